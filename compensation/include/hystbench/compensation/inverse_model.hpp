@@ -1,0 +1,103 @@
+#pragma once
+// Feedforward compensators: given a desired output y_ref, the input u that makes the model give it.
+// step() is real-time safe (no allocation, no exceptions, bounded work).
+#include <memory>
+
+#include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+
+namespace hystbench::compensation {
+
+class InverseModel {
+ public:
+  virtual ~InverseModel() = default;
+  /// Returns the input u for desired output y_ref [output unit -> input unit].
+  virtual double step(double y_ref) noexcept = 0;
+  /// State consistent with the model relaxed at input u0 (ActuatorModel::reset(u0)).
+  virtual void reset(double u0) noexcept = 0;
+  virtual std::unique_ptr<InverseModel> clone() const = 0;
+};
+
+/// Analytic inverse of a classical PI (itself a PI on y - offset). Throws NotInvertibleError.
+class PiInverse final : public InverseModel {
+ public:
+  explicit PiInverse(const PiModel& model);
+  double step(double y_ref) noexcept override;
+  void reset(double u0) noexcept override;
+  std::unique_ptr<InverseModel> clone() const override;
+  const PiParameters& inverse_parameters() const noexcept { return inv_.parameters(); }
+
+ private:
+  PiParameters model_;
+  PiModel inv_;
+};
+
+/// Analytic inverse of a modified PI: u = PI^-1[ S^-1[y - center] + center ].
+class ModifiedPiInverse final : public InverseModel {
+ public:
+  explicit ModifiedPiInverse(const ModifiedPiModel& model);
+  double step(double y_ref) noexcept override;
+  void reset(double u0) noexcept override;
+  std::unique_ptr<InverseModel> clone() const override;
+
+ private:
+  double center_;
+  DeadZoneSuperposition dz_inv_;
+  PiInverse pi_inv_;
+};
+
+/// Numeric inverse for any static model (hysteresis + creep): per sample, brackets the input
+/// u in [input_min, input_max] with model.peek_static(u) = y_ref and refines it (regula falsi
+/// with bisection safeguard, at most `max_iterations`), then steps the internal model copy.
+/// Beyond the reachable range the input saturates at the bound.
+class NumericInverse final : public InverseModel {
+ public:
+  struct Options {
+    double input_min = 0.0;    ///< bracket bounds [input unit]; default: the model's
+    double input_max = 0.0;    ///< identification range (used when min >= max)
+    double tolerance = 1e-12;  ///< relative to the output range
+    int max_iterations = 80;
+  };
+  NumericInverse(const ActuatorModel& model, Options options);
+  explicit NumericInverse(const ActuatorModel& model) : NumericInverse(model, Options{}) {}
+  double step(double y_ref) noexcept override;
+  void reset(double u0) noexcept override;
+  std::unique_ptr<InverseModel> clone() const override;
+
+ private:
+  ActuatorModel model_;
+  Options opt_;
+  double u_prev_ = 0.0;
+  double y_tol_ = 1e-12;
+};
+
+/// Inverse multiplicative structure (classical-PI paper, Theorem 3.1), generalised with a
+/// nominal gain g so that y and u may have different units:
+///   u(k) = u(k-1) + (y_ref(k) - y_model(k-1)) / g,   y_model(k-1) = H[u](k-1).
+/// Needs no inverse parameters: it runs the model itself in a delayed feedback.
+class InverseMultiplicativeCompensator final : public InverseModel {
+ public:
+  /// gain <= 0 selects the model's major-loop slope over its identification range.
+  explicit InverseMultiplicativeCompensator(const ActuatorModel& model, double gain = 0.0);
+  double step(double y_ref) noexcept override;
+  void reset(double u0) noexcept override;
+  std::unique_ptr<InverseModel> clone() const override;
+  double gain() const noexcept { return gain_; }
+
+ private:
+  ActuatorModel model_;
+  double gain_;
+  double u_prev_ = 0.0;
+  double y_prev_ = 0.0;
+};
+
+enum class InverseKind { kAnalytic, kNumeric, kMultiplicative, kAuto };
+
+/// Builds the inverse for a model: kAuto picks analytic for PI / modified PI without creep,
+/// numeric otherwise. Dynamics and delay are not inverted (quasi-static feedforward).
+/// Throws NotInvertibleError naming the offending index, or std::invalid_argument.
+std::unique_ptr<InverseModel> make_inverse(const ActuatorModel& model,
+                                           InverseKind kind = InverseKind::kAuto);
+
+}  // namespace hystbench::compensation

@@ -1,0 +1,46 @@
+#pragma once
+// Rate-dependent modified PI (rate-dependent paper, eq. 15-21): the cumulative play weights are
+// linear in the input rate, W_i(rate) = W^_i + c_i * rate, rate = |u(k) - u(k-1)| / dt
+// [input unit / s]; w_i(rate) = W_i(rate) - W_{i-1}(rate). Dead zones are rate-independent.
+// Needs set_sample_period(). Real-time safe step()/peek().
+#include <vector>
+
+#include "hystbench/compensation/modified_pi_model.hpp"
+
+namespace hystbench::compensation {
+
+struct RateDependentPiParameters {
+  ModifiedPiParameters base;              ///< weights at rate 0 (W^ via cumulative sums)
+  std::vector<double> rate_coefficients;  ///< c_i, one per play [output/input per (input/s)]
+  double max_rate = 0.0;  ///< largest |rate| seen in identification; invertibility is checked
+                          ///< on [0, max_rate] [input unit / s]
+};
+
+class RateDependentPiModel final : public HysteresisModel {
+ public:
+  explicit RateDependentPiModel(RateDependentPiParameters p, double dt_s = 1e-3);
+
+  ModelKind kind() const noexcept override { return ModelKind::kRateDependentPi; }
+  double step(double u) noexcept override;
+  double peek(double u) const noexcept override;
+  void reset(double u0) noexcept override;
+  void set_sample_period(double dt_s) override;
+  std::size_t operator_count() const noexcept override;
+  Invertibility invertibility() const override;
+  std::unique_ptr<HysteresisModel> clone() const override;
+
+  const RateDependentPiParameters& parameters() const noexcept { return p_; }
+  double sample_period() const noexcept { return dt_; }
+
+ private:
+  double evaluate(double u, bool commit) noexcept;
+
+  RateDependentPiParameters p_;
+  PiModel pi_;  // plays and their state; weights taken from p_ per rate
+  DeadZoneSuperposition dz_;
+  std::vector<double> dw_;  // c_i - c_{i-1}: per-weight rate slope
+  double dt_ = 1e-3;
+  double u_prev_ = 0.0;
+};
+
+}  // namespace hystbench::compensation

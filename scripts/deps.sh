@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages hystbench needs, only those that are missing.
+# Usage: scripts/deps.sh [build|test|all]   (default: build)
+# Sourced by scripts/demo.sh and scripts/test.sh; safe to run again (no-op when all present).
+set -euo pipefail
+
+BUILD_PKGS=(
+  build-essential cmake pkg-config
+  libeigen3-dev libspdlog-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
+  libsystemd-dev libmodbus-dev libgpiod-dev libsocketcan-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  gnuplot-nox
+)
+# Peers and tools used only by the test suite (independent implementations to test against).
+TEST_PKGS=(python3 socat)
+
+want=("${BUILD_PKGS[@]}")
+case "${1:-build}" in
+  build) ;;
+  test|all) want+=("${TEST_PKGS[@]}") ;;
+  *) echo "usage: $0 [build|test|all]" >&2; exit 2 ;;
+esac
+
+missing=()
+for p in "${want[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+echo "hystbench: installing missing Debian packages: ${missing[*]}" >&2
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "hystbench: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+  SUDO="sudo"
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
