@@ -34,6 +34,8 @@ class PiModel final : public HysteresisModel {
   const PiParameters& parameters() const noexcept { return p_; }
   /// Play outputs (state), one per threshold.
   std::span<const double> state() const noexcept { return state_; }
+  /// Writable play outputs, for composite models that evaluate the plays themselves.
+  std::span<double> mutable_state() noexcept { return state_; }
   /// Sets the play outputs; sizes must match (throws std::invalid_argument otherwise).
   void set_state(std::span<const double> play_outputs);
 

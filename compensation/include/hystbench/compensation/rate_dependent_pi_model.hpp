@@ -33,7 +33,8 @@ class RateDependentPiModel final : public HysteresisModel {
   double sample_period() const noexcept { return dt_; }
 
  private:
-  double evaluate(double u, bool commit) noexcept;
+  /// Output for input u; writes the new play outputs to state_out when it is not null.
+  double evaluate(double u, double* state_out) const noexcept;
 
   RateDependentPiParameters p_;
   PiModel pi_;  // plays and their state; weights taken from p_ per rate

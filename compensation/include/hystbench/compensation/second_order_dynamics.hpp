@@ -14,6 +14,7 @@ class SecondOrderDynamics {
   /// Throws std::invalid_argument for f_n <= 0, zeta <= 0, dt <= 0 or NaN.
   SecondOrderDynamics(DynamicsParameters p, double dt_s);
 
+  /// Holds x for one sample period; returns the output at the end of that period.
   double step(double x) noexcept;
   /// Settled at input (= output) x0.
   void reset(double x0) noexcept;

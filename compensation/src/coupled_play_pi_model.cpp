@@ -1,0 +1,85 @@
+#include "hystbench/compensation/coupled_play_pi_model.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "details/validate.hpp"
+
+namespace hystbench::compensation {
+
+CoupledPlayPiModel::CoupledPlayPiModel(CoupledPlayParameters p)
+    : p_(std::move(p)), z_(p_.weights.size(), 0.0) {
+  const std::size_t n = p_.weights.size();
+  details::require(n > 0, "coupled_play.weights must not be empty");
+  const std::pair<const std::vector<double>*, const char*> blocks[] = {
+      {&p_.r, "coupled_play.r"}, {&p_.ra, "coupled_play.ra"},
+      {&p_.rb, "coupled_play.rb"}, {&p_.rc, "coupled_play.rc"}};
+  for (const auto& [v, name] : blocks) {
+    details::require_same_size(v->size(), n, name, "coupled_play.weights");
+    details::require_finite(*v, name);
+    for (std::size_t i = 0; i < n; ++i) {
+      details::require((*v)[i] >= 0.0,
+                       std::string(name) + "[" + std::to_string(i) + "] must be >= 0");
+    }
+  }
+  details::require_finite(p_.weights, "coupled_play.weights");
+  details::require_finite(p_.offset, "coupled_play.offset");
+}
+
+double CoupledPlayPiModel::operator_output(double u, double u_prev, double z_prev, double r,
+                                           double ra, double rb, double rc) noexcept {
+  if (u >= u_prev) {
+    const double width = u >= rc ? r : rc;
+    return std::max(z_prev, u - width);
+  }
+  const double width = u <= -rb ? ra : rb;
+  return std::min(z_prev, u + width);
+}
+
+double CoupledPlayPiModel::step(double u) noexcept {
+  double y = p_.offset;
+  for (std::size_t i = 0; i < z_.size(); ++i) {
+    z_[i] = operator_output(u, u_prev_, z_[i], p_.r[i], p_.ra[i], p_.rb[i], p_.rc[i]);
+    y += p_.weights[i] * z_[i];
+  }
+  u_prev_ = u;
+  return y;
+}
+
+double CoupledPlayPiModel::peek(double u) const noexcept {
+  double y = p_.offset;
+  for (std::size_t i = 0; i < z_.size(); ++i) {
+    y += p_.weights[i] *
+         operator_output(u, u_prev_, z_[i], p_.r[i], p_.ra[i], p_.rb[i], p_.rc[i]);
+  }
+  return y;
+}
+
+void CoupledPlayPiModel::reset(double u0) noexcept {
+  std::fill(z_.begin(), z_.end(), u0);
+  u_prev_ = u0;
+}
+
+Invertibility CoupledPlayPiModel::invertibility() const {
+  double cumulative = 0.0;
+  for (std::size_t i = 0; i < p_.weights.size(); ++i) {
+    cumulative += p_.weights[i];
+    if (!(cumulative > 0.0)) {
+      Invertibility v;
+      v.invertible = false;
+      v.block = "coupled_play";
+      v.index = static_cast<int>(i);
+      v.value = cumulative;
+      v.reason = "cumulative coupled-play weight W[" + std::to_string(i) + "] = " +
+                 std::to_string(cumulative) + " is not positive";
+      return v;
+    }
+  }
+  return Invertibility::ok();
+}
+
+std::unique_ptr<HysteresisModel> CoupledPlayPiModel::clone() const {
+  return std::make_unique<CoupledPlayPiModel>(*this);
+}
+
+}  // namespace hystbench::compensation

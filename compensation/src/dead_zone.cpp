@@ -1,0 +1,87 @@
+#include "hystbench/compensation/dead_zone.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "details/validate.hpp"
+
+namespace hystbench::compensation {
+
+DeadZoneSuperposition::DeadZoneSuperposition() : p_{{0.0}, {1.0}}, zero_(0) {}
+
+DeadZoneSuperposition::DeadZoneSuperposition(DeadZoneParameters p) : p_(std::move(p)) {
+  details::require(!p_.thresholds.empty(), "deadzone.thresholds must not be empty");
+  details::require_same_size(p_.thresholds.size(), p_.weights.size(), "deadzone.thresholds",
+                             "deadzone.weights");
+  details::require_finite(p_.thresholds, "deadzone.thresholds");
+  details::require_finite(p_.weights, "deadzone.weights");
+  details::require_strictly_increasing(p_.thresholds, "deadzone.thresholds");
+  const auto it = std::find(p_.thresholds.begin(), p_.thresholds.end(), 0.0);
+  details::require(it != p_.thresholds.end(),
+                   "deadzone.thresholds must contain 0 (the identity operator)");
+  zero_ = static_cast<std::size_t>(it - p_.thresholds.begin());
+}
+
+double DeadZoneSuperposition::apply(double v) const noexcept {
+  double z = 0.0;
+  const std::size_t n = p_.thresholds.size();
+  for (std::size_t j = 0; j < n; ++j) z += p_.weights[j] * dead_zone(v, p_.thresholds[j]);
+  return z;
+}
+
+Invertibility DeadZoneSuperposition::invertibility() const {
+  auto fail = [](std::size_t index, double value, const std::string& side) {
+    Invertibility v;
+    v.invertible = false;
+    v.block = "deadzone";
+    v.index = static_cast<int>(index);
+    v.value = value;
+    v.reason = "cumulative dead-zone weight at deadzone index " + std::to_string(index) + " (" +
+               side + " side) = " + std::to_string(value) + " is not positive";
+    return v;
+  };
+  double w = 0.0;
+  for (std::size_t j = zero_; j < p_.weights.size(); ++j) {
+    w += p_.weights[j];
+    if (!(w > 0.0)) return fail(j, w, "positive");
+  }
+  w = p_.weights[zero_];
+  for (std::size_t j = zero_; j-- > 0;) {
+    w += p_.weights[j];
+    if (!(w > 0.0)) return fail(j, w, "negative");
+  }
+  return Invertibility::ok();
+}
+
+DeadZoneSuperposition DeadZoneSuperposition::inverse() const {
+  const Invertibility inv = invertibility();
+  if (!inv.invertible) throw NotInvertibleError(inv);
+  const auto& d = p_.thresholds;
+  const auto& w = p_.weights;
+  const std::size_t n = d.size();
+  DeadZoneParameters out{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0)};
+  out.weights[zero_] = 1.0 / w[zero_];
+  // Positive side: d'_i = sum_{j=0..i} w_j (d_i - d_j), w'_i = -w_i / (W_i W_{i-1}).
+  double cum_prev = w[zero_];
+  for (std::size_t i = zero_ + 1; i < n; ++i) {
+    double di = 0.0;
+    for (std::size_t j = zero_; j <= i; ++j) di += w[j] * (d[i] - d[j]);
+    out.thresholds[i] = di;
+    const double cum = cum_prev + w[i];
+    out.weights[i] = -w[i] / (cum * cum_prev);
+    cum_prev = cum;
+  }
+  // Negative side, mirrored outward from zero.
+  cum_prev = w[zero_];
+  for (std::size_t i = zero_; i-- > 0;) {
+    double di = 0.0;
+    for (std::size_t j = i; j <= zero_; ++j) di += w[j] * (d[i] - d[j]);
+    out.thresholds[i] = di;
+    const double cum = cum_prev + w[i];
+    out.weights[i] = -w[i] / (cum * cum_prev);
+    cum_prev = cum;
+  }
+  return DeadZoneSuperposition(std::move(out));
+}
+
+}  // namespace hystbench::compensation

@@ -1,0 +1,37 @@
+#include "hystbench/compensation/hysteresis_model.hpp"
+
+#include <array>
+#include <utility>
+
+namespace hystbench::compensation {
+
+namespace {
+constexpr std::array<std::pair<ModelKind, std::string_view>, 4> kNames{{
+    {ModelKind::kPi, "pi"},
+    {ModelKind::kModifiedPi, "mpi"},
+    {ModelKind::kCoupledPlayPi, "cpi"},
+    {ModelKind::kRateDependentPi, "rpi"},
+}};
+}  // namespace
+
+std::string_view to_string(ModelKind kind) noexcept {
+  for (const auto& [k, name] : kNames) {
+    if (k == kind) return name;
+  }
+  return "unknown";
+}
+
+std::optional<ModelKind> model_kind_from_string(std::string_view name) noexcept {
+  for (const auto& [k, n] : kNames) {
+    if (n == name) return k;
+  }
+  return std::nullopt;
+}
+
+std::vector<double> HysteresisModel::simulate(std::span<const double> u) {
+  std::vector<double> y(u.size());
+  for (std::size_t k = 0; k < u.size(); ++k) y[k] = step(u[k]);
+  return y;
+}
+
+}  // namespace hystbench::compensation

@@ -1,0 +1,202 @@
+#include "hystbench/compensation/inverse_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "details/validate.hpp"
+#include "hystbench/compensation/coupled_play_pi_model.hpp"
+
+namespace hystbench::compensation {
+
+// ---------------------------------------------------------------- PiInverse
+
+PiInverse::PiInverse(const PiModel& model)
+    : model_(model.parameters()), inv_(compensation::inverse_parameters(model.parameters())) {
+  inv_.set_state(inverse_state(model_, model.state()));
+}
+
+double PiInverse::step(double y_ref) noexcept { return inv_.step(y_ref - model_.offset); }
+
+void PiInverse::reset(double u0) noexcept {
+  // Model plays all at u0 => inverse plays p'_i = W_n * u0 (see inverse_state()).
+  double total = 0.0;
+  for (const double w : model_.weights) total += w;
+  inv_.reset(total * u0);
+}
+
+std::unique_ptr<InverseModel> PiInverse::clone() const { return std::make_unique<PiInverse>(*this); }
+
+// ---------------------------------------------------------------- ModifiedPiInverse
+
+ModifiedPiInverse::ModifiedPiInverse(const ModifiedPiModel& model)
+    : center_(model.parameters().center),
+      dz_inv_(model.dead_zone_part().inverse()),
+      pi_inv_(model.play_part()) {}
+
+double ModifiedPiInverse::step(double y_ref) noexcept {
+  return pi_inv_.step(center_ + dz_inv_.apply(y_ref - center_));
+}
+
+void ModifiedPiInverse::reset(double u0) noexcept { pi_inv_.reset(u0); }
+
+std::unique_ptr<InverseModel> ModifiedPiInverse::clone() const {
+  return std::make_unique<ModifiedPiInverse>(*this);
+}
+
+// ---------------------------------------------------------------- NumericInverse
+
+NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
+    : model_(model), opt_(options) {
+  details::require(model_.valid(), "numeric inverse needs a model");
+  if (!(opt_.input_min < opt_.input_max)) {
+    opt_.input_min = model_.input_min;
+    opt_.input_max = model_.input_max;
+  }
+  details::require(opt_.input_min < opt_.input_max,
+                   "numeric inverse needs an input range (input_min < input_max)");
+  const Invertibility inv = model_.hysteresis().invertibility();
+  if (!inv.invertible) throw NotInvertibleError(inv);
+  // Static model only: the inverse runs the hysteresis (+ creep) at the model's sample period.
+  model_.set_delay(0.0);
+  model_.set_dynamics(std::nullopt);
+  model_.reset(opt_.input_min);
+  const double y_span =
+      std::abs(model_.peek_static(opt_.input_max) - model_.peek_static(opt_.input_min));
+  y_tol_ = opt_.tolerance * std::max(y_span, 1e-300);
+  reset(opt_.input_min);
+}
+
+double NumericInverse::step(double y_ref) noexcept {
+  const double lo_bound = opt_.input_min;
+  const double hi_bound = opt_.input_max;
+  auto f = [&](double u) { return model_.peek_static(u) - y_ref; };
+  // Bracket around the previous input, growing the step geometrically.
+  double a = std::clamp(u_prev_, lo_bound, hi_bound);
+  double fa = f(a);
+  double b = a;
+  double fb = fa;
+  if (std::abs(fa) > y_tol_) {
+    double stepsize = (hi_bound - lo_bound) * 1e-4;
+    const double dir = fa < 0.0 ? 1.0 : -1.0;  // increasing map: raise u when below target
+    for (int it = 0; it < 64; ++it) {
+      b = std::clamp(a + dir * stepsize, lo_bound, hi_bound);
+      fb = f(b);
+      if ((fb > 0.0) != (fa > 0.0) || std::abs(fb) <= y_tol_) break;
+      if (b == lo_bound || b == hi_bound) break;  // target beyond reach: saturate
+      a = b;
+      fa = fb;
+      stepsize *= 2.0;
+    }
+    if ((fb > 0.0) == (fa > 0.0) && std::abs(fb) > y_tol_) {
+      // Unreachable: saturate at the bound in the direction of the target.
+      model_.step(b);
+      u_prev_ = b;
+      return b;
+    }
+    // Regula falsi (Illinois) with bisection safeguard.
+    int side = 0;
+    for (int it = 0; it < opt_.max_iterations && std::abs(fb) > y_tol_; ++it) {
+      double c = (fa * b - fb * a) / (fa - fb);
+      if (!(c > std::min(a, b) && c < std::max(a, b))) c = 0.5 * (a + b);
+      const double fc = f(c);
+      if ((fc > 0.0) == (fb > 0.0)) {
+        b = c;
+        fb = fc;
+        if (side == -1) fa *= 0.5;
+        side = -1;
+      } else {
+        a = b;
+        fa = fb;
+        b = c;
+        fb = fc;
+        side = +1;
+      }
+      if (std::abs(b - a) <= 1e-15 * (std::abs(a) + std::abs(b) + 1e-300)) break;
+    }
+  }
+  model_.step(b);
+  u_prev_ = b;
+  return b;
+}
+
+void NumericInverse::reset(double u0) noexcept {
+  model_.reset(u0);
+  u_prev_ = u0;
+}
+
+std::unique_ptr<InverseModel> NumericInverse::clone() const {
+  return std::make_unique<NumericInverse>(*this);
+}
+
+// ---------------------------------------------------------------- InverseMultiplicative
+
+InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const ActuatorModel& model,
+                                                                   double gain)
+    : model_(model), gain_(gain) {
+  details::require(model_.valid(), "inverse multiplicative compensator needs a model");
+  model_.set_delay(0.0);
+  model_.set_dynamics(std::nullopt);
+  if (!(gain_ > 0.0)) {
+    details::require(model_.input_max > model_.input_min,
+                     "inverse multiplicative compensator needs the model's input range or a gain");
+    // Major-loop slope: output span over input span along the initial loading curve.
+    ActuatorModel probe(model_);
+    probe.reset(model_.input_min);
+    const double y0 = probe.peek_static(model_.input_min);
+    const double y1 = probe.peek_static(model_.input_max);
+    gain_ = (y1 - y0) / (model_.input_max - model_.input_min);
+  }
+  details::require(std::isfinite(gain_) && gain_ > 0.0,
+                   "inverse multiplicative compensator needs a positive gain");
+  reset(model_.input_min);
+}
+
+double InverseMultiplicativeCompensator::step(double y_ref) noexcept {
+  const double u = u_prev_ + (y_ref - y_prev_) / gain_;
+  y_prev_ = model_.step(u);
+  u_prev_ = u;
+  return u;
+}
+
+void InverseMultiplicativeCompensator::reset(double u0) noexcept {
+  model_.reset(u0);
+  u_prev_ = u0;
+  y_prev_ = model_.peek_static(u0);
+}
+
+std::unique_ptr<InverseModel> InverseMultiplicativeCompensator::clone() const {
+  return std::make_unique<InverseMultiplicativeCompensator>(*this);
+}
+
+// ---------------------------------------------------------------- factory
+
+std::unique_ptr<InverseModel> make_inverse(const ActuatorModel& model, InverseKind kind) {
+  details::require(model.valid(), "cannot invert an empty model");
+  const Invertibility inv = model.hysteresis().invertibility();
+  if (!inv.invertible) throw NotInvertibleError(inv);
+  const ModelKind mk = model.hysteresis().kind();
+  const bool analytic_possible =
+      !model.creep() && (mk == ModelKind::kPi || mk == ModelKind::kModifiedPi);
+  if (kind == InverseKind::kAuto) kind = analytic_possible ? InverseKind::kAnalytic : InverseKind::kNumeric;
+  switch (kind) {
+    case InverseKind::kAnalytic:
+      details::require(analytic_possible,
+                       "no analytic inverse for a " + std::string(to_string(mk)) +
+                           (model.creep() ? " model with creep" : " model") +
+                           "; use the numeric inverse");
+      if (mk == ModelKind::kPi) {
+        return std::make_unique<PiInverse>(static_cast<const PiModel&>(model.hysteresis()));
+      }
+      return std::make_unique<ModifiedPiInverse>(
+          static_cast<const ModifiedPiModel&>(model.hysteresis()));
+    case InverseKind::kNumeric:
+      return std::make_unique<NumericInverse>(model);
+    case InverseKind::kMultiplicative:
+      return std::make_unique<InverseMultiplicativeCompensator>(model);
+    case InverseKind::kAuto:
+      break;
+  }
+  throw std::invalid_argument("unknown inverse kind");
+}
+
+}  // namespace hystbench::compensation

@@ -1,0 +1,91 @@
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "details/validate.hpp"
+
+namespace hystbench::compensation {
+
+RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double dt_s)
+    : p_(std::move(p)), pi_(p_.base.play), dz_(p_.base.dead_zone) {
+  details::require_same_size(p_.rate_coefficients.size(), p_.base.play.weights.size(),
+                             "rate.coefficients", "play.weights");
+  details::require_finite(p_.rate_coefficients, "rate.coefficients");
+  details::require_finite(p_.max_rate, "rate.max_rate");
+  details::require(p_.max_rate >= 0.0, "rate.max_rate must be >= 0");
+  details::require_finite(p_.base.center, "deadzone.center");
+  dw_.resize(p_.rate_coefficients.size());
+  double prev = 0.0;
+  for (std::size_t i = 0; i < dw_.size(); ++i) {
+    dw_[i] = p_.rate_coefficients[i] - prev;
+    prev = p_.rate_coefficients[i];
+  }
+  set_sample_period(dt_s);
+}
+
+void RateDependentPiModel::set_sample_period(double dt_s) {
+  details::require(std::isfinite(dt_s) && dt_s > 0.0, "sample period must be > 0");
+  dt_ = dt_s;
+}
+
+double RateDependentPiModel::evaluate(double u, double* state_out) const noexcept {
+  const double rate = std::abs(u - u_prev_) / dt_;
+  const auto& r = p_.base.play.thresholds;
+  const auto& w = p_.base.play.weights;
+  const double* s = pi_.state().data();
+  double y = p_.base.play.offset;
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    const double pl = std::max(u - r[i], std::min(u + r[i], s[i]));
+    if (state_out != nullptr) state_out[i] = pl;
+    y += (w[i] + dw_[i] * rate) * pl;
+  }
+  return p_.base.center + dz_.apply(y - p_.base.center);
+}
+
+double RateDependentPiModel::step(double u) noexcept {
+  const double y = evaluate(u, pi_.mutable_state().data());
+  u_prev_ = u;
+  return y;
+}
+
+double RateDependentPiModel::peek(double u) const noexcept { return evaluate(u, nullptr); }
+
+void RateDependentPiModel::reset(double u0) noexcept {
+  pi_.reset(u0);
+  u_prev_ = u0;
+}
+
+std::size_t RateDependentPiModel::operator_count() const noexcept {
+  return pi_.operator_count() + dz_.size();
+}
+
+Invertibility RateDependentPiModel::invertibility() const {
+  // W_i(rate) is linear in rate, so positivity on [0, max_rate] is checked at both ends.
+  for (const double rate : {0.0, p_.max_rate}) {
+    double cumulative = 0.0;
+    for (std::size_t i = 0; i < dw_.size(); ++i) {
+      cumulative += p_.base.play.weights[i] + dw_[i] * rate;
+      if (!(cumulative > 0.0)) {
+        Invertibility v;
+        v.invertible = false;
+        v.block = "rate";
+        v.index = static_cast<int>(i);
+        v.value = cumulative;
+        v.reason = "cumulative play weight W[" + std::to_string(i) + "] at rate " +
+                   std::to_string(rate) + " = " + std::to_string(cumulative) +
+                   " is not positive";
+        return v;
+      }
+    }
+  }
+  if (p_.base.play.thresholds.front() != 0.0) return pi_.invertibility();
+  return dz_.invertibility();
+}
+
+std::unique_ptr<HysteresisModel> RateDependentPiModel::clone() const {
+  return std::make_unique<RateDependentPiModel>(*this);
+}
+
+}  // namespace hystbench::compensation
