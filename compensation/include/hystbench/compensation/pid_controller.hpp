@@ -1,0 +1,47 @@
+#pragma once
+// Incremental PID (multilayer-actuator paper, eq. 22), added to a feedforward: u = u_ff + u_fb.
+//   u_fb(k) = u_fb(k-1) + Kp [e(k) - e(k-1)] + Ki T e(k) + (Kd/T) [ef(k) - 2 ef(k-1) + ef(k-2)]
+// with ef the error through a first-order low-pass (derivative filter), u_fb clamped to
+// [output_min, output_max] and anti-windup: the integral increment is dropped while the output
+// (or the stage after it, see set_saturation()) is saturated in the direction it would push.
+// Units: error in output unit (µm), u_fb in input unit (V); Ki in 1/s, Kd in s.
+// step() is real-time safe.
+#include <cstdint>
+
+namespace hystbench::compensation {
+
+struct PidParameters {
+  double kp = 0.0;                     ///< [V/µm]
+  double ki = 0.0;                     ///< [V/(µm s)]
+  double kd = 0.0;                     ///< [V s/µm]
+  double derivative_filter_hz = 0.0;   ///< 0 = unfiltered derivative
+  double output_min = -1e300;          ///< clamp of u_fb [V]
+  double output_max = 1e300;
+};
+
+class PidController {
+ public:
+  /// Throws std::invalid_argument for NaN gains, dt <= 0 or output_min > output_max.
+  PidController(PidParameters p, double dt_s);
+
+  /// Advances one sample with error e = y_ref - y; returns u_fb.
+  double step(double error) noexcept;
+  /// Tells the controller the stage after it clamped the total output: +1 high, -1 low, 0 none.
+  void set_saturation(int direction) noexcept { external_saturation_ = direction; }
+  void reset() noexcept;
+
+  double output() const noexcept { return u_; }
+  const PidParameters& parameters() const noexcept { return p_; }
+
+ private:
+  PidParameters p_;
+  double dt_;
+  double alpha_ = 1.0;  // derivative filter coefficient
+  double u_ = 0.0;
+  double e1_ = 0.0;
+  double ef_ = 0.0, ef1_ = 0.0, ef2_ = 0.0;
+  int external_saturation_ = 0;
+  std::uint64_t samples_ = 0;
+};
+
+}  // namespace hystbench::compensation

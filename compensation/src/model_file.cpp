@@ -1,0 +1,234 @@
+#include "hystbench/compensation/model_file.hpp"
+
+#include <cmath>
+
+#include "hystbench/compensation/coupled_play_pi_model.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+
+namespace hystbench::compensation {
+
+using nlohmann::json;
+
+namespace {
+
+[[noreturn]] void fail(const std::string& field, const std::string& what) {
+  throw ModelFileError(field + ": " + what);
+}
+
+const json& member(const json& obj, const std::string& parent, const char* key) {
+  const std::string field = parent.empty() ? key : parent + "." + key;
+  if (!obj.is_object()) fail(parent.empty() ? "(top level)" : parent, "must be an object");
+  const auto it = obj.find(key);
+  if (it == obj.end()) fail(field, "missing");
+  return *it;
+}
+
+double number(const json& v, const std::string& field) {
+  if (!v.is_number()) fail(field, std::string("must be a number, got ") + v.type_name());
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) fail(field, "must be finite");
+  return d;
+}
+
+double number_member(const json& obj, const std::string& parent, const char* key,
+                     std::optional<double> fallback = std::nullopt) {
+  if (fallback && obj.is_object() && !obj.contains(key)) return *fallback;
+  return number(member(obj, parent, key), parent + "." + key);
+}
+
+std::vector<double> numbers(const json& obj, const std::string& parent, const char* key) {
+  const json& v = member(obj, parent, key);
+  const std::string field = parent + "." + key;
+  // NaN is not valid JSON; a null in an array (what many tools write for NaN) is caught here.
+  if (!v.is_array()) fail(field, std::string("must be an array of numbers, got ") + v.type_name());
+  std::vector<double> out;
+  out.reserve(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    out.push_back(number(v[i], field + "[" + std::to_string(i) + "]"));
+  }
+  return out;
+}
+
+void require_increasing(const std::vector<double>& v, const std::string& field) {
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    if (!(v[i] > v[i - 1])) {
+      fail(field + "[" + std::to_string(i) + "]",
+           "thresholds must be strictly increasing (" + std::to_string(v[i]) +
+               " after " + std::to_string(v[i - 1]) + ")");
+    }
+  }
+}
+
+PiParameters play_from_json(const json& j) {
+  const json& p = member(j, "", "play");
+  PiParameters out{numbers(p, "play", "thresholds"), numbers(p, "play", "weights"),
+                   number_member(p, "play", "offset", 0.0)};
+  require_increasing(out.thresholds, "play.thresholds");
+  if (out.thresholds.empty()) fail("play.thresholds", "must not be empty");
+  if (out.thresholds.size() != out.weights.size()) {
+    fail("play.weights", "must have as many entries as play.thresholds");
+  }
+  return out;
+}
+
+std::pair<DeadZoneParameters, double> dead_zone_from_json(const json& j) {
+  const json& d = member(j, "", "deadzone");
+  DeadZoneParameters out{numbers(d, "deadzone", "thresholds"), numbers(d, "deadzone", "weights")};
+  require_increasing(out.thresholds, "deadzone.thresholds");
+  if (out.thresholds.size() != out.weights.size()) {
+    fail("deadzone.weights", "must have as many entries as deadzone.thresholds");
+  }
+  return {out, number_member(d, "deadzone", "center", 0.0)};
+}
+
+json play_to_json(const PiParameters& p) {
+  return {{"thresholds", p.thresholds}, {"weights", p.weights}, {"offset", p.offset}};
+}
+
+json dead_zone_to_json(const DeadZoneParameters& d, double center) {
+  return {{"thresholds", d.thresholds}, {"weights", d.weights}, {"center", center}};
+}
+
+}  // namespace
+
+json to_json(const ModelFile& file) {
+  const ActuatorModel& m = file.model;
+  if (!m.valid()) throw ModelFileError("model: empty model cannot be saved");
+  json j;
+  j["schema"] = kModelSchema;
+  j["type"] = std::string(to_string(m.hysteresis().kind()));
+  j["units"] = {{"input", m.units.input}, {"output", m.units.output}};
+  j["input_range"] = {m.input_min, m.input_max};
+  switch (m.hysteresis().kind()) {
+    case ModelKind::kPi:
+      j["play"] = play_to_json(static_cast<const PiModel&>(m.hysteresis()).parameters());
+      break;
+    case ModelKind::kModifiedPi: {
+      const auto& p = static_cast<const ModifiedPiModel&>(m.hysteresis()).parameters();
+      j["play"] = play_to_json(p.play);
+      j["deadzone"] = dead_zone_to_json(p.dead_zone, p.center);
+      break;
+    }
+    case ModelKind::kRateDependentPi: {
+      const auto& p = static_cast<const RateDependentPiModel&>(m.hysteresis()).parameters();
+      j["play"] = play_to_json(p.base.play);
+      j["deadzone"] = dead_zone_to_json(p.base.dead_zone, p.base.center);
+      j["rate"] = {{"coefficients", p.rate_coefficients}, {"max_rate", p.max_rate}};
+      break;
+    }
+    case ModelKind::kCoupledPlayPi: {
+      const auto& p = static_cast<const CoupledPlayPiModel&>(m.hysteresis()).parameters();
+      j["coupled_play"] = {{"r", p.r},   {"ra", p.ra},           {"rb", p.rb},
+                           {"rc", p.rc}, {"weights", p.weights}, {"offset", p.offset}};
+      break;
+    }
+  }
+  if (m.creep()) {
+    j["creep"] = {{"time_constants_s", m.creep()->time_constants_s}, {"gains", m.creep()->gains}};
+  }
+  if (m.dynamics()) {
+    j["dynamics"] = {{"natural_frequency_hz", m.dynamics()->natural_frequency_hz},
+                     {"damping_ratio", m.dynamics()->damping_ratio}};
+  }
+  if (m.delay_s() > 0.0) j["delay_s"] = m.delay_s();
+  j["identification"] = file.identification.is_null() ? json::object() : file.identification;
+  return j;
+}
+
+ModelFile model_file_from_json(const json& j) {
+  if (!j.is_object()) fail("(top level)", "a model file must be a JSON object");
+  const json& schema = member(j, "", "schema");
+  if (!schema.is_string() || schema.get<std::string>() != kModelSchema) {
+    fail("schema", std::string("must be \"") + kModelSchema + "\", got " + schema.dump());
+  }
+  const json& type = member(j, "", "type");
+  if (!type.is_string()) fail("type", "must be a string");
+  const auto kind = model_kind_from_string(type.get<std::string>());
+  if (!kind) fail("type", "unknown model type \"" + type.get<std::string>() + "\" (pi, mpi, cpi, rpi)");
+
+  ModelFile out;
+  try {
+    std::unique_ptr<HysteresisModel> h;
+    switch (*kind) {
+      case ModelKind::kPi:
+        h = std::make_unique<PiModel>(play_from_json(j));
+        break;
+      case ModelKind::kModifiedPi: {
+        auto [dz, center] = dead_zone_from_json(j);
+        h = std::make_unique<ModifiedPiModel>(ModifiedPiParameters{play_from_json(j), dz, center});
+        break;
+      }
+      case ModelKind::kRateDependentPi: {
+        auto [dz, center] = dead_zone_from_json(j);
+        const json& r = member(j, "", "rate");
+        RateDependentPiParameters p{ModifiedPiParameters{play_from_json(j), dz, center},
+                                    numbers(r, "rate", "coefficients"),
+                                    number_member(r, "rate", "max_rate", 0.0)};
+        h = std::make_unique<RateDependentPiModel>(std::move(p));
+        break;
+      }
+      case ModelKind::kCoupledPlayPi: {
+        const json& c = member(j, "", "coupled_play");
+        CoupledPlayParameters p{numbers(c, "coupled_play", "r"),
+                                numbers(c, "coupled_play", "ra"),
+                                numbers(c, "coupled_play", "rb"),
+                                numbers(c, "coupled_play", "rc"),
+                                numbers(c, "coupled_play", "weights"),
+                                number_member(c, "coupled_play", "offset", 0.0)};
+        h = std::make_unique<CoupledPlayPiModel>(std::move(p));
+        break;
+      }
+    }
+    out.model = ActuatorModel(std::move(h));
+    if (j.contains("creep")) {
+      const json& c = j["creep"];
+      out.model.set_creep(
+          CreepParameters{numbers(c, "creep", "time_constants_s"), numbers(c, "creep", "gains")});
+    }
+    if (j.contains("dynamics")) {
+      const json& d = j["dynamics"];
+      out.model.set_dynamics(
+          DynamicsParameters{number_member(d, "dynamics", "natural_frequency_hz"),
+                             number_member(d, "dynamics", "damping_ratio")});
+    }
+    if (j.contains("delay_s")) out.model.set_delay(number(j["delay_s"], "delay_s"));
+  } catch (const std::invalid_argument& e) {
+    // Model constructors name the field; keep their message.
+    throw ModelFileError(e.what());
+  }
+  if (j.contains("units")) {
+    const json& u = j["units"];
+    if (!u.is_object()) fail("units", "must be an object");
+    if (u.contains("input")) {
+      if (!u["input"].is_string()) fail("units.input", "must be a string");
+      out.model.units.input = u["input"].get<std::string>();
+    }
+    if (u.contains("output")) {
+      if (!u["output"].is_string()) fail("units.output", "must be a string");
+      out.model.units.output = u["output"].get<std::string>();
+    }
+  }
+  if (j.contains("input_range")) {
+    const json& r = j["input_range"];
+    if (!r.is_array() || r.size() != 2) fail("input_range", "must be [min, max]");
+    out.model.input_min = number(r[0], "input_range[0]");
+    out.model.input_max = number(r[1], "input_range[1]");
+    if (!(out.model.input_min < out.model.input_max)) fail("input_range", "needs min < max");
+  }
+  if (j.contains("identification")) out.identification = j["identification"];
+  return out;
+}
+
+ModelFile parse_model_file(const std::string& text) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw ModelFileError(std::string("not valid JSON: ") + e.what());
+  }
+  return model_file_from_json(j);
+}
+
+}  // namespace hystbench::compensation
