@@ -11,9 +11,10 @@ CoupledPlayPiModel::CoupledPlayPiModel(CoupledPlayParameters p)
     : p_(std::move(p)), z_(p_.weights.size(), 0.0) {
   const std::size_t n = p_.weights.size();
   details::require(n > 0, "coupled_play.weights must not be empty");
-  const std::pair<const std::vector<double>*, const char*> blocks[] = {
-      {&p_.r, "coupled_play.r"}, {&p_.ra, "coupled_play.ra"},
-      {&p_.rb, "coupled_play.rb"}, {&p_.rc, "coupled_play.rc"}};
+  const std::pair<const std::vector<double>*, const char*> blocks[] = {{&p_.r, "coupled_play.r"},
+                                                                       {&p_.ra, "coupled_play.ra"},
+                                                                       {&p_.rb, "coupled_play.rb"},
+                                                                       {&p_.rc, "coupled_play.rc"}};
   for (const auto& [v, name] : blocks) {
     details::require_same_size(v->size(), n, name, "coupled_play.weights");
     details::require_finite(*v, name);
@@ -49,8 +50,7 @@ double CoupledPlayPiModel::step(double u) noexcept {
 double CoupledPlayPiModel::peek(double u) const noexcept {
   double y = p_.offset;
   for (std::size_t i = 0; i < z_.size(); ++i) {
-    y += p_.weights[i] *
-         operator_output(u, u_prev_, z_[i], p_.r[i], p_.ra[i], p_.rb[i], p_.rc[i]);
+    y += p_.weights[i] * operator_output(u, u_prev_, z_[i], p_.r[i], p_.ra[i], p_.rb[i], p_.rc[i]);
   }
   return y;
 }
@@ -61,6 +61,20 @@ void CoupledPlayPiModel::reset(double u0) noexcept {
 }
 
 Invertibility CoupledPlayPiModel::invertibility() const {
+  // Each operator's branches are non-decreasing in u only if its width never shrinks when the
+  // input crosses a switching level: rc >= r on the rising side, ra <= rb on the falling side.
+  for (std::size_t i = 0; i < p_.weights.size(); ++i) {
+    if (p_.rc[i] < p_.r[i] || p_.ra[i] > p_.rb[i]) {
+      Invertibility v;
+      v.invertible = false;
+      v.block = "coupled_play";
+      v.index = static_cast<int>(i);
+      v.value = p_.rc[i] < p_.r[i] ? p_.rc[i] - p_.r[i] : p_.rb[i] - p_.ra[i];
+      v.reason = "coupled-play operator " + std::to_string(i) +
+                 " is not monotone (needs rc >= r and ra <= rb)";
+      return v;
+    }
+  }
   double cumulative = 0.0;
   for (std::size_t i = 0; i < p_.weights.size(); ++i) {
     cumulative += p_.weights[i];
@@ -70,8 +84,8 @@ Invertibility CoupledPlayPiModel::invertibility() const {
       v.block = "coupled_play";
       v.index = static_cast<int>(i);
       v.value = cumulative;
-      v.reason = "cumulative coupled-play weight W[" + std::to_string(i) + "] = " +
-                 std::to_string(cumulative) + " is not positive";
+      v.reason = "cumulative coupled-play weight W[" + std::to_string(i) +
+                 "] = " + std::to_string(cumulative) + " is not positive";
       return v;
     }
   }

@@ -18,8 +18,8 @@ std::vector<double> log_spaced_time_constants(std::size_t n, double tau_min_s, d
 }
 
 CreepOperatorBank::CreepOperatorBank(CreepParameters p, double dt_s) : p_(std::move(p)) {
-  details::require_same_size(p_.time_constants_s.size(), p_.gains.size(),
-                             "creep.time_constants_s", "creep.gains");
+  details::require_same_size(p_.time_constants_s.size(), p_.gains.size(), "creep.time_constants_s",
+                             "creep.gains");
   details::require_finite(p_.time_constants_s, "creep.time_constants_s");
   details::require_finite(p_.gains, "creep.gains");
   for (std::size_t k = 0; k < p_.time_constants_s.size(); ++k) {
@@ -47,7 +47,8 @@ double CreepOperatorBank::step(double u) noexcept {
 
 double CreepOperatorBank::peek(double u) const noexcept {
   double y = 0.0;
-  for (std::size_t k = 0; k < x_.size(); ++k) y += p_.gains[k] * (a_[k] * x_[k] + (1.0 - a_[k]) * u);
+  for (std::size_t k = 0; k < x_.size(); ++k)
+    y += p_.gains[k] * (a_[k] * x_[k] + (1.0 - a_[k]) * u);
   return y;
 }
 

@@ -24,7 +24,9 @@ void PiInverse::reset(double u0) noexcept {
   inv_.reset(total * u0);
 }
 
-std::unique_ptr<InverseModel> PiInverse::clone() const { return std::make_unique<PiInverse>(*this); }
+std::unique_ptr<InverseModel> PiInverse::clone() const {
+  return std::make_unique<PiInverse>(*this);
+}
 
 // ---------------------------------------------------------------- ModifiedPiInverse
 
@@ -70,25 +72,36 @@ double NumericInverse::step(double y_ref) noexcept {
   const double lo_bound = opt_.input_min;
   const double hi_bound = opt_.input_max;
   auto f = [&](double u) { return model_.peek_static(u) - y_ref; };
-  // Bracket around the previous input, growing the step geometrically.
-  double a = std::clamp(u_prev_, lo_bound, hi_bound);
-  double fa = f(a);
-  double b = a;
-  double fb = fa;
-  if (std::abs(fa) > y_tol_) {
-    double stepsize = (hi_bound - lo_bound) * 1e-4;
-    const double dir = fa < 0.0 ? 1.0 : -1.0;  // increasing map: raise u when below target
-    for (int it = 0; it < 64; ++it) {
-      b = std::clamp(a + dir * stepsize, lo_bound, hi_bound);
-      fb = f(b);
-      if ((fb > 0.0) != (fa > 0.0) || std::abs(fb) <= y_tol_) break;
-      if (b == lo_bound || b == hi_bound) break;  // target beyond reach: saturate
-      a = b;
-      fa = fb;
-      stepsize *= 2.0;
+  // Bracket around the previous input, growing the step geometrically: first in the direction
+  // an increasing map suggests, then the other way (rate-dependent maps need not be monotone
+  // near the previous input).
+  const double start = std::clamp(u_prev_, lo_bound, hi_bound);
+  const double f_start = f(start);
+  double a = start, fa = f_start, b = start, fb = f_start;
+  if (std::abs(f_start) > y_tol_) {
+    bool bracketed = false;
+    const double preferred = f_start < 0.0 ? 1.0 : -1.0;
+    for (const double dir : {preferred, -preferred}) {
+      a = start;
+      fa = f_start;
+      double stepsize = (hi_bound - lo_bound) * 1e-4;
+      for (int it = 0; it < 64; ++it) {
+        b = std::clamp(a + dir * stepsize, lo_bound, hi_bound);
+        fb = f(b);
+        if ((fb > 0.0) != (fa > 0.0) || std::abs(fb) <= y_tol_) {
+          bracketed = true;
+          break;
+        }
+        if (b == lo_bound || b == hi_bound) break;
+        a = b;
+        fa = fb;
+        stepsize *= 2.0;
+      }
+      if (bracketed) break;
     }
-    if ((fb > 0.0) == (fa > 0.0) && std::abs(fb) > y_tol_) {
-      // Unreachable: saturate at the bound in the direction of the target.
+    if (!bracketed) {
+      // Unreachable: saturate at the bound in the direction an increasing map suggests.
+      b = preferred > 0.0 ? hi_bound : lo_bound;
       model_.step(b);
       u_prev_ = b;
       return b;
@@ -177,13 +190,14 @@ std::unique_ptr<InverseModel> make_inverse(const ActuatorModel& model, InverseKi
   const ModelKind mk = model.hysteresis().kind();
   const bool analytic_possible =
       !model.creep() && (mk == ModelKind::kPi || mk == ModelKind::kModifiedPi);
-  if (kind == InverseKind::kAuto) kind = analytic_possible ? InverseKind::kAnalytic : InverseKind::kNumeric;
+  if (kind == InverseKind::kAuto)
+    kind = analytic_possible ? InverseKind::kAnalytic : InverseKind::kNumeric;
   switch (kind) {
     case InverseKind::kAnalytic:
-      details::require(analytic_possible,
-                       "no analytic inverse for a " + std::string(to_string(mk)) +
-                           (model.creep() ? " model with creep" : " model") +
-                           "; use the numeric inverse");
+      details::require(analytic_possible, "no analytic inverse for a " +
+                                              std::string(to_string(mk)) +
+                                              (model.creep() ? " model with creep" : " model") +
+                                              "; use the numeric inverse");
       if (mk == ModelKind::kPi) {
         return std::make_unique<PiInverse>(static_cast<const PiModel&>(model.hysteresis()));
       }

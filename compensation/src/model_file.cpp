@@ -54,9 +54,9 @@ std::vector<double> numbers(const json& obj, const std::string& parent, const ch
 void require_increasing(const std::vector<double>& v, const std::string& field) {
   for (std::size_t i = 1; i < v.size(); ++i) {
     if (!(v[i] > v[i - 1])) {
-      fail(field + "[" + std::to_string(i) + "]",
-           "thresholds must be strictly increasing (" + std::to_string(v[i]) +
-               " after " + std::to_string(v[i - 1]) + ")");
+      fail(field + "[" + std::to_string(i) + "]", "thresholds must be strictly increasing (" +
+                                                      std::to_string(v[i]) + " after " +
+                                                      std::to_string(v[i - 1]) + ")");
     }
   }
 }
@@ -100,7 +100,7 @@ json to_json(const ModelFile& file) {
   j["schema"] = kModelSchema;
   j["type"] = std::string(to_string(m.hysteresis().kind()));
   j["units"] = {{"input", m.units.input}, {"output", m.units.output}};
-  j["input_range"] = {m.input_min, m.input_max};
+  if (m.input_min < m.input_max) j["input_range"] = {m.input_min, m.input_max};
   switch (m.hysteresis().kind()) {
     case ModelKind::kPi:
       j["play"] = play_to_json(static_cast<const PiModel&>(m.hysteresis()).parameters());
@@ -146,7 +146,8 @@ ModelFile model_file_from_json(const json& j) {
   const json& type = member(j, "", "type");
   if (!type.is_string()) fail("type", "must be a string");
   const auto kind = model_kind_from_string(type.get<std::string>());
-  if (!kind) fail("type", "unknown model type \"" + type.get<std::string>() + "\" (pi, mpi, cpi, rpi)");
+  if (!kind)
+    fail("type", "unknown model type \"" + type.get<std::string>() + "\" (pi, mpi, cpi, rpi)");
 
   ModelFile out;
   try {
@@ -171,12 +172,10 @@ ModelFile model_file_from_json(const json& j) {
       }
       case ModelKind::kCoupledPlayPi: {
         const json& c = member(j, "", "coupled_play");
-        CoupledPlayParameters p{numbers(c, "coupled_play", "r"),
-                                numbers(c, "coupled_play", "ra"),
-                                numbers(c, "coupled_play", "rb"),
-                                numbers(c, "coupled_play", "rc"),
-                                numbers(c, "coupled_play", "weights"),
-                                number_member(c, "coupled_play", "offset", 0.0)};
+        CoupledPlayParameters p{
+            numbers(c, "coupled_play", "r"),       numbers(c, "coupled_play", "ra"),
+            numbers(c, "coupled_play", "rb"),      numbers(c, "coupled_play", "rc"),
+            numbers(c, "coupled_play", "weights"), number_member(c, "coupled_play", "offset", 0.0)};
         h = std::make_unique<CoupledPlayPiModel>(std::move(p));
         break;
       }

@@ -25,7 +25,8 @@ void validate(const PiParameters& p) {
 
 std::vector<double> uniform_thresholds(std::size_t n, double r_max) {
   std::vector<double> r(n);
-  for (std::size_t i = 0; i < n; ++i) r[i] = r_max * static_cast<double>(i) / static_cast<double>(n);
+  for (std::size_t i = 0; i < n; ++i)
+    r[i] = r_max * static_cast<double>(i) / static_cast<double>(n);
   return r;
 }
 
@@ -66,8 +67,8 @@ Invertibility PiModel::invertibility() const {
     v.block = "play";
     v.index = 0;
     v.value = p_.thresholds.front();
-    v.reason = "play.thresholds[0] must be 0 (a first threshold of " +
-               std::to_string(v.value) + " leaves a flat backlash after every reversal)";
+    v.reason = "play.thresholds[0] must be 0 (a first threshold of " + std::to_string(v.value) +
+               " leaves a flat backlash after every reversal)";
     return v;
   }
   double cumulative = 0.0;
@@ -79,8 +80,9 @@ Invertibility PiModel::invertibility() const {
       v.block = "play";
       v.index = static_cast<int>(i);
       v.value = cumulative;
-      v.reason = "cumulative play weight W[" + std::to_string(i) + "] = " +
-                 std::to_string(cumulative) + " is not positive (the loading curve is not "
+      v.reason = "cumulative play weight W[" + std::to_string(i) +
+                 "] = " + std::to_string(cumulative) +
+                 " is not positive (the loading curve is not "
                  "increasing there)";
       return v;
     }
@@ -114,7 +116,8 @@ PiParameters inverse_parameters(const PiParameters& model) {
   double cum_prev = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     double r = 0.0;
-    for (std::size_t j = 0; j <= i; ++j) r += model.weights[j] * (model.thresholds[i] - model.thresholds[j]);
+    for (std::size_t j = 0; j <= i; ++j)
+      r += model.weights[j] * (model.thresholds[i] - model.thresholds[j]);
     out.thresholds[i] = r;
     const double cum = cum_prev + model.weights[i];
     out.weights[i] = (i == 0) ? 1.0 / cum : -model.weights[i] / (cum * cum_prev);

@@ -14,9 +14,9 @@ PidController::PidController(PidParameters p, double dt_s) : p_(p), dt_(dt_s) {
   details::require_finite(p_.kd, "pid.kd");
   details::require(std::isfinite(p_.derivative_filter_hz) && p_.derivative_filter_hz >= 0.0,
                    "pid.derivative_filter_hz must be >= 0");
-  details::require(!std::isnan(p_.output_min) && !std::isnan(p_.output_max) &&
-                       p_.output_min <= p_.output_max,
-                   "pid.output_min must be <= pid.output_max");
+  details::require(
+      !std::isnan(p_.output_min) && !std::isnan(p_.output_max) && p_.output_min <= p_.output_max,
+      "pid.output_min must be <= pid.output_max");
   details::require(std::isfinite(dt_s) && dt_s > 0.0, "sample period must be > 0");
   if (p_.derivative_filter_hz > 0.0) {
     const double tau = 1.0 / (2.0 * std::numbers::pi * p_.derivative_filter_hz);

@@ -74,8 +74,7 @@ Invertibility RateDependentPiModel::invertibility() const {
         v.index = static_cast<int>(i);
         v.value = cumulative;
         v.reason = "cumulative play weight W[" + std::to_string(i) + "] at rate " +
-                   std::to_string(rate) + " = " + std::to_string(cumulative) +
-                   " is not positive";
+                   std::to_string(rate) + " = " + std::to_string(cumulative) + " is not positive";
         return v;
       }
     }

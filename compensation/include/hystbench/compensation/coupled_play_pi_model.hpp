@@ -27,7 +27,8 @@ class CoupledPlayPiModel final : public HysteresisModel {
   double peek(double u) const noexcept override;
   void reset(double u0) noexcept override;
   std::size_t operator_count() const noexcept override { return p_.weights.size(); }
-  /// Requires cumulative weights > 0 (monotone branches) so the numeric inverse is unique.
+  /// Requires rc >= r and ra <= rb per operator (monotone branches) and cumulative weights > 0,
+  /// so the numeric inverse is unique.
   Invertibility invertibility() const override;
   std::unique_ptr<HysteresisModel> clone() const override;
 

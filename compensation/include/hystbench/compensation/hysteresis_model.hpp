@@ -14,10 +14,10 @@
 namespace hystbench::compensation {
 
 enum class ModelKind {
-  kPi,                ///< classical PI: weighted plays + offset
-  kModifiedPi,        ///< Kuhnen's modified PI: PI followed by 2m+1 one-sided dead zones
-  kCoupledPlayPi,     ///< asymmetric PI of coupled-play operators (r, ra, rb, rc)
-  kRateDependentPi,   ///< modified PI whose cumulative play weights are linear in |du/dt|
+  kPi,               ///< classical PI: weighted plays + offset
+  kModifiedPi,       ///< Kuhnen's modified PI: PI followed by 2m+1 one-sided dead zones
+  kCoupledPlayPi,    ///< asymmetric PI of coupled-play operators (r, ra, rb, rc)
+  kRateDependentPi,  ///< modified PI whose cumulative play weights are linear in |du/dt|
 };
 
 /// "pi", "mpi", "cpi", "rpi".

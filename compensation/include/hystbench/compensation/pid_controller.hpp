@@ -11,11 +11,11 @@
 namespace hystbench::compensation {
 
 struct PidParameters {
-  double kp = 0.0;                     ///< [V/µm]
-  double ki = 0.0;                     ///< [V/(µm s)]
-  double kd = 0.0;                     ///< [V s/µm]
-  double derivative_filter_hz = 0.0;   ///< 0 = unfiltered derivative
-  double output_min = -1e300;          ///< clamp of u_fb [V]
+  double kp = 0.0;                    ///< [V/µm]
+  double ki = 0.0;                    ///< [V/(µm s)]
+  double kd = 0.0;                    ///< [V s/µm]
+  double derivative_filter_hz = 0.0;  ///< 0 = unfiltered derivative
+  double output_min = -1e300;         ///< clamp of u_fb [V]
   double output_max = 1e300;
 };
 

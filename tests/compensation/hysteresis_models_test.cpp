@@ -1,0 +1,175 @@
+// Properties of the forward models: play definition, wiping-out, rate independence, asymmetry.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "hystbench/compensation/coupled_play_pi_model.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/play_operator.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "support/random_models.hpp"
+
+namespace hc = hystbench::compensation;
+
+TEST(PlayOperator, FollowsDefinitionAndHoldsInsideBand) {
+  hc::PlayOperator play(1.0, 0.0);
+  EXPECT_DOUBLE_EQ(play.step(0.5), 0.0);   // inside [u-r, u+r]: holds
+  EXPECT_DOUBLE_EQ(play.step(3.0), 2.0);   // pushed up: u - r
+  EXPECT_DOUBLE_EQ(play.step(2.5), 2.0);   // reversal inside the band: holds
+  EXPECT_DOUBLE_EQ(play.step(-1.0), 0.0);  // pushed down: u + r
+  EXPECT_DOUBLE_EQ(play.peek(5.0), 4.0);
+  EXPECT_DOUBLE_EQ(play.output(), 0.0);  // peek does not change state
+  EXPECT_THROW(hc::PlayOperator(-1.0), std::invalid_argument);
+}
+
+TEST(PiModel, IsWeightedSumOfPlaysPlusOffset) {
+  hc::PiModel pi({{0.0, 1.0, 2.0}, {0.5, 0.3, 0.2}, 7.0});
+  pi.reset(0.0);
+  hc::PlayOperator p0(0.0), p1(1.0), p2(2.0);
+  for (double u : {0.0, 2.0, 5.0, 3.0, 4.5, -1.0, 0.25}) {
+    const double expected = 7.0 + 0.5 * p0.step(u) + 0.3 * p1.step(u) + 0.2 * p2.step(u);
+    EXPECT_NEAR(pi.step(u), expected, 1e-12);
+  }
+}
+
+TEST(PiModel, RejectsBadParametersNamingTheField) {
+  auto message = [](const hc::PiParameters& p) {
+    try {
+      hc::PiModel m(p);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({{0.0, 2.0, 1.0}, {1, 1, 1}, 0}).find("play.thresholds"), std::string::npos);
+  EXPECT_NE(message({{0.0, 1.0}, {1.0}, 0}).find("play.weights"), std::string::npos);
+  EXPECT_NE(message({{0.0, 1.0}, {1.0, NAN}, 0}).find("play.weights[1]"), std::string::npos);
+}
+
+// After the input passes a previous extremum, the memory of the loops inside it is erased: two
+// histories that differ only inside a wiped-out excursion give identical outputs afterwards.
+TEST(PiModel, WipingOutProperty) {
+  std::mt19937_64 rng(7);
+  for (int trial = 0; trial < 20; ++trial) {
+    const auto params = hystbench::testing::random_mpi(rng, 12, 3, 10.0);
+    hc::ModifiedPiModel a(params), b(params);
+    a.reset(0.0);
+    b.reset(0.0);
+    auto ramp = [](hc::ModifiedPiModel& m, double from, double to) {
+      for (int k = 1; k <= 50; ++k) m.step(from + (to - from) * k / 50.0);
+    };
+    ramp(a, 0.0, 10.0), ramp(b, 0.0, 10.0);
+    ramp(a, 10.0, 1.0), ramp(b, 10.0, 1.0);
+    // a: nested minor loops below 8; b: straight up.
+    ramp(a, 1.0, 6.0), ramp(a, 6.0, 3.0), ramp(a, 3.0, 5.0), ramp(a, 5.0, 4.0), ramp(a, 4.0, 8.0);
+    ramp(b, 1.0, 8.0);
+    std::uniform_real_distribution<double> unit(0.0, 10.0);
+    for (int k = 0; k < 500; ++k) {
+      const double u = unit(rng);
+      ASSERT_NEAR(a.step(u), b.step(u), 1e-9) << "trial " << trial << " sample " << k;
+    }
+  }
+}
+
+// Rate independence: the loop height at mid-input does not depend on the sample rate.
+TEST(PiModel, LoopHeightIndependentOfSampleRate) {
+  std::mt19937_64 rng(11);
+  const auto params = hystbench::testing::random_mpi(rng, 20, 4, 100.0);
+  std::vector<double> heights;
+  for (const double fs : {100.0, 1000.0, 10000.0}) {
+    hc::ModifiedPiModel m(params);
+    m.reset(0.0);
+    // Triangle 0 -> 100 -> 0 over 1 s, two periods; mid-input sampled exactly at t=.25 and .75.
+    double up = 0.0, down = 0.0;
+    const int n = static_cast<int>(2 * fs);
+    for (int k = 0; k <= n; ++k) {
+      const double t = k / fs;
+      const double phase = std::fmod(t, 1.0);
+      const double u = phase < 0.5 ? 200.0 * phase : 200.0 * (1.0 - phase);
+      const double y = m.step(u);
+      if (k == static_cast<int>(1.25 * fs)) up = y;
+      if (k == static_cast<int>(1.75 * fs)) down = y;
+    }
+    heights.push_back(down - up);
+  }
+  EXPECT_GT(heights[0], 0.0);
+  EXPECT_NEAR(heights[1], heights[0], 1e-9 * std::abs(heights[0]));
+  EXPECT_NEAR(heights[2], heights[0], 1e-9 * std::abs(heights[0]));
+}
+
+TEST(ModifiedPiModel, DeadZonesMakeTheLoopAsymmetric) {
+  hc::PiParameters play{{0.0, 2.0, 4.0}, {0.6, 0.3, 0.2}, 0.0};
+  hc::ModifiedPiModel sym({play, {{0.0}, {1.0}}, 5.0});
+  hc::ModifiedPiModel asym({play, {{-3.0, 0.0, 3.0}, {0.0, 1.0, 0.5}}, 5.0});
+  // Identity dead zone: same as the PI.
+  hc::PiModel pi(play);
+  sym.reset(0.0), pi.reset(0.0), asym.reset(0.0);
+  double max_diff = 0.0;
+  for (int k = 0; k <= 200; ++k) {
+    const double u = 10.0 * std::sin(0.05 * k);
+    EXPECT_NEAR(sym.step(u), pi.step(u), 1e-12);
+    max_diff = std::max(max_diff, std::abs(asym.step(u) - pi.peek(u)));
+  }
+  EXPECT_GT(max_diff, 0.1);
+}
+
+TEST(DeadZoneSuperposition, InverseUndoesTheMapOnBothSides) {
+  hc::DeadZoneSuperposition s({{-2.0, -1.0, 0.0, 1.5, 3.0}, {0.3, -0.2, 1.0, 0.4, -0.5}});
+  ASSERT_TRUE(s.invertibility().invertible);
+  const auto inv = s.inverse();
+  for (double v = -6.0; v <= 6.0; v += 0.01) EXPECT_NEAR(inv.apply(s.apply(v)), v, 1e-12);
+  hc::DeadZoneSuperposition bad({{0.0, 1.0}, {1.0, -1.5}});
+  const auto why = bad.invertibility();
+  EXPECT_FALSE(why.invertible);
+  EXPECT_EQ(why.block, "deadzone");
+  EXPECT_EQ(why.index, 1);
+  EXPECT_THROW(bad.inverse(), hc::NotInvertibleError);
+}
+
+TEST(CoupledPlayPiModel, WidthDependsOnDirectionAndLevel) {
+  // Rising above rc = 1 uses r = 0.5; below it the width is rc. Falling below -rb = -1 uses ra.
+  const double r = 0.5, ra = 2.0, rb = 1.0, rc = 1.0;
+  double z = 0.0;
+  z = hc::CoupledPlayPiModel::operator_output(0.8, 0.0, z, r, ra, rb, rc);
+  EXPECT_DOUBLE_EQ(z, 0.0);  // max(0, 0.8 - 1.0)
+  z = hc::CoupledPlayPiModel::operator_output(3.0, 0.8, z, r, ra, rb, rc);
+  EXPECT_DOUBLE_EQ(z, 2.5);
+  z = hc::CoupledPlayPiModel::operator_output(1.0, 3.0, z, r, ra, rb, rc);
+  EXPECT_DOUBLE_EQ(z, 2.0);  // min(2.5, 1.0 + rb)
+  z = hc::CoupledPlayPiModel::operator_output(-3.0, 1.0, z, r, ra, rb, rc);
+  EXPECT_DOUBLE_EQ(z, -1.0);  // min(2.0, -3.0 + ra)
+}
+
+TEST(RateDependentPiModel, ReducesToModifiedPiAtZeroRateCoefficients) {
+  std::mt19937_64 rng(3);
+  const auto base = hystbench::testing::random_mpi(rng, 10, 2, 20.0);
+  hc::RateDependentPiModel rate({base, std::vector<double>(10, 0.0), 100.0}, 1e-3);
+  hc::ModifiedPiModel mpi(base);
+  rate.reset(0.0), mpi.reset(0.0);
+  for (double u : hystbench::testing::random_reversal_signal(rng, 2000, 0.0, 20.0)) {
+    ASSERT_NEAR(rate.step(u), mpi.step(u), 1e-12);
+  }
+}
+
+TEST(RateDependentPiModel, LoopWidensWithRateWhenCoefficientsArePositive) {
+  hc::ModifiedPiParameters base{
+      {{0.0, 2.0, 4.0, 6.0}, {0.5, 0.2, 0.2, 0.1}, 0.0}, {{0.0}, {1.0}}, 0.0};
+  auto width_at = [&](double frequency_hz) {
+    hc::RateDependentPiModel m({base, {0.0, 0.001, 0.002, 0.003}, 1e4}, 1e-4);
+    m.reset(0.0);
+    double up = 0, down = 0;
+    const int n = static_cast<int>(2.0 / frequency_hz / 1e-4);
+    for (int k = 0; k <= n; ++k) {
+      const double t = k * 1e-4 * frequency_hz;  // cycles
+      const double phase = std::fmod(t, 1.0);
+      const double u = phase < 0.5 ? 40.0 * phase : 40.0 * (1.0 - phase);
+      const double y = m.step(u);
+      if (k == static_cast<int>(1.25 / frequency_hz / 1e-4)) up = y;
+      if (k == static_cast<int>(1.75 / frequency_hz / 1e-4)) down = y;
+    }
+    return down - up;
+  };
+  EXPECT_GT(width_at(10.0), width_at(1.0) * 1.05);
+}

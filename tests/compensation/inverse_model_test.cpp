@@ -1,0 +1,217 @@
+// Property tests: model(inverse(y_ref)) == y_ref for random invertible models and signals.
+#include "hystbench/compensation/inverse_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "hystbench/compensation/coupled_play_pi_model.hpp"
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "support/random_models.hpp"
+
+namespace hc = hystbench::compensation;
+using hystbench::testing::random_mpi;
+using hystbench::testing::random_pi;
+using hystbench::testing::random_reversal_signal;
+
+namespace {
+
+// A reachable reference: the model's own response to a random input (from a relaxed state).
+std::vector<double> reachable_reference(hc::HysteresisModel& model, std::mt19937_64& rng,
+                                        std::size_t n, double lo, double hi) {
+  auto copy = model.clone();
+  copy->reset(lo);
+  return copy->simulate(random_reversal_signal(rng, n, lo, hi));
+}
+
+double range_of(const std::vector<double>& v) {
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  return *hi - *lo;
+}
+
+// Returns max |model(inverse(y_ref)) - y_ref| over the signal.
+double composition_error(hc::HysteresisModel& model, hc::InverseModel& inverse,
+                         const std::vector<double>& y_ref) {
+  double worst = 0.0;
+  for (const double yr : y_ref) {
+    const double u = inverse.step(yr);
+    worst = std::max(worst, std::abs(model.step(u) - yr));
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST(PiInverse, ComposesToIdentityForRandomModelsAndSignals) {
+  std::mt19937_64 rng(2024);
+  for (int trial = 0; trial < 50; ++trial) {
+    const int n = 2 + static_cast<int>(rng() % 40);
+    hc::PiModel model(random_pi(rng, n, 150.0));
+    const auto y_ref = reachable_reference(model, rng, 3000, 0.0, 150.0);
+    model.reset(0.0);
+    hc::PiInverse inverse(model);
+    const double err = composition_error(model, inverse, y_ref);
+    EXPECT_LE(err, 1e-9 * range_of(y_ref)) << "trial " << trial << " n=" << n;
+  }
+}
+
+TEST(ModifiedPiInverse, ComposesToIdentityForRandomModelsAndSignals) {
+  std::mt19937_64 rng(99);
+  for (int trial = 0; trial < 50; ++trial) {
+    const int n = 2 + static_cast<int>(rng() % 30);
+    const int m = static_cast<int>(rng() % 6);
+    hc::ModifiedPiModel model(random_mpi(rng, n, m, 150.0));
+    const auto y_ref = reachable_reference(model, rng, 3000, 0.0, 150.0);
+    model.reset(0.0);
+    hc::ModifiedPiInverse inverse(model);
+    const double err = composition_error(model, inverse, y_ref);
+    EXPECT_LE(err, 1e-9 * range_of(y_ref)) << "trial " << trial << " n=" << n << " m=" << m;
+  }
+}
+
+// The inverse can be started from any model state (not only a relaxed one).
+TEST(PiInverse, StartsConsistentlyFromAnArbitraryModelState) {
+  std::mt19937_64 rng(5);
+  hc::ModifiedPiModel model(random_mpi(rng, 15, 3, 100.0));
+  model.reset(0.0);
+  for (double u : random_reversal_signal(rng, 777, 0.0, 100.0)) model.step(u);
+  hc::ModifiedPiInverse inverse(model);  // built from the current state
+  auto probe = model.clone();
+  std::vector<double> y_ref = probe->simulate(random_reversal_signal(rng, 2000, 0.0, 100.0));
+  EXPECT_LE(composition_error(model, inverse, y_ref), 1e-9 * range_of(y_ref));
+}
+
+TEST(MakeInverse, RefusesNonInvertibleModelsNamingTheIndex) {
+  hc::ActuatorModel model(std::make_unique<hc::PiModel>(
+      hc::PiParameters{{0.0, 1.0, 2.0, 3.0}, {1.0, 0.5, -2.0, 0.2}, 0.0}));
+  try {
+    (void)hc::make_inverse(model);
+    FAIL() << "expected NotInvertibleError";
+  } catch (const hc::NotInvertibleError& e) {
+    EXPECT_EQ(e.why().index, 2);
+    EXPECT_EQ(e.why().block, "play");
+    EXPECT_NE(std::string(e.what()).find("W[2]"), std::string::npos);
+  }
+}
+
+TEST(NumericInverse, ComposesForCoupledPlayModels) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 10; ++trial) {
+    hc::CoupledPlayParameters p;
+    const int n = 8;
+    for (int i = 0; i < n; ++i) {
+      p.r.push_back(i * 5.0);
+      const double rb = i * 5.0 * (0.5 + unit(rng));
+      p.ra.push_back(rb * unit(rng));  // ra <= rb
+      p.rb.push_back(rb);
+      p.rc.push_back(i * 5.0 * (1.0 + unit(rng)));  // rc >= r
+      p.weights.push_back(i == 0 ? 0.3 + unit(rng) : 0.1 * unit(rng));
+    }
+    hc::ActuatorModel model(std::make_unique<hc::CoupledPlayPiModel>(p));
+    model.input_min = -100.0;
+    model.input_max = 100.0;
+    model.configure(1e-4);
+    const auto y_ref = reachable_reference(model.hysteresis(), rng, 2000, -80.0, 80.0);
+    auto inverse = hc::make_inverse(model);
+    model.reset(-80.0);
+    inverse->reset(-80.0);
+    EXPECT_LE(composition_error(model.hysteresis(), *inverse, y_ref), 1e-7 * range_of(y_ref))
+        << "trial " << trial;
+  }
+}
+
+TEST(CoupledPlayPiModel, NonMonotoneOperatorIsReportedNotInverted) {
+  hc::ActuatorModel model(std::make_unique<hc::CoupledPlayPiModel>(
+      hc::CoupledPlayParameters{{0, 2}, {0, 1}, {0, 1}, {0, 1}, {1.0, 0.5}, 0.0}));
+  model.input_min = -10;
+  model.input_max = 10;
+  try {
+    (void)hc::make_inverse(model);
+    FAIL() << "expected NotInvertibleError";
+  } catch (const hc::NotInvertibleError& e) {
+    EXPECT_EQ(e.why().index, 1);  // rc = 1 < r = 2
+  }
+}
+
+TEST(NumericInverse, ComposesForRateDependentModels) {
+  std::mt19937_64 rng(23);
+  auto base = random_mpi(rng, 10, 2, 100.0);
+  std::vector<double> c(10);
+  for (int i = 0; i < 10; ++i) c[i] = 2e-5 * i;  // cumulative weights grow with rate
+  // 100 Hz sampling: the random signal's rates stay below ~1e4 input units/s.
+  hc::ActuatorModel model(std::make_unique<hc::RateDependentPiModel>(
+      hc::RateDependentPiParameters{base, c, 1e4}, 1e-2));
+  // The map depends on the rate, so the inverse may take another (equally exact) input path;
+  // give it room beyond the reference's input range.
+  model.input_min = -50.0;
+  model.input_max = 150.0;
+  model.configure(1e-2);
+  const auto y_ref = reachable_reference(model.hysteresis(), rng, 3000, 0.0, 100.0);
+  auto inverse = hc::make_inverse(model);
+  model.reset(0.0);
+  inverse->reset(0.0);
+  EXPECT_LE(composition_error(model.hysteresis(), *inverse, y_ref), 1e-7 * range_of(y_ref));
+}
+
+TEST(NumericInverse, SaturatesAtTheInputBoundForUnreachableTargets) {
+  hc::ActuatorModel model(
+      std::make_unique<hc::PiModel>(hc::PiParameters{{0.0, 1.0}, {0.2, 0.1}, 0.0}));
+  model.input_min = 0.0;
+  model.input_max = 10.0;
+  hc::NumericInverse inverse(model);
+  inverse.reset(0.0);
+  EXPECT_DOUBLE_EQ(inverse.step(1e6), 10.0);
+  EXPECT_DOUBLE_EQ(inverse.step(-1e6), 0.0);
+}
+
+TEST(InverseMultiplicativeCompensator, TracksASlowReferenceClosely) {
+  std::mt19937_64 rng(31);
+  hc::ActuatorModel model(std::make_unique<hc::PiModel>(random_pi(rng, 15, 150.0)));
+  model.input_min = 0.0;
+  model.input_max = 150.0;
+  hc::InverseMultiplicativeCompensator comp(model);
+  model.reset(0.0);
+  comp.reset(0.0);
+  // 1 Hz sine over most of the range at 10 kHz.
+  const double y_lo = model.peek_static(15.0), y_hi = model.peek_static(135.0);
+  double worst = 0.0, worst_open_loop = 0.0;
+  hc::ActuatorModel open(model);
+  open.reset(0.0);
+  for (int k = 0; k < 30000; ++k) {
+    const double s = 0.5 - 0.5 * std::cos(2.0 * M_PI * k / 10000.0);
+    const double yr = y_lo + (y_hi - y_lo) * s;
+    const double y = model.step(comp.step(yr));
+    const double y_lin = open.step(15.0 + 120.0 * s);  // linear map, no compensation
+    if (k > 10000) {
+      worst = std::max(worst, std::abs(y - yr));
+      worst_open_loop = std::max(worst_open_loop, std::abs(y_lin - yr));
+    }
+  }
+  EXPECT_LT(worst, 0.01 * (y_hi - y_lo));
+  EXPECT_LT(worst, 0.2 * worst_open_loop);
+}
+
+// Table 2 of the multilayer-actuator paper, shipped as model files, is invertible and its
+// inverse composes to identity.
+TEST(SeedTable, MultilayerPaperTable2LoadsAndInverts) {
+  for (const char* name : {"multilayer-table2-pi.json", "multilayer-table2-mpi.json"}) {
+    std::ifstream in(std::string(HYSTBENCH_SOURCE_DIR) + "/config/models/" + name);
+    ASSERT_TRUE(in) << name;
+    std::stringstream text;
+    text << in.rdbuf();
+    hc::ModelFile file = hc::parse_model_file(text.str());
+    ASSERT_TRUE(file.model.hysteresis().invertibility().invertible) << name;
+    std::mt19937_64 rng(1);
+    const auto y_ref = reachable_reference(file.model.hysteresis(), rng, 4000, 0.0, 2.0);
+    auto inverse = hc::make_inverse(file.model);
+    file.model.reset(0.0);
+    inverse->reset(0.0);
+    EXPECT_LE(composition_error(file.model.hysteresis(), *inverse, y_ref), 1e-9 * range_of(y_ref))
+        << name;
+  }
+}

@@ -1,0 +1,102 @@
+#include "hystbench/compensation/model_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "support/random_models.hpp"
+
+namespace hc = hystbench::compensation;
+using nlohmann::json;
+
+namespace {
+
+std::string error_of(const std::string& text) {
+  try {
+    hc::parse_model_file(text);
+  } catch (const hc::ModelFileError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+json valid_mpi() {
+  return json::parse(R"({"schema":"hystbench.model/1","type":"mpi",
+    "units":{"input":"V","output":"um"},"input_range":[0,150],
+    "play":{"thresholds":[0,10,20],"weights":[0.2,0.05,0.03],"offset":1.5},
+    "deadzone":{"thresholds":[-5,0,5],"weights":[0.1,1.0,-0.1],"center":20},
+    "creep":{"time_constants_s":[0.1,10],"gains":[0.01,0.02]},
+    "dynamics":{"natural_frequency_hz":3000,"damping_ratio":0.07},"delay_s":0.0002,
+    "identification":{"data":"x.csv","samples":100}})");
+}
+
+}  // namespace
+
+TEST(ModelFile, RoundTripsEveryFieldAndBehavesIdentically) {
+  const hc::ModelFile a = hc::model_file_from_json(valid_mpi());
+  const json again = hc::to_json(a);
+  hc::ModelFile b = hc::model_file_from_json(again);
+  EXPECT_EQ(again, hc::to_json(b));
+  EXPECT_EQ(b.model.units.output, "um");
+  EXPECT_EQ(b.identification["samples"], 100);
+  ASSERT_TRUE(b.model.creep().has_value());
+  ASSERT_TRUE(b.model.dynamics().has_value());
+  hc::ActuatorModel ma = a.model;
+  std::mt19937_64 rng(1);
+  const auto u = hystbench::testing::random_reversal_signal(rng, 5000, 0.0, 150.0);
+  const auto ya = ma.simulate(u, 1e-4);
+  const auto yb = b.model.simulate(u, 1e-4);
+  for (std::size_t k = 0; k < u.size(); ++k) ASSERT_DOUBLE_EQ(ya[k], yb[k]);
+}
+
+TEST(ModelFile, RateDependentRoundTrip) {
+  std::mt19937_64 rng(2);
+  hc::ModelFile f;
+  f.model =
+      hc::ActuatorModel(std::make_unique<hc::RateDependentPiModel>(hc::RateDependentPiParameters{
+          hystbench::testing::random_mpi(rng, 5, 1, 10.0), {0, 1e-4, 2e-4, 3e-4, 4e-4}, 300.0}));
+  const json j = hc::to_json(f);
+  EXPECT_EQ(j["type"], "rpi");
+  EXPECT_EQ(hc::to_json(hc::model_file_from_json(j)), j);
+}
+
+TEST(ModelFile, ErrorsNameTheField) {
+  json j = valid_mpi();
+  j["type"] = "preisach";
+  EXPECT_NE(error_of(j.dump()).find("type"), std::string::npos);
+
+  j = valid_mpi();
+  j["play"].erase("weights");
+  EXPECT_NE(error_of(j.dump()).find("play.weights: missing"), std::string::npos);
+
+  j = valid_mpi();
+  j["play"]["thresholds"] = {0, 20, 10};
+  EXPECT_NE(error_of(j.dump()).find("play.thresholds[2]"), std::string::npos);
+
+  // NaN cannot be written in JSON; tools write null or the bare word NaN.
+  j = valid_mpi();
+  j["deadzone"]["weights"][1] = nullptr;
+  EXPECT_NE(error_of(j.dump()).find("deadzone.weights[1]"), std::string::npos);
+  EXPECT_NE(error_of(R"({"schema":"hystbench.model/1","type":"pi","play":{"thresholds":[0],
+    "weights":[NaN]}})")
+                .find("not valid JSON"),
+            std::string::npos);
+
+  j = valid_mpi();
+  j["play"]["weights"][0] = "0.2";
+  EXPECT_NE(error_of(j.dump()).find("play.weights[0]: must be a number"), std::string::npos);
+
+  j = valid_mpi();
+  j["schema"] = "hystbench.model/9";
+  EXPECT_NE(error_of(j.dump()).find("schema"), std::string::npos);
+
+  j = valid_mpi();
+  j["deadzone"]["thresholds"] = {-5, 1, 5};
+  EXPECT_NE(error_of(j.dump()).find("deadzone.thresholds must contain 0"), std::string::npos);
+
+  j = valid_mpi();
+  j["dynamics"]["damping_ratio"] = -1;
+  EXPECT_NE(error_of(j.dump()).find("dynamics.damping_ratio"), std::string::npos);
+}
