@@ -1,0 +1,55 @@
+#pragma once
+// Columnar numeric data files (CSV): lines starting with '#' are comments, the first other line
+// is a header naming the columns, every following line is one row of numbers. Bench run logs
+// (sample_log) use the same format, so they can be read back here.
+// Errors carry the file name and line number. Not real-time safe.
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hystbench::daemon {
+
+class DataFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class DataTable {
+ public:
+  /// Reads a CSV file. Throws DataFileError (cannot open, no header, ragged or non-numeric row
+  /// with its line number, duplicate column name, no rows).
+  static DataTable read_csv(const std::string& path);
+  /// Parses CSV text; `origin` names it in messages.
+  static DataTable parse_csv(const std::string& text, const std::string& origin = "<text>");
+
+  bool has(const std::string& column) const { return index_.count(column) != 0; }
+  /// The named column; throws DataFileError listing the available columns when missing.
+  const std::vector<double>& column(const std::string& name) const;
+  /// Requires `t` to be strictly increasing (error names the first offending line).
+  void require_increasing(const std::string& name) const;
+  std::size_t rows() const { return columns_.empty() ? 0 : columns_.front().size(); }
+  const std::vector<std::string>& names() const { return names_; }
+  const std::string& origin() const { return origin_; }
+  /// Comment lines (without the leading '#'), e.g. a run log's JSON header.
+  const std::vector<std::string>& comments() const { return comments_; }
+  /// Median sample period of column `t` [s]; throws when fewer than 2 rows.
+  double sample_period() const;
+
+ private:
+  std::string origin_;
+  std::vector<std::string> names_;
+  std::vector<std::vector<double>> columns_;
+  std::map<std::string, std::size_t> index_;
+  std::vector<std::size_t> line_of_row_;
+  std::vector<std::string> comments_;
+};
+
+/// Writes columns as CSV with a header row and optional '#' comment lines first.
+/// Values use 10 significant digits. Throws DataFileError when the file cannot be written.
+void write_csv(const std::string& path, const std::vector<std::string>& names,
+               const std::vector<const std::vector<double>*>& columns,
+               const std::vector<std::string>& comments = {});
+
+}  // namespace hystbench::daemon

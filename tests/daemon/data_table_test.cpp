@@ -1,0 +1,62 @@
+#include "hystbench/daemon/data_table.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace hd = hystbench::daemon;
+
+namespace {
+std::string error_of(const std::string& text) {
+  try {
+    hd::DataTable::parse_csv(text, "f.csv");
+  } catch (const hd::DataFileError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+}  // namespace
+
+TEST(DataTable, ReadsCommentsHeaderAndColumnsIgnoringExtras) {
+  const auto t = hd::DataTable::parse_csv("# {\"run\":1}\n# second\nt,u,y,extra\n0,1,2,9\n0.001,1.5,2.5,9\n");
+  EXPECT_EQ(t.rows(), 2u);
+  EXPECT_EQ(t.comments().size(), 2u);
+  EXPECT_DOUBLE_EQ(t.column("u")[1], 1.5);
+  EXPECT_DOUBLE_EQ(t.sample_period(), 0.001);
+  EXPECT_TRUE(t.has("extra"));
+}
+
+TEST(DataTable, ErrorsCarryTheLineNumber) {
+  EXPECT_EQ(error_of("# only\n# comments\n"), "f.csv: no header row (column names) found");
+  EXPECT_NE(error_of("t,u\n0,1\n1,abc\n").find("f.csv:3: column 'u': 'abc' is not a number"),
+            std::string::npos);
+  EXPECT_NE(error_of("t,u\n0,1\n1\n").find("f.csv:3: expected 2 values, found 1"),
+            std::string::npos);
+  EXPECT_NE(error_of("t,u,t\n0,1,2\n").find("duplicate column name 't'"), std::string::npos);
+  EXPECT_NE(error_of("t,u\n").find("no data rows"), std::string::npos);
+  const auto t = hd::DataTable::parse_csv("t,u\n0,1\n# c\n1,1\n1,2\n", "f.csv");
+  try {
+    t.require_increasing("t");
+    FAIL();
+  } catch (const hd::DataFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("f.csv:5: column 't' must be strictly increasing"),
+              std::string::npos);
+  }
+  try {
+    (void)t.column("y");
+    FAIL();
+  } catch (const hd::DataFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing column 'y' (columns: t, u)"), std::string::npos);
+  }
+}
+
+TEST(DataTable, WriteThenReadRoundTrips) {
+  const auto path = std::filesystem::temp_directory_path() / "hystbench_data_table_test.csv";
+  std::vector<double> a{0.0, 0.1, 0.2}, b{1.23456789012, -2.0, 3.5e-7};
+  hd::write_csv(path, {"t", "v"}, {&a, &b}, {"hello"});
+  const auto t = hd::DataTable::read_csv(path);
+  EXPECT_EQ(t.comments().front(), " hello");
+  EXPECT_NEAR(t.column("v")[0], 1.23456789012, 1e-9);
+  EXPECT_DOUBLE_EQ(t.column("v")[2], 3.5e-7);
+  std::filesystem::remove(path);
+}
