@@ -152,12 +152,23 @@ InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const Actuato
   if (!(gain_ > 0.0)) {
     details::require(model_.input_max > model_.input_min,
                      "inverse multiplicative compensator needs the model's input range or a gain");
-    // Major-loop slope: output span over input span along the initial loading curve.
+    // Largest local slope along a major loop (min -> max -> min): with g at least every local
+    // slope s, the per-sample correction factor 1 - s/g stays in [0, 1) and the structure is
+    // stable everywhere; the mean slope can be less than half the steepest part and diverge.
     ActuatorModel probe(model_);
+    probe.configure(model_.sample_period());
     probe.reset(model_.input_min);
-    const double y0 = probe.peek_static(model_.input_min);
-    const double y1 = probe.peek_static(model_.input_max);
-    gain_ = (y1 - y0) / (model_.input_max - model_.input_min);
+    constexpr int kPoints = 2000;
+    const double du = (model_.input_max - model_.input_min) / kPoints;
+    double y_prev = probe.step(model_.input_min);
+    gain_ = 0.0;
+    for (int k = 1; k <= 2 * kPoints; ++k) {
+      const double u =
+          k <= kPoints ? model_.input_min + k * du : model_.input_max - (k - kPoints) * du;
+      const double y = probe.step(u);
+      gain_ = std::max(gain_, std::abs(y - y_prev) / du);
+      y_prev = y;
+    }
   }
   details::require(std::isfinite(gain_) && gain_ > 0.0,
                    "inverse multiplicative compensator needs a positive gain");

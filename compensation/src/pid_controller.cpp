@@ -45,8 +45,9 @@ double PidController::step(double error) noexcept {
   return u_;
 }
 
-void PidController::reset() noexcept {
-  u_ = e1_ = ef_ = ef1_ = ef2_ = 0.0;
+void PidController::reset(double initial_output) noexcept {
+  u_ = std::clamp(initial_output, p_.output_min, p_.output_max);
+  e1_ = ef_ = ef1_ = ef2_ = 0.0;
   external_saturation_ = 0;
   samples_ = 0;
 }

@@ -78,7 +78,8 @@ class NumericInverse final : public InverseModel {
 /// Needs no inverse parameters: it runs the model itself in a delayed feedback.
 class InverseMultiplicativeCompensator final : public InverseModel {
  public:
-  /// gain <= 0 selects the model's major-loop slope over its identification range.
+  /// gain <= 0 selects the steepest local slope of the model's major loop over its
+  /// identification range (stable for every local slope; see the .cpp).
   explicit InverseMultiplicativeCompensator(const ActuatorModel& model, double gain = 0.0);
   double step(double y_ref) noexcept override;
   void reset(double u0) noexcept override;

@@ -28,7 +28,8 @@ class PidController {
   double step(double error) noexcept;
   /// Tells the controller the stage after it clamped the total output: +1 high, -1 low, 0 none.
   void set_saturation(int direction) noexcept { external_saturation_ = direction; }
-  void reset() noexcept;
+  /// Clears the history; the output restarts at `initial_output` (clamped).
+  void reset(double initial_output = 0.0) noexcept;
 
   double output() const noexcept { return u_; }
   const PidParameters& parameters() const noexcept { return p_; }

@@ -1,0 +1,58 @@
+#include "hystbench/compensation/tracking_metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace hystbench::compensation {
+
+double hysteresis_width(std::span<const double> y_ref, std::span<const double> y) {
+  const std::size_t n = std::min(y_ref.size(), y.size());
+  if (n < 3) return 0.0;
+  const auto [lo_it, hi_it] = std::minmax_element(y_ref.begin(), y_ref.begin() + n);
+  const double lo = *lo_it, hi = *hi_it, span = hi - lo;
+  if (!(span > 0.0)) return 0.0;
+  constexpr int kLevels = 100;
+  std::vector<double> up_sum(kLevels, 0.0), down_sum(kLevels, 0.0);
+  std::vector<int> up_n(kLevels, 0), down_n(kLevels, 0);
+  const double first = lo + 0.05 * span, step = 0.9 * span / (kLevels - 1);
+  for (std::size_t k = 1; k < n; ++k) {
+    const double a = y_ref[k - 1], b = y_ref[k];
+    if (a == b) continue;
+    const double seg_lo = std::min(a, b), seg_hi = std::max(a, b);
+    int i0 = static_cast<int>(std::ceil((seg_lo - first) / step));
+    int i1 = static_cast<int>(std::floor((seg_hi - first) / step));
+    i0 = std::max(i0, 0);
+    i1 = std::min(i1, kLevels - 1);
+    for (int i = i0; i <= i1; ++i) {
+      const double level = first + i * step;
+      if (level < seg_lo || level > seg_hi) continue;
+      const double f = (level - a) / (b - a);
+      const double yi = y[k - 1] + f * (y[k] - y[k - 1]);
+      if (b > a) {
+        up_sum[i] += yi;
+        ++up_n[i];
+      } else {
+        down_sum[i] += yi;
+        ++down_n[i];
+      }
+    }
+  }
+  double width = 0.0;
+  for (int i = 0; i < kLevels; ++i) {
+    if (up_n[i] > 0 && down_n[i] > 0) {
+      width = std::max(width, std::abs(down_sum[i] / down_n[i] - up_sum[i] / up_n[i]));
+    }
+  }
+  return width;
+}
+
+double hysteresis_percent(std::span<const double> y_ref, std::span<const double> y) {
+  const std::size_t n = std::min(y_ref.size(), y.size());
+  if (n < 3) return 0.0;
+  const auto [lo, hi] = std::minmax_element(y.begin(), y.begin() + n);
+  const double range = *hi - *lo;
+  return range > 0.0 ? 100.0 * hysteresis_width(y_ref, y) / range : 0.0;
+}
+
+}  // namespace hystbench::compensation

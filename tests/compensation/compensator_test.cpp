@@ -1,0 +1,105 @@
+#include "hystbench/compensation/compensator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "hystbench/compensation/error_metrics.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/tracking_metrics.hpp"
+#include "support/random_models.hpp"
+
+namespace hc = hystbench::compensation;
+
+namespace {
+
+struct TrackFigures {
+  double max_error, hysteresis;
+};
+
+// Tracks a 1 Hz triangle with `kind` on a plant equal to `truth`, at 10 kHz.
+TrackFigures track(hc::CompensatorKind kind, const hc::ActuatorModel& model,
+                   hc::ActuatorModel truth) {
+  std::optional<hc::PidController> pid;
+  if (hc::uses_feedback(kind))
+    pid.emplace(hc::PidParameters{0.05, 200.0, 0.0, 0.0, -150, 150}, 1e-4);
+  std::unique_ptr<hc::InverseModel> inverse;
+  if (hc::needs_model(kind)) {
+    inverse = hc::make_inverse(model, kind == hc::CompensatorKind::kInverseMultiplicative
+                                          ? hc::InverseKind::kMultiplicative
+                                          : hc::InverseKind::kAuto);
+  }
+  const double y0 = truth.peek_static(0.0), y1 = truth.peek_static(150.0);
+  hc::Compensator comp(kind, std::move(inverse), pid, {(y1 - y0) / 150.0, y0});
+  truth.reset(0.0);
+  comp.reset(0.0);
+  std::vector<double> yr, y;
+  double y_prev = NAN;
+  for (int k = 0; k < 30000; ++k) {
+    const double phase = std::fmod(k / 10000.0, 1.0);
+    const double tri = phase < 0.5 ? 2 * phase : 2 * (1 - phase);
+    const double ref = y0 + (y1 - y0) * (0.1 + 0.8 * tri);
+    const auto out = comp.step(ref, y_prev);
+    y_prev = truth.step(std::clamp(out.u, 0.0, 150.0));
+    if (k >= 10000) {
+      yr.push_back(ref);
+      y.push_back(y_prev);
+    }
+  }
+  return {hc::error_stats(yr, y).max_abs / (y1 - y0), hc::hysteresis_percent(yr, y)};
+}
+
+}  // namespace
+
+TEST(Compensator, InverseRemovesTheHysteresisOfAnExactModel) {
+  std::mt19937_64 rng(8);
+  hc::ActuatorModel model(
+      std::make_unique<hc::ModifiedPiModel>(hystbench::testing::random_mpi(rng, 12, 2, 150.0)));
+  model.input_min = 0.0;
+  model.input_max = 150.0;
+  model.configure(1e-4);
+  const TrackFigures none = track(hc::CompensatorKind::kNone, model, model);
+  const TrackFigures inverse = track(hc::CompensatorKind::kInverse, model, model);
+  const TrackFigures multiplicative =
+      track(hc::CompensatorKind::kInverseMultiplicative, model, model);
+  const TrackFigures pid = track(hc::CompensatorKind::kInversePid, model, model);
+  EXPECT_GT(none.hysteresis, 2.0);
+  EXPECT_LT(inverse.max_error, 1e-9);
+  EXPECT_LT(inverse.hysteresis, 1e-6);
+  EXPECT_LT(multiplicative.max_error, 0.01);
+  EXPECT_LT(pid.max_error, 0.01);
+}
+
+TEST(Compensator, PidAloneFollowsASlowReferenceOnAMismatchedPlant) {
+  std::mt19937_64 rng(9);
+  hc::ActuatorModel truth(
+      std::make_unique<hc::ModifiedPiModel>(hystbench::testing::random_mpi(rng, 12, 2, 150.0)));
+  truth.configure(1e-4);
+  const TrackFigures pid = track(hc::CompensatorKind::kPid, truth, truth);
+  const TrackFigures none = track(hc::CompensatorKind::kNone, truth, truth);
+  EXPECT_LT(pid.hysteresis, none.hysteresis);
+}
+
+TEST(Compensator, RefusesAnInverseKindWithoutAModel) {
+  EXPECT_THROW(hc::Compensator(hc::CompensatorKind::kInverse, nullptr, std::nullopt, {}),
+               std::invalid_argument);
+  EXPECT_THROW(hc::Compensator(hc::CompensatorKind::kPid, nullptr, std::nullopt, {}),
+               std::invalid_argument);
+  EXPECT_EQ(hc::compensator_kind_from_string("inverse+pid"), hc::CompensatorKind::kInversePid);
+  EXPECT_FALSE(hc::compensator_kind_from_string("bogus").has_value());
+}
+
+TEST(TrackingMetrics, HysteresisPercentMeasuresTheLoopWidth) {
+  // y lags the reference like an ellipse: width 2*a*sin(phi) at mid level for y = a sin(wt - phi).
+  std::vector<double> yr, y;
+  const double phi = 0.2;
+  for (int k = 0; k < 20000; ++k) {
+    const double w = 2 * M_PI * k / 1000.0;
+    yr.push_back(std::sin(w));
+    y.push_back(std::sin(w - phi));
+  }
+  // Widest at the middle: 2 sin(phi) over a range of 2.
+  EXPECT_NEAR(hc::hysteresis_percent(yr, y), 100.0 * std::sin(phi), 0.5);
+  EXPECT_NEAR(hc::hysteresis_percent(yr, yr), 0.0, 1e-12);
+}
