@@ -21,6 +21,7 @@ ActuatorModel::ActuatorModel(const ActuatorModel& other)
       dyn_params_(other.dyn_params_),
       delay_s_(other.delay_s_),
       dt_(other.dt_),
+      last_input_(other.last_input_),
       creep_(other.creep_),
       dynamics_(other.dynamics_),
       delay_(other.delay_) {}
@@ -33,20 +34,22 @@ ActuatorModel& ActuatorModel::operator=(const ActuatorModel& other) {
   return *this;
 }
 
+// Each setter rebuilds only its own part, so the state of the others is kept.
 void ActuatorModel::set_creep(std::optional<CreepParameters> creep) {
+  creep_ = creep ? CreepOperatorBank(*creep, dt_) : CreepOperatorBank();
   creep_params_ = std::move(creep);
-  configure(dt_);
 }
 
 void ActuatorModel::set_dynamics(std::optional<DynamicsParameters> dynamics) {
+  dynamics_.reset();
+  if (dynamics) dynamics_.emplace(*dynamics, dt_);
   dyn_params_ = dynamics;
-  configure(dt_);
 }
 
 void ActuatorModel::set_delay(double delay_s) {
   details::require(std::isfinite(delay_s) && delay_s >= 0.0, "delay_s must be >= 0");
   delay_s_ = delay_s;
-  configure(dt_);
+  delay_ = DelayLine(static_cast<std::size_t>(std::lround(delay_s_ / dt_)));
 }
 
 void ActuatorModel::configure(double dt_s) {
@@ -60,6 +63,7 @@ void ActuatorModel::configure(double dt_s) {
 }
 
 double ActuatorModel::step(double u) noexcept {
+  last_input_ = u;
   const double ud = delay_.push(u);
   double y = hysteresis_->step(ud);
   if (!creep_.empty()) y += creep_.step(ud);
@@ -74,6 +78,7 @@ double ActuatorModel::peek_static(double u) const noexcept {
 }
 
 void ActuatorModel::reset(double u0) noexcept {
+  last_input_ = u0;
   delay_.reset(u0);
   hysteresis_->reset(u0);
   double y = hysteresis_->peek(u0);

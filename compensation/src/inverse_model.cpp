@@ -59,13 +59,15 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
   const Invertibility inv = model_.hysteresis().invertibility();
   if (!inv.invertible) throw NotInvertibleError(inv);
   // Static model only: the inverse runs the hysteresis (+ creep) at the model's sample period.
+  // Static model only: dropping delay and dynamics keeps the hysteresis and creep state.
   model_.set_delay(0.0);
   model_.set_dynamics(std::nullopt);
-  model_.reset(opt_.input_min);
+  ActuatorModel probe(model_);
+  probe.reset(opt_.input_min);
   const double y_span =
-      std::abs(model_.peek_static(opt_.input_max) - model_.peek_static(opt_.input_min));
+      std::abs(probe.peek_static(opt_.input_max) - probe.peek_static(opt_.input_min));
   y_tol_ = opt_.tolerance * std::max(y_span, 1e-300);
-  reset(opt_.input_min);
+  u_prev_ = model_.last_input();
 }
 
 double NumericInverse::step(double y_ref) noexcept {
@@ -172,7 +174,8 @@ InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const Actuato
   }
   details::require(std::isfinite(gain_) && gain_ > 0.0,
                    "inverse multiplicative compensator needs a positive gain");
-  reset(model_.input_min);
+  u_prev_ = model_.last_input();
+  y_prev_ = model_.peek_static(u_prev_);
 }
 
 double InverseMultiplicativeCompensator::step(double y_ref) noexcept {

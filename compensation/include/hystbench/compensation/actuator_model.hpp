@@ -33,7 +33,8 @@ class ActuatorModel {
   void set_creep(std::optional<CreepParameters> creep);
   void set_dynamics(std::optional<DynamicsParameters> dynamics);
   void set_delay(double delay_s);  ///< >= 0 [s]; rounded to whole samples at configure()
-  /// Sample period for every part that depends on time; allocates the delay line.
+  /// Sample period for every part that depends on time; allocates the delay line. Resets the
+  /// state of creep, dynamics and delay (not of the hysteresis).
   void configure(double dt_s);
 
   // --- real-time path ---
@@ -52,6 +53,8 @@ class ActuatorModel {
   double delay_s() const noexcept { return delay_s_; }
   std::size_t delay_samples() const noexcept { return delay_.samples(); }
   double sample_period() const noexcept { return dt_; }
+  /// The input of the last step() (or reset()).
+  double last_input() const noexcept { return last_input_; }
   /// True when delay and dynamics are absent (the static map can be inverted sample by sample).
   bool is_static() const noexcept { return delay_s_ == 0.0 && !dyn_params_; }
 
@@ -69,6 +72,7 @@ class ActuatorModel {
   std::optional<DynamicsParameters> dyn_params_;
   double delay_s_ = 0.0;
   double dt_ = 1e-3;
+  double last_input_ = 0.0;
   CreepOperatorBank creep_;
   std::optional<SecondOrderDynamics> dynamics_;
   DelayLine delay_;

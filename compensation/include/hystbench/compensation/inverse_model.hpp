@@ -1,5 +1,7 @@
 #pragma once
 // Feedforward compensators: given a desired output y_ref, the input u that makes the model give it.
+// Every inverse starts from the state the model is in when the inverse is built (so simulate the
+// model through the actuator's known history first), or from reset(u0).
 // step() is real-time safe (no allocation, no exceptions, bounded work).
 #include <memory>
 
