@@ -1,0 +1,71 @@
+// SimulatedActuator::step()/reset() and SignalGenerator::value() must not allocate: this file
+// replaces the global operator new of the sim_tests executable with a counting one.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <new>
+
+#include "hystbench/sim/signal_generator.hpp"
+#include "hystbench/sim/simulated_actuator.hpp"
+
+namespace {
+thread_local bool counting = false;
+thread_local long allocations = 0;
+
+/// Counts the allocations made by f on this thread.
+template <class F>
+long allocations_during(F&& f) {
+  allocations = 0;
+  counting = true;
+  f();
+  counting = false;
+  return allocations;
+}
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (counting) ++allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace hs = hystbench::sim;
+
+TEST(RealTimeSafety, ActuatorStepAndResetDoNotAllocateWithEveryEffectOn) {
+  hs::SimulatedActuatorConfig c;
+  c.rate_dependence.enabled = true;
+  c.delay.enabled = true;
+  c.thermal_drift.enabled = true;
+  c.thermal_drift.shape = hs::DriftShape::kRandomWalk;
+  c.displacement_saturation.enabled = true;
+  hs::SimulatedActuator a(c, 1e-4);
+  double sink = 0.0;
+  const long n = allocations_during([&] {
+    for (int k = 0; k < 20000; ++k) sink += a.step(75.0 + 70.0 * std::sin(k * 1e-3));
+    a.reset(20.0);
+    sink += a.step(30.0);
+  });
+  EXPECT_EQ(n, 0);
+  EXPECT_TRUE(std::isfinite(sink));
+}
+
+TEST(RealTimeSafety, SignalValuesDoNotAllocate) {
+  for (const char* name : {"sine", "decaying_sine", "triangle", "sawtooth", "steps",
+                           "multi_frequency", "chirp", "csv"}) {
+    hs::SignalSpec s;
+    s.kind = hs::signal_kind_from_string(name);
+    s.duration_s = 10.0;
+    s.steps = {{0.0, 1.0}, {1.0, 2.0}};
+    s.samples = {{0.0, 0.0}, {1.0, 1.0}, {5.0, -1.0}};
+    const auto g = hs::make_signal_generator(s);
+    double sink = 0.0;
+    EXPECT_EQ(allocations_during([&] {
+                for (int k = 0; k < 1000; ++k) sink += g->value(k * 0.013);
+              }),
+              0)
+        << name;
+    EXPECT_TRUE(std::isfinite(sink));
+  }
+}
