@@ -1,0 +1,117 @@
+#pragma once
+// The fixed-rate loop thread: absolute deadlines (clock_nanosleep, CLOCK_MONOTONIC), optional
+// SCHED_FIFO / mlockall / CPU affinity. Per tick: reference -> compensator -> limits ->
+// driver write -> driver read -> record and log. Idle ticks ramp the output to the driver's safe
+// value through the slew limit and keep reading, so timing statistics are kept all the time.
+//
+// Threads: the loop thread runs tick(); every public method except the constructor, start()
+// and shutdown() is for the control thread and is lock-free. Runs are handed over as whole
+// RunProgram objects (see run_program.hpp); the loop never allocates, locks or throws.
+//
+// Faults (driver error, non-finite measurement, overrun budget, a limit hit with fatal limits):
+// the driver goes to its safe state in the same tick, the run ends with the reason and the loop
+// stays in kFault, writing the safe output, until reset_fault().
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <thread>
+
+#include "hystbench/daemon/loop_statistics.hpp"
+#include "hystbench/daemon/output_limiter.hpp"
+#include "hystbench/daemon/realtime.hpp"
+#include "hystbench/daemon/run_program.hpp"
+#include "hystbench/drivers/driver.hpp"
+
+namespace hystbench::daemon {
+
+struct BenchLoopOptions {
+  double rate_hz = 10000.0;  ///< [1, 20000]
+  RealtimeOptions realtime;
+  /// Overruns allowed in one run before it faults; 0 = unlimited.
+  std::uint64_t overrun_budget = 100;
+  OutputLimits limits;
+  /// A range or slew limit hit during a run faults it instead of being clamped and counted.
+  bool fatal_on_limit = false;
+};
+
+class BenchLoop {
+ public:
+  enum class State : int { kStopped = 0, kIdle, kRunning, kFault };
+
+  /// The driver must be configured and active; it must outlive the loop.
+  BenchLoop(drivers::Driver& driver, BenchLoopOptions options);
+  ~BenchLoop();
+  BenchLoop(const BenchLoop&) = delete;
+  BenchLoop& operator=(const BenchLoop&) = delete;
+
+  /// Starts the loop thread and returns what its real-time setup achieved.
+  RealtimeReport start();
+  /// Ends any run (aborted), drives the safe output, joins the thread. Idempotent.
+  void shutdown();
+
+  /// Hands a run to the loop. Fails (returns the program back) when a run is active, another
+  /// is pending, a finished one has not been taken yet, or the loop is in kFault.
+  std::unique_ptr<RunProgram> submit(std::unique_ptr<RunProgram> program);
+  /// Ends the active run normally at the next tick.
+  void request_stop() noexcept { stop_requested_.store(true, std::memory_order_release); }
+  /// Safe output at the next tick; the active run ends as aborted (not a fault).
+  void request_abort() noexcept { abort_requested_.store(true, std::memory_order_release); }
+  /// A finished run (completed, stopped, aborted or faulted), or null.
+  std::unique_ptr<RunProgram> take_finished() noexcept;
+  /// Leaves kFault for kIdle; false when not in kFault.
+  bool reset_fault() noexcept;
+
+  State state() const noexcept { return state_.load(std::memory_order_acquire); }
+  /// Why the loop is in kFault (static string; empty otherwise).
+  const char* fault_reason() const noexcept {
+    return fault_reason_.load(std::memory_order_acquire);
+  }
+  /// The active run's program (for progress), valid only while state() == kRunning.
+  const RunProgram* active() const noexcept { return active_pub_.load(std::memory_order_acquire); }
+  /// Timing since start (or the last reset_statistics()).
+  LoopStatisticsSnapshot statistics() const noexcept { return stats_.snapshot(); }
+  void reset_statistics() noexcept { stats_.request_reset(); }
+  double last_measurement() const noexcept { return last_y_.load(std::memory_order_relaxed); }
+  double last_output() const noexcept { return last_u_.load(std::memory_order_relaxed); }
+  /// Increments every tick: the watchdog is fed only while it advances.
+  std::uint64_t ticks() const noexcept { return ticks_.load(std::memory_order_relaxed); }
+  const BenchLoopOptions& options() const noexcept { return options_; }
+
+ private:
+  void run();
+  void tick(std::int64_t scheduled_ns, std::int64_t wake_ns, std::int64_t period_ns) noexcept;
+  void run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
+  void idle_tick() noexcept;
+  void end_run(RunEnd end, const char* reason) noexcept;
+  void fault(const char* reason) noexcept;
+
+  drivers::Driver& driver_;
+  BenchLoopOptions options_;
+  OutputLimiter limiter_;
+  LoopStatistics stats_;
+  std::thread thread_;
+  std::atomic<bool> quit_{false};
+  std::atomic<State> state_{State::kStopped};
+  std::atomic<const char*> fault_reason_{""};
+  std::atomic<RunProgram*> pending_{nullptr};
+  std::atomic<RunProgram*> finished_{nullptr};
+  std::atomic<const RunProgram*> active_pub_{nullptr};
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> abort_requested_{false};
+  std::atomic<bool> reset_requested_{false};
+  std::atomic<double> last_y_{0.0};
+  std::atomic<double> last_u_{0.0};
+  std::atomic<std::uint64_t> ticks_{0};
+  RealtimeReport realtime_report_;
+  std::atomic<bool> started_{false};
+
+  // Loop-thread state.
+  RunProgram* active_ = nullptr;
+  std::int64_t run_start_ns_ = 0;
+  double y_prev_ = 0.0;
+  double dt_ = 1e-4;
+  std::int64_t period_ns_ = 100000;
+  bool overran_ = false;
+};
+
+}  // namespace hystbench::daemon

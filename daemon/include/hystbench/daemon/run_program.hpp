@@ -1,0 +1,58 @@
+#pragma once
+// Everything one run needs inside the loop, allocated by the control thread before the run and
+// handed to the loop whole, so the loop itself never allocates. The loop writes progress and the
+// outcome into it; the control thread reads them after the loop hands the program back.
+#include <atomic>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/compensator.hpp"
+#include "hystbench/daemon/loop_statistics.hpp"
+#include "hystbench/daemon/sample_log_writer.hpp"
+#include "hystbench/sim/signal_generator.hpp"
+
+namespace hystbench::daemon {
+
+enum class RunKind { kIdentify, kTrack };
+enum class RunEnd { kCompleted, kStopped, kAborted, kFault };
+const char* to_string(RunKind kind) noexcept;
+const char* to_string(RunEnd end) noexcept;
+
+struct RunProgram {
+  // ---- set by the control thread before submit() ----
+  std::string run_id;
+  RunKind kind = RunKind::kTrack;
+  std::uint64_t total_samples = 0;
+  /// identify: the open-loop drive, one value per sample [V].
+  std::vector<double> excitation;
+  /// track: the reference [µm] as a function of run time, and the compensator.
+  std::unique_ptr<sim::SignalGenerator> reference;
+  std::optional<compensation::Compensator> compensator;
+  /// track: references outside [y_ref_min, y_ref_max] are clipped and flagged [µm].
+  double y_ref_min = -std::numeric_limits<double>::infinity();
+  double y_ref_max = std::numeric_limits<double>::infinity();
+  /// Samples before this index are left out of the error figures (start-up transient).
+  std::uint64_t metrics_from = 0;
+  /// The per-run log (may be null in unit tests).
+  std::unique_ptr<SampleLogWriter> log;
+  /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).
+  std::vector<double> rec_u, rec_y, rec_yr;
+  std::uint64_t record_capacity = 0;
+
+  // ---- written by the loop thread ----
+  std::atomic<std::uint64_t> done{0};  ///< samples completed (any thread may read)
+  std::uint64_t recorded = 0;
+  RunEnd end = RunEnd::kCompleted;
+  const char* end_reason = "";  ///< static string, set when the run did not complete
+  std::uint64_t overruns = 0, clamps = 0, slew_limits = 0, reference_clips = 0;
+  std::uint64_t stale_reads = 0, log_drops = 0;
+  double error_sum2 = 0.0, error_max = 0.0;  ///< tracking error from metrics_from on [µm]
+  std::uint64_t error_samples = 0;
+  LoopStatistics stats;  ///< this run's loop timing
+};
+
+}  // namespace hystbench::daemon

@@ -1,0 +1,267 @@
+#include "hystbench/daemon/bench_loop.hpp"
+
+#include <time.h>
+
+#include <cmath>
+#include <future>
+
+#include "hystbench/daemon/loop_timer.hpp"
+
+namespace hystbench::daemon {
+
+BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
+    : driver_(driver),
+      options_(options),
+      limiter_(options.limits, 1.0 / options.rate_hz),
+      dt_(1.0 / options.rate_hz),
+      period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))) {
+  limiter_.reset(driver_.safe_output_v());
+  last_u_.store(driver_.safe_output_v());
+}
+
+BenchLoop::~BenchLoop() { shutdown(); }
+
+RealtimeReport BenchLoop::start() {
+  if (thread_.joinable()) return realtime_report_;
+  std::promise<RealtimeReport> ready;
+  auto report = ready.get_future();
+  state_.store(State::kIdle, std::memory_order_release);
+  thread_ = std::thread([this, &ready] {
+    realtime_report_ = apply_realtime(options_.realtime);
+    prefault_stack();
+    ready.set_value(realtime_report_);
+    run();
+  });
+  return report.get();
+}
+
+void BenchLoop::shutdown() {
+  if (!thread_.joinable()) return;
+  quit_.store(true, std::memory_order_release);
+  thread_.join();
+  driver_.safe_state();
+  state_.store(State::kStopped, std::memory_order_release);
+  // Programs the loop never picked up or handed back stay owned here until destruction.
+  delete pending_.exchange(nullptr);
+  delete finished_.exchange(nullptr);
+}
+
+std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> program) {
+  if (state() != State::kIdle || finished_.load(std::memory_order_acquire) != nullptr) {
+    return program;
+  }
+  RunProgram* expected = nullptr;
+  RunProgram* raw = program.get();
+  stop_requested_.store(false, std::memory_order_relaxed);
+  abort_requested_.store(false, std::memory_order_relaxed);
+  if (!pending_.compare_exchange_strong(expected, raw, std::memory_order_acq_rel)) return program;
+  program.release();
+  return nullptr;
+}
+
+std::unique_ptr<RunProgram> BenchLoop::take_finished() noexcept {
+  return std::unique_ptr<RunProgram>(finished_.exchange(nullptr, std::memory_order_acq_rel));
+}
+
+bool BenchLoop::reset_fault() noexcept {
+  if (state() != State::kFault) return false;
+  reset_requested_.store(true, std::memory_order_release);
+  // The loop acknowledges within a tick; wait briefly so the caller sees the new state.
+  for (int i = 0; i < 2000 && state() == State::kFault; ++i) {
+    timespec ts{0, 500000};
+    nanosleep(&ts, nullptr);
+  }
+  return state() != State::kFault;
+}
+
+void BenchLoop::run() {
+  LoopTimer timer{std::chrono::nanoseconds(period_ns_)};
+  timer.start();
+  while (!quit_.load(std::memory_order_acquire)) {
+    const LoopTimer::Tick t = timer.wait();
+    // A tick that wakes after its successor's deadline (the previous work or the scheduler
+    // made it late by a period or more, so deadlines were skipped) counts as an overrun.
+    overran_ = t.skipped > 0;
+    tick(t.scheduled_ns, t.wake_ns, period_ns_);
+    const std::int64_t done = LoopTimer::now_ns();
+    stats_.record(t.latency_ns(), done - t.wake_ns, overran_ || timer.overran(t, done), t.skipped);
+  }
+  if (active_ != nullptr) end_run(RunEnd::kAborted, "daemon shutting down");
+  driver_.safe_state();
+}
+
+void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns,
+                     std::int64_t /*period_ns*/) noexcept {
+  ticks_.fetch_add(1, std::memory_order_relaxed);
+  if (reset_requested_.exchange(false, std::memory_order_acq_rel) && state() == State::kFault) {
+    fault_reason_.store("", std::memory_order_release);
+    state_.store(State::kIdle, std::memory_order_release);
+  }
+  if (state() == State::kFault) {
+    driver_.safe_state();
+    drivers::Measurement m;
+    if (driver_.read(m) == drivers::DriverStatus::kOk) last_y_.store(m.position_um);
+    return;
+  }
+  if (active_ == nullptr) {
+    RunProgram* p = pending_.exchange(nullptr, std::memory_order_acq_rel);
+    if (p != nullptr) {
+      active_ = p;
+      run_start_ns_ = scheduled_ns;
+      active_pub_.store(p, std::memory_order_release);
+      state_.store(State::kRunning, std::memory_order_release);
+    }
+  }
+  if (abort_requested_.exchange(false, std::memory_order_acq_rel)) {
+    // Safe output now, not ramped; a run ends as aborted.
+    driver_.safe_state();
+    limiter_.reset(driver_.safe_output_v());
+    last_u_.store(driver_.safe_output_v());
+    if (active_ != nullptr) end_run(RunEnd::kAborted, "aborted by request");
+    return;
+  }
+  if (active_ != nullptr) {
+    run_tick(*active_, scheduled_ns, wake_ns);
+  } else {
+    idle_tick();
+  }
+}
+
+void BenchLoop::idle_tick() noexcept {
+  const auto lim = limiter_.apply(driver_.safe_output_v());
+  if (driver_.write(lim.u) != drivers::DriverStatus::kOk) {
+    fault("driver write failed while idle");
+    return;
+  }
+  last_u_.store(lim.u, std::memory_order_relaxed);
+  drivers::Measurement m;
+  const auto st = driver_.read(m);
+  if (st == drivers::DriverStatus::kOk || st == drivers::DriverStatus::kStale) {
+    last_y_.store(m.position_um, std::memory_order_relaxed);
+    y_prev_ = m.position_um;
+  } else {
+    fault("driver read failed while idle");
+  }
+}
+
+void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
+  const std::uint64_t k = p.done.load(std::memory_order_relaxed);
+  SampleRecord rec;
+  rec.index = k;
+  rec.scheduled_ns = scheduled_ns - run_start_ns_;
+  rec.wake_ns = wake_ns - run_start_ns_;
+  if (overran_) {
+    rec.flags |= kSampleOverrun;
+    ++p.overruns;
+  }
+
+  double y_ref = std::numeric_limits<double>::quiet_NaN();
+  double u_request = 0.0;
+  if (p.kind == RunKind::kIdentify || k < p.excitation.size()) {
+    // Identification drive, or the open-loop pre-conditioning prefix of a tracking run.
+    u_request = p.excitation[k];
+    rec.u_ff = u_request;
+  } else {
+    const double t = static_cast<double>(k - p.excitation.size()) * dt_;
+    y_ref = p.reference->value(t);
+    if (y_ref < p.y_ref_min || y_ref > p.y_ref_max) {
+      y_ref = std::min(std::max(y_ref, p.y_ref_min), p.y_ref_max);
+      rec.flags |= kSampleReferenceLimited;
+      ++p.reference_clips;
+    }
+    const auto out = p.compensator->step(y_ref, y_prev_);
+    rec.u_ff = out.u_ff;
+    rec.u_fb = out.u_fb;
+    u_request = out.u;
+  }
+  rec.reference = y_ref;
+
+  const auto lim = limiter_.apply(u_request);
+  if (p.compensator) p.compensator->notify_saturation(lim.direction);
+  if (lim.clamped) {
+    rec.flags |= kSampleOutputClamped;
+    ++p.clamps;
+  }
+  if (lim.slew_limited) {
+    rec.flags |= kSampleSlewLimited;
+    ++p.slew_limits;
+  }
+  rec.u_out = lim.u;
+
+  const char* failure = nullptr;
+  if ((lim.clamped || lim.slew_limited) && options_.fatal_on_limit) {
+    failure = "output limit reached (limits.fatal_on_limit)";
+  } else if (driver_.write(lim.u) != drivers::DriverStatus::kOk) {
+    failure = "driver write failed";
+  } else {
+    last_u_.store(lim.u, std::memory_order_relaxed);
+    drivers::Measurement m;
+    const auto st = driver_.read(m);
+    if (st == drivers::DriverStatus::kStale) {
+      rec.flags |= kSampleStale;
+      ++p.stale_reads;
+    } else if (st != drivers::DriverStatus::kOk) {
+      failure =
+          st == drivers::DriverStatus::kTimeout ? "driver read timed out" : "driver read failed";
+    }
+    if (failure == nullptr && !std::isfinite(m.position_um)) {
+      failure = "measurement is not a finite number";
+    }
+    rec.y_measured = m.position_um;
+    if (failure == nullptr) {
+      y_prev_ = m.position_um;
+      last_y_.store(m.position_um, std::memory_order_relaxed);
+    }
+  }
+  if (failure == nullptr && options_.overrun_budget > 0 && p.overruns > options_.overrun_budget) {
+    failure = "overrun budget exceeded (loop.overrun_budget)";
+  }
+  if (failure != nullptr) rec.flags |= kSampleFault;
+
+  if (p.recorded < p.record_capacity && k >= p.metrics_from) {
+    p.rec_u[p.recorded] = rec.u_out;
+    p.rec_y[p.recorded] = rec.y_measured;
+    p.rec_yr[p.recorded] = y_ref;
+    ++p.recorded;
+  }
+  if (failure == nullptr && k >= p.metrics_from && !std::isnan(y_ref)) {
+    const double e = rec.y_measured - y_ref;
+    p.error_sum2 += e * e;
+    p.error_max = std::max(p.error_max, std::abs(e));
+    ++p.error_samples;
+  }
+  rec.exec_ns = LoopTimer::now_ns() - wake_ns;
+  if (p.log && !p.log->push(rec)) ++p.log_drops;
+  p.stats.record(wake_ns - scheduled_ns, rec.exec_ns, overran_);
+  p.done.store(k + 1, std::memory_order_release);
+
+  if (failure != nullptr) {
+    fault(failure);
+  } else if (k + 1 >= p.total_samples) {
+    end_run(RunEnd::kCompleted, "");
+  } else if (stop_requested_.exchange(false, std::memory_order_acq_rel)) {
+    end_run(RunEnd::kStopped, "stopped by request");
+  }
+}
+
+void BenchLoop::end_run(RunEnd end, const char* reason) noexcept {
+  RunProgram* p = active_;
+  if (p == nullptr) return;
+  p->end = end;
+  p->end_reason = reason;
+  active_ = nullptr;
+  active_pub_.store(nullptr, std::memory_order_release);
+  if (end != RunEnd::kFault) state_.store(State::kIdle, std::memory_order_release);
+  finished_.store(p, std::memory_order_release);
+}
+
+void BenchLoop::fault(const char* reason) noexcept {
+  driver_.safe_state();
+  limiter_.reset(driver_.safe_output_v());
+  last_u_.store(driver_.safe_output_v(), std::memory_order_relaxed);
+  fault_reason_.store(reason, std::memory_order_release);
+  state_.store(State::kFault, std::memory_order_release);
+  end_run(RunEnd::kFault, reason);
+}
+
+}  // namespace hystbench::daemon

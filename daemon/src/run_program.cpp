@@ -1,0 +1,23 @@
+#include "hystbench/daemon/run_program.hpp"
+
+namespace hystbench::daemon {
+
+const char* to_string(RunKind kind) noexcept {
+  return kind == RunKind::kIdentify ? "identify" : "track";
+}
+
+const char* to_string(RunEnd end) noexcept {
+  switch (end) {
+    case RunEnd::kCompleted:
+      return "completed";
+    case RunEnd::kStopped:
+      return "stopped";
+    case RunEnd::kAborted:
+      return "aborted";
+    case RunEnd::kFault:
+      return "fault";
+  }
+  return "unknown";
+}
+
+}  // namespace hystbench::daemon

@@ -1,0 +1,138 @@
+#include "hystbench/drivers/loopback_driver.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "hystbench/sim/simulated_actuator.hpp"
+
+namespace hystbench::drivers {
+
+namespace {
+bool armed(const std::atomic<std::uint64_t>& at, std::uint64_t tick) noexcept {
+  const std::uint64_t v = at.load(std::memory_order_relaxed);
+  return v != 0 && tick >= v;
+}
+}  // namespace
+
+LoopbackDriver::LoopbackDriver() = default;
+LoopbackDriver::~LoopbackDriver() = default;
+
+Result LoopbackDriver::configure(const nlohmann::json& params, double rate_hz) {
+  if (!params.is_null() && !params.is_object()) {
+    return Result::failure("driver.loopback: must be a table");
+  }
+  const nlohmann::json p = params.is_null() ? nlohmann::json::object() : params;
+  for (const auto& [key, value] : p.items()) {
+    if (key != "actuator" && key != "safe_output_v" && key != "max_rate_hz" && key != "faults") {
+      return Result::failure("driver.loopback." + key +
+                             ": unknown key (actuator, safe_output_v, max_rate_hz, faults)");
+    }
+  }
+  try {
+    const sim::SimulatedActuatorConfig cfg =
+        sim::from_json(p.value("actuator", nlohmann::json::object()));
+    max_rate_hz_ = p.value("max_rate_hz", 20000.0);
+    if (!(max_rate_hz_ > 0.0)) return Result::failure("driver.loopback.max_rate_hz: must be > 0");
+    if (!(rate_hz > 0.0) || rate_hz > max_rate_hz_) {
+      return Result::failure("loop.rate_hz: " + std::to_string(rate_hz) +
+                             " Hz is beyond what the loopback driver holds (max " +
+                             std::to_string(max_rate_hz_) + " Hz)");
+    }
+    safe_output_v_ = p.value("safe_output_v", cfg.input.min_v);
+    if (!(safe_output_v_ >= cfg.input.min_v && safe_output_v_ <= cfg.input.max_v)) {
+      return Result::failure(
+          "driver.loopback.safe_output_v: must be within the actuator input "
+          "range");
+    }
+    actuator_ = std::make_unique<sim::SimulatedActuator>(cfg, 1.0 / rate_hz);
+    if (p.contains("faults")) {
+      const auto& f = p["faults"];
+      FaultInjection fi;
+      fi.read_error_at_tick = f.value("read_error_at_tick", std::uint64_t{0});
+      fi.nan_at_tick = f.value("nan_at_tick", std::uint64_t{0});
+      fi.stuck_at_tick = f.value("stuck_at_tick", std::uint64_t{0});
+      fi.write_error_at_tick = f.value("write_error_at_tick", std::uint64_t{0});
+      read_error_at_ = fi.read_error_at_tick;
+      nan_at_ = fi.nan_at_tick;
+      stuck_at_ = fi.stuck_at_tick;
+      write_error_at_ = fi.write_error_at_tick;
+    }
+  } catch (const std::exception& e) {
+    return Result::failure(std::string("driver.loopback: ") + e.what());
+  }
+  return Result::success();
+}
+
+Result LoopbackDriver::activate() {
+  if (!actuator_) return Result::failure("loopback driver: activate() before configure()");
+  actuator_->reset(safe_output_v_);
+  output_v_ = safe_output_v_;
+  tick_.store(0, std::memory_order_relaxed);
+  active_ = true;
+  return Result::success();
+}
+
+Result LoopbackDriver::deactivate() {
+  output_v_ = safe_output_v_;
+  active_ = false;
+  return Result::success();
+}
+
+Result LoopbackDriver::on_error() {
+  output_v_ = safe_output_v_;
+  return Result::success();
+}
+
+DriverStatus LoopbackDriver::write(double output_v) noexcept {
+  if (!active_) return DriverStatus::kFault;
+  if (armed(write_error_at_, tick_.load(std::memory_order_relaxed) + 1)) {
+    return DriverStatus::kError;
+  }
+  output_v_ = output_v;
+  return DriverStatus::kOk;
+}
+
+DriverStatus LoopbackDriver::read(Measurement& out) noexcept {
+  if (!active_) return DriverStatus::kFault;
+  const std::uint64_t tick = tick_.fetch_add(1, std::memory_order_relaxed) + 1;
+  const double y = actuator_->step(output_v_);  // the plant advances whatever the sensor does
+  out.age_ticks = 0;
+  if (armed(read_error_at_, tick)) return DriverStatus::kError;
+  if (armed(nan_at_, tick)) {
+    out.position_um = std::numeric_limits<double>::quiet_NaN();
+    return DriverStatus::kOk;
+  }
+  if (!armed(stuck_at_, tick)) last_position_ = y;
+  out.position_um = last_position_;
+  return DriverStatus::kOk;
+}
+
+DriverStatus LoopbackDriver::safe_state() noexcept {
+  output_v_ = safe_output_v_;
+  return DriverStatus::kOk;
+}
+
+double LoopbackDriver::output_min_v() const noexcept {
+  return actuator_ ? actuator_->input_min() : 0.0;
+}
+
+double LoopbackDriver::output_max_v() const noexcept {
+  return actuator_ ? actuator_->input_max() : 0.0;
+}
+
+nlohmann::json LoopbackDriver::diagnostics() const {
+  return {{"type", "loopback"},
+          {"ticks", tick_.load(std::memory_order_relaxed)},
+          {"output_v", output_v_}};
+}
+
+void LoopbackDriver::inject(const FaultInjection& f) noexcept {
+  const std::uint64_t now = tick_.load(std::memory_order_relaxed);
+  auto rel = [now](std::uint64_t at) { return at == 0 ? 0 : now + at; };
+  read_error_at_ = rel(f.read_error_at_tick);
+  nan_at_ = rel(f.nan_at_tick);
+  stuck_at_ = rel(f.stuck_at_tick);
+  write_error_at_ = rel(f.write_error_at_tick);
+}
+
+}  // namespace hystbench::drivers
