@@ -31,7 +31,10 @@ void RateDependentPiModel::set_sample_period(double dt_s) {
 }
 
 double RateDependentPiModel::evaluate(double u, double* state_out) const noexcept {
-  const double rate = std::abs(u - u_prev_) / dt_;
+  // Capped at the identified range: beyond it the linear law is an extrapolation, and an input
+  // step would otherwise make a one-sample weight spike.
+  double rate = std::abs(u - u_prev_) / dt_;
+  if (p_.max_rate > 0.0 && rate > p_.max_rate) rate = p_.max_rate;
   const auto& r = p_.base.play.thresholds;
   const auto& w = p_.base.play.weights;
   const double* s = pi_.state().data();

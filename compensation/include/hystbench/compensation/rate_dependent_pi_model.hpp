@@ -1,7 +1,8 @@
 #pragma once
 // Rate-dependent modified PI (rate-dependent paper, eq. 15-21): the cumulative play weights are
 // linear in the input rate, W_i(rate) = W^_i + c_i * rate, rate = |u(k) - u(k-1)| / dt
-// [input unit / s]; w_i(rate) = W_i(rate) - W_{i-1}(rate). Dead zones are rate-independent.
+// [input unit / s], capped at max_rate (when > 0); w_i(rate) = W_i(rate) - W_{i-1}(rate).
+// Dead zones are rate-independent.
 // Needs set_sample_period(). Real-time safe step()/peek().
 #include <vector>
 
