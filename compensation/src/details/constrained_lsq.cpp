@@ -1,0 +1,232 @@
+#include "details/constrained_lsq.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace hystbench::compensation::details {
+
+NormalEquations::NormalEquations(Eigen::Index unknowns, Eigen::Index block_rows)
+    : block_(block_rows, unknowns),
+      targets_(block_rows),
+      gram_(Eigen::MatrixXd::Zero(unknowns, unknowns)),
+      rhs_(Eigen::VectorXd::Zero(unknowns)) {}
+
+void NormalEquations::flush() {
+  if (pending_ == 0) return;
+  const auto rows = block_.topRows(pending_);
+  const auto z = targets_.head(pending_);
+  gram_.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+  rhs_.noalias() += rows.transpose() * z;
+  zz_ += z.squaredNorm();
+  rows_ += pending_;
+  pending_ = 0;
+}
+
+const Eigen::MatrixXd& NormalEquations::gram() {
+  flush();
+  gram_.triangularView<Eigen::StrictlyUpper>() = gram_.transpose();
+  return gram_;
+}
+
+const Eigen::VectorXd& NormalEquations::rhs() {
+  flush();
+  return rhs_;
+}
+
+double NormalEquations::target_square_sum() {
+  flush();
+  return zz_;
+}
+
+namespace {
+
+constexpr double kRidge = 1e-12;  // relative to the unit diagonal after Jacobi scaling
+
+void validate(const Eigen::MatrixXd& G, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
+              const Eigen::VectorXd& upper) {
+  const Eigen::Index n = b.size();
+  if (G.rows() != n || G.cols() != n || lower.size() != n || upper.size() != n) {
+    throw std::invalid_argument(
+        "bounded least squares: G must be n x n and b, lower, upper of "
+        "length n (n = " +
+        std::to_string(n) + ")");
+  }
+  if (!G.allFinite() || !b.allFinite()) {
+    throw std::invalid_argument("bounded least squares: G and b must be finite");
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (std::isnan(lower[i]) || std::isnan(upper[i]) || lower[i] > upper[i]) {
+      throw std::invalid_argument("bounded least squares: bounds of unknown " + std::to_string(i) +
+                                  " are NaN or lower > upper");
+    }
+  }
+}
+
+// The active-set iteration on the scaled problem min 0.5 x'Hx - c'x, lo <= x <= hi.
+class ActiveSet {
+ public:
+  ActiveSet(const Eigen::MatrixXd& H, const Eigen::VectorXd& c, const Eigen::VectorXd& lo,
+            const Eigen::VectorXd& hi)
+      : H_(H), c_(c), lo_(lo), hi_(hi), n_(c.size()), state_(n_, BoundState::kFree) {}
+
+  BoundedLsqResult run() {
+    BoundedLsqResult out;
+    x_ = H_.ldlt().solve(c_);
+    if (feasible(x_)) {
+      out.x = x_;
+      out.state = state_;
+      out.converged = true;
+      return out;
+    }
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      if (x_[i] <= lo_[i]) set_bound(i, BoundState::kLower);
+      if (x_[i] >= hi_[i]) set_bound(i, BoundState::kUpper);
+    }
+    const int max_iterations = 100 + 20 * static_cast<int>(n_);
+    while (out.iterations < max_iterations) {
+      if (!step_to_subspace_minimum()) {
+        ++out.iterations;
+        continue;
+      }
+      const Eigen::Index release = most_violated_multiplier();
+      if (release < 0) {
+        out.converged = true;
+        break;
+      }
+      state_[release] = BoundState::kFree;
+      ++out.iterations;
+    }
+    out.x = x_;
+    out.state = state_;
+    return out;
+  }
+
+ private:
+  bool feasible(const Eigen::VectorXd& x) const {
+    return ((x - lo_).array() >= 0.0).all() && ((hi_ - x).array() >= 0.0).all();
+  }
+
+  void set_bound(Eigen::Index i, BoundState s) {
+    state_[i] = s;
+    x_[i] = s == BoundState::kLower ? lo_[i] : hi_[i];
+  }
+
+  // Minimises over the free unknowns with the others held on their bounds; moves towards that
+  // minimum as far as the bounds allow. Returns false when a bound blocked the move (the
+  // blocking unknown is then fixed on it).
+  bool step_to_subspace_minimum() {
+    free_.clear();
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      if (state_[i] == BoundState::kFree) free_.push_back(i);
+    }
+    const auto nf = static_cast<Eigen::Index>(free_.size());
+    if (nf == 0) return true;
+    Eigen::MatrixXd Hff(nf, nf);
+    Eigen::VectorXd rhs(nf);
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const Eigen::Index i = free_[a];
+      double r = c_[i];
+      for (Eigen::Index j = 0; j < n_; ++j) {
+        if (state_[j] != BoundState::kFree) r -= H_(i, j) * x_[j];
+      }
+      rhs[a] = r;
+      for (Eigen::Index b = 0; b < nf; ++b) Hff(a, b) = H_(i, free_[b]);
+    }
+    const Eigen::VectorXd target = Hff.ldlt().solve(rhs);
+    double alpha = 1.0;
+    Eigen::Index blocking = -1;
+    BoundState side = BoundState::kFree;
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const Eigen::Index i = free_[a];
+      const double d = target[a] - x_[i];
+      if (target[a] < lo_[i] && d < 0.0) {
+        const double t = (lo_[i] - x_[i]) / d;
+        if (t < alpha) alpha = t, blocking = i, side = BoundState::kLower;
+      } else if (target[a] > hi_[i] && d > 0.0) {
+        const double t = (hi_[i] - x_[i]) / d;
+        if (t < alpha) alpha = t, blocking = i, side = BoundState::kUpper;
+      }
+    }
+    alpha = std::max(alpha, 0.0);
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const Eigen::Index i = free_[a];
+      x_[i] = std::clamp(x_[i] + alpha * (target[a] - x_[i]), lo_[i], hi_[i]);
+    }
+    if (blocking < 0) return true;
+    set_bound(blocking, side);
+    return false;
+  }
+
+  // The bound unknown whose Lagrange multiplier has the wrong sign by the largest margin, or -1.
+  Eigen::Index most_violated_multiplier() const {
+    const Eigen::VectorXd g = H_ * x_ - c_;
+    const double tol = 1e-10 * (c_.lpNorm<Eigen::Infinity>() + x_.lpNorm<Eigen::Infinity>());
+    Eigen::Index best = -1;
+    double worst = tol;
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      if (lo_[i] == hi_[i]) continue;  // fixed unknown
+      double violation = 0.0;
+      if (state_[i] == BoundState::kLower) violation = -g[i];  // wants to increase
+      if (state_[i] == BoundState::kUpper) violation = g[i];   // wants to decrease
+      if (violation > worst) worst = violation, best = i;
+    }
+    return best;
+  }
+
+  const Eigen::MatrixXd& H_;
+  const Eigen::VectorXd& c_;
+  const Eigen::VectorXd& lo_;
+  const Eigen::VectorXd& hi_;
+  Eigen::Index n_;
+  std::vector<BoundState> state_;
+  std::vector<Eigen::Index> free_;
+  Eigen::VectorXd x_;
+};
+
+}  // namespace
+
+BoundedLsqResult solve_bounded_lsq(const Eigen::MatrixXd& G, const Eigen::VectorXd& b,
+                                   const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+  validate(G, b, lower, upper);
+  const Eigen::Index n = b.size();
+  // Jacobi scaling: unit diagonal, so the ridge and the tolerances are relative.
+  Eigen::VectorXd s(n);
+  for (Eigen::Index i = 0; i < n; ++i) s[i] = G(i, i) > 0.0 ? 1.0 / std::sqrt(G(i, i)) : 1.0;
+  Eigen::MatrixXd H = s.asDiagonal() * G * s.asDiagonal();
+  H.diagonal().array() += kRidge;
+  const Eigen::VectorXd c = s.cwiseProduct(b);
+  const Eigen::VectorXd lo = lower.cwiseQuotient(s);
+  const Eigen::VectorXd hi = upper.cwiseQuotient(s);
+
+  BoundedLsqResult out = ActiveSet(H, c, lo, hi).run();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    switch (out.state[i]) {
+      case BoundState::kLower:
+        out.x[i] = lower[i];
+        break;
+      case BoundState::kUpper:
+        out.x[i] = upper[i];
+        break;
+      case BoundState::kFree:
+        out.x[i] = std::clamp(out.x[i] * s[i], lower[i], upper[i]);
+        break;
+    }
+  }
+  return out;
+}
+
+std::vector<double> cumulative_to_increments(const double* cumulative, std::size_t n,
+                                             double start) {
+  std::vector<double> w(n);
+  double prev = start;
+  for (std::size_t k = 0; k < n; ++k) {
+    w[k] = cumulative[k] - prev;
+    prev = cumulative[k];
+  }
+  return w;
+}
+
+}  // namespace hystbench::compensation::details
