@@ -1,0 +1,128 @@
+#pragma once
+// The daemon's configuration file (TOML). Every section and key is optional; a missing one
+// takes the default below. An unknown key, a wrong type or a value out of range throws
+// ConfigError whose message starts with the key path, e.g.
+//   loop.rate_hz: must be in [1, 20000], got 50000
+// (prefixed with "<file>:<line>: " when it comes from load_config()).
+//
+//   [daemon]   socket_path, log_dir, model_dir, log_level
+//   [loop]     rate_hz, realtime, priority, cpu, lock_memory, overrun_budget, ring_capacity
+//   [limits]   u_min, u_max, slew_v_per_s, fatal_on_limit, y_min, y_max
+//   [driver]   type, plus one sub-table per driver ([driver.loopback], [driver.modbus], ...)
+//              kept as JSON and validated by the driver itself
+//   [actuator] the simulated actuator's truth, kept as JSON for the simulator to validate
+//   [identify] model, operators, dead_zones, amplitude_v, offset_v, frequency_hz, cycles,
+//              heldout_fraction, fit_rate_hz
+//   [pid]      kp, ki, kd, derivative_filter_hz, u_fb_min, u_fb_max
+// Not real-time safe (allocates, throws); read once at start-up.
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace hystbench::daemon {
+
+/// A bad configuration: what() names the key path (and file:line when known).
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(const std::string& what, std::string key, int line)
+      : std::runtime_error(what), key_(std::move(key)), line_(line) {}
+  /// Dotted key path, e.g. "loop.rate_hz"; empty for a TOML syntax error.
+  const std::string& key() const noexcept { return key_; }
+  /// 1-based line in the TOML text; 0 when not known (a missing key, a cross-key check).
+  int line() const noexcept { return line_; }
+
+ private:
+  std::string key_;
+  int line_;
+};
+
+struct DaemonSection {
+  std::string socket_path = "/run/hystbench/hystbench.sock";  ///< at most 107 bytes
+  std::string log_dir = "/var/lib/hystbench/logs";
+  std::string model_dir = "/var/lib/hystbench/models";
+  std::string log_level = "info";  ///< trace | debug | info | warn | error | critical | off
+};
+
+struct LoopSection {
+  double rate_hz = 10000.0;  ///< [1, 20000] Hz
+  bool realtime = true;      ///< try SCHED_FIFO (degraded, not fatal, when not permitted)
+  int priority = 80;         ///< SCHED_FIFO priority [1, 99]
+  int cpu = -1;              ///< CPU to pin the loop thread to; -1 = none; [0, 1023]
+  bool lock_memory = true;   ///< mlockall(MCL_CURRENT | MCL_FUTURE)
+  /// Overruns tolerated per run, counted in total (not consecutively): the run ends with a
+  /// fault at overrun number overrun_budget + 1. 0 = the first overrun ends it. [0, 1e9]
+  std::uint64_t overrun_budget = 100;
+  /// Sample-log ring records [1024, 2^24], rounded up to a power of two.
+  std::size_t ring_capacity = std::size_t{1} << 16;
+};
+
+struct LimitsSection {
+  double u_min = 0.0;           ///< output clamp [V], finite, u_min < u_max
+  double u_max = 150.0;         ///< [V]
+  double slew_v_per_s = 1e6;    ///< output rate limit (0, 1e12] V/s
+  bool fatal_on_limit = false;  ///< true: a clamped or rate-limited sample ends the run (fault)
+  /// Reference range [µm]; both or neither; unset = the reference is not limited.
+  std::optional<double> y_min;
+  std::optional<double> y_max;
+};
+
+struct DriverSection {
+  std::string type = "loopback";  ///< [a-z0-9_-]+, checked against the backends by the driver
+  /// Every [driver.<name>] sub-table as JSON, by name: {"loopback": {...}, "modbus": {...}}.
+  nlohmann::json tables = nlohmann::json::object();
+  /// The sub-table of the selected type ({} when absent), for Driver::configure().
+  nlohmann::json params() const;
+};
+
+struct IdentifySection {
+  std::string model = "mpi";  ///< pi | mpi | cpi | rpi | auto
+  int operators = 0;          ///< plays [0, 100]; 0 = chosen by held-out error
+  int dead_zones = -1;        ///< dead zones per side [-1, 50]; -1 = chosen by held-out error
+  /// Excitation u = offset_v + amplitude_v * wave: by default the whole [u_min, u_max] range;
+  /// must stay inside it. [V]
+  double amplitude_v = 75.0;
+  double offset_v = 75.0;
+  double frequency_hz = 1.0;       ///< (0, loop.rate_hz / 20]
+  int cycles = 3;                  ///< [1, 1000]
+  double heldout_fraction = 0.25;  ///< [0, 0.9]
+  double fit_rate_hz = 2000.0;     ///< records are block-averaged to this rate for the fit
+};
+
+struct PidSection {
+  double kp = 0.1;                    ///< [V/µm] >= 0
+  double ki = 2000.0;                 ///< [V/(µm s)] >= 0
+  double kd = 0.0;                    ///< [V s/µm] >= 0
+  double derivative_filter_hz = 0.0;  ///< 0 = unfiltered; below loop.rate_hz / 2
+  double u_fb_min = -30.0;            ///< clamp of the feedback output [V]
+  double u_fb_max = 30.0;
+};
+
+struct DaemonConfig {
+  DaemonSection daemon;
+  LoopSection loop;
+  LimitsSection limits;
+  DriverSection driver;
+  nlohmann::json actuator = nlohmann::json::object();  ///< the [actuator] table as JSON
+  IdentifySection identify;
+  PidSection pid;
+};
+
+/// Parses TOML text. `origin` (a file name) prefixes messages as "origin:line: ".
+DaemonConfig parse_config(std::string_view toml_text, std::string_view origin = {});
+/// Reads and parses a file; a file that cannot be read is a ConfigError too.
+DaemonConfig load_config(const std::filesystem::path& path);
+
+/// The effective configuration with every default filled in, sections and keys as in the file
+/// (for config.get); unset optionals are null.
+nlohmann::json to_json(const DaemonConfig& config);
+
+/// A whole TOML document as JSON: tables -> objects, arrays -> arrays, integers -> int64,
+/// floats -> double, dates and times -> ISO 8601 strings. Throws ConfigError on bad syntax.
+nlohmann::json toml_to_json(std::string_view toml_text);
+
+}  // namespace hystbench::daemon
