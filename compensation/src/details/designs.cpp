@@ -1,0 +1,217 @@
+#include "details/designs.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "hystbench/compensation/coupled_play_pi_model.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+
+namespace hystbench::compensation::details {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}  // namespace
+
+std::size_t ModelStructure::zero_index() const {
+  const auto it = std::find(dead_zone_thresholds.begin(), dead_zone_thresholds.end(), 0.0);
+  if (it == dead_zone_thresholds.end()) {
+    throw std::invalid_argument("dead-zone thresholds must contain 0");
+  }
+  return static_cast<std::size_t>(it - dead_zone_thresholds.begin());
+}
+
+CoupledThresholds coupled_thresholds(const ModelStructure& s) {
+  CoupledThresholds t;
+  t.r = s.play_thresholds;
+  for (const double r : t.r) {
+    t.ra.push_back(s.cp_scale[0] * r);
+    t.rb.push_back(s.cp_scale[1] * r);
+    t.rc.push_back(s.cp_scale[2] * r);
+  }
+  return t;
+}
+
+std::vector<double> sample_rates(std::span<const double> u, double dt) {
+  std::vector<double> rate(u.size(), 0.0);
+  for (std::size_t k = 1; k < u.size(); ++k) rate[k] = std::abs(u[k] - u[k - 1]) / dt;
+  return rate;
+}
+
+Design::Design(ModelStructure s) : s_(std::move(s)) {
+  if (s_.play_thresholds.empty()) throw std::invalid_argument("a design needs at least one play");
+  if (s_.kind == ModelKind::kRateDependentPi) s_.input_reference = 0.0;  // see header
+  n_ = static_cast<Eigen::Index>(s_.plays());
+  if (s_.kind == ModelKind::kCoupledPlayPi) cp_ = coupled_thresholds(s_);
+  if (s_.has_dead_zones()) {
+    const std::size_t zero = s_.zero_index();
+    for (std::size_t j = zero + 1; j < s_.dead_zone_thresholds.size(); ++j) {
+      dz_pos_.push_back(s_.dead_zone_thresholds[j]);
+    }
+    for (std::size_t j = zero; j-- > 0;) dz_neg_.push_back(s_.dead_zone_thresholds[j]);
+  }
+  m_pos_ = static_cast<Eigen::Index>(dz_pos_.size());
+  m_neg_ = static_cast<Eigen::Index>(dz_neg_.size());
+  if (s_.kind == ModelKind::kRateDependentPi) {
+    if (!(s_.max_rate > 0.0))
+      throw std::invalid_argument("rate-dependent design needs max_rate > 0");
+    inv_max_rate_ = 1.0 / s_.max_rate;
+  }
+  play_cols_ = s_.kind == ModelKind::kRateDependentPi ? 2 * n_ : n_;
+  offset_col_ = play_cols_;
+  dz_col_ = offset_col_ + 1;
+  creep_col_ = dz_col_ + m_pos_ + m_neg_;
+  unknowns_ = creep_col_ + static_cast<Eigen::Index>(s_.creep_time_constants.size());
+  z_.assign(s_.plays(), 0.0);
+  for (const double tau : s_.creep_time_constants) creep_a_.push_back(std::exp(-s_.dt / tau));
+  creep_x_.assign(creep_a_.size(), 0.0);
+}
+
+void Design::reset(double u0) noexcept {
+  std::fill(z_.begin(), z_.end(), u0);
+  std::fill(creep_x_.begin(), creep_x_.end(), u0);
+  u_prev_ = u0;
+}
+
+void Design::step_operators(double u) noexcept {
+  const double* r = s_.play_thresholds.data();
+  double* z = z_.data();
+  if (s_.kind == ModelKind::kCoupledPlayPi) {
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      z[i] = CoupledPlayPiModel::operator_output(u, u_prev_, z[i], r[i], cp_.ra[i], cp_.rb[i],
+                                                 cp_.rc[i]);
+    }
+  } else {
+    for (Eigen::Index i = 0; i < n_; ++i) z[i] = std::max(u - r[i], std::min(u + r[i], z[i]));
+  }
+}
+
+double Design::row(double u, double y, double* a) noexcept {
+  step_operators(u);
+  // Cumulative-weight regressors: sum_i w_i (p_i - u_ref) = sum_i W_i (p_i - p_{i+1}).
+  const double* z = z_.data();
+  if (s_.kind == ModelKind::kRateDependentPi) {
+    const double rho = std::abs(u - u_prev_) / s_.dt * inv_max_rate_;
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      const double q = z[i] - (i + 1 < n_ ? z[i + 1] : 0.0);
+      a[i] = q * (1.0 - rho);
+      a[n_ + i] = q * rho;
+    }
+  } else {
+    for (Eigen::Index i = 0; i + 1 < n_; ++i) a[i] = z[i] - z[i + 1];
+    a[n_ - 1] = z[n_ - 1] - s_.input_reference;
+  }
+  a[offset_col_] = 1.0;
+  double target = y;
+  if (s_.has_dead_zones()) {
+    // S'[v] = clamp(v, d'_-1, d'_1) + sum_j V_j t_j per side, t_j = s_j - s_{j+1}.
+    const double v = y - s_.center;
+    double* t = a + dz_col_;
+    double next = 0.0;
+    for (Eigen::Index j = m_pos_; j-- > 0;) {
+      const double sj = std::max(v - dz_pos_[j], 0.0);
+      t[j] = -(sj - next);
+      next = sj;
+    }
+    t += m_pos_;
+    next = 0.0;
+    for (Eigen::Index j = m_neg_; j-- > 0;) {
+      const double sj = std::min(v - dz_neg_[j], 0.0);
+      t[j] = -(sj - next);
+      next = sj;
+    }
+    target = std::clamp(v, m_neg_ > 0 ? dz_neg_[0] : -kInf, m_pos_ > 0 ? dz_pos_[0] : kInf);
+  }
+  double* c = a + creep_col_;
+  for (std::size_t k = 0; k < creep_x_.size(); ++k) {
+    creep_x_[k] = creep_a_[k] * creep_x_[k] + (1.0 - creep_a_[k]) * u;
+    c[k] = creep_x_[k];
+  }
+  u_prev_ = u;
+  return target;
+}
+
+Eigen::VectorXd Design::lower_bounds() const {
+  Eigen::VectorXd lo = Eigen::VectorXd::Constant(unknowns_, -kInf);
+  lo.head(play_cols_).setConstant(s_.min_play_slope);
+  lo.segment(dz_col_, m_pos_ + m_neg_).setConstant(s_.min_dead_zone_slope);
+  return lo;
+}
+
+Eigen::VectorXd Design::upper_bounds() const { return Eigen::VectorXd::Constant(unknowns_, kInf); }
+
+std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd& x) const {
+  const auto n = static_cast<std::size_t>(n_);
+  PiParameters play;
+  play.thresholds = s_.play_thresholds;
+  play.weights = cumulative_to_increments(x.data(), n);
+  const double total = x[n_ - 1];
+  play.offset = x[offset_col_] - s_.input_reference * total;
+  if (!s_.has_dead_zones()) {
+    if (s_.kind == ModelKind::kCoupledPlayPi) {
+      CoupledPlayParameters p{cp_.r, cp_.ra, cp_.rb, cp_.rc, play.weights, play.offset};
+      return std::make_unique<CoupledPlayPiModel>(std::move(p));
+    }
+    return std::make_unique<PiModel>(std::move(play));
+  }
+  play.offset += s_.center;
+  // Inverse dead zone: w'_0 = 1 and increments of the cumulative V outward from 0.
+  DeadZoneParameters inv;
+  inv.thresholds = s_.dead_zone_thresholds;
+  inv.weights.assign(inv.thresholds.size(), 0.0);
+  const std::size_t zero = s_.zero_index();
+  inv.weights[zero] = 1.0;
+  const auto pos = cumulative_to_increments(x.data() + dz_col_, dz_pos_.size(), 1.0);
+  const auto neg = cumulative_to_increments(x.data() + dz_col_ + m_pos_, dz_neg_.size(), 1.0);
+  for (std::size_t j = 0; j < pos.size(); ++j) inv.weights[zero + 1 + j] = pos[j];
+  for (std::size_t j = 0; j < neg.size(); ++j) inv.weights[zero - 1 - j] = neg[j];
+  ModifiedPiParameters mpi{std::move(play),
+                           DeadZoneSuperposition(std::move(inv)).inverse().parameters(), s_.center};
+  if (s_.kind == ModelKind::kModifiedPi) return std::make_unique<ModifiedPiModel>(std::move(mpi));
+  // Rate-dependent: W_i(rate) = A_i + (B_i - A_i) rate / max_rate.
+  RateDependentPiParameters rpi;
+  rpi.base = std::move(mpi);
+  rpi.rate_coefficients.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    rpi.rate_coefficients[i] =
+        (x[n_ + static_cast<Eigen::Index>(i)] - x[static_cast<Eigen::Index>(i)]) * inv_max_rate_;
+  }
+  rpi.max_rate = s_.max_rate;
+  return std::make_unique<RateDependentPiModel>(std::move(rpi), s_.dt);
+}
+
+ActuatorModel Design::build(const Eigen::VectorXd& x) const {
+  ActuatorModel model(build_hysteresis(x));
+  if (!s_.creep_time_constants.empty()) {
+    CreepParameters creep;
+    creep.time_constants_s = s_.creep_time_constants;
+    creep.gains.assign(x.data() + creep_col_, x.data() + unknowns_);
+    model.set_creep(std::move(creep));
+  }
+  return model;
+}
+
+BoundedLsqResult fit_design(Design& design, std::span<const double> u, std::span<const double> y,
+                            std::size_t begin, std::size_t end, std::size_t stride) {
+  NormalEquations ne(design.unknowns());
+  std::vector<double> scratch(static_cast<std::size_t>(design.unknowns()));
+  design.reset(u[0]);
+  for (std::size_t k = 0; k < begin; ++k) design.row(u[k], y[k], scratch.data());
+  if (stride <= 1) {
+    for (std::size_t k = begin; k < end; ++k) ne.push(design.row(u[k], y[k], ne.row()));
+  } else {
+    for (std::size_t k = begin; k < end; ++k) {
+      if ((k - begin) % stride == 0) {
+        ne.push(design.row(u[k], y[k], ne.row()));
+      } else {
+        design.row(u[k], y[k], scratch.data());
+      }
+    }
+  }
+  return solve_bounded_lsq(ne.gram(), ne.rhs(), design.lower_bounds(), design.upper_bounds());
+}
+
+}  // namespace hystbench::compensation::details

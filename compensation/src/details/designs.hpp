@@ -1,0 +1,110 @@
+#pragma once
+// Linear-in-the-weights regressions of the PI family (identification internals).
+// A ModelStructure holds everything that is fixed while the weights are fitted (thresholds,
+// dead-zone thresholds, asymmetry scales, rate range, creep lags). A Design steps the
+// operators over a record and writes one regressor row per sample; its unknowns are the
+// CUMULATIVE weights, so invertibility constraints are plain lower bounds:
+//   PI / CPI : y            = sum_i W_i (p_i - p_{i+1}) + c                      (p_n := u_ref)
+//   MPI      : S'[y - ctr]  = sum_i W_i (p_i - p_{i+1}) + c0   (Kuhnen's error model)
+//              with S' = inverse dead zone, w'_0 = 1, cumulative V_j >= eps outward from 0
+//   RPI      : as MPI with W_i(rho) = A_i (1 - rho) + B_i rho, rho = |du/dt| / max_rate,
+//              A_i >= eps and B_i >= eps (invertible on the whole rate range [0, max_rate]).
+// Creep lags, when present, are extra unconstrained columns.
+#include <Eigen/Dense>
+#include <array>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "details/constrained_lsq.hpp"
+#include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/dead_zone.hpp"
+#include "hystbench/compensation/hysteresis_model.hpp"
+
+namespace hystbench::compensation::details {
+
+struct ModelStructure {
+  ModelKind kind = ModelKind::kPi;
+  std::vector<double> play_thresholds;  ///< r_0 = 0 < r_1 < ... [input unit]
+  /// Inverse dead-zone thresholds d' about `center`, strictly increasing with exactly one 0
+  /// (MPI / RPI only; {0} alone = no dead zones) [output unit].
+  std::vector<double> dead_zone_thresholds{0.0};
+  double center = 0.0;           ///< [output unit] (MPI / RPI)
+  double input_reference = 0.0;  ///< subtracted from the last play for conditioning (not RPI)
+  std::array<double, 3> cp_scale{1.0, 1.0, 1.0};  ///< CPI: ra, rb, rc as multiples of r_i
+  double max_rate = 0.0;                          ///< RPI [input unit / s]
+  double dt = 1e-3;                               ///< sample period [s]
+  double min_play_slope = 0.0;                    ///< lower bound on cumulative play weights
+  double min_dead_zone_slope = 0.0;  ///< lower bound on cumulative inverse dead-zone weights
+  std::vector<double> creep_time_constants;  ///< creep lag columns [s] (empty = none)
+
+  std::size_t plays() const noexcept { return play_thresholds.size(); }
+  std::size_t zero_index() const;  ///< index of 0 in dead_zone_thresholds
+  bool has_dead_zones() const noexcept {
+    return kind == ModelKind::kModifiedPi || kind == ModelKind::kRateDependentPi;
+  }
+};
+
+/// The coupled-play thresholds (r, ra, rb, rc) of a structure.
+struct CoupledThresholds {
+  std::vector<double> r, ra, rb, rc;
+};
+CoupledThresholds coupled_thresholds(const ModelStructure& s);
+
+/// Rate |u(k) - u(k-1)| / dt of every sample (first sample 0), as the rate-dependent model sees it.
+std::vector<double> sample_rates(std::span<const double> u, double dt);
+
+class Design {
+ public:
+  explicit Design(ModelStructure s);
+
+  const ModelStructure& structure() const noexcept { return s_; }
+  Eigen::Index unknowns() const noexcept { return unknowns_; }
+  Eigen::Index plays() const noexcept { return n_; }
+  Eigen::Index offset_column() const noexcept { return offset_col_; }
+  Eigen::Index dead_zone_column() const noexcept { return dz_col_; }
+  Eigen::Index dead_zone_unknowns() const noexcept { return m_pos_ + m_neg_; }
+  Eigen::Index creep_column() const noexcept { return creep_col_; }
+
+  void reset(double u0) noexcept;
+  /// Steps the operators with input u (measured output y) and writes the regressors of this
+  /// sample to a[0 .. unknowns()); returns the regression target.
+  double row(double u, double y, double* a) noexcept;
+
+  Eigen::VectorXd lower_bounds() const;
+  Eigen::VectorXd upper_bounds() const;
+
+  /// The model for the fitted unknowns (hysteresis + creep gains; no delay, not configured).
+  ActuatorModel build(const Eigen::VectorXd& x) const;
+  /// The hysteresis of build() only.
+  std::unique_ptr<HysteresisModel> build_hysteresis(const Eigen::VectorXd& x) const;
+
+ private:
+  void step_operators(double u) noexcept;
+
+  ModelStructure s_;
+  CoupledThresholds cp_;
+  Eigen::Index n_ = 0;      // plays
+  Eigen::Index m_pos_ = 0;  // dead zones above 0
+  Eigen::Index m_neg_ = 0;  // dead zones below 0
+  Eigen::Index play_cols_ = 0;
+  Eigen::Index offset_col_ = 0;
+  Eigen::Index dz_col_ = 0;
+  Eigen::Index creep_col_ = 0;
+  Eigen::Index unknowns_ = 0;
+  std::vector<double> z_;                // operator outputs
+  std::vector<double> creep_a_;          // lag poles
+  std::vector<double> creep_x_;          // lag states
+  std::vector<double> dz_pos_, dz_neg_;  // thresholds outward from 0
+  double u_prev_ = 0.0;
+  double inv_max_rate_ = 0.0;
+};
+
+/// Fits the design's unknowns on rows [begin, end) of the record (the operators are stepped
+/// from reset(u[0]) at sample 0, so rows before `begin` only advance the state). With
+/// stride > 1 only every stride-th row of [begin, end) enters the fit (the operators still see
+/// every sample): a cheaper, slightly noisier fit for searches.
+BoundedLsqResult fit_design(Design& design, std::span<const double> u, std::span<const double> y,
+                            std::size_t begin, std::size_t end, std::size_t stride = 1);
+
+}  // namespace hystbench::compensation::details

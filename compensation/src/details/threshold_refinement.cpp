@@ -1,0 +1,157 @@
+#include "details/threshold_refinement.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <unsupported/Eigen/LevenbergMarquardt>
+
+namespace hystbench::compensation::details {
+
+namespace {
+
+// Thresholds <-> log-increments.
+class Packing {
+ public:
+  Packing(const ModelStructure& s, const RefinementSettings& settings) : base_(s) {
+    plays_ = settings.plays && s.plays() >= 2 ? static_cast<Eigen::Index>(s.plays()) - 1 : 0;
+    if (settings.dead_zones && s.has_dead_zones()) {
+      zero_ = s.zero_index();
+      pos_ = static_cast<Eigen::Index>(s.dead_zone_thresholds.size() - zero_ - 1);
+      neg_ = static_cast<Eigen::Index>(zero_);
+    }
+    if (settings.asymmetry && s.kind == ModelKind::kCoupledPlayPi && s.cp_scale[1] > 0.0) {
+      // rb free (ra follows in proportion, so ra <= rb stays true); rc > r as 1 + exp(theta)
+      // when it is above r (rc = r is the plain rising play and stays so).
+      scales_ = s.cp_scale[2] > 1.0 ? 2 : 1;
+    }
+  }
+
+  Eigen::Index size() const noexcept { return plays_ + pos_ + neg_ + scales_; }
+
+  Eigen::VectorXd pack() const {
+    Eigen::VectorXd theta(size());
+    Eigen::Index k = 0;
+    const auto& r = base_.play_thresholds;
+    for (Eigen::Index i = 1; i <= plays_; ++i) theta[k++] = std::log(r[i] - r[i - 1]);
+    const auto& d = base_.dead_zone_thresholds;
+    for (Eigen::Index j = 1; j <= pos_; ++j) theta[k++] = std::log(d[zero_ + j] - d[zero_ + j - 1]);
+    for (Eigen::Index j = 1; j <= neg_; ++j) theta[k++] = std::log(d[zero_ - j + 1] - d[zero_ - j]);
+    if (scales_ > 0) theta[k++] = std::log(base_.cp_scale[1]);
+    if (scales_ > 1) theta[k++] = std::log(base_.cp_scale[2] - 1.0);
+    return theta;
+  }
+
+  ModelStructure unpack(const Eigen::VectorXd& theta) const {
+    ModelStructure s = base_;
+    Eigen::Index k = 0;
+    auto& r = s.play_thresholds;
+    for (Eigen::Index i = 1; i <= plays_; ++i) r[i] = r[i - 1] + std::exp(theta[k++]);
+    auto& d = s.dead_zone_thresholds;
+    for (Eigen::Index j = 1; j <= pos_; ++j) d[zero_ + j] = d[zero_ + j - 1] + std::exp(theta[k++]);
+    for (Eigen::Index j = 1; j <= neg_; ++j) d[zero_ - j] = d[zero_ - j + 1] - std::exp(theta[k++]);
+    if (scales_ > 0) {
+      s.cp_scale[1] = std::exp(theta[k++]);
+      s.cp_scale[0] = base_.cp_scale[0] / base_.cp_scale[1] * s.cp_scale[1];
+    }
+    if (scales_ > 1) s.cp_scale[2] = 1.0 + std::exp(theta[k++]);
+    return s;
+  }
+
+ private:
+  ModelStructure base_;
+  Eigen::Index plays_ = 0;
+  std::size_t zero_ = 0;
+  Eigen::Index pos_ = 0;
+  Eigen::Index neg_ = 0;
+  Eigen::Index scales_ = 0;
+};
+
+// Output error of the structure with its weights fitted by constrained least squares.
+void output_residuals(const ModelStructure& s, const RefinementRecord& rec, double* f) {
+  const std::size_t n = rec.residuals();
+  try {
+    Design design(s);
+    const BoundedLsqResult fit = fit_design(design, rec.u, rec.y, rec.begin, rec.end, rec.stride);
+    ActuatorModel model = design.build(fit.x);
+    const std::vector<double> yhat = model.simulate(rec.u.first(rec.end), s.dt);
+    for (std::size_t i = 0, k = rec.begin; i < n; ++i, k += rec.stride) f[i] = rec.y[k] - yhat[k];
+  } catch (const std::exception&) {
+    // A structure the models reject (it cannot happen with positive slope bounds): make it
+    // look bad rather than abort the search.
+    for (std::size_t i = 0; i < n; ++i)
+      f[i] = 1e3 * (1.0 + std::abs(rec.y[rec.begin + i * rec.stride]));
+  }
+}
+
+struct Residuals : Eigen::DenseFunctor<double> {
+  Residuals(const Packing& packing, const RefinementRecord& record, int* evaluations)
+      : Eigen::DenseFunctor<double>(static_cast<int>(packing.size()),
+                                    static_cast<int>(record.residuals())),
+        packing_(packing),
+        record_(record),
+        evaluations_(evaluations) {}
+
+  int operator()(const InputType& theta, ValueType& f) const {
+    ++*evaluations_;
+    output_residuals(packing_.unpack(theta), record_, f.data());
+    return 0;
+  }
+
+  // Forward differences; the plays are piecewise linear in their thresholds, so a small
+  // fixed step in log-increment space is well inside one linear piece most of the time.
+  int df(const InputType& theta, JacobianType& jac) const {
+    constexpr double kStep = 1e-4;
+    ValueType f0(values()), f1(values());
+    (*this)(theta, f0);
+    InputType t = theta;
+    for (Eigen::Index j = 0; j < theta.size(); ++j) {
+      t[j] = theta[j] + kStep;
+      (*this)(t, f1);
+      jac.col(j) = (f1 - f0) / kStep;
+      t[j] = theta[j];
+    }
+    return 0;
+  }
+
+  const Packing& packing_;
+  const RefinementRecord& record_;
+  int* evaluations_;
+};
+
+}  // namespace
+
+double structure_rmse(const ModelStructure& s, const RefinementRecord& record) {
+  Eigen::VectorXd f(static_cast<Eigen::Index>(record.residuals()));
+  output_residuals(s, record, f.data());
+  return f.size() > 0 ? std::sqrt(f.squaredNorm() / static_cast<double>(f.size())) : 0.0;
+}
+
+RefinementResult refine_structure(const ModelStructure& s, const RefinementRecord& full,
+                                  const RefinementSettings& settings) {
+  RefinementRecord record = full;
+  const std::size_t rows = full.end > full.begin ? full.end - full.begin : 0;
+  record.stride = std::max<std::size_t>(
+      1, (rows + settings.max_rows - 1) / std::max<std::size_t>(1, settings.max_rows));
+  RefinementResult out;
+  out.structure = s;
+  out.initial_rmse = out.final_rmse = structure_rmse(s, record);
+  const Packing packing(s, settings);
+  if (packing.size() == 0 || record.end <= record.begin) return out;
+
+  Residuals functor(packing, record, &out.evaluations);
+  Eigen::LevenbergMarquardt<Residuals> lm(functor);
+  lm.setMaxfev(settings.max_iterations);
+  lm.setFtol(1e-6);
+  lm.setXtol(1e-6);
+  Eigen::VectorXd theta = packing.pack();
+  lm.minimize(theta);
+  const ModelStructure refined = packing.unpack(theta);
+  const double rmse = structure_rmse(refined, record);
+  if (rmse < out.initial_rmse) {
+    out.structure = refined;
+    out.final_rmse = rmse;
+  }
+  return out;
+}
+
+}  // namespace hystbench::compensation::details

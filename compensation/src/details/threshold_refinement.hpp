@@ -1,0 +1,48 @@
+#pragma once
+// Levenberg-Marquardt refinement of a structure's thresholds by variable projection: for given
+// thresholds the weights are the constrained least-squares solution (fit_design), and LM
+// minimises the simulated output error over the thresholds alone. Thresholds are packed as
+// logarithms of their increments, so they stay ordered and positive for any step.
+#include <span>
+
+#include "details/designs.hpp"
+
+namespace hystbench::compensation::details {
+
+struct RefinementRecord {
+  std::span<const double> u;  ///< input as the hysteresis sees it (after any delay)
+  std::span<const double> y;
+  std::size_t begin = 0;  ///< residuals on [begin, end); the model runs from sample 0
+  std::size_t end = 0;
+  std::size_t stride = 1;  ///< every stride-th row of [begin, end) is fitted and compared
+
+  std::size_t residuals() const noexcept {
+    return end > begin ? (end - begin - 1) / stride + 1 : 0;
+  }
+};
+
+struct RefinementSettings {
+  bool plays = true;       ///< refine play thresholds r_1 .. r_{n-1}
+  bool dead_zones = true;  ///< refine inverse dead-zone thresholds (MPI / RPI)
+  bool asymmetry = true;   ///< refine the coupled-play scales (CPI), keeping them monotone
+  int max_iterations = 15;
+  /// Rows the search works on at most (a stride thins longer records; the result is then
+  /// re-scored on every row by the caller).
+  std::size_t max_rows = 8000;
+};
+
+struct RefinementResult {
+  ModelStructure structure;
+  double initial_rmse = 0.0;
+  double final_rmse = 0.0;
+  int evaluations = 0;
+};
+
+/// Simulated output RMS error of the structure fitted on `record`.
+double structure_rmse(const ModelStructure& s, const RefinementRecord& record);
+
+/// Refines the thresholds; returns the input structure when nothing can be refined.
+RefinementResult refine_structure(const ModelStructure& s, const RefinementRecord& record,
+                                  const RefinementSettings& settings);
+
+}  // namespace hystbench::compensation::details

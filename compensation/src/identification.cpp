@@ -1,0 +1,658 @@
+#include "hystbench/compensation/identification.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <utility>
+
+#include "details/constrained_lsq.hpp"
+#include "details/designs.hpp"
+#include "details/rate_groups.hpp"
+#include "details/threshold_refinement.hpp"
+#include "details/validate.hpp"
+
+namespace hystbench::compensation {
+
+namespace {
+
+using details::Design;
+using details::ModelStructure;
+
+constexpr std::size_t kMinSamples = 50;
+constexpr std::size_t kMinFitRows = 20;
+constexpr int kOperatorGrid[] = {4, 6, 8, 10, 12, 15, 20, 25, 30};
+constexpr int kMaxDeadZones = 5;
+constexpr int kDefaultDeadZones = 2;
+constexpr std::size_t kRowsPerUnknown = 10;  // order search: at least this many rows per unknown
+// A larger model must beat the best smaller one by more than this (relative) to be chosen.
+constexpr double kParsimony = 0.01;
+// Coupled-play asymmetry grid: rb (and ra) and rc as multiples of r. The levels compare with
+// the absolute input (the paper's is bipolar): for u >= 0 the falling width is always rb, and
+// rc only changes anything when rc > r + rb, hence level scales up to 6.
+// Monotone (invertible) operators need rc >= r and ra <= rb.
+constexpr double kCpWidthScales[] = {0.5, 0.7, 1.0, 1.4, 2.0};
+constexpr double kCpLevelScales[] = {1.0, 2.0, 3.0, 4.0, 6.0};
+// Automatic family choice tries the rate-dependent model only when the record crosses the same
+// input levels at clearly different rates (else its rate terms merely fit the loop shape of
+// the one excitation and do not carry over to other signals).
+constexpr double kMinRateSpread = 1.25;
+
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// Record checks build their message only on failure (details::require_finite and friends
+// format one per element, too slow for 1e5-sample records).
+void require_finite_record(std::span<const double> v, const char* name) {
+  const auto bad = std::find_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); });
+  if (bad != v.end()) {
+    throw std::invalid_argument(std::string(name) + "[" + std::to_string(bad - v.begin()) +
+                                "] is not a finite number");
+  }
+}
+
+void validate_record(std::span<const double> t, std::span<const double> u,
+                     std::span<const double> y) {
+  details::require(t.size() == u.size() && u.size() == y.size(),
+                   "t, u and y must have the same length (t: " + std::to_string(t.size()) +
+                       ", u: " + std::to_string(u.size()) + ", y: " + std::to_string(y.size()) +
+                       ")");
+  details::require(u.size() >= kMinSamples, "at least " + std::to_string(kMinSamples) +
+                                                " samples are needed to identify a model, got " +
+                                                std::to_string(u.size()));
+  require_finite_record(t, "t");
+  require_finite_record(u, "u");
+  require_finite_record(y, "y");
+  const auto step = std::adjacent_find(t.begin(), t.end(), std::greater_equal<double>());
+  if (step != t.end()) {
+    const auto k = static_cast<std::size_t>(step - t.begin()) + 1;
+    throw std::invalid_argument("t must be strictly increasing: t[" + std::to_string(k) +
+                                "] = " + fmt(t[k]) + " <= t[" + std::to_string(k - 1) +
+                                "] = " + fmt(t[k - 1]));
+  }
+  const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
+  details::require(*hi > *lo, "input u is constant (" + fmt(*lo) +
+                                  "): a constant input does not excite any hysteresis");
+}
+
+void validate_thresholds(const FitOptions& o) {
+  if (!o.play_thresholds.empty()) {
+    details::require_finite(o.play_thresholds, "options.play_thresholds");
+    details::require(o.play_thresholds.front() == 0.0,
+                     "options.play_thresholds[0] must be 0 (else the model is not invertible)");
+    details::require_strictly_increasing(o.play_thresholds, "options.play_thresholds");
+  }
+  if (!o.dead_zone_thresholds.empty()) {
+    details::require_finite(o.dead_zone_thresholds, "options.dead_zone_thresholds");
+    details::require_strictly_increasing(o.dead_zone_thresholds, "options.dead_zone_thresholds");
+    details::require(
+        std::count(o.dead_zone_thresholds.begin(), o.dead_zone_thresholds.end(), 0.0) == 1,
+        "options.dead_zone_thresholds must contain exactly one 0");
+  }
+}
+
+void validate_options(const FitOptions& o, std::size_t n) {
+  details::require(
+      std::isfinite(o.heldout_fraction) && o.heldout_fraction >= 0.0 && o.heldout_fraction <= 0.9,
+      "options.heldout_fraction must be in [0, 0.9], got " + fmt(o.heldout_fraction));
+  details::require(o.operators >= 0, "options.operators must be >= 0 (0 = automatic)");
+  details::require(o.dead_zones >= -1, "options.dead_zones must be >= -1 (-1 = automatic)");
+  details::require(std::isfinite(o.min_cumulative_weight) && o.min_cumulative_weight > 0.0,
+                   "options.min_cumulative_weight must be > 0 (it guarantees invertibility)");
+  details::require(o.delay_samples >= -1, "options.delay_samples must be >= -1 (-1 = automatic)");
+  details::require(
+      o.max_delay_samples >= 0 && static_cast<std::size_t>(o.max_delay_samples) < n / 4,
+      "options.max_delay_samples must be in [0, N/4)");
+  details::require(o.delay_samples < 0 || static_cast<std::size_t>(o.delay_samples) < n / 4,
+                   "options.delay_samples must be < N/4");
+  if (o.creep) {
+    details::require(!o.creep_time_constants_s.empty() || o.creep_operators >= 1,
+                     "options.creep_operators must be >= 1 when creep is on");
+    for (const double tau : o.creep_time_constants_s) {
+      details::require(std::isfinite(tau) && tau > 0.0,
+                       "options.creep_time_constants_s must be positive");
+    }
+  }
+  validate_thresholds(o);
+}
+
+// The record as the fits see it: input delayed, fitted part and held-out part.
+struct Record {
+  std::span<const double> t, u, y;
+  double dt = 1e-3;
+  std::size_t n = 0;
+  std::size_t begin = 0;    // first fitted sample (after the skipped transient)
+  std::size_t fit_end = 0;  // held-out part is [fit_end, n)
+  int delay = 0;
+  std::vector<double> ud;  // u delayed by `delay` samples (u[0] before the start)
+  double u_lo = 0, u_hi = 0, y_lo = 0, y_hi = 0;  // ranges over the fitted part
+
+  void set_delay(int d) {
+    delay = d;
+    ud.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      ud[k] = k >= static_cast<std::size_t>(d) ? u[k - static_cast<std::size_t>(d)] : u[0];
+    }
+    const auto [ulo, uhi] = std::minmax_element(ud.begin() + begin, ud.begin() + fit_end);
+    u_lo = *ulo, u_hi = *uhi;
+  }
+};
+
+Record make_record(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                   const FitOptions& o) {
+  Record r;
+  r.t = t, r.u = u, r.y = y;
+  r.n = u.size();
+  r.dt = (t.back() - t.front()) / static_cast<double>(r.n - 1);
+  const auto heldout = static_cast<std::size_t>(std::floor(o.heldout_fraction * r.n));
+  r.fit_end = r.n - heldout;
+  r.begin = o.skip_samples;
+  details::require(r.begin + kMinFitRows <= r.fit_end,
+                   "too few samples left to fit: " + std::to_string(r.n) + " samples minus " +
+                       std::to_string(r.begin) + " skipped and " + std::to_string(heldout) +
+                       " held out leaves fewer than " + std::to_string(kMinFitRows));
+  const auto [ylo, yhi] = std::minmax_element(y.begin() + r.begin, y.begin() + r.fit_end);
+  r.y_lo = *ylo, r.y_hi = *yhi;
+  details::require(r.y_hi > r.y_lo, "output y is constant over the fitted part (" + fmt(r.y_lo) +
+                                        "): nothing to identify");
+  r.set_delay(0);
+  details::require(r.u_hi > r.u_lo, "input u is constant over the fitted part (" + fmt(r.u_lo) +
+                                        "): a constant input does not excite any hysteresis");
+  return r;
+}
+
+struct Candidate {
+  ModelStructure structure;
+  Eigen::VectorXd x;
+  std::optional<ActuatorModel> model;
+  ErrorStats fit, heldout;
+  std::string method;
+
+  double score() const { return heldout.samples > 0 ? heldout.rmse : fit.rmse; }
+};
+
+// Simulates the model (no delay: the record's input is already delayed) and scores it.
+// The slope bounds make every fitted model invertible; that is checked, never assumed: a model
+// that fails the check scores +inf and cannot be chosen.
+void score(Candidate& c, const Record& r) {
+  const Invertibility inv = c.model->hysteresis().invertibility();
+  if (!inv.invertible) {
+    c.fit.rmse = c.heldout.rmse = std::numeric_limits<double>::infinity();
+    c.method += " (rejected, not invertible: " + inv.reason + ")";
+    return;
+  }
+  const std::vector<double> yhat = c.model->simulate(r.ud, r.dt);
+  const auto y = r.y;
+  c.fit = error_stats(y.subspan(r.begin, r.fit_end - r.begin),
+                      std::span(yhat).subspan(r.begin, r.fit_end - r.begin));
+  c.heldout = error_stats(y.subspan(r.fit_end), std::span(yhat).subspan(r.fit_end));
+}
+
+int dead_zones_of(const ModelStructure& s) {
+  return s.has_dead_zones() ? static_cast<int>(s.dead_zone_thresholds.size() / 2) : 0;
+}
+
+class Identifier {
+ public:
+  Identifier(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+             const FitOptions& options)
+      : o_(options), r_(make_record(t, u, y, options)) {
+    center_ = o_.center.value_or(0.5 * (r_.y_lo + r_.y_hi));
+  }
+
+  FitResult run();
+
+ private:
+  void progress(double fraction, const std::string& what) const {
+    if (o_.progress) o_.progress(fraction, what);
+  }
+  // Progress within the current stage [stage_begin_, stage_begin_ + stage_span_].
+  void stage_progress(double fraction, const std::string& what) const {
+    progress(stage_begin_ + stage_span_ * fraction, what);
+  }
+
+  ModelStructure structure(ModelKind kind, int plays, int dead_zones) const;
+  Candidate evaluate(const ModelStructure& s, std::string method);
+  Candidate& memo(ModelKind kind, int plays, int dead_zones,
+                  std::array<double, 3> cp = {1.0, 1.0, 1.0});
+  std::vector<int> operator_grid(int extra_unknowns) const;
+  std::vector<int> dead_zone_grid() const;
+  // Among candidates in increasing complexity, the smallest within kParsimony of the best.
+  template <class Key, class Eval>
+  Key pick(const std::vector<Key>& keys, Eval eval);
+
+  int choose_delay();
+  Candidate search(ModelKind kind);
+  Candidate search_pi();
+  Candidate search_mpi();
+  Candidate search_cpi();
+  Candidate search_rpi();
+  void refine(Candidate& c);
+  void add_creep(Candidate& c);
+  std::vector<double> creep_time_constants() const;
+
+  FitOptions o_;
+  Record r_;
+  double center_ = 0.0;
+  std::map<std::tuple<ModelKind, int, int, std::array<double, 3>>, Candidate> memo_;
+  std::optional<Candidate> best_mpi_;
+  std::vector<FitCandidate> log_;
+  double stage_begin_ = 0.0;
+  double stage_span_ = 0.0;
+};
+
+ModelStructure Identifier::structure(ModelKind kind, int plays, int dead_zones) const {
+  ModelStructure s;
+  s.kind = kind;
+  s.dt = r_.dt;
+  const double u_span = r_.u_hi - r_.u_lo;
+  const double y_span = r_.y_hi - r_.y_lo;
+  s.play_thresholds = o_.play_thresholds.empty()
+                          ? uniform_thresholds(static_cast<std::size_t>(plays), 0.5 * u_span)
+                          : o_.play_thresholds;
+  s.input_reference = 0.5 * (r_.u_lo + r_.u_hi);
+  s.min_play_slope = o_.min_cumulative_weight * y_span / u_span;
+  s.min_dead_zone_slope = o_.min_cumulative_weight;
+  s.center = center_;
+  if (s.has_dead_zones()) {
+    if (!o_.dead_zone_thresholds.empty()) {
+      s.dead_zone_thresholds = o_.dead_zone_thresholds;
+    } else {
+      // Uniform on the fitted output range about the center, 2m+1 thresholds in all.
+      const double above = r_.y_hi - center_;
+      const double below = center_ - r_.y_lo;
+      s.dead_zone_thresholds.assign(static_cast<std::size_t>(2 * dead_zones + 1), 0.0);
+      for (int j = 1; j <= dead_zones; ++j) {
+        const double f = static_cast<double>(j) / (dead_zones + 1);
+        s.dead_zone_thresholds[static_cast<std::size_t>(dead_zones + j)] = f * above;
+        s.dead_zone_thresholds[static_cast<std::size_t>(dead_zones - j)] = -f * below;
+      }
+    }
+  }
+  return s;
+}
+
+Candidate Identifier::evaluate(const ModelStructure& s, std::string method) {
+  Candidate c;
+  c.structure = s;
+  c.method = std::move(method);
+  Design design(s);
+  const details::BoundedLsqResult fit =
+      details::fit_design(design, r_.ud, r_.y, r_.begin, r_.fit_end);
+  c.x = fit.x;
+  c.model = design.build(fit.x);
+  score(c, r_);
+  log_.push_back({s.kind, static_cast<int>(s.plays()), dead_zones_of(s), r_.delay, c.fit.rmse,
+                  c.heldout.rmse, c.method});
+  return c;
+}
+
+Candidate& Identifier::memo(ModelKind kind, int plays, int dead_zones, std::array<double, 3> cp) {
+  const auto key = std::make_tuple(kind, plays, dead_zones, cp);
+  auto it = memo_.find(key);
+  if (it == memo_.end()) {
+    ModelStructure s = structure(kind, plays, dead_zones);
+    s.cp_scale = cp;
+    it = memo_.emplace(key, evaluate(s, "constrained-lsq")).first;
+  }
+  return it->second;
+}
+
+std::vector<int> Identifier::operator_grid(int extra_unknowns) const {
+  if (!o_.play_thresholds.empty()) return {static_cast<int>(o_.play_thresholds.size())};
+  if (o_.operators > 0) return {o_.operators};
+  const std::size_t rows = r_.fit_end - r_.begin;
+  std::vector<int> grid;
+  for (const int n : kOperatorGrid) {
+    if (static_cast<std::size_t>(n + 1 + extra_unknowns) * kRowsPerUnknown <= rows)
+      grid.push_back(n);
+  }
+  if (grid.empty()) grid.push_back(std::max<int>(1, static_cast<int>(rows / kRowsPerUnknown) - 1));
+  return grid;
+}
+
+std::vector<int> Identifier::dead_zone_grid() const {
+  if (!o_.dead_zone_thresholds.empty()) {
+    return {static_cast<int>(o_.dead_zone_thresholds.size() / 2)};
+  }
+  if (o_.dead_zones >= 0) return {o_.dead_zones};
+  std::vector<int> grid;
+  for (int m = 0; m <= kMaxDeadZones; ++m) grid.push_back(m);
+  return grid;
+}
+
+template <class Key, class Eval>
+Key Identifier::pick(const std::vector<Key>& keys, Eval eval) {
+  std::vector<double> scores;
+  for (const Key& k : keys) scores.push_back(eval(k));
+  const double best = *std::min_element(scores.begin(), scores.end());
+  const double tolerance = best * kParsimony + 1e-9 * (r_.y_hi - r_.y_lo);
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (scores[i] <= best + tolerance) return keys[i];
+  }
+  return keys.front();
+}
+
+int Identifier::choose_delay() {
+  if (o_.delay_samples >= 0) return o_.delay_samples;
+  // A mid-size model of the requested family (MPI when automatic) at each delay.
+  const ModelKind kind = o_.kind.value_or(ModelKind::kModifiedPi) == ModelKind::kPi
+                             ? ModelKind::kPi
+                             : ModelKind::kModifiedPi;
+  const std::vector<int> ns = operator_grid(2 * kDefaultDeadZones);
+  const int plays = o_.operators > 0 ? ns.front() : ns[ns.size() / 2];
+  const int m = o_.dead_zones >= 0 ? o_.dead_zones : kDefaultDeadZones;
+  int best = 0;
+  double best_score = std::numeric_limits<double>::infinity();
+  for (int d = 0; d <= o_.max_delay_samples; ++d) {
+    progress(0.1 * d / (o_.max_delay_samples + 1), "delay " + std::to_string(d) + " samples");
+    r_.set_delay(d);
+    const double s = evaluate(structure(kind, plays, m), "delay-search").score();
+    if (s < best_score) best_score = s, best = d;
+  }
+  return best;
+}
+
+Candidate Identifier::search_pi() {
+  const int n = pick(operator_grid(0), [&](int n) { return memo(ModelKind::kPi, n, 0).score(); });
+  return memo(ModelKind::kPi, n, 0);
+}
+
+Candidate Identifier::search_mpi() {
+  if (best_mpi_) return *best_mpi_;
+  const std::vector<int> ms = dead_zone_grid();
+  int m = ms.size() == 1 ? ms.front() : std::min(kDefaultDeadZones, ms.back());
+  auto by_n = [&](int mm) {
+    return pick(operator_grid(2 * mm),
+                [&](int n) { return memo(ModelKind::kModifiedPi, n, mm).score(); });
+  };
+  int n = by_n(m);
+  if (ms.size() > 1) {
+    const int m2 = pick(ms, [&](int mm) { return memo(ModelKind::kModifiedPi, n, mm).score(); });
+    if (m2 != m) n = by_n(m = m2);
+  }
+  best_mpi_ = memo(ModelKind::kModifiedPi, n, m);
+  return *best_mpi_;
+}
+
+Candidate Identifier::search_cpi() {
+  // Plain plays are coupled plays with unit scales: choose the order there, then the scales.
+  const std::vector<int> ns = operator_grid(0);
+  const int n = ns.size() == 1 ? ns.front() : static_cast<int>(search_pi().structure.plays());
+  std::vector<std::array<double, 3>> grid;
+  const bool bipolar = r_.u_lo < 0.0;
+  for (const double kb : kCpWidthScales) {
+    for (const double kc : kCpLevelScales) {
+      if (bipolar) {
+        for (const double ka : kCpWidthScales) {
+          if (ka <= kb) grid.push_back({ka, kb, kc});
+        }
+      } else {
+        grid.push_back({kb, kb, kc});  // ra only acts below -rb: irrelevant for u >= 0
+      }
+    }
+  }
+  Candidate best = memo(ModelKind::kCoupledPlayPi, n, 0);
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    stage_progress(static_cast<double>(i) / static_cast<double>(grid.size()),
+                   "coupled-play asymmetry scales");
+    const Candidate& c = memo(ModelKind::kCoupledPlayPi, n, 0, grid[i]);
+    if (c.score() < best.score()) best = c;
+  }
+  return best;
+}
+
+Candidate Identifier::search_rpi() {
+  const Candidate mpi = search_mpi();
+  const std::vector<double> rates = details::sample_rates(r_.ud, r_.dt);
+  ModelStructure s = mpi.structure;
+  s.kind = ModelKind::kRateDependentPi;
+  s.max_rate = *std::max_element(rates.begin(), rates.end());
+  Candidate best = evaluate(s, "constrained-lsq-rate-joint");
+  // The paper's way: per-rate-group weights regressed on rate, dead zones from the MPI.
+  const Design mpi_design(mpi.structure);
+  const Eigen::VectorXd v =
+      mpi.x.segment(mpi_design.dead_zone_column(), mpi_design.dead_zone_unknowns());
+  const auto x = details::fit_rate_groups(s, v, r_.ud, r_.y, r_.begin, r_.fit_end);
+  if (x) {
+    Candidate g;
+    g.structure = s;
+    g.x = *x;
+    g.model = Design(s).build(*x);
+    g.method = "rate-groups-regression";
+    score(g, r_);
+    log_.push_back({s.kind, static_cast<int>(s.plays()), dead_zones_of(s), r_.delay, g.fit.rmse,
+                    g.heldout.rmse, g.method});
+    if (g.score() < best.score()) best = std::move(g);
+  }
+  return best;
+}
+
+Candidate Identifier::search(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::kPi:
+      return search_pi();
+    case ModelKind::kModifiedPi:
+      return search_mpi();
+    case ModelKind::kCoupledPlayPi:
+      return search_cpi();
+    case ModelKind::kRateDependentPi:
+      return search_rpi();
+  }
+  throw std::invalid_argument("unknown model kind");
+}
+
+void Identifier::refine(Candidate& c) {
+  details::RefinementSettings settings;
+  settings.plays = o_.play_thresholds.empty();
+  settings.dead_zones = o_.dead_zone_thresholds.empty();
+  const details::RefinementRecord rec{r_.ud, r_.y, r_.begin, r_.fit_end};
+  const details::RefinementResult refined = details::refine_structure(c.structure, rec, settings);
+  if (refined.final_rmse >= refined.initial_rmse) return;
+  Candidate next = evaluate(refined.structure, c.method + "+lm");
+  if (next.score() < c.score()) c = std::move(next);
+}
+
+std::vector<double> Identifier::creep_time_constants() const {
+  if (!o_.creep_time_constants_s.empty()) return o_.creep_time_constants_s;
+  const double duration = r_.t.back() - r_.t.front();
+  return log_spaced_time_constants(static_cast<std::size_t>(o_.creep_operators),
+                                   std::max(0.05 * duration, 2.0 * r_.dt), 0.5 * duration);
+}
+
+void Identifier::add_creep(Candidate& c) {
+  ModelStructure s = c.structure;
+  s.creep_time_constants = creep_time_constants();
+  // Joint linear fit: exact for PI / CPI (creep adds to the output); for MPI / RPI the
+  // error model puts the lags before the dead zone, so it is only a starting point.
+  Candidate best = evaluate(s, c.method + "+creep");
+  if (s.has_dead_zones()) {
+    // Alternate: hysteresis on y - creep, creep gains on y - hysteresis (both linear).
+    ModelStructure hs = c.structure;
+    std::vector<double> gains(s.creep_time_constants.size(), 0.0);  // first pass: c's own H
+    std::vector<double> y_adj(r_.n);
+    const Eigen::Index K = static_cast<Eigen::Index>(gains.size());
+    for (int iteration = 0; iteration < 4; ++iteration) {
+      CreepOperatorBank bank({s.creep_time_constants, gains}, r_.dt);
+      bank.reset(r_.ud[0]);
+      for (std::size_t k = 0; k < r_.n; ++k) y_adj[k] = r_.y[k] - bank.step(r_.ud[k]);
+      Design design(hs);
+      const auto fit = details::fit_design(design, r_.ud, y_adj, r_.begin, r_.fit_end);
+      auto hysteresis = design.build_hysteresis(fit.x);
+      hysteresis->reset(r_.ud[0]);
+      details::NormalEquations ne(K);
+      bank.reset(r_.ud[0]);
+      for (std::size_t k = 0; k < r_.fit_end; ++k) {
+        const double h = hysteresis->step(r_.ud[k]);
+        bank.step(r_.ud[k]);
+        if (k < r_.begin) continue;
+        std::copy(bank.state().begin(), bank.state().end(), ne.row());
+        ne.push(r_.y[k] - h);
+      }
+      const Eigen::VectorXd inf =
+          Eigen::VectorXd::Constant(K, std::numeric_limits<double>::infinity());
+      const Eigen::VectorXd g = details::solve_bounded_lsq(ne.gram(), ne.rhs(), -inf, inf).x;
+      gains.assign(g.data(), g.data() + K);
+      Candidate alt;
+      alt.structure = s;
+      alt.method = c.method + "+creep-alternating";
+      alt.model = ActuatorModel(design.build_hysteresis(fit.x));
+      alt.model->set_creep(CreepParameters{s.creep_time_constants, gains});
+      score(alt, r_);
+      log_.push_back({s.kind, static_cast<int>(s.plays()), dead_zones_of(s), r_.delay, alt.fit.rmse,
+                      alt.heldout.rmse, alt.method});
+      if (alt.fit.rmse < best.fit.rmse) best = std::move(alt);
+    }
+  }
+  if (best.score() < c.score()) c = std::move(best);
+}
+
+FitResult Identifier::run() {
+  progress(0.0, "checking the record");
+  const int delay = choose_delay();
+  r_.set_delay(delay);
+  memo_.clear();
+
+  std::vector<ModelKind> kinds;
+  if (o_.kind) {
+    kinds.push_back(*o_.kind);
+  } else {
+    kinds = {ModelKind::kPi, ModelKind::kModifiedPi, ModelKind::kCoupledPlayPi,
+             ModelKind::kRateDependentPi};
+  }
+  std::optional<Candidate> best;
+  for (std::size_t i = 0; i < kinds.size(); ++i) {
+    stage_span_ = 0.6 / static_cast<double>(kinds.size());
+    stage_begin_ = 0.1 + stage_span_ * static_cast<double>(i);
+    if (!o_.kind && kinds[i] == ModelKind::kRateDependentPi &&
+        details::half_cycle_rate_spread(r_.ud, r_.dt, r_.begin, r_.fit_end) < kMinRateSpread) {
+      stage_progress(0.0, "skipping rpi: the record has a single excitation rate");
+      continue;
+    }
+    stage_progress(0.0, "fitting " + std::string(to_string(kinds[i])));
+    Candidate c = search(kinds[i]);
+    if (!best || c.score() < best->score()) best = std::move(c);
+  }
+  if (!std::isfinite(best->score())) {
+    throw std::logic_error("identification found no invertible model: " + best->method);
+  }
+  if (o_.refine_thresholds) {
+    progress(0.7, "refining thresholds (Levenberg-Marquardt)");
+    refine(*best);
+  }
+  if (o_.creep) {
+    progress(0.9, "fitting creep");
+    add_creep(*best);
+  }
+  progress(0.97, "scoring");
+
+  FitResult out;
+  out.model = std::move(*best->model);
+  out.model.configure(r_.dt);
+  out.model.set_delay(delay * r_.dt);
+  out.model.units = o_.units;
+  const auto [ulo, uhi] = std::minmax_element(r_.u.begin(), r_.u.end());
+  out.model.input_min = *ulo;
+  out.model.input_max = *uhi;
+  const ModelScore s = score_model(out.model, r_.t, r_.u, r_.y, o_.heldout_fraction, r_.begin);
+  out.fit = s.fit;
+  out.heldout = s.heldout;
+  out.fit_samples = r_.fit_end - r_.begin;
+  out.heldout_samples = r_.n - r_.fit_end;
+  out.operators = static_cast<int>(best->structure.plays());
+  out.dead_zones = dead_zones_of(best->structure);
+  out.method = best->method;
+  out.delay_samples = delay;
+  out.creep = !best->structure.creep_time_constants.empty();
+  out.candidates = std::move(log_);
+  progress(1.0, "done");
+  return out;
+}
+
+}  // namespace
+
+FitResult fit_model(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                    const FitOptions& options) {
+  validate_record(t, u, y);
+  validate_options(options, u.size());
+  return Identifier(t, u, y, options).run();
+}
+
+FitResult fit_model_with_creep(std::span<const double> t, std::span<const double> u,
+                               std::span<const double> y, FitOptions options) {
+  options.creep = true;
+  return fit_model(t, u, y, options);
+}
+
+ModelScore score_model(ActuatorModel model, std::span<const double> t, std::span<const double> u,
+                       std::span<const double> y, double heldout_fraction,
+                       std::size_t skip_samples) {
+  validate_record(t, u, y);
+  details::require(heldout_fraction >= 0.0 && heldout_fraction <= 0.9,
+                   "heldout_fraction must be in [0, 0.9]");
+  const std::size_t n = u.size();
+  const std::size_t fit_end = n - static_cast<std::size_t>(std::floor(heldout_fraction * n));
+  details::require(skip_samples < fit_end, "skip_samples leaves nothing to score");
+  const double dt = (t.back() - t.front()) / static_cast<double>(n - 1);
+  const std::vector<double> yhat = model.simulate(u, dt);
+  ModelScore s;
+  s.fit = error_stats(y.subspan(skip_samples, fit_end - skip_samples),
+                      std::span(yhat).subspan(skip_samples, fit_end - skip_samples));
+  s.heldout = error_stats(y.subspan(fit_end), std::span(yhat).subspan(fit_end));
+  return s;
+}
+
+PiParameters identify_pi_triangular(std::span<const double> u_branch,
+                                    std::span<const double> y_branch, int operators) {
+  details::require_same_size(u_branch.size(), y_branch.size(), "u_branch", "y_branch");
+  details::require(u_branch.size() >= 2, "the branch needs at least 2 samples");
+  details::require(operators >= 1, "operators must be >= 1");
+  require_finite_record(u_branch, "u_branch");
+  require_finite_record(y_branch, "y_branch");
+  const auto down = std::adjacent_find(u_branch.begin(), u_branch.end(), std::greater<double>());
+  if (down != u_branch.end()) {
+    const auto k = static_cast<std::size_t>(down - u_branch.begin()) + 1;
+    throw std::invalid_argument("u_branch must be non-decreasing (an ascending branch): u_branch[" +
+                                std::to_string(k) + "] = " + fmt(u_branch[k]) + " < u_branch[" +
+                                std::to_string(k - 1) + "] = " + fmt(u_branch[k - 1]));
+  }
+  const double u0 = u_branch.front();
+  const double span = u_branch.back() - u0;
+  details::require(span > 0.0, "u_branch spans no input range");
+  const auto n = static_cast<std::size_t>(operators);
+  const double h = span / static_cast<double>(n);  // band-width step: bw_i = 2 r_i = i h
+  // Output rise at the band edges Delta_k = k h (k = 1..n), linearly interpolated.
+  auto rise_at = [&](double du) {
+    const double target = u0 + du;
+    const auto it = std::lower_bound(u_branch.begin(), u_branch.end(), target);
+    if (it == u_branch.end()) return y_branch.back() - y_branch.front();
+    const auto k = static_cast<std::size_t>(it - u_branch.begin());
+    if (k == 0 || u_branch[k] == target) return y_branch[k] - y_branch.front();
+    const double f = (target - u_branch[k - 1]) / (u_branch[k] - u_branch[k - 1]);
+    return y_branch[k - 1] + f * (y_branch[k] - y_branch[k - 1]) - y_branch.front();
+  };
+  // Eq. 1: y_k = sum_{i<k} (bw_k - bw_i) w_i = sum_{i<k} (k - i) h w_i: forward substitution.
+  PiParameters p;
+  p.thresholds = uniform_thresholds(n, 0.5 * span);
+  p.weights.assign(n, 0.0);
+  for (std::size_t k = 1; k <= n; ++k) {
+    double rest = rise_at(static_cast<double>(k) * h);
+    for (std::size_t i = 0; i + 1 < k; ++i) rest -= static_cast<double>(k - i) * h * p.weights[i];
+    p.weights[k - 1] = rest / h;
+  }
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) sum += p.weights[i] * (u0 + p.thresholds[i]);
+  p.offset = y_branch.front() - sum;
+  return p;
+}
+
+}  // namespace hystbench::compensation
