@@ -1,1 +1,206 @@
-int main() { return 0; }
+// hystbench: the bench's command-line tool.
+//   Offline (no daemon needed): fit, simulate, invert, diagnose on CSV files.
+//   Bench (talks to hystbenchd over its Unix socket): status, identify, track, stop, abort,
+//   reset, model, config.
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <iostream>
+
+#include "hystbench/daemon/offline_commands.hpp"
+#include "hystbench/daemon/remote_commands.hpp"
+
+namespace hd = hystbench::daemon;
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "hystbench - identify, simulate and compensate piezo hysteresis (Prandtl-Ishlinskii family)\n"
+      "\n"
+      "Data files are CSV: '#' lines are comments, a header row names the columns; 't' (s) and\n"
+      "'u' (input, e.g. V) are required, 'y' (output, e.g. um) where the command needs it.\n"
+      "\n"
+      "Examples:\n"
+      "  hystbench fit run.csv --model mpi -o actuator.json\n"
+      "  hystbench simulate actuator.json other_run.csv -o predicted.csv --json\n"
+      "  hystbench invert actuator.json reference.csv -o drive.csv\n"
+      "  hystbench identify --wait                  (bench: identify the actuator on the bench)\n"
+      "  hystbench track --reference triangle --frequency 1 --periods 5 --compensator inverse "
+      "--wait --json\n"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string(HYSTBENCH_VERSION));
+
+  hd::FitCommand fit;
+  auto* fit_cmd =
+      app.add_subcommand("fit", "Identify a hysteresis model from a measured record (t,u,y)");
+  fit_cmd->add_option("data", fit.data_path, "CSV file with columns t, u, y")
+      ->required()
+      ->check(CLI::ExistingFile);
+  fit_cmd
+      ->add_option("--model", fit.model_name,
+                   "Model family: pi (classical), mpi (modified, asymmetric), cpi (coupled-play), "
+                   "rpi (rate-dependent), auto (lowest held-out error)")
+      ->check(CLI::IsMember({"pi", "mpi", "cpi", "rpi", "auto"}))
+      ->capture_default_str();
+  fit_cmd
+      ->add_option("--operators", fit.operators,
+                   "Number of play operators (0 = choose by held-out error)")
+      ->check(CLI::Range(0, 500))
+      ->capture_default_str();
+  fit_cmd
+      ->add_option("--deadzones", fit.dead_zones,
+                   "Dead zones per side m, 2m+1 in all (-1 = choose by held-out error)")
+      ->check(CLI::Range(-1, 100))
+      ->capture_default_str();
+  fit_cmd
+      ->add_option("--heldout", fit.heldout_fraction,
+                   "Fraction at the end of the record kept out of the fit to measure the error")
+      ->check(CLI::Range(0.05, 0.9))
+      ->capture_default_str();
+  fit_cmd->add_flag("!--no-refine", fit.refine,
+                    "Skip the Levenberg-Marquardt threshold refinement");
+  fit_cmd->add_option("-o,--output", fit.output_path, "Model file to write (JSON)")->required();
+  fit_cmd->add_flag("--json", fit.json_output, "Print the result as one JSON line");
+
+  hd::SimulateCommand sim;
+  auto* sim_cmd = app.add_subcommand(
+      "simulate", "Run a model file over an input record; writes t,u,y_model[,y,residual]");
+  sim_cmd->add_option("model", sim.model_path, "Model file (JSON)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sim_cmd->add_option("data", sim.data_path, "CSV with columns t, u (and y to measure the error)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sim_cmd->add_option("-o,--output", sim.output_path, "CSV file to write")->required();
+  sim_cmd->add_flag(
+      "--json", sim.json_output,
+      "Print {\"rmse\",\"max_abs\",\"range\",...} as one JSON line (when y is present)");
+
+  hd::InvertCommand inv;
+  auto* inv_cmd = app.add_subcommand(
+      "invert", "Compute the drive u that makes the model follow a reference yr");
+  inv_cmd->add_option("model", inv.model_path, "Model file (JSON)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  inv_cmd->add_option("reference", inv.reference_path, "CSV with columns t, yr")
+      ->required()
+      ->check(CLI::ExistingFile);
+  inv_cmd->add_option("-o,--output", inv.output_path, "CSV file to write (t,yr,u)")->required();
+  inv_cmd
+      ->add_option("--inverse", inv.inverse,
+                   "auto (analytic where a closed form exists, else numeric), analytic, numeric, "
+                   "multiplicative (inverse multiplicative structure)")
+      ->check(CLI::IsMember({"auto", "analytic", "numeric", "multiplicative"}))
+      ->capture_default_str();
+  inv_cmd->add_flag("--json", inv.json_output, "Print the result as one JSON line");
+
+  // ---- bench commands (talk to hystbenchd) ----
+  hd::RemoteCommand remote;
+  remote.socket_path = hd::default_socket_path();
+  app.add_option("--socket", remote.socket_path,
+                 "hystbenchd socket (default $HYSTBENCH_SOCKET or /run/hystbench/hystbench.sock)");
+  auto add_output_flags = [&remote](CLI::App* c, bool waits) {
+    c->add_flag("--json", remote.json_output, "Print the result as one JSON line");
+    if (waits) {
+      c->add_flag("--wait", remote.wait,
+                  "Show progress until the run ends, then print its result (exit 1 unless it "
+                  "completed)");
+    }
+  };
+  auto* status_cmd =
+      app.add_subcommand("status", "State, active run, model, loop timing, last result");
+  add_output_flags(status_cmd, false);
+
+  std::string id_model = "";
+  int id_operators = -2, id_deadzones = -2;
+  auto* identify_cmd = app.add_subcommand(
+      "identify", "Play the identification excitation, fit a model, make it the active model");
+  identify_cmd->add_option("--model", id_model, "pi, mpi, cpi, rpi or auto (default: the config's)")
+      ->check(CLI::IsMember({"pi", "mpi", "cpi", "rpi", "auto"}));
+  identify_cmd->add_option("--operators", id_operators, "Number of plays (0 = by held-out error)");
+  identify_cmd->add_option("--deadzones", id_deadzones,
+                           "Dead zones per side (-1 = by held-out error)");
+  add_output_flags(identify_cmd, true);
+
+  std::string tr_reference = "triangle", tr_compensator;
+  double tr_frequency = 1.0, tr_periods = 5.0, tr_duration = 0.0, tr_fraction = 0.8;
+  double tr_min = NAN, tr_max = NAN;
+  auto* track_cmd =
+      app.add_subcommand("track", "Follow a reference with a compensator and report the error");
+  track_cmd
+      ->add_option("--reference", tr_reference,
+                   "sine, triangle, sawtooth, decaying_sine, multi_frequency, chirp")
+      ->capture_default_str();
+  track_cmd->add_option("--frequency", tr_frequency, "Reference frequency [Hz]")
+      ->capture_default_str();
+  track_cmd->add_option("--periods", tr_periods, "Number of periods")->capture_default_str();
+  track_cmd->add_option("--duration", tr_duration, "Duration [s] (instead of --periods)");
+  track_cmd->add_option("--compensator", tr_compensator,
+                        "none, inverse, inverse_multiplicative, inverse+pid, pid (default: inverse "
+                        "with a model, none without)");
+  track_cmd
+      ->add_option("--range-fraction", tr_fraction,
+                   "Part of the actuator range the reference spans, centred")
+      ->capture_default_str();
+  track_cmd->add_option("--min", tr_min, "Reference minimum [um] (instead of --range-fraction)");
+  track_cmd->add_option("--max", tr_max, "Reference maximum [um]");
+  add_output_flags(track_cmd, true);
+
+  auto* stop_cmd = app.add_subcommand("stop", "End the active run normally (its result is kept)");
+  add_output_flags(stop_cmd, false);
+  auto* abort_cmd = app.add_subcommand("abort", "Safe output now; the active run ends as aborted");
+  add_output_flags(abort_cmd, false);
+  auto* reset_cmd = app.add_subcommand("reset", "Leave FAULT after the cause is fixed");
+  add_output_flags(reset_cmd, false);
+  auto* model_cmd = app.add_subcommand("model", "Show or load the active model");
+  model_cmd->require_subcommand(1);
+  auto* model_get = model_cmd->add_subcommand("get", "Print the active model file");
+  std::string model_path;
+  auto* model_load =
+      model_cmd->add_subcommand("load", "Load a model file (as the daemon sees paths)");
+  model_load->add_option("path", model_path, "Model file")->required();
+  add_output_flags(model_get, false);
+  add_output_flags(model_load, false);
+  auto* config_cmd = app.add_subcommand("config", "Print the daemon's effective configuration");
+  add_output_flags(config_cmd, false);
+
+  CLI11_PARSE(app, argc, argv);
+
+  auto remote_run = [&](const std::string& cmd, nlohmann::json params) {
+    remote.cmd = cmd;
+    remote.params = std::move(params);
+    return hd::run_remote(remote, std::cout, std::cerr);
+  };
+  if (*status_cmd) return remote_run("status", nlohmann::json::object());
+  if (*identify_cmd) {
+    nlohmann::json p = nlohmann::json::object();
+    if (!id_model.empty()) p["model"] = id_model;
+    if (id_operators != -2) p["operators"] = id_operators;
+    if (id_deadzones != -2) p["dead_zones"] = id_deadzones;
+    return remote_run("identify", p);
+  }
+  if (*track_cmd) {
+    nlohmann::json p = {{"reference", tr_reference}, {"frequency_hz", tr_frequency}};
+    if (tr_duration > 0)
+      p["duration_s"] = tr_duration;
+    else
+      p["periods"] = tr_periods;
+    if (!tr_compensator.empty()) p["compensator"] = tr_compensator;
+    if (!std::isnan(tr_min) || !std::isnan(tr_max)) {
+      if (!std::isnan(tr_min)) p["min_um"] = tr_min;
+      if (!std::isnan(tr_max)) p["max_um"] = tr_max;
+    } else {
+      p["range_fraction"] = tr_fraction;
+    }
+    return remote_run("track", p);
+  }
+  if (*stop_cmd) return remote_run("stop", nlohmann::json::object());
+  if (*abort_cmd) return remote_run("abort", nlohmann::json::object());
+  if (*reset_cmd) return remote_run("reset", nlohmann::json::object());
+  if (*model_get) return remote_run("model.get", nlohmann::json::object());
+  if (*model_load) return remote_run("model.load", {{"path", model_path}});
+  if (*config_cmd) return remote_run("config.get", nlohmann::json::object());
+
+  if (*fit_cmd) return hd::run_fit(fit, std::cout, std::cerr);
+  if (*sim_cmd) return hd::run_simulate(sim, std::cout, std::cerr);
+  if (*inv_cmd) return hd::run_invert(inv, std::cout, std::cerr);
+  return 2;
+}

@@ -213,7 +213,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
       last_y_.store(m.position_um, std::memory_order_relaxed);
     }
   }
-  if (failure == nullptr && options_.overrun_budget > 0 && p.overruns > options_.overrun_budget) {
+  if (failure == nullptr && p.overruns > options_.overrun_budget) {
     failure = "overrun budget exceeded (loop.overrun_budget)";
   }
   if (failure != nullptr) rec.flags |= kSampleFault;

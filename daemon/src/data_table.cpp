@@ -54,8 +54,8 @@ DataTable DataTable::parse_csv(const std::string& text, const std::string& origi
                               std::to_string(i + 1) + " has no name");
         }
         if (!t.index_.emplace(cells[i], i).second) {
-          throw DataFileError(origin + ":" + std::to_string(line_no) +
-                              ": duplicate column name '" + cells[i] + "'");
+          throw DataFileError(origin + ":" + std::to_string(line_no) + ": duplicate column name '" +
+                              cells[i] + "'");
         }
       }
       t.names_ = cells;
@@ -117,7 +117,8 @@ void DataTable::require_increasing(const std::string& name) const {
 
 double DataTable::sample_period() const {
   const auto& t = column("t");
-  if (t.size() < 2) throw DataFileError(origin_ + ": need at least 2 rows to know the sample period");
+  if (t.size() < 2)
+    throw DataFileError(origin_ + ": need at least 2 rows to know the sample period");
   std::vector<double> d(t.size() - 1);
   for (std::size_t k = 1; k < t.size(); ++k) d[k - 1] = t[k] - t[k - 1];
   std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());

@@ -27,7 +27,7 @@ namespace hystbench::daemon {
 struct BenchLoopOptions {
   double rate_hz = 10000.0;  ///< [1, 20000]
   RealtimeOptions realtime;
-  /// Overruns allowed in one run before it faults; 0 = unlimited.
+  /// Overruns tolerated in one run: overrun number overrun_budget + 1 faults it (0 = the first).
   std::uint64_t overrun_budget = 100;
   OutputLimits limits;
   /// A range or slew limit hit during a run faults it instead of being clamped and counted.

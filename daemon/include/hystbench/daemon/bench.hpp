@@ -1,0 +1,134 @@
+#pragma once
+// The bench: owns the driver, the loop, the active model and the runs; answers commands.
+// Commands arrive as (cmd, params) JSON from the socket server's thread; run completion,
+// progress events and model fitting happen on the bench's supervisor thread. Nothing here runs
+// on the loop thread except through BenchLoop.
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "hystbench/compensation/identification.hpp"
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/pid_controller.hpp"
+#include "hystbench/daemon/bench_loop.hpp"
+#include "hystbench/drivers/driver.hpp"
+
+namespace hystbench::daemon {
+
+/// A command refused: `code` is machine-readable ("bad_params", "busy", "no_model", ...).
+class CommandError : public std::runtime_error {
+ public:
+  CommandError(std::string code, const std::string& message)
+      : std::runtime_error(message), code_(std::move(code)) {}
+  const std::string& code() const noexcept { return code_; }
+
+ private:
+  std::string code_;
+};
+
+struct BenchSettings {
+  BenchLoopOptions loop;
+  std::string driver_type = "loopback";
+  nlohmann::json driver_params = nlohmann::json::object();
+  std::string log_dir = "/var/lib/hystbench/logs";
+  std::string model_dir = "/var/lib/hystbench/models";
+  std::size_t log_ring_capacity = std::size_t{1} << 16;
+  /// Reference range without a model [µm]; with a model its major loop defines the range.
+  double y_min = 0.0;
+  double y_max = 0.0;
+  /// identify defaults (overridable per request)
+  std::string identify_model = "mpi";
+  int identify_operators = 0;
+  int identify_dead_zones = -1;
+  /// Input span of the identification excitation [V]; NaN = the whole [u_min, u_max].
+  double identify_u_min = std::numeric_limits<double>::quiet_NaN();
+  double identify_u_max = std::numeric_limits<double>::quiet_NaN();
+  /// Frequency and number of the excitation's full major loops (the rest is fixed).
+  double identify_major_loop_hz = 0.5;
+  int identify_major_loop_cycles = 2;
+  double identify_heldout_fraction = 0.25;
+  /// Highest sample rate the identification fit runs at; faster records are block-averaged.
+  double identify_fit_rate_hz = 2000.0;
+  /// track defaults
+  compensation::PidParameters pid{0.1, 2000.0, 0.0, 0.0, -30.0, 30.0};
+  /// Open-loop sweep to u_max and back to u_min before every track run [s], so the actuator's
+  /// hysteresis state is known and the inverse starts consistent with it.
+  double precondition_s = 1.0;
+  /// The effective configuration, returned by config.get.
+  nlohmann::json config_json = nlohmann::json::object();
+};
+
+class Bench {
+ public:
+  using EventSink = std::function<void(const nlohmann::json&)>;
+
+  /// Creates, configures and activates the driver. Throws std::runtime_error naming the cause.
+  explicit Bench(BenchSettings settings);
+  ~Bench();
+  Bench(const Bench&) = delete;
+  Bench& operator=(const Bench&) = delete;
+
+  /// Starts the loop and the supervisor; returns the real-time setup report.
+  RealtimeReport start();
+  /// Ends a run (aborted, log closed), safe output, stops threads, deactivates the driver.
+  void shutdown();
+
+  /// Executes one command; returns its result object. Throws CommandError.
+  nlohmann::json handle(const std::string& cmd, const nlohmann::json& params);
+  /// Receives progress and run events (from the supervisor thread).
+  void set_event_sink(EventSink sink);
+
+  /// True when the loop has ticked since the previous call (for the systemd watchdog).
+  bool loop_advanced();
+  /// Waits until no run is active or pending finalisation (for tests and shutdown).
+  bool wait_idle(std::chrono::milliseconds timeout);
+  BenchLoop& loop() { return *loop_; }
+  drivers::Driver& driver() { return *driver_; }
+
+ private:
+  nlohmann::json status() const;
+  nlohmann::json start_identify(const nlohmann::json& params);
+  nlohmann::json start_track(const nlohmann::json& params);
+  nlohmann::json load_model(const nlohmann::json& params);
+  void supervise();
+  void finalize(std::unique_ptr<RunProgram> run);
+  std::unique_ptr<SampleLogWriter> open_log(const std::string& run_id, nlohmann::json header);
+  std::string new_run_id(const char* kind);
+  void emit(const nlohmann::json& event);
+  struct ActuatorRange {
+    double y_bottom, y_top;
+  };
+  std::optional<ActuatorRange> actuator_range() const;
+
+  BenchSettings settings_;
+  std::unique_ptr<drivers::Driver> driver_;
+  std::unique_ptr<BenchLoop> loop_;
+  RealtimeReport realtime_;
+  double dt_;
+
+  mutable std::mutex mutex_;  // guards everything below
+  std::optional<compensation::ModelFile> model_;
+  std::string model_path_;
+  nlohmann::json last_result_;
+  nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
+  bool finalizing_ = false;
+  std::string pending_identify_model_;
+  nlohmann::json pending_identify_options_;
+  EventSink sink_;
+  std::uint64_t run_counter_ = 0;
+
+  std::thread supervisor_;
+  std::atomic<bool> quit_{false};
+  std::condition_variable idle_cv_;
+  std::uint64_t watchdog_ticks_ = 0;
+};
+
+}  // namespace hystbench::daemon

@@ -1,0 +1,54 @@
+#pragma once
+// The offline commands of the `hystbench` CLI: fit, simulate, invert on CSV files.
+// Each returns a process exit code and writes human-readable text (or one JSON line with
+// `json_output`) to `out`, progress and errors to `err`.
+#include <iosfwd>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "hystbench/compensation/error_metrics.hpp"
+#include "hystbench/compensation/identification.hpp"
+#include "hystbench/compensation/model_file.hpp"
+
+namespace hystbench::daemon {
+
+struct FitCommand {
+  std::string data_path;
+  std::string model_name = "mpi";  ///< pi | mpi | cpi | rpi | auto
+  int operators = 0;               ///< 0 = chosen by held-out error
+  int dead_zones = -1;             ///< -1 = chosen by held-out error
+  double heldout_fraction = 0.25;
+  bool refine = true;
+  std::string output_path;
+  bool json_output = false;
+};
+
+struct SimulateCommand {
+  std::string model_path;
+  std::string data_path;
+  std::string output_path;
+  bool json_output = false;
+};
+
+struct InvertCommand {
+  std::string model_path;
+  std::string reference_path;
+  std::string output_path;
+  std::string inverse = "auto";  ///< auto | analytic | numeric | multiplicative
+  bool json_output = false;
+};
+
+int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err);
+int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& err);
+int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err);
+
+/// {"rmse":..,"max_abs":..,"range":..,"rmse_percent":..,"max_percent":..,"samples":..}
+nlohmann::json to_json(const compensation::ErrorStats& s);
+
+/// Reads and validates a model file; throws std::runtime_error naming the file and field.
+compensation::ModelFile load_model_file(const std::string& path);
+/// Writes a model file atomically (temp file + rename).
+void save_model_file(const std::string& path, const compensation::ModelFile& file);
+
+}  // namespace hystbench::daemon

@@ -1,0 +1,739 @@
+#include "hystbench/daemon/bench.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+
+#include "hystbench/compensation/compensator.hpp"
+#include "hystbench/compensation/error_metrics.hpp"
+#include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/compensation/tracking_metrics.hpp"
+#include "hystbench/daemon/offline_commands.hpp"
+#include "hystbench/sim/identification_excitation.hpp"
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+namespace {
+
+constexpr std::uint64_t kMaxRecordedSamples = 2'000'000;
+
+const char* state_name(BenchLoop::State s) {
+  switch (s) {
+    case BenchLoop::State::kStopped:
+      return "stopped";
+    case BenchLoop::State::kIdle:
+      return "idle";
+    case BenchLoop::State::kRunning:
+      return "running";
+    case BenchLoop::State::kFault:
+      return "fault";
+  }
+  return "unknown";
+}
+
+// Parameters must be an object with only the listed keys.
+void check_keys(const json& params, std::initializer_list<const char*> allowed) {
+  if (params.is_null()) return;
+  if (!params.is_object()) throw CommandError("bad_params", "params must be an object");
+  for (const auto& [key, value] : params.items()) {
+    bool ok = false;
+    std::string list;
+    for (const char* a : allowed) {
+      ok = ok || key == a;
+      list += (list.empty() ? "" : ", ") + std::string(a);
+    }
+    if (!ok)
+      throw CommandError("bad_params", "unknown parameter '" + key + "' (valid: " + list + ")");
+  }
+}
+
+double number_param(const json& params, const char* key, double fallback, double lo, double hi) {
+  if (params.is_null() || !params.contains(key)) return fallback;
+  const json& v = params[key];
+  if (!v.is_number()) {
+    throw CommandError("bad_params", std::string(key) + ": must be a number, got " + v.type_name());
+  }
+  const double d = v.get<double>();
+  if (!std::isfinite(d) || d < lo || d > hi) {
+    throw CommandError("bad_params", std::string(key) + ": " + std::to_string(d) +
+                                         " is out of range [" + std::to_string(lo) + ", " +
+                                         std::to_string(hi) + "]");
+  }
+  return d;
+}
+
+int int_param(const json& params, const char* key, int fallback, int lo, int hi) {
+  if (params.is_null() || !params.contains(key)) return fallback;
+  const json& v = params[key];
+  if (!v.is_number_integer()) {
+    throw CommandError("bad_params", std::string(key) + ": must be an integer");
+  }
+  const auto d = v.get<long long>();
+  if (d < lo || d > hi) {
+    throw CommandError("bad_params", std::string(key) + ": " + std::to_string(d) +
+                                         " is out of range [" + std::to_string(lo) + ", " +
+                                         std::to_string(hi) + "]");
+  }
+  return static_cast<int>(d);
+}
+
+std::string string_param(const json& params, const char* key, const std::string& fallback) {
+  if (params.is_null() || !params.contains(key)) return fallback;
+  if (!params[key].is_string())
+    throw CommandError("bad_params", std::string(key) + ": must be a string");
+  return params[key].get<std::string>();
+}
+
+// Ramps linearly from a to b over n samples (b reached on the last one).
+void append_ramp(std::vector<double>& out, double a, double b, std::size_t n) {
+  for (std::size_t k = 1; k <= n; ++k) out.push_back(a + (b - a) * static_cast<double>(k) / n);
+}
+
+}  // namespace
+
+Bench::Bench(BenchSettings settings) : settings_(std::move(settings)) {
+  dt_ = 1.0 / settings_.loop.rate_hz;
+  try {
+    driver_ = drivers::make_driver(settings_.driver_type);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+  if (auto r = driver_->configure(settings_.driver_params, settings_.loop.rate_hz); !r) {
+    throw std::runtime_error(r.message);
+  }
+  auto& lim = settings_.loop.limits;
+  if (lim.u_min < driver_->output_min_v() || lim.u_max > driver_->output_max_v()) {
+    throw std::runtime_error("limits.u_min/u_max [" + std::to_string(lim.u_min) + ", " +
+                             std::to_string(lim.u_max) + "] V exceed the driver's output range [" +
+                             std::to_string(driver_->output_min_v()) + ", " +
+                             std::to_string(driver_->output_max_v()) + "] V");
+  }
+  if (auto r = driver_->activate(); !r) throw std::runtime_error(r.message);
+  loop_ = std::make_unique<BenchLoop>(*driver_, settings_.loop);
+}
+
+Bench::~Bench() { shutdown(); }
+
+RealtimeReport Bench::start() {
+  realtime_ = loop_->start();
+  supervisor_ = std::thread([this] { supervise(); });
+  return realtime_;
+}
+
+void Bench::shutdown() {
+  if (quit_.exchange(true)) return;
+  if (loop_) {
+    loop_->request_abort();
+    // Give the loop a few ticks to end the run cleanly, then stop it.
+    for (int i = 0; i < 200 && loop_->state() == BenchLoop::State::kRunning; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    loop_->shutdown();
+  }
+  if (supervisor_.joinable()) supervisor_.join();
+  if (loop_) {
+    if (auto finished = loop_->take_finished()) finalize(std::move(finished));
+  }
+  if (driver_) {
+    driver_->safe_state();
+    driver_->deactivate();
+  }
+}
+
+void Bench::set_event_sink(EventSink sink) {
+  std::lock_guard lock(mutex_);
+  sink_ = std::move(sink);
+}
+
+void Bench::emit(const json& event) {
+  EventSink sink;
+  {
+    std::lock_guard lock(mutex_);
+    sink = sink_;
+  }
+  if (sink) sink(event);
+}
+
+bool Bench::loop_advanced() {
+  const std::uint64_t t = loop_->ticks();
+  const bool advanced = t != watchdog_ticks_;
+  watchdog_ticks_ = t;
+  return advanced;
+}
+
+bool Bench::wait_idle(std::chrono::milliseconds timeout) {
+  const auto until = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < until) {
+    {
+      std::lock_guard lock(mutex_);
+      if (loop_->state() != BenchLoop::State::kRunning && !finalizing_ && active_run_.is_null()) {
+        return true;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return false;
+}
+
+std::string Bench::new_run_id(const char* kind) {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
+  return std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
+}
+
+std::unique_ptr<SampleLogWriter> Bench::open_log(const std::string& run_id, json header) {
+  SampleLogOptions opt;
+  opt.log_dir = settings_.log_dir;
+  opt.run_id = run_id;
+  opt.header = std::move(header);
+  opt.ring_capacity = settings_.log_ring_capacity;
+  try {
+    return std::make_unique<SampleLogWriter>(std::move(opt));
+  } catch (const std::exception& e) {
+    throw CommandError("log_error", std::string("cannot open the run log: ") + e.what());
+  }
+}
+
+std::optional<Bench::ActuatorRange> Bench::actuator_range() const {
+  // Caller holds mutex_.
+  if (model_) {
+    hc::ActuatorModel m = model_->model;
+    m.configure(dt_);
+    const auto& lim = settings_.loop.limits;
+    m.reset(lim.u_min);
+    const std::size_t n = 2000;
+    double top = -INFINITY, bottom = INFINITY;
+    for (std::size_t k = 0; k <= n; ++k)
+      top = std::max(top, m.step(lim.u_min + (lim.u_max - lim.u_min) * k / n));
+    for (std::size_t k = 0; k <= n; ++k)
+      bottom = std::min(bottom, m.step(lim.u_max - (lim.u_max - lim.u_min) * k / n));
+    return ActuatorRange{bottom, top};
+  }
+  if (settings_.y_max > settings_.y_min) return ActuatorRange{settings_.y_min, settings_.y_max};
+  return std::nullopt;
+}
+
+json Bench::handle(const std::string& cmd, const json& params) {
+  if (cmd == "status") {
+    check_keys(params, {});
+    return status();
+  }
+  if (cmd == "identify") return start_identify(params);
+  if (cmd == "track") return start_track(params);
+  if (cmd == "stop") {
+    check_keys(params, {});
+    {
+      std::lock_guard lock(mutex_);
+      // A run submitted but not yet picked up by the loop counts as active.
+      if (active_run_.is_null() || finalizing_) throw CommandError("no_run", "no run is active");
+    }
+    loop_->request_stop();
+    return {{"stopping", true}};
+  }
+  if (cmd == "abort") {
+    check_keys(params, {});
+    bool running = false;
+    {
+      std::lock_guard lock(mutex_);
+      running = !active_run_.is_null() && !finalizing_;
+    }
+    loop_->request_abort();
+    return {{"aborted", running}, {"output_v", driver_->safe_output_v()}};
+  }
+  if (cmd == "reset") {
+    check_keys(params, {});
+    const bool was_fault = loop_->state() == BenchLoop::State::kFault;
+    if (was_fault && !loop_->reset_fault()) {
+      throw CommandError("reset_failed", "the loop did not leave FAULT");
+    }
+    return {{"was_fault", was_fault}, {"state", state_name(loop_->state())}};
+  }
+  if (cmd == "model.get") {
+    check_keys(params, {});
+    std::lock_guard lock(mutex_);
+    if (!model_) throw CommandError("no_model", "no active model (identify or model.load first)");
+    return {{"path", model_path_}, {"model", hc::to_json(*model_)}};
+  }
+  if (cmd == "model.load") return load_model(params);
+  if (cmd == "config.get") {
+    check_keys(params, {});
+    return settings_.config_json;
+  }
+  throw CommandError("unknown_command",
+                     "unknown command '" + cmd +
+                         "' (status, identify, track, stop, abort, reset, model.get, model.load, "
+                         "config.get)");
+}
+
+json Bench::status() const {
+  json s;
+  const auto state = loop_->state();
+  std::lock_guard lock(mutex_);
+  s["state"] = finalizing_ && state == BenchLoop::State::kIdle ? "finalizing" : state_name(state);
+  if (state == BenchLoop::State::kFault) s["fault_reason"] = loop_->fault_reason();
+  s["output_v"] = loop_->last_output();
+  s["position_um"] = loop_->last_measurement();
+  if (!active_run_.is_null()) {
+    json run = active_run_;
+    if (const RunProgram* p = loop_->active()) {
+      (void)p;  // progress is read through active_run_ bookkeeping below
+    }
+    s["run"] = run;
+  } else {
+    s["run"] = nullptr;
+  }
+  if (model_) {
+    s["model"] = {{"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
+                  {"path", model_path_},
+                  {"operators", model_->model.hysteresis().operator_count()}};
+  } else {
+    s["model"] = nullptr;
+  }
+  s["loop"] = {{"rate_hz", settings_.loop.rate_hz},
+               {"realtime", realtime_.summary(settings_.loop.realtime)},
+               {"degraded", realtime_.degraded()},
+               {"statistics", to_json(loop_->statistics())}};
+  s["driver"] = driver_->diagnostics();
+  s["last_result"] = last_result_;
+  return s;
+}
+
+nlohmann::json Bench::load_model(const json& params) {
+  check_keys(params, {"path"});
+  const std::string path = string_param(params, "path", "");
+  if (path.empty()) throw CommandError("bad_params", "path: required");
+  hc::ModelFile file;
+  try {
+    file = load_model_file(path);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_model", e.what());
+  }
+  const auto inv = file.model.hysteresis().invertibility();
+  std::lock_guard lock(mutex_);
+  if (!active_run_.is_null())
+    throw CommandError("busy", "a run is active; load the model after it");
+  model_ = std::move(file);
+  model_path_ = std::filesystem::absolute(path).string();
+  return {{"path", model_path_},
+          {"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
+          {"invertible", inv.invertible},
+          {"reason", inv.reason}};
+}
+
+json Bench::start_identify(const json& params) {
+  check_keys(params, {"model", "operators", "dead_zones", "u_min", "u_max"});
+  const auto& lim = settings_.loop.limits;
+  const std::string model = string_param(params, "model", settings_.identify_model);
+  if (model != "auto" && !hc::model_kind_from_string(model)) {
+    throw CommandError("bad_params", "model: unknown '" + model + "' (pi, mpi, cpi, rpi, auto)");
+  }
+  const int operators = int_param(params, "operators", settings_.identify_operators, 0, 500);
+  const int dead_zones = int_param(params, "dead_zones", settings_.identify_dead_zones, -1, 100);
+  const double u_lo = number_param(
+      params, "u_min", std::isnan(settings_.identify_u_min) ? lim.u_min : settings_.identify_u_min,
+      lim.u_min, lim.u_max);
+  const double u_hi = number_param(
+      params, "u_max", std::isnan(settings_.identify_u_max) ? lim.u_max : settings_.identify_u_max,
+      lim.u_min, lim.u_max);
+  if (!(u_hi > u_lo)) throw CommandError("bad_params", "u_max must be greater than u_min");
+
+  std::lock_guard lock(mutex_);
+  if (loop_->state() == BenchLoop::State::kFault) {
+    throw CommandError("fault", std::string("the bench is in FAULT (") + loop_->fault_reason() +
+                                    "); send reset first");
+  }
+  if (!active_run_.is_null() || finalizing_) throw CommandError("busy", "a run is active");
+
+  auto p = std::make_unique<RunProgram>();
+  p->kind = RunKind::kIdentify;
+  p->run_id = new_run_id("identify");
+  sim::Excitation exc;
+  try {
+    sim::IdentificationExcitationOptions options;
+    options.major_loop_frequency_hz = settings_.identify_major_loop_hz;
+    options.major_loop_cycles = settings_.identify_major_loop_cycles;
+    exc = sim::identification_excitation(u_lo, u_hi, dt_, options);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  // Start from where the output is: a short ramp to the excitation's first value.
+  const double u_now = loop_->last_output();
+  append_ramp(p->excitation, u_now, exc.samples.front(),
+              static_cast<std::size_t>(std::ceil(0.1 / dt_)));
+  const std::size_t offset = p->excitation.size();
+  p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
+  p->total_samples = p->excitation.size();
+  p->metrics_from = offset;
+  p->record_capacity = std::min<std::uint64_t>(p->total_samples - offset, kMaxRecordedSamples);
+  p->rec_u.resize(p->record_capacity);
+  p->rec_y.resize(p->record_capacity);
+  p->rec_yr.resize(p->record_capacity);
+  json segments = json::array();
+  for (const auto& s : exc.segments) {
+    segments.push_back({{"name", s.name}, {"begin", s.begin + offset}, {"end", s.end + offset}});
+  }
+  json header = {{"run",
+                  {{"kind", "identify"},
+                   {"model", model},
+                   {"operators", operators},
+                   {"dead_zones", dead_zones},
+                   {"u_min", u_lo},
+                   {"u_max", u_hi},
+                   {"rate_hz", settings_.loop.rate_hz},
+                   {"segments", segments}}},
+                 {"driver", settings_.driver_type}};
+  p->log = open_log(p->run_id, header);
+  const std::string log_path = p->log->path().string();
+  const std::string run_id = p->run_id;
+  const std::uint64_t total = p->total_samples;
+  if (auto refused = loop_->submit(std::move(p))) {
+    refused->log->close();
+    throw CommandError("busy", "the loop did not accept the run");
+  }
+  active_run_ = {{"run_id", run_id}, {"kind", "identify"}, {"total", total}, {"log", log_path}};
+  pending_identify_model_ = model;
+  pending_identify_options_ = {{"operators", operators}, {"dead_zones", dead_zones}};
+  idle_cv_.notify_all();
+  return {{"run_id", run_id},
+          {"samples", total},
+          {"duration_s", static_cast<double>(total) * dt_},
+          {"log", log_path}};
+}
+
+json Bench::start_track(const json& params) {
+  check_keys(params, {"reference", "frequency_hz", "periods", "duration_s", "compensator",
+                      "range_fraction", "min_um", "max_um", "kp", "ki", "kd", "precondition_s"});
+  const auto& lim = settings_.loop.limits;
+  const std::string ref_name = string_param(params, "reference", "triangle");
+  sim::SignalSpec spec;
+  try {
+    spec.kind = sim::signal_kind_from_string(ref_name);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", std::string("reference: ") + e.what());
+  }
+  if (spec.kind == sim::SignalKind::kSteps || spec.kind == sim::SignalKind::kSamples) {
+    throw CommandError("bad_params", "reference: '" + ref_name +
+                                         "' needs data; use sine, triangle, sawtooth, "
+                                         "decaying_sine, multi_frequency or chirp");
+  }
+  spec.frequency_hz =
+      number_param(params, "frequency_hz", 1.0, 1e-3, settings_.loop.rate_hz / 20.0);
+  const double periods = number_param(params, "periods", 5.0, 0.0, 1e7);
+  double duration = number_param(params, "duration_s", 0.0, 0.0, 7.0 * 24 * 3600);
+  if (duration <= 0.0) duration = periods / spec.frequency_hz;
+  if (!(duration > 0.0)) throw CommandError("bad_params", "periods or duration_s must be > 0");
+  const double precondition =
+      number_param(params, "precondition_s", settings_.precondition_s, 0.0, 60.0);
+
+  std::lock_guard lock(mutex_);
+  if (loop_->state() == BenchLoop::State::kFault) {
+    throw CommandError("fault", std::string("the bench is in FAULT (") + loop_->fault_reason() +
+                                    "); send reset first");
+  }
+  if (!active_run_.is_null() || finalizing_) throw CommandError("busy", "a run is active");
+  const std::string comp_name = string_param(params, "compensator", model_ ? "inverse" : "none");
+  const auto kind = hc::compensator_kind_from_string(comp_name);
+  if (!kind) {
+    throw CommandError("bad_params",
+                       "compensator: unknown '" + comp_name +
+                           "' (none, inverse, inverse_multiplicative, inverse+pid, pid)");
+  }
+  if (hc::needs_model(*kind) && !model_) {
+    throw CommandError("no_model", "compensator '" + comp_name +
+                                       "' needs a model: run identify or model.load first");
+  }
+  const auto range = actuator_range();
+  if (!range) {
+    throw CommandError("no_range",
+                       "the actuator range is unknown: identify or load a model, or set "
+                       "limits.y_min and limits.y_max");
+  }
+  const double span = range->y_top - range->y_bottom;
+  const double fraction = number_param(params, "range_fraction", 0.8, 0.01, 1.0);
+  double y_lo = range->y_bottom + 0.5 * (1.0 - fraction) * span;
+  double y_hi = range->y_top - 0.5 * (1.0 - fraction) * span;
+  if (params.is_object() && (params.contains("min_um") || params.contains("max_um"))) {
+    y_lo = number_param(params, "min_um", y_lo, -1e9, 1e9);
+    y_hi = number_param(params, "max_um", y_hi, -1e9, 1e9);
+    if (!(y_hi > y_lo)) throw CommandError("bad_params", "max_um must be greater than min_um");
+    if (y_lo < range->y_bottom - 1e-9 || y_hi > range->y_top + 1e-9) {
+      throw CommandError("out_of_range", "reference [" + std::to_string(y_lo) + ", " +
+                                             std::to_string(y_hi) +
+                                             "] um is beyond the actuator range [" +
+                                             std::to_string(range->y_bottom) + ", " +
+                                             std::to_string(range->y_top) + "] um");
+    }
+  }
+  spec.amplitude = 0.5 * (y_hi - y_lo);
+  spec.offset = 0.5 * (y_hi + y_lo);
+  spec.phase_rad = -M_PI / 2.0;  // start at the bottom of the range, rising
+  spec.duration_s = duration;
+
+  auto p = std::make_unique<RunProgram>();
+  p->kind = RunKind::kTrack;
+  p->run_id = new_run_id("track");
+  try {
+    p->reference = sim::make_signal_generator(spec);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  // Pre-conditioning: current output -> u_max -> u_min, open loop.
+  const std::size_t half = static_cast<std::size_t>(std::ceil(0.5 * precondition / dt_));
+  if (half > 0) {
+    append_ramp(p->excitation, loop_->last_output(), lim.u_max, half);
+    append_ramp(p->excitation, lim.u_max, lim.u_min, half);
+  }
+  std::unique_ptr<hc::InverseModel> inverse;
+  hc::LinearMap linear{span / (lim.u_max - lim.u_min),
+                       range->y_bottom - span / (lim.u_max - lim.u_min) * lim.u_min};
+  if (model_) {
+    hc::ActuatorModel m = model_->model;
+    m.configure(dt_);
+    m.reset(p->excitation.empty() ? loop_->last_output() : p->excitation.front());
+    for (const double u : p->excitation) m.step(u);
+    if (m.input_max <= m.input_min) {
+      m.input_min = lim.u_min;
+      m.input_max = lim.u_max;
+    }
+    m.input_min = std::max(m.input_min, lim.u_min);
+    m.input_max = std::min(m.input_max, lim.u_max);
+    if (hc::needs_model(*kind)) {
+      try {
+        inverse = hc::make_inverse(m, *kind == hc::CompensatorKind::kInverseMultiplicative
+                                          ? hc::InverseKind::kMultiplicative
+                                          : hc::InverseKind::kAuto);
+      } catch (const hc::NotInvertibleError& e) {
+        throw CommandError("not_invertible", e.what());
+      } catch (const std::exception& e) {
+        throw CommandError("bad_model", e.what());
+      }
+    }
+  }
+  std::optional<hc::PidController> pid;
+  if (hc::uses_feedback(*kind)) {
+    hc::PidParameters pp = settings_.pid;
+    pp.kp = number_param(params, "kp", pp.kp, 0.0, 1e6);
+    pp.ki = number_param(params, "ki", pp.ki, 0.0, 1e9);
+    pp.kd = number_param(params, "kd", pp.kd, 0.0, 1e3);
+    if (*kind == hc::CompensatorKind::kPid) {
+      pp.output_min = lim.u_min;
+      pp.output_max = lim.u_max;
+    }
+    try {
+      pid.emplace(pp, dt_);
+    } catch (const std::exception& e) {
+      throw CommandError("bad_params", e.what());
+    }
+  }
+  try {
+    p->compensator.emplace(*kind, std::move(inverse), std::move(pid), linear);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  if (*kind == hc::CompensatorKind::kPid) {
+    p->compensator->reset(p->excitation.empty() ? loop_->last_output() : p->excitation.back());
+  }
+  const std::uint64_t prefix = p->excitation.size();
+  const std::uint64_t body = static_cast<std::uint64_t>(std::llround(duration / dt_));
+  const std::uint64_t one_period =
+      static_cast<std::uint64_t>(std::llround(1.0 / spec.frequency_hz / dt_));
+  p->total_samples = prefix + body;
+  p->metrics_from = prefix + (body >= 2 * one_period ? one_period : 0);
+  p->y_ref_min = range->y_bottom;
+  p->y_ref_max = range->y_top;
+  p->record_capacity =
+      std::min<std::uint64_t>(p->total_samples - p->metrics_from, kMaxRecordedSamples);
+  p->rec_u.resize(p->record_capacity);
+  p->rec_y.resize(p->record_capacity);
+  p->rec_yr.resize(p->record_capacity);
+  json header = {{"run",
+                  {{"kind", "track"},
+                   {"reference", ref_name},
+                   {"frequency_hz", spec.frequency_hz},
+                   {"duration_s", duration},
+                   {"min_um", y_lo},
+                   {"max_um", y_hi},
+                   {"compensator", comp_name},
+                   {"precondition_samples", prefix},
+                   {"metrics_from", p->metrics_from},
+                   {"rate_hz", settings_.loop.rate_hz}}},
+                 {"driver", settings_.driver_type},
+                 {"model", model_ ? hc::to_json(*model_) : json(nullptr)}};
+  p->log = open_log(p->run_id, header);
+  const std::string log_path = p->log->path().string();
+  const std::string run_id = p->run_id;
+  const std::uint64_t total = p->total_samples;
+  if (auto refused = loop_->submit(std::move(p))) {
+    refused->log->close();
+    throw CommandError("busy", "the loop did not accept the run");
+  }
+  active_run_ = {{"run_id", run_id},
+                 {"kind", "track"},
+                 {"total", total},
+                 {"log", log_path},
+                 {"compensator", comp_name}};
+  return {{"run_id", run_id},
+          {"samples", total},
+          {"duration_s", static_cast<double>(total) * dt_},
+          {"reference", {{"kind", ref_name}, {"min_um", y_lo}, {"max_um", y_hi}}},
+          {"compensator", comp_name},
+          {"log", log_path}};
+}
+
+void Bench::supervise() {
+  auto last_progress = std::chrono::steady_clock::now();
+  while (!quit_.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (auto finished = loop_->take_finished()) {
+      finalize(std::move(finished));
+      continue;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_progress >= std::chrono::milliseconds(500)) {
+      last_progress = now;
+      json run;
+      {
+        std::lock_guard lock(mutex_);
+        run = active_run_;
+      }
+      const RunProgram* p = loop_->active();
+      if (!run.is_null() && p != nullptr) {
+        const auto done = p->done.load(std::memory_order_acquire);
+        const auto total = run["total"].get<std::uint64_t>();
+        emit({{"event", "run.progress"},
+              {"run_id", run["run_id"]},
+              {"kind", run["kind"]},
+              {"done", done},
+              {"total", total},
+              {"fraction", total ? static_cast<double>(done) / total : 0.0}});
+      }
+    }
+  }
+}
+
+void Bench::finalize(std::unique_ptr<RunProgram> run) {
+  {
+    std::lock_guard lock(mutex_);
+    finalizing_ = true;
+  }
+  SampleLogCounts counts;
+  std::string log_path;
+  if (run->log) {
+    log_path = run->log->path().string();
+    counts = run->log->close();
+  }
+  json result = {{"run_id", run->run_id},
+                 {"kind", to_string(run->kind)},
+                 {"end", to_string(run->end)},
+                 {"reason", run->end_reason},
+                 {"samples", run->done.load()},
+                 {"planned_samples", run->total_samples},
+                 {"logged", counts.written},
+                 {"dropped", counts.dropped + run->log_drops},
+                 {"log", log_path},
+                 {"loop", to_json(run->stats.snapshot())},
+                 {"overruns", run->overruns},
+                 {"clamps", run->clamps},
+                 {"slew_limits", run->slew_limits},
+                 {"reference_clips", run->reference_clips},
+                 {"stale_reads", run->stale_reads}};
+  if (!counts.error.empty()) result["log_error"] = counts.error;
+  const std::size_t n = run->recorded;
+  if (run->kind == RunKind::kTrack && n > 2) {
+    std::span<const double> yr(run->rec_yr.data(), n), y(run->rec_y.data(), n);
+    const hc::ErrorStats e = hc::error_stats(yr, y);  // range = reference span
+    const double rms = run->error_samples ? std::sqrt(run->error_sum2 / run->error_samples) : 0.0;
+    result["rms_error_um"] = rms;
+    result["max_error_um"] = run->error_max;
+    result["range_um"] = e.range;
+    result["rms_error_percent"] = e.range > 0 ? 100.0 * rms / e.range : 0.0;
+    result["max_error_percent"] = e.range > 0 ? 100.0 * run->error_max / e.range : 0.0;
+    result["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
+    result["error_samples"] = run->error_samples;
+  }
+  std::string fit_model_name;
+  json fit_options;
+  {
+    std::lock_guard lock(mutex_);
+    fit_model_name = pending_identify_model_;
+    fit_options = pending_identify_options_;
+  }
+  if (run->kind == RunKind::kIdentify && run->end == RunEnd::kCompleted && n > 100) {
+    try {
+      // Block-average down to the fit rate: the hysteresis is rate independent and the fit's
+      // cost grows with the sample count.
+      const std::size_t block = std::max<std::size_t>(
+          1, static_cast<std::size_t>(
+                 std::floor(settings_.loop.rate_hz / settings_.identify_fit_rate_hz)));
+      std::vector<double> t, u, y;
+      for (std::size_t k = 0; k + block <= n; k += block) {
+        double su = 0, sy = 0;
+        for (std::size_t j = 0; j < block; ++j) {
+          su += run->rec_u[k + j];
+          sy += run->rec_y[k + j];
+        }
+        t.push_back(static_cast<double>(t.size()) * block * dt_);
+        u.push_back(su / block);
+        y.push_back(sy / block);
+      }
+      hc::FitOptions opt;
+      if (fit_model_name == "auto") {
+        opt.kind = std::nullopt;
+      } else {
+        opt.kind = hc::model_kind_from_string(fit_model_name);
+      }
+      opt.operators = fit_options.value("operators", 0);
+      opt.dead_zones = fit_options.value("dead_zones", -1);
+      opt.heldout_fraction = settings_.identify_heldout_fraction;
+      const std::string run_id = run->run_id;
+      opt.progress = [this, run_id](double f, const std::string& what) {
+        emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});
+      };
+      hc::FitResult fit = hc::fit_model(t, u, y, opt);
+      fit.model.units = {"V", "um"};
+      hc::ModelFile file{fit.model, json::object()};
+      file.identification = {{"run_id", run->run_id},
+                             {"log", log_path},
+                             {"samples", n},
+                             {"fit_sample_period_s", block * dt_},
+                             {"method", fit.method},
+                             {"operators", fit.operators},
+                             {"dead_zones", fit.dead_zones},
+                             {"fit", to_json(fit.fit)},
+                             {"heldout", to_json(fit.heldout)}};
+      std::filesystem::create_directories(settings_.model_dir);
+      const std::string path =
+          (std::filesystem::path(settings_.model_dir) / (run->run_id + ".json")).string();
+      save_model_file(path, file);
+      result["model"] = {{"path", path},
+                         {"type", std::string(hc::to_string(fit.model.hysteresis().kind()))},
+                         {"operators", fit.operators},
+                         {"dead_zones", fit.dead_zones},
+                         {"method", fit.method},
+                         {"fit", to_json(fit.fit)},
+                         {"heldout", to_json(fit.heldout)}};
+      std::lock_guard lock(mutex_);
+      model_ = std::move(file);
+      model_path_ = path;
+    } catch (const std::exception& e) {
+      result["fit_error"] = e.what();
+    }
+  }
+  {
+    std::lock_guard lock(mutex_);
+    last_result_ = result;
+    active_run_ = nullptr;
+    finalizing_ = false;
+  }
+  emit({{"event", "run.finished"}, {"result", result}});
+}
+
+}  // namespace hystbench::daemon

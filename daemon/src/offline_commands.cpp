@@ -1,0 +1,208 @@
+#include "hystbench/daemon/offline_commands.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/daemon/data_table.hpp"
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+nlohmann::json to_json(const hc::ErrorStats& s) {
+  return {{"rmse", s.rmse},
+          {"max_abs", s.max_abs},
+          {"range", s.range},
+          {"rmse_percent", s.rmse_percent()},
+          {"max_percent", s.max_percent()},
+          {"samples", s.samples}};
+}
+
+hc::ModelFile load_model_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open model file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  try {
+    return hc::parse_model_file(ss.str());
+  } catch (const hc::ModelFileError& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+}
+
+void save_model_file(const std::string& path, const hc::ModelFile& file) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error(path + ": cannot write model file");
+    out << std::setw(2) << hc::to_json(file) << "\n";
+    if (!out) throw std::runtime_error(path + ": write failed");
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+namespace {
+
+void print_stats(std::ostream& out, const char* label, const hc::ErrorStats& s,
+                 const std::string& unit) {
+  out << std::left << std::setw(10) << label << std::right << std::fixed << std::setprecision(4)
+      << "rms " << s.rmse << " " << unit << " (" << std::setprecision(2) << s.rmse_percent()
+      << " % of range)   max " << std::setprecision(4) << s.max_abs << " " << unit << " ("
+      << std::setprecision(2) << s.max_percent() << " %)   over " << s.samples << " samples\n";
+}
+
+// Runs a command body, turning exceptions into a clear message and exit code 1 (2 for usage).
+template <typename F>
+int guarded(std::ostream& err, F&& body) {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    err << "hystbench: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace
+
+int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
+  return guarded(err, [&] {
+    const DataTable data = DataTable::read_csv(cmd.data_path);
+    data.require_increasing("t");
+    hc::FitOptions opt;
+    if (cmd.model_name == "auto") {
+      opt.kind = std::nullopt;
+    } else {
+      opt.kind = hc::model_kind_from_string(cmd.model_name);
+      if (!opt.kind) {
+        throw std::invalid_argument("--model: unknown model '" + cmd.model_name +
+                                    "' (pi, mpi, cpi, rpi, auto)");
+      }
+    }
+    opt.operators = cmd.operators;
+    opt.dead_zones = cmd.dead_zones;
+    opt.heldout_fraction = cmd.heldout_fraction;
+    opt.refine_thresholds = cmd.refine;
+    if (!cmd.json_output) {
+      opt.progress = [&err](double fraction, const std::string& what) {
+        err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction) << " %] " << what
+            << "\x1b[K" << std::flush;
+      };
+    }
+    const hc::FitResult r =
+        hc::fit_model(data.column("t"), data.column("u"), data.column("y"), opt);
+    if (!cmd.json_output) err << "\n";
+    hc::ModelFile file{r.model, json::object()};
+    file.identification = {{"data_file", cmd.data_path},
+                           {"samples", data.rows()},
+                           {"fit_samples", r.fit_samples},
+                           {"heldout_samples", r.heldout_samples},
+                           {"sample_period_s", data.sample_period()},
+                           {"method", r.method},
+                           {"operators", r.operators},
+                           {"dead_zones", r.dead_zones},
+                           {"fit", to_json(r.fit)},
+                           {"heldout", to_json(r.heldout)}};
+    save_model_file(cmd.output_path, file);
+    const std::string type(hc::to_string(r.model.hysteresis().kind()));
+    if (cmd.json_output) {
+      out << json{{"model", cmd.output_path},     {"type", type},       {"operators", r.operators},
+                  {"dead_zones", r.dead_zones},   {"method", r.method}, {"fit", to_json(r.fit)},
+                  {"heldout", to_json(r.heldout)}}
+                 .dump()
+          << "\n";
+    } else {
+      out << "model     " << type << " with " << r.operators << " plays, " << r.dead_zones
+          << " dead zones per side (" << r.method << ")\n";
+      print_stats(out, "fit", r.fit, r.model.units.output);
+      print_stats(out, "held-out", r.heldout, r.model.units.output);
+      out << "saved     " << cmd.output_path << "\n";
+    }
+    return 0;
+  });
+}
+
+int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& err) {
+  return guarded(err, [&] {
+    hc::ModelFile file = load_model_file(cmd.model_path);
+    const DataTable data = DataTable::read_csv(cmd.data_path);
+    data.require_increasing("t");
+    const auto& t = data.column("t");
+    const auto& u = data.column("u");
+    for (std::size_t k = 0; k < u.size(); ++k) {
+      if (!std::isfinite(u[k])) throw std::invalid_argument(cmd.data_path + ": u is not finite");
+    }
+    const std::vector<double> y_model = file.model.simulate(u, data.sample_period());
+    std::vector<std::string> names{"t", "u", "y_model"};
+    std::vector<const std::vector<double>*> cols{&t, &u, &y_model};
+    std::vector<double> residual;
+    json result = {{"samples", u.size()}, {"output", cmd.output_path}};
+    if (data.has("y")) {
+      const auto& y = data.column("y");
+      residual.resize(y.size());
+      for (std::size_t k = 0; k < y.size(); ++k) residual[k] = y[k] - y_model[k];
+      names.insert(names.end(), {"y", "residual"});
+      cols.insert(cols.end(), {&y, &residual});
+      const hc::ErrorStats s = hc::error_stats(y, y_model);
+      result.update(to_json(s));
+      if (!cmd.json_output) print_stats(out, "error", s, file.model.units.output);
+    }
+    write_csv(cmd.output_path, names, cols,
+              {"hystbench simulate model=" + cmd.model_path + " data=" + cmd.data_path});
+    if (cmd.json_output) {
+      out << result.dump() << "\n";
+    } else {
+      out << "wrote " << cmd.output_path << " (" << u.size() << " samples)\n";
+    }
+    return 0;
+  });
+}
+
+int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
+  return guarded(err, [&] {
+    hc::ModelFile file = load_model_file(cmd.model_path);
+    const DataTable data = DataTable::read_csv(cmd.reference_path);
+    data.require_increasing("t");
+    const auto& t = data.column("t");
+    const auto& yr = data.column("yr");
+    file.model.configure(data.sample_period());
+    hc::InverseKind kind = hc::InverseKind::kAuto;
+    if (cmd.inverse == "analytic")
+      kind = hc::InverseKind::kAnalytic;
+    else if (cmd.inverse == "numeric")
+      kind = hc::InverseKind::kNumeric;
+    else if (cmd.inverse == "multiplicative")
+      kind = hc::InverseKind::kMultiplicative;
+    else if (cmd.inverse != "auto") {
+      throw std::invalid_argument("--inverse: unknown '" + cmd.inverse +
+                                  "' (auto, analytic, numeric, multiplicative)");
+    }
+    auto inverse = hc::make_inverse(file.model, kind);
+    const double u0 = file.model.input_min < file.model.input_max ? file.model.input_min : 0.0;
+    inverse->reset(u0);
+    std::vector<double> u(yr.size());
+    for (std::size_t k = 0; k < yr.size(); ++k) {
+      if (!std::isfinite(yr[k])) {
+        throw std::invalid_argument(cmd.reference_path + ": yr is not finite at row " +
+                                    std::to_string(k + 1));
+      }
+      u[k] = inverse->step(yr[k]);
+    }
+    write_csv(cmd.output_path, {"t", "yr", "u"}, {&t, &yr, &u},
+              {"hystbench invert model=" + cmd.model_path + " reference=" + cmd.reference_path});
+    if (cmd.json_output) {
+      out << json{{"samples", u.size()}, {"output", cmd.output_path}}.dump() << "\n";
+    } else {
+      out << "wrote " << cmd.output_path << " (" << u.size() << " samples)\n";
+    }
+    return 0;
+  });
+}
+
+}  // namespace hystbench::daemon

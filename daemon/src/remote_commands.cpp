@@ -1,0 +1,139 @@
+#include "hystbench/daemon/remote_commands.hpp"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "hystbench/daemon/bench_client.hpp"
+
+namespace hystbench::daemon {
+
+using nlohmann::json;
+
+std::string default_socket_path() {
+  const char* env = std::getenv("HYSTBENCH_SOCKET");
+  return env != nullptr && *env != '\0' ? env : "/run/hystbench/hystbench.sock";
+}
+
+namespace {
+
+std::string fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+std::string us(const json& ns) {
+  return ns.is_number() ? fixed(ns.get<double>() / 1000.0, 1) : "?";
+}
+
+void progress_bar(std::ostream& err, double fraction, const std::string& label) {
+  const int width = 30;
+  const int filled = static_cast<int>(fraction * width + 0.5);
+  err << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
+      << std::setw(3) << static_cast<int>(100 * fraction) << " % " << label << "\x1b[K"
+      << std::flush;
+}
+
+}  // namespace
+
+void print_run_result(const json& r, std::ostream& out) {
+  out << "run " << r.value("run_id", "?") << " " << r.value("end", "?");
+  if (!r.value("reason", std::string()).empty())
+    out << " (" << r["reason"].get<std::string>() << ")";
+  out << ": " << r.value("samples", 0) << " samples, " << r.value("dropped", 0) << " dropped\n";
+  if (r.contains("rms_error_um")) {
+    out << "  tracking error  rms " << fixed(r["rms_error_um"], 4) << " um ("
+        << fixed(r["rms_error_percent"], 3) << " % of " << fixed(r["range_um"], 2) << " um)   max "
+        << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %)\n";
+    out << "  hysteresis      " << fixed(r["hysteresis_percent"], 3) << " % of the output range\n";
+  }
+  if (r.contains("model")) {
+    const json& m = r["model"];
+    out << "  model           " << m.value("type", "?") << ", " << m.value("operators", 0)
+        << " plays, " << m.value("dead_zones", 0) << " dead zones per side -> "
+        << m.value("path", "?") << "\n";
+    if (m.contains("heldout")) {
+      out << "  model error     fit rms " << fixed(m["fit"]["rmse"], 4) << " um, held-out rms "
+          << fixed(m["heldout"]["rmse"], 4) << " um (" << fixed(m["heldout"]["rmse_percent"], 3)
+          << " %), max " << fixed(m["heldout"]["max_abs"], 4) << " um\n";
+    }
+  }
+  if (r.contains("fit_error"))
+    out << "  fit failed      " << r["fit_error"].get<std::string>() << "\n";
+  if (r.contains("loop")) {
+    const json& l = r["loop"];
+    const json w = l.value("wake_latency_ns", json::object());
+    const json e = l.value("exec_ns", json::object());
+    out << "  loop            wake latency p50 " << us(w.value("p50", json())) << " us, p99 "
+        << us(w.value("p99", json())) << " us, max " << us(w.value("max", json()))
+        << " us; execution p99 " << us(e.value("p99", json())) << " us; " << l.value("overruns", 0)
+        << " overruns\n";
+  }
+  if (r.contains("clamps")) {
+    out << "  limits          " << r.value("clamps", 0) << " clamped, " << r.value("slew_limits", 0)
+        << " slew-limited samples\n";
+  }
+  if (!r.value("log", std::string()).empty())
+    out << "  log             " << r["log"].get<std::string>() << "\n";
+}
+
+int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
+  try {
+    BenchClient client(cmd.socket_path);
+    json reply = client.request(cmd.cmd, cmd.params);
+    if (!reply.value("ok", false)) {
+      const json& e = reply["error"];
+      if (cmd.json_output) {
+        out << reply.dump() << "\n";
+      } else {
+        err << "hystbench: " << cmd.cmd << " refused: " << e.value("message", "?") << " ["
+            << e.value("code", "?") << "]\n";
+      }
+      return 1;
+    }
+    const json& result = reply["result"];
+    const bool is_run = cmd.cmd == "identify" || cmd.cmd == "track";
+    if (!(is_run && cmd.wait)) {
+      if (cmd.json_output || !is_run) {
+        out << (cmd.json_output ? result.dump() : result.dump(2)) << "\n";
+      } else {
+        out << "started " << result.value("run_id", "?") << " ("
+            << fixed(result.value("duration_s", 0.0), 1) << " s), log " << result.value("log", "?")
+            << "\n";
+      }
+      return 0;
+    }
+    const std::string run_id = result.value("run_id", "");
+    const bool tty = ::isatty(STDERR_FILENO) == 1;
+    for (;;) {
+      auto event = client.next_event(std::chrono::seconds(3600));
+      if (!event) continue;
+      const std::string name = event->value("event", "");
+      if (name == "run.progress" && event->value("run_id", "") == run_id && tty &&
+          !cmd.json_output) {
+        progress_bar(err, event->value("fraction", 0.0), cmd.cmd + " " + run_id);
+      } else if (name == "fit.progress" && event->value("run_id", "") == run_id && tty &&
+                 !cmd.json_output) {
+        progress_bar(err, event->value("fraction", 0.0), "fitting: " + event->value("stage", ""));
+      } else if (name == "run.finished" && (*event)["result"].value("run_id", "") == run_id) {
+        if (tty && !cmd.json_output) err << "\r\x1b[K" << std::flush;
+        const json& r = (*event)["result"];
+        if (cmd.json_output) {
+          out << r.dump() << "\n";
+        } else {
+          print_run_result(r, out);
+        }
+        return r.value("end", "") == "completed" && !r.contains("fit_error") ? 0 : 1;
+      }
+    }
+  } catch (const ClientError& e) {
+    err << "hystbench: " << e.what() << "\n";
+    return 2;
+  }
+}
+
+}  // namespace hystbench::daemon

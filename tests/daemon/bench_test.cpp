@@ -1,0 +1,125 @@
+// The bench end to end in-process, on the loopback driver (no socket).
+#include "hystbench/daemon/bench.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/sample_log_writer.hpp"
+
+namespace hd = hystbench::daemon;
+using nlohmann::json;
+
+namespace {
+
+class BenchTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("hystbench_bench_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+  }
+  void TearDown() override {
+    bench_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+  hd::BenchSettings settings(double rate_hz = 5000.0) {
+    hd::BenchSettings s;
+    s.loop.rate_hz = rate_hz;
+    s.loop.realtime.fifo = false;
+    s.loop.realtime.lock_memory = false;
+    s.loop.overrun_budget = 1000000;  // a shared CI machine may be late; not under test here
+    s.log_dir = (dir_ / "logs").string();
+    s.model_dir = (dir_ / "models").string();
+    s.y_min = 0.0;
+    s.y_max = 45.0;
+    s.precondition_s = 0.4;
+    return s;
+  }
+  void start(hd::BenchSettings s) {
+    bench_ = std::make_unique<hd::Bench>(std::move(s));
+    bench_->set_event_sink([this](const json& e) {
+      if (e["event"] == "run.finished") {
+        std::lock_guard lock(m_);
+        results_.push_back(e["result"]);
+      }
+    });
+    bench_->start();
+  }
+  json run_and_wait(const std::string& cmd, const json& params, int timeout_s = 120) {
+    bench_->handle(cmd, params);
+    EXPECT_TRUE(bench_->wait_idle(std::chrono::seconds(timeout_s)));
+    std::lock_guard lock(m_);
+    return results_.empty() ? json() : results_.back();
+  }
+  std::string error_code(const std::string& cmd, const json& params) {
+    try {
+      bench_->handle(cmd, params);
+    } catch (const hd::CommandError& e) {
+      return e.code();
+    }
+    return "ok";
+  }
+
+  std::filesystem::path dir_;
+  std::unique_ptr<hd::Bench> bench_;
+  std::mutex m_;
+  std::vector<json> results_;
+};
+
+}  // namespace
+
+TEST_F(BenchTest, TrackWithoutModelLogsEverySampleAndReportsHysteresis) {
+  start(settings());
+  const json r =
+      run_and_wait("track", {{"compensator", "none"}, {"periods", 3}, {"frequency_hz", 2}});
+  ASSERT_EQ(r["end"], "completed") << r.dump(2);
+  EXPECT_EQ(r["samples"], r["planned_samples"]);
+  EXPECT_EQ(r["dropped"], 0);
+  EXPECT_EQ(r["logged"], r["samples"]);
+  // The default actuator has 15-20 % hysteresis; the linear map leaves it all in place.
+  EXPECT_GT(r["hysteresis_percent"].get<double>(), 8.0);
+  const auto table = hd::DataTable::read_csv(r["log"].get<std::string>());
+  EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
+  const auto& index = table.column("index");
+  for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
+  const json header = hd::read_sample_log_header(r["log"].get<std::string>());
+  EXPECT_EQ(header["run"]["compensator"], "none");
+}
+
+TEST_F(BenchTest, BadRequestsChangeNothing) {
+  start(settings());
+  EXPECT_EQ(error_code("track", {{"compensator", "inverse"}}), "no_model");
+  EXPECT_EQ(error_code("track", {{"frequency_hz", "fast"}}), "bad_params");
+  EXPECT_EQ(error_code("track", {{"min_um", -100.0}, {"max_um", 10.0}}), "out_of_range");
+  EXPECT_EQ(error_code("track", {{"bogus", 1}}), "bad_params");
+  EXPECT_EQ(error_code("fly", json::object()), "unknown_command");
+  EXPECT_EQ(error_code("stop", json::object()), "no_run");
+  EXPECT_EQ(error_code("model.load", {{"path", "/nonexistent.json"}}), "bad_model");
+  EXPECT_EQ(bench_->handle("status", json::object())["state"], "idle");
+  // A run while one is active is refused.
+  bench_->handle("track", {{"compensator", "none"}, {"periods", 20}});
+  EXPECT_EQ(error_code("track", {{"compensator", "none"}}), "busy");
+  EXPECT_EQ(error_code("identify", json::object()), "busy");
+  bench_->handle("stop", json::object());
+  ASSERT_TRUE(bench_->wait_idle(std::chrono::seconds(10)));
+  std::lock_guard lock(m_);
+  EXPECT_EQ(results_.back()["end"], "stopped");
+}
+
+TEST_F(BenchTest, DriverFaultGoesSafeAndStaysInFaultUntilReset) {
+  auto s = settings();
+  s.driver_params = {{"faults", {{"nan_at_tick", 3000}}}};
+  start(s);
+  const json r = run_and_wait("track", {{"compensator", "none"}, {"periods", 10}});
+  EXPECT_EQ(r["end"], "fault");
+  EXPECT_EQ(r["reason"], "measurement is not a finite number");
+  EXPECT_EQ(bench_->handle("status", json::object())["state"], "fault");
+  EXPECT_DOUBLE_EQ(bench_->loop().last_output(), bench_->driver().safe_output_v());
+  EXPECT_EQ(error_code("track", {{"compensator", "none"}}), "fault");
+  // Log intact: every sample up to and including the faulted one.
+  const auto table = hd::DataTable::read_csv(r["log"].get<std::string>());
+  EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
+}
