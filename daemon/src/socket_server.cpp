@@ -262,9 +262,9 @@ void SocketServer::accept_clients() {
           details::error_line(nullptr, "too_many_clients",
                               "the server has " + std::to_string(options_.max_clients) +
                                   " clients already; try again later");
+      counters_.refused.fetch_add(1, std::memory_order_relaxed);
       [[maybe_unused]] const auto n = ::send(fd, line.data(), line.size(), MSG_NOSIGNAL);
       ::close(fd);
-      counters_.refused.fetch_add(1, std::memory_order_relaxed);
       continue;
     }
     auto c = std::make_unique<Client>();

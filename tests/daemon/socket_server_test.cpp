@@ -305,7 +305,7 @@ TEST_F(SocketServerTest, ClientThatNeverReadsIsDisconnectedWithoutBlockingOthers
   reading.join();
   EXPECT_EQ(received.load(), kEvents);
   EXPECT_TRUE(eventually([&] { return server_->counters().slow_dropped == 1; }));
-  EXPECT_EQ(server_->counters().clients, 1u);
+  EXPECT_TRUE(eventually([&] { return server_->counters().clients == 1; }));
   EXPECT_EQ(reader.request({{"id", 1}, {"cmd", "echo"}})["ok"], true);
   // The sleeper finds the connection closed after whatever had been sent.
   std::size_t lines = 0;
