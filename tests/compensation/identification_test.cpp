@@ -237,7 +237,7 @@ TEST(Identification, TriangularMethodRecoversPiFromOneAscendingBranch) {
 
 TEST(Identification, ReachesTheNoiseFloorOnNoisyData) {
   std::mt19937_64 rng(21);
-  const std::vector<double> u = rich_excitation(30000, 0.0, 10.0);
+  const std::vector<double> u = rich_excitation(20000, 0.0, 10.0);
   const hc::ModifiedPiParameters truth = known_mpi(rng, u);
   for (const bool modified : {false, true}) {
     std::unique_ptr<hc::HysteresisModel> model;

@@ -97,6 +97,7 @@ struct FitResult {
 };
 
 /// Fits a model to a record. t [s] strictly increasing, u input, y output, equal lengths.
+/// Sampling is taken as uniform with the mean step (t.back() - t.front()) / (N - 1).
 /// Throws std::invalid_argument with a clear message for too few samples (< 50), constant
 /// input or output, NaN/inf, mismatched lengths, non-increasing t or bad options.
 FitResult fit_model(std::span<const double> t, std::span<const double> u, std::span<const double> y,
