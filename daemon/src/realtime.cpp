@@ -5,6 +5,7 @@
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -49,6 +50,14 @@ RealtimeStatus set_normal_scheduling() noexcept {
   return {rc, "sched_setscheduler"};
 }
 
+RealtimeStatus set_timer_slack(long nanoseconds) noexcept {
+  if (nanoseconds < 1) return {EINVAL, "prctl(PR_SET_TIMERSLACK)"};
+  if (prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(nanoseconds), 0, 0, 0) != 0) {
+    return {errno, "prctl(PR_SET_TIMERSLACK)"};
+  }
+  return {};
+}
+
 RealtimeStatus pin_to_cpu(int cpu) noexcept {
   if (cpu < 0) return {};
   if (cpu >= CPU_SETSIZE) return {EINVAL, "pthread_setaffinity_np"};
@@ -84,6 +93,7 @@ void prefault_stack(std::size_t bytes) noexcept {
 
 RealtimeReport apply_realtime(const RealtimeOptions& options) noexcept {
   RealtimeReport report;
+  set_timer_slack(1);  // best effort: only matters when SCHED_FIFO is not granted
   if (options.fifo) report.scheduling = set_fifo_priority(options.priority);
   report.affinity = pin_to_cpu(options.cpu);
   if (options.lock_memory) {

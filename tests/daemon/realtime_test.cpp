@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <pthread.h>
 #include <sched.h>
+#include <sys/prctl.h>
 
 #include <cerrno>
 #include <iostream>
@@ -28,6 +29,15 @@ TEST(Realtime, FifoPriorityIsAppliedOrReportedNotPermitted) {
     } else {
       EXPECT_NE(st.describe().find("sched_setscheduler"), std::string::npos);
     }
+  });
+  t.join();
+}
+
+TEST(Realtime, TimerSlackIsSetForTheCallingThread) {
+  EXPECT_EQ(hd::set_timer_slack(0).error, EINVAL);
+  std::thread t([] {
+    ASSERT_TRUE(hd::set_timer_slack(1).ok());
+    EXPECT_EQ(prctl(PR_GET_TIMERSLACK, 0, 0, 0, 0), 1);
   });
   t.join();
 }

@@ -26,6 +26,9 @@ RealtimeStatus set_fifo_priority(int priority) noexcept;
 /// SCHED_OTHER, nice 0 for the calling thread (helper threads started from a real-time thread
 /// inherit its policy; they call this first).
 RealtimeStatus set_normal_scheduling() noexcept;
+/// Timer slack of the calling thread (prctl PR_SET_TIMERSLACK): how late the kernel may wake a
+/// SCHED_OTHER sleeper to batch wake-ups (default 50 µs). SCHED_FIFO threads have none.
+RealtimeStatus set_timer_slack(long nanoseconds) noexcept;
 /// Pins the calling thread to one CPU; cpu < 0 does nothing and returns ok.
 RealtimeStatus pin_to_cpu(int cpu) noexcept;
 /// mlockall(MCL_CURRENT | MCL_FUTURE), see the note above; undo with unlock_memory().
@@ -53,7 +56,8 @@ struct RealtimeReport {
 };
 
 /// Applies every requested step to the calling thread (memory: the whole process), going on
-/// after a failure. Never throws.
+/// after a failure; also sets the timer slack to 1 ns (helps when SCHED_FIFO is refused).
+/// Never throws.
 RealtimeReport apply_realtime(const RealtimeOptions& options) noexcept;
 
 }  // namespace hystbench::daemon
