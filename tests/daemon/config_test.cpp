@@ -309,3 +309,16 @@ id = "b"
   EXPECT_EQ(j["runs"][1]["id"], "b");
   EXPECT_THROW(hd::toml_to_json("a = "), hd::ConfigError);
 }
+
+TEST(Config, EveryShippedConfigFileLoads) {
+  const fs::path dir = fs::path(HYSTBENCH_SOURCE_DIR) / "config";
+  int files = 0;
+  if (fs::is_directory(dir)) {
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      if (entry.path().extension() != ".toml") continue;
+      ++files;
+      EXPECT_NO_THROW(hd::load_config(entry.path())) << entry.path();
+    }
+  }
+  if (files == 0) GTEST_SKIP() << "no config/*.toml in " << dir;
+}
