@@ -4,10 +4,12 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstring>
 #include <fstream>
 #include <optional>
@@ -329,6 +331,37 @@ TEST_F(SocketServerTest, ClientKilledMidStreamDoesNotDisturbTheServer) {
   ASSERT_TRUE(after.greeted());
   EXPECT_EQ(after.request({{"id", 5}, {"cmd", "echo"}})["id"], 5);
   EXPECT_TRUE(eventually([&] { return server_->counters().clients == 1; }));
+}
+
+TEST_F(SocketServerTest, ProcessKilledWhileFloodingDoesNotDisturbTheServer) {
+  // Everything the child needs is prepared before fork(): it only makes system calls.
+  std::string flood;
+  for (int i = 0; i < 500; ++i)
+    flood += R"({"id":1,"cmd":"big","params":{"n":2000}})"
+             "\n";
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::strncpy(addr.sun_path, path_.c_str(), sizeof addr.sun_path - 1);
+  const std::uint64_t before = server_->counters().requests;
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) ::_exit(1);
+    for (;;) {  // never reads: blocks once the server applies back-pressure, until killed
+      if (::send(fd, flood.data(), flood.size(), MSG_NOSIGNAL) < 0) ::_exit(2);
+    }
+  }
+  const bool busy = eventually([&] { return server_->counters().requests > before + 100; });
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  EXPECT_TRUE(busy);
+  EXPECT_TRUE(WIFSIGNALED(status));
+  EXPECT_TRUE(eventually([&] { return server_->counters().clients == 0; }));
+  TestClient after(path_);
+  ASSERT_TRUE(after.greeted());
+  EXPECT_EQ(after.request({{"id", 6}, {"cmd", "echo"}})["id"], 6);
 }
 
 TEST_F(SocketServerTest, HundredConcurrentClientsAllGetTheirReplies) {
