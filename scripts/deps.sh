@@ -12,7 +12,7 @@ BUILD_PKGS=(
   gnuplot-nox
 )
 # Peers and tools used only by the test suite (independent implementations to test against).
-TEST_PKGS=(python3 socat)
+TEST_PKGS=(python3 socat python3-pymodbus python3-serial python3-serial-asyncio mbpoll can-utils)
 
 want=("${BUILD_PKGS[@]}")
 case "${1:-build}" in

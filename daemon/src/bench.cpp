@@ -644,7 +644,8 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
                  {"clamps", run->clamps},
                  {"slew_limits", run->slew_limits},
                  {"reference_clips", run->reference_clips},
-                 {"stale_reads", run->stale_reads}};
+                 {"stale_reads", run->stale_reads},
+                 {"output_v_after", loop_->last_output()}};
   if (!counts.error.empty()) result["log_error"] = counts.error;
   const std::size_t n = run->recorded;
   if (run->kind == RunKind::kTrack && n > 2) {

@@ -19,7 +19,10 @@ BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
   last_u_.store(driver_.safe_output_v());
 }
 
-BenchLoop::~BenchLoop() { shutdown(); }
+BenchLoop::~BenchLoop() {
+  shutdown();
+  delete finished_.exchange(nullptr);
+}
 
 RealtimeReport BenchLoop::start() {
   if (thread_.joinable()) return realtime_report_;
@@ -41,9 +44,8 @@ void BenchLoop::shutdown() {
   thread_.join();
   driver_.safe_state();
   state_.store(State::kStopped, std::memory_order_release);
-  // Programs the loop never picked up or handed back stay owned here until destruction.
+  // A program the loop never picked up is dropped; a finished one stays for take_finished().
   delete pending_.exchange(nullptr);
-  delete finished_.exchange(nullptr);
 }
 
 std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> program) {

@@ -238,6 +238,12 @@ void SocketServer::run() noexcept {
       return true;
     });
   }
+  // Last words: events broadcast before stop() (e.g. the result of the run a shutdown ended)
+  // still reach the clients that read them; one non-blocking attempt each, never waiting.
+  deliver_events();
+  for (const auto& c : clients_) {
+    if (!c->dead) flush(*c);
+  }
   close_all();
 }
 

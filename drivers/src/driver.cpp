@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "hystbench/drivers/loopback_driver.hpp"
+#include "hystbench/drivers/modbus_daq.hpp"
 
 namespace hystbench::drivers {
 
@@ -26,6 +27,8 @@ const std::vector<DriverBackend>& driver_backends() {
   static const std::vector<DriverBackend> table{
       {"loopback", "simulated actuator in the loop (no hardware)",
        []() -> std::unique_ptr<Driver> { return std::make_unique<LoopbackDriver>(); }},
+      {"modbus", "Modbus DAQ over TCP or RTU (libmodbus); [driver.modbus]",
+       []() -> std::unique_ptr<Driver> { return std::make_unique<ModbusDaqDriver>(); }},
   };
   return table;
 }

@@ -12,9 +12,12 @@ inline void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
 }
 
+// The messages are built only on failure: these run over whole data columns.
 inline void require_finite(std::span<const double> v, const std::string& field) {
   for (std::size_t i = 0; i < v.size(); ++i) {
-    require(std::isfinite(v[i]), field + "[" + std::to_string(i) + "] is not a finite number");
+    if (!std::isfinite(v[i])) {
+      throw std::invalid_argument(field + "[" + std::to_string(i) + "] is not a finite number");
+    }
   }
 }
 
@@ -24,10 +27,12 @@ inline void require_finite(double v, const std::string& field) {
 
 inline void require_strictly_increasing(std::span<const double> v, const std::string& field) {
   for (std::size_t i = 1; i < v.size(); ++i) {
-    require(v[i] > v[i - 1], field + " must be strictly increasing: " + field + "[" +
-                                 std::to_string(i) + "] = " + std::to_string(v[i]) +
-                                 " <= " + field + "[" + std::to_string(i - 1) +
-                                 "] = " + std::to_string(v[i - 1]));
+    if (!(v[i] > v[i - 1])) {
+      throw std::invalid_argument(field + " must be strictly increasing: " + field + "[" +
+                                  std::to_string(i) + "] = " + std::to_string(v[i]) + " <= " +
+                                  field + "[" + std::to_string(i - 1) +
+                                  "] = " + std::to_string(v[i - 1]));
+    }
   }
 }
 
