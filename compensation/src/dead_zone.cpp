@@ -7,7 +7,7 @@
 
 namespace hystbench::compensation {
 
-DeadZoneSuperposition::DeadZoneSuperposition() : p_{{0.0}, {1.0}}, zero_(0) {}
+DeadZoneSuperposition::DeadZoneSuperposition() : p_{{0.0}, {1.0}}, zero_(0), w0_(1.0) {}
 
 DeadZoneSuperposition::DeadZoneSuperposition(DeadZoneParameters p) : p_(std::move(p)) {
   details::require(!p_.thresholds.empty(), "deadzone.thresholds must not be empty");
@@ -20,13 +20,28 @@ DeadZoneSuperposition::DeadZoneSuperposition(DeadZoneParameters p) : p_(std::mov
   details::require(it != p_.thresholds.end(),
                    "deadzone.thresholds must contain 0 (the identity operator)");
   zero_ = static_cast<std::size_t>(it - p_.thresholds.begin());
+  w0_ = p_.weights[zero_];
+  for (std::size_t j = zero_ + 1; j < p_.thresholds.size(); ++j) {
+    pos_d_.push_back(p_.thresholds[j]);
+    pos_w_.push_back(p_.weights[j]);
+  }
+  for (std::size_t j = 0; j < zero_; ++j) {
+    neg_d_.push_back(p_.thresholds[j]);
+    neg_w_.push_back(p_.weights[j]);
+  }
 }
 
 double DeadZoneSuperposition::apply(double v) const noexcept {
-  double z = 0.0;
-  const std::size_t n = p_.thresholds.size();
-  for (std::size_t j = 0; j < n; ++j) z += p_.weights[j] * dead_zone(v, p_.thresholds[j]);
-  return z;
+  double zp = 0.0, zn = 0.0;
+  for (std::size_t j = 0; j < pos_d_.size(); ++j) {
+    const double e = v - pos_d_[j];
+    zp += pos_w_[j] * (e > 0.0 ? e : 0.0);
+  }
+  for (std::size_t j = 0; j < neg_d_.size(); ++j) {
+    const double e = v - neg_d_[j];
+    zn += neg_w_[j] * (e < 0.0 ? e : 0.0);
+  }
+  return w0_ * v + zp + zn;
 }
 
 Invertibility DeadZoneSuperposition::invertibility() const {

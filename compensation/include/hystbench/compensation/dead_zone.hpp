@@ -44,6 +44,9 @@ class DeadZoneSuperposition {
  private:
   DeadZoneParameters p_;
   std::size_t zero_ = 0;
+  // Split by side so apply() is branch-free: d > 0 (increasing) and d < 0 (decreasing).
+  std::vector<double> pos_d_, pos_w_, neg_d_, neg_w_;
+  double w0_ = 1.0;
 };
 
 }  // namespace hystbench::compensation

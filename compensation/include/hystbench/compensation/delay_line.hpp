@@ -12,7 +12,7 @@ class DelayLine {
   /// Pushes x and returns the value pushed `samples` calls ago.
   double push(double x) noexcept {
     buf_[head_] = x;
-    head_ = (head_ + 1) % buf_.size();
+    if (++head_ == buf_.size()) head_ = 0;  // no division in the per-sample path
     return buf_[head_];
   }
   void reset(double x0) noexcept {
