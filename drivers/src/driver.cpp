@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "hystbench/drivers/can_amplifier.hpp"
 #include "hystbench/drivers/loopback_driver.hpp"
 #include "hystbench/drivers/modbus_daq.hpp"
 
@@ -29,6 +30,8 @@ const std::vector<DriverBackend>& driver_backends() {
        []() -> std::unique_ptr<Driver> { return std::make_unique<LoopbackDriver>(); }},
       {"modbus", "Modbus DAQ over TCP or RTU (libmodbus); [driver.modbus]",
        []() -> std::unique_ptr<Driver> { return std::make_unique<ModbusDaqDriver>(); }},
+      {"can", "CAN piezo amplifier over SocketCAN (libsocketcan); [driver.can]",
+       []() -> std::unique_ptr<Driver> { return std::make_unique<CanAmplifierDriver>(); }},
   };
   return table;
 }

@@ -7,12 +7,6 @@
 
 namespace hystbench::drivers::details {
 
-std::int64_t monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
-}
-
 ModbusLink::ModbusLink(const ModbusDaqConfig& config) : config_(config) {
   if (config.transport == ModbusDaqConfig::Transport::kTcp) {
     const std::string port = std::to_string(config.port);

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string>
 
+#include "details/clock.hpp"
 #include "hystbench/drivers/modbus_daq_config.hpp"
 
 namespace hystbench::drivers::details {
@@ -49,8 +50,5 @@ class ModbusLink {
   int last_errno_ = 0;
   Op last_op_ = Op::kNone;
 };
-
-/// CLOCK_MONOTONIC in ns (vDSO; real-time safe).
-std::int64_t monotonic_ns() noexcept;
 
 }  // namespace hystbench::drivers::details

@@ -1,0 +1,415 @@
+#include "hystbench/drivers/can_amplifier.hpp"
+
+#include <fcntl.h>
+#include <linux/can/error.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <thread>
+
+#include "details/clock.hpp"
+#include "details/json_params.hpp"
+
+namespace hystbench::drivers {
+
+using details::monotonic_ns;
+using details::ParamError;
+using details::Params;
+
+namespace {
+constexpr int kMaxFramesPerRead = 64;
+constexpr int kMaxSendFailures = 3;
+
+std::string fmt(double v, int digits = 0) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+}  // namespace
+
+CanAmplifierDriver::CanAmplifierDriver() = default;
+
+CanAmplifierDriver::CanAmplifierDriver(std::unique_ptr<CanController> controller)
+    : controller_(std::move(controller)), injected_controller_(controller_ != nullptr) {}
+
+CanAmplifierDriver::~CanAmplifierDriver() { stop_supervisor(); }
+
+Result CanAmplifierDriver::configure(const nlohmann::json& params, double rate_hz) {
+  if (active_) return Result::failure("driver.can: configure() while active");
+  try {
+    const Params p(params, "driver.can");
+    p.allow_only({"interface", "socket_fd", "heartbeat_timeout_ms", "restart_on_bus_off",
+                  "max_rate_hz", "safe_output_v", "output_min_v", "output_max_v", "setpoint",
+                  "feedback", "enable", "disable"});
+    interface_ = p.string("interface", "");
+    socket_fd_ = static_cast<int>(p.integer("socket_fd", -1, 0, 1 << 20));
+    if (interface_.empty() && socket_fd_ < 0) {
+      throw ParamError("driver.can.interface: required (the SocketCAN interface, e.g. \"can0\")");
+    }
+    heartbeat_ns_ =
+        static_cast<std::int64_t>(p.number("heartbeat_timeout_ms", 50.0, 0.0, 10000.0) * 1e6);
+    if (heartbeat_ns_ <= 0) throw ParamError("driver.can.heartbeat_timeout_ms: must be > 0");
+    restart_on_bus_off_ = p.boolean("restart_on_bus_off", false);
+    declared_max_rate_hz_ = p.number("max_rate_hz", 0.0, 0.0, 20000.0);
+    output_min_v_ = p.number("output_min_v", 0.0, -1e6, 1e6);
+    output_max_v_ = p.number("output_max_v", 150.0, -1e6, 1e6);
+    if (!(output_max_v_ > output_min_v_)) {
+      throw ParamError("driver.can.output_max_v: must be greater than output_min_v");
+    }
+    safe_output_v_ = p.number("safe_output_v", output_min_v_, output_min_v_, output_max_v_);
+    protocol_ = parse_can_protocol(params, "driver.can");
+  } catch (const ParamError& e) {
+    return Result::failure(e.what());
+  } catch (const std::invalid_argument& e) {
+    return Result::failure(e.what());
+  }
+  if (!(rate_hz > 0.0)) return Result::failure("loop.rate_hz: must be > 0");
+  max_rate_hz_ = declared_max_rate_hz_ > 0.0 ? declared_max_rate_hz_ : 20000.0;
+  if (rate_hz > max_rate_hz_) {
+    return Result::failure("loop.rate_hz: " + fmt(rate_hz) +
+                           " Hz is beyond driver.can.max_rate_hz = " + fmt(max_rate_hz_));
+  }
+  rate_hz_ = rate_hz;
+  if (!injected_controller_) {
+    controller_ = interface_.empty() ? nullptr : make_libsocketcan_controller(interface_);
+  }
+  configured_ = true;
+  return Result::success();
+}
+
+Result CanAmplifierDriver::activate() {
+  if (!configured_) return Result::failure("driver.can: activate() before configure()");
+  if (active_) return Result::success();
+  const std::string where = interface_.empty() ? "socket " + std::to_string(socket_fd_)
+                                               : "interface '" + interface_ + "'";
+  try {
+    if (socket_fd_ < 0 && !interface_is_up(interface_)) {
+      return Result::failure("driver.can: " + where + " is down (ip link set " + interface_ +
+                             " up type can bitrate 1000000)");
+    }
+  } catch (const std::exception& e) {
+    return Result::failure(e.what());
+  }
+  bitrate_ = 0;
+  if (controller_) {
+    CanController::State s = controller_->state();
+    if (s == CanController::State::kBusOff && restart_on_bus_off_) {
+      if (auto r = controller_->restart(); !r) return r;
+      restarts_.fetch_add(1);
+      s = controller_->state();
+    }
+    controller_state_ = to_string(s);
+    if (s == CanController::State::kBusOff) {
+      return Result::failure("driver.can: " + where + " is bus-off: restart it (ip link set " +
+                             interface_ +
+                             " type can restart) or set driver.can.restart_on_bus_off = true");
+    }
+    if (s == CanController::State::kStopped || s == CanController::State::kSleeping) {
+      return Result::failure("driver.can: " + where + " controller is " + controller_state_ +
+                             " (ip link set " + interface_ + " up type can bitrate 1000000)");
+    }
+    bitrate_ = controller_->bitrate();
+  }
+  if (bitrate_ > 0) {
+    const int bits = can_frame_bits(protocol_.setpoint_length, protocol_.setpoint_id.extended) +
+                     can_frame_bits(protocol_.feedback_length, protocol_.feedback_id.extended);
+    const double bus_max = std::floor(static_cast<double>(bitrate_) / bits);
+    max_rate_hz_ = declared_max_rate_hz_ > 0.0 ? std::min(declared_max_rate_hz_, bus_max) : bus_max;
+    if (rate_hz_ > max_rate_hz_) {
+      return Result::failure("loop.rate_hz: " + fmt(rate_hz_) + " Hz is beyond what " + where +
+                             " carries at " + std::to_string(bitrate_) + " bit/s: a setpoint and " +
+                             "a feedback frame take up to " + std::to_string(bits) +
+                             " bits, so at most " + fmt(bus_max) + " Hz");
+    }
+  }
+  try {
+    if (socket_fd_ >= 0) {
+      const int fd = ::fcntl(socket_fd_, F_DUPFD_CLOEXEC, 0);
+      if (fd < 0) {
+        return Result::failure("driver.can.socket_fd: " + std::to_string(socket_fd_) +
+                               " is not open: " + std::strerror(errno));
+      }
+      socket_ = std::make_unique<CanSocket>(fd);
+    } else {
+      socket_ = open_socketcan(interface_);
+    }
+  } catch (const std::exception& e) {
+    return Result::failure(e.what());
+  }
+  can_frame f{};
+  while (socket_->receive(f) == 1) {
+  }
+  // Enable, then setpoints at the safe output until the amplifier answers.
+  if (!socket_->send(protocol_.enable_frame())) {
+    return release(("driver.can: cannot send the enable frame " + protocol_.enable_id.describe() +
+                    " on " + where + ": " + std::strerror(errno)));
+  }
+  const std::int64_t wait_ns = std::max<std::int64_t>(heartbeat_ns_, 200'000'000);
+  const std::int64_t until = monotonic_ns() + wait_ns;
+  bool answered = false;
+  double y = 0.0;
+  std::uint8_t status = 0;
+  while (!answered && monotonic_ns() < until) {
+    socket_->send(protocol_.setpoint_frame(safe_output_v_));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    int rc = 0;
+    while (!answered && (rc = socket_->receive(f)) == 1) {
+      answered = protocol_.decode_feedback(f, y, status) == CanProtocol::Decoded::kFeedback;
+    }
+    if (rc < 0) {
+      return release(("driver.can: " + where + " failed while waiting for feedback: " +
+                      (errno == 0 ? "the peer closed the socket" : std::strerror(errno))));
+    }
+  }
+  if (!answered) {
+    return release(("driver.can: no feedback frame " + protocol_.feedback_id.describe() + " on " +
+                    where + " within " + fmt(wait_ns / 1e6) + " ms of the enable frame " +
+                    protocol_.enable_id.describe() + ": is the amplifier powered and on the bus?"));
+  }
+  if ((status & protocol_.fault_mask) != 0) {
+    return release(("driver.can: the amplifier reports a fault (status 0x" + [&] {
+      char b[8];
+      std::snprintf(b, sizeof b, "%02X", status);
+      return std::string(b);
+    }() + ") on " + where));
+  }
+  last_y_ = y;
+  position_um_ = y;
+  age_ = 0;
+  consecutive_send_failures_ = 0;
+  last_feedback_ns_ = monotonic_ns();
+  bus_off_ = false;
+  socket_dead_ = false;
+  last_fault_ = 0;
+  last_fault_detail_ = 0;
+  output_v_ = safe_output_v_;
+  active_ = true;
+  if (restart_on_bus_off_ && controller_) {
+    quit_ = false;
+    supervisor_ = std::thread([this] { supervise(); });
+  }
+  return Result::success();
+}
+
+Result CanAmplifierDriver::release(const std::string& message) {
+  if (socket_) {
+    socket_->send(protocol_.setpoint_frame(safe_output_v_));
+    socket_->send(protocol_.disable_frame());
+  }
+  socket_.reset();
+  return Result::failure(message);
+}
+
+void CanAmplifierDriver::supervise() noexcept {
+  while (!quit_.load()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (!bus_off_.load()) continue;
+    // Not real-time: netlink through libsocketcan, then enable the amplifier again.
+    try {
+      if (controller_->restart()) {
+        restarts_.fetch_add(1);
+        last_feedback_ns_.store(monotonic_ns());
+        bus_off_.store(false);
+        if (socket_) socket_->send(protocol_.enable_frame());
+      }
+    } catch (...) {
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+}
+
+void CanAmplifierDriver::stop_supervisor() noexcept {
+  quit_ = true;
+  if (supervisor_.joinable()) supervisor_.join();
+}
+
+Result CanAmplifierDriver::deactivate() {
+  if (!active_) return Result::success();
+  stop_supervisor();
+  active_ = false;
+  output_v_ = safe_output_v_;
+  const bool ok = socket_->send(protocol_.setpoint_frame(safe_output_v_)) &&
+                  socket_->send(protocol_.disable_frame());
+  const int err = errno;
+  socket_.reset();
+  if (!ok) {
+    return Result::failure("driver.can: the safe setpoint or the disable frame was not sent: " +
+                           std::string(std::strerror(err)));
+  }
+  return Result::success();
+}
+
+Result CanAmplifierDriver::on_error() {
+  if (!active_) return Result::success();
+  return deactivate();
+}
+
+void CanAmplifierDriver::fault(Fault cause, std::int64_t detail) noexcept {
+  last_fault_.store(static_cast<int>(cause), std::memory_order_relaxed);
+  last_fault_detail_.store(detail, std::memory_order_relaxed);
+}
+
+DriverStatus CanAmplifierDriver::write(double output_v) noexcept {
+  if (!active_.load(std::memory_order_relaxed) || socket_dead_.load(std::memory_order_relaxed)) {
+    return DriverStatus::kFault;
+  }
+  if (bus_off_.load(std::memory_order_relaxed)) return DriverStatus::kFault;
+  if (socket_->send(protocol_.setpoint_frame(output_v))) {
+    sent_.fetch_add(1, std::memory_order_relaxed);
+    consecutive_send_failures_ = 0;
+    output_v_.store(output_v, std::memory_order_relaxed);
+    return DriverStatus::kOk;
+  }
+  send_failures_.fetch_add(1, std::memory_order_relaxed);
+  if (++consecutive_send_failures_ >= kMaxSendFailures) {
+    fault(Fault::kSend, errno);
+    return DriverStatus::kFault;
+  }
+  return DriverStatus::kOk;
+}
+
+DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
+  if (!active_.load(std::memory_order_relaxed)) return DriverStatus::kFault;
+  bool fresh = false, malformed = false, amp_fault = false;
+  std::int64_t detail = 0;
+  can_frame f{};
+  for (int i = 0; i < kMaxFramesPerRead && !socket_dead_.load(std::memory_order_relaxed); ++i) {
+    const int rc = socket_->receive(f);
+    if (rc == 0) break;
+    if (rc < 0) {
+      socket_dead_.store(true, std::memory_order_relaxed);
+      fault(Fault::kSocket, errno);
+      break;
+    }
+    received_.fetch_add(1, std::memory_order_relaxed);
+    if ((f.can_id & CAN_ERR_FLAG) != 0) {
+      if ((f.can_id & CAN_ERR_BUSOFF) != 0) {
+        bus_off_.store(true, std::memory_order_relaxed);
+        bus_offs_.fetch_add(1, std::memory_order_relaxed);
+        fault(Fault::kBusOff, 0);
+      } else if ((f.can_id & CAN_ERR_RESTARTED) != 0) {
+        bus_off_.store(false, std::memory_order_relaxed);
+      }
+      continue;
+    }
+    double y = 0.0;
+    std::uint8_t status = 0;
+    switch (protocol_.decode_feedback(f, y, status)) {
+      case CanProtocol::Decoded::kFeedback:
+        feedback_.fetch_add(1, std::memory_order_relaxed);
+        if ((status & protocol_.fault_mask) != 0) {
+          amp_fault = true;
+          detail = status;
+        } else {
+          last_y_ = y;
+          fresh = true;
+        }
+        break;
+      case CanProtocol::Decoded::kMalformed:
+        malformed_.fetch_add(1, std::memory_order_relaxed);
+        malformed = true;
+        detail = f.can_dlc;
+        break;
+      case CanProtocol::Decoded::kOther:
+        break;
+    }
+  }
+  const std::int64_t now = monotonic_ns();
+  if (fresh) {
+    age_ = 0;
+    last_feedback_ns_.store(now, std::memory_order_relaxed);
+    position_um_.store(last_y_, std::memory_order_relaxed);
+  } else {
+    ++age_;
+    stale_reads_.fetch_add(1, std::memory_order_relaxed);
+  }
+  out = {last_y_, age_};
+  if (socket_dead_.load(std::memory_order_relaxed) || bus_off_.load(std::memory_order_relaxed)) {
+    return DriverStatus::kFault;
+  }
+  if (malformed) {
+    fault(Fault::kMalformed, detail);
+    return DriverStatus::kFault;
+  }
+  if (amp_fault) {
+    fault(Fault::kAmplifier, detail);
+    return DriverStatus::kFault;
+  }
+  const std::int64_t silent = now - last_feedback_ns_.load(std::memory_order_relaxed);
+  if (silent > heartbeat_ns_) {
+    fault(Fault::kHeartbeat, silent);
+    return DriverStatus::kFault;
+  }
+  return fresh ? DriverStatus::kOk : DriverStatus::kStale;
+}
+
+DriverStatus CanAmplifierDriver::safe_state() noexcept {
+  output_v_.store(safe_output_v_, std::memory_order_relaxed);
+  if (!active_.load(std::memory_order_relaxed) || socket_dead_.load(std::memory_order_relaxed)) {
+    return DriverStatus::kFault;
+  }
+  // Sent even when bus-off: the frame waits in the queue for the restart.
+  return socket_->send(protocol_.setpoint_frame(safe_output_v_)) ? DriverStatus::kOk
+                                                                 : DriverStatus::kError;
+}
+
+nlohmann::json CanAmplifierDriver::diagnostics() const {
+  const auto cause = static_cast<Fault>(last_fault_.load(std::memory_order_relaxed));
+  const std::int64_t detail = last_fault_detail_.load(std::memory_order_relaxed);
+  std::string fault;
+  switch (cause) {
+    case Fault::kNone:
+      break;
+    case Fault::kHeartbeat:
+      fault = "no feedback frame " + protocol_.feedback_id.describe() + " for " +
+              fmt(detail / 1e6, 1) + " ms (heartbeat_timeout_ms = " + fmt(heartbeat_ns_ / 1e6, 1) +
+              ")";
+      break;
+    case Fault::kMalformed:
+      fault = "malformed feedback frame " + protocol_.feedback_id.describe() + ": " +
+              std::to_string(detail) + " data bytes, expected " +
+              std::to_string(protocol_.feedback_length);
+      break;
+    case Fault::kBusOff:
+      fault = "bus-off (error frame)" + std::string(restart_on_bus_off_ && controller_
+                                                        ? ": restarting the controller"
+                                                        : ": restart the interface");
+      break;
+    case Fault::kAmplifier:
+      fault = "the amplifier reports a fault: status byte " + std::to_string(detail) +
+              " & fault_mask " + std::to_string(protocol_.fault_mask);
+      break;
+    case Fault::kSocket:
+      fault = std::string("the CAN socket failed: ") +
+              (detail == 0 ? "the peer closed it" : std::strerror(static_cast<int>(detail)));
+      break;
+    case Fault::kSend:
+      fault = std::to_string(kMaxSendFailures) +
+              " setpoint frames in a row not sent: " + std::strerror(static_cast<int>(detail));
+      break;
+  }
+  return {{"type", "can"},
+          {"interface", interface_},
+          {"active", active_.load()},
+          {"controller_state", controller_state_},
+          {"bitrate", bitrate_},
+          {"max_rate_hz", max_rate_hz_},
+          {"bus_off", bus_off_.load()},
+          {"frames_sent", sent_.load()},
+          {"frames_received", received_.load()},
+          {"feedback_frames", feedback_.load()},
+          {"malformed_frames", malformed_.load()},
+          {"bus_offs", bus_offs_.load()},
+          {"restarts", restarts_.load()},
+          {"send_failures", send_failures_.load()},
+          {"stale_reads", stale_reads_.load()},
+          {"output_v", output_v_.load()},
+          {"position_um", position_um_.load()},
+          {"last_fault", fault}};
+}
+
+}  // namespace hystbench::drivers
