@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
 
   std::string tr_reference = "triangle", tr_compensator;
   double tr_frequency = 1.0, tr_periods = 5.0, tr_duration = 0.0, tr_fraction = 0.8;
-  double tr_min = NAN, tr_max = NAN;
+  double tr_min = NAN, tr_max = NAN, tr_precondition = NAN;
   auto* track_cmd =
       app.add_subcommand("track", "Follow a reference with a compensator and report the error");
   track_cmd
@@ -142,6 +142,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   track_cmd->add_option("--min", tr_min, "Reference minimum [um] (instead of --range-fraction)");
   track_cmd->add_option("--max", tr_max, "Reference maximum [um]");
+  track_cmd->add_option("--precondition", tr_precondition,
+                        "Open-loop sweep u_max -> u_min before the reference [s] (default: the "
+                        "daemon's, 1 s; 0 = none)");
   add_output_flags(track_cmd, true);
 
   auto* stop_cmd = app.add_subcommand("stop", "End the active run normally (its result is kept)");
@@ -184,6 +187,7 @@ int main(int argc, char** argv) {
     else
       p["periods"] = tr_periods;
     if (!tr_compensator.empty()) p["compensator"] = tr_compensator;
+    if (!std::isnan(tr_precondition)) p["precondition_s"] = tr_precondition;
     if (!std::isnan(tr_min) || !std::isnan(tr_max)) {
       if (!std::isnan(tr_min)) p["min_um"] = tr_min;
       if (!std::isnan(tr_max)) p["max_um"] = tr_max;

@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
+#include <iostream>
 
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
@@ -122,4 +124,25 @@ TEST_F(BenchTest, DriverFaultGoesSafeAndStaysInFaultUntilReset) {
   // Log intact: every sample up to and including the faulted one.
   const auto table = hd::DataTable::read_csv(r["log"].get<std::string>());
   EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
+}
+
+// Opt-in (HYSTBENCH_LONG_TESTS=1): a 60 s track at 10 kHz logs exactly 600 000 samples.
+TEST_F(BenchTest, SixtySecondsAtTenKilohertzLogEverySample) {
+  if (std::getenv("HYSTBENCH_LONG_TESTS") == nullptr) {
+    GTEST_SKIP() << "set HYSTBENCH_LONG_TESTS=1 to run the 60 s / 10 kHz logging test";
+  }
+  auto s = settings(10000.0);
+  s.loop.realtime.fifo = true;  // used when permitted, degraded otherwise
+  start(s);
+  const json r = run_and_wait(
+      "track", {{"compensator", "none"}, {"duration_s", 60.0}, {"precondition_s", 0.0}}, 120);
+  ASSERT_EQ(r["end"], "completed") << r.dump(2);
+  EXPECT_EQ(r["samples"], 600000);
+  EXPECT_EQ(r["logged"], 600000);
+  EXPECT_EQ(r["dropped"], 0);
+  const auto table = hd::DataTable::read_csv(r["log"].get<std::string>());
+  EXPECT_EQ(table.rows(), 600000u);
+  std::cout << "60 s at 10 kHz: wake latency p99 " << r["loop"]["wake_latency_ns"]["p99"]
+            << " ns, max " << r["loop"]["wake_latency_ns"]["max"] << " ns, overruns "
+            << r["overruns"] << "\n";
 }
