@@ -694,6 +694,9 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       opt.operators = fit_options.value("operators", 0);
       opt.dead_zones = fit_options.value("dead_zones", -1);
       opt.heldout_fraction = settings_.identify_heldout_fraction;
+      // The feedforward inverts the static map only; a fitted input delay would stand in for the
+      // actuator's dynamic lag and mislead the inverse (`hystbench diagnose` names real delays).
+      opt.delay_samples = 0;
       const std::string run_id = run->run_id;
       opt.progress = [this, run_id](double f, const std::string& what) {
         emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});

@@ -54,7 +54,7 @@ struct BenchSettings {
   /// Frequency and number of the excitation's full major loops (the rest is fixed).
   double identify_major_loop_hz = 0.5;
   int identify_major_loop_cycles = 2;
-  double identify_heldout_fraction = 0.25;
+  double identify_heldout_fraction = 0.1;
   /// Highest sample rate the identification fit runs at; faster records are block-averaged.
   double identify_fit_rate_hz = 2000.0;
   /// track defaults
