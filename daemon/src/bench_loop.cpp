@@ -109,6 +109,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns,
     RunProgram* p = pending_.exchange(nullptr, std::memory_order_acq_rel);
     if (p != nullptr) {
       active_ = p;
+      driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
       active_pub_.store(p, std::memory_order_release);
       state_.store(State::kRunning, std::memory_order_release);
@@ -252,6 +253,7 @@ void BenchLoop::end_run(RunEnd end, const char* reason) noexcept {
   p->end = end;
   p->end_reason = reason;
   active_ = nullptr;
+  driver_.set_run_active(false);
   active_pub_.store(nullptr, std::memory_order_release);
   if (end != RunEnd::kFault) state_.store(State::kIdle, std::memory_order_release);
   finished_.store(p, std::memory_order_release);

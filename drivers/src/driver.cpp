@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "hystbench/drivers/can_amplifier.hpp"
+#include "hystbench/drivers/gpio_driver.hpp"
 #include "hystbench/drivers/loopback_driver.hpp"
 #include "hystbench/drivers/modbus_daq.hpp"
 
@@ -28,10 +29,10 @@ const std::vector<DriverBackend>& driver_backends() {
   static const std::vector<DriverBackend> table{
       {"loopback", "simulated actuator in the loop (no hardware)",
        []() -> std::unique_ptr<Driver> { return std::make_unique<LoopbackDriver>(); }},
-      {"modbus", "Modbus DAQ over TCP or RTU (libmodbus); [driver.modbus]",
-       []() -> std::unique_ptr<Driver> { return std::make_unique<ModbusDaqDriver>(); }},
-      {"can", "CAN piezo amplifier over SocketCAN (libsocketcan); [driver.can]",
-       []() -> std::unique_ptr<Driver> { return std::make_unique<CanAmplifierDriver>(); }},
+      {"modbus", "Modbus DAQ over TCP or RTU (libmodbus); [driver.modbus], [driver.modbus.gpio]",
+       with_gpio<ModbusDaqDriver>},
+      {"can", "CAN piezo amplifier over SocketCAN (libsocketcan); [driver.can], [driver.can.gpio]",
+       with_gpio<CanAmplifierDriver>},
   };
   return table;
 }

@@ -57,6 +57,9 @@ class Driver {
   virtual DriverStatus read(Measurement& out) noexcept = 0;
   /// Drives the configured safe output now.
   virtual DriverStatus safe_state() noexcept = 0;
+  /// A run starts (true) or ends (false), called from the loop thread in that tick (real-time
+  /// path). For run-bound outputs such as an amplifier-enable GPIO; the default does nothing.
+  virtual void set_run_active(bool /*active*/) noexcept {}
 
   /// Highest loop rate this driver can hold [Hz].
   virtual double max_rate_hz() const noexcept = 0;
