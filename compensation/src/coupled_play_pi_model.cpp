@@ -75,21 +75,8 @@ Invertibility CoupledPlayPiModel::invertibility() const {
       return v;
     }
   }
-  double cumulative = 0.0;
-  for (std::size_t i = 0; i < p_.weights.size(); ++i) {
-    cumulative += p_.weights[i];
-    if (!(cumulative > 0.0)) {
-      Invertibility v;
-      v.invertible = false;
-      v.block = "coupled_play";
-      v.index = static_cast<int>(i);
-      v.value = cumulative;
-      v.reason = "cumulative coupled-play weight W[" + std::to_string(i) +
-                 "] = " + std::to_string(cumulative) + " is not positive";
-      return v;
-    }
-  }
-  return Invertibility::ok();
+  return check_cumulative_weights(p_.weights.data(), p_.weights.size(), "coupled_play",
+                                  "cumulative coupled-play weight");
 }
 
 std::unique_ptr<HysteresisModel> CoupledPlayPiModel::clone() const {

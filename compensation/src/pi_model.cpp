@@ -93,23 +93,8 @@ Invertibility PiModel::invertibility() const {
                " leaves a flat backlash after every reversal)";
     return v;
   }
-  double cumulative = 0.0;
-  for (std::size_t i = 0; i < p_.weights.size(); ++i) {
-    cumulative += p_.weights[i];
-    if (!(cumulative > 0.0)) {
-      Invertibility v;
-      v.invertible = false;
-      v.block = "play";
-      v.index = static_cast<int>(i);
-      v.value = cumulative;
-      v.reason = "cumulative play weight W[" + std::to_string(i) +
-                 "] = " + std::to_string(cumulative) +
-                 " is not positive (the loading curve is not "
-                 "increasing there)";
-      return v;
-    }
-  }
-  return Invertibility::ok();
+  return check_cumulative_weights(p_.weights.data(), p_.weights.size(), "play",
+                                  "cumulative play weight");
 }
 
 std::unique_ptr<HysteresisModel> PiModel::clone() const { return std::make_unique<PiModel>(*this); }

@@ -67,20 +67,9 @@ std::size_t RateDependentPiModel::operator_count() const noexcept {
 Invertibility RateDependentPiModel::invertibility() const {
   // W_i(rate) is linear in rate, so positivity on [0, max_rate] is checked at both ends.
   for (const double rate : {0.0, p_.max_rate}) {
-    double cumulative = 0.0;
-    for (std::size_t i = 0; i < dw_.size(); ++i) {
-      cumulative += p_.base.play.weights[i] + dw_[i] * rate;
-      if (!(cumulative > 0.0)) {
-        Invertibility v;
-        v.invertible = false;
-        v.block = "rate";
-        v.index = static_cast<int>(i);
-        v.value = cumulative;
-        v.reason = "cumulative play weight W[" + std::to_string(i) + "] at rate " +
-                   std::to_string(rate) + " = " + std::to_string(cumulative) + " is not positive";
-        return v;
-      }
-    }
+    Invertibility v = check_cumulative_weights(p_.base.play.weights.data(), dw_.size(), "rate",
+                                               "cumulative play weight", rate, dw_.data());
+    if (!v.invertible) return v;
   }
   if (p_.base.play.thresholds.front() != 0.0) return pi_.invertibility();
   return dz_.invertibility();

@@ -1,5 +1,6 @@
 #pragma once
 // Result of an invertibility check, and the error thrown when an inverse is requested anyway.
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -15,7 +16,16 @@ struct Invertibility {
   std::string reason;
 
   static Invertibility ok() { return {}; }
+  static Invertibility failure(std::string block, int index, double value, std::string reason) {
+    return {false, std::move(block), index, value, std::move(reason)};
+  }
 };
+
+/// Checks that the running sums of `weights` (the slopes of a loading curve) stay positive;
+/// names the first index where one does not, as "<label> W[i] = ... is not positive".
+Invertibility check_cumulative_weights(const double* weights, std::size_t n,
+                                       const std::string& block, const std::string& label,
+                                       double rate = 0.0, const double* rate_slopes = nullptr);
 
 class NotInvertibleError : public std::runtime_error {
  public:
