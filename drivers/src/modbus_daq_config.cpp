@@ -109,7 +109,7 @@ ModbusDaqConfig parse_modbus_daq_config(const nlohmann::json& params) {
       throw ParamError(p.key_path("max_rate_hz") + ": must be > 0");
     }
     c.max_stale_reads =
-        static_cast<std::uint64_t>(p.integer("max_stale_reads", 100, 1, 1000000000));
+        static_cast<std::uint64_t>(p.integer("max_stale_reads", 0, 1, 1000000000));
     c.max_failed_transactions =
         static_cast<std::uint64_t>(p.integer("max_failed_transactions", 3, 1, 1000000000));
     c.reconnect_interval_ms = p.number("reconnect_interval_ms", 200.0, 1.0, 60000.0);

@@ -305,14 +305,16 @@ TEST(CanProtocol, FieldsEncodeBothByteOrdersAndSigns) {
 TEST(CanAmplifier, OverRealVcanWithHystbenchSimamp) {
   // Where the kernel has vcan (not on this project's CI machine): a vcan0 that exists, or one
   // this test may create.
+  const auto ip = ht::find_program("ip");
+  bool created = false;
   if (!std::filesystem::exists("/sys/class/net/vcan0")) {
-    const auto ip = ht::find_program("ip");
     if (ip.empty() ||
         ht::run_program({ip, "link", "add", "vcan0", "type", "vcan"}, 5s).first != 0 ||
         ht::run_program({ip, "link", "set", "vcan0", "up"}, 5s).first != 0) {
       GTEST_SKIP() << "no vcan0 and `ip link add vcan0 type vcan` failed: this kernel has no "
                       "CAN support (the socketpair tests above cover the driver)";
     }
+    created = true;
   }
   ht::PeerProcess amp({ht::bin("hystbench-simamp"), "--interface", "vcan0"});
   ASSERT_TRUE(amp.wait_for("ready on interface vcan0", 5s));
@@ -324,4 +326,6 @@ TEST(CanAmplifier, OverRealVcanWithHystbenchSimamp) {
   for (int k = 0; k < 100; ++k) tick_until(d, hd::DriverStatus::kOk, 1, 120.0, &m);
   EXPECT_GT(m.position_um, 20.0);
   EXPECT_TRUE(d.deactivate().ok);
+  amp.kill();
+  if (created) ht::run_program({ip, "link", "del", "vcan0"}, 5s);
 }

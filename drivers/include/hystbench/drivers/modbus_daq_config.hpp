@@ -16,7 +16,8 @@
 //   max_rate_hz                                    (0, 20000]: the highest loop rate in io = "loop"
 //                                                  (default: RTU from the line's wire time, TCP
 //                                                  20000; activation measures and may refuse)
-//   max_stale_reads                                [1, 1e9] stale reads in a row = fault (100)
+//   max_stale_reads                                [1, 1e9] stale reads in a row = fault
+//                                                  (default: 20 ms of ticks, at least 10)
 //   max_failed_transactions                        [1, 1e9] failed ones in a row = fault (3)
 //   reconnect_interval_ms                          [1, 60000] between connection attempts (200)
 //   safe_output_v                                  the output on fault and when idle (output.min_v)
@@ -50,7 +51,7 @@ struct ModbusDaqConfig {
   IoMode io = IoMode::kThread;
   bool write_read = false;
   double max_rate_hz = 0.0;  ///< 0 = derived (see above)
-  std::uint64_t max_stale_reads = 100;
+  std::uint64_t max_stale_reads = 0;  ///< 0 = 20 ms of loop ticks, at least 10
   std::uint64_t max_failed_transactions = 3;
   double reconnect_interval_ms = 200.0;
   double safe_output_v = 0.0;

@@ -1,0 +1,36 @@
+// The shipped driver configs (config/modbus-*.toml, config/can.toml) load and their driver
+// tables pass the drivers' own validation at the configured loop rate.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "hystbench/daemon/config.hpp"
+#include "hystbench/daemon/daemon_settings.hpp"
+#include "hystbench/drivers/driver.hpp"
+
+namespace hdm = hystbench::daemon;
+namespace hd = hystbench::drivers;
+
+TEST(DriverConfigs, ShippedExamplesConfigureTheirDrivers) {
+  for (const char* name : {"modbus-tcp.toml", "modbus-rtu.toml", "can.toml"}) {
+    SCOPED_TRACE(name);
+    const auto path = std::filesystem::path(HYSTBENCH_SOURCE_DIR) / "config" / name;
+    const hdm::BenchSettings s = hdm::bench_settings_from(hdm::load_config(path));
+    auto driver = hd::make_driver(s.driver_type);
+    const hd::Result r = driver->configure(s.driver_params, s.loop.rate_hz);
+    EXPECT_TRUE(r.ok) << r.message;
+    EXPECT_LE(s.loop.limits.u_max, driver->output_max_v());
+  }
+}
+
+TEST(DriverConfigs, EveryBackendIsInTheTable) {
+  std::vector<std::string> names;
+  for (const auto& b : hd::driver_backends()) names.emplace_back(b.type);
+  EXPECT_EQ(names, (std::vector<std::string>{"loopback", "modbus", "can"}));
+  try {
+    hd::make_driver("profibus");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("available: loopback, modbus, can"), std::string::npos);
+  }
+}
