@@ -143,7 +143,7 @@ TEST_F(ModbusBenchTest, ServerKilledMidRunFaultsSafeKeepsTheLogAndRecoversAfterR
   const auto& index = table.column("index");
   for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
 
-  // A reset while the server is away faults again at once; with it back, runs work again.
+  // Runs are refused while in FAULT; with the server back, a reset and runs work again.
   EXPECT_THROW(bench_->handle("track", {{"compensator", "none"}}), hdm::CommandError);
   start_simdaq(port_);
   const auto back = std::chrono::steady_clock::now() + 10s;

@@ -223,6 +223,13 @@ TEST(ModbusPeer, MbpollReadsAndWritesHystbenchSimdaq) {
   const double nm = std::stod(out.substr(colon + 5));
   EXPECT_GT(nm, 15000.0) << out;  // 100 V lifts the stack by tens of micrometres
   EXPECT_LT(nm, 60000.0) << out;
+  // The communication watchdog: 50 ms without an output write drops the output to 0 V.
+  std::tie(rc, out) = mbpoll({"-t", "4", "-r", "3", "127.0.0.1", "50"});
+  ASSERT_EQ(rc, 0) << out;
+  std::this_thread::sleep_for(150ms);
+  std::tie(rc, out) = mbpoll({"-t", "3", "-r", "5", "-c", "2", "127.0.0.1"});
+  EXPECT_NE(out.find("[5]: \t0\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("[6]: \t1\n"), std::string::npos) << out;  // status: watchdog tripped
 }
 
 TEST(ModbusPeer, RtuOverASocatPseudoTerminalPair) {
