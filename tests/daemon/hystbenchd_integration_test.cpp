@@ -15,8 +15,7 @@
 
 #include "hystbench/daemon/bench_client.hpp"
 #include "hystbench/daemon/data_table.hpp"
-
-extern char** environ;
+#include "support/daemon_process.hpp"
 
 namespace hd = hystbench::daemon;
 using nlohmann::json;
@@ -24,106 +23,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class Daemon {
- public:
-  explicit Daemon(const fs::path& dir) : dir_(dir) {
-    fs::create_directories(dir_);
-    socket_ = (dir_ / "s.sock").string();
-    const std::string bin = std::string(HYSTBENCH_BIN_DIR) + "/hystbenchd";
-    const std::string config = std::string(HYSTBENCH_SOURCE_DIR) + "/config/loopback.toml";
-    const std::string logs = (dir_ / "logs").string(), models = (dir_ / "models").string();
-    const std::string out = (dir_ / "daemon.log").string();
-    std::vector<std::string> args{bin,         "--config", config,        "--socket", socket_,
-                                  "--log-dir", logs,       "--model-dir", models};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&fa, 1, 2);
-    if (posix_spawn(&pid_, bin.c_str(), &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&fa);
-    for (int i = 0; i < 200 && pid_ > 0; ++i) {
-      if (fs::exists(socket_)) {
-        try {
-          hd::BenchClient probe(socket_);
-          return;
-        } catch (const hd::ClientError&) {
-        }
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(25));
-    }
-  }
-  ~Daemon() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  /// Sends a signal and returns the exit status (or -1 on timeout).
-  int terminate(int sig = SIGTERM) {
-    ::kill(pid_, sig);
-    for (int i = 0; i < 400; ++i) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(25));
-    }
-    return -1;
-  }
-  const std::string& socket() const { return socket_; }
-  bool running() const { return pid_ > 0 && ::kill(pid_, 0) == 0; }
-
- private:
-  fs::path dir_;
-  std::string socket_;
-  pid_t pid_ = -1;
-};
-
-// A raw connection for sending arbitrary bytes.
-class RawClient {
- public:
-  explicit RawClient(const std::string& path) {
-    fd_ = ::socket(AF_UNIX, SOCK_STREAM, 0);
-    sockaddr_un a{};
-    a.sun_family = AF_UNIX;
-    std::strncpy(a.sun_path, path.c_str(), sizeof a.sun_path - 1);
-    ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a);
-    line();  // greeting
-  }
-  ~RawClient() { ::close(fd_); }
-  void send(const std::string& bytes) {
-    std::size_t off = 0;
-    while (off < bytes.size()) {
-      const ssize_t n = ::send(fd_, bytes.data() + off, bytes.size() - off, MSG_NOSIGNAL);
-      if (n <= 0) return;
-      off += static_cast<std::size_t>(n);
-    }
-  }
-  // Next line that is not an event.
-  json line() {
-    for (;;) {
-      const auto nl = buf_.find('\n');
-      if (nl != std::string::npos) {
-        json j = json::parse(buf_.substr(0, nl));
-        buf_.erase(0, nl + 1);
-        if (j.contains("event")) continue;
-        return j;
-      }
-      char c[4096];
-      const ssize_t n = ::recv(fd_, c, sizeof c, 0);
-      if (n <= 0) return json();
-      buf_.append(c, static_cast<std::size_t>(n));
-    }
-  }
-
- private:
-  int fd_ = -1;
-  std::string buf_;
-};
+using hystbench::testing::Daemon;
+using hystbench::testing::RawClient;
+using hystbench::testing::wait_finished;
 
 class HystbenchdTest : public ::testing::Test {
  protected:
@@ -138,16 +40,6 @@ class HystbenchdTest : public ::testing::Test {
   void TearDown() override {
     daemon_.reset();
     fs::remove_all(dir_);
-  }
-  json wait_finished(hd::BenchClient& c, const std::string& run_id, int seconds = 120) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
-    while (std::chrono::steady_clock::now() < until) {
-      auto e = c.next_event(std::chrono::milliseconds(500));
-      if (e && (*e)["event"] == "run.finished" && (*e)["result"]["run_id"] == run_id) {
-        return (*e)["result"];
-      }
-    }
-    return json();
   }
   fs::path dir_;
   std::unique_ptr<Daemon> daemon_;

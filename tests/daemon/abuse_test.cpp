@@ -1,0 +1,302 @@
+// Abuse and faults against the real hystbenchd: 100 concurrent clients during a 10 kHz run,
+// hostile clients (slow readers, half-closed sockets, oversized lines, invalid UTF-8), the
+// socket's permissions, injected sensor faults, and kill -9 mid-run followed by a restart.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <atomic>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <sstream>
+
+#include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/sample_record.hpp"
+#include "support/daemon_process.hpp"
+
+namespace hd = hystbench::daemon;
+namespace fs = std::filesystem;
+using hystbench::testing::Daemon;
+using hystbench::testing::RawClient;
+using hystbench::testing::wait_finished;
+using nlohmann::json;
+
+namespace {
+
+/// A loopback configuration at `rate_hz`, with extra TOML appended (e.g. a [driver.loopback]).
+std::string write_config(const fs::path& dir, int rate_hz, const std::string& extra = "") {
+  fs::create_directories(dir);
+  const fs::path path = dir / "bench.toml";
+  std::ofstream(path) << "[daemon]\nlog_level = \"warn\"\n"
+                      << "[loop]\nrate_hz = " << rate_hz
+                      << "\nrealtime = true\noverrun_budget = 1000000\n"
+                      << "[limits]\nu_min = 0.0\nu_max = 150.0\ny_min = 0.0\ny_max = 44.0\n"
+                      << "[driver]\ntype = \"loopback\"\n"
+                      << extra;
+  return path.string();
+}
+
+/// VmRSS of a process [kB].
+long rss_kb(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return -1;
+}
+
+/// A run log cut off at any byte (kill -9): everything up to the last complete line.
+hd::DataTable read_complete_records(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto last_newline = text.rfind('\n');
+  text.resize(last_newline == std::string::npos ? 0 : last_newline + 1);
+  return hd::DataTable::parse_csv(text, path);
+}
+
+class AbuseTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("hbabuse_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+  }
+  void TearDown() override {
+    daemon_.reset();
+    fs::remove_all(dir_);
+  }
+  void start(const std::string& config = {}) {
+    daemon_ = std::make_unique<Daemon>(dir_, config);
+    ASSERT_TRUE(daemon_->running()) << "hystbenchd did not start";
+  }
+  /// A status request answered on a fresh connection.
+  bool responsive() {
+    try {
+      hd::BenchClient c(daemon_->socket());
+      return c.request("status", json::object(), std::chrono::seconds(5))["ok"] == true;
+    } catch (const hd::ClientError&) {
+      return false;
+    }
+  }
+  fs::path dir_;
+  std::unique_ptr<Daemon> daemon_;
+};
+
+}  // namespace
+
+TEST_F(AbuseTest, HundredConcurrentClientsDuringA10kHzRunAllGetReplies) {
+  start(write_config(dir_, 10000));
+  hd::BenchClient c(daemon_->socket());
+  const json track = {{"compensator", "none"}, {"periods", 3}, {"frequency_hz", 1}};
+  // Reference: the same run without client load.
+  json r = c.request("track", track);
+  ASSERT_TRUE(r["ok"]) << r.dump();
+  const json idle = wait_finished(c, r["result"]["run_id"].get<std::string>());
+  ASSERT_EQ(idle["end"], "completed") << idle.dump();
+
+  r = c.request("track", track);
+  ASSERT_TRUE(r["ok"]) << r.dump();
+  constexpr int kClients = 100, kRequests = 20;
+  std::atomic<int> replies{0}, wrong{0};
+  std::vector<std::thread> clients;
+  for (int i = 0; i < kClients; ++i) {
+    clients.emplace_back([&, i] {
+      RawClient raw(daemon_->socket());
+      for (int k = 0; k < kRequests; ++k) {
+        const int kind = (i + k) % 4;
+        const std::string line =
+            kind == 0   ? "{\"id\":" + std::to_string(k) + ",\"cmd\":\"status\"}\n"
+            : kind == 1 ? "{\"id\":" + std::to_string(k) + ",\"cmd\":\"no.such\"}\n"
+            : kind == 2 ? "{not json at all\n"
+                        : "{\"id\":" + std::to_string(k) + ",\"cmd\":\"track\"}\n";  // busy
+        raw.send(line);
+        const json reply = raw.line();
+        if (reply.is_null()) return;
+        ++replies;
+        if ((kind == 0) != reply.value("ok", false)) ++wrong;
+      }
+    });
+  }
+  for (auto& t : clients) t.join();
+  const json loaded = wait_finished(c, r["result"]["run_id"].get<std::string>());
+  EXPECT_EQ(replies.load(), kClients * kRequests);
+  EXPECT_EQ(wrong.load(), 0);
+  ASSERT_EQ(loaded["end"], "completed") << loaded.dump();
+  EXPECT_EQ(loaded["dropped"], 0);
+  EXPECT_EQ(idle["dropped"], 0);
+  // Reported, not asserted: on a shared 2-core machine the latency figures vary by more than
+  // the 10 % criterion between two idle runs already (see scripts/bench-report.sh).
+  const auto& li = idle["loop"]["wake_latency_ns"];
+  const auto& ll = loaded["loop"]["wake_latency_ns"];
+  std::cout << "10 kHz run, idle:   wake p50 " << li["p50"] << " ns, p99 " << li["p99"]
+            << " ns, max " << li["max"] << " ns, overruns " << idle["overruns"] << " of "
+            << idle["samples"] << "\n"
+            << "10 kHz run, loaded: wake p50 " << ll["p50"] << " ns, p99 " << ll["p99"]
+            << " ns, max " << ll["max"] << " ns, overruns " << loaded["overruns"] << " of "
+            << loaded["samples"] << " (" << kClients << " clients x " << kRequests
+            << " requests)\n";
+}
+
+TEST_F(AbuseTest, HostileClientsLeaveTheDaemonResponsiveAndBounded) {
+  start();
+  ASSERT_TRUE(responsive());
+  const long rss_before = rss_kb(daemon_->pid());
+  {
+    // Slow readers: request status replies without ever reading them.
+    std::vector<std::unique_ptr<RawClient>> slow;
+    for (int i = 0; i < 5; ++i) {
+      slow.push_back(std::make_unique<RawClient>(daemon_->socket(), false));
+      const std::string burst = [] {
+        std::string s;
+        for (int k = 0; k < 200; ++k) s += "{\"cmd\":\"status\"}\n";
+        return s;
+      }();
+      for (int k = 0; k < 200; ++k) {  // 40 000 requests, non-blocking: stop when refused
+        if (::send(slow.back()->fd(), burst.data(), burst.size(), MSG_NOSIGNAL | MSG_DONTWAIT) < 0)
+          break;
+      }
+    }
+    EXPECT_TRUE(responsive());
+    // Half-closed: a request, then the write side shut; the reply still arrives.
+    for (int i = 0; i < 10; ++i) {
+      RawClient half(daemon_->socket());
+      half.send("{\"id\":1,\"cmd\":\"status\"}\n");
+      ::shutdown(half.fd(), SHUT_WR);
+      const json reply = half.line();
+      EXPECT_TRUE(reply.value("ok", false)) << reply.dump();
+    }
+    // Half-closed mid-line, never completed.
+    for (int i = 0; i < 10; ++i) {
+      RawClient half(daemon_->socket());
+      half.send("{\"id\":1,\"cmd\":\"sta");
+      ::shutdown(half.fd(), SHUT_WR);
+    }
+    // Oversized lines: 8 MiB without a newline, then a valid request on the same connection.
+    for (int i = 0; i < 4; ++i) {
+      RawClient big(daemon_->socket());
+      const std::string chunk(1 << 20, 'x');
+      for (int k = 0; k < 8; ++k) big.send(chunk);
+      EXPECT_EQ(big.line()["error"]["code"], "line_too_long");
+      big.send("\n{\"id\":2,\"cmd\":\"status\"}\n");
+      const json reply = big.line();
+      EXPECT_TRUE(reply.value("ok", false)) << reply.dump().substr(0, 200);
+    }
+    // Invalid UTF-8 and random bytes: every line gets a protocol error, never a crash.
+    std::mt19937 rng(7);
+    RawClient junk(daemon_->socket());
+    for (int i = 0; i < 500; ++i) {
+      std::string line = "{\"id\":" + std::to_string(i) + ",\"cmd\":\"";
+      for (int k = 0; k < 40; ++k) {
+        char ch = static_cast<char>(0x80 + rng() % 0x80);
+        line += ch;
+      }
+      line += "\"}\n";
+      junk.send(line);
+      const json reply = junk.line();
+      ASSERT_FALSE(reply.is_null()) << "no reply to line " << i;
+      EXPECT_FALSE(reply.value("ok", true));
+    }
+    EXPECT_TRUE(responsive());
+  }
+  // Everything closed: memory back within a bound (a few MiB of buffers may stay allocated).
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ASSERT_TRUE(responsive());
+  const long rss_after = rss_kb(daemon_->pid());
+  std::cout << "VmRSS before " << rss_before << " kB, after " << rss_after << " kB\n";
+  EXPECT_LT(rss_after, rss_before + 32 * 1024);
+  hd::BenchClient c(daemon_->socket());
+  EXPECT_EQ(c.request("status")["result"]["state"], "idle");
+}
+
+TEST_F(AbuseTest, SocketIsOnlyForTheOwnerAndGroup) {
+  start();
+  struct stat st {};
+  ASSERT_EQ(::lstat(daemon_->socket().c_str(), &st), 0);
+  EXPECT_TRUE(S_ISSOCK(st.st_mode));
+  EXPECT_EQ(st.st_mode & 07777, 0660u) << std::oct << (st.st_mode & 07777);
+  EXPECT_EQ(st.st_uid, ::getuid());
+  EXPECT_EQ(st.st_gid, ::getgid());
+}
+
+namespace {
+
+struct FaultCase {
+  const char* key;
+  const char* reason;
+};
+
+}  // namespace
+
+TEST_F(AbuseTest, SensorFaultsGoSafeWithinTheTickAndEndTheRunWithTheReason) {
+  // 1 kHz; the fault is armed at an absolute driver tick (4 s after start-up), mid-run.
+  for (const FaultCase fc : {FaultCase{"read_error_at_tick", "driver read failed"},
+                             FaultCase{"nan_at_tick", "measurement is not a finite number"}}) {
+    SCOPED_TRACE(fc.key);
+    daemon_.reset();
+    fs::remove_all(dir_);
+    start(write_config(dir_, 1000,
+                       std::string("[driver.loopback]\nfaults = { ") + fc.key + " = 4000 }\n"));
+    hd::BenchClient c(daemon_->socket());
+    const json r =
+        c.request("track", {{"compensator", "none"}, {"periods", 20}, {"frequency_hz", 1}});
+    ASSERT_TRUE(r["ok"]) << r.dump();
+    const json result = wait_finished(c, r["result"]["run_id"].get<std::string>());
+    ASSERT_EQ(result["end"], "fault") << result.dump();
+    EXPECT_EQ(result["reason"], fc.reason);
+    EXPECT_LT(result["samples"].get<std::uint64_t>(),
+              result["planned_samples"].get<std::uint64_t>());
+    EXPECT_EQ(result["output_v_after"], 0.0);  // the loopback's safe output
+    EXPECT_EQ(result["dropped"], 0);
+    // The log is intact and ends with the faulted tick.
+    const auto log = hd::DataTable::read_csv(result["log"].get<std::string>());
+    ASSERT_EQ(log.rows(), result["samples"].get<std::size_t>());
+    const auto& index = log.column("index");
+    const auto& flags = log.column("flags");
+    for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
+    for (std::size_t k = 0; k + 1 < flags.size(); ++k)
+      ASSERT_EQ(static_cast<unsigned>(flags[k]) & hd::kSampleFault, 0u) << "row " << k;
+    EXPECT_NE(static_cast<unsigned>(flags.back()) & hd::kSampleFault, 0u);
+    // The bench stays in FAULT, at the safe output, until reset.
+    const json status = c.request("status")["result"];
+    EXPECT_EQ(status["state"], "fault");
+    EXPECT_EQ(status["output_v"], 0.0);
+    EXPECT_FALSE(c.request("track", {{"compensator", "none"}})["ok"]);
+  }
+}
+
+TEST_F(AbuseTest, KillNineMidRunLeavesAReadableLogAndTheNextStartRecovers) {
+  const std::string config = write_config(dir_, 10000);
+  start(config);
+  std::string log_path;
+  {
+    hd::BenchClient c(daemon_->socket());
+    const json r = c.request("track", {{"compensator", "none"}, {"periods", 100}});
+    ASSERT_TRUE(r["ok"]) << r.dump();
+    log_path = r["result"]["log"];
+    std::this_thread::sleep_for(std::chrono::milliseconds(2000));
+  }
+  EXPECT_EQ(daemon_->terminate(SIGKILL), 128 + SIGKILL);
+  // Readable up to the last complete record, indices without gaps.
+  const auto log = read_complete_records(log_path);
+  EXPECT_GT(log.rows(), 0u);
+  const auto& index = log.column("index");
+  for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
+  std::cout << "kill -9 after 2 s at 10 kHz: " << log.rows() << " complete records\n";
+  EXPECT_TRUE(fs::exists(fs::symlink_status(daemon_->socket())));  // the stale socket is left
+  // The next start is not blocked by the stale socket, and a run completes.
+  daemon_.reset();
+  start(config);
+  hd::BenchClient c(daemon_->socket());
+  EXPECT_EQ(c.request("status")["result"]["state"], "idle");
+  const json r = c.request("track", {{"compensator", "none"}, {"periods", 1}, {"frequency_hz", 2}});
+  ASSERT_TRUE(r["ok"]) << r.dump();
+  const json result = wait_finished(c, r["result"]["run_id"].get<std::string>());
+  ASSERT_EQ(result["end"], "completed") << result.dump();
+  // `latest` is a valid link to the new run's complete log.
+  const fs::path latest = dir_ / "logs" / "latest.csv";
+  ASSERT_TRUE(fs::is_symlink(latest));
+  EXPECT_EQ(fs::canonical(latest), fs::canonical(result["log"].get<std::string>()));
+  EXPECT_EQ(hd::DataTable::read_csv(latest.string()).rows(), result["samples"].get<std::size_t>());
+}
