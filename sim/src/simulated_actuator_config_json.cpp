@@ -194,7 +194,10 @@ std::string key_list(Visitable&& visit_names) {
 template <class Section>
 void decode_section(const json& j, const std::string& path, Section& section) {
   if (!j.is_object()) fail(path, "expected an object, got " + j.dump());
-  for (const auto& [key, value] : j.items()) {
+  for (const auto& item : j.items()) {
+    // Not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
+    const std::string& key = item.key();
+    const json& value = item.value();
     bool known = false;
     visit_fields(section, [&](const char* name, auto& field) {
       if (key != name) return;
@@ -223,7 +226,10 @@ json to_json(const SimulatedActuatorConfig& config) {
 SimulatedActuatorConfig from_json(const json& j) {
   if (!j.is_object()) fail("simulated actuator config", "expected an object, got " + j.dump());
   SimulatedActuatorConfig config;
-  for (const auto& [key, value] : j.items()) {
+  for (const auto& item : j.items()) {
+    // Not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
+    const std::string& key = item.key();
+    const json& value = item.value();
     bool known = false;
     visit_sections(config, [&](const char* name, auto& section) {
       if (key != name) return;
