@@ -183,6 +183,12 @@ TEST_F(AbuseTest, HostileClientsLeaveTheDaemonResponsiveAndBounded) {
       const json reply = big.line();
       EXPECT_TRUE(reply.value("ok", false)) << reply.dump().substr(0, 200);
     }
+    // A number beyond double (fuzzer finding: it used to terminate the daemon).
+    {
+      RawClient big_number(daemon_->socket());
+      big_number.send("{\"id\":1e999,\"cmd\":\"status\"}\n");
+      EXPECT_EQ(big_number.line()["error"]["code"], "bad_json");
+    }
     // Invalid UTF-8 and random bytes: every line gets a protocol error, never a crash.
     std::mt19937 rng(7);
     RawClient junk(daemon_->socket());

@@ -17,7 +17,9 @@ bool parse_request(std::string_view line, Request& request, ProtocolError& error
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(line.begin(), line.end());
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error, and out_of_range for a number beyond double (1e999): both are bad JSON here,
+    // never an exception out of the server's event thread (which would terminate the daemon).
     return fail(error, "bad_json", e.what(), nullptr);
   }
   if (!j.is_object()) return fail(error, "bad_request", "a request must be a JSON object", nullptr);
