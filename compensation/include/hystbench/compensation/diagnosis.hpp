@@ -1,0 +1,170 @@
+#pragma once
+// Diagnosis of what a hysteresis model misses on a measured record (t, u, y).
+// Not real-time: allocates freely; about 1-3 s for 300 000 samples on one core.
+//
+// The record is cut into `blocks` equal blocks; every `heldout_every`-th block (from block
+// `heldout_every / 2`) is held out, the others are the fit part. Every model is simulated
+// through the whole record from its start (so the held-out blocks see the right hysteresis
+// state) but its parameters are fitted on the fit part only, and every error reported as
+// "held-out" is measured on the held-out blocks only.
+//
+// The baseline is a given model (e.g. the bench's simulation) or a classical PI identified on
+// the fit part (plays uniform on half the input span, order chosen by held-out error). The
+// baseline's residual is profiled against time, input level, direction, rate, time since the
+// last reversal or step, and frequency. Then each candidate cause is tested: a statistic
+// computed from the residual, and an extended model (the baseline structure plus the effect,
+// refitted on the fit part) whose held-out error gives the gain
+//   gain = baseline held-out rms / extended held-out rms.
+// The named cause is the significant candidate with the largest gain above `min_gain`;
+// `none` when there is none, or when the baseline's held-out error is at the noise floor
+// (estimated from the second differences of the residual).
+//
+// Candidates and their extensions:
+//   asymmetry        modified PI (dead zones) or coupled-play PI
+//   rate_dependence  rate-dependent PI (cumulative weights linear in |du/dt|)
+//   creep            creep lags (CreepOperatorBank), time constants log-spaced
+//   dynamics         second-order dynamics (natural frequency, damping) after the hysteresis
+//   delay            pure input delay in whole samples
+//   drift            slow output offset, piecewise linear in time (knots at the block edges);
+//                    named, not extrapolated: the extended model is the hysteresis fitted with
+//                    the drift removed, and its held-out error includes the drift curve
+//                    interpolated across the held-out blocks.
+// Units are the record's: t in s, u in the input unit (e.g. V), y in the output unit (µm).
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/error_metrics.hpp"
+
+namespace hystbench::compensation {
+
+enum class Cause { kNone, kAsymmetry, kRateDependence, kCreep, kDynamics, kDelay, kDrift };
+
+/// "none", "asymmetry", "rate_dependence", "creep", "dynamics", "delay", "drift".
+std::string_view to_string(Cause cause) noexcept;
+std::optional<Cause> cause_from_string(std::string_view name) noexcept;
+/// Every cause but none, in the order they are tested and reported.
+std::span<const Cause> candidate_causes() noexcept;
+
+struct DiagnosisOptions {
+  /// The baseline model; std::nullopt = a classical PI identified on the fit part.
+  std::optional<ActuatorModel> baseline;
+  /// Split: `blocks` equal blocks, every `heldout_every`-th held out (25 % with 16 and 4).
+  int blocks = 32;        ///< 4 .. 64
+  int heldout_every = 4;  ///< 2 .. blocks / 2
+  /// A candidate is named only when its held-out gain reaches this (and its statistic is
+  /// significant).
+  double min_gain = 1.2;
+  /// The baseline is "at the noise floor" when its held-out rms is below this times the
+  /// estimated noise rms.
+  double noise_floor_factor = 1.3;
+  /// Units written to the models.
+  Units units;
+  /// Optional progress callback: (fraction done 0..1, what is happening).
+  std::function<void(double, const std::string&)> progress;
+};
+
+/// How the record was split into fit and held-out parts.
+struct DataSplit {
+  std::size_t samples = 0;
+  std::size_t blocks = 0;
+  /// Held-out sample ranges [first, second), in time order.
+  std::vector<std::pair<std::size_t, std::size_t>> heldout;
+  std::size_t fit_samples = 0;
+  std::size_t heldout_samples = 0;
+  /// Samples at the start, before the input has reached both its extremes (the hysteresis
+  /// state there depends on what came before the record): simulated, neither fitted nor scored.
+  std::size_t skipped = 0;
+
+  bool is_heldout(std::size_t k) const noexcept;
+  /// One line, e.g. "4 interleaved blocks of 2125 samples held out (25 %): 4250-6375, ...".
+  std::string describe(double sample_period_s) const;
+};
+
+/// The baseline residual's mean against one explanatory variable (binned).
+struct ResidualProfile {
+  std::string variable;         ///< "time", "input", "direction", "rate", "since_event"
+  std::string label;            ///< human-readable, with unit
+  std::vector<double> centers;  ///< bin centers [variable unit]
+  std::vector<double> means;    ///< mean residual per bin [output unit]
+  std::vector<std::size_t> counts;
+  /// Share of the residual variance the binned means explain, 0..1.
+  double explained = 0.0;
+};
+
+/// Measured output against the baseline prediction, per frequency (Welch estimate):
+/// gain = |S_y,yhat / S_yhat,yhat|, phase of the same ratio, coherence 0..1, the one-sided power
+/// spectral densities of the prediction and of the measured output [output unit^2 / Hz], and
+/// whether the bin is informative: coherence >= 0.5, the prediction above the noise floor and
+/// the measured output 10x above it.
+struct FrequencyResponse {
+  std::vector<double> frequency_hz, gain, phase_rad, coherence, input_psd, output_psd;
+  std::vector<unsigned char> informative;
+};
+
+struct CandidateReport {
+  Cause cause = Cause::kNone;
+  double statistic = 0.0;  ///< the cause's test statistic (what it is: see `evidence`)
+  double threshold = 0.0;  ///< significant when statistic >= threshold
+  bool significant = false;
+  std::string evidence;   ///< one line: what the residual shows for this cause
+  std::string extension;  ///< what the extended model adds, with its fitted parameters
+  ActuatorModel model;    ///< the extended model, fitted on the fit part
+  ErrorStats fit;         ///< on the fit part (prediction including drift for drift)
+  ErrorStats heldout;     ///< on the held-out part
+  double gain = 0.0;      ///< baseline held-out rms / this held-out rms
+  /// Fitted drift per sample [output unit] (drift only; empty otherwise).
+  std::vector<double> drift;
+  /// Whole-record prediction of the extended model (+ drift) [output unit].
+  std::vector<double> prediction;
+};
+
+struct Diagnosis {
+  Cause cause = Cause::kNone;
+  /// One paragraph: the named cause and why, or why none.
+  std::string verdict;
+  /// Caveats: ambiguous candidates, effects left over, missing excitation, ...
+  std::vector<std::string> notes;
+
+  std::size_t samples = 0;
+  double sample_period_s = 0.0;
+  DataSplit split;
+  /// Noise rms estimated from the residual's second differences [output unit].
+  double noise_rms = 0.0;
+
+  bool baseline_given = false;
+  std::string baseline_description;
+  ActuatorModel baseline;
+  ErrorStats baseline_fit, baseline_heldout;
+  std::vector<double> baseline_prediction;
+  /// With a given baseline: the same structure refitted on the fit part (no new effect).
+  std::optional<ErrorStats> refit_heldout;
+
+  std::vector<ResidualProfile> profiles;
+  FrequencyResponse frequency_response;
+  std::vector<CandidateReport> candidates;  ///< in candidate_causes() order
+
+  /// The named cause's extended model (the baseline for none).
+  ActuatorModel extended;
+  std::string extended_description;
+  ErrorStats extended_fit, extended_heldout;
+  std::vector<double> extended_prediction;
+
+  const CandidateReport* candidate(Cause cause) const noexcept;
+  const ResidualProfile* profile(std::string_view variable) const noexcept;
+};
+
+/// Diagnoses a record. t [s] strictly increasing (uniform sampling assumed, 100 Hz .. 20 kHz
+/// and beyond), u input, y output, equal lengths. Throws std::invalid_argument with a clear
+/// message for fewer than 400 samples, mismatched lengths, NaN/inf, non-increasing t, constant
+/// u or y, or bad options.
+Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                   const DiagnosisOptions& options = {});
+
+}  // namespace hystbench::compensation

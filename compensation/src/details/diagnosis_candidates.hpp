@@ -1,0 +1,50 @@
+#pragma once
+// The candidate causes of the diagnosis (internals), one file each: every candidate computes
+// a statistic from the baseline residual (with a significance threshold) and fits its extended
+// model (the baseline structure plus the effect) on the fit part of the record.
+#include <span>
+#include <string>
+#include <vector>
+
+#include "details/diagnosis_extension_fit.hpp"
+#include "details/diagnosis_record.hpp"
+#include "details/diagnosis_signals.hpp"
+
+namespace hystbench::compensation::details {
+
+struct CandidateContext {
+  const DiagnosisRecord& record;
+  /// The baseline structure every extension starts from, and that structure fitted here
+  /// (without a given model this fit IS the baseline).
+  const ExtensionSpec& base;
+  const ExtensionFit& base_fit;
+  std::span<const double> baseline_prediction;
+  std::span<const double> residual;  ///< y - baseline prediction
+  const InputEvents& events;
+  const std::vector<ResidualProfile>& profiles;
+  const FrequencyResponse& response;
+  double noise_rms = 0.0;
+
+  const ResidualProfile& profile(const std::string& variable) const;
+};
+
+struct CandidateOutcome {
+  double statistic = 0.0;
+  double threshold = 0.0;
+  std::string evidence;   ///< what the residual shows, one line
+  std::string extension;  ///< what the extended model adds, with fitted values
+  ExtensionFit fit;       ///< predicted and scored
+};
+
+CandidateOutcome test_asymmetry(const CandidateContext& c);
+CandidateOutcome test_rate_dependence(const CandidateContext& c);
+CandidateOutcome test_creep(const CandidateContext& c);
+CandidateOutcome test_dynamics(const CandidateContext& c);
+CandidateOutcome test_delay(const CandidateContext& c);
+CandidateOutcome test_drift(const CandidateContext& c);
+
+/// printf-style %.3g / %.4g helpers for evidence lines.
+std::string num(double v, int digits = 3);
+std::string percent(double fraction);
+
+}  // namespace hystbench::compensation::details

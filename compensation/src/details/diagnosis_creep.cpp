@@ -1,0 +1,70 @@
+// Candidate `creep`: the output keeps moving, in the direction of the last input change, while
+// the input holds. Statistic: share of the variance of the residual signed by the last move
+// that the (log) time since the last step or reversal explains, over the holds from 50 ms on
+// (over all samples when the record has no holds: weak evidence). Extension: creep lags
+// (CreepOperatorBank) log-spaced from max(50 ms, 5 samples) to half the record, about two per
+// decade, fitted jointly with the baseline's weights.
+#include <algorithm>
+#include <cmath>
+
+#include "details/diagnosis_candidates.hpp"
+
+namespace hystbench::compensation::details {
+
+namespace {
+
+constexpr double kThreshold = 0.2;
+constexpr double kSettleSeconds = 0.05;
+constexpr double kMinHoldSeconds = 0.5;  // in all, for the holds to count as evidence
+
+std::vector<double> creep_time_constants(const DiagnosisRecord& r) {
+  const double lo = std::max(kSettleSeconds, 5.0 * r.dt);
+  const double hi = std::max(2.0 * lo, 0.5 * r.duration());
+  const auto count =
+      static_cast<std::size_t>(std::clamp(std::round(2.0 * std::log10(hi / lo)) + 1.0, 3.0, 8.0));
+  return log_spaced_time_constants(count, lo, hi);
+}
+
+}  // namespace
+
+CandidateOutcome test_creep(const CandidateContext& c) {
+  CandidateOutcome out;
+  const DiagnosisRecord& r = c.record;
+  const InputEvents& ev = c.events;
+  const bool holds = ev.hold_seconds >= kMinHoldSeconds;
+  std::vector<unsigned char> use(r.n, 0);
+  std::vector<double> signed_residual(r.n, 0.0);
+  double longest = 0.0;
+  for (std::size_t k = 0; k < r.n; ++k) {
+    signed_residual[k] = c.residual[k] * ev.last_move[k];
+    use[k] =
+        ev.last_move[k] != 0 && ev.since_event_s[k] >= kSettleSeconds && (!holds || ev.holding[k]);
+    if (use[k]) longest = std::max(longest, ev.since_event_s[k]);
+  }
+  if (longest > kSettleSeconds) {
+    const ResidualProfile p =
+        binned_profile("since_event", "time since the last step or reversal [s]", ev.since_event_s,
+                       signed_residual, use, log_edges(kSettleSeconds, longest, 12));
+    out.statistic = p.explained;
+    const double moved = p.means.empty() ? 0.0 : p.means.back() - p.means.front();
+    out.evidence =
+        (holds ? "over " + std::to_string(ev.holds) + " holds (" + num(ev.hold_seconds) + " s)"
+               : std::string("the record has no holds (weak evidence): after reversals")) +
+        " the residual moves " + num(moved) + " " + r.units.output +
+        " in the direction of the last input change between " + num(kSettleSeconds) + " and " +
+        num(longest) + " s; log time explains " + percent(p.explained) + " of its variance";
+  } else {
+    out.evidence = "the input never rests long enough to show creep";
+  }
+  out.threshold = kThreshold;
+
+  ExtensionSpec spec = c.base;
+  spec.structure.creep_time_constants = creep_time_constants(r);
+  out.fit = fit_extension(r, spec);
+  const auto& tau = spec.structure.creep_time_constants;
+  out.extension = "creep: " + std::to_string(tau.size()) + " lags " + num(tau.front()) + ".." +
+                  num(tau.back()) + " s";
+  return out;
+}
+
+}  // namespace hystbench::compensation::details

@@ -1,0 +1,289 @@
+#include "details/diagnosis_extension_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "hystbench/compensation/coupled_play_pi_model.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+
+namespace hystbench::compensation::details {
+
+namespace {
+
+constexpr double kMinCumulativeWeight = 1e-3;  // as FitOptions::min_cumulative_weight
+
+// Piecewise-linear drift basis: knots every `spacing` samples, knot 0 left out (the offset
+// column carries the level there). Writes the `knots` values for sample k.
+class DriftBasis {
+ public:
+  DriftBasis(std::size_t block, std::size_t knots)
+      : block_(static_cast<double>(block)), knots_(knots) {}
+  std::size_t size() const noexcept { return knots_; }
+  void row(std::size_t k, double* a) const noexcept {
+    std::fill(a, a + knots_, 0.0);
+    const double x = std::min(static_cast<double>(k) / block_, static_cast<double>(knots_));
+    const auto i = static_cast<std::size_t>(x);
+    const double frac = x - static_cast<double>(i);
+    if (i >= 1) a[i - 1] += 1.0 - frac;
+    if (i < knots_ && frac > 0.0) a[i] += frac;
+  }
+
+ private:
+  double block_;
+  std::size_t knots_;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 1.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+std::vector<double> delayed(std::span<const double> u, std::size_t d) {
+  std::vector<double> out(u.size());
+  for (std::size_t k = 0; k < u.size(); ++k) out[k] = k >= d ? u[k - d] : u[0];
+  return out;
+}
+
+ModelStructure pi_structure(const DiagnosisRecord& r, int plays) {
+  ModelStructure s;
+  s.kind = ModelKind::kPi;
+  s.dt = r.dt;
+  const double u_span = r.u_hi - r.u_lo;
+  s.play_thresholds = uniform_thresholds(static_cast<std::size_t>(plays), 0.5 * u_span);
+  s.input_reference = 0.5 * (r.u_lo + r.u_hi);
+  s.min_play_slope = kMinCumulativeWeight * (r.y_hi - r.y_lo) / u_span;
+  s.min_dead_zone_slope = kMinCumulativeWeight;
+  s.center = 0.5 * (r.y_lo + r.y_hi);
+  return s;
+}
+
+std::optional<ModelStructure> structure_of(const ActuatorModel& model, const DiagnosisRecord& r) {
+  if (!model.valid()) return std::nullopt;
+  ModelStructure s = pi_structure(r, 1);
+  const HysteresisModel& h = model.hysteresis();
+  s.kind = h.kind();
+  auto set_dead_zones = [&s](const ModifiedPiParameters& p) {
+    s.play_thresholds = p.play.thresholds;
+    s.center = p.center;
+    s.dead_zone_thresholds = DeadZoneSuperposition(p.dead_zone).inverse().parameters().thresholds;
+  };
+  try {
+    switch (h.kind()) {
+      case ModelKind::kPi:
+        s.play_thresholds = dynamic_cast<const PiModel&>(h).parameters().thresholds;
+        break;
+      case ModelKind::kModifiedPi:
+        set_dead_zones(dynamic_cast<const ModifiedPiModel&>(h).parameters());
+        break;
+      case ModelKind::kRateDependentPi: {
+        const auto& p = dynamic_cast<const RateDependentPiModel&>(h).parameters();
+        set_dead_zones(p.base);
+        s.max_rate = p.max_rate;
+        if (!(s.max_rate > 0.0)) return std::nullopt;
+        break;
+      }
+      case ModelKind::kCoupledPlayPi: {
+        const auto& p = dynamic_cast<const CoupledPlayPiModel&>(h).parameters();
+        s.play_thresholds = p.r;
+        std::vector<double> ka, kb, kc;
+        for (std::size_t i = 0; i < p.r.size(); ++i) {
+          if (p.r[i] <= 0.0) continue;
+          ka.push_back(p.ra[i] / p.r[i]);
+          kb.push_back(p.rb[i] / p.r[i]);
+          kc.push_back(p.rc[i] / p.r[i]);
+        }
+        s.cp_scale = {median(ka), median(kb), median(kc)};
+        break;
+      }
+    }
+  } catch (const std::exception&) {
+    return std::nullopt;  // e.g. a dead zone that cannot be inverted
+  }
+  if (s.play_thresholds.empty()) return std::nullopt;
+  if (model.creep()) s.creep_time_constants = model.creep()->time_constants_s;
+  return s;
+}
+
+namespace {
+
+// A spec's linear unknowns fitted jointly to target y: the model (configured at the record's dt,
+// delay set) and the drift curve.
+struct Joint {
+  ActuatorModel model;
+  std::vector<double> drift;
+  double regression_mse = 0.0;
+};
+
+Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const ExtensionSpec& spec,
+                FitRows rows) {
+  Design design(spec.structure);
+  const Eigen::Index nd = design.unknowns();
+  const DriftBasis drift(r.drift_knot_samples(), spec.drift ? r.drift_knots() : 0);
+  const auto nb = static_cast<Eigen::Index>(drift.size());
+  const Eigen::Index unknowns = nd + nb;
+  const std::vector<double> ud = delayed(r.u, spec.delay_samples);
+
+  // Columns that pass through the dynamics: plays (and rate columns), creep lags. The offset is
+  // constant (unit DC gain keeps it) and the dead-zone columns act on the measured output.
+  std::vector<Eigen::Index> filtered;
+  for (Eigen::Index j = 0; j < design.offset_column(); ++j) filtered.push_back(j);
+  for (Eigen::Index j = design.creep_column(); j < nd; ++j) filtered.push_back(j);
+  std::vector<SecondOrderDynamics> filters;
+  if (spec.dynamics) filters.assign(filtered.size(), SecondOrderDynamics(*spec.dynamics, r.dt));
+
+  // Rate-dependent rows above the model's rate cap (input steps) are not fitted: the model
+  // caps the rate there, the design does not.
+  const bool rate_cap = spec.structure.kind == ModelKind::kRateDependentPi;
+  const double max_step = spec.structure.max_rate * r.dt;
+
+  const std::size_t stride = rows == FitRows::kSearch ? r.search_stride : 1;
+  NormalEquations ne(unknowns);
+  std::vector<double> scratch(static_cast<std::size_t>(unknowns));
+  design.reset(ud[0]);
+  std::size_t fit_index = 0;
+  for (std::size_t k = 0; k < r.n; ++k) {
+    bool use = r.fit_row(k);
+    if (use) use = fit_index++ % stride == 0;
+    if (use && rate_cap && k > 0 && std::abs(ud[k] - ud[k - 1]) > max_step) use = false;
+    double* a = use ? ne.row() : scratch.data();
+    const double target = design.row(ud[k], y[k], a);
+    if (spec.dynamics) {
+      for (std::size_t c = 0; c < filtered.size(); ++c) {
+        const Eigen::Index j = filtered[c];
+        if (k == 0) filters[c].reset(a[j]);
+        a[j] = filters[c].step(a[j]);
+      }
+    }
+    if (nb > 0) drift.row(k, a + nd);
+    if (use) ne.push(target);
+  }
+  Eigen::VectorXd lo(unknowns), hi(unknowns);
+  lo.head(nd) = design.lower_bounds();
+  hi.head(nd) = design.upper_bounds();
+  lo.tail(nb).setConstant(-std::numeric_limits<double>::infinity());
+  hi.tail(nb).setConstant(std::numeric_limits<double>::infinity());
+  const Eigen::MatrixXd& G = ne.gram();
+  const Eigen::VectorXd& b = ne.rhs();
+  const Eigen::VectorXd x = solve_bounded_lsq(G, b, lo, hi).x;
+  const double rss = ne.target_square_sum() - 2.0 * b.dot(x) + x.dot(G * x);
+
+  Joint out;
+  out.regression_mse =
+      std::max(rss, 0.0) / static_cast<double>(std::max<Eigen::Index>(1, ne.rows()));
+  out.model = design.build(x.head(nd));
+  if (spec.dynamics) out.model.set_dynamics(*spec.dynamics);
+  out.model.configure(r.dt);
+  out.model.set_delay(static_cast<double>(spec.delay_samples) * r.dt);
+  if (nb > 0) {
+    out.drift.resize(r.n);
+    std::vector<double> a(drift.size());
+    for (std::size_t k = 0; k < r.n; ++k) {
+      drift.row(k, a.data());
+      double d = 0.0;
+      for (Eigen::Index m = 0; m < nb; ++m) d += a[static_cast<std::size_t>(m)] * x[nd + m];
+      out.drift[k] = d;
+    }
+  }
+  return out;
+}
+
+// Dead-zone kinds regress S'[y] (Kuhnen's error model), where creep and drift, which add to the
+// output, do not belong. As the identification does for creep, alternate: the hysteresis on
+// y minus the additive terms, then the additive terms (creep gains, drift) on y minus the
+// simulated hysteresis, both linear.
+Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows) {
+  ExtensionSpec hysteresis_only = spec;
+  hysteresis_only.structure.creep_time_constants.clear();
+  hysteresis_only.drift = false;
+  const std::vector<double>& taus = spec.structure.creep_time_constants;
+  const DriftBasis drift(r.drift_knot_samples(), spec.drift ? r.drift_knots() : 0);
+  const std::size_t nc = taus.size(), nb = drift.size(), unknowns = nc + nb;
+  // Unit-gain creep lag states of the delayed input, as the model's bank steps them.
+  const std::vector<double> ud = delayed(r.u, spec.delay_samples);
+  std::vector<std::vector<double>> lags(nc, std::vector<double>(r.n));
+  for (std::size_t j = 0; j < nc; ++j) {
+    const double a = std::exp(-r.dt / taus[j]);
+    double x = ud[0];
+    for (std::size_t k = 0; k < r.n; ++k) lags[j][k] = x = a * x + (1.0 - a) * ud[k];
+  }
+  const std::size_t stride = rows == FitRows::kSearch ? r.search_stride : 1;
+  std::vector<double> target(r.y.begin(), r.y.end());
+  std::vector<double> additive(r.n, 0.0);
+  Joint out;
+  Eigen::VectorXd coef = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(unknowns));
+  std::vector<double> a(unknowns);
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    out = fit_joint(r, target, hysteresis_only, rows);
+    const std::vector<double> h = ActuatorModel(out.model).simulate(r.u, r.dt);
+    NormalEquations ne(static_cast<Eigen::Index>(unknowns));
+    std::size_t fit_index = 0;
+    for (std::size_t k = 0; k < r.n; ++k) {
+      if (!r.fit_row(k) || fit_index++ % stride != 0) continue;
+      double* row = ne.row();
+      for (std::size_t j = 0; j < nc; ++j) row[j] = lags[j][k];
+      drift.row(k, row + nc);
+      ne.push(r.y[k] - h[k]);
+    }
+    const Eigen::VectorXd inf = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(unknowns),
+                                                          std::numeric_limits<double>::infinity());
+    coef = solve_bounded_lsq(ne.gram(), ne.rhs(), -inf, inf).x;
+    const double rss =
+        ne.target_square_sum() - 2.0 * ne.rhs().dot(coef) + coef.dot(ne.gram() * coef);
+    out.regression_mse =
+        std::max(rss, 0.0) / static_cast<double>(std::max<Eigen::Index>(1, ne.rows()));
+    for (std::size_t k = 0; k < r.n; ++k) {
+      double v = 0.0;
+      for (std::size_t j = 0; j < nc; ++j) v += coef[static_cast<Eigen::Index>(j)] * lags[j][k];
+      drift.row(k, a.data());
+      for (std::size_t m = 0; m < nb; ++m) v += coef[static_cast<Eigen::Index>(nc + m)] * a[m];
+      target[k] = r.y[k] - v;
+    }
+  }
+  if (nc > 0) {
+    out.model.set_creep(CreepParameters{taus, std::vector<double>(coef.data(), coef.data() + nc)});
+  }
+  if (nb > 0) {
+    out.drift.assign(r.n, 0.0);
+    for (std::size_t k = 0; k < r.n; ++k) {
+      drift.row(k, a.data());
+      for (std::size_t m = 0; m < nb; ++m) {
+        out.drift[k] += coef[static_cast<Eigen::Index>(nc + m)] * a[m];
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows,
+                           bool predict) {
+  const bool additive = !spec.structure.creep_time_constants.empty() || spec.drift;
+  Joint j = spec.structure.has_dead_zones() && additive ? fit_alternating(r, spec, rows)
+                                                        : fit_joint(r, r.y, spec, rows);
+  ExtensionFit out;
+  out.spec = spec;
+  out.model = std::move(j.model);
+  out.model.units = r.units;
+  out.model.input_min = r.u_lo;
+  out.model.input_max = r.u_hi;
+  out.drift = std::move(j.drift);
+  out.regression_mse = j.regression_mse;
+  if (predict) {
+    ActuatorModel sim(out.model);
+    out.prediction = sim.simulate(r.u, r.dt);
+    for (std::size_t k = 0; k < out.drift.size(); ++k) out.prediction[k] += out.drift[k];
+    const SplitErrors e = split_errors(r, out.prediction);
+    out.fit = e.fit;
+    out.heldout = e.heldout;
+  }
+  return out;
+}
+
+}  // namespace hystbench::compensation::details

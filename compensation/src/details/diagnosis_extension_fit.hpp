@@ -1,0 +1,60 @@
+#pragma once
+// Extended-model fits of the diagnosis (internals). An ExtensionSpec is a PI-family structure
+// (designs.hpp, creep lags included) plus any of: a pure input delay, second-order dynamics
+// after the hysteresis and creep, and a drift piecewise linear in time. For a fixed spec every
+// unknown enters linearly:
+//   y(k) = D[ sum_i W_i q_i(u(k - d)) + c + sum_j g_j x_j(u(k - d)) ](k) + sum_m b_m hat_m(k)
+// (D linear with unit DC gain, so it filters each regressor column), and all are fitted
+// together by the identification's bounded least squares on the FIT rows of the record only;
+// the operators are stepped through every sample. For dead-zone kinds (MPI / RPI) the
+// dynamics and drift are approximations (Kuhnen's error model regresses S'[y]).
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "details/designs.hpp"
+#include "details/diagnosis_record.hpp"
+#include "hystbench/compensation/second_order_dynamics.hpp"
+
+namespace hystbench::compensation::details {
+
+struct ExtensionSpec {
+  ModelStructure structure;
+  std::size_t delay_samples = 0;
+  std::optional<DynamicsParameters> dynamics;
+  bool drift = false;  ///< hat functions with knots at the split's block edges
+};
+
+struct ExtensionFit {
+  ExtensionSpec spec;
+  ActuatorModel model;             ///< configured at the record's dt, delay set, no drift
+  std::vector<double> drift;       ///< fitted drift per sample (empty without drift)
+  std::vector<double> prediction;  ///< model output + drift, whole record (empty if !predict)
+  ErrorStats fit, heldout;         ///< of `prediction` (when predicted)
+  double regression_mse = 0.0;     ///< mean square regression residual on the rows used
+};
+
+enum class FitRows {
+  kAll,     ///< every fit row
+  kSearch,  ///< every record.search_stride-th fit row (cheaper, for searches)
+};
+
+/// Fits the spec's linear unknowns; with `predict` also simulates the model through the record
+/// and scores it on both parts. For PI / CPI kinds regression_mse is the output error on the
+/// rows used, so searches over delay and dynamics can skip the simulation.
+ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec,
+                           FitRows rows = FitRows::kAll, bool predict = true);
+
+/// Classical PI structure: `plays` thresholds uniform on half the input span.
+ModelStructure pi_structure(const DiagnosisRecord& r, int plays);
+
+/// u delayed by d samples (u[0] before the start).
+std::vector<double> delayed(std::span<const double> u, std::size_t d);
+
+/// The hysteresis of `model` as a structure the designs can refit (its thresholds, dead zones,
+/// asymmetry scales, rate range and creep lags); the parameters that are not thresholds are
+/// refitted. std::nullopt for a model the designs cannot represent.
+std::optional<ModelStructure> structure_of(const ActuatorModel& model, const DiagnosisRecord& r);
+
+}  // namespace hystbench::compensation::details

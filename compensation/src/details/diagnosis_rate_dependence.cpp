@@ -1,0 +1,62 @@
+// Candidate `rate_dependence`: the loop widens with the input rate (and, unlike dynamics, does
+// not ring). Statistic: share of the baseline residual variance explained by the signed input
+// rate (holds and steps left out). It can only be told from the loop shape when the record
+// crosses the same levels at clearly different rates. Extension: the rate-dependent PI on the
+// baseline's plays (and dead zones), cumulative weights linear in |du/dt| up to the 99.9th
+// percentile of the record's rates.
+#include <algorithm>
+#include <cmath>
+
+#include "details/diagnosis_candidates.hpp"
+#include "details/rate_groups.hpp"
+
+namespace hystbench::compensation::details {
+
+namespace {
+
+constexpr double kThreshold = 0.15;
+constexpr double kMinRateSpread = 1.25;  // as the identification's automatic family choice
+constexpr double kRateQuantile = 0.999;
+
+}  // namespace
+
+CandidateOutcome test_rate_dependence(const CandidateContext& c) {
+  CandidateOutcome out;
+  const DiagnosisRecord& r = c.record;
+  const ResidualProfile& rate = c.profile("rate");
+  const double spread = half_cycle_rate_spread(r.u, r.dt, 0, r.n);
+  out.statistic = spread >= kMinRateSpread ? rate.explained : 0.0;
+  out.threshold = kThreshold;
+  if (rate.means.empty()) {
+    out.evidence = "the input never moves smoothly enough to profile the rate";
+  } else {
+    out.evidence = "the signed input rate explains " + percent(rate.explained) +
+                   " of the residual variance (mean residual " + num(rate.means.front()) + " " +
+                   r.units.output + " at the fastest falling rate, " + num(rate.means.back()) +
+                   " at the fastest rising); half-cycle rates spread " + num(spread) + "x";
+    if (spread < kMinRateSpread) {
+      out.evidence += " - too little to tell rate dependence from the loop shape";
+    }
+  }
+
+  std::vector<double> rates = sample_rates(r.u, r.dt);
+  const auto q = rates.begin() +
+                 static_cast<std::ptrdiff_t>(kRateQuantile * static_cast<double>(rates.size() - 1));
+  std::nth_element(rates.begin(), q, rates.end());
+  ExtensionSpec spec = c.base;
+  ModelStructure& s = spec.structure;
+  const bool had_dead_zones = s.has_dead_zones();
+  s.kind = ModelKind::kRateDependentPi;
+  if (!had_dead_zones) {
+    s.dead_zone_thresholds = {0.0};
+    s.center = 0.5 * (r.y_lo + r.y_hi);
+  }
+  s.max_rate = *q > 0.0 ? *q : 1.0 / r.dt;
+  out.fit = fit_extension(r, spec);
+  out.extension = "rate-dependent PI on " + std::to_string(s.plays()) +
+                  " plays, weights linear in |du/dt| up to " + num(s.max_rate) + " " +
+                  r.units.input + "/s";
+  return out;
+}
+
+}  // namespace hystbench::compensation::details

@@ -1,0 +1,69 @@
+#pragma once
+// The record as the diagnosis sees it (diagnosis internals): samples, the interleaved
+// fit / held-out split, the row thinning of searches, and error statistics per part.
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/diagnosis.hpp"
+#include "hystbench/compensation/error_metrics.hpp"
+
+namespace hystbench::compensation::details {
+
+/// Which part of the record a sample belongs to.
+enum Part : unsigned char {
+  kFitPart = 0,
+  kHeldoutPart = 1,
+  kSkippedPart = 2,  ///< start-up: simulated, neither fitted nor scored
+};
+
+struct DiagnosisRecord {
+  std::span<const double> t, u, y;
+  std::size_t n = 0;
+  double dt = 0.0;  ///< mean sample period [s]
+  DataSplit split;
+  std::vector<unsigned char> part;  ///< Part of every sample
+  bool fit_row(std::size_t k) const noexcept { return part[k] == kFitPart; }
+  /// Searches fit every search_stride-th fit row only (final fits use every row).
+  std::size_t search_stride = 1;
+  double u_lo = 0.0, u_hi = 0.0;  ///< input range over the whole record
+  double y_lo = 0.0, y_hi = 0.0;  ///< output range over the fit part
+  Units units;
+
+  double duration() const noexcept { return dt * static_cast<double>(n - 1); }
+  /// Split blocks per held-out period; the drift knots are that far apart, so that every
+  /// held-out block lies between two knots fitted on its neighbours, and the drift stays slower
+  /// than the input's own slow structure (holds, loop segments), which it must not absorb.
+  std::size_t heldout_every = 4;
+
+  std::size_t block_samples() const noexcept { return n / split.blocks; }
+  std::size_t drift_knot_samples() const noexcept { return block_samples() * heldout_every; }
+  /// Drift knots after t = 0 (the knot at 0 is the model's offset).
+  std::size_t drift_knots() const noexcept { return split.blocks / heldout_every; }
+};
+
+/// `blocks` equal blocks, block b held out when b % heldout_every == heldout_every / 2; a
+/// held-out block without input steps moves by one block onto a neighbour with steps until
+/// the held-out part has its share of the steps (1 / heldout_every, at least one when the input
+/// has two or more, at most half). Uses the input only.
+DataSplit make_split(std::span<const double> u, int blocks, int heldout_every);
+
+/// Samples at the start whose hysteresis state the record does not determine: until the input
+/// has come within 0.5 % of its span to both its minimum and its maximum (a PI's memory of what
+/// came before is then wiped out), at most one split block.
+std::size_t startup_samples(std::span<const double> u, std::size_t max_samples);
+
+/// Validated record (lengths, finiteness, increasing t, non-constant u and y, enough samples).
+/// Throws std::invalid_argument with a clear message.
+DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const double> u,
+                                      std::span<const double> y, const DiagnosisOptions& o);
+
+/// Error statistics of a whole-record prediction on the fit part and on the held-out part
+/// (the start-up samples in neither).
+struct SplitErrors {
+  ErrorStats fit, heldout;
+};
+SplitErrors split_errors(const DiagnosisRecord& r, std::span<const double> prediction);
+
+}  // namespace hystbench::compensation::details

@@ -1,0 +1,275 @@
+#include "details/diagnosis_signals.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <unsupported/Eigen/FFT>
+
+namespace hystbench::compensation::details {
+
+namespace {
+
+constexpr double kReversalBand = 0.005;  // of the input span
+constexpr double kHoldBand = 0.001;      // of the input span
+constexpr double kMinHoldSeconds = 0.1;
+constexpr double kStepFraction = 0.01;  // of the input span
+constexpr double kStepContrast = 3.0;   // against the neighbouring increments
+constexpr double kMinCoherence = 0.5;
+constexpr double kMinSignalToNoise = 10.0;
+
+double median_of(std::vector<double>& v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+std::vector<std::size_t> find_steps(std::span<const double> u) {
+  std::vector<std::size_t> steps;
+  if (u.size() < 2) return steps;
+  const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
+  const double span = *hi - *lo;
+  for (std::size_t k = 1; k < u.size(); ++k) {
+    const double du = std::abs(u[k] - u[k - 1]);
+    const double before = k >= 2 ? std::abs(u[k - 1] - u[k - 2]) : 0.0;
+    const double after = k + 1 < u.size() ? std::abs(u[k + 1] - u[k]) : 0.0;
+    if (du > kStepFraction * span && du > kStepContrast * std::max(before, after)) {
+      steps.push_back(k);
+    }
+  }
+  return steps;
+}
+
+InputEvents find_input_events(std::span<const double> u, double dt) {
+  const std::size_t n = u.size();
+  InputEvents ev;
+  const auto [lo_it, hi_it] = std::minmax_element(u.begin(), u.end());
+  const double span = *hi_it - *lo_it;
+  const double band = kReversalBand * span;
+  const double hold_band = kHoldBand * span;
+
+  ev.rate.assign(n, 0.0);
+  const auto m = static_cast<std::size_t>(std::max(1.0, std::round(1e-3 / dt)));
+  for (std::size_t k = 1; k < n; ++k) {
+    const std::size_t back = std::min(k, m);
+    ev.rate[k] = (u[k] - u[k - back]) / (static_cast<double>(back) * dt);
+  }
+
+  ev.step.assign(n, 0);
+  for (const std::size_t k : find_steps(u)) {
+    ev.step[k] = 1;
+    ++ev.steps;
+  }
+
+  // Turning points with a dead band; steps are events too. Reference level of each event:
+  // the input before it (steps) or at it (turning points).
+  std::vector<signed char> dir(n, 0);
+  std::vector<std::pair<std::size_t, double>> events;
+  int state = 0;
+  double ext = u[0];
+  std::size_t ext_k = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (ev.step[k]) events.emplace_back(k, u[k - 1]);
+    if (state == 0) {
+      if (u[k] > u[0] + band) state = 1, ext = u[k], ext_k = k;
+      if (u[k] < u[0] - band) state = -1, ext = u[k], ext_k = k;
+    } else if (state == 1) {
+      if (u[k] >= ext) {
+        ext = u[k], ext_k = k;
+      } else if (u[k] < ext - band) {
+        if (!ev.step[k]) events.emplace_back(ext_k, u[ext_k]);
+        ++ev.reversals;
+        state = -1, ext = u[k], ext_k = k;
+      }
+    } else {
+      if (u[k] <= ext) {
+        ext = u[k], ext_k = k;
+      } else if (u[k] > ext + band) {
+        if (!ev.step[k]) events.emplace_back(ext_k, u[ext_k]);
+        ++ev.reversals;
+        state = 1, ext = u[k], ext_k = k;
+      }
+    }
+    dir[k] = static_cast<signed char>(state);
+  }
+  std::sort(events.begin(), events.end());
+
+  // Holds: runs within the hold band lasting at least kMinHoldSeconds.
+  ev.holding.assign(n, 0);
+  const auto min_hold = static_cast<std::size_t>(std::max(5.0, std::ceil(kMinHoldSeconds / dt)));
+  std::size_t start = 0;
+  for (std::size_t k = 1; k <= n; ++k) {
+    if (k < n && std::abs(u[k] - u[start]) <= hold_band) continue;
+    if (k - start >= min_hold) {
+      std::fill(ev.holding.begin() + static_cast<std::ptrdiff_t>(start),
+                ev.holding.begin() + static_cast<std::ptrdiff_t>(k), 1);
+      ++ev.holds;
+      ev.hold_seconds += static_cast<double>(k - start) * dt;
+    }
+    start = k;
+  }
+
+  ev.direction.assign(n, 0);
+  ev.last_move.assign(n, 0);
+  ev.since_event_s.assign(n, 0.0);
+  std::size_t next = 0;
+  std::size_t last = 0;
+  double reference = u[0];
+  bool any = false;
+  for (std::size_t k = 0; k < n; ++k) {
+    while (next < events.size() && events[next].first <= k) {
+      last = events[next].first, reference = events[next].second, any = true;
+      ++next;
+    }
+    ev.since_event_s[k] = static_cast<double>(k - last) * dt;
+    ev.direction[k] = ev.holding[k] ? 0 : dir[k];
+    const double moved = u[k] - reference;
+    if (any) ev.last_move[k] = std::abs(moved) > hold_band ? (moved > 0 ? 1 : -1) : dir[k];
+  }
+  for (const auto& e : events) ev.event_samples.push_back(e.first);
+  ev.event_samples.erase(std::unique(ev.event_samples.begin(), ev.event_samples.end()),
+                         ev.event_samples.end());
+  return ev;
+}
+
+double noise_rms(std::span<const double> e) {
+  if (e.size() < 3) return 0.0;
+  std::vector<double> d(e.size() - 2);
+  for (std::size_t k = 1; k + 1 < e.size(); ++k) d[k - 1] = e[k + 1] - 2.0 * e[k] + e[k - 1];
+  const double med = median_of(d);
+  for (double& v : d) v = std::abs(v - med);
+  // MAD -> sigma for a Gaussian; the second difference of white noise has variance 6 sigma^2.
+  return 1.4826 * median_of(d) / std::sqrt(6.0);
+}
+
+std::vector<double> linear_edges(double lo, double hi, std::size_t bins) {
+  std::vector<double> e(bins + 1);
+  for (std::size_t i = 0; i <= bins; ++i) {
+    e[i] = lo + (hi - lo) * static_cast<double>(i) / static_cast<double>(bins);
+  }
+  return e;
+}
+
+std::vector<double> log_edges(double lo, double hi, std::size_t bins) {
+  std::vector<double> e(bins + 1);
+  for (std::size_t i = 0; i <= bins; ++i) {
+    e[i] = lo * std::pow(hi / lo, static_cast<double>(i) / static_cast<double>(bins));
+  }
+  return e;
+}
+
+std::vector<double> quantile_edges(std::span<const double> x, std::span<const unsigned char> use,
+                                   std::size_t bins) {
+  std::vector<double> v;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (use.empty() || use[k]) v.push_back(x[k]);
+  }
+  if (v.empty()) return {0.0, 1.0};
+  std::sort(v.begin(), v.end());
+  std::vector<double> e;
+  for (std::size_t i = 0; i <= bins; ++i) {
+    const auto j = std::min(v.size() - 1, i * (v.size() - 1) / bins);
+    if (e.empty() || v[j] > e.back()) e.push_back(v[j]);
+  }
+  if (e.size() < 2) e.push_back(e.back() + 1.0);
+  return e;
+}
+
+ResidualProfile binned_profile(std::string variable, std::string label, std::span<const double> x,
+                               std::span<const double> value, std::span<const unsigned char> use,
+                               const std::vector<double>& edges) {
+  ResidualProfile p;
+  p.variable = std::move(variable);
+  p.label = std::move(label);
+  const std::size_t bins = edges.size() - 1;
+  std::vector<double> sum(bins, 0.0);
+  std::vector<std::size_t> count(bins, 0);
+  double total = 0.0, total_sq = 0.0;
+  std::size_t used = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (!use.empty() && !use[k]) continue;
+    const auto it = std::upper_bound(edges.begin() + 1, edges.end() - 1, x[k]);
+    const auto b = static_cast<std::size_t>(it - (edges.begin() + 1));
+    sum[b] += value[k];
+    ++count[b];
+    total += value[k];
+    total_sq += value[k] * value[k];
+    ++used;
+  }
+  if (used == 0) return p;
+  const double mean = total / static_cast<double>(used);
+  const double variance = total_sq - static_cast<double>(used) * mean * mean;
+  double between = 0.0;
+  for (std::size_t b = 0; b < bins; ++b) {
+    if (count[b] == 0) continue;
+    const double m = sum[b] / static_cast<double>(count[b]);
+    p.centers.push_back(0.5 * (edges[b] + edges[b + 1]));
+    p.means.push_back(m);
+    p.counts.push_back(count[b]);
+    between += static_cast<double>(count[b]) * (m - mean) * (m - mean);
+  }
+  p.explained = variance > 0.0 ? std::clamp(between / variance, 0.0, 1.0) : 0.0;
+  return p;
+}
+
+FrequencyResponse frequency_response(std::span<const double> input, std::span<const double> output,
+                                     double dt, double noise_rms) {
+  FrequencyResponse fr;
+  const std::size_t n = std::min(input.size(), output.size());
+  std::size_t len = 256;
+  while (len * 2 <= 16384 && len * 2 * 8 <= n) len *= 2;
+  if (len > n) return fr;
+  const std::size_t hop = len / 2;
+  std::vector<double> window(len);
+  for (std::size_t i = 0; i < len; ++i) {
+    window[i] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) /
+                                     static_cast<double>(len));
+  }
+  const std::size_t bins = len / 2;
+  double window_power = 0.0;
+  for (const double w : window) window_power += w * w;
+  std::size_t segments = 0;
+  std::vector<double> pxx(bins, 0.0), pyy(bins, 0.0);
+  std::vector<std::complex<double>> pyx(bins, 0.0);
+  Eigen::FFT<double> fft;
+  std::vector<double> xs(len), ys(len);
+  std::vector<std::complex<double>> X, Y;
+  for (std::size_t begin = 0; begin + len <= n; begin += hop) {
+    double mx = 0.0, my = 0.0;
+    for (std::size_t i = 0; i < len; ++i) mx += input[begin + i], my += output[begin + i];
+    mx /= static_cast<double>(len), my /= static_cast<double>(len);
+    for (std::size_t i = 0; i < len; ++i) {
+      xs[i] = (input[begin + i] - mx) * window[i];
+      ys[i] = (output[begin + i] - my) * window[i];
+    }
+    fft.fwd(X, xs);
+    fft.fwd(Y, ys);
+    ++segments;
+    for (std::size_t i = 1; i < bins; ++i) {
+      pxx[i] += std::norm(X[i]);
+      pyy[i] += std::norm(Y[i]);
+      pyx[i] += Y[i] * std::conj(X[i]);
+    }
+  }
+  for (std::size_t i = 1; i < bins; ++i) {
+    if (!(pxx[i] > 0.0) || !(pyy[i] > 0.0)) continue;
+    const std::complex<double> h = pyx[i] / pxx[i];
+    fr.frequency_hz.push_back(static_cast<double>(i) / (static_cast<double>(len) * dt));
+    fr.gain.push_back(std::abs(h));
+    fr.phase_rad.push_back(std::arg(h));
+    fr.coherence.push_back(std::norm(pyx[i]) / (pxx[i] * pyy[i]));
+    const double scale = 2.0 * dt / (window_power * static_cast<double>(segments));
+    fr.input_psd.push_back(scale * pxx[i]);
+    fr.output_psd.push_back(scale * pyy[i]);
+    const double noise_psd = 2.0 * noise_rms * noise_rms * dt;
+    fr.informative.push_back(fr.coherence.back() >= kMinCoherence &&
+                             fr.input_psd.back() >= noise_psd &&
+                             fr.output_psd.back() >= kMinSignalToNoise * noise_psd);
+  }
+  return fr;
+}
+
+}  // namespace hystbench::compensation::details

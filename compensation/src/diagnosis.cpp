@@ -1,0 +1,351 @@
+#include "hystbench/compensation/diagnosis.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "details/diagnosis_baseline.hpp"
+#include "details/diagnosis_candidates.hpp"
+#include "details/diagnosis_extension_fit.hpp"
+#include "details/diagnosis_record.hpp"
+#include "details/diagnosis_signals.hpp"
+
+namespace hystbench::compensation {
+
+namespace {
+
+using details::num;
+
+constexpr std::array<Cause, 6> kCandidates{Cause::kAsymmetry, Cause::kRateDependence,
+                                           Cause::kCreep,     Cause::kDynamics,
+                                           Cause::kDelay,     Cause::kDrift};
+// A runner-up this close to the named cause's gain makes the verdict ambiguous.
+constexpr double kAmbiguity = 0.9;
+// Bins of the residual profiles.
+constexpr std::size_t kTimeBins = 32, kLevelBins = 24, kRateBins = 24, kSinceBins = 16;
+
+using TestFunction = details::CandidateOutcome (*)(const details::CandidateContext&);
+
+TestFunction test_of(Cause c) {
+  switch (c) {
+    case Cause::kAsymmetry:
+      return details::test_asymmetry;
+    case Cause::kRateDependence:
+      return details::test_rate_dependence;
+    case Cause::kCreep:
+      return details::test_creep;
+    case Cause::kDynamics:
+      return details::test_dynamics;
+    case Cause::kDelay:
+      return details::test_delay;
+    case Cause::kDrift:
+      return details::test_drift;
+    case Cause::kNone:
+      break;
+  }
+  return nullptr;
+}
+
+std::vector<ResidualProfile> residual_profiles(const details::DiagnosisRecord& r,
+                                               std::span<const double> e,
+                                               const details::InputEvents& ev) {
+  std::vector<ResidualProfile> out;
+  std::vector<unsigned char> scored(r.n);
+  for (std::size_t k = 0; k < r.n; ++k) scored[k] = r.part[k] != details::kSkippedPart;
+  out.push_back(details::binned_profile("time", "time [s]", r.t, e, scored,
+                                        details::linear_edges(r.t.front(), r.t.back(), kTimeBins)));
+  out.push_back(details::binned_profile("input", "input [" + r.units.input + "]", r.u, e, scored,
+                                        details::linear_edges(r.u_lo, r.u_hi, kLevelBins)));
+  std::vector<double> direction(r.n);
+  std::vector<unsigned char> moving(r.n), smooth(r.n), after(r.n);
+  std::vector<double> signed_e(r.n);
+  double longest = 0.0;
+  for (std::size_t k = 0; k < r.n; ++k) {
+    direction[k] = ev.direction[k];
+    moving[k] = scored[k] && ev.direction[k] != 0;
+    smooth[k] = moving[k] && !ev.step[k] && !(k + 1 < r.n && ev.step[k + 1]);
+    after[k] = scored[k] && ev.last_move[k] != 0 && ev.since_event_s[k] > 0.0;
+    signed_e[k] = e[k] * ev.last_move[k];
+    if (after[k]) longest = std::max(longest, ev.since_event_s[k]);
+  }
+  out.push_back(details::binned_profile("direction", "direction (-1 falling, +1 rising)", direction,
+                                        e, moving, {-1.5, 0.0, 1.5}));
+  out.push_back(details::binned_profile("rate", "input rate [" + r.units.input + "/s]", ev.rate, e,
+                                        smooth,
+                                        details::quantile_edges(ev.rate, smooth, kRateBins)));
+  const double first = r.dt;
+  out.push_back(details::binned_profile(
+      "since_event",
+      "time since the last reversal or step [s] (residual signed by the last input change)",
+      ev.since_event_s, signed_e, after,
+      details::log_edges(first, std::max(2.0 * first, longest), kSinceBins)));
+  return out;
+}
+
+}  // namespace
+
+std::string_view to_string(Cause cause) noexcept {
+  switch (cause) {
+    case Cause::kNone:
+      return "none";
+    case Cause::kAsymmetry:
+      return "asymmetry";
+    case Cause::kRateDependence:
+      return "rate_dependence";
+    case Cause::kCreep:
+      return "creep";
+    case Cause::kDynamics:
+      return "dynamics";
+    case Cause::kDelay:
+      return "delay";
+    case Cause::kDrift:
+      return "drift";
+  }
+  return "none";
+}
+
+std::optional<Cause> cause_from_string(std::string_view name) noexcept {
+  if (name == "none") return Cause::kNone;
+  for (const Cause c : kCandidates) {
+    if (to_string(c) == name) return c;
+  }
+  return std::nullopt;
+}
+
+std::span<const Cause> candidate_causes() noexcept { return kCandidates; }
+
+bool DataSplit::is_heldout(std::size_t k) const noexcept {
+  for (const auto& [b, e] : heldout) {
+    if (k < b) return false;
+    if (k < e) return true;
+  }
+  return false;
+}
+
+std::string DataSplit::describe(double sample_period_s) const {
+  std::string s = "record cut into " + std::to_string(blocks) + " equal blocks, " +
+                  std::to_string(heldout.size()) + " interleaved ones held out (" +
+                  num(100.0 * static_cast<double>(heldout_samples) / static_cast<double>(samples)) +
+                  " % of " + std::to_string(samples) + " samples): t =";
+  for (std::size_t i = 0; i < heldout.size(); ++i) {
+    s += (i ? ", " : " ") + num(static_cast<double>(heldout[i].first) * sample_period_s) + "-" +
+         num(static_cast<double>(heldout[i].second) * sample_period_s) + " s";
+  }
+  if (skipped > 0) {
+    s += "; the first " + num(static_cast<double>(skipped) * sample_period_s) +
+         " s (until the input has reached both its extremes) neither fitted nor scored";
+  }
+  return s + "; every model is fitted on the other blocks and simulated through the whole record";
+}
+
+const CandidateReport* Diagnosis::candidate(Cause c) const noexcept {
+  for (const CandidateReport& r : candidates) {
+    if (r.cause == c) return &r;
+  }
+  return nullptr;
+}
+
+const ResidualProfile* Diagnosis::profile(std::string_view variable) const noexcept {
+  for (const ResidualProfile& p : profiles) {
+    if (p.variable == variable) return &p;
+  }
+  return nullptr;
+}
+
+Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                   const DiagnosisOptions& options) {
+  auto progress = [&](double f, const std::string& what) {
+    if (options.progress) options.progress(f, what);
+  };
+  progress(0.0, "checking the record");
+  const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options);
+  Diagnosis d;
+  d.samples = r.n;
+  d.sample_period_s = r.dt;
+  d.split = r.split;
+
+  // ---- baseline
+  progress(0.05, "baseline");
+  details::ExtensionSpec base;
+  details::ExtensionFit base_fit;
+  if (options.baseline) {
+    if (!options.baseline->valid())
+      throw std::invalid_argument("the given baseline model is empty");
+    d.baseline_given = true;
+    d.baseline = *options.baseline;
+    ActuatorModel sim(d.baseline);
+    d.baseline_prediction = sim.simulate(r.u, r.dt);
+    d.baseline_description = "given model: " + details::describe_model(d.baseline);
+    base = details::spec_of_model(d.baseline, r);
+    base_fit = details::fit_extension(r, base);
+    d.refit_heldout = base_fit.heldout;
+  } else {
+    details::PiBaseline b = details::fit_pi_baseline(r);
+    d.baseline = b.fit.model;
+    d.baseline_prediction = std::move(b.fit.prediction);
+    d.baseline_description = b.description;
+    base = b.finest_spec;
+    base_fit = std::move(b.finest_fit);
+  }
+  const details::SplitErrors be = details::split_errors(r, d.baseline_prediction);
+  d.baseline_fit = be.fit;
+  d.baseline_heldout = be.heldout;
+
+  // ---- what the baseline gets wrong
+  progress(0.2, "residual structure");
+  std::vector<double> e(r.n);
+  for (std::size_t k = 0; k < r.n; ++k) e[k] = r.y[k] - d.baseline_prediction[k];
+  d.noise_rms = details::noise_rms(e);
+  const details::InputEvents ev = details::find_input_events(r.u, r.dt);
+  d.profiles = residual_profiles(r, e, ev);
+  d.frequency_response = details::frequency_response(d.baseline_prediction, r.y, r.dt, d.noise_rms);
+
+  // ---- candidates: their statistics read the residual of the reference the gains are judged
+  // against, the refit when a given model no longer matches this record.
+  const bool stale = d.refit_heldout && d.refit_heldout->rmse > 0.0 &&
+                     d.baseline_heldout.rmse / d.refit_heldout->rmse >= options.min_gain;
+  std::vector<double> ref_e = e;
+  std::vector<ResidualProfile> ref_profiles = d.profiles;
+  FrequencyResponse ref_response = d.frequency_response;
+  if (stale) {
+    for (std::size_t k = 0; k < r.n; ++k) ref_e[k] = r.y[k] - base_fit.prediction[k];
+    ref_profiles = residual_profiles(r, ref_e, ev);
+    ref_response = details::frequency_response(base_fit.prediction, r.y, r.dt, d.noise_rms);
+  }
+  const std::span<const double> ref_prediction =
+      stale ? std::span<const double>(base_fit.prediction) : d.baseline_prediction;
+  const details::CandidateContext ctx{r,  base,         base_fit,     ref_prediction, ref_e,
+                                      ev, ref_profiles, ref_response, d.noise_rms};
+  for (std::size_t i = 0; i < kCandidates.size(); ++i) {
+    const Cause c = kCandidates[i];
+    progress(0.25 + 0.7 * static_cast<double>(i) / kCandidates.size(),
+             "testing " + std::string(to_string(c)));
+    details::CandidateOutcome o = test_of(c)(ctx);
+    CandidateReport rep;
+    rep.cause = c;
+    rep.statistic = o.statistic;
+    rep.threshold = o.threshold;
+    rep.significant = o.statistic >= o.threshold;
+    rep.evidence = std::move(o.evidence);
+    rep.extension = std::move(o.extension);
+    rep.model = std::move(o.fit.model);
+    rep.fit = o.fit.fit;
+    rep.heldout = o.fit.heldout;
+    rep.gain = rep.heldout.rmse > 0.0 ? d.baseline_heldout.rmse / rep.heldout.rmse : 0.0;
+    rep.drift = std::move(o.fit.drift);
+    rep.prediction = std::move(o.fit.prediction);
+    d.candidates.push_back(std::move(rep));
+  }
+
+  // ---- decision
+  progress(0.95, "deciding");
+  double reference = d.baseline_heldout.rmse;
+  if (d.refit_heldout) reference = std::min(reference, d.refit_heldout->rmse);
+  const double floor = options.noise_floor_factor * d.noise_rms;
+  const bool at_floor = d.baseline_heldout.rmse <= floor;
+  std::vector<const CandidateReport*> eligible;
+  for (const CandidateReport& c : d.candidates) {
+    if (c.significant && c.heldout.rmse > 0.0 && reference / c.heldout.rmse >= options.min_gain) {
+      eligible.push_back(&c);
+    }
+  }
+  std::sort(eligible.begin(), eligible.end(),
+            [](const CandidateReport* a, const CandidateReport* b) { return a->gain > b->gain; });
+  const std::string unit = r.units.output;
+  const CandidateReport* best_any = &*std::max_element(
+      d.candidates.begin(), d.candidates.end(),
+      [](const CandidateReport& a, const CandidateReport& b) { return a.gain < b.gain; });
+  if (at_floor) {
+    d.cause = Cause::kNone;
+    d.verdict = "none: the baseline's held-out rms error " + num(d.baseline_heldout.rmse) + " " +
+                unit + " is at the noise floor (noise rms " + num(d.noise_rms) + " " + unit +
+                "); there is nothing left to explain";
+  } else if (eligible.empty()) {
+    d.cause = Cause::kNone;
+    d.verdict = "none: no candidate lowers the held-out error by " + num(options.min_gain) +
+                "x with a significant statistic (best: " + std::string(to_string(best_any->cause)) +
+                ", gain " + num(best_any->gain) +
+                (best_any->significant ? "" : ", not significant") +
+                "); the baseline explains the data as far as these effects go";
+  } else {
+    const CandidateReport& w = *eligible.front();
+    d.cause = w.cause;
+    d.verdict = std::string(to_string(w.cause)) + ": " + w.evidence + ". " + w.extension +
+                " lowers the held-out rms error from " + num(d.baseline_heldout.rmse) + " to " +
+                num(w.heldout.rmse) + " " + unit + " (gain " + num(w.gain) + ")";
+  }
+  if (!eligible.empty() && d.cause != Cause::kNone) {
+    for (std::size_t i = 1; i < eligible.size(); ++i) {
+      if (eligible[i]->gain >= kAmbiguity * eligible.front()->gain) {
+        d.notes.push_back("not clean: " + std::string(to_string(eligible[i]->cause)) +
+                          " explains the data almost as well (gain " + num(eligible[i]->gain) +
+                          " against " + num(eligible.front()->gain) + ")");
+      }
+    }
+    const CandidateReport& w = *eligible.front();
+    if (w.heldout.rmse > 2.0 * floor && eligible.size() > 1) {
+      std::string others;
+      for (std::size_t i = 1; i < eligible.size(); ++i) {
+        others += (i > 1 ? ", " : "") + std::string(to_string(eligible[i]->cause)) + " (gain " +
+                  num(eligible[i]->gain) + ")";
+      }
+      d.notes.push_back("more than one effect: with " + std::string(to_string(w.cause)) +
+                        " the held-out error is still " + num(w.heldout.rmse / d.noise_rms) +
+                        "x the noise; " + others + " also gain on their own");
+    }
+  }
+  if (d.cause != Cause::kNone) {
+    const CandidateReport& named = *d.candidate(d.cause);
+    for (const CandidateReport& c : d.candidates) {
+      if (!c.significant && c.gain > named.gain * 1.05 && c.gain >= options.min_gain) {
+        d.notes.push_back("not clean: " + std::string(to_string(c.cause)) +
+                          " lowers the held-out error more (gain " + num(c.gain) +
+                          ") but its statistic is not significant (" + c.evidence + ")");
+      }
+    }
+  }
+  if (d.cause == Cause::kNone && !at_floor) {
+    d.notes.push_back("not clean: the baseline's held-out error is " +
+                      num(d.baseline_heldout.rmse / d.noise_rms) +
+                      "x the noise, but no single candidate explains the rest (best gain " +
+                      num(best_any->gain) + ", " + std::string(to_string(best_any->cause)) +
+                      (best_any->significant ? "" : ", statistic not significant") + ")");
+  }
+  if (d.refit_heldout && d.refit_heldout->rmse > 0.0 &&
+      d.baseline_heldout.rmse / d.refit_heldout->rmse >= options.min_gain) {
+    d.notes.push_back(
+        "the given model's parameters do not match this record: the same structure "
+        "refitted here lowers the held-out error " +
+        num(d.baseline_heldout.rmse / d.refit_heldout->rmse) +
+        "x; candidates are tested on the refit's residual and named only for what "
+        "they gain beyond that refit");
+  }
+  if (ev.hold_seconds < 0.5) {
+    d.notes.push_back("the input never holds: creep and drift can only be seen indirectly");
+  }
+  if (ev.steps == 0) {
+    d.notes.push_back(
+        "no input steps: dynamics and delay show only through the fast parts of "
+        "the excitation");
+  }
+
+  if (d.cause == Cause::kNone) {
+    d.extended = d.baseline;
+    d.extended_description = "the baseline (no extension named)";
+    d.extended_fit = d.baseline_fit;
+    d.extended_heldout = d.baseline_heldout;
+    d.extended_prediction = d.baseline_prediction;
+  } else {
+    const CandidateReport& w = *d.candidate(d.cause);
+    d.extended = w.model;
+    d.extended_description = details::describe_model(w.model) + " (" + w.extension + ")";
+    d.extended_fit = w.fit;
+    d.extended_heldout = w.heldout;
+    d.extended_prediction = w.prediction;
+  }
+  progress(1.0, "done");
+  return d;
+}
+
+}  // namespace hystbench::compensation
