@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "hystbench/daemon/diagnose_command.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/daemon/remote_commands.hpp"
 
@@ -22,6 +23,7 @@ int main(int argc, char** argv) {
       "  hystbench fit run.csv --model mpi -o actuator.json\n"
       "  hystbench simulate actuator.json other_run.csv -o predicted.csv --json\n"
       "  hystbench invert actuator.json reference.csv -o drive.csv\n"
+      "  hystbench diagnose run.csv --report diagnosis/ --save-extended extended.json\n"
       "  hystbench identify --wait                  (bench: identify the actuator on the bench)\n"
       "  hystbench track --reference triangle --frequency 1 --periods 5 --compensator inverse "
       "--wait --json\n"};
@@ -91,6 +93,26 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "analytic", "numeric", "multiplicative"}))
       ->capture_default_str();
   inv_cmd->add_flag("--json", inv.json_output, "Print the result as one JSON line");
+
+  hd::DiagnoseCommand diag;
+  auto* diag_cmd = app.add_subcommand(
+      "diagnose",
+      "Find what a model misses on a record (t,u,y): asymmetry, rate_dependence, creep, "
+      "dynamics, delay, drift or none; gains measured on a held-out part");
+  diag_cmd
+      ->add_option("data", diag.data_path, "CSV with columns t, u, y (a bench run log works too)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  diag_cmd
+      ->add_option("--model", diag.model_path,
+                   "Baseline model file (default: a classical PI identified on the data)")
+      ->check(CLI::ExistingFile);
+  diag_cmd->add_flag("--json", diag.json_output, "Print the result as one JSON object");
+  diag_cmd->add_option("--report", diag.report_dir,
+                       "Folder for report.txt, diagnosis.json and gnuplot PNGs");
+  diag_cmd->add_option("--save-baseline", diag.save_baseline, "Write the baseline model file");
+  diag_cmd->add_option("--save-extended", diag.save_extended,
+                       "Write the extended model file (the baseline plus the named effect)");
 
   // ---- bench commands (talk to hystbenchd) ----
   hd::RemoteCommand remote;
@@ -206,5 +228,6 @@ int main(int argc, char** argv) {
   if (*fit_cmd) return hd::run_fit(fit, std::cout, std::cerr);
   if (*sim_cmd) return hd::run_simulate(sim, std::cout, std::cerr);
   if (*inv_cmd) return hd::run_invert(inv, std::cout, std::cerr);
+  if (*diag_cmd) return hd::run_diagnose(diag, std::cout, std::cerr);
   return 2;
 }

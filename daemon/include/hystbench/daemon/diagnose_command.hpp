@@ -1,0 +1,53 @@
+#pragma once
+// `hystbench diagnose DATA.csv [--model MODEL.json] [--json] [--report DIR]
+//                     [--save-baseline FILE] [--save-extended FILE]`
+// Reads a record (columns t, u, y; bench run logs work too), runs compensation::diagnose()
+// and prints a short readable report, or one JSON object with --json:
+//   {"cause": "<name>", "verdict": "..", "heldout": "<how the record was split>",
+//    "baseline": {"model": {model file}, "description": "..", "rmse": .., "max_abs": .., ...},
+//    "extended": {"model": {model file}, "description": "..", "rmse": .., "gain": .., ...},
+//    "candidates": [{"cause": .., "statistic": .., "threshold": .., "significant": ..,
+//                    "rmse_heldout": .., "gain": .., "evidence": "..", "extension": ".."}, ...],
+//    "residual_structure": {"time": share, "input": .., ...}, "noise_rms": .., "notes": [..]}
+// (rmse on the held-out part; gain = baseline rmse / candidate rmse).
+// --report DIR writes report.txt, diagnosis.json, the plotted data, report.gp and the gnuplot
+// PNGs: loops.png (y against u with both models), residual_time.png (residual against time,
+// before and after), cause_<variable>.png (baseline residual against the named cause's
+// explanatory variable: input, rate, since_event, frequency or time), heldout_errors.png
+// (held-out error of the baseline and of each candidate); gnuplot runs as a subprocess.
+// --save-baseline / --save-extended write model files `simulate` and `invert` load. Returns the
+// process exit code (0 ok, 1 error); not real-time code.
+#include <iosfwd>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+
+#include "hystbench/compensation/diagnosis.hpp"
+
+namespace hystbench::daemon {
+
+struct DiagnoseCommand {
+  std::string data_path;
+  std::string model_path;  ///< empty: the baseline is a classical PI identified on the data
+  bool json_output = false;
+  std::string report_dir;     ///< empty: no report
+  std::string save_baseline;  ///< empty: not saved
+  std::string save_extended;  ///< empty: not saved
+};
+
+int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err);
+
+/// The --json object (see above); `data_path` is recorded in it.
+nlohmann::json diagnosis_to_json(const compensation::Diagnosis& d, const std::string& data_path);
+
+/// The readable report (what `diagnose` prints without --json).
+void print_diagnosis(std::ostream& out, const compensation::Diagnosis& d,
+                     const std::string& data_path);
+
+/// Writes the report folder (created if needed) and runs gnuplot on it. Throws
+/// std::runtime_error naming the file or the gnuplot failure.
+void write_diagnosis_report(const std::string& dir, const compensation::Diagnosis& d,
+                            const std::string& data_path, std::span<const double> t,
+                            std::span<const double> u, std::span<const double> y);
+
+}  // namespace hystbench::daemon

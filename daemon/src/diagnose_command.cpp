@@ -1,0 +1,389 @@
+#include "hystbench/daemon/diagnose_command.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <optional>
+#include <ostream>
+#include <sstream>
+
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/offline_commands.hpp"
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+namespace {
+
+constexpr std::size_t kMaxPlotPoints = 20000;
+
+std::string fmt(double v, int digits = 4) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+std::string pct(double fraction) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "%.0f %%", 100.0 * fraction);
+  return buf;
+}
+
+// A column must hold finite numbers only: name the file, column and data row.
+void require_finite_column(const DataTable& data, const std::string& name) {
+  const auto& c = data.column(name);
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    if (!std::isfinite(c[k])) {
+      throw std::invalid_argument(data.origin() + ": column '" + name + "', data row " +
+                                  std::to_string(k + 1) + ": " + fmt(c[k]) +
+                                  " is not a finite number");
+    }
+  }
+}
+
+// The variable that explains the named cause, for its residual plot.
+const char* explanatory_variable(hc::Cause c) {
+  switch (c) {
+    case hc::Cause::kAsymmetry:
+      return "input";
+    case hc::Cause::kRateDependence:
+    case hc::Cause::kDelay:
+      return "rate";
+    case hc::Cause::kCreep:
+      return "since_event";
+    case hc::Cause::kDynamics:
+      return "frequency";
+    case hc::Cause::kDrift:
+    case hc::Cause::kNone:
+      break;
+  }
+  return "time";
+}
+
+json model_json(const hc::ActuatorModel& m, const json& identification) {
+  return hc::to_json(hc::ModelFile{m, identification});
+}
+
+json identification_of(const hc::Diagnosis& d, const std::string& data_path, bool extended) {
+  json j = {{"data_file", data_path},
+            {"source", "hystbench diagnose"},
+            {"role", extended ? "extended" : "baseline"},
+            {"cause", std::string(hc::to_string(d.cause))},
+            {"description", extended ? d.extended_description : d.baseline_description},
+            {"heldout", d.split.describe(d.sample_period_s)},
+            {"samples", d.samples},
+            {"sample_period_s", d.sample_period_s},
+            {"fit", to_json(extended ? d.extended_fit : d.baseline_fit)},
+            {"heldout_error", to_json(extended ? d.extended_heldout : d.baseline_heldout)}};
+  return j;
+}
+
+// Runs `gnuplot script`, its output into log; throws with the log's tail on failure.
+void run_gnuplot(const std::filesystem::path& script, const std::filesystem::path& log) {
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("cannot start gnuplot: fork failed");
+  if (pid == 0) {
+    if (FILE* f = std::fopen(log.c_str(), "w")) {
+      dup2(fileno(f), STDOUT_FILENO);
+      dup2(fileno(f), STDERR_FILENO);
+    }
+    execlp("gnuplot", "gnuplot", script.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) throw std::runtime_error("gnuplot: waitpid failed");
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+  std::ifstream in(log);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string text = ss.str();
+  if (text.size() > 600) text = "..." + text.substr(text.size() - 600);
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 127) {
+    throw std::runtime_error("gnuplot is not installed (or not on PATH): the report data and " +
+                             script.string() + " are written, the PNGs are not");
+  }
+  throw std::runtime_error("gnuplot failed on " + script.string() + ": " + text);
+}
+
+std::ofstream open_for_writing(const std::filesystem::path& p) {
+  std::ofstream out(p, std::ios::trunc);
+  if (!out) throw std::runtime_error(p.string() + ": cannot write");
+  out << std::setprecision(10);
+  return out;
+}
+
+std::string quoted(const std::filesystem::path& p) {
+  std::string s = p.string();
+  std::string q = "'";
+  for (const char c : s) q += c == '\'' ? std::string("''") : std::string(1, c);
+  return q + "'";
+}
+
+}  // namespace
+
+json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
+  json candidates = json::array();
+  for (const hc::CandidateReport& c : d.candidates) {
+    candidates.push_back({{"cause", std::string(hc::to_string(c.cause))},
+                          {"statistic", c.statistic},
+                          {"threshold", c.threshold},
+                          {"significant", c.significant},
+                          {"rmse_heldout", c.heldout.rmse},
+                          {"rmse_fit", c.fit.rmse},
+                          {"gain", c.gain},
+                          {"evidence", c.evidence},
+                          {"extension", c.extension}});
+  }
+  json structure = json::object();
+  for (const hc::ResidualProfile& p : d.profiles) structure[p.variable] = p.explained;
+  json baseline = {{"model", model_json(d.baseline, identification_of(d, data_path, false))},
+                   {"description", d.baseline_description},
+                   {"given", d.baseline_given},
+                   {"rmse", d.baseline_heldout.rmse},
+                   {"max_abs", d.baseline_heldout.max_abs},
+                   {"rmse_fit", d.baseline_fit.rmse}};
+  if (d.refit_heldout) baseline["rmse_refit"] = d.refit_heldout->rmse;
+  const double gain =
+      d.extended_heldout.rmse > 0.0 ? d.baseline_heldout.rmse / d.extended_heldout.rmse : 1.0;
+  return {{"data", data_path},
+          {"cause", std::string(hc::to_string(d.cause))},
+          {"verdict", d.verdict},
+          {"notes", d.notes},
+          {"samples", d.samples},
+          {"sample_period_s", d.sample_period_s},
+          {"heldout", d.split.describe(d.sample_period_s)},
+          {"noise_rms", d.noise_rms},
+          {"baseline", baseline},
+          {"extended",
+           {{"model", model_json(d.extended, identification_of(d, data_path, true))},
+            {"description", d.extended_description},
+            {"rmse", d.extended_heldout.rmse},
+            {"max_abs", d.extended_heldout.max_abs},
+            {"rmse_fit", d.extended_fit.rmse},
+            {"gain", gain}}},
+          {"candidates", candidates},
+          {"residual_structure", structure}};
+}
+
+void print_diagnosis(std::ostream& out, const hc::Diagnosis& d, const std::string& data_path) {
+  const std::string unit = d.baseline.units.output;
+  const double seconds = d.sample_period_s * static_cast<double>(d.samples - 1);
+  out << "data      " << data_path << ": " << d.samples << " samples, "
+      << fmt(1.0 / d.sample_period_s) << " Hz, " << fmt(seconds) << " s\n";
+  out << "held out  " << d.split.describe(d.sample_period_s) << "\n";
+  out << "baseline  " << d.baseline_description << "\n"
+      << "          held-out rms " << fmt(d.baseline_heldout.rmse) << " " << unit << " ("
+      << fmt(d.baseline_heldout.rmse_percent(), 3) << " % of range), max "
+      << fmt(d.baseline_heldout.max_abs) << " " << unit << "; noise rms about "
+      << fmt(d.noise_rms, 3) << " " << unit << "\n";
+  if (d.refit_heldout) {
+    out << "          same structure refitted here: held-out rms " << fmt(d.refit_heldout->rmse)
+        << " " << unit << "\n";
+  }
+  out << "residual  share of the baseline residual variance explained by:";
+  for (const hc::ResidualProfile& p : d.profiles)
+    out << "  " << p.variable << " " << pct(p.explained);
+  out << "\n";
+  const hc::FrequencyResponse& fr = d.frequency_response;
+  std::optional<std::size_t> peak;
+  for (std::size_t i = 0; i < fr.gain.size(); ++i) {
+    if (fr.informative[i] && (!peak || fr.gain[i] > fr.gain[*peak])) peak = i;
+  }
+  if (peak) {
+    out << "          measured / predicted: largest gain " << fmt(fr.gain[*peak], 3) << " at "
+        << fmt(fr.frequency_hz[*peak], 3) << " Hz (phase "
+        << fmt(fr.phase_rad[*peak] * 180.0 / M_PI, 3)
+        << " deg), over the coherent bins above the noise\n";
+  } else {
+    out << "          measured / predicted: no coherent frequency bin above the noise\n";
+  }
+  out << "candidates (held-out rms; gain = baseline / candidate):\n";
+  for (const hc::CandidateReport& c : d.candidates) {
+    out << "  " << std::left << std::setw(16) << hc::to_string(c.cause) << std::right
+        << " statistic " << std::setw(8) << fmt(c.statistic, 3) << (c.significant ? " >= " : " <  ")
+        << std::setw(5) << fmt(c.threshold, 2) << "  rms " << std::setw(9) << fmt(c.heldout.rmse)
+        << "  gain " << std::setw(7) << fmt(c.gain, 3) << "  " << c.extension << "\n"
+        << "  " << std::string(16, ' ') << " " << c.evidence << "\n";
+  }
+  out << "cause     " << hc::to_string(d.cause) << "\n          " << d.verdict << "\n";
+  for (const std::string& n : d.notes) out << "note      " << n << "\n";
+  out << "extended  " << d.extended_description << ": held-out rms " << fmt(d.extended_heldout.rmse)
+      << " " << unit << "\n";
+}
+
+void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
+                            const std::string& data_path, std::span<const double> t,
+                            std::span<const double> u, std::span<const double> y) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::absolute(dir_name);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
+    throw std::runtime_error(dir.string() + ": cannot create the report folder");
+  }
+  {
+    auto f = open_for_writing(dir / "report.txt");
+    print_diagnosis(f, d, data_path);
+  }
+  {
+    auto f = open_for_writing(dir / "diagnosis.json");
+    f << std::setw(2) << diagnosis_to_json(d, data_path) << "\n";
+  }
+  // Whole-record series, thinned to at most kMaxPlotPoints rows.
+  const std::size_t n = u.size();
+  const std::size_t stride = std::max<std::size_t>(1, (n + kMaxPlotPoints - 1) / kMaxPlotPoints);
+  {
+    auto f = open_for_writing(dir / "record.dat");
+    f << "# t u y y_baseline y_extended residual_baseline residual_extended part "
+         "(0 fit, 1 held out, 2 start-up: neither)\n";
+    for (std::size_t k = 0; k < n; k += stride) {
+      const double yb = d.baseline_prediction[k], ye = d.extended_prediction[k];
+      const int part = k < d.split.skipped ? 2 : d.split.is_heldout(k) ? 1 : 0;
+      f << t[k] << ' ' << u[k] << ' ' << y[k] << ' ' << yb << ' ' << ye << ' ' << y[k] - yb << ' '
+        << y[k] - ye << ' ' << part << '\n';
+    }
+  }
+  const std::string variable = explanatory_variable(d.cause);
+  const hc::ResidualProfile* profile = d.profile(variable);
+  {
+    auto f = open_for_writing(dir / "explanatory.dat");
+    if (variable == "frequency") {
+      f << "# frequency_hz gain phase_deg coherence informative (measured / baseline "
+           "prediction)\n";
+      const auto& fr = d.frequency_response;
+      for (std::size_t i = 0; i < fr.frequency_hz.size(); ++i) {
+        f << fr.frequency_hz[i] << ' ' << fr.gain[i] << ' ' << fr.phase_rad[i] * 180.0 / M_PI << ' '
+          << fr.coherence[i] << ' ' << int{fr.informative[i]} << '\n';
+      }
+    } else if (profile != nullptr) {
+      f << "# " << profile->label << " | mean baseline residual | samples\n";
+      for (std::size_t i = 0; i < profile->centers.size(); ++i) {
+        f << profile->centers[i] << ' ' << profile->means[i] << ' ' << profile->counts[i] << '\n';
+      }
+    }
+  }
+  {
+    auto f = open_for_writing(dir / "candidates.dat");
+    f << "# index name heldout_rms gain\n0 baseline " << d.baseline_heldout.rmse << " 1\n";
+    int i = 1;
+    for (const hc::CandidateReport& c : d.candidates) {
+      f << i++ << ' ' << hc::to_string(c.cause) << ' ' << c.heldout.rmse << ' ' << c.gain << '\n';
+    }
+  }
+  const std::string in = d.baseline.units.input, out = d.baseline.units.output;
+  const std::string cause(hc::to_string(d.cause));
+  const fs::path record = dir / "record.dat";
+  std::ostringstream gp;
+  gp << "# hystbench diagnose report: gnuplot " << quoted(dir / "report.gp") << "\n"
+     << "set terminal pngcairo size 1000,650 font ',10' noenhanced\nset grid\nset key top left\n"
+     << "set datafile commentschars '#'\n";
+  gp << "set output " << quoted(dir / "loops.png") << "\n"
+     << "set title 'y against u: measured and both models (cause: " << cause << ")'\n"
+     << "set xlabel 'u [" << in << "]'\nset ylabel 'y [" << out << "]'\n"
+     << "plot " << quoted(record)
+     << " using 2:3 with points pt 7 ps 0.25 lc rgb '#999999' title 'measured', \\\n"
+     << "     '' using 2:4 with lines lw 1 lc rgb '#d62728' title 'baseline', \\\n"
+     << "     '' using 2:5 with lines lw 1 lc rgb '#1f77b4' title 'extended'\n";
+  gp << "set output " << quoted(dir / "residual_time.png") << "\n"
+     << "set title 'residual against time, before (baseline) and after (extended); grey: held "
+        "out'\n"
+     << "set xlabel 't [s]'\nset ylabel 'y - model [" << out << "]'\n"
+     << "plot " << quoted(record)
+     << " using 1:($8 == 1 ? $6 : 1/0) with impulses lc rgb '#dddddd' notitle, \\\n"
+     << "     '' using 1:($8 < 2 ? $6 : 1/0) with lines lc rgb '#d62728' title 'baseline', \\\n"
+     << "     '' using 1:($8 < 2 ? $7 : 1/0) with lines lc rgb '#1f77b4' title 'extended'\n";
+  const fs::path expl = dir / "explanatory.dat";
+  gp << "set output " << quoted(dir / ("cause_" + variable + ".png")) << "\n";
+  if (variable == "frequency") {
+    gp << "set title 'measured / baseline prediction against frequency (Welch)'\n"
+       << "set logscale x\nset xlabel 'f [Hz]'\nset ylabel 'gain'\nset y2label 'phase [deg]'\n"
+       << "set ytics nomirror\nset y2tics\n"
+       << "plot " << quoted(expl)
+       << " using 1:($5 > 0 ? $2 : 1/0) with lines lw 2 title "
+          "'gain (informative bins)', \\\n"
+       << "     '' using 1:($5 > 0 ? $3 : 1/0) axes x1y2 with lines title 'phase'\n"
+       << "unset logscale x\nunset y2tics\nunset y2label\nset ytics mirror\n";
+  } else {
+    const std::string label = profile != nullptr ? profile->label : variable;
+    gp << "set title 'baseline residual against " << label << " (binned mean)'\nset xlabel '"
+       << label << "'\nset ylabel 'mean residual [" << out << "]'\n";
+    if (variable == "since_event") gp << "set logscale x\n";
+    gp << "plot " << quoted(expl) << " using 1:2 with linespoints lw 2 title 'mean residual'\n";
+    if (variable == "since_event") gp << "unset logscale x\n";
+  }
+  gp << "set output " << quoted(dir / "heldout_errors.png") << "\n"
+     << "set title 'held-out rms error: baseline and each candidate (gain above the bars)'\n"
+     << "set style fill solid 0.6\nset boxwidth 0.6\nset xlabel ''\nset ylabel 'rms [" << out
+     << "]'\nset yrange [0:*]\nset xtics rotate by -30\n"
+     << "plot " << quoted(dir / "candidates.dat")
+     << " using 1:3:xtic(2) with boxes lc rgb '#1f77b4' notitle, \\\n"
+     << "     '' using 1:3:(sprintf('%.2fx', $4)) with labels offset 0,1 notitle\n";
+  {
+    auto f = open_for_writing(dir / "report.gp");
+    f << gp.str();
+  }
+  run_gnuplot(dir / "report.gp", dir / "gnuplot.log");
+}
+
+int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
+  try {
+    const DataTable data = DataTable::read_csv(cmd.data_path);
+    data.require_increasing("t");
+    for (const char* c : {"u", "y"}) require_finite_column(data, c);
+    const auto& t = data.column("t");
+    const auto& u = data.column("u");
+    const auto& y = data.column("y");
+    hc::DiagnosisOptions opt;
+    if (!cmd.model_path.empty()) {
+      opt.baseline = load_model_file(cmd.model_path).model;
+      opt.units = opt.baseline->units;
+    }
+    if (!cmd.json_output) {
+      opt.progress = [&err](double fraction, const std::string& what) {
+        err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction) << " %] " << what
+            << "\x1b[K" << std::flush;
+      };
+    }
+    hc::Diagnosis d;
+    try {
+      d = hc::diagnose(t, u, y, opt);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(cmd.data_path + ": " + e.what());
+    }
+    if (!cmd.json_output) err << "\n";
+    if (!cmd.save_baseline.empty()) {
+      save_model_file(cmd.save_baseline,
+                      hc::ModelFile{d.baseline, identification_of(d, cmd.data_path, false)});
+    }
+    if (!cmd.save_extended.empty()) {
+      save_model_file(cmd.save_extended,
+                      hc::ModelFile{d.extended, identification_of(d, cmd.data_path, true)});
+    }
+    if (!cmd.report_dir.empty()) write_diagnosis_report(cmd.report_dir, d, cmd.data_path, t, u, y);
+    if (cmd.json_output) {
+      out << diagnosis_to_json(d, cmd.data_path).dump() << "\n";
+    } else {
+      print_diagnosis(out, d, cmd.data_path);
+      if (!cmd.save_baseline.empty()) out << "saved     baseline " << cmd.save_baseline << "\n";
+      if (!cmd.save_extended.empty()) out << "saved     extended " << cmd.save_extended << "\n";
+      if (!cmd.report_dir.empty()) out << "report    " << cmd.report_dir << "\n";
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    err << "hystbench: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace hystbench::daemon

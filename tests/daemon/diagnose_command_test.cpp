@@ -1,0 +1,289 @@
+// `hystbench diagnose`: CSV and bench run-log input, the JSON object, saved models that
+// `simulate` and `invert` load, the report folder with gnuplot PNGs, clear errors for bad
+// input, and the measured piezo records of the shared data set.
+#include "hystbench/daemon/diagnose_command.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/offline_commands.hpp"
+#include "hystbench/daemon/sample_log_writer.hpp"
+#include "hystbench/sim/identification_excitation.hpp"
+#include "hystbench/sim/simulated_actuator.hpp"
+
+namespace hd = hystbench::daemon;
+namespace hs = hystbench::sim;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct Record {
+  std::vector<double> t, u, y;
+};
+
+// A simulated actuator (symmetric PI truth) with creep as the one hidden effect.
+hs::SimulatedActuatorConfig creep_actuator() {
+  hs::SimulatedActuatorConfig c;
+  c.dynamics.enabled = false;
+  c.hysteresis.dead_zone_thresholds_um = {0.0};
+  c.hysteresis.dead_zone_weights = {1.0};
+  c.creep.enabled = true;
+  c.creep.time_constants_s = {0.1, 1.0, 10.0};
+  c.creep.gains_um_per_v = {0.003, 0.003, 0.003};
+  return c;
+}
+
+Record simulate(const hs::SimulatedActuatorConfig& c, double dt,
+                const hs::IdentificationExcitationOptions& o, std::uint64_t noise_seed) {
+  hs::SimulatedActuatorConfig config = c;
+  config.sensor_noise.seed = noise_seed;
+  hs::SimulatedActuator actuator(config, dt);
+  const hs::Excitation x = hs::identification_excitation(0.0, 150.0, dt, o);
+  Record r;
+  actuator.reset(x.samples.front());
+  for (std::size_t k = 0; k < x.samples.size(); ++k) {
+    r.t.push_back(static_cast<double>(k) * dt);
+    r.u.push_back(x.samples[k]);
+    r.y.push_back(actuator.step(x.samples[k]));
+  }
+  return r;
+}
+
+class DiagnoseCommandTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("hystbench_diagnose_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  std::string write_record(const std::string& name, const Record& r) const {
+    hd::write_csv(path(name), {"t", "u", "y"}, {&r.t, &r.u, &r.y});
+    return path(name);
+  }
+
+  std::string write_text(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  }
+
+  // Runs the command; returns the exit code, output in out_ / err_.
+  int run(const hd::DiagnoseCommand& cmd) {
+    std::ostringstream out, err;
+    const int code = hd::run_diagnose(cmd, out, err);
+    out_ = out.str();
+    err_ = err.str();
+    return code;
+  }
+
+  fs::path dir_;
+  std::string out_, err_;
+};
+
+double rms_of_simulation(const std::string& model, const std::string& data,
+                         const std::string& output) {
+  hd::SimulateCommand sim{model, data, output, true};
+  std::ostringstream out, err;
+  EXPECT_EQ(hd::run_simulate(sim, out, err), 0) << err.str();
+  return json::parse(out.str()).at("rmse").get<double>();
+}
+
+}  // namespace
+
+TEST_F(DiagnoseCommandTest, JsonNamesTheHiddenEffectAndSavedModelsPredictAnotherRecord) {
+  const auto config = creep_actuator();
+  hs::IdentificationExcitationOptions first, second;
+  second.hold_levels = {0.8, 0.1, 0.6, 0.0};
+  second.rate_frequencies_hz = {1.0, 4.0};
+  second.rate_cycles = {3, 6};
+  const std::string data = write_record("first.csv", simulate(config, 1e-3, first, 11));
+  const std::string other = write_record("second.csv", simulate(config, 1e-3, second, 12));
+
+  hd::DiagnoseCommand cmd;
+  cmd.data_path = data;
+  cmd.json_output = true;
+  cmd.save_baseline = path("baseline.json");
+  cmd.save_extended = path("extended.json");
+  ASSERT_EQ(run(cmd), 0) << err_;
+  const json j = json::parse(out_);
+  EXPECT_EQ(j.at("cause"), "creep");
+  for (const char* key : {"baseline", "extended", "candidates", "heldout", "verdict"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j.at("baseline").at("model").at("schema"), "hystbench.model/1");
+  EXPECT_EQ(j.at("baseline").at("model").at("type"), "pi");
+  EXPECT_TRUE(j.at("extended").at("model").contains("creep"));
+  EXPECT_FALSE(j.at("baseline").at("given").get<bool>());
+  ASSERT_EQ(j.at("candidates").size(), 6u);
+  const double base_rmse = j.at("baseline").at("rmse").get<double>();
+  for (const json& c : j.at("candidates")) {
+    EXPECT_NEAR(c.at("gain").get<double>(), base_rmse / c.at("rmse_heldout").get<double>(),
+                1e-9 * c.at("gain").get<double>());
+    EXPECT_FALSE(c.at("evidence").get<std::string>().empty());
+  }
+  EXPECT_LT(j.at("extended").at("rmse").get<double>(), base_rmse);
+  EXPECT_NE(j.at("heldout").get<std::string>().find("held out"), std::string::npos);
+
+  // Both saved models are ordinary model files: simulate runs them on the other record, where
+  // the extended one predicts better; invert builds an inverse of the extended one.
+  const double base_other = rms_of_simulation(cmd.save_baseline, other, path("b.csv"));
+  const double ext_other = rms_of_simulation(cmd.save_extended, other, path("e.csv"));
+  EXPECT_LT(ext_other, 0.6 * base_other);
+  const hd::DataTable second_record = hd::DataTable::read_csv(other);
+  const auto& t = second_record.column("t");
+  const auto& y = second_record.column("y");
+  hd::write_csv(path("reference.csv"), {"t", "yr"}, {&t, &y});
+  hd::InvertCommand inv{cmd.save_extended, path("reference.csv"), path("drive.csv"), "auto", true};
+  std::ostringstream out, err;
+  EXPECT_EQ(hd::run_invert(inv, out, err), 0) << err.str();
+}
+
+TEST_F(DiagnoseCommandTest, ReadsABenchRunLogAndTakesAGivenModelAsBaseline) {
+  const Record r = simulate(creep_actuator(), 1e-3, {}, 21);
+  hd::SampleLogOptions o;
+  o.log_dir = dir_ / "logs";
+  o.run_id = "identify-1";
+  o.header = {{"run", {{"kind", "identify"}}}};
+  o.update_latest_link = false;
+  std::string log;
+  {
+    hd::SampleLogWriter writer(o);
+    for (std::size_t k = 0; k < r.u.size(); ++k) {
+      hd::SampleRecord s;
+      s.index = k;
+      s.scheduled_ns = static_cast<std::int64_t>(k) * 1000000;
+      s.u_out = r.u[k];
+      s.y_measured = r.y[k];
+      ASSERT_TRUE(writer.push(s));
+    }
+    EXPECT_EQ(writer.close().dropped, 0u);
+    log = writer.path().string();
+  }
+  // First without a model (saving the PI it identifies), then with that model as the baseline.
+  hd::DiagnoseCommand cmd;
+  cmd.data_path = log;
+  cmd.save_baseline = path("pi.json");
+  ASSERT_EQ(run(cmd), 0) << err_;
+  EXPECT_NE(out_.find("cause     creep"), std::string::npos) << out_;
+  EXPECT_NE(out_.find("held out"), std::string::npos);
+  cmd.model_path = cmd.save_baseline;
+  cmd.save_baseline.clear();
+  cmd.json_output = true;
+  ASSERT_EQ(run(cmd), 0) << err_;
+  const json j = json::parse(out_);
+  EXPECT_TRUE(j.at("baseline").at("given").get<bool>());
+  EXPECT_EQ(j.at("cause"), "creep");
+}
+
+TEST_F(DiagnoseCommandTest, ReportFolderHasTheTextTheJsonAndThePlots) {
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "gnuplot is not installed";
+  }
+  hd::DiagnoseCommand cmd;
+  cmd.data_path = write_record("run.csv", simulate(creep_actuator(), 2e-3, {}, 31));
+  cmd.report_dir = path("report");
+  ASSERT_EQ(run(cmd), 0) << err_;
+  for (const char* f : {"report.txt", "diagnosis.json", "report.gp", "loops.png",
+                        "residual_time.png", "cause_since_event.png", "heldout_errors.png"}) {
+    const fs::path p = fs::path(cmd.report_dir) / f;
+    ASSERT_TRUE(fs::exists(p)) << p;
+    EXPECT_GT(fs::file_size(p), 100u) << p;
+  }
+  std::ifstream in(fs::path(cmd.report_dir) / "report.txt");
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), out_.substr(0, out_.find("report    ")));
+}
+
+TEST_F(DiagnoseCommandTest, BadInputGivesAClearError) {
+  std::string with_nan = "t,u,y\n";
+  for (int k = 0; k < 1000; ++k) {
+    with_nan += std::to_string(k * 1e-3) + "," + std::to_string(50 + 40 * std::sin(0.02 * k)) +
+                "," + (k == 17 ? std::string("nan") : std::to_string(0.3 * (50 + k % 7))) + "\n";
+  }
+  auto error_of = [&](const std::string& text) {
+    hd::DiagnoseCommand cmd;
+    cmd.data_path = write_text("bad.csv", text);
+    EXPECT_EQ(run(cmd), 1);
+    return err_;
+  };
+  EXPECT_NE(error_of("t,u,y\n0,1,2\n0.001,2,3\n").find("too few samples"), std::string::npos);
+  std::string constant = "t,u,y\n";
+  for (int k = 0; k < 1000; ++k)
+    constant += std::to_string(k * 1e-3) + ",5," + std::to_string(k) + "\n";
+  EXPECT_NE(error_of(constant).find("input u is constant"), std::string::npos);
+  const std::string nan_error = error_of(with_nan);
+  EXPECT_NE(nan_error.find("column 'y', data row 18"), std::string::npos) << nan_error;
+  EXPECT_NE(nan_error.find("not a finite number"), std::string::npos) << nan_error;
+  std::string no_y = "t,u\n";
+  for (int k = 0; k < 1000; ++k)
+    no_y += std::to_string(k * 1e-3) + "," + std::to_string(k % 50) + "\n";
+  EXPECT_NE(error_of(no_y).find("missing column 'y'"), std::string::npos);
+  EXPECT_EQ(error_of(no_y).rfind("hystbench: error: ", 0), 0u);
+}
+
+// The measured micromanipulator of the shared data set: the identification run as data, then
+// the tracking run with a model identified on the first (`hystbench fit`) as the baseline.
+TEST_F(DiagnoseCommandTest, MeasuredPiezoRecords) {
+  const fs::path folder = fs::path(HYSTBENCH_SHARED_DATA_DIR) / "piezo-ntu-dbo";
+  if (!fs::exists(folder / "Model_Vi_Do.dat") || !fs::exists(folder / "Test_Vi_Do_Di.dat")) {
+    GTEST_SKIP() << "shared data set piezo-ntu-dbo not found under " << HYSTBENCH_SHARED_DATA_DIR;
+  }
+  // Columns (README): 1 control input [V], 5 displacement [um]; 200 Hz, no time column.
+  auto convert = [&](const fs::path& dat, const std::string& name) {
+    std::ifstream in(dat);
+    Record r;
+    std::string line;
+    while (std::getline(in, line)) {
+      std::istringstream cells(line);
+      std::vector<double> v;
+      for (double x; cells >> x;) v.push_back(x);
+      if (v.size() < 5) continue;
+      r.t.push_back(static_cast<double>(r.t.size()) / 200.0);
+      r.u.push_back(v[0]);
+      r.y.push_back(v[4]);
+    }
+    return write_record(name, r);
+  };
+  hd::DiagnoseCommand cmd;
+  cmd.data_path = convert(folder / "Model_Vi_Do.dat", "identification.csv");
+  cmd.json_output = true;
+  ASSERT_EQ(run(cmd), 0) << err_;
+  const json id = json::parse(out_);
+  ASSERT_TRUE(id.at("cause").is_string());
+  // The README documents a one-sample sensor lag: the delay candidate finds it.
+  for (const json& c : id.at("candidates")) {
+    if (c.at("cause") == "delay") {
+      EXPECT_NE(c.at("extension").get<std::string>().find("1 samples"), std::string::npos);
+    }
+  }
+  EXPECT_LE(id.at("extended").at("rmse").get<double>(), id.at("baseline").at("rmse").get<double>());
+
+  hd::FitCommand fit;
+  fit.data_path = cmd.data_path;
+  fit.output_path = path("identified.json");
+  std::ostringstream fout, ferr;
+  ASSERT_EQ(hd::run_fit(fit, fout, ferr), 0) << ferr.str();
+  cmd.data_path = convert(folder / "Test_Vi_Do_Di.dat", "tracking.csv");
+  cmd.model_path = fit.output_path;
+  ASSERT_EQ(run(cmd), 0) << err_;
+  const json tr = json::parse(out_);
+  EXPECT_TRUE(tr.at("baseline").at("given").get<bool>());
+  EXPECT_TRUE(tr.at("baseline").contains("rmse_refit"));
+  EXPECT_LE(tr.at("extended").at("rmse").get<double>(), tr.at("baseline").at("rmse").get<double>());
+}
