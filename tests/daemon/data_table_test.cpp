@@ -18,7 +18,8 @@ std::string error_of(const std::string& text) {
 }  // namespace
 
 TEST(DataTable, ReadsCommentsHeaderAndColumnsIgnoringExtras) {
-  const auto t = hd::DataTable::parse_csv("# {\"run\":1}\n# second\nt,u,y,extra\n0,1,2,9\n0.001,1.5,2.5,9\n");
+  const auto t =
+      hd::DataTable::parse_csv("# {\"run\":1}\n# second\nt,u,y,extra\n0,1,2,9\n0.001,1.5,2.5,9\n");
   EXPECT_EQ(t.rows(), 2u);
   EXPECT_EQ(t.comments().size(), 2u);
   EXPECT_DOUBLE_EQ(t.column("u")[1], 1.5);
