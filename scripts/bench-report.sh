@@ -16,6 +16,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${BUILD:-build}
 seconds=${HYSTBENCH_REPORT_SECONDS:-10}
+if [ -z "${HYSTBENCH_NO_BUILD:-}" ]; then
+  bash scripts/deps.sh build >&2
+  cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DHYSTBENCH_BENCH=ON >/dev/null
+fi
 [ -n "${HYSTBENCH_NO_BUILD:-}" ] || cmake --build "$build" -j2 --target hystbench-bench hystbench-bare-loop hystbench hystbenchd hystbench-simdaq >/dev/null
 bin=$build/bin
 bench_tmp=$(mktemp -d)
