@@ -21,6 +21,7 @@ constexpr std::array<Cause, 6> kCandidates{Cause::kAsymmetry, Cause::kRateDepend
                                            Cause::kCreep,     Cause::kDynamics,
                                            Cause::kDelay,     Cause::kDrift};
 // A runner-up this close to the named cause's gain makes the verdict ambiguous.
+constexpr double kMinCoherentShare = 0.5;
 constexpr double kAmbiguity = 0.9;
 // Bins of the residual profiles.
 constexpr std::size_t kTimeBins = 32, kLevelBins = 24, kRateBins = 24, kSinceBins = 16;
@@ -197,9 +198,28 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
   std::vector<double> e(r.n);
   for (std::size_t k = 0; k < r.n; ++k) e[k] = r.y[k] - d.baseline_prediction[k];
   d.noise_rms = details::noise_rms(e);
+  d.noise_source = "second differences of the baseline residual";
+  d.input_period = details::input_period(r.u);
+  if (d.input_period > 0) {
+    const double periodic = details::periodic_noise_rms(r.y, d.input_period);
+    if (periodic > 0.0 && periodic < d.noise_rms) {
+      d.noise_rms = periodic;
+      d.noise_source = "period-to-period difference of the output (the input repeats every " +
+                       std::to_string(d.input_period) + " samples)";
+    }
+  }
   const details::InputEvents ev = details::find_input_events(r.u, r.dt);
   d.profiles = residual_profiles(r, e, ev);
   d.frequency_response = details::frequency_response(d.baseline_prediction, r.y, r.dt, d.noise_rms);
+  {
+    const FrequencyResponse& fr = d.frequency_response;
+    double coherent = 0.0, total = 0.0;
+    for (std::size_t i = 0; i < fr.coherence.size(); ++i) {
+      coherent += fr.coherence[i] * fr.output_psd[i];
+      total += fr.output_psd[i];
+    }
+    if (total > 0.0) d.coherent_share = coherent / total;
+  }
 
   // ---- candidates: their statistics read the residual of the reference the gains are judged
   // against, the refit when a given model no longer matches this record.
@@ -311,6 +331,20 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
                       "x the noise, but no single candidate explains the rest (best gain " +
                       num(best_any->gain) + ", " + std::string(to_string(best_any->cause)) +
                       (best_any->significant ? "" : ", statistic not significant") + ")");
+  }
+  if (!at_floor && d.coherent_share < kMinCoherentShare) {
+    double mean = 0.0, square = 0.0;
+    for (const double v : r.y) mean += v, square += v * v;
+    mean /= static_cast<double>(r.n);
+    const double variance = square / static_cast<double>(r.n) - mean * mean;
+    const double noise_share = variance > 0.0 ? d.noise_rms * d.noise_rms / variance : 0.0;
+    d.notes.push_back(
+        "not clean: only " + num(100.0 * d.coherent_share) +
+        " % of the output's power is coherent with this input's prediction, and noise makes " +
+        num(100.0 * noise_share) +
+        " %: the rest comes from something not in this record (another input driving this "
+        "output, as in a multi-axis stage, or a disturbance), which no single-input model or "
+        "candidate here explains");
   }
   if (d.refit_heldout && d.refit_heldout->rmse > 0.0 &&
       d.baseline_heldout.rmse / d.refit_heldout->rmse >= options.min_gain) {

@@ -164,6 +164,9 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
           {"sample_period_s", d.sample_period_s},
           {"heldout", d.split.describe(d.sample_period_s)},
           {"noise_rms", d.noise_rms},
+          {"noise_source", d.noise_source},
+          {"coherent_share", d.coherent_share},
+          {"input_period_samples", d.input_period},
           {"baseline", baseline},
           {"extended",
            {{"model", model_json(d.extended, identification_of(d, data_path, true))},
@@ -186,7 +189,7 @@ void print_diagnosis(std::ostream& out, const hc::Diagnosis& d, const std::strin
       << "          held-out rms " << fmt(d.baseline_heldout.rmse) << " " << unit << " ("
       << fmt(d.baseline_heldout.rmse_percent(), 3) << " % of range), max "
       << fmt(d.baseline_heldout.max_abs) << " " << unit << "; noise rms about "
-      << fmt(d.noise_rms, 3) << " " << unit << "\n";
+      << fmt(d.noise_rms, 3) << " " << unit << " (" << d.noise_source << ")\n";
   if (d.refit_heldout) {
     out << "          same structure refitted here: held-out rms " << fmt(d.refit_heldout->rmse)
         << " " << unit << "\n";

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <numbers>
 #include <unsupported/Eigen/FFT>
 
@@ -143,6 +144,73 @@ double noise_rms(std::span<const double> e) {
   for (double& v : d) v = std::abs(v - med);
   // MAD -> sigma for a Gaussian; the second difference of white noise has variance 6 sigma^2.
   return 1.4826 * median_of(d) / std::sqrt(6.0);
+}
+
+std::size_t input_period(std::span<const double> u) {
+  const std::size_t n = u.size();
+  if (n < 64) return 0;
+  // Coarse search on block means (at most 2^16 of them, one FFT), refined at full rate.
+  const std::size_t m = (n + 65535) / 65536;
+  const std::size_t nc = n / m;
+  std::vector<double> coarse(nc, 0.0);
+  for (std::size_t i = 0; i < nc; ++i) {
+    for (std::size_t j = 0; j < m; ++j) coarse[i] += u[i * m + j];
+    coarse[i] /= static_cast<double>(m);
+  }
+  double mean = 0.0;
+  for (const double v : coarse) mean += v;
+  mean /= static_cast<double>(nc);
+  std::size_t len = 1;
+  while (len < 2 * nc) len *= 2;
+  std::vector<double> x(len, 0.0);
+  for (std::size_t k = 0; k < nc; ++k) x[k] = coarse[k] - mean;
+  Eigen::FFT<double> fft;
+  std::vector<std::complex<double>> X;
+  fft.fwd(X, x);
+  for (auto& c : X) c = std::norm(c);
+  std::vector<double> acf;
+  fft.inv(acf, X);
+  if (!(acf[0] > 0.0)) return 0;
+  // Unbiased, normalised: r(l) = sum_k x(k) x(k+l) / (n - l) / variance.
+  auto r = [&](std::size_t l) {
+    return acf[l] * static_cast<double>(nc) / (static_cast<double>(nc - l) * acf[0]);
+  };
+  const std::size_t max_lag = nc / 2;
+  std::size_t l = 1;
+  while (l <= max_lag && r(l) > 0.5) ++l;
+  std::size_t lag = 0;
+  for (; l <= max_lag; ++l) {
+    if (r(l) >= 0.95 && r(l) >= r(l - 1) && (l + 1 > max_lag || r(l) >= r(l + 1))) {
+      lag = l;
+      break;
+    }
+  }
+  if (lag == 0) return 0;
+  // Full rate: the lag within one block either side with the smallest mean square difference.
+  auto mean_square_difference = [&](std::size_t p) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k + p < n; ++k) sum += (u[k + p] - u[k]) * (u[k + p] - u[k]);
+    return sum / static_cast<double>(n - p);
+  };
+  std::size_t best = 0;
+  double best_difference = std::numeric_limits<double>::infinity();
+  for (std::size_t p = lag * m - std::min(lag * m - 1, m); p <= std::min(n / 2, lag * m + m); ++p) {
+    const double d = mean_square_difference(p);
+    if (d < best_difference) best = p, best_difference = d;
+  }
+  double full_mean = 0.0, full_square = 0.0;
+  for (const double v : u) full_mean += v, full_square += v * v;
+  full_mean /= static_cast<double>(n);
+  const double variance = full_square / static_cast<double>(n) - full_mean * full_mean;
+  return best_difference <= 0.02 * 0.02 * variance ? best : 0;
+}
+
+double periodic_noise_rms(std::span<const double> y, std::size_t period) {
+  if (period == 0 || y.size() < period + 3) return 0.0;
+  std::vector<double> d(y.size() - period);
+  for (std::size_t k = 0; k < d.size(); ++k) d[k] = y[k + period] - y[k];
+  // The period difference carries the noise of two samples.
+  return noise_rms(d) / std::sqrt(2.0);
 }
 
 std::vector<double> linear_edges(double lo, double hi, std::size_t bins) {

@@ -38,6 +38,17 @@ InputEvents find_input_events(std::span<const double> u, double dt);
 /// so slow model errors and isolated transients hardly count.
 double noise_rms(std::span<const double> residual);
 
+/// The period of a repeating input in samples (a multisine or a repeated wave played at least
+/// twice): the first autocorrelation peak after the first drop, accepted only when the input
+/// repeats to within 2 % of its standard deviation over at least one whole period; 0 when the
+/// input does not repeat.
+std::size_t input_period(std::span<const double> u);
+
+/// Noise rms of the output from its period-to-period difference, given the input's period:
+/// y(k + P) - y(k) cancels everything the input explains, however fast; its second difference
+/// also cancels slow drift and creep; what is left is noise (robust: median absolute deviation).
+double periodic_noise_rms(std::span<const double> y, std::size_t period);
+
 /// Binned means of `value` against `x` over the samples with use[k] (all when `use` is empty),
 /// with `edges` the bin edges (increasing; values outside fall into the end bins).
 ResidualProfile binned_profile(std::string variable, std::string label, std::span<const double> x,

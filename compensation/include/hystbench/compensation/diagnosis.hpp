@@ -135,8 +135,17 @@ struct Diagnosis {
   std::size_t samples = 0;
   double sample_period_s = 0.0;
   DataSplit split;
-  /// Noise rms estimated from the residual's second differences [output unit].
+  /// Noise rms [output unit]: from the baseline residual's second differences, or, when the
+  /// input repeats (`input_period` > 0 samples), from the output's period-to-period difference
+  /// if that is lower (it also holds when the residual has content up to the Nyquist frequency).
   double noise_rms = 0.0;
+  std::size_t input_period = 0;
+  std::string noise_source;  ///< how noise_rms was estimated, one phrase
+  /// Share of the output's power (beyond its mean) that is coherent with the baseline's
+  /// prediction, 0..1 (Welch coherence weighted by the output spectrum). Well below 1 while the
+  /// noise is small: something not in the record drives the output (another input, a
+  /// disturbance), which no single-input model explains.
+  double coherent_share = 1.0;
 
   bool baseline_given = false;
   std::string baseline_description;
