@@ -18,17 +18,37 @@ int main(int argc, char** argv) {
       "\n"
       "Data files are CSV: '#' lines are comments, a header row names the columns; 't' (s) and\n"
       "'u' (input, e.g. V) are required, 'y' (output, e.g. um) where the command needs it.\n"
+      "Other names, scales or no time column: --t-column, --u-column, --y-column, --u-scale,\n"
+      "--y-scale, --rate (fit, simulate, diagnose).\n"
       "\n"
       "Examples:\n"
       "  hystbench fit run.csv --model mpi -o actuator.json\n"
       "  hystbench simulate actuator.json other_run.csv -o predicted.csv --json\n"
       "  hystbench invert actuator.json reference.csv -o drive.csv\n"
       "  hystbench diagnose run.csv --report diagnosis/ --save-extended extended.json\n"
+      "  hystbench diagnose daq.csv --u-column u1_V --y-column y1_m --y-scale 1e6 --rate 6400\n"
       "  hystbench identify --wait                  (bench: identify the actuator on the bench)\n"
       "  hystbench track --reference triangle --frequency 1 --periods 5 --compensator inverse "
       "--wait --json\n"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string(HYSTBENCH_VERSION));
+
+  // Column mapping shared by the commands that read a measured record.
+  auto add_column_options = [](CLI::App* c, hd::RecordColumns& columns, bool y_optional) {
+    c->add_option("--t-column", columns.t, "Name of the time column [s]")->capture_default_str();
+    c->add_option("--u-column", columns.u, "Name of the input column")->capture_default_str();
+    c->add_option("--y-column", columns.y,
+                  y_optional ? "Name of the (optional) measured output column"
+                             : "Name of the measured output column")
+        ->capture_default_str();
+    c->add_option("--u-scale", columns.u_scale, "Multiply the input column by this (mV -> V: 1e-3)")
+        ->capture_default_str();
+    c->add_option("--y-scale", columns.y_scale, "Multiply the output column by this (m -> um: 1e6)")
+        ->capture_default_str();
+    c->add_option("--rate", columns.rate_hz,
+                  "Sample rate [Hz] of a file without a time column (t = row / rate)")
+        ->check(CLI::PositiveNumber);
+  };
 
   hd::FitCommand fit;
   auto* fit_cmd =
@@ -61,6 +81,7 @@ int main(int argc, char** argv) {
                     "Skip the Levenberg-Marquardt threshold refinement");
   fit_cmd->add_option("-o,--output", fit.output_path, "Model file to write (JSON)")->required();
   fit_cmd->add_flag("--json", fit.json_output, "Print the result as one JSON line");
+  add_column_options(fit_cmd, fit.columns, false);
 
   hd::SimulateCommand sim;
   auto* sim_cmd = app.add_subcommand(
@@ -72,6 +93,7 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   sim_cmd->add_option("-o,--output", sim.output_path, "CSV file to write")->required();
+  add_column_options(sim_cmd, sim.columns, true);
   sim_cmd->add_flag(
       "--json", sim.json_output,
       "Print {\"rmse\",\"max_abs\",\"range\",...} as one JSON line (when y is present)");
@@ -108,6 +130,7 @@ int main(int argc, char** argv) {
                    "Baseline model file (default: a classical PI identified on the data)")
       ->check(CLI::ExistingFile);
   diag_cmd->add_flag("--json", diag.json_output, "Print the result as one JSON object");
+  add_column_options(diag_cmd, diag.columns, false);
   diag_cmd->add_option("--report", diag.report_dir,
                        "Folder for report.txt, diagnosis.json and gnuplot PNGs");
   diag_cmd->add_option("--save-baseline", diag.save_baseline, "Write the baseline model file");

@@ -115,14 +115,62 @@ void DataTable::require_increasing(const std::string& name) const {
   }
 }
 
+namespace {
+
+// Median increment of a time column with at least 2 rows [its unit].
+double median_step(const std::vector<double>& t) {
+  std::vector<double> d(t.size() - 1);
+  for (std::size_t k = 1; k < t.size(); ++k) d[k - 1] = t[k] - t[k - 1];
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+}  // namespace
+
 double DataTable::sample_period() const {
   const auto& t = column("t");
   if (t.size() < 2)
     throw DataFileError(origin_ + ": need at least 2 rows to know the sample period");
-  std::vector<double> d(t.size() - 1);
-  for (std::size_t k = 1; k < t.size(); ++k) d[k - 1] = t[k] - t[k - 1];
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return d[d.size() / 2];
+  return median_step(t);
+}
+
+Record read_record(const std::string& path, const RecordColumns& columns, bool y_required) {
+  for (const auto& [name, value] :
+       {std::pair{"u scale", columns.u_scale}, std::pair{"y scale", columns.y_scale}}) {
+    if (!std::isfinite(value) || value == 0.0) {
+      throw DataFileError(std::string(name) + " must be a finite, non-zero number");
+    }
+  }
+  if (!std::isfinite(columns.rate_hz) || columns.rate_hz < 0.0) {
+    throw DataFileError("the sample rate must be a positive number of Hz (or 0: read t)");
+  }
+  const DataTable data = DataTable::read_csv(path);
+  Record r;
+  auto scaled = [&](const std::string& name, double scale) {
+    std::vector<double> v = data.column(name);
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      if (!std::isfinite(v[k])) {
+        throw DataFileError(path + ":" + std::to_string(data.line_of_row(k)) + ": column '" + name +
+                            "', data row " + std::to_string(k + 1) + ": " + std::to_string(v[k]) +
+                            " is not a finite number");
+      }
+      v[k] *= scale;
+    }
+    return v;
+  };
+  if (columns.rate_hz > 0.0) {
+    r.t.resize(data.rows());
+    for (std::size_t k = 0; k < r.t.size(); ++k) r.t[k] = static_cast<double>(k) / columns.rate_hz;
+    r.sample_period_s = 1.0 / columns.rate_hz;
+  } else {
+    data.require_increasing(columns.t);
+    r.t = data.column(columns.t);
+    if (r.t.size() < 2) throw DataFileError(path + ": need at least 2 rows");
+    r.sample_period_s = median_step(r.t);
+  }
+  r.u = scaled(columns.u, columns.u_scale);
+  if (y_required || data.has(columns.y)) r.y = scaled(columns.y, columns.y_scale);
+  return r;
 }
 
 void write_csv(const std::string& path, const std::vector<std::string>& names,

@@ -39,17 +39,6 @@ std::string pct(double fraction) {
 }
 
 // A column must hold finite numbers only: name the file, column and data row.
-void require_finite_column(const DataTable& data, const std::string& name) {
-  const auto& c = data.column(name);
-  for (std::size_t k = 0; k < c.size(); ++k) {
-    if (!std::isfinite(c[k])) {
-      throw std::invalid_argument(data.origin() + ": column '" + name + "', data row " +
-                                  std::to_string(k + 1) + ": " + fmt(c[k]) +
-                                  " is not a finite number");
-    }
-  }
-}
-
 // The variable that explains the named cause, for its residual plot.
 const char* explanatory_variable(hc::Cause c) {
   switch (c) {
@@ -341,12 +330,10 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
 
 int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
-    const DataTable data = DataTable::read_csv(cmd.data_path);
-    data.require_increasing("t");
-    for (const char* c : {"u", "y"}) require_finite_column(data, c);
-    const auto& t = data.column("t");
-    const auto& u = data.column("u");
-    const auto& y = data.column("y");
+    const Record data = read_record(cmd.data_path, cmd.columns, true);
+    const auto& t = data.t;
+    const auto& u = data.u;
+    const auto& y = data.y;
     hc::DiagnosisOptions opt;
     if (!cmd.model_path.empty()) {
       opt.baseline = load_model_file(cmd.model_path).model;

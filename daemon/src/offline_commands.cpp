@@ -73,8 +73,7 @@ int guarded(std::ostream& err, F&& body) {
 
 int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
   return guarded(err, [&] {
-    const DataTable data = DataTable::read_csv(cmd.data_path);
-    data.require_increasing("t");
+    const Record data = read_record(cmd.data_path, cmd.columns, true);
     hc::FitOptions opt;
     if (cmd.model_name == "auto") {
       opt.kind = std::nullopt;
@@ -95,15 +94,14 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
             << "\x1b[K" << std::flush;
       };
     }
-    const hc::FitResult r =
-        hc::fit_model(data.column("t"), data.column("u"), data.column("y"), opt);
+    const hc::FitResult r = hc::fit_model(data.t, data.u, data.y, opt);
     if (!cmd.json_output) err << "\n";
     hc::ModelFile file{r.model, json::object()};
     file.identification = {{"data_file", cmd.data_path},
-                           {"samples", data.rows()},
+                           {"samples", data.t.size()},
                            {"fit_samples", r.fit_samples},
                            {"heldout_samples", r.heldout_samples},
-                           {"sample_period_s", data.sample_period()},
+                           {"sample_period_s", data.sample_period_s},
                            {"method", r.method},
                            {"operators", r.operators},
                            {"dead_zones", r.dead_zones},
@@ -131,20 +129,16 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
 int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& err) {
   return guarded(err, [&] {
     hc::ModelFile file = load_model_file(cmd.model_path);
-    const DataTable data = DataTable::read_csv(cmd.data_path);
-    data.require_increasing("t");
-    const auto& t = data.column("t");
-    const auto& u = data.column("u");
-    for (std::size_t k = 0; k < u.size(); ++k) {
-      if (!std::isfinite(u[k])) throw std::invalid_argument(cmd.data_path + ": u is not finite");
-    }
-    const std::vector<double> y_model = file.model.simulate(u, data.sample_period());
+    const Record data = read_record(cmd.data_path, cmd.columns, false);
+    const auto& t = data.t;
+    const auto& u = data.u;
+    const std::vector<double> y_model = file.model.simulate(u, data.sample_period_s);
     std::vector<std::string> names{"t", "u", "y_model"};
     std::vector<const std::vector<double>*> cols{&t, &u, &y_model};
     std::vector<double> residual;
     json result = {{"samples", u.size()}, {"output", cmd.output_path}};
-    if (data.has("y")) {
-      const auto& y = data.column("y");
+    if (!data.y.empty()) {
+      const auto& y = data.y;
       residual.resize(y.size());
       for (std::size_t k = 0; k < y.size(); ++k) residual[k] = y[k] - y_model[k];
       names.insert(names.end(), {"y", "residual"});

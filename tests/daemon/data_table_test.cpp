@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
 namespace hd = hystbench::daemon;
 
@@ -59,5 +60,52 @@ TEST(DataTable, WriteThenReadRoundTrips) {
   EXPECT_EQ(t.comments().front(), " hello");
   EXPECT_NEAR(t.column("v")[0], 1.23456789012, 1e-9);
   EXPECT_DOUBLE_EQ(t.column("v")[2], 3.5e-7);
+  std::filesystem::remove(path);
+}
+
+TEST(DataTable, ReadRecordMapsNamesScalesAndARateForFilesWithoutTime) {
+  const auto path = std::filesystem::temp_directory_path() / "hystbench_read_record_test.csv";
+  {
+    std::ofstream f(path);
+    f << "k,drive_mV,pos_m,other\n0,100,1e-6,7\n1,200,2e-6,7\n2,300,4e-6,7\n";
+  }
+  hd::RecordColumns c;
+  c.u = "drive_mV";
+  c.y = "pos_m";
+  c.u_scale = 1e-3;
+  c.y_scale = 1e6;
+  c.rate_hz = 6400.0;
+  const hd::Record r = hd::read_record(path, c, true);
+  ASSERT_EQ(r.t.size(), 3u);
+  EXPECT_DOUBLE_EQ(r.t[2], 2.0 / 6400.0);
+  EXPECT_DOUBLE_EQ(r.sample_period_s, 1.0 / 6400.0);
+  EXPECT_DOUBLE_EQ(r.u[1], 0.2);
+  EXPECT_DOUBLE_EQ(r.y[2], 4.0);
+
+  auto error_of_record = [&](const hd::RecordColumns& cols) -> std::string {
+    try {
+      (void)hd::read_record(path, cols, true);
+    } catch (const hd::DataFileError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  // Without a rate the time column is required and named in the error with what is there.
+  hd::RecordColumns no_rate = c;
+  no_rate.rate_hz = 0.0;
+  EXPECT_NE(
+      error_of_record(no_rate).find("missing column 't' (columns: k, drive_mV, pos_m, other)"),
+      std::string::npos);
+  no_rate.t = "k";
+  EXPECT_DOUBLE_EQ(hd::read_record(path, no_rate, true).sample_period_s, 1.0);
+  hd::RecordColumns zero = c;
+  zero.y_scale = 0.0;
+  EXPECT_NE(error_of_record(zero).find("y scale must be a finite, non-zero number"),
+            std::string::npos);
+  // y is optional where the command allows it (simulate), required elsewhere.
+  hd::RecordColumns no_y = c;
+  no_y.y = "absent";
+  EXPECT_TRUE(hd::read_record(path, no_y, false).y.empty());
+  EXPECT_NE(error_of_record(no_y).find("missing column 'absent'"), std::string::npos);
   std::filesystem::remove(path);
 }

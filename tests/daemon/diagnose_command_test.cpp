@@ -97,7 +97,7 @@ class DiagnoseCommandTest : public ::testing::Test {
 
 double rms_of_simulation(const std::string& model, const std::string& data,
                          const std::string& output) {
-  hd::SimulateCommand sim{model, data, output, true};
+  hd::SimulateCommand sim{model, data, output, true, {}};
   std::ostringstream out, err;
   EXPECT_EQ(hd::run_simulate(sim, out, err), 0) << err.str();
   return json::parse(out.str()).at("rmse").get<double>();
@@ -296,16 +296,14 @@ TEST_F(DiagnoseCommandTest, MeasuredFineSteeringMirrorChannelDrivenByThreeInputs
                  << HYSTBENCH_SHARED_DATA_DIR;
   }
   // README: k (t = k / 6400 s), u1_V..u3_V [V], y1_m..y3_m [m]; a random-phase multisine of
-  // 8192 samples played twice on all three actuators at once. Output 1 against input 1.
-  const hd::DataTable table = hd::DataTable::read_csv(csv.string());
-  Record r;
-  for (std::size_t k = 0; k < table.rows(); ++k) {
-    r.t.push_back(table.column("k")[k] / 6400.0);
-    r.u.push_back(table.column("u1_V")[k]);
-    r.y.push_back(table.column("y1_m")[k] * 1e6);
-  }
+  // 8192 samples played twice on all three actuators at once. Output 1 against input 1, read
+  // straight from the file through the column options.
   hd::DiagnoseCommand cmd;
-  cmd.data_path = write_record("fsm_channel1.csv", r);
+  cmd.data_path = csv.string();
+  cmd.columns.u = "u1_V";
+  cmd.columns.y = "y1_m";
+  cmd.columns.y_scale = 1e6;
+  cmd.columns.rate_hz = 6400.0;
   cmd.json_output = true;
   ASSERT_EQ(run(cmd), 0) << err_;
   const json d = json::parse(out_);

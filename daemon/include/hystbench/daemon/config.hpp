@@ -87,12 +87,12 @@ struct IdentifySection {
   /// must stay inside it. [V]
   double amplitude_v = 75.0;
   double offset_v = 75.0;
-  double frequency_hz = 1.0;       ///< (0, loop.rate_hz / 20]
-  int cycles = 3;                  ///< [1, 1000]
+  double frequency_hz = 1.0;  ///< (0, loop.rate_hz / 20]
+  int cycles = 3;             ///< [1, 1000]
   /// End of the excitation kept out of the fit [0, 0.9]. Small: the excitation ends with holds at
   /// the range ends, which the model needs to see; held out they only judge the model order.
   double heldout_fraction = 0.1;
-  double fit_rate_hz = 2000.0;     ///< records are block-averaged to this rate for the fit
+  double fit_rate_hz = 2000.0;  ///< records are block-averaged to this rate for the fit
 };
 
 struct PidSection {

@@ -30,6 +30,8 @@ class DataTable {
   /// Requires `t` to be strictly increasing (error names the first offending line).
   void require_increasing(const std::string& name) const;
   std::size_t rows() const { return columns_.empty() ? 0 : columns_.front().size(); }
+  /// The file's line number of data row `row` (0-based), for messages.
+  std::size_t line_of_row(std::size_t row) const { return line_of_row_.at(row); }
   const std::vector<std::string>& names() const { return names_; }
   const std::string& origin() const { return origin_; }
   /// Comment lines (without the leading '#'), e.g. a run log's JSON header.
@@ -45,6 +47,27 @@ class DataTable {
   std::vector<std::size_t> line_of_row_;
   std::vector<std::string> comments_;
 };
+
+/// Which columns of a data file hold time, input and output, and their scale: a lab's export
+/// rarely says t, u, y in s, V and um. The defaults read `t`, `u`, `y` as they are.
+struct RecordColumns {
+  std::string t = "t", u = "u", y = "y";
+  double u_scale = 1.0;  ///< u = column * u_scale (e.g. 1e-3 for mV -> V)
+  double y_scale = 1.0;  ///< y = column * y_scale (e.g. 1e6 for m -> um)
+  double rate_hz = 0.0;  ///< > 0: the file has no usable time column; t = row / rate_hz [s]
+};
+
+/// A record read through RecordColumns: t [s] strictly increasing, u and y finite (y empty when
+/// the file has no y column and it was optional).
+struct Record {
+  std::vector<double> t, u, y;
+  double sample_period_s = 0.0;  ///< median of the t increments
+};
+
+/// Reads path's CSV as a record. Throws DataFileError naming the file, the column and the line
+/// (missing column with the columns there are, non-finite value, t not increasing, scale or
+/// rate not positive and finite).
+Record read_record(const std::string& path, const RecordColumns& columns, bool y_required);
 
 /// Writes columns as CSV with a header row and optional '#' comment lines first.
 /// Values use 10 significant digits. Throws DataFileError when the file cannot be written.

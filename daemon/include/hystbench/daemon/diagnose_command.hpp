@@ -23,6 +23,7 @@
 #include <string>
 
 #include "hystbench/compensation/diagnosis.hpp"
+#include "hystbench/daemon/data_table.hpp"
 
 namespace hystbench::daemon {
 
@@ -33,6 +34,7 @@ struct DiagnoseCommand {
   std::string report_dir;     ///< empty: no report
   std::string save_baseline;  ///< empty: not saved
   std::string save_extended;  ///< empty: not saved
+  RecordColumns columns;      ///< which columns are t, u, y (default t, u, y)
 };
 
 int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err);

@@ -10,6 +10,7 @@
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/model_file.hpp"
+#include "hystbench/daemon/data_table.hpp"
 
 namespace hystbench::daemon {
 
@@ -22,6 +23,7 @@ struct FitCommand {
   bool refine = true;
   std::string output_path;
   bool json_output = false;
+  RecordColumns columns;  ///< which columns are t, u, y (default t, u, y)
 };
 
 struct SimulateCommand {
@@ -29,6 +31,7 @@ struct SimulateCommand {
   std::string data_path;
   std::string output_path;
   bool json_output = false;
+  RecordColumns columns;  ///< which columns are t, u and the optional y
 };
 
 struct InvertCommand {
