@@ -338,13 +338,18 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
     mean /= static_cast<double>(r.n);
     const double variance = square / static_cast<double>(r.n) - mean * mean;
     const double noise_share = variance > 0.0 ? d.noise_rms * d.noise_rms / variance : 0.0;
+    // The incoherent power stays in the error of any model driven by this input alone (of any
+    // linear filter of the prediction, exactly; of other models, about).
+    const double floor_rms = std::sqrt(std::max(0.0, (1.0 - d.coherent_share) * variance));
     d.notes.push_back(
         "not clean: only " + num(100.0 * d.coherent_share) +
         " % of the output's power is coherent with this input's prediction, and noise makes " +
         num(100.0 * noise_share) +
         " %: the rest comes from something not in this record (another input driving this "
         "output, as in a multi-axis stage, or a disturbance), which no single-input model or "
-        "candidate here explains");
+        "candidate here explains; such a model could lower the error to about " +
+        num(floor_rms) + " " + unit + " at best (gain " +
+        num(floor_rms > 0.0 ? d.baseline_heldout.rmse / floor_rms : 0.0) + ")");
   }
   if (d.refit_heldout && d.refit_heldout->rmse > 0.0 &&
       d.baseline_heldout.rmse / d.refit_heldout->rmse >= options.min_gain) {
