@@ -22,6 +22,7 @@ constexpr std::array<Cause, 6> kCandidates{Cause::kAsymmetry, Cause::kRateDepend
                                            Cause::kDelay,     Cause::kDrift};
 // A runner-up this close to the named cause's gain makes the verdict ambiguous.
 constexpr double kMinCoherentShare = 0.5;
+constexpr double kOneLoopBand = 0.03;  // of the input span: a reversal this close is at the end
 constexpr double kAmbiguity = 0.9;
 // Bins of the residual profiles.
 constexpr std::size_t kTimeBins = 32, kLevelBins = 24, kRateBins = 24, kSinceBins = 16;
@@ -362,6 +363,23 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
   }
   if (ev.hold_seconds < 0.5) {
     d.notes.push_back("the input never holds: creep and drift can only be seen indirectly");
+  }
+  {
+    const auto [lo, hi] = std::minmax_element(r.u.begin(), r.u.end());
+    const double band = kOneLoopBand * (*hi - *lo);
+    std::size_t reversals = 0, inner = 0;
+    for (const std::size_t k : ev.event_samples) {
+      if (ev.step[k]) continue;
+      ++reversals;
+      if (r.u[k] > *lo + band && r.u[k] < *hi - band) ++inner;
+    }
+    if (reversals >= 4 && inner == 0) {
+      d.notes.push_back("every reversal of the input is at its extremes (" + num(*lo) + " and " +
+                        num(*hi) + " " + r.units.input +
+                        "): the record shows one loop and no minor loops, so a model fitted on "
+                        "it may not hold for smaller loops or other excitations; check it on "
+                        "another record (hystbench simulate, or diagnose --model)");
+    }
   }
   if (ev.steps == 0) {
     d.notes.push_back(

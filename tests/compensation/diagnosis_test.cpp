@@ -432,6 +432,28 @@ TEST(Diagnosis, EstimatesTheNoiseFromTheOutputWhenTheInputRepeats) {
   EXPECT_NEAR(once.noise_rms, d.config.sensor_noise.rms_um, 0.25 * d.config.sensor_noise.rms_um);
 }
 
+// A record with one loop only (a full-range triangle, as the measured NTU identification run)
+// cannot show how the actuator behaves on minor loops: the report says so; the identification
+// excitation, with nested minor loops, does not get the note.
+TEST(Diagnosis, NotesARecordWithOneLoopOnly) {
+  const HiddenData d = make_hidden({hc::Cause::kNone, 1000.0, 321});
+  hs::Excitation x;
+  x.dt_s = 1e-3;
+  for (std::size_t k = 0; k < 20000; ++k) {
+    const double phase = std::fmod(static_cast<double>(k) * 1e-3, 1.0);
+    x.samples.push_back(150.0 * (phase < 0.5 ? 2.0 * phase : 2.0 - 2.0 * phase));
+  }
+  hs::SimulatedActuator actuator(d.config, x.dt_s);
+  const Record r = run(actuator, x);
+  auto one_loop_note = [](const hc::Diagnosis& diagnosis) {
+    return std::any_of(diagnosis.notes.begin(), diagnosis.notes.end(), [](const std::string& s) {
+      return s.find("every reversal of the input is at its extremes") != std::string::npos;
+    });
+  };
+  EXPECT_TRUE(one_loop_note(hc::diagnose(r.t, r.u, r.y)));
+  EXPECT_FALSE(one_loop_note(hc::diagnose(d.first.t, d.first.u, d.first.y)));
+}
+
 // A second actuator, driven by an input the record does not have, adds twice its motion to the
 // output (a multi-axis stage seen through one axis): the diagnosis says so instead of forcing a
 // cause.
