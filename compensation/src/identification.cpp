@@ -22,6 +22,8 @@ namespace hystbench::compensation {
 
 namespace {
 
+using details::fmt;
+
 using details::Design;
 using details::ModelStructure;
 
@@ -44,22 +46,6 @@ constexpr double kCpLevelScales[] = {1.0, 2.0, 3.0, 4.0, 6.0};
 // the one excitation and do not carry over to other signals).
 constexpr double kMinRateSpread = 1.25;
 
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-// Record checks build their message only on failure (details::require_finite and friends
-// format one per element, too slow for 1e5-sample records).
-void require_finite_record(std::span<const double> v, const char* name) {
-  const auto bad = std::find_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); });
-  if (bad != v.end()) {
-    throw std::invalid_argument(std::string(name) + "[" + std::to_string(bad - v.begin()) +
-                                "] is not a finite number");
-  }
-}
-
 void validate_record(std::span<const double> t, std::span<const double> u,
                      std::span<const double> y) {
   details::require(t.size() == u.size() && u.size() == y.size(),
@@ -69,9 +55,9 @@ void validate_record(std::span<const double> t, std::span<const double> u,
   details::require(u.size() >= kMinSamples, "at least " + std::to_string(kMinSamples) +
                                                 " samples are needed to identify a model, got " +
                                                 std::to_string(u.size()));
-  require_finite_record(t, "t");
-  require_finite_record(u, "u");
-  require_finite_record(y, "y");
+  details::require_finite(t, "t");
+  details::require_finite(u, "u");
+  details::require_finite(y, "y");
   const auto step = std::adjacent_find(t.begin(), t.end(), std::greater_equal<double>());
   if (step != t.end()) {
     const auto k = static_cast<std::size_t>(step - t.begin()) + 1;
@@ -616,8 +602,8 @@ PiParameters identify_pi_triangular(std::span<const double> u_branch,
   details::require_same_size(u_branch.size(), y_branch.size(), "u_branch", "y_branch");
   details::require(u_branch.size() >= 2, "the branch needs at least 2 samples");
   details::require(operators >= 1, "operators must be >= 1");
-  require_finite_record(u_branch, "u_branch");
-  require_finite_record(y_branch, "y_branch");
+  details::require_finite(u_branch, "u_branch");
+  details::require_finite(y_branch, "y_branch");
   const auto down = std::adjacent_find(u_branch.begin(), u_branch.end(), std::greater<double>());
   if (down != u_branch.end()) {
     const auto k = static_cast<std::size_t>(down - u_branch.begin()) + 1;

@@ -17,20 +17,6 @@ namespace {
 constexpr std::size_t kMinSamples = 400;
 constexpr std::size_t kMaxSearchRows = 60000;
 
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
-void require_finite_record(std::span<const double> v, const char* name) {
-  const auto bad = std::find_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); });
-  if (bad != v.end()) {
-    throw std::invalid_argument(std::string(name) + "[" + std::to_string(bad - v.begin()) +
-                                "] is not a finite number (" + fmt(*bad) + ")");
-  }
-}
-
 }  // namespace
 
 DataSplit make_split(std::span<const double> u, int blocks, int heldout_every) {
@@ -113,9 +99,9 @@ DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const
   require(std::isfinite(o.min_gain) && o.min_gain > 1.0, "options.min_gain must be > 1");
   require(std::isfinite(o.noise_floor_factor) && o.noise_floor_factor >= 1.0,
           "options.noise_floor_factor must be >= 1");
-  require_finite_record(t, "t");
-  require_finite_record(u, "u");
-  require_finite_record(y, "y");
+  details::require_finite(t, "t");
+  details::require_finite(u, "u");
+  details::require_finite(y, "y");
   const auto step = std::adjacent_find(t.begin(), t.end(), std::greater_equal<double>());
   if (step != t.end()) {
     const auto k = static_cast<std::size_t>(step - t.begin()) + 1;
