@@ -55,19 +55,7 @@ void validate_record(std::span<const double> t, std::span<const double> u,
   details::require(u.size() >= kMinSamples, "at least " + std::to_string(kMinSamples) +
                                                 " samples are needed to identify a model, got " +
                                                 std::to_string(u.size()));
-  details::require_finite(t, "t");
-  details::require_finite(u, "u");
-  details::require_finite(y, "y");
-  const auto step = std::adjacent_find(t.begin(), t.end(), std::greater_equal<double>());
-  if (step != t.end()) {
-    const auto k = static_cast<std::size_t>(step - t.begin()) + 1;
-    throw std::invalid_argument("t must be strictly increasing: t[" + std::to_string(k) +
-                                "] = " + fmt(t[k]) + " <= t[" + std::to_string(k - 1) +
-                                "] = " + fmt(t[k - 1]));
-  }
-  const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
-  details::require(*hi > *lo, "input u is constant (" + fmt(*lo) +
-                                  "): a constant input does not excite any hysteresis");
+  details::require_record(t, u, y);
 }
 
 void validate_thresholds(const FitOptions& o) {

@@ -99,16 +99,7 @@ DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const
   require(std::isfinite(o.min_gain) && o.min_gain > 1.0, "options.min_gain must be > 1");
   require(std::isfinite(o.noise_floor_factor) && o.noise_floor_factor >= 1.0,
           "options.noise_floor_factor must be >= 1");
-  details::require_finite(t, "t");
-  details::require_finite(u, "u");
-  details::require_finite(y, "y");
-  const auto step = std::adjacent_find(t.begin(), t.end(), std::greater_equal<double>());
-  if (step != t.end()) {
-    const auto k = static_cast<std::size_t>(step - t.begin()) + 1;
-    throw std::invalid_argument("t must be strictly increasing: t[" + std::to_string(k) +
-                                "] = " + fmt(t[k]) + " <= t[" + std::to_string(k - 1) +
-                                "] = " + fmt(t[k - 1]));
-  }
+  require_record(t, u, y);
   DiagnosisRecord r;
   r.t = t, r.u = u, r.y = y;
   r.n = u.size();
@@ -116,8 +107,6 @@ DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const
   r.units = o.units;
   const auto [ulo, uhi] = std::minmax_element(u.begin(), u.end());
   r.u_lo = *ulo, r.u_hi = *uhi;
-  require(r.u_hi > r.u_lo, "input u is constant (" + fmt(r.u_lo) +
-                               "): a constant input does not excite any hysteresis");
   r.split = make_split(u, o.blocks, o.heldout_every);
   r.heldout_every = static_cast<std::size_t>(o.heldout_every);
   r.part.assign(r.n, kFitPart);

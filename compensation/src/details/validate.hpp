@@ -1,6 +1,7 @@
 #pragma once
 // Parameter validation helpers shared by the model constructors. Throw std::invalid_argument
 // with a message that names the offending field and index.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <span>
@@ -43,6 +44,26 @@ inline void require_strictly_increasing(std::span<const double> v, const std::st
                                   "] = " + std::to_string(v[i - 1]));
     }
   }
+}
+
+/// A measured record for identification or diagnosis: t, u, y finite, t strictly increasing,
+/// u not constant (lengths are the caller's to check first).
+inline void require_record(std::span<const double> t, std::span<const double> u,
+                           std::span<const double> y) {
+  require_finite(t, "t");
+  require_finite(u, "u");
+  require_finite(y, "y");
+  for (std::size_t k = 1; k < t.size(); ++k) {
+    if (!(t[k] > t[k - 1])) {
+      throw std::invalid_argument("t must be strictly increasing: t[" + std::to_string(k) +
+                                  "] = " + fmt(t[k]) + " <= t[" + std::to_string(k - 1) +
+                                  "] = " + fmt(t[k - 1]));
+    }
+  }
+  double lo = u.empty() ? 0.0 : u[0], hi = lo;
+  for (const double v : u) lo = std::min(lo, v), hi = std::max(hi, v);
+  require(hi > lo,
+          "input u is constant (" + fmt(lo) + "): a constant input does not excite any hysteresis");
 }
 
 inline void require_same_size(std::size_t a, std::size_t b, const std::string& fa,
