@@ -9,52 +9,21 @@
 
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
+#include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
 using nlohmann::json;
 
 namespace {
 
-class BenchTest : public ::testing::Test {
+class BenchTest : public hystbench::test::BenchFixture {
  protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("hystbench_bench_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(dir_);
-  }
-  void TearDown() override {
-    bench_.reset();
-    std::filesystem::remove_all(dir_);
-  }
-  hd::BenchSettings settings(double rate_hz = 5000.0) {
-    hd::BenchSettings s;
-    s.loop.rate_hz = rate_hz;
-    s.loop.realtime.fifo = false;
-    s.loop.realtime.lock_memory = false;
-    s.loop.overrun_budget = 1000000;  // a shared CI machine may be late; not under test here
-    s.log_dir = (dir_ / "logs").string();
-    s.model_dir = (dir_ / "models").string();
+  BenchTest() : BenchFixture("hystbench_bench_test") {}
+  hd::BenchSettings settings(double rate_hz = 5000.0) const {
+    hd::BenchSettings s = base_settings(rate_hz);
     s.y_min = 0.0;
     s.y_max = 45.0;
-    s.precondition_s = 0.4;
     return s;
-  }
-  void start(hd::BenchSettings s) {
-    bench_ = std::make_unique<hd::Bench>(std::move(s));
-    bench_->set_event_sink([this](const json& e) {
-      if (e["event"] == "run.finished") {
-        std::lock_guard lock(m_);
-        results_.push_back(e["result"]);
-      }
-    });
-    bench_->start();
-  }
-  json run_and_wait(const std::string& cmd, const json& params, int timeout_s = 120) {
-    bench_->handle(cmd, params);
-    EXPECT_TRUE(bench_->wait_idle(std::chrono::seconds(timeout_s)));
-    std::lock_guard lock(m_);
-    return results_.empty() ? json() : results_.back();
   }
   std::string error_code(const std::string& cmd, const json& params) {
     try {
@@ -64,11 +33,6 @@ class BenchTest : public ::testing::Test {
     }
     return "ok";
   }
-
-  std::filesystem::path dir_;
-  std::unique_ptr<hd::Bench> bench_;
-  std::mutex m_;
-  std::vector<json> results_;
 };
 
 }  // namespace

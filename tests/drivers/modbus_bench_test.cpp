@@ -10,6 +10,7 @@
 #include "hystbench/daemon/bench.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "peer_process.hpp"
+#include "support/bench_fixture.hpp"
 
 namespace hdm = hystbench::daemon;
 namespace ht = hystbench::test;
@@ -18,18 +19,13 @@ using namespace std::chrono_literals;
 
 namespace {
 
-class ModbusBenchTest : public ::testing::Test {
+class ModbusBenchTest : public ht::BenchFixture {
  protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("hystbench_modbus_bench_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(dir_);
-  }
+  ModbusBenchTest() : BenchFixture("hystbench_modbus_bench") {}
   void TearDown() override {
     bench_.reset();
     simdaq_.reset();
-    std::filesystem::remove_all(dir_);
+    BenchFixture::TearDown();
   }
   /// Starts hystbench-simdaq on `port` (0: a free one) and remembers the port.
   void start_simdaq(int port = 0) {
@@ -48,52 +44,23 @@ class ModbusBenchTest : public ::testing::Test {
             {"measurement",
              {{"table", "holding"}, {"address", 11}, {"format", "s32"}, {"scale", 0.001}}}};
   }
-  hdm::BenchSettings settings(double rate_hz, const std::string& io = "thread") {
-    hdm::BenchSettings s;
-    s.loop.rate_hz = rate_hz;
-    s.loop.realtime.fifo = false;
-    s.loop.realtime.lock_memory = false;
-    s.loop.overrun_budget = 1000000;  // a shared CI machine is late now and then
+  hdm::BenchSettings settings(double rate_hz, const std::string& io = "thread") const {
+    hdm::BenchSettings s = base_settings(rate_hz);
     s.driver_type = "modbus";
     s.driver_params = driver_params(io);
-    s.log_dir = (dir_ / "logs").string();
-    s.model_dir = (dir_ / "models").string();
     s.y_min = 0.0;
     s.y_max = 40.0;
-    s.precondition_s = 0.4;
     return s;
   }
-  void start_bench(hdm::BenchSettings s) {
-    bench_ = std::make_unique<hdm::Bench>(std::move(s));
-    bench_->set_event_sink([this](const json& e) {
-      if (e["event"] == "run.finished") {
-        std::lock_guard lock(m_);
-        results_.push_back(e["result"]);
-      }
-    });
-    bench_->start();
-  }
-  json run_and_wait(const std::string& cmd, const json& params, int timeout_s = 120) {
-    bench_->handle(cmd, params);
-    EXPECT_TRUE(bench_->wait_idle(std::chrono::seconds(timeout_s)));
-    std::lock_guard lock(m_);
-    return results_.empty() ? json() : results_.back();
-  }
-  json status() { return bench_->handle("status", json::object()); }
-
-  std::filesystem::path dir_;
   std::unique_ptr<ht::PeerProcess> simdaq_;
   int port_ = 0;
-  std::unique_ptr<hdm::Bench> bench_;
-  std::mutex m_;
-  std::vector<json> results_;
 };
 
 }  // namespace
 
 TEST_F(ModbusBenchTest, IdentifyThenTrackOverModbusTcp) {
   start_simdaq();
-  start_bench(settings(5000.0));
+  start(settings(5000.0));
   const json id = run_and_wait("identify", {{"model", "mpi"}});
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   EXPECT_EQ(id["dropped"], 0);
@@ -113,7 +80,7 @@ TEST_F(ModbusBenchTest, IdentifyThenTrackOverModbusTcp) {
 
 TEST_F(ModbusBenchTest, ServerKilledMidRunFaultsSafeKeepsTheLogAndRecoversAfterReset) {
   start_simdaq();
-  start_bench(settings(5000.0));
+  start(settings(5000.0));
   bench_->handle("track", {{"compensator", "none"}, {"periods", 30}});
   const auto until = std::chrono::steady_clock::now() + 20s;
   while (std::chrono::steady_clock::now() < until &&
@@ -188,7 +155,7 @@ TEST_F(ModbusBenchTest, RateSweep) {
       auto s = settings(rate, io);
       s.loop.realtime.fifo = true;  // as hystbenchd runs it (degraded, not fatal, without rights)
       try {
-        start_bench(s);
+        start(s);
       } catch (const std::exception& e) {
         std::cout << "[ sweep ] io=" << io << " rate=" << rate << " refused: " << e.what() << "\n";
         bench_.reset();

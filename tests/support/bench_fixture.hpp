@@ -1,0 +1,81 @@
+#pragma once
+// Test fixture for the whole bench in-process (hystbenchd's Bench without the socket): a
+// temporary folder per test for logs and models, settings a shared CI machine can keep (no
+// SCHED_FIFO, no mlockall, an overrun budget that never faults: timing is not under test), the
+// run.finished results collected, and run_and_wait().
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "hystbench/daemon/bench.hpp"
+
+namespace hystbench::test {
+
+class BenchFixture : public ::testing::Test {
+ protected:
+  /// `prefix` names the temporary folder (prefix_pid_testname).
+  explicit BenchFixture(std::string prefix) : prefix_(std::move(prefix)) {}
+
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           (prefix_ + "_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+  }
+  void TearDown() override {
+    bench_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+
+  /// Loop at `rate_hz` [Hz], logs and models in the test's folder, precondition 0.4 s.
+  daemon::BenchSettings base_settings(double rate_hz) const {
+    daemon::BenchSettings s;
+    s.loop.rate_hz = rate_hz;
+    s.loop.realtime.fifo = false;
+    s.loop.realtime.lock_memory = false;
+    s.loop.overrun_budget = 1000000;
+    s.log_dir = (dir_ / "logs").string();
+    s.model_dir = (dir_ / "models").string();
+    s.precondition_s = 0.4;
+    return s;
+  }
+
+  void start(daemon::BenchSettings s) {
+    bench_ = std::make_unique<daemon::Bench>(std::move(s));
+    bench_->set_event_sink([this](const nlohmann::json& e) {
+      if (e["event"] == "run.finished") {
+        std::lock_guard lock(m_);
+        results_.push_back(e["result"]);
+      }
+    });
+    bench_->start();
+  }
+
+  /// Sends a run command and waits for the bench to be idle; the run's result (null if none).
+  nlohmann::json run_and_wait(const std::string& cmd, const nlohmann::json& params,
+                              int timeout_s = 120) {
+    bench_->handle(cmd, params);
+    EXPECT_TRUE(bench_->wait_idle(std::chrono::seconds(timeout_s)));
+    std::lock_guard lock(m_);
+    return results_.empty() ? nlohmann::json() : results_.back();
+  }
+
+  nlohmann::json status() { return bench_->handle("status", nlohmann::json::object()); }
+
+  std::filesystem::path dir_;
+  std::unique_ptr<daemon::Bench> bench_;
+  std::mutex m_;
+  std::vector<nlohmann::json> results_;
+
+ private:
+  std::string prefix_;
+};
+
+}  // namespace hystbench::test
