@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -86,57 +88,83 @@ class AbuseTest : public ::testing::Test {
 
 }  // namespace
 
+// One 3 s track at 10 kHz with 100 clients x 20 requests (status, unknown command, malformed
+// JSON, a run while one is active) sent during it. Every client must get every reply, the run
+// must complete with nothing dropped. The loop's wake latency and overruns are compared with
+// the same run without clients: HYSTBENCH_ABUSE_PAIRS (default 1) alternating idle/loaded
+// pairs; with 5 or more the medians are asserted (p99 within 10 % + 5 us, overruns within 10 %
+// + 10 of the idle run's); with fewer they are printed only (two idle runs on a shared 2-core
+// machine already differ by more than 10 %).
 TEST_F(AbuseTest, HundredConcurrentClientsDuringA10kHzRunAllGetReplies) {
   start(write_config(dir_, 10000));
   hd::BenchClient c(daemon_->socket());
   const json track = {{"compensator", "none"}, {"periods", 3}, {"frequency_hz", 1}};
-  // Reference: the same run without client load.
-  json r = c.request("track", track);
-  ASSERT_TRUE(r["ok"]) << r.dump();
-  const json idle = wait_finished(c, r["result"]["run_id"].get<std::string>());
-  ASSERT_EQ(idle["end"], "completed") << idle.dump();
-
-  r = c.request("track", track);
-  ASSERT_TRUE(r["ok"]) << r.dump();
+  const char* pairs_env = std::getenv("HYSTBENCH_ABUSE_PAIRS");
+  const int pairs = pairs_env ? std::max(1, std::atoi(pairs_env)) : 1;
   constexpr int kClients = 100, kRequests = 20;
-  std::atomic<int> replies{0}, wrong{0};
-  std::vector<std::thread> clients;
-  for (int i = 0; i < kClients; ++i) {
-    clients.emplace_back([&, i] {
-      RawClient raw(daemon_->socket());
-      for (int k = 0; k < kRequests; ++k) {
-        const int kind = (i + k) % 4;
-        const std::string line =
-            kind == 0   ? "{\"id\":" + std::to_string(k) + ",\"cmd\":\"status\"}\n"
-            : kind == 1 ? "{\"id\":" + std::to_string(k) + ",\"cmd\":\"no.such\"}\n"
-            : kind == 2 ? "{not json at all\n"
-                        : "{\"id\":" + std::to_string(k) + ",\"cmd\":\"track\"}\n";  // busy
-        raw.send(line);
-        const json reply = raw.line();
-        if (reply.is_null()) return;
-        ++replies;
-        if ((kind == 0) != reply.value("ok", false)) ++wrong;
-      }
-    });
+  std::vector<double> idle_p99, loaded_p99, idle_overruns, loaded_overruns;
+  for (int pair = 0; pair < pairs; ++pair) {
+    json r = c.request("track", track);
+    ASSERT_TRUE(r["ok"]) << r.dump();
+    const json idle = wait_finished(c, r["result"]["run_id"].get<std::string>());
+    ASSERT_EQ(idle["end"], "completed") << idle.dump();
+
+    r = c.request("track", track);
+    ASSERT_TRUE(r["ok"]) << r.dump();
+    std::atomic<int> replies{0}, wrong{0};
+    std::vector<std::thread> clients;
+    for (int i = 0; i < kClients; ++i) {
+      clients.emplace_back([&, i] {
+        RawClient raw(daemon_->socket());
+        for (int k = 0; k < kRequests; ++k) {
+          const int kind = (i + k) % 4;
+          const std::string line =
+              kind == 0   ? "{\"id\":" + std::to_string(k) + ",\"cmd\":\"status\"}\n"
+              : kind == 1 ? "{\"id\":" + std::to_string(k) + ",\"cmd\":\"no.such\"}\n"
+              : kind == 2 ? "{not json at all\n"
+                          : "{\"id\":" + std::to_string(k) + ",\"cmd\":\"track\"}\n";  // busy
+          raw.send(line);
+          const json reply = raw.line();
+          if (reply.is_null()) return;
+          ++replies;
+          if ((kind == 0) != reply.value("ok", false)) ++wrong;
+        }
+      });
+    }
+    for (auto& t : clients) t.join();
+    const json loaded = wait_finished(c, r["result"]["run_id"].get<std::string>());
+    EXPECT_EQ(replies.load(), kClients * kRequests);
+    EXPECT_EQ(wrong.load(), 0);
+    ASSERT_EQ(loaded["end"], "completed") << loaded.dump();
+    EXPECT_EQ(loaded["dropped"], 0);
+    EXPECT_EQ(idle["dropped"], 0);
+    const auto& li = idle["loop"]["wake_latency_ns"];
+    const auto& ll = loaded["loop"]["wake_latency_ns"];
+    std::cout << "pair " << pair + 1 << " of " << pairs << ", 10 kHz run, idle:   wake p50 "
+              << li["p50"] << " ns, p99 " << li["p99"] << " ns, max " << li["max"]
+              << " ns, overruns " << idle["overruns"] << " of " << idle["samples"] << "\n"
+              << "pair " << pair + 1 << " of " << pairs << ", 10 kHz run, loaded: wake p50 "
+              << ll["p50"] << " ns, p99 " << ll["p99"] << " ns, max " << ll["max"]
+              << " ns, overruns " << loaded["overruns"] << " of " << loaded["samples"] << " ("
+              << kClients << " clients x " << kRequests << " requests)\n";
+    idle_p99.push_back(li["p99"].get<double>());
+    loaded_p99.push_back(ll["p99"].get<double>());
+    idle_overruns.push_back(idle["overruns"].get<double>());
+    loaded_overruns.push_back(loaded["overruns"].get<double>());
   }
-  for (auto& t : clients) t.join();
-  const json loaded = wait_finished(c, r["result"]["run_id"].get<std::string>());
-  EXPECT_EQ(replies.load(), kClients * kRequests);
-  EXPECT_EQ(wrong.load(), 0);
-  ASSERT_EQ(loaded["end"], "completed") << loaded.dump();
-  EXPECT_EQ(loaded["dropped"], 0);
-  EXPECT_EQ(idle["dropped"], 0);
-  // Reported, not asserted: on a shared 2-core machine the latency figures vary by more than
-  // the 10 % criterion between two idle runs already (see scripts/bench-report.sh).
-  const auto& li = idle["loop"]["wake_latency_ns"];
-  const auto& ll = loaded["loop"]["wake_latency_ns"];
-  std::cout << "10 kHz run, idle:   wake p50 " << li["p50"] << " ns, p99 " << li["p99"]
-            << " ns, max " << li["max"] << " ns, overruns " << idle["overruns"] << " of "
-            << idle["samples"] << "\n"
-            << "10 kHz run, loaded: wake p50 " << ll["p50"] << " ns, p99 " << ll["p99"]
-            << " ns, max " << ll["max"] << " ns, overruns " << loaded["overruns"] << " of "
-            << loaded["samples"] << " (" << kClients << " clients x " << kRequests
-            << " requests)\n";
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  const double ip = median(idle_p99), lp = median(loaded_p99);
+  const double io = median(idle_overruns), lo = median(loaded_overruns);
+  std::cout << "median over " << pairs << " pairs: wake p99 idle " << ip << " ns, loaded " << lp
+            << " ns (" << (ip > 0 ? 100.0 * (lp / ip - 1.0) : 0.0) << " %); overruns idle " << io
+            << ", loaded " << lo << "\n";
+  if (pairs >= 5) {
+    EXPECT_LE(lp, 1.1 * ip + 5000.0);
+    EXPECT_LE(lo, 1.1 * io + 10.0);
+  }
 }
 
 TEST_F(AbuseTest, HostileClientsLeaveTheDaemonResponsiveAndBounded) {
