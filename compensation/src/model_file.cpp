@@ -224,7 +224,9 @@ ModelFile parse_model_file(const std::string& text) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
+    // parse_error, and out_of_range (406) for a number beyond double such as 7e777: both are
+    // bad input, reported as ModelFileError like every other fault in the file.
     throw ModelFileError(std::string("not valid JSON: ") + e.what());
   }
   return model_file_from_json(j);

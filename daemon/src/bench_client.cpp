@@ -51,7 +51,7 @@ std::optional<json> BenchClient::read_line(std::chrono::milliseconds timeout) {
       buffer_.erase(0, nl + 1);
       try {
         return json::parse(line);
-      } catch (const json::parse_error& e) {
+      } catch (const json::exception& e) {  // parse_error or out_of_range (number beyond double)
         throw ClientError(path_ + ": daemon sent a malformed line: " + e.what());
       }
     }

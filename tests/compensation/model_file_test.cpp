@@ -83,6 +83,11 @@ TEST(ModelFile, ErrorsNameTheField) {
     "weights":[NaN]}})")
                 .find("not valid JSON"),
             std::string::npos);
+  // A number beyond double is bad JSON too (the fuzzer found it escaping as out_of_range).
+  EXPECT_NE(error_of(R"({"schema":"hystbench.model/1","type":"pi","play":{"thresholds":[0],
+    "weights":[7e777]}})")
+                .find("not valid JSON"),
+            std::string::npos);
 
   j = valid_mpi();
   j["play"]["weights"][0] = "0.2";
