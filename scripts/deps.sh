@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages hystbench needs, only those that are missing.
-# Usage: scripts/deps.sh [build|test|all]   (default: build)
+# Usage: scripts/deps.sh [build|test|fuzz|all]   (default: build)
 # Sourced by scripts/demo.sh and scripts/test.sh; safe to run again (no-op when all present).
 set -euo pipefail
 
@@ -13,12 +13,16 @@ BUILD_PKGS=(
 )
 # Peers and tools used only by the test suite (independent implementations to test against).
 TEST_PKGS=(python3 socat python3-pymodbus python3-serial python3-serial-asyncio mbpoll can-utils)
+# clang with the libFuzzer and sanitizer runtimes, for scripts/fuzz.sh only.
+FUZZ_PKGS=(clang libclang-rt-14-dev)
 
 want=("${BUILD_PKGS[@]}")
 case "${1:-build}" in
   build) ;;
-  test|all) want+=("${TEST_PKGS[@]}") ;;
-  *) echo "usage: $0 [build|test|all]" >&2; exit 2 ;;
+  test) want+=("${TEST_PKGS[@]}") ;;
+  fuzz) want+=("${FUZZ_PKGS[@]}") ;;
+  all) want+=("${TEST_PKGS[@]}" "${FUZZ_PKGS[@]}") ;;
+  *) echo "usage: $0 [build|test|fuzz|all]" >&2; exit 2 ;;
 esac
 
 missing=()

@@ -13,6 +13,7 @@ targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(request config model_file csv)
 build=build-fuzz
 jobs=${HYSTBENCH_FUZZ_JOBS:-2}
+bash scripts/deps.sh fuzz
 
 flags="-O1 -g -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,address,undefined"
 flags+=" -fno-sanitize-recover=undefined"
@@ -44,6 +45,7 @@ seed() {  # seed corpora once from files in the repository
 }
 
 summary=()
+failed=0
 for t in "${targets[@]}"; do
   seed "$t"
   mkdir -p "fuzz/regressions/$t" "$build/artifacts/$t"
@@ -62,8 +64,10 @@ for t in "${targets[@]}"; do
     rm -f "$f"
   done
   summary+=("$(printf '%-11s execs %-10s exit %-3s new crashers %s' "$t" "$execs" "$rc" "$found")")
-  [ $rc -eq 0 ] || tail -40 "$log"
+  [ $rc -eq 0 ] || { tail -40 "$log"; failed=1; }
+  [ $found -eq 0 ] || failed=1
 done
 echo
 echo "== fuzz summary (${seconds}s per target; logs in $build/<target>.log)"
 printf '%s\n' "${summary[@]}"
+[ $failed -eq 0 ] || { echo "fuzz: a target crashed, hung or tripped a sanitizer: fix it, then commit its input in fuzz/regressions/" >&2; exit 1; }
