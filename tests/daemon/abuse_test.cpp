@@ -48,6 +48,27 @@ long rss_kb(pid_t pid) {
   return -1;
 }
 
+/// Jiffies of all CPUs from /proc/stat: {total, steal} (steal: time the hypervisor ran
+/// something else while this VM wanted the CPU).
+std::pair<double, double> cpu_jiffies() {
+  std::ifstream in("/proc/stat");
+  std::string cpu;
+  in >> cpu;
+  double total = 0, steal = 0, v = 0;
+  for (int i = 0; i < 8 && in >> v; ++i) {
+    total += v;
+    if (i == 7) steal = v;
+  }
+  return {total, steal};
+}
+
+/// Share of CPU time stolen by the hypervisor since `from` (cpu_jiffies()), 0..1.
+double steal_share_since(const std::pair<double, double>& from) {
+  const auto now = cpu_jiffies();
+  const double total = now.first - from.first;
+  return total > 0 ? (now.second - from.second) / total : 0.0;
+}
+
 /// A run log cut off at any byte (kill -9): everything up to the last complete line.
 hd::DataTable read_complete_records(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -92,9 +113,10 @@ class AbuseTest : public ::testing::Test {
 // JSON, a run while one is active) sent during it. Every client must get every reply, the run
 // must complete with nothing dropped. The loop's wake latency and overruns are compared with
 // the same run without clients: HYSTBENCH_ABUSE_PAIRS (default 1) alternating idle/loaded
-// pairs; with 5 or more the medians are asserted (p99 within 10 % + 5 us, overruns within 10 %
-// + 10 of the idle run's); with fewer they are printed only (two idle runs on a shared 2-core
-// machine already differ by more than 10 %).
+// pairs; with 5 or more pairs in which the hypervisor stole under 2 % of the CPU, the medians
+// are asserted (p99 within 10 % + 5 us, overruns within 10 % + 10 of the idle run's); with
+// fewer they are printed only (two idle runs on a shared 2-core VM already differ by more than
+// 10 %, and stolen time stalls any loop).
 TEST_F(AbuseTest, HundredConcurrentClientsDuringA10kHzRunAllGetReplies) {
   start(write_config(dir_, 10000));
   hd::BenchClient c(daemon_->socket());
@@ -102,13 +124,20 @@ TEST_F(AbuseTest, HundredConcurrentClientsDuringA10kHzRunAllGetReplies) {
   const char* pairs_env = std::getenv("HYSTBENCH_ABUSE_PAIRS");
   const int pairs = pairs_env ? std::max(1, std::atoi(pairs_env)) : 1;
   constexpr int kClients = 100, kRequests = 20;
+  // A pair counts towards the comparison only when the hypervisor stole less than this share
+  // of the CPU during both of its runs: stolen time stalls the loop whatever the daemon does.
+  constexpr double kMaxSteal = 0.02;
   std::vector<double> idle_p99, loaded_p99, idle_overruns, loaded_overruns;
+  int stolen_pairs = 0;
   for (int pair = 0; pair < pairs; ++pair) {
+    auto jiffies = cpu_jiffies();
     json r = c.request("track", track);
     ASSERT_TRUE(r["ok"]) << r.dump();
     const json idle = wait_finished(c, r["result"]["run_id"].get<std::string>());
     ASSERT_EQ(idle["end"], "completed") << idle.dump();
+    const double idle_steal = steal_share_since(jiffies);
 
+    jiffies = cpu_jiffies();
     r = c.request("track", track);
     ASSERT_TRUE(r["ok"]) << r.dump();
     std::atomic<int> replies{0}, wrong{0};
@@ -133,6 +162,7 @@ TEST_F(AbuseTest, HundredConcurrentClientsDuringA10kHzRunAllGetReplies) {
     }
     for (auto& t : clients) t.join();
     const json loaded = wait_finished(c, r["result"]["run_id"].get<std::string>());
+    const double loaded_steal = steal_share_since(jiffies);
     EXPECT_EQ(replies.load(), kClients * kRequests);
     EXPECT_EQ(wrong.load(), 0);
     ASSERT_EQ(loaded["end"], "completed") << loaded.dump();
@@ -142,11 +172,17 @@ TEST_F(AbuseTest, HundredConcurrentClientsDuringA10kHzRunAllGetReplies) {
     const auto& ll = loaded["loop"]["wake_latency_ns"];
     std::cout << "pair " << pair + 1 << " of " << pairs << ", 10 kHz run, idle:   wake p50 "
               << li["p50"] << " ns, p99 " << li["p99"] << " ns, max " << li["max"]
-              << " ns, overruns " << idle["overruns"] << " of " << idle["samples"] << "\n"
+              << " ns, overruns " << idle["overruns"] << " of " << idle["samples"] << ", steal "
+              << 100.0 * idle_steal << " %\n"
               << "pair " << pair + 1 << " of " << pairs << ", 10 kHz run, loaded: wake p50 "
               << ll["p50"] << " ns, p99 " << ll["p99"] << " ns, max " << ll["max"]
               << " ns, overruns " << loaded["overruns"] << " of " << loaded["samples"] << " ("
-              << kClients << " clients x " << kRequests << " requests)\n";
+              << kClients << " clients x " << kRequests << " requests), steal "
+              << 100.0 * loaded_steal << " %\n";
+    if (idle_steal > kMaxSteal || loaded_steal > kMaxSteal) {
+      ++stolen_pairs;
+      continue;
+    }
     idle_p99.push_back(li["p99"].get<double>());
     loaded_p99.push_back(ll["p99"].get<double>());
     idle_overruns.push_back(idle["overruns"].get<double>());
@@ -156,14 +192,24 @@ TEST_F(AbuseTest, HundredConcurrentClientsDuringA10kHzRunAllGetReplies) {
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
   };
+  const int counted = static_cast<int>(idle_p99.size());
+  if (counted == 0) {
+    std::cout << "no pair without hypervisor steal above " << 100.0 * kMaxSteal
+              << " %: latency comparison not made\n";
+    return;
+  }
   const double ip = median(idle_p99), lp = median(loaded_p99);
   const double io = median(idle_overruns), lo = median(loaded_overruns);
-  std::cout << "median over " << pairs << " pairs: wake p99 idle " << ip << " ns, loaded " << lp
-            << " ns (" << (ip > 0 ? 100.0 * (lp / ip - 1.0) : 0.0) << " %); overruns idle " << io
+  std::cout << "median over " << counted << " pairs (" << stolen_pairs
+            << " left out for steal): wake p99 idle " << ip << " ns, loaded " << lp << " ns ("
+            << (ip > 0 ? 100.0 * (lp / ip - 1.0) : 0.0) << " %); overruns idle " << io
             << ", loaded " << lo << "\n";
-  if (pairs >= 5) {
+  if (counted >= 5) {
     EXPECT_LE(lp, 1.1 * ip + 5000.0);
     EXPECT_LE(lo, 1.1 * io + 10.0);
+  } else if (pairs >= 5) {
+    std::cout << "only " << counted << " of " << pairs
+              << " pairs ran without steal: the 10 % criterion is not asserted\n";
   }
 }
 
