@@ -15,6 +15,7 @@
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/sample_record.hpp"
 #include "support/daemon_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace hd = hystbench::daemon;
 namespace fs = std::filesystem;
@@ -78,17 +79,12 @@ hd::DataTable read_complete_records(const std::string& path) {
   return hd::DataTable::parse_csv(text, path);
 }
 
-class AbuseTest : public ::testing::Test {
+class AbuseTest : public hystbench::test::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("hbabuse_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-  }
+  AbuseTest() : TempDirTest("hbabuse") {}
   void TearDown() override {
     daemon_.reset();
-    fs::remove_all(dir_);
+    TempDirTest::TearDown();
   }
   void start(const std::string& config = {}) {
     daemon_ = std::make_unique<Daemon>(dir_, config);
@@ -103,7 +99,6 @@ class AbuseTest : public ::testing::Test {
       return false;
     }
   }
-  fs::path dir_;
   std::unique_ptr<Daemon> daemon_;
 };
 

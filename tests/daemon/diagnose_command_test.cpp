@@ -4,7 +4,6 @@
 #include "hystbench/daemon/diagnose_command.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -19,6 +18,8 @@
 #include "hystbench/daemon/sample_log_writer.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
+#include "support/simulated_record.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace hd = hystbench::daemon;
 namespace hs = hystbench::sim;
@@ -27,9 +28,7 @@ using nlohmann::json;
 
 namespace {
 
-struct Record {
-  std::vector<double> t, u, y;
-};
+using Record = hystbench::test::SimulatedRecord;
 
 // A simulated actuator (symmetric PI truth) with creep as the one hidden effect.
 hs::SimulatedActuatorConfig creep_actuator() {
@@ -45,32 +44,12 @@ hs::SimulatedActuatorConfig creep_actuator() {
 
 Record simulate(const hs::SimulatedActuatorConfig& c, double dt,
                 const hs::IdentificationExcitationOptions& o, std::uint64_t noise_seed) {
-  hs::SimulatedActuatorConfig config = c;
-  config.sensor_noise.seed = noise_seed;
-  hs::SimulatedActuator actuator(config, dt);
-  const hs::Excitation x = hs::identification_excitation(0.0, 150.0, dt, o);
-  Record r;
-  actuator.reset(x.samples.front());
-  for (std::size_t k = 0; k < x.samples.size(); ++k) {
-    r.t.push_back(static_cast<double>(k) * dt);
-    r.u.push_back(x.samples[k]);
-    r.y.push_back(actuator.step(x.samples[k]));
-  }
-  return r;
+  return hystbench::test::simulate_record(c, dt, o, noise_seed);
 }
 
-class DiagnoseCommandTest : public ::testing::Test {
+class DiagnoseCommandTest : public hystbench::test::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("hystbench_diagnose_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  DiagnoseCommandTest() : TempDirTest("hystbench_diagnose_test") {}
 
   std::string write_record(const std::string& name, const Record& r) const {
     hd::write_csv(path(name), {"t", "u", "y"}, {&r.t, &r.u, &r.y});
@@ -91,7 +70,6 @@ class DiagnoseCommandTest : public ::testing::Test {
     return code;
   }
 
-  fs::path dir_;
   std::string out_, err_;
 };
 

@@ -16,6 +16,7 @@
 #include "hystbench/daemon/bench_client.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "support/daemon_process.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace hd = hystbench::daemon;
 using nlohmann::json;
@@ -27,21 +28,18 @@ using hystbench::testing::Daemon;
 using hystbench::testing::RawClient;
 using hystbench::testing::wait_finished;
 
-class HystbenchdTest : public ::testing::Test {
+class HystbenchdTest : public hystbench::test::TempDirTest {
  protected:
+  HystbenchdTest() : TempDirTest("hbd") {}
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("hbd_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
+    TempDirTest::SetUp();
     daemon_ = std::make_unique<Daemon>(dir_);
     ASSERT_TRUE(daemon_->running()) << "hystbenchd did not start";
   }
   void TearDown() override {
     daemon_.reset();
-    fs::remove_all(dir_);
+    TempDirTest::TearDown();
   }
-  fs::path dir_;
   std::unique_ptr<Daemon> daemon_;
 };
 

@@ -4,7 +4,6 @@
 // SCHED_FIFO, no mlockall, an overrun budget that never faults: timing is not under test), the
 // run.finished results collected, and run_and_wait().
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -15,23 +14,18 @@
 #include <vector>
 
 #include "hystbench/daemon/bench.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace hystbench::test {
 
-class BenchFixture : public ::testing::Test {
+class BenchFixture : public TempDirTest {
  protected:
   /// `prefix` names the temporary folder (prefix_pid_testname).
-  explicit BenchFixture(std::string prefix) : prefix_(std::move(prefix)) {}
+  explicit BenchFixture(std::string prefix) : TempDirTest(std::move(prefix)) {}
 
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           (prefix_ + "_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(dir_);
-  }
   void TearDown() override {
     bench_.reset();
-    std::filesystem::remove_all(dir_);
+    TempDirTest::TearDown();
   }
 
   /// Loop at `rate_hz` [Hz], logs and models in the test's folder, precondition 0.4 s.
@@ -69,13 +63,9 @@ class BenchFixture : public ::testing::Test {
 
   nlohmann::json status() { return bench_->handle("status", nlohmann::json::object()); }
 
-  std::filesystem::path dir_;
   std::unique_ptr<daemon::Bench> bench_;
   std::mutex m_;
   std::vector<nlohmann::json> results_;
-
- private:
-  std::string prefix_;
 };
 
 }  // namespace hystbench::test
