@@ -107,6 +107,18 @@ int main(int argc, char** argv) {
   inv_cmd->add_option("reference", inv.reference_path, "CSV with columns t, yr")
       ->required()
       ->check(CLI::ExistingFile);
+  inv_cmd->add_option("--t-column", inv.t_column, "Name of the time column [s]")
+      ->capture_default_str();
+  inv_cmd
+      ->add_option("--yr-column", inv.yr_column,
+                   "Name of the reference column (the model's output unit after --yr-scale)")
+      ->capture_default_str();
+  inv_cmd->add_option("--yr-scale", inv.yr_scale, "Multiply the reference by this (m -> um: 1e6)")
+      ->capture_default_str();
+  inv_cmd
+      ->add_option("--rate", inv.rate_hz,
+                   "Sample rate [Hz] of a file without a time column (t = row / rate)")
+      ->check(CLI::PositiveNumber);
   inv_cmd->add_option("-o,--output", inv.output_path, "CSV file to write (t,yr,u)")->required();
   inv_cmd
       ->add_option("--inverse", inv.inverse,

@@ -161,11 +161,21 @@ int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& er
 int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
   return guarded(err, [&] {
     hc::ModelFile file = load_model_file(cmd.model_path);
-    const DataTable data = DataTable::read_csv(cmd.reference_path);
-    data.require_increasing("t");
-    const auto& t = data.column("t");
-    const auto& yr = data.column("yr");
-    file.model.configure(data.sample_period());
+    // The reference goes through the record reader as its input column: same checks (finite,
+    // t increasing, scale and rate valid), same messages naming file, column and line.
+    if (!std::isfinite(cmd.yr_scale) || cmd.yr_scale == 0.0) {
+      throw DataFileError("--yr-scale must be a finite, non-zero number");
+    }
+    RecordColumns columns;
+    columns.t = cmd.t_column;
+    columns.u = cmd.yr_column;
+    columns.y.clear();  // no output column to read
+    columns.u_scale = cmd.yr_scale;
+    columns.rate_hz = cmd.rate_hz;
+    const Record reference = read_record(cmd.reference_path, columns, false);
+    const auto& t = reference.t;
+    const auto& yr = reference.u;
+    file.model.configure(reference.sample_period_s);
     hc::InverseKind kind = hc::InverseKind::kAuto;
     if (cmd.inverse == "analytic")
       kind = hc::InverseKind::kAnalytic;
@@ -181,13 +191,7 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
     const double u0 = file.model.input_min < file.model.input_max ? file.model.input_min : 0.0;
     inverse->reset(u0);
     std::vector<double> u(yr.size());
-    for (std::size_t k = 0; k < yr.size(); ++k) {
-      if (!std::isfinite(yr[k])) {
-        throw std::invalid_argument(cmd.reference_path + ": yr is not finite at row " +
-                                    std::to_string(k + 1));
-      }
-      u[k] = inverse->step(yr[k]);
-    }
+    for (std::size_t k = 0; k < yr.size(); ++k) u[k] = inverse->step(yr[k]);
     write_csv(cmd.output_path, {"t", "yr", "u"}, {&t, &yr, &u},
               {"hystbench invert model=" + cmd.model_path + " reference=" + cmd.reference_path});
     if (cmd.json_output) {

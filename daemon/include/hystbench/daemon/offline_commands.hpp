@@ -40,6 +40,10 @@ struct InvertCommand {
   std::string output_path;
   std::string inverse = "auto";  ///< auto | analytic | numeric | multiplicative
   bool json_output = false;
+  std::string t_column = "t";    ///< time column [s]
+  std::string yr_column = "yr";  ///< reference column, in the model's output unit after scaling
+  double yr_scale = 1.0;         ///< yr = column * yr_scale (e.g. 1e6 for m -> um)
+  double rate_hz = 0.0;          ///< > 0: the file has no time column; t = row / rate_hz [s]
 };
 
 int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err);

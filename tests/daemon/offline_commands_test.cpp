@@ -1,0 +1,217 @@
+// The offline commands (`hystbench fit`, `simulate`, `invert`) on CSV files: a model fitted on one
+// simulated record predicts another, its inverse drives the model onto a reference whatever the
+// reference file's column names, units and time base, and bad input gives an error that names
+// the cause and writes nothing.
+#include "hystbench/daemon/offline_commands.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/daemon/data_table.hpp"
+#include "support/simulated_record.hpp"
+#include "support/temp_dir_test.hpp"
+
+namespace hd = hystbench::daemon;
+namespace hs = hystbench::sim;
+namespace fs = std::filesystem;
+using hystbench::test::SimulatedRecord;
+using nlohmann::json;
+
+namespace {
+
+// The default simulated stack (asymmetric modified-PI hysteresis, sensor noise, converters)
+// without creep and structural dynamics: what a modified PI can describe.
+hs::SimulatedActuatorConfig static_actuator() {
+  hs::SimulatedActuatorConfig c;
+  c.dynamics.enabled = false;
+  c.creep.enabled = false;
+  return c;
+}
+
+class OfflineCommandsTest : public hystbench::test::TempDirTest {
+ protected:
+  OfflineCommandsTest() : TempDirTest("hystbench_offline_test") {}
+
+  std::string write_record(const std::string& name, const SimulatedRecord& r) const {
+    hd::write_csv(path(name), {"t", "u", "y"}, {&r.t, &r.u, &r.y});
+    return path(name);
+  }
+
+  /// Fits a modified PI on a simulated record; returns the model file's path.
+  std::string fit_model() {
+    hd::FitCommand fit;
+    fit.data_path =
+        write_record("fit.csv", hystbench::test::simulate_record(static_actuator(), 1e-3, {}, 11));
+    fit.model_name = "mpi";
+    fit.output_path = path("model.json");
+    fit.json_output = true;
+    EXPECT_EQ(run(hd::run_fit, fit), 0) << err_;
+    return fit.output_path;
+  }
+
+  template <typename Command>
+  int run(int (*command)(const Command&, std::ostream&, std::ostream&), const Command& cmd) {
+    std::ostringstream out, err;
+    const int code = command(cmd, out, err);
+    out_ = out.str();
+    err_ = err.str();
+    return code;
+  }
+
+  std::string out_, err_;
+};
+
+}  // namespace
+
+TEST_F(OfflineCommandsTest, FittedModelPredictsASecondRecordOfTheSameActuator) {
+  const std::string model = fit_model();
+  const json fitted = json::parse(out_);
+  EXPECT_EQ(fitted.at("type"), "mpi");
+  EXPECT_LT(fitted.at("heldout").at("rmse_percent").get<double>(), 1.0) << out_;
+
+  // Another excitation (other reversal points and rates) and another noise realisation.
+  hs::IdentificationExcitationOptions other;
+  other.reversal_points = {0.6, 0.1, 0.95, 0.4, 0.75, 0.05, 0.5};
+  other.rate_frequencies_hz = {1.0, 5.0};
+  other.rate_cycles = {3, 8};
+  const SimulatedRecord second =
+      hystbench::test::simulate_record(static_actuator(), 1e-3, other, 12);
+  hd::SimulateCommand sim;
+  sim.model_path = model;
+  sim.data_path = write_record("second.csv", second);
+  sim.output_path = path("prediction.csv");
+  sim.json_output = true;
+  ASSERT_EQ(run(hd::run_simulate, sim), 0) << err_;
+  const json predicted = json::parse(out_);
+  EXPECT_LT(predicted.at("rmse_percent").get<double>(), 1.0) << out_;
+
+  const hd::DataTable written = hd::DataTable::read_csv(sim.output_path);
+  EXPECT_EQ(written.names(), (std::vector<std::string>{"t", "u", "y_model", "y", "residual"}));
+  ASSERT_EQ(written.rows(), second.t.size());
+  const auto& residual = written.column("residual");
+  double sum2 = 0.0;
+  for (const double r : residual) sum2 += r * r;
+  EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(residual.size())),
+              predicted.at("rmse").get<double>(), 1e-6);
+}
+
+TEST_F(OfflineCommandsTest, InverseDrivesTheModelOntoTheReferenceWhateverTheFileLayout) {
+  const std::string model = fit_model();
+  hystbench::compensation::ModelFile file = hd::load_model_file(model);
+
+  // A reference the model can reach: its own response to a decaying triangle from input_min.
+  constexpr double kDt = 1e-3;
+  std::vector<double> t, u_true;
+  for (int k = 0; k < 4000; ++k) {
+    const double phase = std::fmod(k * kDt, 1.0);
+    const double amplitude = 140.0 * (1.0 - 0.2 * std::floor(k * kDt));
+    t.push_back(k * kDt);
+    u_true.push_back(amplitude * (phase < 0.5 ? 2.0 * phase : 2.0 - 2.0 * phase));
+  }
+  file.model.configure(kDt);
+  const std::vector<double> yr = file.model.simulate(u_true, kDt);
+  const double range =
+      *std::max_element(yr.begin(), yr.end()) - *std::min_element(yr.begin(), yr.end());
+
+  hd::InvertCommand inv;
+  inv.model_path = model;
+  inv.reference_path = path("reference.csv");
+  inv.output_path = path("drive.csv");
+  hd::write_csv(inv.reference_path, {"t", "yr"}, {&t, &yr});
+  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
+  const hd::DataTable drive = hd::DataTable::read_csv(inv.output_path);
+  ASSERT_EQ(drive.names(), (std::vector<std::string>{"t", "yr", "u"}));
+  const std::vector<double> u = drive.column("u");
+  const std::vector<double> y = file.model.simulate(u, kDt);
+  double worst = 0.0;
+  for (std::size_t k = 0; k < y.size(); ++k) worst = std::max(worst, std::abs(y[k] - yr[k]));
+  EXPECT_LT(worst, 1e-6 * range) << "model(inverse(yr)) misses yr by " << worst;
+
+  // The same reference in a lab's export: position in m under another name, time in another
+  // column; then with no time column at all and the rate given.
+  std::vector<double> yr_m(yr.size());
+  for (std::size_t k = 0; k < yr.size(); ++k) yr_m[k] = yr[k] * 1e-6;
+  inv.reference_path = path("export.csv");
+  inv.output_path = path("drive_export.csv");
+  hd::write_csv(inv.reference_path, {"time_s", "position_m"}, {&t, &yr_m});
+  inv.t_column = "time_s";
+  inv.yr_column = "position_m";
+  inv.yr_scale = 1e6;
+  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
+  const std::vector<double> u_export = hd::DataTable::read_csv(inv.output_path).column("u");
+
+  inv.reference_path = path("no_time.csv");
+  inv.output_path = path("drive_no_time.csv");
+  hd::write_csv(inv.reference_path, {"position_m"}, {&yr_m});
+  inv.rate_hz = 1.0 / kDt;
+  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
+  const std::vector<double> u_no_time = hd::DataTable::read_csv(inv.output_path).column("u");
+
+  ASSERT_EQ(u_export.size(), u.size());
+  ASSERT_EQ(u_no_time.size(), u.size());
+  for (std::size_t k = 0; k < u.size(); ++k) {
+    EXPECT_NEAR(u_export[k], u[k], 1e-6) << "row " << k;
+    EXPECT_NEAR(u_no_time[k], u[k], 1e-6) << "row " << k;
+  }
+}
+
+TEST_F(OfflineCommandsTest, BadInputNamesTheCauseAndWritesNothing) {
+  const std::string model = fit_model();
+  auto write_text = [&](const std::string& name, const std::string& text) {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  };
+  hd::InvertCommand inv;
+  inv.model_path = model;
+  inv.output_path = path("drive.csv");
+
+  inv.reference_path = write_text("no_yr.csv", "t,y\n0,1\n0.001,2\n");
+  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_NE(err_.find("yr"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("no_yr.csv"), std::string::npos) << err_;
+
+  inv.reference_path = write_text("nan.csv", "t,yr\n0,1\n0.001,nan\n0.002,3\n");
+  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_NE(err_.find("nan.csv:3"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("not a finite number"), std::string::npos) << err_;
+
+  inv.reference_path = write_text("backwards.csv", "t,yr\n0,1\n0.002,2\n0.001,3\n");
+  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_NE(err_.find("t"), std::string::npos) << err_;
+
+  inv.reference_path = write_text("ok.csv", "t,yr\n0,1\n0.001,2\n");
+  inv.yr_scale = 0.0;
+  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_NE(err_.find("--yr-scale"), std::string::npos) << err_;
+  inv.yr_scale = 1.0;
+  inv.inverse = "exact";
+  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_NE(err_.find("--inverse"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(inv.output_path));
+
+  hd::FitCommand fit;
+  fit.output_path = path("constant.json");
+  std::string constant = "t,u,y\n";
+  for (int k = 0; k < 2000; ++k)
+    constant += std::to_string(k * 1e-3) + ",5," + std::to_string(k) + "\n";
+  fit.data_path = write_text("constant.csv", constant);
+  EXPECT_EQ(run(hd::run_fit, fit), 1);
+  EXPECT_NE(err_.find("constant"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(fit.output_path));
+
+  hd::SimulateCommand sim;
+  sim.model_path = write_text("broken.json", "{\"schema\":\"hystbench.model/1\",\"type\":\"pi\"}");
+  sim.data_path = write_text("data.csv", "t,u\n0,1\n0.001,2\n");
+  sim.output_path = path("out.csv");
+  EXPECT_EQ(run(hd::run_simulate, sim), 1);
+  EXPECT_NE(err_.find("broken.json"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(sim.output_path));
+}
