@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <string>
 
+#include "details/play_kernels.hpp"
 #include "details/validate.hpp"
 
 namespace hystbench::compensation {
@@ -37,22 +38,22 @@ double CoupledPlayPiModel::operator_output(double u, double u_prev, double z_pre
   return std::min(z_prev, u + width);
 }
 
+namespace {
+
+details::CoupledPlayArrays arrays(const CoupledPlayParameters& p) noexcept {
+  return {p.r.data(), p.ra.data(), p.rb.data(), p.rc.data(), p.weights.data(), p.weights.size()};
+}
+
+}  // namespace
+
 double CoupledPlayPiModel::step(double u) noexcept {
-  double y = p_.offset;
-  for (std::size_t i = 0; i < z_.size(); ++i) {
-    z_[i] = operator_output(u, u_prev_, z_[i], p_.r[i], p_.ra[i], p_.rb[i], p_.rc[i]);
-    y += p_.weights[i] * z_[i];
-  }
+  const double y = p_.offset + details::coupled_play_step(u, u >= u_prev_, arrays(p_), z_.data());
   u_prev_ = u;
   return y;
 }
 
 double CoupledPlayPiModel::peek(double u) const noexcept {
-  double y = p_.offset;
-  for (std::size_t i = 0; i < z_.size(); ++i) {
-    y += p_.weights[i] * operator_output(u, u_prev_, z_[i], p_.r[i], p_.ra[i], p_.rb[i], p_.rc[i]);
-  }
-  return y;
+  return p_.offset + details::coupled_play_peek(u, u >= u_prev_, arrays(p_), z_.data());
 }
 
 void CoupledPlayPiModel::reset(double u0) noexcept {

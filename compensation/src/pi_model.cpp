@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "details/play_kernels.hpp"
 #include "details/validate.hpp"
 
 namespace hystbench::compensation {
@@ -34,39 +35,9 @@ PiModel::PiModel(PiParameters p) : p_(std::move(p)), state_(p_.thresholds.size()
   validate(p_);
 }
 
-namespace {
-
-// One play step of every operator and the weighted sum of their outputs: the hot loop of every
-// PI-family model and analytic inverse. Compiled twice, for AVX2 and for the x86-64 baseline;
-// the loader picks the one the CPU runs, so the binary stays portable without -march. Four
-// independent accumulators: without -ffast-math the compiler may not reorder a floating-point
-// sum, and one serial accumulator makes the step latency-bound. Both versions add in the same
-// order, so their results are identical.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-double play_step(double u, const double* r, const double* w, double* s, std::size_t n) noexcept {
-  for (std::size_t i = 0; i < n; ++i) {
-    const double lo = u - r[i], hi = u + r[i];
-    const double v = s[i] < hi ? s[i] : hi;  // min, max written out so they vectorise
-    s[i] = v > lo ? v : lo;
-  }
-  double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
-  std::size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    a0 += w[i] * s[i];
-    a1 += w[i + 1] * s[i + 1];
-    a2 += w[i + 2] * s[i + 2];
-    a3 += w[i + 3] * s[i + 3];
-  }
-  for (; i < n; ++i) a0 += w[i] * s[i];
-  return (a0 + a1) + (a2 + a3);
-}
-
-}  // namespace
-
 double PiModel::step(double u) noexcept {
-  return play_step(u, p_.thresholds.data(), p_.weights.data(), state_.data(), state_.size()) +
+  return details::play_step(u, p_.thresholds.data(), p_.weights.data(), state_.data(),
+                            state_.size()) +
          p_.offset;
 }
 

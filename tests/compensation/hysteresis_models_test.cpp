@@ -142,6 +142,42 @@ TEST(CoupledPlayPiModel, WidthDependsOnDirectionAndLevel) {
   EXPECT_DOUBLE_EQ(z, -1.0);  // min(2.0, -3.0 + ra)
 }
 
+TEST(CoupledPlayPiModel, StepAndPeekAreTheWeightedSumOfItsOperators) {
+  // The model's vectorised kernel against the operator definition, one operator at a time, for
+  // operator counts that do and do not fill whole vectors, over a random signal with reversals.
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> width(0.0, 3.0), weight(0.05, 1.0), input(-8.0, 8.0);
+  for (const std::size_t n : {1u, 4u, 7u, 13u, 50u}) {
+    hc::CoupledPlayParameters p;
+    for (std::size_t i = 0; i < n; ++i) {
+      p.r.push_back(width(rng));
+      p.rc.push_back(p.r.back() + width(rng));
+      p.rb.push_back(width(rng));
+      p.ra.push_back(p.rb.back() * 0.5);
+      p.weights.push_back(weight(rng));
+    }
+    p.offset = 0.3;
+    hc::CoupledPlayPiModel model(p);
+    model.reset(0.0);
+    std::vector<double> z(n, 0.0);
+    double u_prev = 0.0;
+    for (int k = 0; k < 2000; ++k) {
+      const double u = k % 7 == 0 ? input(rng) : u_prev + 0.1 * input(rng);
+      double expected = p.offset;
+      for (std::size_t i = 0; i < n; ++i) {
+        z[i] = hc::CoupledPlayPiModel::operator_output(u, u_prev, z[i], p.r[i], p.ra[i], p.rb[i],
+                                                       p.rc[i]);
+        expected += p.weights[i] * z[i];
+      }
+      const double peeked = model.peek(u);
+      const double stepped = model.step(u);
+      ASSERT_NEAR(stepped, expected, 1e-12 * (1.0 + std::abs(expected))) << "n " << n << " k " << k;
+      ASSERT_EQ(peeked, stepped) << "n " << n << " k " << k;
+      u_prev = u;
+    }
+  }
+}
+
 TEST(RateDependentPiModel, ReducesToModifiedPiAtZeroRateCoefficients) {
   std::mt19937_64 rng(3);
   const auto base = hystbench::testing::random_mpi(rng, 10, 2, 20.0);
