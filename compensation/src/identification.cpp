@@ -244,11 +244,12 @@ ModelStructure Identifier::structure(ModelKind kind, int plays, int dead_zones) 
       // Uniform on the fitted output range about the center, 2m+1 thresholds in all.
       const double above = r_.y_hi - center_;
       const double below = center_ - r_.y_lo;
-      s.dead_zone_thresholds.assign(static_cast<std::size_t>(2 * dead_zones + 1), 0.0);
+      s.dead_zone_thresholds.assign(2 * static_cast<std::size_t>(dead_zones) + 1, 0.0);
       for (int j = 1; j <= dead_zones; ++j) {
         const double f = static_cast<double>(j) / (dead_zones + 1);
-        s.dead_zone_thresholds[static_cast<std::size_t>(dead_zones + j)] = f * above;
-        s.dead_zone_thresholds[static_cast<std::size_t>(dead_zones - j)] = -f * below;
+        const auto m = static_cast<std::size_t>(dead_zones), i = static_cast<std::size_t>(j);
+        s.dead_zone_thresholds[m + i] = f * above;
+        s.dead_zone_thresholds[m - i] = -f * below;
       }
     }
   }
@@ -307,6 +308,7 @@ std::vector<int> Identifier::dead_zone_grid() const {
 template <class Key, class Eval>
 Key Identifier::pick(const std::vector<Key>& keys, Eval eval) {
   std::vector<double> scores;
+  scores.reserve(keys.size());
   for (const Key& k : keys) scores.push_back(eval(k));
   const double best = *std::min_element(scores.begin(), scores.end());
   const double tolerance = best * kParsimony + 1e-9 * (r_.y_hi - r_.y_lo);

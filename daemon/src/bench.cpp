@@ -1,5 +1,7 @@
 #include "hystbench/daemon/bench.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -117,7 +119,14 @@ Bench::Bench(BenchSettings settings) : settings_(std::move(settings)) {
   loop_ = std::make_unique<BenchLoop>(*driver_, settings_.loop);
 }
 
-Bench::~Bench() { shutdown(); }
+Bench::~Bench() {
+  // A run that cannot be written out at exit (full disk) is logged, not rethrown from here.
+  try {
+    shutdown();
+  } catch (const std::exception& e) {
+    spdlog::error("bench shutdown: {}", e.what());
+  }
+}
 
 RealtimeReport Bench::start() {
   realtime_ = loop_->start();
@@ -534,7 +543,7 @@ json Bench::start_track(const json& params) {
     }
   }
   try {
-    p->compensator.emplace(*kind, std::move(inverse), std::move(pid), linear);
+    p->compensator.emplace(*kind, std::move(inverse), pid, linear);
   } catch (const std::exception& e) {
     throw CommandError("bad_params", e.what());
   }

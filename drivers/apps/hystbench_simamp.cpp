@@ -21,7 +21,9 @@
 namespace hd = hystbench::drivers;
 using hystbench::apps::RealtimePlant;
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{
       "hystbench-simamp - CAN piezo amplifier simulator (the simulated actuator behind the CAN\n"
       "amplifier driver's frame protocol). See docs/drivers.md for candump/cansend usage."};
@@ -132,5 +134,16 @@ int main(int argc, char** argv) {
       std::cerr << "hystbench-simamp: " << std::strerror(errno) << "\n";
       return 1;
     }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "hystbench-simamp: " << e.what() << "\n";
+    return 1;
   }
 }

@@ -95,7 +95,7 @@ ModbusDaqConfig parse_modbus_daq_config(const nlohmann::json& params) {
     c.parity = parity == "none" ? 'N' : parity == "even" ? 'E' : 'O';
     c.data_bits = static_cast<int>(p.integer("data_bits", 8, 7, 8));
     c.stop_bits = static_cast<int>(p.integer("stop_bits", 1, 1, 2));
-    c.slave_id = static_cast<int>(p.integer("slave_id", tcp ? 1 : 1, tcp ? 0 : 1, tcp ? 255 : 247));
+    c.slave_id = static_cast<int>(p.integer("slave_id", 1, tcp ? 0 : 1, tcp ? 255 : 247));
     c.response_timeout_ms = p.number("response_timeout_ms", c.response_timeout_ms, 0.0, 10000.0);
     if (c.response_timeout_ms <= 0.0) {
       throw ParamError(p.key_path("response_timeout_ms") + ": must be > 0");
@@ -108,8 +108,7 @@ ModbusDaqConfig parse_modbus_daq_config(const nlohmann::json& params) {
     if (p.has("max_rate_hz") && c.max_rate_hz <= 0.0) {
       throw ParamError(p.key_path("max_rate_hz") + ": must be > 0");
     }
-    c.max_stale_reads =
-        static_cast<std::uint64_t>(p.integer("max_stale_reads", 0, 1, 1000000000));
+    c.max_stale_reads = static_cast<std::uint64_t>(p.integer("max_stale_reads", 0, 1, 1000000000));
     c.max_failed_transactions =
         static_cast<std::uint64_t>(p.integer("max_failed_transactions", 3, 1, 1000000000));
     c.reconnect_interval_ms = p.number("reconnect_interval_ms", 200.0, 1.0, 60000.0);

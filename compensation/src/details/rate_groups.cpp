@@ -68,6 +68,7 @@ double half_cycle_rate_spread(std::span<const double> u, double dt, std::size_t 
   std::vector<Segment> segments = half_cycles(u, rate, begin, end);
   if (segments.size() < 4) return 1.0;
   std::vector<double> r;
+  r.reserve(segments.size());
   for (const Segment& s : segments) r.push_back(s.rate);
   std::sort(r.begin(), r.end());
   const double lo = r[r.size() / 10];
@@ -92,7 +93,7 @@ std::optional<Eigen::VectorXd> fit_rate_groups(const ModelStructure& structure,
 
   const std::vector<double> rate = sample_rates(u, structure.dt);
   std::vector<Segment> segments = half_cycles(u, rate, begin, end);
-  if (segments.size() < 2 * 2) return std::nullopt;
+  if (segments.size() < 4) return std::nullopt;  // two groups of at least two half-cycles
   std::sort(segments.begin(), segments.end(),
             [](const Segment& a, const Segment& b) { return a.rate < b.rate; });
   const std::size_t groups = std::min(kMaxGroups, segments.size() / 2);
@@ -127,6 +128,7 @@ std::optional<Eigen::VectorXd> fit_rate_groups(const ModelStructure& structure,
   const Eigen::VectorXd hi =
       Eigen::VectorXd::Constant(n + 1, std::numeric_limits<double>::infinity());
   std::vector<Eigen::VectorXd> W;
+  W.reserve(per_group.size());
   for (auto& ne : per_group) W.push_back(solve_bounded_lsq(ne.gram(), ne.rhs(), lo, hi).x);
 
   // Cumulative weights linear in rate, invertible at both ends of [0, max_rate].

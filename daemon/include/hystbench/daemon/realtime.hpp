@@ -35,7 +35,7 @@ RealtimeStatus pin_to_cpu(int cpu) noexcept;
 RealtimeStatus lock_memory() noexcept;
 RealtimeStatus unlock_memory() noexcept;
 /// Touches `bytes` of the calling thread's stack so the loop takes no page fault on it later.
-void prefault_stack(std::size_t bytes = 256 * 1024) noexcept;
+void prefault_stack(std::size_t bytes = std::size_t{256} * 1024) noexcept;
 
 struct RealtimeOptions {
   bool fifo = true;   ///< try SCHED_FIFO

@@ -58,8 +58,9 @@ struct SocketServerOptions {
   std::filesystem::path path;  ///< at most 107 bytes; its folder is created when missing
   unsigned mode = 0660;        ///< file mode of the socket
   std::size_t max_clients = 128;
-  std::size_t max_line_bytes = 64 * 1024;      ///< longest request line, '\n' excluded
-  std::size_t max_output_bytes = 1024 * 1024;  ///< unsent bytes per client before disconnect
+  std::size_t max_line_bytes = std::size_t{64} << 10;  ///< longest request line, '\n' excluded
+  std::size_t max_output_bytes = std::size_t{1}
+                                 << 20;  ///< unsent bytes per client before disconnect
 };
 
 /// The socket cannot be set up: path in use by a live server, not a socket, too long, ...
