@@ -13,6 +13,7 @@ BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
     : driver_(driver),
       options_(options),
       limiter_(options.limits, 1.0 / options.rate_hz),
+      stuck_(options.stuck_sensor),
       dt_(1.0 / options.rate_hz),
       period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))) {
   limiter_.reset(driver_.safe_output_v());
@@ -109,6 +110,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns,
     RunProgram* p = pending_.exchange(nullptr, std::memory_order_acq_rel);
     if (p != nullptr) {
       active_ = p;
+      stuck_.reset();
       driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
       active_pub_.store(p, std::memory_order_release);
@@ -209,6 +211,8 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     }
     if (failure == nullptr && !std::isfinite(m.position_um)) {
       failure = "measurement is not a finite number";
+    } else if (st == drivers::DriverStatus::kOk && stuck_.update(lim.u, m.position_um)) {
+      failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
     }
     rec.y_measured = m.position_um;
     if (failure == nullptr) {

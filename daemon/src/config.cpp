@@ -213,6 +213,8 @@ void read_loop(Section s, LoopSection& l) {
   s.boolean("lock_memory", l.lock_memory);
   s.integer<std::uint64_t>("overrun_budget", l.overrun_budget, 0, 1'000'000'000);
   s.integer<std::size_t>("ring_capacity", l.ring_capacity, 1024, std::size_t{1} << 24);
+  s.number("stuck_sensor_ms", l.stuck_sensor_ms, 0.0, 10000.0);
+  s.number("stuck_sensor_span", l.stuck_sensor_span, 0.0, 1.0, true);
   s.finish();
 }
 
@@ -357,7 +359,9 @@ nlohmann::json to_json(const DaemonConfig& c) {
         {"cpu", c.loop.cpu},
         {"lock_memory", c.loop.lock_memory},
         {"overrun_budget", c.loop.overrun_budget},
-        {"ring_capacity", c.loop.ring_capacity}}},
+        {"ring_capacity", c.loop.ring_capacity},
+        {"stuck_sensor_ms", c.loop.stuck_sensor_ms},
+        {"stuck_sensor_span", c.loop.stuck_sensor_span}}},
       {"limits",
        {{"u_min", c.limits.u_min},
         {"u_max", c.limits.u_max},

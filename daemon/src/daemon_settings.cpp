@@ -1,5 +1,8 @@
 #include "hystbench/daemon/daemon_settings.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace hystbench::daemon {
 
 BenchSettings bench_settings_from(const DaemonConfig& c) {
@@ -12,6 +15,11 @@ BenchSettings bench_settings_from(const DaemonConfig& c) {
   s.loop.overrun_budget = c.loop.overrun_budget;
   s.loop.limits = {c.limits.u_min, c.limits.u_max, c.limits.slew_v_per_s};
   s.loop.fatal_on_limit = c.limits.fatal_on_limit;
+  if (c.loop.stuck_sensor_ms > 0.0) {
+    s.loop.stuck_sensor.ticks = static_cast<std::uint64_t>(
+        std::max(2.0, std::round(c.loop.stuck_sensor_ms * 1e-3 * c.loop.rate_hz)));
+  }
+  s.loop.stuck_sensor.output_span_v = c.loop.stuck_sensor_span * (c.limits.u_max - c.limits.u_min);
   s.driver_type = c.driver.type;
   s.driver_params = c.driver.params();
   // The loopback driver's actuator is the [actuator] table unless the driver table names one.

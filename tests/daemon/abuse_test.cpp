@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -306,8 +307,14 @@ struct FaultCase {
 
 TEST_F(AbuseTest, SensorFaultsGoSafeWithinTheTickAndEndTheRunWithTheReason) {
   // 1 kHz; the fault is armed at an absolute driver tick (4 s after start-up), mid-run.
-  for (const FaultCase fc : {FaultCase{"read_error_at_tick", "driver read failed"},
-                             FaultCase{"nan_at_tick", "measurement is not a finite number"}}) {
+  // A stuck sensor is found after loop.stuck_sensor_ms (20 ms: 20 ticks) of identical readings
+  // while the output sweeps 2 % of its range (3 V; the 1 Hz triangle moves 6 V in 20 ms).
+  for (const FaultCase fc :
+       {FaultCase{"read_error_at_tick", "driver read failed"},
+        FaultCase{"nan_at_tick", "measurement is not a finite number"},
+        FaultCase{
+            "stuck_at_tick",
+            "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)"}}) {
     SCOPED_TRACE(fc.key);
     daemon_.reset();
     fs::remove_all(dir_);
@@ -333,6 +340,17 @@ TEST_F(AbuseTest, SensorFaultsGoSafeWithinTheTickAndEndTheRunWithTheReason) {
     for (std::size_t k = 0; k + 1 < flags.size(); ++k)
       ASSERT_EQ(static_cast<unsigned>(flags[k]) & hd::kSampleFault, 0u) << "row " << k;
     EXPECT_NE(static_cast<unsigned>(flags.back()) & hd::kSampleFault, 0u);
+    if (std::string(fc.key) == "stuck_at_tick") {
+      // The reading froze, then the run ended within the detection window (plus the ticks a
+      // turning point of the triangle may need to sweep the span).
+      const auto& y = log.column("y");
+      std::size_t same = 1;
+      while (same < y.size() && y[y.size() - 1 - same] == y.back()) ++same;
+      EXPECT_GE(same, 20u);
+      EXPECT_LE(same, 40u);
+      const auto& u = log.column("u");
+      EXPECT_GT(std::abs(u[u.size() - 1] - u[u.size() - same]), 3.0);
+    }
     // The bench stays in FAULT, at the safe output, until reset.
     const json status = c.request("status")["result"];
     EXPECT_EQ(status["state"], "fault");

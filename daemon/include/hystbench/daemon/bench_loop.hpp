@@ -8,9 +8,9 @@
 // and shutdown() is for the control thread and is lock-free. Runs are handed over as whole
 // RunProgram objects (see run_program.hpp); the loop never allocates, locks or throws.
 //
-// Faults (driver error, non-finite measurement, overrun budget, a limit hit with fatal limits):
-// the driver goes to its safe state in the same tick, the run ends with the reason and the loop
-// stays in kFault, writing the safe output, until reset_fault().
+// Faults (driver error, non-finite or stuck measurement, overrun budget, a limit hit with fatal
+// limits): the driver goes to its safe state in the same tick, the run ends with the reason and the
+// loop stays in kFault, writing the safe output, until reset_fault().
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -20,6 +20,7 @@
 #include "hystbench/daemon/output_limiter.hpp"
 #include "hystbench/daemon/realtime.hpp"
 #include "hystbench/daemon/run_program.hpp"
+#include "hystbench/daemon/stuck_sensor_detector.hpp"
 #include "hystbench/drivers/driver.hpp"
 
 namespace hystbench::daemon {
@@ -32,6 +33,8 @@ struct BenchLoopOptions {
   OutputLimits limits;
   /// A range or slew limit hit during a run faults it instead of being clamped and counted.
   bool fatal_on_limit = false;
+  /// A fresh reading repeated bit for bit while the output sweeps a span faults the run.
+  StuckSensorOptions stuck_sensor;
 };
 
 class BenchLoop {
@@ -88,6 +91,7 @@ class BenchLoop {
   drivers::Driver& driver_;
   BenchLoopOptions options_;
   OutputLimiter limiter_;
+  StuckSensorDetector stuck_;
   LoopStatistics stats_;
   std::thread thread_;
   std::atomic<bool> quit_{false};

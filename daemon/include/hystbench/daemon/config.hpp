@@ -59,6 +59,11 @@ struct LoopSection {
   std::uint64_t overrun_budget = 100;
   /// Sample-log ring records [1024, 2^24], rounded up to a power of two.
   std::size_t ring_capacity = std::size_t{1} << 16;
+  /// A fresh reading repeated bit for bit for this long [ms] while the output sweeps
+  /// stuck_sensor_span of [u_min, u_max] faults the run (frozen or saturated sensor).
+  /// [0, 10000]; 0 = off.
+  double stuck_sensor_ms = 20.0;
+  double stuck_sensor_span = 0.02;  ///< (0, 1]
 };
 
 struct LimitsSection {
