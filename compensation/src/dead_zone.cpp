@@ -7,6 +7,16 @@
 
 namespace hystbench::compensation {
 
+std::vector<double> uniform_dead_zone_thresholds(std::size_t m, double below, double above) {
+  std::vector<double> d(2 * m + 1, 0.0);
+  for (std::size_t j = 1; j <= m; ++j) {
+    const double f = static_cast<double>(j) / static_cast<double>(m + 1);
+    d[m + j] = f * above;
+    d[m - j] = -f * below;
+  }
+  return d;
+}
+
 DeadZoneSuperposition::DeadZoneSuperposition() : p_{{0.0}, {1.0}}, zero_(0), w0_(1.0) {}
 
 DeadZoneSuperposition::DeadZoneSuperposition(DeadZoneParameters p) : p_(std::move(p)) {

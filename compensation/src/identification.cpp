@@ -244,13 +244,8 @@ ModelStructure Identifier::structure(ModelKind kind, int plays, int dead_zones) 
       // Uniform on the fitted output range about the center, 2m+1 thresholds in all.
       const double above = r_.y_hi - center_;
       const double below = center_ - r_.y_lo;
-      s.dead_zone_thresholds.assign(2 * static_cast<std::size_t>(dead_zones) + 1, 0.0);
-      for (int j = 1; j <= dead_zones; ++j) {
-        const double f = static_cast<double>(j) / (dead_zones + 1);
-        const auto m = static_cast<std::size_t>(dead_zones), i = static_cast<std::size_t>(j);
-        s.dead_zone_thresholds[m + i] = f * above;
-        s.dead_zone_thresholds[m - i] = -f * below;
-      }
+      s.dead_zone_thresholds =
+          uniform_dead_zone_thresholds(static_cast<std::size_t>(dead_zones), below, above);
     }
   }
   return s;

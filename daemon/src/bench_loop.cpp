@@ -58,7 +58,7 @@ std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> progra
   stop_requested_.store(false, std::memory_order_relaxed);
   abort_requested_.store(false, std::memory_order_relaxed);
   if (!pending_.compare_exchange_strong(expected, raw, std::memory_order_acq_rel)) return program;
-  program.release();
+  (void)program.release();  // pending_ owns it now; the loop hands it back through finished_
   return nullptr;
 }
 

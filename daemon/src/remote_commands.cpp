@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <iomanip>
 #include <ostream>
@@ -32,7 +33,7 @@ std::string us(const json& ns) {
 
 void progress_bar(std::ostream& err, double fraction, const std::string& label) {
   const int width = 30;
-  const int filled = static_cast<int>(fraction * width + 0.5);
+  const int filled = static_cast<int>(std::lround(fraction * width));
   err << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
       << std::setw(3) << static_cast<int>(100 * fraction) << " % " << label << "\x1b[K"
       << std::flush;

@@ -25,8 +25,8 @@ constexpr std::array<std::string_view, 12> kColumns = {
 constexpr std::array<std::string_view, 12> kUnits = {"1", "s", "ns", "ns", "ns", "um",
                                                      "V", "V", "V",  "um", "um", "1"};
 constexpr std::size_t kBatch = 1024;
-constexpr std::size_t kWriteThreshold = 256 * 1024;
-constexpr std::size_t kMaxRowChars = 12 * 32;
+constexpr std::size_t kWriteThreshold = std::size_t{256} << 10;
+constexpr std::size_t kMaxRowChars = std::size_t{12} * 32;
 
 bool valid_run_id(const std::string& id) {
   if (id.empty() || id.size() > 128 || id.front() == '.' || id == "latest") return false;

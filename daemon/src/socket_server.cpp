@@ -20,7 +20,7 @@ namespace hystbench::daemon {
 
 namespace {
 
-constexpr std::size_t kReadChunk = 64 * 1024;
+constexpr std::size_t kReadChunk = std::size_t{64} << 10;
 constexpr std::size_t kMaxQueuedEvents = 4096;
 
 std::system_error sys_error(const std::string& what) {

@@ -199,9 +199,7 @@ int serve_rtu(Server& s, const std::string& device, int baud, char parity, int s
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{
       "hystbench-simdaq - Modbus TCP/RTU server wrapping the simulated piezo actuator\n"
       "Register map: docs/drivers.md. Prints the endpoint on stdout once it serves."};
@@ -261,4 +259,15 @@ int main(int argc, char** argv) {
                      stop_bits, slave);
   }
   return serve_tcp(s, bind, port);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "hystbench-simdaq: " << e.what() << "\n";
+    return 1;
+  }
 }

@@ -128,6 +128,15 @@ TEST(DeadZoneSuperposition, InverseUndoesTheMapOnBothSides) {
   EXPECT_THROW(bad.inverse(), hc::NotInvertibleError);
 }
 
+TEST(DeadZoneSuperposition, UniformThresholdsSpreadEachSideEvenlyAndAreAccepted) {
+  // m = 3 on an output range 4 below and 8 above the center: steps of 1 and 2.
+  const auto d = hc::uniform_dead_zone_thresholds(3, 4.0, 8.0);
+  EXPECT_EQ(d, (std::vector<double>{-3.0, -2.0, -1.0, 0.0, 2.0, 4.0, 6.0}));
+  EXPECT_EQ(hc::uniform_dead_zone_thresholds(0, 4.0, 8.0), std::vector<double>{0.0});
+  // Strictly increasing with one zero: a superposition takes them as they are.
+  EXPECT_NO_THROW(hc::DeadZoneSuperposition({d, std::vector<double>(d.size(), 0.1)}));
+}
+
 TEST(CoupledPlayPiModel, WidthDependsOnDirectionAndLevel) {
   // Rising above rc = 1 uses r = 0.5; below it the width is rc. Falling below -rb = -1 uses ra.
   const double r = 0.5, ra = 2.0, rb = 1.0, rc = 1.0;

@@ -24,12 +24,7 @@ ModelStructure with_dead_zones(const ModelStructure& base, const DiagnosisRecord
   s.center = 0.5 * (r.y_lo + r.y_hi);
   const double above = r.y_hi - s.center;
   const double below = s.center - r.y_lo;
-  s.dead_zone_thresholds.assign(static_cast<std::size_t>(2 * m + 1), 0.0);
-  for (int j = 1; j <= m; ++j) {
-    const double f = static_cast<double>(j) / (m + 1);
-    s.dead_zone_thresholds[static_cast<std::size_t>(m + j)] = f * above;
-    s.dead_zone_thresholds[static_cast<std::size_t>(m - j)] = -f * below;
-  }
+  s.dead_zone_thresholds = uniform_dead_zone_thresholds(static_cast<std::size_t>(m), below, above);
   return s;
 }
 

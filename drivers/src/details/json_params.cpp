@@ -87,7 +87,7 @@ std::string Params::string(const char* key, const std::string& fallback) const {
 
 std::string Params::choice(const char* key, const std::string& fallback,
                            std::initializer_list<const char*> choices) const {
-  const std::string s = string(key, fallback);
+  std::string s = string(key, fallback);
   for (const char* c : choices) {
     if (s == c) return s;
   }

@@ -18,6 +18,10 @@ inline double dead_zone(double v, double d) noexcept {
   return v;
 }
 
+/// 2m+1 thresholds spread evenly on both sides of 0 (the constrained-identification choice):
+/// d_{+-j} = +-j/(m+1) * above or below, j = 1..m, d_0 = 0, ascending. above, below >= 0.
+std::vector<double> uniform_dead_zone_thresholds(std::size_t m, double below, double above);
+
 struct DeadZoneParameters {
   std::vector<double> thresholds;  ///< strictly increasing, contains exactly one 0
   std::vector<double> weights;     ///< same length
