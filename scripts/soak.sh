@@ -13,9 +13,13 @@ seconds=${HYSTBENCH_SOAK_SECONDS:-3600}
 poll=${HYSTBENCH_SOAK_POLL:-5}
 slack=${HYSTBENCH_SOAK_RSS_SLACK_KB:-8192}
 [ -n "${HYSTBENCH_NO_BUILD:-}" ] || cmake --build "$build" -j2 --target hystbench hystbenchd >/dev/null
-bin=$build/bin
 bench_tmp=$(mktemp -d)
 tmp=$bench_tmp
+# The soak runs from its own copy of the binaries: a rebuild during the hour must not pull them
+# away from under the status polls.
+mkdir "$tmp/bin"
+cp "$build/bin/hystbench" "$build/bin/hystbenchd" "$tmp/bin/"
+bin=$tmp/bin
 . scripts/lib/daemon.sh
 trap stop_daemon_and_clean EXIT
 write_loopback_config "$tmp/soak.toml" 10000 true
