@@ -180,7 +180,8 @@ bool Bench::wait_idle(std::chrono::milliseconds timeout) {
   while (std::chrono::steady_clock::now() < until) {
     {
       std::lock_guard lock(mutex_);
-      if (loop_->state() != BenchLoop::State::kRunning && !finalizing_ && active_run_.is_null()) {
+      if (loop_->state() != BenchLoop::State::kRunning && !finalizing_ && !delivering_result_ &&
+          active_run_.is_null()) {
         return true;
       }
     }
@@ -745,8 +746,13 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
     last_result_ = result;
     active_run_ = nullptr;
     finalizing_ = false;
+    delivering_result_ = true;
   }
+  // Clients may start the next run as soon as they see this event, so the bench is idle before
+  // it goes out; wait_idle() still waits for it, or a caller could read the previous result.
   emit({{"event", "run.finished"}, {"result", result}});
+  std::lock_guard lock(mutex_);
+  delivering_result_ = false;
 }
 
 }  // namespace hystbench::daemon

@@ -3,9 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <thread>
+#include <vector>
 
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
@@ -73,6 +77,29 @@ TEST_F(BenchTest, BadRequestsChangeNothing) {
   ASSERT_TRUE(bench_->wait_idle(std::chrono::seconds(10)));
   std::lock_guard lock(m_);
   EXPECT_EQ(results_.back()["end"], "stopped");
+}
+
+// A sink that takes its time with run.finished (a loaded machine, a slow client fan-out): the
+// bench is idle for new commands meanwhile, but wait_idle() returns only once the result is in.
+TEST_F(BenchTest, WaitIdleReturnsOnlyAfterTheResultReachedTheSink) {
+  start(settings());
+  std::atomic<bool> in_sink{false};
+  json status_in_sink;
+  std::vector<json> delivered;
+  bench_->set_event_sink([&](const json& e) {
+    if (e["event"] != "run.finished") return;
+    in_sink = true;
+    status_in_sink = bench_->handle("status", json::object());
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    delivered.push_back(e["result"]);
+    in_sink = false;
+  });
+  bench_->handle("track", {{"compensator", "none"}, {"periods", 1}, {"precondition_s", 0.0}});
+  ASSERT_TRUE(bench_->wait_idle(std::chrono::seconds(30)));
+  EXPECT_FALSE(in_sink.load());
+  ASSERT_EQ(delivered.size(), 1u);
+  EXPECT_EQ(delivered.back()["end"], "completed");
+  EXPECT_EQ(status_in_sink["state"], "idle") << status_in_sink.dump();
 }
 
 TEST_F(BenchTest, DriverFaultGoesSafeAndStaysInFaultUntilReset) {

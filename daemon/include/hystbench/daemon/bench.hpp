@@ -88,7 +88,8 @@ class Bench {
 
   /// True when the loop has ticked since the previous call (for the systemd watchdog).
   bool loop_advanced();
-  /// Waits until no run is active or pending finalisation (for tests and shutdown).
+  /// Waits until no run is active or pending finalisation and the last run's `run.finished`
+  /// event has reached the sink (for tests and shutdown).
   bool wait_idle(std::chrono::milliseconds timeout);
   BenchLoop& loop() { return *loop_; }
   drivers::Driver& driver() { return *driver_; }
@@ -120,6 +121,7 @@ class Bench {
   nlohmann::json last_result_;
   nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
   bool finalizing_ = false;
+  bool delivering_result_ = false;  // run.finished is on its way to the sink (wait_idle waits)
   std::string pending_identify_model_;
   nlohmann::json pending_identify_options_;
   EventSink sink_;
