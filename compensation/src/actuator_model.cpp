@@ -77,6 +77,12 @@ double ActuatorModel::peek_static(double u) const noexcept {
   return y;
 }
 
+double ActuatorModel::peek_static_at_rate(double u, double rate) const noexcept {
+  double y = hysteresis_->peek_at_rate(u, rate);
+  if (!creep_.empty()) y += creep_.peek(u);
+  return y;
+}
+
 void ActuatorModel::reset(double u0) noexcept {
   last_input_ = u0;
   delay_.reset(u0);

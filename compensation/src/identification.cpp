@@ -17,6 +17,9 @@
 #include "details/rate_groups.hpp"
 #include "details/threshold_refinement.hpp"
 #include "details/validate.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "hystbench/compensation/rate_estimator.hpp"
 
 namespace hystbench::compensation {
 
@@ -45,6 +48,9 @@ constexpr double kCpLevelScales[] = {1.0, 2.0, 3.0, 4.0, 6.0};
 // input levels at clearly different rates (else its rate terms merely fit the loop shape of
 // the one excitation and do not carry over to other signals).
 constexpr double kMinRateSpread = 1.25;
+// RPI rate filter time constants tried, in fit samples (RateEstimator; 0 = the per-sample
+// difference): the one with the lowest held-out error is kept.
+constexpr double kRateFilterSamples[] = {0.0, 2.0, 5.0, 20.0};
 
 void validate_record(std::span<const double> t, std::span<const double> u,
                      std::span<const double> y) {
@@ -210,6 +216,7 @@ class Identifier {
   Candidate search_mpi();
   Candidate search_cpi();
   Candidate search_rpi();
+  Candidate nested_rpi(const Candidate& mpi, const ModelStructure& s);
   void refine(Candidate& c);
   void add_creep(Candidate& c);
   std::vector<double> creep_time_constants() const;
@@ -384,17 +391,29 @@ Candidate Identifier::search_cpi() {
 
 Candidate Identifier::search_rpi() {
   const Candidate mpi = search_mpi();
-  const std::vector<double> rates = details::sample_rates(r_.ud, r_.dt);
   ModelStructure s = mpi.structure;
   s.kind = ModelKind::kRateDependentPi;
-  s.max_rate = *std::max_element(rates.begin(), rates.end());
-  Candidate best = evaluate(s, "constrained-lsq-rate-joint");
+  // The rate range of the smooth parts: a step or a sharp reversal moves the input in a sample
+  // or two, and its per-sample rate would otherwise set a range the weights never see again.
+  s.max_rate = smooth_max_rate(r_.ud, r_.dt);
+  if (!(s.max_rate > 0.0)) {
+    const std::vector<double> rates = details::sample_rates(r_.ud, r_.dt);
+    s.max_rate = std::max(*std::max_element(rates.begin(), rates.end()), 1e-300);
+  }
+  // The nested model: the MPI with zero rate coefficients is a feasible RPI, so the RPI the
+  // search returns is never worse on held-out data than the MPI it extends.
+  Candidate best = nested_rpi(mpi, s);
   // The paper's way: per-rate-group weights regressed on rate, dead zones from the MPI.
   const Design mpi_design(mpi.structure);
   const Eigen::VectorXd v =
       mpi.x.segment(mpi_design.dead_zone_column(), mpi_design.dead_zone_unknowns());
-  const auto x = details::fit_rate_groups(s, v, r_.ud, r_.y, r_.begin, r_.fit_end);
-  if (x) {
+  for (const double samples : kRateFilterSamples) {
+    s.rate_filter_s = samples * r_.dt;
+    stage_progress(0.0, "rate filter " + fmt(s.rate_filter_s * 1e3) + " ms");
+    Candidate joint = evaluate(s, "constrained-lsq-rate-joint");
+    if (joint.score() < best.score()) best = std::move(joint);
+    const auto x = details::fit_rate_groups(s, v, r_.ud, r_.y, r_.begin, r_.fit_end);
+    if (!x) continue;
     Candidate g;
     g.structure = s;
     g.x = *x;
@@ -406,6 +425,27 @@ Candidate Identifier::search_rpi() {
     if (g.score() < best.score()) best = std::move(g);
   }
   return best;
+}
+
+Candidate Identifier::nested_rpi(const Candidate& mpi, const ModelStructure& s) {
+  // The MPI as an RPI with zero rate coefficients: the same outputs, so the same scores.
+  const auto& h = dynamic_cast<const ModifiedPiModel&>(mpi.model->hysteresis());
+  Candidate c = mpi;
+  c.structure.kind = ModelKind::kRateDependentPi;
+  c.structure.max_rate = s.max_rate;
+  c.structure.rate_filter_s = 0.0;
+  ActuatorModel m(std::make_unique<RateDependentPiModel>(
+      RateDependentPiParameters{h.parameters(),
+                                std::vector<double>(h.parameters().play.weights.size(), 0.0),
+                                s.max_rate, 0.0},
+      r_.dt));
+  m.set_creep(mpi.model->creep());
+  c.model = std::move(m);
+  c.method = mpi.method + " (rate-free: no rate law beat the modified PI it extends)";
+  score(c, r_);
+  log_.push_back({ModelKind::kRateDependentPi, static_cast<int>(c.structure.plays()),
+                  dead_zones_of(c.structure), r_.delay, c.fit.rmse, c.heldout.rmse, c.method});
+  return c;
 }
 
 Candidate Identifier::search(ModelKind kind) {
@@ -523,6 +563,15 @@ FitResult Identifier::run() {
   if (o_.creep) {
     progress(0.9, "fitting creep");
     add_creep(*best);
+  }
+  if (o_.kind == ModelKind::kRateDependentPi) {
+    // Nesting: the modified PI, refined and with creep as the RPI was, is a feasible RPI (zero
+    // rate coefficients); the RPI returned is never worse on held-out data.
+    progress(0.93, "checking the rate law against the modified PI it extends");
+    Candidate mpi = search_mpi();
+    if (o_.refine_thresholds) refine(mpi);
+    if (o_.creep) add_creep(mpi);
+    if (mpi.score() <= best->score()) best = nested_rpi(mpi, best->structure);
   }
   progress(0.97, "scoring");
 

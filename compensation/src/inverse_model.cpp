@@ -5,8 +5,14 @@
 
 #include "details/validate.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
 
 namespace hystbench::compensation {
+
+namespace {
+// The rate-dependent inverse's rate prediction is low-passed over at least this many samples.
+constexpr double kMinRatePredictionSamples = 5.0;
+}  // namespace
 
 // ---------------------------------------------------------------- PiInverse
 
@@ -58,7 +64,6 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
                    "numeric inverse needs an input range (input_min < input_max)");
   const Invertibility inv = model_.hysteresis().invertibility();
   if (!inv.invertible) throw NotInvertibleError(inv);
-  // Static model only: the inverse runs the hysteresis (+ creep) at the model's sample period.
   // Static model only: dropping delay and dynamics keeps the hysteresis and creep state.
   model_.set_delay(0.0);
   model_.set_dynamics(std::nullopt);
@@ -68,75 +73,118 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
       std::abs(probe.peek_static(opt_.input_max) - probe.peek_static(opt_.input_min));
   y_tol_ = opt_.tolerance * std::max(y_span, 1e-300);
   u_prev_ = model_.last_input();
+  if (model_.hysteresis().kind() == ModelKind::kRateDependentPi) {
+    const auto& rpi = static_cast<const RateDependentPiModel&>(model_.hysteresis());
+    const RateDependentPiParameters& p = rpi.parameters();
+    ActuatorModel rate_free(std::make_unique<ModifiedPiModel>(p.base));
+    rate_free.set_creep(model_.creep());
+    rate_free.input_min = opt_.input_min;
+    rate_free.input_max = opt_.input_max;
+    rate_free.configure(model_.sample_period());
+    rate_free.reset(u_prev_);
+    rate_free_ = make_inverse(rate_free);
+    // A prediction, so smoothed at least over a few samples even for the per-sample rate law.
+    rate_free_rate_.configure(
+        std::max(p.rate_filter_s, kMinRatePredictionSamples * rpi.sample_period()),
+        rpi.sample_period());
+    rate_free_rate_.reset(u_prev_);
+    for (const double w : p.base.play.weights) total_ += w;
+    total_slope_ = p.rate_coefficients.empty() ? 0.0 : p.rate_coefficients.back();
+    max_rate_ = p.max_rate;
+  }
+}
+
+NumericInverse::NumericInverse(const NumericInverse& other)
+    : model_(other.model_),
+      opt_(other.opt_),
+      u_prev_(other.u_prev_),
+      y_tol_(other.y_tol_),
+      rate_free_(other.rate_free_ ? other.rate_free_->clone() : nullptr),
+      rate_free_rate_(other.rate_free_rate_),
+      total_(other.total_),
+      total_slope_(other.total_slope_),
+      max_rate_(other.max_rate_) {}
+
+double NumericInverse::solve(const ActuatorModel& model, double y_ref, double u_start,
+                             double rate) const noexcept {
+  const double lo_bound = opt_.input_min;
+  const double hi_bound = opt_.input_max;
+  auto f = [&](double u) { return model.peek_static_at_rate(u, rate) - y_ref; };
+  // Bracket around the previous input, growing the step geometrically: first in the direction
+  // an increasing map suggests, then the other way.
+  const double start = std::clamp(u_start, lo_bound, hi_bound);
+  const double f_start = f(start);
+  if (std::abs(f_start) <= y_tol_) return start;
+  double a = start, fa = f_start, b = start, fb = f_start;
+  bool bracketed = false;
+  const double preferred = f_start < 0.0 ? 1.0 : -1.0;
+  for (const double dir : {preferred, -preferred}) {
+    a = start;
+    fa = f_start;
+    double stepsize = (hi_bound - lo_bound) * 1e-4;
+    for (int it = 0; it < 64; ++it) {
+      b = std::clamp(a + dir * stepsize, lo_bound, hi_bound);
+      fb = f(b);
+      if ((fb > 0.0) != (fa > 0.0) || std::abs(fb) <= y_tol_) {
+        bracketed = true;
+        break;
+      }
+      if (b == lo_bound || b == hi_bound) break;
+      a = b;
+      fa = fb;
+      stepsize *= 2.0;
+    }
+    if (bracketed) break;
+  }
+  // Unreachable: saturate at the bound in the direction an increasing map suggests.
+  if (!bracketed) return preferred > 0.0 ? hi_bound : lo_bound;
+  // Regula falsi (Illinois) with bisection safeguard.
+  int side = 0;
+  for (int it = 0; it < opt_.max_iterations && std::abs(fb) > y_tol_; ++it) {
+    double c = (fa * b - fb * a) / (fa - fb);
+    if (!(c > std::min(a, b) && c < std::max(a, b))) c = 0.5 * (a + b);
+    const double fc = f(c);
+    if ((fc > 0.0) == (fb > 0.0)) {
+      b = c;
+      fb = fc;
+      if (side == -1) fa *= 0.5;
+      side = -1;
+    } else {
+      a = b;
+      fa = fb;
+      b = c;
+      fb = fc;
+      side = +1;
+    }
+    if (std::abs(b - a) <= 1e-15 * (std::abs(a) + std::abs(b) + 1e-300)) break;
+  }
+  return b;
 }
 
 double NumericInverse::step(double y_ref) noexcept {
-  const double lo_bound = opt_.input_min;
-  const double hi_bound = opt_.input_max;
-  auto f = [&](double u) { return model_.peek_static(u) - y_ref; };
-  // Bracket around the previous input, growing the step geometrically: first in the direction
-  // an increasing map suggests, then the other way (rate-dependent maps need not be monotone
-  // near the previous input).
-  const double start = std::clamp(u_prev_, lo_bound, hi_bound);
-  const double f_start = f(start);
-  double a = start, fa = f_start, b = start, fb = f_start;
-  if (std::abs(f_start) > y_tol_) {
-    bool bracketed = false;
-    const double preferred = f_start < 0.0 ? 1.0 : -1.0;
-    for (const double dir : {preferred, -preferred}) {
-      a = start;
-      fa = f_start;
-      double stepsize = (hi_bound - lo_bound) * 1e-4;
-      for (int it = 0; it < 64; ++it) {
-        b = std::clamp(a + dir * stepsize, lo_bound, hi_bound);
-        fb = f(b);
-        if ((fb > 0.0) != (fa > 0.0) || std::abs(fb) <= y_tol_) {
-          bracketed = true;
-          break;
-        }
-        if (b == lo_bound || b == hi_bound) break;
-        a = b;
-        fa = fb;
-        stepsize *= 2.0;
-      }
-      if (bracketed) break;
-    }
-    if (!bracketed) {
-      // Unreachable: saturate at the bound in the direction an increasing map suggests.
-      b = preferred > 0.0 ? hi_bound : lo_bound;
-      model_.step(b);
-      u_prev_ = b;
-      return b;
-    }
-    // Regula falsi (Illinois) with bisection safeguard.
-    int side = 0;
-    for (int it = 0; it < opt_.max_iterations && std::abs(fb) > y_tol_; ++it) {
-      double c = (fa * b - fb * a) / (fa - fb);
-      if (!(c > std::min(a, b) && c < std::max(a, b))) c = 0.5 * (a + b);
-      const double fc = f(c);
-      if ((fc > 0.0) == (fb > 0.0)) {
-        b = c;
-        fb = fc;
-        if (side == -1) fa *= 0.5;
-        side = -1;
-      } else {
-        a = b;
-        fa = fb;
-        b = c;
-        fb = fc;
-        side = +1;
-      }
-      if (std::abs(b - a) <= 1e-15 * (std::abs(a) + std::abs(b) + 1e-300)) break;
+  double rate = 0.0;
+  if (rate_free_) {
+    // r W_n(r) = r_0 W_n(0): the rate-dependent map is steeper, so its drive moves slower.
+    double r0 = rate_free_rate_.step(rate_free_->step(y_ref));
+    if (max_rate_ > 0.0) r0 = std::min(r0, max_rate_);
+    rate = r0;
+    if (total_slope_ != 0.0 && total_ > 0.0) {
+      // total_slope_ r^2 + total_ r - total_ r0 = 0, the positive root.
+      const double disc = total_ * total_ + 4.0 * total_slope_ * total_ * r0;
+      if (disc >= 0.0) rate = (2.0 * total_ * r0) / (total_ + std::sqrt(disc));
     }
   }
-  model_.step(b);
-  u_prev_ = b;
-  return b;
+  const double u = solve(model_, y_ref, u_prev_, rate);
+  model_.step(u);
+  u_prev_ = u;
+  return u;
 }
 
 void NumericInverse::reset(double u0) noexcept {
   model_.reset(u0);
   u_prev_ = u0;
+  if (rate_free_) rate_free_->reset(u0);
+  rate_free_rate_.reset(u0);
 }
 
 std::unique_ptr<InverseModel> NumericInverse::clone() const {

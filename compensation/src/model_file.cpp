@@ -115,7 +115,9 @@ json to_json(const ModelFile& file) {
       const auto& p = static_cast<const RateDependentPiModel&>(m.hysteresis()).parameters();
       j["play"] = play_to_json(p.base.play);
       j["deadzone"] = dead_zone_to_json(p.base.dead_zone, p.base.center);
-      j["rate"] = {{"coefficients", p.rate_coefficients}, {"max_rate", p.max_rate}};
+      j["rate"] = {{"coefficients", p.rate_coefficients},
+                   {"max_rate", p.max_rate},
+                   {"filter_s", p.rate_filter_s}};
       break;
     }
     case ModelKind::kCoupledPlayPi: {
@@ -164,9 +166,9 @@ ModelFile model_file_from_json(const json& j) {
       case ModelKind::kRateDependentPi: {
         auto [dz, center] = dead_zone_from_json(j);
         const json& r = member(j, "", "rate");
-        RateDependentPiParameters p{ModifiedPiParameters{play_from_json(j), dz, center},
-                                    numbers(r, "rate", "coefficients"),
-                                    number_member(r, "rate", "max_rate", 0.0)};
+        RateDependentPiParameters p{
+            ModifiedPiParameters{play_from_json(j), dz, center}, numbers(r, "rate", "coefficients"),
+            number_member(r, "rate", "max_rate", 0.0), number_member(r, "rate", "filter_s", 0.0)};
         h = std::make_unique<RateDependentPiModel>(std::move(p));
         break;
       }

@@ -15,6 +15,8 @@ RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double d
   details::require_finite(p_.rate_coefficients, "rate.coefficients");
   details::require_finite(p_.max_rate, "rate.max_rate");
   details::require(p_.max_rate >= 0.0, "rate.max_rate must be >= 0");
+  details::require_finite(p_.rate_filter_s, "rate.filter_s");
+  details::require(p_.rate_filter_s >= 0.0, "rate.filter_s must be >= 0");
   details::require_finite(p_.base.center, "deadzone.center");
   dw_.resize(p_.rate_coefficients.size());
   double prev = 0.0;
@@ -28,13 +30,15 @@ RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double d
 void RateDependentPiModel::set_sample_period(double dt_s) {
   details::require(std::isfinite(dt_s) && dt_s > 0.0, "sample period must be > 0");
   dt_ = dt_s;
+  rate_.configure(p_.rate_filter_s, dt_);
 }
 
-double RateDependentPiModel::evaluate(double u, double* state_out) const noexcept {
-  // Capped at the identified range: beyond it the linear law is an extrapolation, and an input
-  // step would otherwise make a one-sample weight spike.
-  double rate = std::abs(u - u_prev_) / dt_;
-  if (p_.max_rate > 0.0 && rate > p_.max_rate) rate = p_.max_rate;
+double RateDependentPiModel::capped(double rate) const noexcept {
+  // Capped at the identified range: beyond it the linear law is an extrapolation.
+  return p_.max_rate > 0.0 && rate > p_.max_rate ? p_.max_rate : rate;
+}
+
+double RateDependentPiModel::evaluate(double u, double rate, double* state_out) const noexcept {
   const auto& r = p_.base.play.thresholds;
   const auto& w = p_.base.play.weights;
   const double* s = pi_.state().data();
@@ -48,16 +52,20 @@ double RateDependentPiModel::evaluate(double u, double* state_out) const noexcep
 }
 
 double RateDependentPiModel::step(double u) noexcept {
-  const double y = evaluate(u, pi_.mutable_state().data());
-  u_prev_ = u;
-  return y;
+  return evaluate(u, capped(rate_.step(u)), pi_.mutable_state().data());
 }
 
-double RateDependentPiModel::peek(double u) const noexcept { return evaluate(u, nullptr); }
+double RateDependentPiModel::peek(double u) const noexcept {
+  return evaluate(u, capped(rate_.peek(u)), nullptr);
+}
+
+double RateDependentPiModel::peek_at_rate(double u, double rate) const noexcept {
+  return evaluate(u, capped(rate), nullptr);
+}
 
 void RateDependentPiModel::reset(double u0) noexcept {
   pi_.reset(u0);
-  u_prev_ = u0;
+  rate_.reset(u0);
 }
 
 std::size_t RateDependentPiModel::operator_count() const noexcept {

@@ -3,8 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iostream>
+#include <numbers>
 #include <random>
 #include <sstream>
 
@@ -138,16 +141,13 @@ TEST(CoupledPlayPiModel, NonMonotoneOperatorIsReportedNotInverted) {
   }
 }
 
-TEST(NumericInverse, ComposesForRateDependentModels) {
+// An RPI with zero rate coefficients is the modified PI it extends: its numeric inverse composes
+// exactly on any reachable reference, however fast (the rate law is covered on a sine below).
+TEST(NumericInverse, ComposesForARateFreeRateDependentModel) {
   std::mt19937_64 rng(23);
   auto base = random_mpi(rng, 10, 2, 100.0);
-  std::vector<double> c(10);
-  for (int i = 0; i < 10; ++i) c[i] = 2e-5 * i;  // cumulative weights grow with rate
-  // 100 Hz sampling: the random signal's rates stay below ~1e4 input units/s.
   hc::ActuatorModel model(std::make_unique<hc::RateDependentPiModel>(
-      hc::RateDependentPiParameters{base, c, 1e4}, 1e-2));
-  // The map depends on the rate, so the inverse may take another (equally exact) input path;
-  // give it room beyond the reference's input range.
+      hc::RateDependentPiParameters{base, std::vector<double>(10, 0.0), 1e4, 0.0}, 1e-2));
   model.input_min = -50.0;
   model.input_max = 150.0;
   model.configure(1e-2);
@@ -213,5 +213,92 @@ TEST(SeedTable, MultilayerPaperTable2LoadsAndInverts) {
     inverse->reset(0.0);
     EXPECT_LE(composition_error(file.model.hysteresis(), *inverse, y_ref), 1e-9 * range_of(y_ref))
         << name;
+  }
+}
+
+// A stack-like rate-dependent modified PI: 10 plays on 0..150 V with positive weights (the first
+// steepest), a mild one-sided dead zone, cumulative weights growing with |du/dt| as the loopback
+// actuator's do (2e-6 per play per V/s), the rate filtered with time constant tau.
+hc::ActuatorModel stack_rpi(double tau, double rate_scale, double dt) {
+  hc::PiParameters play;
+  for (int i = 0; i < 10; ++i) {
+    play.thresholds.push_back(7.5 * i);
+    play.weights.push_back(i == 0 ? 0.2 : 0.05 * std::exp(-0.2 * i));
+  }
+  hc::DeadZoneParameters dz{{-5.0, 0.0, 5.0}, {0.1, 1.0, 0.15}};
+  std::vector<double> c(10);
+  for (int i = 0; i < 10; ++i) c[i] = rate_scale * 2e-6 * (i + 1);
+  hc::ActuatorModel m(std::make_unique<hc::RateDependentPiModel>(
+      hc::RateDependentPiParameters{hc::ModifiedPiParameters{play, dz, 20.0}, c, 5000.0, tau}, dt));
+  m.input_min = 0.0;
+  m.input_max = 150.0;
+  m.configure(dt);
+  m.reset(0.0);
+  return m;
+}
+
+// The rate-dependent inverse takes its rate from the reference (|dy_ref/dt| over the model's
+// local slope), never from the drive it solves for: its drive is as smooth as the rate-independent
+// inverse's over the same reference (it chattered when the candidate input set its own rate),
+// and it composes with the model to the reference.
+TEST(NumericInverse, RateDependentDriveIsSmoothAndComposesOnASine) {
+  const double dt = 1e-4;
+  for (const double tau : {0.0, 1e-3}) {
+    hc::ActuatorModel rate_model = stack_rpi(tau, 1.0, dt);
+    hc::ActuatorModel flat_model = stack_rpi(tau, 0.0, dt);
+    auto rate_inverse = hc::make_inverse(rate_model);
+    auto flat_inverse = hc::make_inverse(flat_model);
+    // The reference: the rate-free model's output for a 10 Hz input sine over 15-135 V at 10 kHz
+    // (reachable by construction), 3 periods.
+    std::vector<double> reference;
+    hc::ActuatorModel shaper = flat_model;
+    for (int k = 0; k < 3000; ++k) {
+      reference.push_back(
+          shaper.step(75.0 - 60.0 * std::cos(2.0 * std::numbers::pi * 10.0 * k * dt)));
+    }
+    const auto [lo_it, hi_it] = std::minmax_element(reference.begin(), reference.end());
+    const double y_lo = *lo_it, y_hi = *hi_it;
+    rate_inverse->reset(15.0);
+    flat_inverse->reset(15.0);
+    rate_model.reset(15.0);
+    double u_rate_prev = 15.0, u_flat_prev = 15.0, max_du_rate = 0.0, max_du_flat = 0.0;
+    double worst = 0.0, worst_flat_on_rate = 0.0;
+    double variation = 0.0, variation_flat = 0.0;  // total variation of the drives
+    hc::ActuatorModel flat_driven = rate_model;    // the rate model under the rate-free inverse
+    double sum2 = 0.0, sum2_flat = 0.0;
+    for (int k = 0; k < 3000; ++k) {
+      const double s = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * 10.0 * k * dt);
+      const double yr = y_lo + (y_hi - y_lo) * s;
+      const double u_rate = rate_inverse->step(yr);
+      const double u_flat = flat_inverse->step(yr);
+      const double y = rate_model.step(u_rate);
+      const double y_flat = flat_driven.step(u_flat);
+      if (k > 0) {
+        max_du_rate = std::max(max_du_rate, std::abs(u_rate - u_rate_prev));
+        max_du_flat = std::max(max_du_flat, std::abs(u_flat - u_flat_prev));
+        variation += std::abs(u_rate - u_rate_prev);
+        variation_flat += std::abs(u_flat - u_flat_prev);
+      }
+      if (k > 1000) {
+        worst = std::max(worst, std::abs(y - yr));
+        worst_flat_on_rate = std::max(worst_flat_on_rate, std::abs(y_flat - yr));
+        sum2 += (y - yr) * (y - yr);
+        sum2_flat += (y_flat - yr) * (y_flat - yr);
+      }
+      u_rate_prev = u_rate;
+      u_flat_prev = u_flat;
+    }
+    const double rms = std::sqrt(sum2 / 1999.0), rms_flat = std::sqrt(sum2_flat / 1999.0);
+    std::cout << "tau " << tau << ": rate inverse rms " << rms << " max " << worst
+              << ", rate-free inverse rms " << rms_flat << " max " << worst_flat_on_rate
+              << " (range " << y_hi - y_lo << "); max per-tick drive change " << max_du_rate
+              << " vs " << max_du_flat << ", total variation " << variation << " vs "
+              << variation_flat << "\n";
+    EXPECT_LT(max_du_rate, 2.0 * max_du_flat) << "tau " << tau;
+    // A chattering drive (as when the solved input set its own rate) travels many times as far.
+    EXPECT_LT(variation, 1.2 * variation_flat) << "tau " << tau;
+    // It follows the rate law: well under the rate-free inverse's error on the rate-dependent
+    // model (what is left is at the reversals, where the rate changes fastest).
+    EXPECT_LT(rms, 0.6 * rms_flat) << "tau " << tau;
   }
 }

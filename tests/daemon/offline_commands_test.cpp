@@ -215,3 +215,29 @@ TEST_F(OfflineCommandsTest, BadInputNamesTheCauseAndWritesNothing) {
   EXPECT_NE(err_.find("broken.json"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(sim.output_path));
 }
+
+// `fit --model rpi` on a record of the rate-dependent actuator is never worse on held-out data
+// than `fit --model mpi` on the same record: the MPI is the RPI with zero rate coefficients,
+// a feasible point of the same fit with the same held-out split.
+TEST_F(OfflineCommandsTest, RateDependentFitIsNeverWorseThanTheModifiedPiItContains) {
+  hs::SimulatedActuatorConfig truth = static_actuator();
+  truth.rate_dependence.enabled = true;
+  const std::string data =
+      write_record("rate.csv", hystbench::test::simulate_record(truth, 1e-3, {}, 21));
+  auto fit_heldout = [&](const std::string& model) {
+    hd::FitCommand fit;
+    fit.data_path = data;
+    fit.model_name = model;
+    fit.output_path = path(model + ".json");
+    fit.json_output = true;
+    EXPECT_EQ(run(hd::run_fit, fit), 0) << err_;
+    const json j = json::parse(out_);
+    EXPECT_EQ(j.at("type"), model);
+    return j.at("heldout").at("rmse").get<double>();
+  };
+  const double mpi = fit_heldout("mpi");
+  const double rpi = fit_heldout("rpi");
+  EXPECT_LE(rpi, mpi * (1.0 + 1e-9)) << "rpi " << rpi << " um, mpi " << mpi << " um";
+  // The rate law is real in this record, so the RPI should gain, not merely tie.
+  EXPECT_LT(rpi, mpi) << "rpi " << rpi << " um, mpi " << mpi << " um";
+}

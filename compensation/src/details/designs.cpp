@@ -9,6 +9,7 @@
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "hystbench/compensation/rate_estimator.hpp"
 
 namespace hystbench::compensation::details {
 
@@ -35,10 +36,8 @@ CoupledThresholds coupled_thresholds(const ModelStructure& s) {
   return t;
 }
 
-std::vector<double> sample_rates(std::span<const double> u, double dt) {
-  std::vector<double> rate(u.size(), 0.0);
-  for (std::size_t k = 1; k < u.size(); ++k) rate[k] = std::abs(u[k] - u[k - 1]) / dt;
-  return rate;
+std::vector<double> sample_rates(std::span<const double> u, double dt, double rate_filter_s) {
+  return estimate_rates(u, dt, rate_filter_s);
 }
 
 Design::Design(ModelStructure s) : s_(std::move(s)) {
@@ -59,6 +58,7 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
     if (!(s_.max_rate > 0.0))
       throw std::invalid_argument("rate-dependent design needs max_rate > 0");
     inv_max_rate_ = 1.0 / s_.max_rate;
+    rate_.configure(s_.rate_filter_s, s_.dt);
   }
   play_cols_ = s_.kind == ModelKind::kRateDependentPi ? 2 * n_ : n_;
   offset_col_ = play_cols_;
@@ -74,6 +74,7 @@ void Design::reset(double u0) noexcept {
   std::fill(z_.begin(), z_.end(), u0);
   std::fill(creep_x_.begin(), creep_x_.end(), u0);
   u_prev_ = u0;
+  rate_.reset(u0);
 }
 
 void Design::step_operators(double u) noexcept {
@@ -94,10 +95,11 @@ double Design::row(double u, double y, double* a) noexcept {
   // Cumulative-weight regressors: sum_i w_i (p_i - u_ref) = sum_i W_i (p_i - p_{i+1}).
   const double* z = z_.data();
   if (s_.kind == ModelKind::kRateDependentPi) {
-    const double rho = std::abs(u - u_prev_) / s_.dt * inv_max_rate_;
+    // The model's rate: filtered, capped at max_rate (rho in [0, 1]).
+    const double rho = std::min(rate_.step(u) * inv_max_rate_, 1.0);
     for (Eigen::Index i = 0; i < n_; ++i) {
       const double q = z[i] - (i + 1 < n_ ? z[i + 1] : 0.0);
-      a[i] = q * (1.0 - rho);
+      a[i] = q;
       a[n_ + i] = q * rho;
     }
   } else {
@@ -136,7 +138,10 @@ double Design::row(double u, double y, double* a) noexcept {
 
 Eigen::VectorXd Design::lower_bounds() const {
   Eigen::VectorXd lo = Eigen::VectorXd::Constant(unknowns_, -kInf);
-  lo.head(play_cols_).setConstant(s_.min_play_slope);
+  lo.head(n_).setConstant(s_.min_play_slope);
+  // RPI: the rate parts D_i = W_i(max_rate) - W_i(0) >= 0: the loop widens with rate (the
+  // rate-dependent paper's Fig. 8), and W_i >= eps holds on all of [0, max_rate].
+  if (play_cols_ > n_) lo.segment(n_, play_cols_ - n_).setConstant(0.0);
   lo.segment(dz_col_, m_pos_ + m_neg_).setConstant(s_.min_dead_zone_slope);
   return lo;
 }
@@ -171,15 +176,15 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
   ModifiedPiParameters mpi{std::move(play),
                            DeadZoneSuperposition(std::move(inv)).inverse().parameters(), s_.center};
   if (s_.kind == ModelKind::kModifiedPi) return std::make_unique<ModifiedPiModel>(std::move(mpi));
-  // Rate-dependent: W_i(rate) = A_i + (B_i - A_i) rate / max_rate.
+  // Rate-dependent: W_i(rate) = A_i + D_i rate / max_rate.
   RateDependentPiParameters rpi;
   rpi.base = std::move(mpi);
   rpi.rate_coefficients.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    rpi.rate_coefficients[i] =
-        (x[n_ + static_cast<Eigen::Index>(i)] - x[static_cast<Eigen::Index>(i)]) * inv_max_rate_;
+    rpi.rate_coefficients[i] = x[n_ + static_cast<Eigen::Index>(i)] * inv_max_rate_;
   }
   rpi.max_rate = s_.max_rate;
+  rpi.rate_filter_s = s_.rate_filter_s;
   return std::make_unique<RateDependentPiModel>(std::move(rpi), s_.dt);
 }
 

@@ -7,8 +7,8 @@
 //   PI / CPI : y            = sum_i W_i (p_i - p_{i+1}) + c                      (p_n := u_ref)
 //   MPI      : S'[y - ctr]  = sum_i W_i (p_i - p_{i+1}) + c0   (Kuhnen's error model)
 //              with S' = inverse dead zone, w'_0 = 1, cumulative V_j >= eps outward from 0
-//   RPI      : as MPI with W_i(rho) = A_i (1 - rho) + B_i rho, rho = |du/dt| / max_rate,
-//              A_i >= eps and B_i >= eps (invertible on the whole rate range [0, max_rate]).
+//   RPI      : as MPI with W_i(rho) = A_i + D_i rho, rho = min(rate, max_rate) / max_rate,
+//              A_i >= eps and D_i >= 0 (weights grow with rate; invertible on [0, max_rate]).
 // Creep lags, when present, are extra unconstrained columns.
 #include <Eigen/Dense>
 #include <array>
@@ -20,6 +20,7 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/dead_zone.hpp"
 #include "hystbench/compensation/hysteresis_model.hpp"
+#include "hystbench/compensation/rate_estimator.hpp"
 
 namespace hystbench::compensation::details {
 
@@ -33,8 +34,9 @@ struct ModelStructure {
   double input_reference = 0.0;  ///< subtracted from the last play for conditioning (not RPI)
   std::array<double, 3> cp_scale{1.0, 1.0, 1.0};  ///< CPI: ra, rb, rc as multiples of r_i
   double max_rate = 0.0;                          ///< RPI [input unit / s]
-  double dt = 1e-3;                               ///< sample period [s]
-  double min_play_slope = 0.0;                    ///< lower bound on cumulative play weights
+  double rate_filter_s = 0.0;        ///< RPI: the rate's low-pass time constant (RateEstimator) [s]
+  double dt = 1e-3;                  ///< sample period [s]
+  double min_play_slope = 0.0;       ///< lower bound on cumulative play weights
   double min_dead_zone_slope = 0.0;  ///< lower bound on cumulative inverse dead-zone weights
   std::vector<double> creep_time_constants;  ///< creep lag columns [s] (empty = none)
 
@@ -51,8 +53,9 @@ struct CoupledThresholds {
 };
 CoupledThresholds coupled_thresholds(const ModelStructure& s);
 
-/// Rate |u(k) - u(k-1)| / dt of every sample (first sample 0), as the rate-dependent model sees it.
-std::vector<double> sample_rates(std::span<const double> u, double dt);
+/// The rate of every sample (first sample 0) as a rate-dependent model with this rate filter
+/// sees it, before its cap at max_rate (estimate_rates).
+std::vector<double> sample_rates(std::span<const double> u, double dt, double rate_filter_s = 0.0);
 
 class Design {
  public:
@@ -98,6 +101,7 @@ class Design {
   std::vector<double> dz_pos_, dz_neg_;  // thresholds outward from 0
   double u_prev_ = 0.0;
   double inv_max_rate_ = 0.0;
+  RateEstimator rate_;
 };
 
 /// Fits the design's unknowns on rows [begin, end) of the record (the operators are stepped

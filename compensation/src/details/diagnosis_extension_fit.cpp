@@ -85,6 +85,7 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
         const auto& p = dynamic_cast<const RateDependentPiModel&>(h).parameters();
         set_dead_zones(p.base);
         s.max_rate = p.max_rate;
+        s.rate_filter_s = p.rate_filter_s;
         if (!(s.max_rate > 0.0)) return std::nullopt;
         break;
       }

@@ -45,16 +45,17 @@ std::vector<Segment> half_cycles(std::span<const double> u, std::span<const doub
 }
 
 // Weighted LS line W(rho) = A (1 - rho) + B rho through (rho_g, W_g), with A, B >= eps.
+// W(rho) = A + D rho with A >= eps and D >= 0 (the weights grow with rate, as the design's).
 std::pair<double, double> rate_line(const std::vector<double>& rho, const std::vector<double>& w,
                                     const std::vector<double>& weight, double eps) {
   Eigen::Matrix2d G = Eigen::Matrix2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
   for (std::size_t g = 0; g < rho.size(); ++g) {
-    const Eigen::Vector2d a(1.0 - rho[g], rho[g]);
+    const Eigen::Vector2d a(1.0, rho[g]);
     G.noalias() += weight[g] * a * a.transpose();
     b.noalias() += weight[g] * w[g] * a;
   }
-  const Eigen::Vector2d lo = Eigen::Vector2d::Constant(eps);
+  const Eigen::Vector2d lo(eps, 0.0);
   const Eigen::Vector2d hi = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   const Eigen::VectorXd x = solve_bounded_lsq(G, b, lo, hi).x;
   return {x[0], x[1]};
@@ -91,7 +92,8 @@ std::optional<Eigen::VectorXd> fit_rate_groups(const ModelStructure& structure,
     throw std::invalid_argument("fit_rate_groups: wrong number of dead-zone weights");
   }
 
-  const std::vector<double> rate = sample_rates(u, structure.dt);
+  std::vector<double> rate = sample_rates(u, structure.dt, structure.rate_filter_s);
+  for (double& v : rate) v = std::min(v, structure.max_rate);  // as the model caps it
   std::vector<Segment> segments = half_cycles(u, rate, begin, end);
   if (segments.size() < 4) return std::nullopt;  // two groups of at least two half-cycles
   std::sort(segments.begin(), segments.end(),
@@ -119,7 +121,7 @@ std::optional<Eigen::VectorXd> fit_rate_groups(const ModelStructure& structure,
     if (k < begin || group_of[k] < 0) continue;
     NormalEquations& ne = per_group[static_cast<std::size_t>(group_of[k])];
     double* r = ne.row();
-    for (Eigen::Index i = 0; i < n; ++i) r[i] = a[i] + a[n + i];  // q_i (1 - rho) + q_i rho
+    for (Eigen::Index i = 0; i < n; ++i) r[i] = a[i];  // q_i: the weight's own column
     r[n] = 1.0;
     ne.push(target - a.segment(dz, ndz).dot(dead_zone_cumulative));
   }
@@ -131,15 +133,15 @@ std::optional<Eigen::VectorXd> fit_rate_groups(const ModelStructure& structure,
   W.reserve(per_group.size());
   for (auto& ne : per_group) W.push_back(solve_bounded_lsq(ne.gram(), ne.rhs(), lo, hi).x);
 
-  // Cumulative weights linear in rate, invertible at both ends of [0, max_rate].
+  // Cumulative weights linear in rate, growing with it, invertible on all of [0, max_rate].
   Eigen::VectorXd x = Eigen::VectorXd::Zero(design.unknowns());
   std::vector<double> rho(groups), wi(groups);
   for (std::size_t g = 0; g < groups; ++g) rho[g] = group_rate[g] / structure.max_rate;
   for (Eigen::Index i = 0; i < n; ++i) {
     for (std::size_t g = 0; g < groups; ++g) wi[g] = W[g][i];
-    const auto [A, B] = rate_line(rho, wi, group_rows, structure.min_play_slope);
+    const auto [A, D] = rate_line(rho, wi, group_rows, structure.min_play_slope);
     x[i] = A;
-    x[n + i] = B;
+    x[n + i] = D;
   }
   x.segment(dz, ndz) = dead_zone_cumulative;
 

@@ -3,7 +3,7 @@
 // the record is cut into half-cycles between input reversals, the half-cycles are grouped by
 // their mean |du/dt|, the cumulative play weights are fitted per group (dead zones shared, from
 // a rate-independent MPI fit), and each cumulative weight is regressed on rate by weighted least
-// squares, W_i(rate) = W^_i + c_i rate, with W_i >= eps at rate 0 and at max_rate.
+// squares, W_i(rate) = W^_i + c_i rate, with W^_i >= eps and c_i >= 0 (the loop widens with rate).
 #include <Eigen/Dense>
 #include <optional>
 #include <span>

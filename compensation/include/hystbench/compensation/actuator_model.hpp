@@ -41,6 +41,8 @@ class ActuatorModel {
   double step(double u) noexcept;
   /// Static output for input u now (hysteresis + creep), ignoring delay and dynamics.
   double peek_static(double u) const noexcept;
+  /// peek_static() with the rate-dependent terms at `rate` (HysteresisModel::peek_at_rate).
+  double peek_static_at_rate(double u, double rate) const noexcept;
   /// Relaxed at input u0, every part settled.
   void reset(double u0) noexcept;
 

@@ -33,6 +33,10 @@ class HysteresisModel {
   virtual double step(double u) noexcept = 0;
   /// Output the model would give for input u now, without changing its state.
   virtual double peek(double u) const noexcept = 0;
+  /// As peek(), with any rate-dependent term at the given input rate [input unit / s] instead
+  /// of the one u would make (an inverse solves against this with a rate it predicts from the
+  /// reference). Rate-independent models ignore the rate.
+  virtual double peek_at_rate(double u, double /*rate*/) const noexcept { return peek(u); }
   /// Relaxed state at input u0: every play output equals u0 (and the previous input is u0).
   virtual void reset(double u0) noexcept = 0;
   /// Sample period in seconds; only rate-dependent models use it. Not real-time safe.

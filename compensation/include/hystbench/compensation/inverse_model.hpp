@@ -8,6 +8,7 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/rate_estimator.hpp"
 
 namespace hystbench::compensation {
 
@@ -53,6 +54,12 @@ class ModifiedPiInverse final : public InverseModel {
 /// u in [input_min, input_max] with model.peek_static(u) = y_ref and refines it (regula falsi
 /// with bisection safeguard, at most `max_iterations`), then steps the internal model copy.
 /// Beyond the reachable range the input saturates at the bound.
+/// A rate-dependent model is solved at an input rate predicted from the reference, never from
+/// the drive being solved for (that feedback made the drive chatter, and on a falling branch the
+/// exact own-rate inverse is unstable): the rate-free modified PI's inverse follows the
+/// reference, its drive's rate r_0 (the model's rate filter) is scaled to the rate-dependent
+/// map's larger slope, r = r_0 W_n(0) / W_n(r) (W_n the total cumulative play weight), and the
+/// drive is solved at r. Every step is a function of the reference alone.
 class NumericInverse final : public InverseModel {
  public:
   struct Options {
@@ -63,15 +70,26 @@ class NumericInverse final : public InverseModel {
   };
   NumericInverse(const ActuatorModel& model, Options options);
   explicit NumericInverse(const ActuatorModel& model) : NumericInverse(model, Options{}) {}
+  NumericInverse(const NumericInverse& other);
+  NumericInverse& operator=(const NumericInverse&) = delete;
   double step(double y_ref) noexcept override;
   void reset(double u0) noexcept override;
   std::unique_ptr<InverseModel> clone() const override;
 
  private:
+  /// The input near u_start with model.peek_static_at_rate(u, rate) = y_ref (or the bound).
+  double solve(const ActuatorModel& model, double y_ref, double u_start,
+               double rate) const noexcept;
+
   ActuatorModel model_;
   Options opt_;
   double u_prev_ = 0.0;
   double y_tol_ = 1e-12;
+  // Rate-dependent models only: the rate-free inverse and its drive's rate; total cumulative
+  // weight W_n(r) = total_ + total_slope_ r.
+  std::unique_ptr<InverseModel> rate_free_;
+  RateEstimator rate_free_rate_;
+  double total_ = 0.0, total_slope_ = 0.0, max_rate_ = 0.0;
 };
 
 /// Inverse multiplicative structure (classical-PI paper, Theorem 3.1), generalised with a

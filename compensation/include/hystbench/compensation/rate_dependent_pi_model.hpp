@@ -1,20 +1,24 @@
 #pragma once
 // Rate-dependent modified PI (rate-dependent paper, eq. 15-21): the cumulative play weights are
-// linear in the input rate, W_i(rate) = W^_i + c_i * rate, rate = |u(k) - u(k-1)| / dt
-// [input unit / s], capped at max_rate (when > 0); w_i(rate) = W_i(rate) - W_{i-1}(rate).
-// Dead zones are rate-independent.
-// Needs set_sample_period(). Real-time safe step()/peek().
+// linear in the input rate, W_i(rate) = W^_i + c_i * rate [input unit / s], capped at max_rate
+// (when > 0); w_i(rate) = W_i(rate) - W_{i-1}(rate). Dead zones are rate-independent.
+// The rate is |du/dt| through a first-order low-pass of time constant rate_filter_s
+// (RateEstimator; 0 = the per-sample difference |u(k) - u(k-1)| / dt, the paper's form).
+// Needs set_sample_period(). Real-time safe step()/peek()/peek_at_rate().
 #include <vector>
 
 #include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/rate_estimator.hpp"
 
 namespace hystbench::compensation {
 
 struct RateDependentPiParameters {
   ModifiedPiParameters base;              ///< weights at rate 0 (W^ via cumulative sums)
   std::vector<double> rate_coefficients;  ///< c_i, one per play [output/input per (input/s)]
-  double max_rate = 0.0;  ///< largest |rate| seen in identification; invertibility is checked
-                          ///< on [0, max_rate] [input unit / s]
+  double max_rate = 0.0;  ///< largest |rate| of the identification record's smooth parts; the
+                          ///< rate is capped there and invertibility is checked on [0, max_rate]
+                          ///< [input unit / s]
+  double rate_filter_s = 0.0;  ///< time constant of the rate's low-pass [s], >= 0
 };
 
 class RateDependentPiModel final : public HysteresisModel {
@@ -24,6 +28,7 @@ class RateDependentPiModel final : public HysteresisModel {
   ModelKind kind() const noexcept override { return ModelKind::kRateDependentPi; }
   double step(double u) noexcept override;
   double peek(double u) const noexcept override;
+  double peek_at_rate(double u, double rate) const noexcept override;
   void reset(double u0) noexcept override;
   void set_sample_period(double dt_s) override;
   std::size_t operator_count() const noexcept override;
@@ -34,15 +39,17 @@ class RateDependentPiModel final : public HysteresisModel {
   double sample_period() const noexcept { return dt_; }
 
  private:
-  /// Output for input u; writes the new play outputs to state_out when it is not null.
-  double evaluate(double u, double* state_out) const noexcept;
+  /// Output for input u at the given rate; writes the new play outputs to state_out when it is
+  /// not null.
+  double evaluate(double u, double rate, double* state_out) const noexcept;
+  double capped(double rate) const noexcept;
 
   RateDependentPiParameters p_;
   PiModel pi_;  // plays and their state; weights taken from p_ per rate
   DeadZoneSuperposition dz_;
   std::vector<double> dw_;  // c_i - c_{i-1}: per-weight rate slope
   double dt_ = 1e-3;
-  double u_prev_ = 0.0;
+  RateEstimator rate_;
 };
 
 }  // namespace hystbench::compensation
