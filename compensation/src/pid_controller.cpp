@@ -18,6 +18,12 @@ PidController::PidController(PidParameters p, double dt_s) : p_(p), dt_(dt_s) {
       !std::isnan(p_.output_min) && !std::isnan(p_.output_max) && p_.output_min <= p_.output_max,
       "pid.output_min must be <= pid.output_max");
   details::require(std::isfinite(dt_s) && dt_s > 0.0, "sample period must be > 0");
+  details::require(std::isfinite(p_.output_filter_hz) && p_.output_filter_hz >= 0.0 &&
+                       p_.output_filter_hz < 0.5 / dt_s,
+                   "pid.output_filter_hz must be >= 0 and below the Nyquist frequency");
+  if (p_.output_filter_hz > 0.0) {
+    beta_ = 1.0 - std::exp(-2.0 * std::numbers::pi * p_.output_filter_hz * dt_);
+  }
   if (p_.derivative_filter_hz > 0.0) {
     const double tau = 1.0 / (2.0 * std::numbers::pi * p_.derivative_filter_hz);
     alpha_ = dt_ / (tau + dt_);
@@ -25,7 +31,7 @@ PidController::PidController(PidParameters p, double dt_s) : p_(p), dt_(dt_s) {
 }
 
 double PidController::step(double error) noexcept {
-  if (!std::isfinite(error)) return u_;  // hold on a bad measurement; the loop faults on it
+  if (!std::isfinite(error)) return out_;  // hold on a bad measurement; the loop faults on it
   ef_ = samples_ == 0 ? error : ef_ + alpha_ * (error - ef_);
   if (samples_ == 0) {
     e1_ = error;
@@ -42,11 +48,13 @@ double PidController::step(double error) noexcept {
   ef2_ = ef1_;
   ef1_ = ef_;
   ++samples_;
-  return u_;
+  out_ += beta_ * (u_ - out_);
+  return out_;
 }
 
 void PidController::reset(double initial_output) noexcept {
   u_ = std::clamp(initial_output, p_.output_min, p_.output_max);
+  out_ = u_;
   e1_ = ef_ = ef1_ = ef2_ = 0.0;
   external_saturation_ = 0;
   samples_ = 0;

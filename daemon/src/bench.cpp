@@ -11,6 +11,8 @@
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/pid_tuning.hpp"
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
@@ -231,6 +233,31 @@ std::optional<Bench::ActuatorRange> Bench::actuator_range() const {
   return std::nullopt;
 }
 
+std::optional<hc::ActuatorModel> Bench::predictor(double u0) const {
+  // Caller holds mutex_.
+  std::optional<hc::ActuatorModel> m;
+  const auto& lim = settings_.loop.limits;
+  if (model_) {
+    m = model_->model;
+  } else if (settings_.y_max > settings_.y_min && lim.u_max > lim.u_min) {
+    // No model yet: the configured range as a straight line, what `none` compensates with.
+    const double gain = (settings_.y_max - settings_.y_min) / (lim.u_max - lim.u_min);
+    m.emplace(std::make_unique<hc::PiModel>(
+        hc::PiParameters{{0.0}, {gain}, settings_.y_min - gain * lim.u_min}));
+  } else {
+    return std::nullopt;
+  }
+  m->configure(dt_);
+  m->reset(u0);
+  return m;
+}
+
+const char* Bench::predictor_name() const {
+  if (model_) return "the active model, stepped with u";
+  if (settings_.y_max > settings_.y_min) return "linear map of limits.y_min..y_max, stepped with u";
+  return "none (NaN): no model and no limits.y_min/y_max";
+}
+
 json Bench::handle(const std::string& cmd, const json& params) {
   if (cmd == "status") {
     check_keys(params, {});
@@ -378,6 +405,7 @@ json Bench::start_identify(const json& params) {
   const double u_now = loop_->last_output();
   append_ramp(p->excitation, u_now, exc.samples.front(),
               static_cast<std::size_t>(std::ceil(0.1 / dt_)));
+  p->model = predictor(u_now);
   const std::size_t offset = p->excitation.size();
   p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
   p->total_samples = p->excitation.size();
@@ -399,7 +427,8 @@ json Bench::start_identify(const json& params) {
                    {"u_max", u_hi},
                    {"rate_hz", settings_.loop.rate_hz},
                    {"segments", segments}}},
-                 {"driver", settings_.driver_type}};
+                 {"driver", settings_.driver_type},
+                 {"y_model", predictor_name()}};
   p->log = open_log(p->run_id, header);
   const std::string log_path = p->log->path().string();
   const std::string run_id = p->run_id;
@@ -528,11 +557,26 @@ json Bench::start_track(const json& params) {
     }
   }
   std::optional<hc::PidController> pid;
+  json feedback = nullptr;
   if (hc::uses_feedback(*kind)) {
     hc::PidParameters pp = settings_.pid;
-    pp.kp = number_param(params, "kp", pp.kp, 0.0, 1e6);
-    pp.ki = number_param(params, "ki", pp.ki, 0.0, 1e9);
-    pp.kd = number_param(params, "kd", pp.kd, 0.0, 1e3);
+    const bool given = params.is_object() &&
+                       (params.contains("kp") || params.contains("ki") || params.contains("kd"));
+    if (settings_.pid_derived && !given) {
+      const hc::ActuatorModel* m = model_ ? &model_->model : nullptr;
+      const hc::PidTuning t =
+          hc::tune_pid(linear.gain, settings_.loop.rate_hz, settings_.pid_bandwidth_hz, m);
+      pp.kp = t.kp;
+      pp.ki = t.ki;
+      pp.kd = t.kd;
+      pp.output_filter_hz = settings_.pid_output_filter_hz.value_or(t.output_filter_hz);
+      feedback = {{"gains", "derived"}, {"basis", t.basis}};
+    } else {
+      pp.kp = number_param(params, "kp", pp.kp, 0.0, 1e6);
+      pp.ki = number_param(params, "ki", pp.ki, 0.0, 1e9);
+      pp.kd = number_param(params, "kd", pp.kd, 0.0, 1e3);
+      feedback = {{"gains", given ? "request" : "config"}};
+    }
     if (*kind == hc::CompensatorKind::kPid) {
       pp.output_min = lim.u_min;
       pp.output_max = lim.u_max;
@@ -542,6 +586,12 @@ json Bench::start_track(const json& params) {
     } catch (const std::exception& e) {
       throw CommandError("bad_params", e.what());
     }
+    feedback.update({{"kp", pp.kp},
+                     {"ki", pp.ki},
+                     {"kd", pp.kd},
+                     {"output_filter_hz", pp.output_filter_hz},
+                     {"u_fb_min", pp.output_min},
+                     {"u_fb_max", pp.output_max}});
   }
   try {
     p->compensator.emplace(*kind, std::move(inverse), pid, linear);
@@ -551,6 +601,9 @@ json Bench::start_track(const json& params) {
   if (*kind == hc::CompensatorKind::kPid) {
     p->compensator->reset(p->excitation.empty() ? loop_->last_output() : p->excitation.back());
   }
+  p->model = predictor(p->excitation.empty() ? loop_->last_output() : p->excitation.front());
+  p->summary = {{"compensator", comp_name}};
+  if (!feedback.is_null()) p->summary["feedback"] = feedback;
   const std::uint64_t prefix = p->excitation.size();
   const std::uint64_t body = static_cast<std::uint64_t>(std::llround(duration / dt_));
   const std::uint64_t one_period =
@@ -574,8 +627,10 @@ json Bench::start_track(const json& params) {
                    {"compensator", comp_name},
                    {"precondition_samples", prefix},
                    {"metrics_from", p->metrics_from},
-                   {"rate_hz", settings_.loop.rate_hz}}},
+                   {"rate_hz", settings_.loop.rate_hz},
+                   {"feedback", feedback}}},
                  {"driver", settings_.driver_type},
+                 {"y_model", predictor_name()},
                  {"model", model_ ? hc::to_json(*model_) : json(nullptr)}};
   p->log = open_log(p->run_id, header);
   const std::string log_path = p->log->path().string();
@@ -595,6 +650,7 @@ json Bench::start_track(const json& params) {
           {"duration_s", static_cast<double>(total) * dt_},
           {"reference", {{"kind", ref_name}, {"min_um", y_lo}, {"max_um", y_hi}}},
           {"compensator", comp_name},
+          {"feedback", feedback},
           {"log", log_path}};
 }
 
@@ -657,6 +713,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
                  {"stale_reads", run->stale_reads},
                  {"output_v_after", loop_->last_output()}};
   if (!counts.error.empty()) result["log_error"] = counts.error;
+  result.update(run->summary);
   const std::size_t n = run->recorded;
   if (run->kind == RunKind::kTrack && n > 2) {
     std::span<const double> yr(run->rec_yr.data(), n), y(run->rec_y.data(), n);
@@ -669,6 +726,17 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
     result["max_error_percent"] = e.range > 0 ? 100.0 * run->error_max / e.range : 0.0;
     result["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
     result["error_samples"] = run->error_samples;
+  }
+  if (run->model_error_samples > 0 && n > 2) {
+    // The simulation's error on the bench: y - y_model over the scored samples, in µm and in %
+    // of the output range the run covered (the reference's for a tracking run).
+    const auto [lo, hi] = std::minmax_element(run->rec_y.begin(), run->rec_y.begin() + n);
+    const double range = result.contains("range_um") ? result["range_um"].get<double>() : *hi - *lo;
+    const double rms = std::sqrt(run->model_error_sum2 / run->model_error_samples);
+    result["model_rms_error_um"] = rms;
+    result["model_max_error_um"] = run->model_error_max;
+    result["model_rms_error_percent"] = range > 0 ? 100.0 * rms / range : 0.0;
+    result["model_max_error_percent"] = range > 0 ? 100.0 * run->model_error_max / range : 0.0;
   }
   std::string fit_model_name;
   json fit_options;

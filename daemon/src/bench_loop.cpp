@@ -192,6 +192,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     ++p.slew_limits;
   }
   rec.u_out = lim.u;
+  if (p.model) rec.y_model = p.model->step(lim.u);
 
   const char* failure = nullptr;
   if ((lim.clamped || lim.slew_limited) && options_.fatal_on_limit) {
@@ -236,6 +237,12 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     p.error_sum2 += e * e;
     p.error_max = std::max(p.error_max, std::abs(e));
     ++p.error_samples;
+  }
+  if (failure == nullptr && k >= p.metrics_from && p.model) {
+    const double e = rec.y_measured - rec.y_model;
+    p.model_error_sum2 += e * e;
+    p.model_error_max = std::max(p.model_error_max, std::abs(e));
+    ++p.model_error_samples;
   }
   rec.exec_ns = LoopTimer::now_ns() - wake_ns;
   if (p.log && !p.log->push(rec)) ++p.log_drops;

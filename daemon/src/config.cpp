@@ -284,9 +284,16 @@ void read_identify(Section s, IdentifySection& id, const LoopSection& loop,
 }
 
 void read_pid(Section s, PidSection& p, const LoopSection& loop) {
-  s.number("kp", p.kp, 0.0, kInf);
-  s.number("ki", p.ki, 0.0, kInf);
-  s.number("kd", p.kd, 0.0, kInf);
+  s.optional_number("kp", p.kp, 0.0, kInf);
+  s.optional_number("ki", p.ki, 0.0, kInf);
+  s.optional_number("kd", p.kd, 0.0, kInf);
+  s.optional_number("bandwidth_hz", p.bandwidth_hz, 0.0, loop.rate_hz / 20.0, true);
+  s.optional_number("output_filter_hz", p.output_filter_hz, 0.0, kInf);
+  if (p.output_filter_hz && *p.output_filter_hz >= loop.rate_hz / 2.0) {
+    s.fail("output_filter_hz",
+           "must be below loop.rate_hz / 2 = " + number_text(loop.rate_hz / 2.0) + " Hz, got " +
+               number_text(*p.output_filter_hz));
+  }
   s.number("derivative_filter_hz", p.derivative_filter_hz, 0.0, kInf);
   if (p.derivative_filter_hz >= loop.rate_hz / 2.0) {
     s.fail("derivative_filter_hz",
@@ -382,9 +389,11 @@ nlohmann::json to_json(const DaemonConfig& c) {
         {"heldout_fraction", c.identify.heldout_fraction},
         {"fit_rate_hz", c.identify.fit_rate_hz}}},
       {"pid",
-       {{"kp", c.pid.kp},
-        {"ki", c.pid.ki},
-        {"kd", c.pid.kd},
+       {{"kp", optional(c.pid.kp)},
+        {"ki", optional(c.pid.ki)},
+        {"kd", optional(c.pid.kd)},
+        {"bandwidth_hz", optional(c.pid.bandwidth_hz)},
+        {"output_filter_hz", optional(c.pid.output_filter_hz)},
         {"derivative_filter_hz", c.pid.derivative_filter_hz},
         {"u_fb_min", c.pid.u_fb_min},
         {"u_fb_max", c.pid.u_fb_max}}},

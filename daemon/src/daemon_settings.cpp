@@ -42,8 +42,16 @@ BenchSettings bench_settings_from(const DaemonConfig& c) {
   s.identify_major_loop_cycles = c.identify.cycles;
   s.identify_heldout_fraction = c.identify.heldout_fraction;
   s.identify_fit_rate_hz = c.identify.fit_rate_hz;
-  s.pid = {c.pid.kp,       c.pid.ki,      c.pid.kd, c.pid.derivative_filter_hz,
-           c.pid.u_fb_min, c.pid.u_fb_max};
+  s.pid_derived = !c.pid.kp && !c.pid.ki && !c.pid.kd;
+  s.pid = {c.pid.kp.value_or(0.0),
+           c.pid.ki.value_or(0.0),
+           c.pid.kd.value_or(0.0),
+           c.pid.derivative_filter_hz,
+           c.pid.u_fb_min,
+           c.pid.u_fb_max,
+           c.pid.output_filter_hz.value_or(0.0)};
+  s.pid_bandwidth_hz = c.pid.bandwidth_hz.value_or(0.0);
+  s.pid_output_filter_hz = c.pid.output_filter_hz;
   s.config_json = to_json(c);
   return s;
 }

@@ -4,6 +4,8 @@
 // with ef the error through a first-order low-pass (derivative filter), u_fb clamped to
 // [output_min, output_max] and anti-windup: the integral increment is dropped while the output
 // (or the stage after it, see set_saturation()) is saturated in the direction it would push.
+// The output may pass a first-order low-pass (output_filter_hz): it keeps the feedback's per-tick
+// changes small, so an actuator whose gain grows with |du/dt| does not see them as rate.
 // Units: error in output unit (µm), u_fb in input unit (V); Ki in 1/s, Kd in s.
 // step() is real-time safe.
 #include <cstdint>
@@ -17,6 +19,7 @@ struct PidParameters {
   double derivative_filter_hz = 0.0;  ///< 0 = unfiltered derivative
   double output_min = -1e300;         ///< clamp of u_fb [V]
   double output_max = 1e300;
+  double output_filter_hz = 0.0;  ///< low-pass of u_fb; 0 = none; below the Nyquist frequency
 };
 
 class PidController {
@@ -31,14 +34,16 @@ class PidController {
   /// Clears the history; the output restarts at `initial_output` (clamped).
   void reset(double initial_output = 0.0) noexcept;
 
-  double output() const noexcept { return u_; }
+  double output() const noexcept { return out_; }
   const PidParameters& parameters() const noexcept { return p_; }
 
  private:
   PidParameters p_;
   double dt_;
   double alpha_ = 1.0;  // derivative filter coefficient
-  double u_ = 0.0;
+  double u_ = 0.0;      // the incremental PID's state
+  double out_ = 0.0;    // u_ through the output filter
+  double beta_ = 1.0;
   double e1_ = 0.0;
   double ef_ = 0.0, ef1_ = 0.0, ef2_ = 0.0;
   int external_saturation_ = 0;

@@ -57,8 +57,13 @@ struct BenchSettings {
   double identify_heldout_fraction = 0.1;
   /// Highest sample rate the identification fit runs at; faster records are block-averaged.
   double identify_fit_rate_hz = 2000.0;
-  /// track defaults
-  compensation::PidParameters pid{0.1, 2000.0, 0.0, 0.0, -30.0, 30.0};
+  /// track defaults: the PID's clamp and filters; its gains when pid_derived is false.
+  compensation::PidParameters pid{0.0, 0.0, 0.0, 0.0, -30.0, 30.0};
+  /// Gains derived per run from the model and the loop rate (compensation::tune_pid), unless a
+  /// request gives kp, ki or kd.
+  bool pid_derived = true;
+  double pid_bandwidth_hz = 0.0;  ///< crossover of derived gains; 0 = tune_pid's default
+  std::optional<double> pid_output_filter_hz;  ///< overrides the derived output filter
   /// Open-loop sweep to u_max and back to u_min before every track run [s], so the actuator's
   /// hysteresis state is known and the inverse starts consistent with it.
   double precondition_s = 1.0;
@@ -108,6 +113,12 @@ class Bench {
     double y_bottom, y_top;
   };
   std::optional<ActuatorRange> actuator_range() const;
+  /// The run's predictor of y (RunProgram::model) relaxed at output u0: the active model, or
+  /// without one the linear map of limits.y_min/y_max; nullopt when neither is known.
+  /// Caller holds mutex_.
+  std::optional<compensation::ActuatorModel> predictor(double u0) const;
+  /// What predictor() gives, in words, for the log header. Caller holds mutex_.
+  const char* predictor_name() const;
 
   BenchSettings settings_;
   std::unique_ptr<drivers::Driver> driver_;

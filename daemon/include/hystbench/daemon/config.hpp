@@ -13,7 +13,8 @@
 //   [actuator] the simulated actuator's truth, kept as JSON for the simulator to validate
 //   [identify] model, operators, dead_zones, amplitude_v, offset_v, frequency_hz, cycles,
 //              heldout_fraction, fit_rate_hz
-//   [pid]      kp, ki, kd, derivative_filter_hz, u_fb_min, u_fb_max
+//   [pid]      kp, ki, kd, bandwidth_hz, output_filter_hz, derivative_filter_hz, u_fb_min,
+//              u_fb_max
 // Not real-time safe (allocates, throws); read once at start-up.
 #include <cstddef>
 #include <cstdint>
@@ -101,9 +102,15 @@ struct IdentifySection {
 };
 
 struct PidSection {
-  double kp = 0.1;                    ///< [V/µm] >= 0
-  double ki = 2000.0;                 ///< [V/(µm s)] >= 0
-  double kd = 0.0;                    ///< [V s/µm] >= 0
+  /// Gains; all three absent = derived per run from the model and the loop rate
+  /// (compensation/pid_tuning.hpp); any given = the given ones, the others 0.
+  std::optional<double> kp;            ///< [V/µm] >= 0
+  std::optional<double> ki;            ///< [V/(µm s)] >= 0
+  std::optional<double> kd;            ///< [V s/µm] >= 0
+  std::optional<double> bandwidth_hz;  ///< crossover of the derived gains; absent = the default
+  /// Low-pass of the feedback output [Hz]; absent = 4x the crossover for derived gains, none
+  /// for given ones; below loop.rate_hz / 2.
+  std::optional<double> output_filter_hz;
   double derivative_filter_hz = 0.0;  ///< 0 = unfiltered; below loop.rate_hz / 2
   double u_fb_min = -30.0;            ///< clamp of the feedback output [V]
   double u_fb_max = 30.0;

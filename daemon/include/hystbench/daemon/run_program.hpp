@@ -6,10 +6,12 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/daemon/loop_statistics.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
@@ -32,11 +34,17 @@ struct RunProgram {
   /// track: the reference [µm] as a function of run time, and the compensator.
   std::unique_ptr<sim::SignalGenerator> reference;
   std::optional<compensation::Compensator> compensator;
+  /// The active model, configured at the loop's period and relaxed at the run's first output:
+  /// stepped every tick with the drive actually applied, its output is y_model (absent = NaN).
+  std::optional<compensation::ActuatorModel> model;
   /// track: references outside [y_ref_min, y_ref_max] are clipped and flagged [µm].
   double y_ref_min = -std::numeric_limits<double>::infinity();
   double y_ref_max = std::numeric_limits<double>::infinity();
   /// Samples before this index are left out of the error figures (start-up transient).
   std::uint64_t metrics_from = 0;
+  /// Keys merged into the run's result: what the run was built with (compensator, feedback),
+  /// set by the control thread, never touched by the loop.
+  nlohmann::json summary = nlohmann::json::object();
   /// The per-run log (may be null in unit tests).
   std::unique_ptr<SampleLogWriter> log;
   /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).
@@ -52,6 +60,8 @@ struct RunProgram {
   std::uint64_t stale_reads = 0, log_drops = 0;
   double error_sum2 = 0.0, error_max = 0.0;  ///< tracking error from metrics_from on [µm]
   std::uint64_t error_samples = 0;
+  double model_error_sum2 = 0.0, model_error_max = 0.0;  ///< y - y_model from metrics_from [µm]
+  std::uint64_t model_error_samples = 0;
   LoopStatistics stats;  ///< this run's loop timing
 };
 
