@@ -1,7 +1,7 @@
 // hystbench: the bench's command-line tool.
 //   Offline (no daemon needed): fit, simulate, invert, diagnose on CSV files.
-//   Bench (talks to hystbenchd over its Unix socket): status, identify, track, stop, abort,
-//   reset, model, config.
+//   Bench (talks to hystbenchd over its Unix socket): status, identify, track, sweep, stop,
+//   abort, reset, model, config.
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <iostream>
@@ -9,6 +9,7 @@
 #include "hystbench/daemon/diagnose_command.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/daemon/remote_commands.hpp"
+#include "hystbench/daemon/sweep_command.hpp"
 
 namespace hd = hystbench::daemon;
 
@@ -204,6 +205,44 @@ int main(int argc, char** argv) {
                         "daemon's, 1 s; 0 = none)");
   add_output_flags(track_cmd, true);
 
+  hd::SweepCommand sweep;
+  auto* sweep_cmd = app.add_subcommand(
+      "sweep",
+      "Track a reference at each of a list of frequencies with each compensator and print one "
+      "table of the tracking error (rms / max, % of range): how a stage behaves with frequency.\n"
+      "Example: hystbench sweep --frequencies 1,5,10,19,50,100,200 --compensators "
+      "none,inverse,inverse+pid --plot sweep/");
+  sweep_cmd->add_option("--frequencies", sweep.frequencies_hz, "Reference frequencies [Hz]")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sweep_cmd
+      ->add_option("--compensators", sweep.compensators,
+                   "Compensators, each run at every frequency (none, inverse, "
+                   "inverse_multiplicative, inverse+pid, pid)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"none", "inverse", "inverse_multiplicative", "inverse+pid", "pid"}))
+      ->capture_default_str();
+  sweep_cmd->add_option("--reference", sweep.reference, "sine, triangle, sawtooth")
+      ->check(CLI::IsMember({"sine", "triangle", "sawtooth"}))
+      ->capture_default_str();
+  sweep_cmd->add_option("--periods", sweep.periods, "Periods per run (the first is not scored)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sweep_cmd
+      ->add_option("--min-duration", sweep.min_duration_s,
+                   "Each run lasts at least this long [s] (more periods at high frequency)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sweep_cmd
+      ->add_option("--range-fraction", sweep.range_fraction,
+                   "Part of the actuator range the reference spans, centred")
+      ->check(CLI::Range(0.01, 1.0))
+      ->capture_default_str();
+  sweep_cmd->add_option("--plot", sweep.plot_dir,
+                        "Write sweep.png (error against frequency, log axes) and its data here");
+  sweep_cmd->add_flag("--json", sweep.json_output, "Print one JSON object instead of the table");
+
   auto* stop_cmd = app.add_subcommand("stop", "End the active run normally (its result is kept)");
   add_output_flags(stop_cmd, false);
   auto* abort_cmd = app.add_subcommand("abort", "Safe output now; the active run ends as aborted");
@@ -252,6 +291,10 @@ int main(int argc, char** argv) {
       p["range_fraction"] = tr_fraction;
     }
     return remote_run("track", p);
+  }
+  if (*sweep_cmd) {
+    sweep.socket_path = remote.socket_path;
+    return hd::run_sweep(sweep, std::cout, std::cerr);
   }
   if (*stop_cmd) return remote_run("stop", nlohmann::json::object());
   if (*abort_cmd) return remote_run("abort", nlohmann::json::object());

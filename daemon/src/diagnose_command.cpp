@@ -13,6 +13,7 @@
 #include <ostream>
 #include <sstream>
 
+#include "details/gnuplot.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
@@ -76,47 +77,11 @@ json identification_of(const hc::Diagnosis& d, const std::string& data_path, boo
   return j;
 }
 
-// Runs `gnuplot script`, its output into log; throws with the log's tail on failure.
-void run_gnuplot(const std::filesystem::path& script, const std::filesystem::path& log) {
-  const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error("cannot start gnuplot: fork failed");
-  if (pid == 0) {
-    if (FILE* f = std::fopen(log.c_str(), "w")) {
-      dup2(fileno(f), STDOUT_FILENO);
-      dup2(fileno(f), STDERR_FILENO);
-    }
-    execlp("gnuplot", "gnuplot", script.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) throw std::runtime_error("gnuplot: waitpid failed");
-  }
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
-  std::ifstream in(log);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string text = ss.str();
-  if (text.size() > 600) text = "..." + text.substr(text.size() - 600);
-  if (WIFEXITED(status) && WEXITSTATUS(status) == 127) {
-    throw std::runtime_error("gnuplot is not installed (or not on PATH): the report data and " +
-                             script.string() + " are written, the PNGs are not");
-  }
-  throw std::runtime_error("gnuplot failed on " + script.string() + ": " + text);
-}
-
 std::ofstream open_for_writing(const std::filesystem::path& p) {
   std::ofstream out(p, std::ios::trunc);
   if (!out) throw std::runtime_error(p.string() + ": cannot write");
   out << std::setprecision(10);
   return out;
-}
-
-std::string quoted(const std::filesystem::path& p) {
-  std::string s = p.string();
-  std::string q = "'";
-  for (const char c : s) q += c == '\'' ? std::string("''") : std::string(1, c);
-  return q + "'";
 }
 
 }  // namespace
@@ -277,31 +242,32 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
   const std::string cause(hc::to_string(d.cause));
   const fs::path record = dir / "record.dat";
   std::ostringstream gp;
-  gp << "# hystbench diagnose report: gnuplot " << quoted(dir / "report.gp") << "\n"
+  gp << "# hystbench diagnose report: gnuplot " << details::gnuplot_quoted(dir / "report.gp")
+     << "\n"
      << "set terminal pngcairo size 1000,650 font ',10' noenhanced\nset grid\nset key top left\n"
      << "set datafile commentschars '#'\n";
-  gp << "set output " << quoted(dir / "loops.png") << "\n"
+  gp << "set output " << details::gnuplot_quoted(dir / "loops.png") << "\n"
      << "set title 'y against u: measured and both models (cause: " << cause << ")'\n"
      << "set xlabel 'u [" << in << "]'\nset ylabel 'y [" << out << "]'\n"
-     << "plot " << quoted(record)
+     << "plot " << details::gnuplot_quoted(record)
      << " using 2:3 with points pt 7 ps 0.25 lc rgb '#999999' title 'measured', \\\n"
      << "     '' using 2:4 with lines lw 1 lc rgb '#d62728' title 'baseline', \\\n"
      << "     '' using 2:5 with lines lw 1 lc rgb '#1f77b4' title 'extended'\n";
-  gp << "set output " << quoted(dir / "residual_time.png") << "\n"
+  gp << "set output " << details::gnuplot_quoted(dir / "residual_time.png") << "\n"
      << "set title 'residual against time, before (baseline) and after (extended); grey: held "
         "out'\n"
      << "set xlabel 't [s]'\nset ylabel 'y - model [" << out << "]'\n"
-     << "plot " << quoted(record)
+     << "plot " << details::gnuplot_quoted(record)
      << " using 1:($8 == 1 ? $6 : 1/0) with impulses lc rgb '#dddddd' notitle, \\\n"
      << "     '' using 1:($8 < 2 ? $6 : 1/0) with lines lc rgb '#d62728' title 'baseline', \\\n"
      << "     '' using 1:($8 < 2 ? $7 : 1/0) with lines lc rgb '#1f77b4' title 'extended'\n";
   const fs::path expl = dir / "explanatory.dat";
-  gp << "set output " << quoted(dir / ("cause_" + variable + ".png")) << "\n";
+  gp << "set output " << details::gnuplot_quoted(dir / ("cause_" + variable + ".png")) << "\n";
   if (variable == "frequency") {
     gp << "set title 'measured / baseline prediction against frequency (Welch)'\n"
        << "set logscale x\nset xlabel 'f [Hz]'\nset ylabel 'gain'\nset y2label 'phase [deg]'\n"
        << "set ytics nomirror\nset y2tics\n"
-       << "plot " << quoted(expl)
+       << "plot " << details::gnuplot_quoted(expl)
        << " using 1:($5 > 0 ? $2 : 1/0) with lines lw 2 title "
           "'gain (informative bins)', \\\n"
        << "     '' using 1:($5 > 0 ? $3 : 1/0) axes x1y2 with lines title 'phase'\n"
@@ -311,21 +277,22 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
     gp << "set title 'baseline residual against " << label << " (binned mean)'\nset xlabel '"
        << label << "'\nset ylabel 'mean residual [" << out << "]'\n";
     if (variable == "since_event") gp << "set logscale x\n";
-    gp << "plot " << quoted(expl) << " using 1:2 with linespoints lw 2 title 'mean residual'\n";
+    gp << "plot " << details::gnuplot_quoted(expl)
+       << " using 1:2 with linespoints lw 2 title 'mean residual'\n";
     if (variable == "since_event") gp << "unset logscale x\n";
   }
-  gp << "set output " << quoted(dir / "heldout_errors.png") << "\n"
+  gp << "set output " << details::gnuplot_quoted(dir / "heldout_errors.png") << "\n"
      << "set title 'held-out rms error: baseline and each candidate (gain above the bars)'\n"
      << "set style fill solid 0.6\nset boxwidth 0.6\nset xlabel ''\nset ylabel 'rms [" << out
      << "]'\nset yrange [0:*]\nset xtics rotate by -30\n"
-     << "plot " << quoted(dir / "candidates.dat")
+     << "plot " << details::gnuplot_quoted(dir / "candidates.dat")
      << " using 1:3:xtic(2) with boxes lc rgb '#1f77b4' notitle, \\\n"
      << "     '' using 1:3:(sprintf('%.2fx', $4)) with labels offset 0,1 notitle\n";
   {
     auto f = open_for_writing(dir / "report.gp");
     f << gp.str();
   }
-  run_gnuplot(dir / "report.gp", dir / "gnuplot.log");
+  details::run_gnuplot(dir / "report.gp", dir / "gnuplot.log");
 }
 
 int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {

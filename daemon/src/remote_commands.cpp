@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <iomanip>
@@ -31,15 +33,33 @@ std::string us(const json& ns) {
   return ns.is_number() ? fixed(ns.get<double>() / 1000.0, 1) : "?";
 }
 
+}  // namespace
+
 void progress_bar(std::ostream& err, double fraction, const std::string& label) {
   const int width = 30;
-  const int filled = static_cast<int>(std::lround(fraction * width));
+  const int filled = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * width));
   err << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
       << std::setw(3) << static_cast<int>(100 * fraction) << " % " << label << "\x1b[K"
       << std::flush;
 }
 
-}  // namespace
+json wait_for_run(BenchClient& client, const std::string& run_id,
+                  const std::function<void(double, const std::string&)>& progress) {
+  for (;;) {
+    auto event = client.next_event(std::chrono::seconds(3600));
+    if (!event) continue;
+    const std::string name = event->value("event", "");
+    if (name == "run.finished" && (*event)["result"].value("run_id", "") == run_id) {
+      return (*event)["result"];
+    }
+    if (!progress || event->value("run_id", "") != run_id) continue;
+    if (name == "run.progress") {
+      progress(event->value("fraction", 0.0), "");
+    } else if (name == "fit.progress") {
+      progress(event->value("fraction", 0.0), "fitting: " + event->value("stage", ""));
+    }
+  }
+}
 
 void print_run_result(const json& r, std::ostream& out) {
   out << "run " << r.value("run_id", "?") << " " << r.value("end", "?");
@@ -51,6 +71,12 @@ void print_run_result(const json& r, std::ostream& out) {
         << fixed(r["rms_error_percent"], 3) << " % of " << fixed(r["range_um"], 2) << " um)   max "
         << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %)\n";
     out << "  hysteresis      " << fixed(r["hysteresis_percent"], 3) << " % of the output range\n";
+  }
+  if (r.contains("model_rms_error_um")) {
+    out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
+        << fixed(r["model_rms_error_percent"], 3) << " %)   max "
+        << fixed(r["model_max_error_um"], 4) << " um (" << fixed(r["model_max_error_percent"], 3)
+        << " %): y - y_model, the simulation's error\n";
   }
   if (r.contains("model")) {
     const json& m = r["model"];
@@ -110,27 +136,20 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
     }
     const std::string run_id = result.value("run_id", "");
     const bool tty = ::isatty(STDERR_FILENO) == 1;
-    for (;;) {
-      auto event = client.next_event(std::chrono::seconds(3600));
-      if (!event) continue;
-      const std::string name = event->value("event", "");
-      if (name == "run.progress" && event->value("run_id", "") == run_id && tty &&
-          !cmd.json_output) {
-        progress_bar(err, event->value("fraction", 0.0), cmd.cmd + " " + run_id);
-      } else if (name == "fit.progress" && event->value("run_id", "") == run_id && tty &&
-                 !cmd.json_output) {
-        progress_bar(err, event->value("fraction", 0.0), "fitting: " + event->value("stage", ""));
-      } else if (name == "run.finished" && (*event)["result"].value("run_id", "") == run_id) {
-        if (tty && !cmd.json_output) err << "\r\x1b[K" << std::flush;
-        const json& r = (*event)["result"];
-        if (cmd.json_output) {
-          out << r.dump() << "\n";
-        } else {
-          print_run_result(r, out);
-        }
-        return r.value("end", "") == "completed" && !r.contains("fit_error") ? 0 : 1;
-      }
+    std::function<void(double, const std::string&)> show;
+    if (tty && !cmd.json_output) {
+      show = [&](double f, const std::string& what) {
+        progress_bar(err, f, what.empty() ? cmd.cmd + " " + run_id : what);
+      };
     }
+    const json r = wait_for_run(client, run_id, show);
+    if (show) err << "\r\x1b[K" << std::flush;
+    if (cmd.json_output) {
+      out << r.dump() << "\n";
+    } else {
+      print_run_result(r, out);
+    }
+    return r.value("end", "") == "completed" && !r.contains("fit_error") ? 0 : 1;
   } catch (const ClientError& e) {
     err << "hystbench: " << e.what() << "\n";
     return 2;

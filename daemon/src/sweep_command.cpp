@@ -1,0 +1,186 @@
+#include "hystbench/daemon/sweep_command.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <sstream>
+
+#include "details/gnuplot.hpp"
+#include "hystbench/daemon/bench_client.hpp"
+#include "hystbench/daemon/remote_commands.hpp"
+
+namespace hystbench::daemon {
+
+using nlohmann::json;
+
+namespace {
+
+std::string fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+double number_or_nan(const json& r, const char* key) {
+  return r.contains(key) && r[key].is_number() ? r[key].get<double>() : std::nan("");
+}
+
+void print_table(const SweepCommand& cmd, const json& rows, std::ostream& out) {
+  out << "sweep: " << cmd.reference << " over " << fixed(100 * cmd.range_fraction, 0)
+      << " % of range; tracking error rms / max, % of range\n";
+  out << std::setw(12) << "f [Hz]";
+  for (const auto& c : cmd.compensators) out << std::setw(24) << c;
+  out << "\n";
+  for (const double f : cmd.frequencies_hz) {
+    out << std::setw(12) << fixed(f, 3);
+    for (const auto& c : cmd.compensators) {
+      std::string cell = "-";
+      for (const auto& r : rows) {
+        if (r["frequency_hz"].get<double>() == f && r["compensator"] == c) {
+          cell = r.contains("rms_error_percent")
+                     ? fixed(r["rms_error_percent"], 3) + " / " + fixed(r["max_error_percent"], 3)
+                     : r.value("end", std::string("?"));
+        }
+      }
+      out << std::setw(24) << cell;
+    }
+    out << "\n";
+  }
+}
+
+void write_plot(const SweepCommand& cmd, const json& rows) {
+  namespace fs = std::filesystem;
+  const fs::path dir = cmd.plot_dir;
+  fs::create_directories(dir);
+  std::ofstream dat(dir / "sweep.dat", std::ios::trunc);
+  if (!dat) throw std::runtime_error((dir / "sweep.dat").string() + ": cannot write");
+  dat << "# frequency_hz";
+  for (const auto& c : cmd.compensators) dat << " rms_percent_" << c << " max_percent_" << c;
+  dat << "\n";
+  for (const double f : cmd.frequencies_hz) {
+    dat << f;
+    for (const auto& c : cmd.compensators) {
+      double rms = std::nan(""), mx = std::nan("");
+      for (const auto& r : rows) {
+        if (r["frequency_hz"].get<double>() == f && r["compensator"] == c) {
+          rms = number_or_nan(r, "rms_error_percent");
+          mx = number_or_nan(r, "max_error_percent");
+        }
+      }
+      dat << " " << (std::isnan(rms) ? std::string("NaN") : std::to_string(rms)) << " "
+          << (std::isnan(mx) ? std::string("NaN") : std::to_string(mx));
+    }
+    dat << "\n";
+  }
+  dat.close();
+  std::ofstream gp(dir / "sweep.gp", std::ios::trunc);
+  gp << "set terminal pngcairo size 900,600\n"
+     << "set output " << details::gnuplot_quoted(dir / "sweep.png") << "\n"
+     << "set logscale xy\nset grid\nset key top left\n"
+     << "set xlabel 'reference frequency [Hz]'\nset ylabel 'tracking error [% of range]'\n"
+     << "set title 'hystbench sweep: " << cmd.reference << ", rms (solid) and max (dashed)'\n"
+     << "plot ";
+  for (std::size_t i = 0; i < cmd.compensators.size(); ++i) {
+    const auto col = 2 + 2 * i;
+    gp << (i ? ", " : "") << details::gnuplot_quoted(dir / "sweep.dat") << " using 1:" << col
+       << " with linespoints lw 2 lc " << i + 1 << " title '" << cmd.compensators[i] << " rms', "
+       << details::gnuplot_quoted(dir / "sweep.dat") << " using 1:" << col + 1
+       << " with linespoints dt 2 lc " << i + 1 << " title '" << cmd.compensators[i] << " max'";
+  }
+  gp << "\n";
+  gp.close();
+  details::run_gnuplot(dir / "sweep.gp", dir / "gnuplot.log");
+}
+
+}  // namespace
+
+int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
+  json rows = json::array();
+  int status = 0;
+  const bool tty = ::isatty(STDERR_FILENO) == 1 && !cmd.json_output;
+  const std::size_t total = cmd.frequencies_hz.size() * cmd.compensators.size();
+  std::size_t done = 0;
+  try {
+    BenchClient client(cmd.socket_path);
+    for (const auto& comp : cmd.compensators) {
+      for (const double f : cmd.frequencies_hz) {
+        const double periods = std::max(cmd.periods, std::ceil(cmd.min_duration_s * f));
+        const json params = {{"reference", cmd.reference},
+                             {"frequency_hz", f},
+                             {"periods", periods},
+                             {"compensator", comp},
+                             {"range_fraction", cmd.range_fraction}};
+        const json reply = client.request("track", params);
+        json row = {{"frequency_hz", f}, {"compensator", comp}, {"periods", periods}};
+        if (!reply.value("ok", false)) {
+          const json& e = reply["error"];
+          row["end"] = "refused";
+          row["error"] = e;
+          rows.push_back(row);
+          err << "hystbench: sweep: track " << comp << " at " << f
+              << " Hz refused: " << e.value("message", "?") << " [" << e.value("code", "?")
+              << "]\n";
+          status = 1;
+          break;
+        }
+        const std::string label = comp + " " + fixed(f, 3) + " Hz (" + std::to_string(done + 1) +
+                                  "/" + std::to_string(total) + ")";
+        std::function<void(double, const std::string&)> show;
+        if (tty) {
+          show = [&](double frac, const std::string&) {
+            progress_bar(err, (static_cast<double>(done) + frac) / static_cast<double>(total),
+                         "sweep " + label);
+          };
+        }
+        const json r = wait_for_run(client, reply["result"].value("run_id", ""), show);
+        ++done;
+        for (const char* key :
+             {"run_id", "end", "reason", "rms_error_percent", "max_error_percent", "rms_error_um",
+              "max_error_um", "range_um", "model_rms_error_percent", "log"}) {
+          if (r.contains(key)) row[key] = r[key];
+        }
+        rows.push_back(row);
+        if (r.value("end", "") != "completed") {
+          err << (tty ? "\r\x1b[K" : "") << "hystbench: sweep: " << label << " ended "
+              << r.value("end", "?") << " (" << r.value("reason", "") << "); sweep stopped\n";
+          status = 1;
+          break;
+        }
+      }
+      if (status != 0) break;
+    }
+    if (tty) err << "\r\x1b[K" << std::flush;
+  } catch (const ClientError& e) {
+    err << "hystbench: " << e.what() << "\n";
+    return 2;
+  }
+  if (cmd.json_output) {
+    out << json{{"reference", cmd.reference},
+                {"range_fraction", cmd.range_fraction},
+                {"frequencies_hz", cmd.frequencies_hz},
+                {"compensators", cmd.compensators},
+                {"rows", rows}}
+               .dump()
+        << "\n";
+  } else {
+    print_table(cmd, rows, out);
+  }
+  if (!cmd.plot_dir.empty()) {
+    try {
+      write_plot(cmd, rows);
+      if (!cmd.json_output)
+        out << "plot: " << (std::filesystem::path(cmd.plot_dir) / "sweep.png").string() << "\n";
+    } catch (const std::exception& e) {
+      err << "hystbench: sweep: " << e.what() << "\n";
+      return 2;
+    }
+  }
+  return status;
+}
+
+}  // namespace hystbench::daemon
