@@ -1,0 +1,49 @@
+#include "hystbench/compensation/dynamics_inversion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "details/validate.hpp"
+
+namespace hystbench::compensation {
+
+DynamicsInversion::DynamicsInversion(const ActuatorModel& model, double dt_s, double bandwidth_hz)
+    : dt_(dt_s) {
+  details::require(std::isfinite(dt_s) && dt_s > 0.0, "dynamics inversion needs a period > 0");
+  delay_samples_ = std::round(model.delay_s() / dt_s);
+  lead_s_ = delay_samples_ * dt_s;
+  if (model.dynamics()) {
+    p_ = *model.dynamics();
+    dynamics_ = true;
+    const double wn = 2.0 * std::numbers::pi * p_.natural_frequency_hz;
+    c1_ = 2.0 * p_.damping_ratio / wn;
+    c2_ = 1.0 / (wn * wn);
+    bandwidth_hz_ = bandwidth_hz > 0.0 ? bandwidth_hz
+                                       : std::min(0.25 / dt_s, 2.0 * p_.natural_frequency_hz);
+    h_s_ = std::max(dt_s, 1.0 / (std::numbers::pi * bandwidth_hz_));
+    inv_2h_ = 1.0 / (2.0 * h_s_);
+    inv_h2_ = 1.0 / (h_s_ * h_s_);
+    // The model's dynamics are discretised for a zero-order-held input and report the position
+    // at the end of the held sample: the held value best stands for the continuous input half a
+    // sample before the output it makes (measured: 0.09 % rms at 500 Hz, 5.5 % with +0.5).
+    lead_s_ -= 0.5 * dt_s;
+  }
+  preview_ = std::max(0, static_cast<int>(std::ceil((lead_s_ + h_s_) / dt_s - 1e-9)));
+}
+
+std::string DynamicsInversion::describe() const {
+  std::string s;
+  if (delay_samples_ > 0) {
+    s += "delay " + details::fmt(delay_samples_) + " samples (reference previewed)";
+  }
+  if (dynamics_) {
+    if (!s.empty()) s += ", ";
+    s += "dynamics " + details::fmt(p_.natural_frequency_hz) + " Hz / " +
+         details::fmt(p_.damping_ratio) +
+         " (reference derivatives, rolled off above " + details::fmt(bandwidth_hz_) + " Hz)";
+  }
+  return s.empty() ? "nothing (a static model)" : s;
+}
+
+}  // namespace hystbench::compensation
