@@ -54,7 +54,7 @@ Compensator::Compensator(CompensatorKind kind, std::unique_ptr<InverseModel> inv
                    "linear map gain must be > 0");
 }
 
-CompensatorOutput Compensator::step(double y_ref, double y_measured) noexcept {
+CompensatorOutput Compensator::step(double y_ref, double y_measured, double ff_target) noexcept {
   CompensatorOutput out;
   switch (kind_) {
     case CompensatorKind::kNone:
@@ -63,7 +63,7 @@ CompensatorOutput Compensator::step(double y_ref, double y_measured) noexcept {
     case CompensatorKind::kInverse:
     case CompensatorKind::kInverseMultiplicative:
     case CompensatorKind::kInversePid:
-      out.u_ff = inverse_->step(y_ref);
+      out.u_ff = inverse_->step(ff_target);
       break;
     case CompensatorKind::kPid:
       break;

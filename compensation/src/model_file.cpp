@@ -133,6 +133,9 @@ json to_json(const ModelFile& file) {
   if (m.dynamics()) {
     j["dynamics"] = {{"natural_frequency_hz", m.dynamics()->natural_frequency_hz},
                      {"damping_ratio", m.dynamics()->damping_ratio}};
+    if (m.dynamics()->feedforward_bandwidth_hz > 0.0) {
+      j["dynamics"]["feedforward_bandwidth_hz"] = m.dynamics()->feedforward_bandwidth_hz;
+    }
   }
   if (m.delay_s() > 0.0) j["delay_s"] = m.delay_s();
   j["identification"] = file.identification.is_null() ? json::object() : file.identification;
@@ -192,7 +195,8 @@ ModelFile model_file_from_json(const json& j) {
       const json& d = j["dynamics"];
       out.model.set_dynamics(
           DynamicsParameters{number_member(d, "dynamics", "natural_frequency_hz"),
-                             number_member(d, "dynamics", "damping_ratio")});
+                             number_member(d, "dynamics", "damping_ratio"),
+                             number_member(d, "dynamics", "feedforward_bandwidth_hz", 0.0)});
     }
     if (j.contains("delay_s")) out.model.set_delay(number(j["delay_s"], "delay_s"));
   } catch (const std::invalid_argument& e) {

@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "hystbench/compensation/compensator.hpp"
+#include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
@@ -603,6 +604,28 @@ json Bench::start_track(const json& params) {
   }
   p->model = predictor(p->excitation.empty() ? loop_->last_output() : p->excitation.front());
   p->summary = {{"compensator", comp_name}};
+  if (model_ && hc::needs_model(*kind)) {
+    // The feedforward inverts the whole model: hysteresis, creep and rate in the static inverse,
+    // the delay and dynamics from the previewed reference.
+    const double bandwidth =
+        model_->model.dynamics() && model_->model.dynamics()->feedforward_bandwidth_hz > 0
+            ? model_->model.dynamics()->feedforward_bandwidth_hz
+            : settings_.feedforward_bandwidth_hz;
+    hc::DynamicsInversion inversion(model_->model, dt_, bandwidth);
+    json inverted = json::array({"hysteresis"});
+    if (model_->model.creep()) inverted.push_back("creep");
+    if (model_->model.hysteresis().kind() == hc::ModelKind::kRateDependentPi) {
+      inverted.push_back("rate");
+    }
+    if (model_->model.delay_samples() > 0 || model_->model.delay_s() > 0.0)
+      inverted.push_back("delay");
+    if (model_->model.dynamics()) inverted.push_back("dynamics");
+    p->summary["feedforward"] = {{"inverted", inverted},
+                                 {"preview_samples", inversion.preview_samples()},
+                                 {"bandwidth_hz", inversion.bandwidth_hz()},
+                                 {"how", inversion.describe()}};
+    if (inversion.active()) p->preview = inversion;
+  }
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
   const std::uint64_t prefix = p->excitation.size();
   const std::uint64_t body = static_cast<std::uint64_t>(std::llround(duration / dt_));
@@ -635,6 +658,7 @@ json Bench::start_track(const json& params) {
   p->log = open_log(p->run_id, header);
   const std::string log_path = p->log->path().string();
   const std::string run_id = p->run_id;
+  const json p_summary_feedforward = p->summary.value("feedforward", json(nullptr));
   const std::uint64_t total = p->total_samples;
   if (auto refused = loop_->submit(std::move(p))) {
     refused->log->close();
@@ -651,6 +675,7 @@ json Bench::start_track(const json& params) {
           {"reference", {{"kind", ref_name}, {"min_um", y_lo}, {"max_um", y_hi}}},
           {"compensator", comp_name},
           {"feedback", feedback},
+          {"feedforward", p_summary_feedforward},
           {"log", log_path}};
 }
 

@@ -174,7 +174,14 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
       rec.flags |= kSampleReferenceLimited;
       ++p.reference_clips;
     }
-    const auto out = p.compensator->step(y_ref, y_prev_);
+    double target = y_ref;
+    if (p.preview) {
+      // The reference ahead by the model's delay, its derivatives for the dynamics.
+      const double tl = t + p.preview->lead_s(), h = p.preview->step_s();
+      target = p.preview->target(p.reference->value(tl - h), p.reference->value(tl),
+                                 p.reference->value(tl + h));
+    }
+    const auto out = p.compensator->step(y_ref, y_prev_, target);
     rec.u_ff = out.u_ff;
     rec.u_fb = out.u_fb;
     u_request = out.u;

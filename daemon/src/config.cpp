@@ -215,6 +215,7 @@ void read_loop(Section s, LoopSection& l) {
   s.integer<std::size_t>("ring_capacity", l.ring_capacity, 1024, std::size_t{1} << 24);
   s.number("stuck_sensor_ms", l.stuck_sensor_ms, 0.0, 10000.0);
   s.number("stuck_sensor_span", l.stuck_sensor_span, 0.0, 1.0, true);
+  s.number("feedforward_bandwidth_hz", l.feedforward_bandwidth_hz, 0.0, 1e6);
   s.finish();
 }
 
@@ -368,7 +369,8 @@ nlohmann::json to_json(const DaemonConfig& c) {
         {"overrun_budget", c.loop.overrun_budget},
         {"ring_capacity", c.loop.ring_capacity},
         {"stuck_sensor_ms", c.loop.stuck_sensor_ms},
-        {"stuck_sensor_span", c.loop.stuck_sensor_span}}},
+        {"stuck_sensor_span", c.loop.stuck_sensor_span},
+        {"feedforward_bandwidth_hz", c.loop.feedforward_bandwidth_hz}}},
       {"limits",
        {{"u_min", c.limits.u_min},
         {"u_max", c.limits.u_max},

@@ -29,6 +29,7 @@ BenchSettings bench_settings_from(const DaemonConfig& c) {
   s.log_dir = c.daemon.log_dir;
   s.model_dir = c.daemon.model_dir;
   s.log_ring_capacity = c.loop.ring_capacity;
+  s.feedforward_bandwidth_hz = c.loop.feedforward_bandwidth_hz;
   if (c.limits.y_min && c.limits.y_max) {
     s.y_min = *c.limits.y_min;
     s.y_max = *c.limits.y_max;

@@ -44,7 +44,12 @@ class Compensator {
               std::optional<PidController> pid, LinearMap linear);
 
   /// y_measured is the measurement of the previous tick (NaN before the first one).
-  CompensatorOutput step(double y_ref, double y_measured) noexcept;
+  CompensatorOutput step(double y_ref, double y_measured) noexcept {
+    return step(y_ref, y_measured, y_ref);
+  }
+  /// As above, the feedforward inverting `ff_target` instead of y_ref: the static target a
+  /// DynamicsInversion computed from the previewed reference (feedback still acts on y_ref).
+  CompensatorOutput step(double y_ref, double y_measured, double ff_target) noexcept;
   /// The stage after the compensator clamped the output: +1 high, -1 low, 0 none.
   void notify_saturation(int direction) noexcept;
   /// Starts from a relaxed actuator at input u0.

@@ -7,6 +7,9 @@ namespace hystbench::compensation {
 struct DynamicsParameters {
   double natural_frequency_hz = 1000.0;  ///< f_n > 0 [Hz]
   double damping_ratio = 0.05;           ///< zeta > 0
+  /// Roll-off of this model's inversion in the feedforward (DynamicsInversion) [Hz], >= 0;
+  /// 0 = the bench's default. Not used by the dynamics themselves.
+  double feedforward_bandwidth_hz = 0.0;
 };
 
 class SecondOrderDynamics {

@@ -67,6 +67,8 @@ struct BenchSettings {
   /// Open-loop sweep to u_max and back to u_min before every track run [s], so the actuator's
   /// hysteresis state is known and the inverse starts consistent with it.
   double precondition_s = 1.0;
+  /// Roll-off of the feedforward's dynamics inversion [Hz]; 0 = the default (DynamicsInversion).
+  double feedforward_bandwidth_hz = 0.0;
   /// The effective configuration, returned by config.get.
   nlohmann::json config_json = nlohmann::json::object();
 };

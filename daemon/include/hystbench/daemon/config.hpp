@@ -65,6 +65,9 @@ struct LoopSection {
   /// [0, 10000]; 0 = off.
   double stuck_sensor_ms = 20.0;
   double stuck_sensor_span = 0.02;  ///< (0, 1]
+  /// Roll-off of the feedforward's dynamics inversion [Hz] (>= 0; 0 = min(loop rate / 4, twice
+  /// the model's natural frequency)); a model file's dynamics.feedforward_bandwidth_hz wins.
+  double feedforward_bandwidth_hz = 0.0;
 };
 
 struct LimitsSection {

@@ -13,6 +13,7 @@
 
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/compensator.hpp"
+#include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/daemon/loop_statistics.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
 #include "hystbench/sim/signal_generator.hpp"
@@ -34,6 +35,9 @@ struct RunProgram {
   /// track: the reference [µm] as a function of run time, and the compensator.
   std::unique_ptr<sim::SignalGenerator> reference;
   std::optional<compensation::Compensator> compensator;
+  /// track: the model's delay and dynamics inverted from the previewed reference (the
+  /// feedforward then inverts its target, not y_ref); absent for a static model or `none`/`pid`.
+  std::optional<compensation::DynamicsInversion> preview;
   /// The active model, configured at the loop's period and relaxed at the run's first output:
   /// stepped every tick with the drive actually applied, its output is y_model (absent = NaN).
   std::optional<compensation::ActuatorModel> model;
