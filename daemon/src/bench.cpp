@@ -215,6 +215,11 @@ std::unique_ptr<SampleLogWriter> Bench::open_log(const std::string& run_id, json
   }
 }
 
+std::uint64_t Bench::model_delay_ticks() const {
+  if (!model_) return 0;
+  return static_cast<std::uint64_t>(std::ceil(model_->model.delay_s() / dt_ - 1e-9));
+}
+
 std::optional<Bench::ActuatorRange> Bench::actuator_range() const {
   // Caller holds mutex_.
   if (model_) {
@@ -367,6 +372,7 @@ json Bench::start_identify(const json& params) {
 
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kIdentify;
+  p->response_delay_ticks = model_delay_ticks();
   p->run_id = new_run_id("identify");
   sim::Excitation exc;
   try {
@@ -492,6 +498,7 @@ json Bench::start_track(const json& params) {
 
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kTrack;
+  p->response_delay_ticks = model_delay_ticks();
   p->run_id = new_run_id("track");
   try {
     p->reference = sim::make_signal_generator(spec);

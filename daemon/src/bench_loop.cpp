@@ -9,11 +9,19 @@
 
 namespace hystbench::daemon {
 
+namespace {
+/// The configured stuck-sensor options; the driver's count size when none is configured.
+StuckSensorOptions stuck_options(StuckSensorOptions o, const drivers::Driver& driver) {
+  if (o.resolution_um <= 0.0) o.resolution_um = driver.measurement_resolution_um();
+  return o;
+}
+}  // namespace
+
 BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
     : driver_(driver),
       options_(options),
       limiter_(options.limits, 1.0 / options.rate_hz),
-      stuck_(options.stuck_sensor),
+      stuck_(stuck_options(options.stuck_sensor, driver)),
       dt_(1.0 / options.rate_hz),
       period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))) {
   limiter_.reset(driver_.safe_output_v());
@@ -110,7 +118,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns,
     RunProgram* p = pending_.exchange(nullptr, std::memory_order_acq_rel);
     if (p != nullptr) {
       active_ = p;
-      stuck_.reset();
+      stuck_.reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
       driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
       active_pub_.store(p, std::memory_order_release);
@@ -205,13 +213,15 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     if (st == drivers::DriverStatus::kStale) {
       rec.flags |= kSampleStale;
       ++p.stale_reads;
+      stuck_.stale(lim.u);
     } else if (st != drivers::DriverStatus::kOk) {
       failure =
           st == drivers::DriverStatus::kTimeout ? "driver read timed out" : "driver read failed";
     }
     if (failure == nullptr && !std::isfinite(m.position_um)) {
       failure = "measurement is not a finite number";
-    } else if (st == drivers::DriverStatus::kOk && stuck_.update(lim.u, m.position_um)) {
+    } else if (st == drivers::DriverStatus::kOk &&
+               stuck_.update(lim.u, m.position_um, m.response_ticks)) {
       failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
     }
     rec.y_measured = m.position_um;

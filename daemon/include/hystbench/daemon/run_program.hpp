@@ -37,6 +37,9 @@ struct RunProgram {
   double y_ref_max = std::numeric_limits<double>::infinity();
   /// Samples before this index are left out of the error figures (start-up transient).
   std::uint64_t metrics_from = 0;
+  /// The active model's identified input delay [ticks]: the stuck-sensor detector waits this
+  /// much longer for the reading to answer the output.
+  std::uint64_t response_delay_ticks = 0;
   /// The per-run log (may be null in unit tests).
   std::unique_ptr<SampleLogWriter> log;
   /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).

@@ -54,6 +54,10 @@ class CanAmplifierDriver final : public Driver {
   double output_min_v() const noexcept override { return output_min_v_; }
   double output_max_v() const noexcept override { return output_max_v_; }
   double safe_output_v() const noexcept override { return safe_output_v_; }
+  /// |feedback.scale|: one count of the position field.
+  double measurement_resolution_um() const noexcept override {
+    return protocol_.feedback.scale < 0 ? -protocol_.feedback.scale : protocol_.feedback.scale;
+  }
   std::string_view type() const noexcept override { return "can"; }
   nlohmann::json diagnostics() const override;
 

@@ -58,6 +58,8 @@ class ModbusDaqDriver final : public Driver {
   double output_min_v() const noexcept override { return config_.output_min_v; }
   double output_max_v() const noexcept override { return config_.output_max_v; }
   double safe_output_v() const noexcept override { return config_.safe_output_v; }
+  /// |measurement.scale|: one register count.
+  double measurement_resolution_um() const noexcept override;
   std::string_view type() const noexcept override { return "modbus"; }
   nlohmann::json diagnostics() const override;
 
@@ -67,6 +69,7 @@ class ModbusDaqDriver final : public Driver {
   struct Sample {
     double position_um = 0.0;
     std::uint64_t seq = 0;
+    std::uint64_t command = 0;  ///< write() count when the exchange took its command
   };
   void io_thread_main() noexcept;
   /// 1 connected, 0 not yet time to retry, -1 a connection attempt failed.
@@ -86,8 +89,11 @@ class ModbusDaqDriver final : public Driver {
   bool configured_ = false;
   std::atomic<bool> active_{false};
 
-  // Command from the loop to the I/O thread.
+  // Command from the loop to the I/O thread, and how many write()s there have been (the I/O
+  // thread reads the count before the value, so a reading's response_ticks never comes out
+  // lower than the truth).
   std::atomic<double> command_v_{0.0};
+  std::atomic<std::uint64_t> writes_{0};
   sem_t wake_{};
   std::atomic<bool> quit_{false};
   std::thread io_thread_;
