@@ -48,6 +48,8 @@ TEST(ModbusPeer, WritesAndReadsSixteenBitRegistersOfAPymodbusServer) {
   ASSERT_EQ(d.read(m), hd::DriverStatus::kOk);
   EXPECT_DOUBLE_EQ(m.position_um, 32.768);  // the echo, 1 nm per count
   EXPECT_EQ(m.age_ticks, 0u);
+  EXPECT_EQ(m.response_ticks, 0u);  // io = "loop": the read follows this tick's write
+  EXPECT_DOUBLE_EQ(d.measurement_resolution_um(), 0.001);
   EXPECT_TRUE(d.deactivate().ok);
   // Deactivation leaves the safe output (0 V) in the register.
   EXPECT_FALSE(peer.wait_write(0).is_null());
