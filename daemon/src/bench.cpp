@@ -217,7 +217,11 @@ std::unique_ptr<SampleLogWriter> Bench::open_log(const std::string& run_id, json
 
 std::uint64_t Bench::model_delay_ticks() const {
   if (!model_) return 0;
-  return static_cast<std::uint64_t>(std::ceil(model_->model.delay_s() / dt_ - 1e-9));
+  const auto total = static_cast<std::int64_t>(std::ceil(model_->model.delay_s() / dt_ - 1e-9));
+  // The driver's exchange latency is part of the identified delay, and each reading reports it.
+  const std::int64_t exchange =
+      model_->identification.is_object() ? model_->identification.value("exchange_ticks", 0) : 0;
+  return static_cast<std::uint64_t>(std::max<std::int64_t>(0, total - exchange));
 }
 
 std::optional<Bench::ActuatorRange> Bench::actuator_range() const {
@@ -395,6 +399,7 @@ json Bench::start_identify(const json& params) {
   p->rec_u.resize(p->record_capacity);
   p->rec_y.resize(p->record_capacity);
   p->rec_yr.resize(p->record_capacity);
+  p->rec_response.resize(p->record_capacity);
   json segments = json::array();
   for (const auto& s : exc.segments) {
     segments.push_back({{"name", s.name}, {"begin", s.begin + offset}, {"end", s.end + offset}});
@@ -711,7 +716,10 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       // keeps it, the feedforward inverse ignores it (it inverts the static map).
       const IdentificationFit id = fit_identification_record(
           std::span<const double>(run->rec_u.data(), n),
-          std::span<const double>(run->rec_y.data(), n), dt_, block, opt, kMaxDelayTicks);
+          std::span<const double>(run->rec_y.data(), n),
+          std::span<const std::uint32_t>(run->rec_response.data(),
+                                         std::min(n, run->rec_response.size())),
+          dt_, block, opt, kMaxDelayTicks);
       hc::FitResult fit = id.fit;
       fit.model.units = {"V", "um"};
       hc::ModelFile file{fit.model, json::object()};
@@ -720,6 +728,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
                              {"samples", n},
                              {"fit_sample_period_s", block * dt_},
                              {"delay_ticks", id.delay_ticks},
+                             {"exchange_ticks", id.exchange_ticks},
                              {"method", fit.method},
                              {"operators", fit.operators},
                              {"dead_zones", fit.dead_zones},
@@ -735,6 +744,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
                          {"dead_zones", fit.dead_zones},
                          {"method", fit.method},
                          {"delay_ticks", id.delay_ticks},
+                         {"exchange_ticks", id.exchange_ticks},
                          {"fit", to_json(fit.fit)},
                          {"heldout", to_json(fit.heldout)}};
       std::lock_guard lock(mutex_);

@@ -202,6 +202,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   rec.u_out = lim.u;
 
   const char* failure = nullptr;
+  std::uint32_t response = RunProgram::kNoFreshReading;
   if ((lim.clamped || lim.slew_limited) && options_.fatal_on_limit) {
     failure = "output limit reached (limits.fatal_on_limit)";
   } else if (driver_.write(lim.u) != drivers::DriverStatus::kOk) {
@@ -225,6 +226,10 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
       failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
     }
     rec.y_measured = m.position_um;
+    if (st == drivers::DriverStatus::kOk) {
+      response = static_cast<std::uint32_t>(
+          std::min<std::uint64_t>(m.response_ticks, RunProgram::kNoFreshReading - 1));
+    }
     if (failure == nullptr) {
       y_prev_ = m.position_um;
       last_y_.store(m.position_um, std::memory_order_relaxed);
@@ -239,6 +244,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     p.rec_u[p.recorded] = rec.u_out;
     p.rec_y[p.recorded] = rec.y_measured;
     p.rec_yr[p.recorded] = y_ref;
+    if (!p.rec_response.empty()) p.rec_response[p.recorded] = response;
     ++p.recorded;
   }
   if (failure == nullptr && k >= p.metrics_from && !std::isnan(y_ref)) {

@@ -34,14 +34,73 @@ AveragedRecord block_average(std::span<const double> u, std::span<const double> 
   return r;
 }
 
+std::vector<double> align_to_outputs(std::span<const double> u, std::span<const double> y,
+                                     std::span<const std::uint32_t> response) {
+  const std::size_t n = std::min({u.size(), y.size(), response.size()});
+  std::vector<double> out(y.begin(), y.end());
+  std::vector<char> known(n, 0);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (response[k] == kNoAnswer || response[k] > k) continue;
+    out[k - response[k]] = y[k];  // a later reading of the same output wins: it is newer
+    known[k - response[k]] = 1;
+  }
+  std::size_t prev = n;  // the last answered index; n = none yet
+  std::size_t next = 0;  // the next answered index at or after k; n = none
+  for (std::size_t k = 0; k < n; ++k) {
+    if (known[k]) {
+      prev = k;
+      continue;
+    }
+    if (next <= k) {
+      next = k + 1;
+      while (next < n && !known[next]) ++next;
+    }
+    if (prev == n && next == n) return std::vector<double>(y.begin(), y.end());
+    if (prev == n) {
+      out[k] = out[next];
+    } else if (next == n) {
+      out[k] = out[prev];
+    } else {
+      const double du = u[next] - u[prev];
+      const double f = du != 0.0 ? std::clamp((u[k] - u[prev]) / du, 0.0, 1.0) : 0.5;
+      out[k] = out[prev] + f * (out[next] - out[prev]);
+    }
+  }
+  return out;
+}
+
+int median_response_ticks(std::span<const std::uint32_t> response) {
+  std::vector<std::uint32_t> fresh;
+  for (const std::uint32_t r : response) {
+    if (r != kNoAnswer) fresh.push_back(r);
+  }
+  if (fresh.empty()) return 0;
+  const auto mid = fresh.begin() + static_cast<std::ptrdiff_t>(fresh.size() / 2);
+  std::nth_element(fresh.begin(), mid, fresh.end());
+  return static_cast<int>(*mid);
+}
+
 IdentificationFit fit_identification_record(std::span<const double> u, std::span<const double> y,
-                                            double dt_s, std::size_t block, hc::FitOptions options,
+                                            std::span<const std::uint32_t> response, double dt_s,
+                                            std::size_t block, hc::FitOptions options,
                                             int max_delay_ticks) {
+  IdentificationFit out;
+  std::vector<double> aligned;
+  if (!response.empty()) {
+    aligned = align_to_outputs(u, y, response);
+    y = std::span<const double>(aligned.data(), std::min(aligned.size(), y.size()));
+    out.exchange_ticks = median_response_ticks(response);
+  }
   options.delay_samples = 0;
   const AveragedRecord r0 = block_average(u, y, dt_s, block, 0);
-  IdentificationFit out;
   out.fit = hc::fit_model(r0.t, r0.u, r0.y, options);
-  if (max_delay_ticks <= 0) return out;
+  const auto finish = [&](int fitted) {
+    out.delay_ticks = out.exchange_ticks + fitted;
+    out.fit.delay_samples = out.delay_ticks;
+    out.fit.model.set_delay(static_cast<double>(out.delay_ticks) * dt_s);
+    return out;
+  };
+  if (max_delay_ticks <= 0) return finish(0);
 
   // Score each delay with the order and family found without one: one least-squares fit each.
   hc::FitOptions quick = options;
@@ -66,15 +125,12 @@ IdentificationFit fit_identification_record(std::span<const double> u, std::span
       best = d;
     }
   }
-  if (best == 0) return out;
+  if (best == 0) return finish(0);
   const AveragedRecord rd = block_average(u, y, dt_s, block, static_cast<std::size_t>(best));
   hc::FitResult delayed = hc::fit_model(rd.t, rd.u, rd.y, options);
-  if (!(score(delayed) < score(out.fit))) return out;
-  delayed.model.set_delay(static_cast<double>(best) * dt_s);
-  delayed.delay_samples = best;
+  if (!(score(delayed) < score(out.fit))) return finish(0);
   out.fit = std::move(delayed);
-  out.delay_ticks = best;
-  return out;
+  return finish(best);
 }
 
 }  // namespace hystbench::daemon

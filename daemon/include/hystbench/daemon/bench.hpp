@@ -108,7 +108,8 @@ class Bench {
     double y_bottom, y_top;
   };
   std::optional<ActuatorRange> actuator_range() const;
-  /// The active model's input delay in whole ticks, rounded up (0 without a model); mutex_ held.
+  /// The active model's input delay beyond the driver's exchange latency (which every reading
+  /// reports) in whole ticks, rounded up (0 without a model); mutex_ held.
   std::uint64_t model_delay_ticks() const;
 
   BenchSettings settings_;

@@ -44,6 +44,10 @@ struct RunProgram {
   std::unique_ptr<SampleLogWriter> log;
   /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).
   std::vector<double> rec_u, rec_y, rec_yr;
+  /// identify: per recorded sample, the fresh reading's response_ticks, or kNoFreshReading
+  /// (preallocated like rec_u; empty = not recorded).
+  std::vector<std::uint32_t> rec_response;
+  static constexpr std::uint32_t kNoFreshReading = 0xffffffffu;
   std::uint64_t record_capacity = 0;
 
   // ---- written by the loop thread ----
