@@ -193,8 +193,8 @@ void ModbusDaqDriver::io_thread_main() noexcept {
     }
     if (quit_.load(std::memory_order_acquire)) break;
     double y = 0.0;
-    const std::uint64_t command = writes_.load(std::memory_order_acquire);
-    const double u = command_v_.load(std::memory_order_acquire);
+    std::uint64_t command = 0;
+    const double u = load_command(command);
     if (exchange(u, true, true, y)) {
       samples_->publish(Sample{y, ++seq_, command});
     } else if (!link_->connected()) {
@@ -247,10 +247,28 @@ Result ModbusDaqDriver::on_error() {
   return r;
 }
 
+void ModbusDaqDriver::publish_command(double output_v, bool count) noexcept {
+  const std::uint64_t seq = command_seq_.load(std::memory_order_relaxed);
+  command_seq_.store(seq + 1, std::memory_order_relaxed);
+  std::atomic_thread_fence(std::memory_order_release);
+  command_v_.store(output_v, std::memory_order_relaxed);
+  if (count) writes_.store(writes_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  command_seq_.store(seq + 2, std::memory_order_release);
+}
+
+double ModbusDaqDriver::load_command(std::uint64_t& writes) const noexcept {
+  for (;;) {
+    const std::uint64_t before = command_seq_.load(std::memory_order_acquire);
+    const double v = command_v_.load(std::memory_order_relaxed);
+    writes = writes_.load(std::memory_order_relaxed);
+    std::atomic_thread_fence(std::memory_order_acquire);
+    if ((before & 1) == 0 && command_seq_.load(std::memory_order_relaxed) == before) return v;
+  }
+}
+
 DriverStatus ModbusDaqDriver::write(double output_v) noexcept {
   if (!active_) return DriverStatus::kFault;
-  command_v_.store(output_v, std::memory_order_release);
-  writes_.fetch_add(1, std::memory_order_release);
+  publish_command(output_v, true);
   if (config_.io == ModbusDaqConfig::IoMode::kThread) {
     sem_post(&wake_);
     return DriverStatus::kOk;
@@ -306,7 +324,7 @@ DriverStatus ModbusDaqDriver::read(Measurement& out) noexcept {
 }
 
 DriverStatus ModbusDaqDriver::safe_state() noexcept {
-  command_v_.store(config_.safe_output_v, std::memory_order_release);
+  publish_command(config_.safe_output_v, false);
   if (!active_) return DriverStatus::kOk;
   if (config_.io == ModbusDaqConfig::IoMode::kThread) {
     sem_post(&wake_);

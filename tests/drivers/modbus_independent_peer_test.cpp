@@ -168,9 +168,10 @@ TEST_F(IndependentPeerTest, IdentifyAndTrackANoiseFreePiPlantWithoutAFault) {
   EXPECT_LE(tr["rms_error_percent"].get<double>(), 0.5) << tr.dump(2);
   const json drv = driver_status();
   EXPECT_EQ(drv["failed_transactions"], 0) << drv.dump(2);
-  std::cout << "[ pymodbus PI ] identify held-out " << heldout_percent << " % of range, delay "
-            << id["model"]["delay_ticks"] << " ticks, stale " << id["stale_reads"] << " of "
-            << id["samples"] << "; track inverse rms " << tr["rms_error_percent"] << " % max "
+  std::cout << "[ pymodbus PI ] identify fit rms " << id["model"]["fit"]["rmse"] << " um, held-out "
+            << heldout_percent << " % of range, delay " << id["model"]["delay_ticks"]
+            << " ticks, stale " << id["stale_reads"] << " of " << id["samples"]
+            << "; track inverse rms " << tr["rms_error_percent"] << " % max "
             << tr["max_error_percent"] << " %; rtt_us " << drv["rtt_us"].dump() << "\n";
 }
 

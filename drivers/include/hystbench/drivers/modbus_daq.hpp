@@ -89,11 +89,16 @@ class ModbusDaqDriver final : public Driver {
   bool configured_ = false;
   std::atomic<bool> active_{false};
 
-  // Command from the loop to the I/O thread, and how many write()s there have been (the I/O
-  // thread reads the count before the value, so a reading's response_ticks never comes out
-  // lower than the truth).
+  // Command from the loop to the I/O thread with the write() count it belongs to, published
+  // together under a sequence lock (command_seq_ odd while the loop thread changes them), so a
+  // reading's response_ticks names the write its exchange really answered.
   std::atomic<double> command_v_{0.0};
   std::atomic<std::uint64_t> writes_{0};
+  std::atomic<std::uint64_t> command_seq_{0};
+  /// Loop thread: sets the command (and counts a write when `count`).
+  void publish_command(double output_v, bool count) noexcept;
+  /// I/O thread: the command and its write count, consistent with each other.
+  double load_command(std::uint64_t& writes) const noexcept;
   sem_t wake_{};
   std::atomic<bool> quit_{false};
   std::thread io_thread_;
