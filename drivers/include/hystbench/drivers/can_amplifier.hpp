@@ -2,7 +2,7 @@
 // CAN piezo amplifier driver (SocketCAN raw socket, libsocketcan for the controller).
 // Per tick: write() sends the setpoint frame, read() takes every frame that arrived (never
 // blocks) and returns the newest position from the feedback frames, kStale (age_ticks) when
-// none came this tick.
+// none came this tick. A fresh position has response_ticks 1: it answers an earlier setpoint.
 //
 // Config [driver.can] (unknown keys are errors naming them):
 //   interface = "can0"            the SocketCAN interface (state, bitrate and restart through

@@ -7,7 +7,9 @@
 //   "thread" (default): an I/O thread does one exchange (write the latest command, read the
 //     measurement) per loop tick, as fast as the device answers; write() and read() only touch
 //     a wait-free buffer, so they are real-time safe whatever the device does. read() returns
-//     kStale with age_ticks when no new measurement arrived since the previous tick.
+//     kStale with age_ticks when no new measurement arrived since the previous tick; a fresh
+//     one carries response_ticks, the ticks since the write() whose command its exchange took
+//     (usually 1; more when the device is slow).
 //   "loop": write()/read() do the transactions themselves and block for the round trip (up to
 //     response_timeout_ms per transaction, plus a reconnect attempt when the link is down).
 //     configure() refuses a loop rate above max_rate_hz; activate() measures the round trip and
