@@ -224,13 +224,13 @@ TEST_F(IndependentPeerTest, AFrozenRegisterFaultsTheWindowAfterTheOutputHasMoved
             "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)");
   // From the log: where the reading froze, when the output was 3 V (2 % of 150 V) away from
   // its value then, and the faulted tick. The fault comes stuck_sensor_ms (20 ticks) after the
-  // output has moved, plus the exchange's response latency (one tick, a few when the Python
-  // server is late), never earlier.
+  // output has moved, plus the exchange's response latency (one tick; tens when the Python
+  // server stalls on a loaded machine), never earlier.
   const auto f =
       ht::find_frozen_reading(hdm::DataTable::read_csv(r["log"].get<std::string>()), 3.0);
   ASSERT_TRUE(f.output_moved());
   EXPECT_GE(f.fault_after_moved(), 20u);
-  EXPECT_LE(f.fault_after_moved(), 20u + 10u);
+  EXPECT_LE(f.fault_after_moved(), 20u + 50u);
   EXPECT_DOUBLE_EQ(bench_->loop().last_output(), bench_->driver().safe_output_v());
   std::cout << "[ pymodbus frozen register ] froze at tick " << f.frozen << ", output 3 V away "
             << f.moved - f.frozen << " ticks later, fault " << f.fault_after_moved()
@@ -268,23 +268,26 @@ TEST_F(IndependentPeerTest, ASlowHealthyDeviceHeldThenSteppedIsNotStuckAFrozenOn
 
 TEST_F(IndependentPeerTest, StaleReadsASlowDeviceIsNotAFaultAStoppedOneIs) {
   REQUIRE_PYMODBUS();
-  // 3 ms per answer at 1 kHz: two or three stale ticks between fresh values, under the
-  // default stale limit (20 ms at 1 kHz).
+  // 3 ms per answer at 1 kHz: two or three stale ticks between fresh values, far under the
+  // stale limit (100 reads in a row here: a loaded CI machine stalls the Python server for tens
+  // of milliseconds now and then).
   start_peer({"--delay-ms", "3"});
   hd::ModbusDaqDriver d;
-  ASSERT_TRUE(d.configure(plant_driver_params(peer_->port), kRateHz).ok);
+  json params = plant_driver_params(peer_->port);
+  params["max_stale_reads"] = 100;
+  ASSERT_TRUE(d.configure(params, kRateHz).ok);
   ASSERT_TRUE(d.activate().ok);
   hdm::StuckSensorDetector off({.ticks = 0});
   const DriverRun slow = tick_driver(d, off, 500, [](int) { return 50.0; });
   EXPECT_FALSE(slow.fault) << d.diagnostics().dump(2);
   EXPECT_GT(slow.stale, 100);
-  // Stopped (the process no longer answers, the connection stays): no fresh value for 20
+  // Stopped (the process no longer answers, the connection stays): no fresh value for 100
   // reads in a row is a fault, long before the 1 s transaction timeout.
   peer_->signal(SIGSTOP);
-  const DriverRun stopped = tick_driver(d, off, 500, [](int) { return 50.0; });
+  const DriverRun stopped = tick_driver(d, off, 1000, [](int) { return 50.0; });
   peer_->signal(SIGCONT);
   EXPECT_TRUE(stopped.fault);
-  EXPECT_LE(stopped.stale, 25);
+  EXPECT_LE(stopped.stale, 105);
   EXPECT_NE(d.diagnostics()["last_fault"].get<std::string>().find("max_stale_reads"),
             std::string::npos)
       << d.diagnostics().dump(2);
@@ -302,19 +305,22 @@ TEST_F(IndependentPeerTest, OverrunBudgetASlowDeviceInThreadModeIsNotAFaultAHung
   EXPECT_GT(slow["stale_reads"].get<int>(), 100) << slow.dump(2);
   bench_.reset();
 
-  // io = "loop" with a device that stops answering mid-run: every tick waits out the 5 ms
-  // transaction timeout, so every tick overruns; the sixth overrun faults the run.
+  // io = "loop" with a device that stops answering mid-run: every tick waits out the 20 ms
+  // transaction timeout, four periods at 200 Hz (a rate whose period the Python server's round
+  // trip fits at activation even on a loaded machine), so every tick overruns; the sixth
+  // overrun faults the run.
   peer_ = nullptr;
   start_peer();
   s = settings();
+  s.loop.rate_hz = 200.0;
   s.loop.overrun_budget = 5;
   s.driver_params["io"] = "loop";
-  s.driver_params["response_timeout_ms"] = 5;
+  s.driver_params["response_timeout_ms"] = 20;
   s.driver_params["max_failed_transactions"] = 100000;
   s.driver_params["max_stale_reads"] = 100000;
   start(s);
   bench_->handle("track", {{"compensator", "none"}, {"periods", 5}});
-  ASSERT_TRUE(wait_run_samples(500));
+  ASSERT_TRUE(wait_run_samples(100));
   peer_->signal(SIGSTOP);
   ASSERT_TRUE(bench_->wait_idle(20s));
   peer_->signal(SIGCONT);
