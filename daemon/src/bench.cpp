@@ -15,6 +15,7 @@
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/compensation/pid_tuning.hpp"
 #include "hystbench/compensation/tracking_metrics.hpp"
+#include "hystbench/daemon/identification_fit.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 
@@ -26,6 +27,8 @@ using nlohmann::json;
 namespace {
 
 constexpr std::uint64_t kMaxRecordedSamples = 2'000'000;
+/// Largest measurement delay identify looks for [ticks].
+constexpr int kMaxDelayTicks = 4;
 
 const char* state_name(BenchLoop::State s) {
   switch (s) {
@@ -215,6 +218,15 @@ std::unique_ptr<SampleLogWriter> Bench::open_log(const std::string& run_id, json
   }
 }
 
+std::uint64_t Bench::model_delay_ticks() const {
+  if (!model_) return 0;
+  const auto total = static_cast<std::int64_t>(std::ceil(model_->model.delay_s() / dt_ - 1e-9));
+  // The driver's exchange latency is part of the identified delay, and each reading reports it.
+  const std::int64_t exchange =
+      model_->identification.is_object() ? model_->identification.value("exchange_ticks", 0) : 0;
+  return static_cast<std::uint64_t>(std::max<std::int64_t>(0, total - exchange));
+}
+
 std::optional<Bench::ActuatorRange> Bench::actuator_range() const {
   // Caller holds mutex_.
   if (model_) {
@@ -392,6 +404,7 @@ json Bench::start_identify(const json& params) {
 
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kIdentify;
+  p->response_delay_ticks = model_delay_ticks();
   p->run_id = new_run_id("identify");
   sim::Excitation exc;
   try {
@@ -415,6 +428,7 @@ json Bench::start_identify(const json& params) {
   p->rec_u.resize(p->record_capacity);
   p->rec_y.resize(p->record_capacity);
   p->rec_yr.resize(p->record_capacity);
+  p->rec_response.resize(p->record_capacity);
   json segments = json::array();
   for (const auto& s : exc.segments) {
     segments.push_back({{"name", s.name}, {"begin", s.begin + offset}, {"end", s.end + offset}});
@@ -519,6 +533,7 @@ json Bench::start_track(const json& params) {
 
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kTrack;
+  p->response_delay_ticks = model_delay_ticks();
   p->run_id = new_run_id("track");
   try {
     p->reference = sim::make_signal_generator(spec);
@@ -773,21 +788,10 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
   if (run->kind == RunKind::kIdentify && run->end == RunEnd::kCompleted && n > 100) {
     try {
       // Block-average down to the fit rate: the hysteresis is rate independent and the fit's
-      // cost grows with the sample count.
+      // cost grows with the sample count. The input delay is chosen in ticks before averaging.
       const std::size_t block = std::max<std::size_t>(
           1, static_cast<std::size_t>(
                  std::floor(settings_.loop.rate_hz / settings_.identify_fit_rate_hz)));
-      std::vector<double> t, u, y;
-      for (std::size_t k = 0; k + block <= n; k += block) {
-        double su = 0, sy = 0;
-        for (std::size_t j = 0; j < block; ++j) {
-          su += run->rec_u[k + j];
-          sy += run->rec_y[k + j];
-        }
-        t.push_back(static_cast<double>(t.size()) * block * dt_);
-        u.push_back(su / block);
-        y.push_back(sy / block);
-      }
       hc::FitOptions opt;
       if (fit_model_name == "auto") {
         opt.kind = std::nullopt;
@@ -797,20 +801,27 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       opt.operators = fit_options.value("operators", 0);
       opt.dead_zones = fit_options.value("dead_zones", -1);
       opt.heldout_fraction = settings_.identify_heldout_fraction;
-      // The feedforward inverts the static map only; a fitted input delay would stand in for the
-      // actuator's dynamic lag and mislead the inverse (`hystbench diagnose` names real delays).
-      opt.delay_samples = 0;
       const std::string run_id = run->run_id;
       opt.progress = [this, run_id](double f, const std::string& what) {
         emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});
       };
-      hc::FitResult fit = hc::fit_model(t, u, y, opt);
+      // The measurement delay (a thread-mode exchange, transport) in whole ticks; the model
+      // keeps it, the feedforward inverse ignores it (it inverts the static map).
+      const IdentificationFit id = fit_identification_record(
+          std::span<const double>(run->rec_u.data(), n),
+          std::span<const double>(run->rec_y.data(), n),
+          std::span<const std::uint32_t>(run->rec_response.data(),
+                                         std::min(n, run->rec_response.size())),
+          dt_, block, opt, kMaxDelayTicks);
+      hc::FitResult fit = id.fit;
       fit.model.units = {"V", "um"};
       hc::ModelFile file{fit.model, json::object()};
       file.identification = {{"run_id", run->run_id},
                              {"log", log_path},
                              {"samples", n},
                              {"fit_sample_period_s", block * dt_},
+                             {"delay_ticks", id.delay_ticks},
+                             {"exchange_ticks", id.exchange_ticks},
                              {"method", fit.method},
                              {"operators", fit.operators},
                              {"dead_zones", fit.dead_zones},
@@ -825,6 +836,8 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
                          {"operators", fit.operators},
                          {"dead_zones", fit.dead_zones},
                          {"method", fit.method},
+                         {"delay_ticks", id.delay_ticks},
+                         {"exchange_ticks", id.exchange_ticks},
                          {"fit", to_json(fit.fit)},
                          {"heldout", to_json(fit.heldout)}};
       std::lock_guard lock(mutex_);

@@ -9,11 +9,19 @@
 
 namespace hystbench::daemon {
 
+namespace {
+/// The configured stuck-sensor options; the driver's count size when none is configured.
+StuckSensorOptions stuck_options(StuckSensorOptions o, const drivers::Driver& driver) {
+  if (o.resolution_um <= 0.0) o.resolution_um = driver.measurement_resolution_um();
+  return o;
+}
+}  // namespace
+
 BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
     : driver_(driver),
       options_(options),
       limiter_(options.limits, 1.0 / options.rate_hz),
-      stuck_(options.stuck_sensor),
+      stuck_(stuck_options(options.stuck_sensor, driver)),
       dt_(1.0 / options.rate_hz),
       period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))) {
   limiter_.reset(driver_.safe_output_v());
@@ -110,7 +118,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns,
     RunProgram* p = pending_.exchange(nullptr, std::memory_order_acq_rel);
     if (p != nullptr) {
       active_ = p;
-      stuck_.reset();
+      stuck_.reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
       driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
       active_pub_.store(p, std::memory_order_release);
@@ -202,6 +210,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   if (p.model) rec.y_model = p.model->step(lim.u);
 
   const char* failure = nullptr;
+  std::uint32_t response = RunProgram::kNoFreshReading;
   if ((lim.clamped || lim.slew_limited) && options_.fatal_on_limit) {
     failure = "output limit reached (limits.fatal_on_limit)";
   } else if (driver_.write(lim.u) != drivers::DriverStatus::kOk) {
@@ -213,16 +222,22 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     if (st == drivers::DriverStatus::kStale) {
       rec.flags |= kSampleStale;
       ++p.stale_reads;
+      stuck_.stale(lim.u);
     } else if (st != drivers::DriverStatus::kOk) {
       failure =
           st == drivers::DriverStatus::kTimeout ? "driver read timed out" : "driver read failed";
     }
     if (failure == nullptr && !std::isfinite(m.position_um)) {
       failure = "measurement is not a finite number";
-    } else if (st == drivers::DriverStatus::kOk && stuck_.update(lim.u, m.position_um)) {
+    } else if (st == drivers::DriverStatus::kOk &&
+               stuck_.update(lim.u, m.position_um, m.response_ticks)) {
       failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
     }
     rec.y_measured = m.position_um;
+    if (st == drivers::DriverStatus::kOk) {
+      response = static_cast<std::uint32_t>(
+          std::min<std::uint64_t>(m.response_ticks, RunProgram::kNoFreshReading - 1));
+    }
     if (failure == nullptr) {
       y_prev_ = m.position_um;
       last_y_.store(m.position_um, std::memory_order_relaxed);
@@ -237,6 +252,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     p.rec_u[p.recorded] = rec.u_out;
     p.rec_y[p.recorded] = rec.y_measured;
     p.rec_yr[p.recorded] = y_ref;
+    if (!p.rec_response.empty()) p.rec_response[p.recorded] = response;
     ++p.recorded;
   }
   if (failure == nullptr && k >= p.metrics_from && !std::isnan(y_ref)) {

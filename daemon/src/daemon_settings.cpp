@@ -20,6 +20,10 @@ BenchSettings bench_settings_from(const DaemonConfig& c) {
         std::max(2.0, std::round(c.loop.stuck_sensor_ms * 1e-3 * c.loop.rate_hz)));
   }
   s.loop.stuck_sensor.output_span_v = c.loop.stuck_sensor_span * (c.limits.u_max - c.limits.u_min);
+  if (c.limits.y_min && c.limits.y_max && c.limits.u_max > c.limits.u_min) {
+    s.loop.stuck_sensor.gain_um_per_v =
+        std::abs(*c.limits.y_max - *c.limits.y_min) / (c.limits.u_max - c.limits.u_min);
+  }
   s.driver_type = c.driver.type;
   s.driver_params = c.driver.params();
   // The loopback driver's actuator is the [actuator] table unless the driver table names one.

@@ -327,7 +327,9 @@ DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
     ++age_;
     stale_reads_.fetch_add(1, std::memory_order_relaxed);
   }
-  out = {last_y_, age_};
+  // A feedback frame read in the tick of a setpoint answers an earlier one: the amplifier
+  // cannot sample and send within the microseconds between write() and read().
+  out = {last_y_, age_, age_ + 1};
   if (socket_dead_.load(std::memory_order_relaxed) || bus_off_.load(std::memory_order_relaxed)) {
     return DriverStatus::kFault;
   }

@@ -135,4 +135,11 @@ void LoopbackDriver::inject(const FaultInjection& f) noexcept {
   write_error_at_ = rel(f.write_error_at_tick);
 }
 
+double LoopbackDriver::measurement_resolution_um() const noexcept {
+  if (!actuator_) return 0.0;
+  const auto& adc = actuator_->config().adc;
+  if (!adc.enabled) return 0.0;
+  return (adc.range_max - adc.range_min) / (std::ldexp(1.0, adc.bits) - 1.0);
+}
+
 }  // namespace hystbench::drivers

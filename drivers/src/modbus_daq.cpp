@@ -168,7 +168,8 @@ Result ModbusDaqDriver::activate() {
   age_ = 0;
   consecutive_stale_ = 0;
   command_v_.store(config_.safe_output_v);
-  samples_->reset(Sample{y, 0});
+  writes_.store(0);
+  samples_->reset(Sample{y, 0, 0});
   active_.store(true);
   if (config_.io == ModbusDaqConfig::IoMode::kThread) {
     while (sem_trywait(&wake_) == 0) {
@@ -192,9 +193,10 @@ void ModbusDaqDriver::io_thread_main() noexcept {
     }
     if (quit_.load(std::memory_order_acquire)) break;
     double y = 0.0;
-    const double u = command_v_.load(std::memory_order_acquire);
+    std::uint64_t command = 0;
+    const double u = load_command(command);
     if (exchange(u, true, true, y)) {
-      samples_->publish(Sample{y, ++seq_});
+      samples_->publish(Sample{y, ++seq_, command});
     } else if (!link_->connected()) {
       // Do not spin on a dead link: wait for the next attempt unless told to quit.
       const std::int64_t wait = std::max<std::int64_t>(0, next_connect_ns_ - monotonic_ns());
@@ -245,9 +247,28 @@ Result ModbusDaqDriver::on_error() {
   return r;
 }
 
+void ModbusDaqDriver::publish_command(double output_v, bool count) noexcept {
+  const std::uint64_t seq = command_seq_.load(std::memory_order_relaxed);
+  command_seq_.store(seq + 1, std::memory_order_relaxed);
+  std::atomic_thread_fence(std::memory_order_release);
+  command_v_.store(output_v, std::memory_order_relaxed);
+  if (count) writes_.store(writes_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  command_seq_.store(seq + 2, std::memory_order_release);
+}
+
+double ModbusDaqDriver::load_command(std::uint64_t& writes) const noexcept {
+  for (;;) {
+    const std::uint64_t before = command_seq_.load(std::memory_order_acquire);
+    const double v = command_v_.load(std::memory_order_relaxed);
+    writes = writes_.load(std::memory_order_relaxed);
+    std::atomic_thread_fence(std::memory_order_acquire);
+    if ((before & 1) == 0 && command_seq_.load(std::memory_order_relaxed) == before) return v;
+  }
+}
+
 DriverStatus ModbusDaqDriver::write(double output_v) noexcept {
   if (!active_) return DriverStatus::kFault;
-  command_v_.store(output_v, std::memory_order_release);
+  publish_command(output_v, true);
   if (config_.io == ModbusDaqConfig::IoMode::kThread) {
     sem_post(&wake_);
     return DriverStatus::kOk;
@@ -274,10 +295,15 @@ DriverStatus ModbusDaqDriver::read_status() noexcept {
 DriverStatus ModbusDaqDriver::read(Measurement& out) noexcept {
   if (!active_) return DriverStatus::kFault;
   bool fresh = false;
+  std::uint64_t response = 0;
   if (config_.io == ModbusDaqConfig::IoMode::kThread) {
     Sample s;
     fresh = samples_->take(s);
-    if (fresh) last_y_ = s.position_um;
+    if (fresh) {
+      last_y_ = s.position_um;
+      const std::uint64_t writes = writes_.load(std::memory_order_relaxed);
+      response = writes > s.command ? writes - s.command : 0;
+    }
   } else {
     double y = 0.0;
     fresh = exchange(command_v_.load(std::memory_order_relaxed), config_.write_read, true, y);
@@ -287,7 +313,7 @@ DriverStatus ModbusDaqDriver::read(Measurement& out) noexcept {
     age_ = 0;
     consecutive_stale_ = 0;
     last_position_.store(last_y_, std::memory_order_relaxed);
-    out = {last_y_, 0};
+    out = {last_y_, 0, response};
     return DriverStatus::kOk;
   }
   ++age_;
@@ -298,7 +324,7 @@ DriverStatus ModbusDaqDriver::read(Measurement& out) noexcept {
 }
 
 DriverStatus ModbusDaqDriver::safe_state() noexcept {
-  command_v_.store(config_.safe_output_v, std::memory_order_release);
+  publish_command(config_.safe_output_v, false);
   if (!active_) return DriverStatus::kOk;
   if (config_.io == ModbusDaqConfig::IoMode::kThread) {
     sem_post(&wake_);
@@ -306,6 +332,10 @@ DriverStatus ModbusDaqDriver::safe_state() noexcept {
   }
   double y = 0.0;
   return exchange(config_.safe_output_v, true, false, y) ? DriverStatus::kOk : DriverStatus::kError;
+}
+
+double ModbusDaqDriver::measurement_resolution_um() const noexcept {
+  return std::abs(config_.measurement.scale);
 }
 
 double ModbusDaqDriver::max_rate_hz() const noexcept {

@@ -16,6 +16,7 @@
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/sample_record.hpp"
 #include "support/daemon_process.hpp"
+#include "support/stuck_sensor_log.hpp"
 #include "support/temp_dir_test.hpp"
 
 namespace hd = hystbench::daemon;
@@ -307,8 +308,8 @@ struct FaultCase {
 
 TEST_F(AbuseTest, SensorFaultsGoSafeWithinTheTickAndEndTheRunWithTheReason) {
   // 1 kHz; the fault is armed at an absolute driver tick (4 s after start-up), mid-run.
-  // A stuck sensor is found after loop.stuck_sensor_ms (20 ms: 20 ticks) of identical readings
-  // while the output sweeps 2 % of its range (3 V; the 1 Hz triangle moves 6 V in 20 ms).
+  // A stuck sensor is found loop.stuck_sensor_ms (20 ms: 20 ticks) after the output has moved
+  // 2 % of its range (3 V) from where the reading froze (the loopback answers in the same tick).
   for (const FaultCase fc :
        {FaultCase{"read_error_at_tick", "driver read failed"},
         FaultCase{"nan_at_tick", "measurement is not a finite number"},
@@ -341,15 +342,12 @@ TEST_F(AbuseTest, SensorFaultsGoSafeWithinTheTickAndEndTheRunWithTheReason) {
       ASSERT_EQ(static_cast<unsigned>(flags[k]) & hd::kSampleFault, 0u) << "row " << k;
     EXPECT_NE(static_cast<unsigned>(flags.back()) & hd::kSampleFault, 0u);
     if (std::string(fc.key) == "stuck_at_tick") {
-      // The reading froze, then the run ended within the detection window (plus the ticks a
-      // turning point of the triangle may need to sweep the span).
-      const auto& y = log.column("y");
-      std::size_t same = 1;
-      while (same < y.size() && y[y.size() - 1 - same] == y.back()) ++same;
-      EXPECT_GE(same, 20u);
-      EXPECT_LE(same, 40u);
-      const auto& u = log.column("u");
-      EXPECT_GT(std::abs(u[u.size() - 1] - u[u.size() - same]), 3.0);
+      // The reading froze; the output moved 3 V away from where it was then; the run ended
+      // the window after that, not before and not later.
+      const auto f = hystbench::test::find_frozen_reading(log, 3.0);
+      ASSERT_TRUE(f.output_moved());
+      // (+-1: the log's u is rounded to its printed digits.)
+      EXPECT_NEAR(static_cast<double>(f.fault_after_moved()), 20.0, 1.0);
     }
     // The bench stays in FAULT, at the safe output, until reset.
     const json status = c.request("status")["result"];

@@ -147,6 +147,8 @@ TEST(GpioDriver, WithoutAGpioTableItOnlyForwards) {
   ASSERT_TRUE(d.configure(json::object(), 1000.0).ok);
   ASSERT_TRUE(d.activate().ok);
   EXPECT_EQ(d.type(), "loopback");
+  // The simulated 16-bit ADC over -10..60 um, as the stuck-sensor rule needs it.
+  EXPECT_DOUBLE_EQ(d.measurement_resolution_um(), 70.0 / 65535.0);
   EXPECT_FALSE(d.diagnostics().contains("gpio"));
   EXPECT_EQ(gpio->requested(), 0);
   hd::Measurement m;

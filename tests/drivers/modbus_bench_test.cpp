@@ -86,19 +86,11 @@ TEST_F(ModbusBenchTest, ServerKilledMidRunFaultsSafeKeepsTheLogAndRecoversAfterR
   start_simdaq();
   start(settings(5000.0));
   bench_->handle("track", {{"compensator", "none"}, {"periods", 30}});
-  const auto until = std::chrono::steady_clock::now() + 20s;
-  while (std::chrono::steady_clock::now() < until &&
-         (bench_->loop().active() == nullptr || bench_->loop().active()->done.load() < 5000)) {
-    std::this_thread::sleep_for(10ms);
-  }
+  ASSERT_TRUE(wait_run_samples(5000));
   simdaq_->kill();
   ASSERT_TRUE(bench_->wait_idle(20s));
-  json r;
-  {
-    std::lock_guard lock(m_);
-    ASSERT_FALSE(results_.empty());
-    r = results_.back();
-  }
+  const json r = last_result();
+  ASSERT_FALSE(r.is_null());
   EXPECT_EQ(r["end"], "fault") << r.dump(2);
   EXPECT_EQ(r["reason"], "driver read failed");
   EXPECT_GT(r["samples"].get<std::uint64_t>(), 5000u);

@@ -10,6 +10,7 @@
 #include "hystbench/drivers/modbus_daq.hpp"
 #include "hystbench/drivers/simdaq_register_map.hpp"
 #include "peer_process.hpp"
+#include "pymodbus_peer.hpp"
 
 namespace hd = hystbench::drivers;
 namespace ht = hystbench::test;
@@ -17,51 +18,6 @@ using nlohmann::json;
 using namespace std::chrono_literals;
 
 namespace {
-
-constexpr const char* kPython = "/usr/bin/python3";  // Debian's, where python3-pymodbus lives
-
-bool pymodbus_available() {
-  static const bool ok =
-      ::access(kPython, X_OK) == 0 &&
-      ht::run_program({kPython, "-c", "import pymodbus.server.async_io"}, 20s).first == 0;
-  return ok;
-}
-
-std::string peer_script() {
-  return (std::filesystem::path(HYSTBENCH_SOURCE_DIR) / "tests/drivers/modbus_peer.py").string();
-}
-
-/// The pymodbus peer on a free port; `port` is 0 until it listens.
-struct PymodbusPeer {
-  explicit PymodbusPeer(std::vector<std::string> args) {
-    std::vector<std::string> argv{kPython, peer_script()};
-    argv.insert(argv.end(), args.begin(), args.end());
-    proc = std::make_unique<ht::PeerProcess>(argv);
-    if (auto line = proc->wait_for("port ", 20s)) port = std::stoi(line->substr(5));
-  }
-  /// The next register write the peer logged whose values contain `value`.
-  json wait_write(int value, std::chrono::milliseconds timeout = 5s) {
-    const auto until = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < until) {
-      auto line = proc->read_line(std::chrono::duration_cast<std::chrono::milliseconds>(
-          until - std::chrono::steady_clock::now()));
-      if (!line) break;
-      if (line->empty() || (*line)[0] != '{') continue;
-      const json j = json::parse(*line);
-      for (const auto& v : j["values"]) {
-        if (v == value) return j;
-      }
-    }
-    return json();
-  }
-  std::unique_ptr<ht::PeerProcess> proc;
-  int port = 0;
-};
-
-#define REQUIRE_PYMODBUS()                                                                     \
-  if (!pymodbus_available())                                                                   \
-  GTEST_SKIP() << "python3-pymodbus is not installed (scripts/deps.sh test installs it): the " \
-                  "independent Modbus server peer is missing"
 
 #define REQUIRE_PROGRAM(name, package)                                    \
   if (ht::find_program(name).empty())                                     \
@@ -72,7 +28,7 @@ struct PymodbusPeer {
 
 TEST(ModbusPeer, WritesAndReadsSixteenBitRegistersOfAPymodbusServer) {
   REQUIRE_PYMODBUS();
-  PymodbusPeer peer({"--echo", "0:1:10"});  // what lands in HR 0 shows up in IR 10
+  ht::PymodbusPeer peer({"--echo", "0:1:10"});  // what lands in HR 0 shows up in IR 10
   ASSERT_GT(peer.port, 0) << "the pymodbus peer did not start";
   hd::ModbusDaqDriver d;
   const json params = {{"port", peer.port},
@@ -92,6 +48,8 @@ TEST(ModbusPeer, WritesAndReadsSixteenBitRegistersOfAPymodbusServer) {
   ASSERT_EQ(d.read(m), hd::DriverStatus::kOk);
   EXPECT_DOUBLE_EQ(m.position_um, 32.768);  // the echo, 1 nm per count
   EXPECT_EQ(m.age_ticks, 0u);
+  EXPECT_EQ(m.response_ticks, 0u);  // io = "loop": the read follows this tick's write
+  EXPECT_DOUBLE_EQ(d.measurement_resolution_um(), 0.001);
   EXPECT_TRUE(d.deactivate().ok);
   // Deactivation leaves the safe output (0 V) in the register.
   EXPECT_FALSE(peer.wait_write(0).is_null());
@@ -100,7 +58,7 @@ TEST(ModbusPeer, WritesAndReadsSixteenBitRegistersOfAPymodbusServer) {
 TEST(ModbusPeer, FunctionTwentyThreeWithSignedThirtyTwoBitWordOrders) {
   REQUIRE_PYMODBUS();
   // Measurement preset: s32 -16 high word first at HR 30-31.
-  PymodbusPeer peer({"--hr", "30=0xffff,31=0xfff0"});
+  ht::PymodbusPeer peer({"--hr", "30=0xffff,31=0xfff0"});
   ASSERT_GT(peer.port, 0);
   hd::ModbusDaqDriver d;
   const json params = {
@@ -132,7 +90,7 @@ TEST(ModbusPeer, FunctionTwentyThreeWithSignedThirtyTwoBitWordOrders) {
 
 TEST(ModbusPeer, ActivationNamesTheRegisterTheDeviceRefuses) {
   REQUIRE_PYMODBUS();
-  PymodbusPeer peer({"--size", "16"});
+  ht::PymodbusPeer peer({"--size", "16"});
   ASSERT_GT(peer.port, 0);
   hd::ModbusDaqDriver d;
   ASSERT_TRUE(d.configure({{"port", peer.port}, {"measurement", {{"address", 40}}}}, 1000.0).ok);
@@ -144,7 +102,7 @@ TEST(ModbusPeer, ActivationNamesTheRegisterTheDeviceRefuses) {
 
 TEST(ModbusPeer, IoThreadDeliversFreshValuesAndFaultsWhenThePeerDies) {
   REQUIRE_PYMODBUS();
-  PymodbusPeer peer({"--echo", "0:1:10"});
+  ht::PymodbusPeer peer({"--echo", "0:1:10"});
   ASSERT_GT(peer.port, 0);
   hd::ModbusDaqDriver d;
   const json params = {{"port", peer.port},

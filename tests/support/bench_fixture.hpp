@@ -11,6 +11,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "hystbench/daemon/bench.hpp"
@@ -62,6 +63,24 @@ class BenchFixture : public TempDirTest {
   }
 
   nlohmann::json status() { return bench_->handle("status", nlohmann::json::object()); }
+
+  /// Waits until the active run has done `samples` ticks; false after `timeout`.
+  bool wait_run_samples(std::uint64_t samples,
+                        std::chrono::seconds timeout = std::chrono::seconds(20)) {
+    const auto until = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < until) {
+      const auto* run = bench_->loop().active();
+      if (run != nullptr && run->done.load() >= samples) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+  }
+
+  /// The latest run.finished result, or null.
+  nlohmann::json last_result() {
+    std::lock_guard lock(m_);
+    return results_.empty() ? nlohmann::json() : results_.back();
+  }
 
   std::unique_ptr<daemon::Bench> bench_;
   std::mutex m_;

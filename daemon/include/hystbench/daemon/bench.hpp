@@ -121,6 +121,9 @@ class Bench {
   std::optional<compensation::ActuatorModel> predictor(double u0) const;
   /// What predictor() gives, in words, for the log header. Caller holds mutex_.
   const char* predictor_name() const;
+  /// The active model's input delay beyond the driver's exchange latency (which every reading
+  /// reports) in whole ticks, rounded up (0 without a model); mutex_ held.
+  std::uint64_t model_delay_ticks() const;
 
   BenchSettings settings_;
   std::unique_ptr<drivers::Driver> driver_;

@@ -33,7 +33,8 @@ struct BenchLoopOptions {
   OutputLimits limits;
   /// A range or slew limit hit during a run faults it instead of being clamped and counted.
   bool fatal_on_limit = false;
-  /// A fresh reading repeated bit for bit while the output sweeps a span faults the run.
+  /// A fresh reading repeated bit for bit after the output has moved a span faults the run (see
+  /// stuck_sensor_detector.hpp); resolution_um 0 takes the driver's measurement count.
   StuckSensorOptions stuck_sensor;
 };
 

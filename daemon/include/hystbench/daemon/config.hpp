@@ -60,8 +60,9 @@ struct LoopSection {
   std::uint64_t overrun_budget = 100;
   /// Sample-log ring records [1024, 2^24], rounded up to a power of two.
   std::size_t ring_capacity = std::size_t{1} << 16;
-  /// A fresh reading repeated bit for bit for this long [ms] while the output sweeps
-  /// stuck_sensor_span of [u_min, u_max] faults the run (frozen or saturated sensor).
+  /// A fresh reading that stays bit for bit the same for this long [ms] after the output has
+  /// moved stuck_sensor_span of [u_min, u_max] (at least two sensor counts at the y/u range's
+  /// gain), plus the response latency, faults the run (frozen sensor; stuck_sensor_detector.hpp).
   /// [0, 10000]; 0 = off.
   double stuck_sensor_ms = 20.0;
   double stuck_sensor_span = 0.02;  ///< (0, 1]

@@ -49,10 +49,17 @@ struct RunProgram {
   /// Keys merged into the run's result: what the run was built with (compensator, feedback),
   /// set by the control thread, never touched by the loop.
   nlohmann::json summary = nlohmann::json::object();
+  /// The active model's identified input delay [ticks]: the stuck-sensor detector waits this
+  /// much longer for the reading to answer the output.
+  std::uint64_t response_delay_ticks = 0;
   /// The per-run log (may be null in unit tests).
   std::unique_ptr<SampleLogWriter> log;
   /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).
   std::vector<double> rec_u, rec_y, rec_yr;
+  /// identify: per recorded sample, the fresh reading's response_ticks, or kNoFreshReading
+  /// (preallocated like rec_u; empty = not recorded).
+  std::vector<std::uint32_t> rec_response;
+  static constexpr std::uint32_t kNoFreshReading = 0xffffffffu;
   std::uint64_t record_capacity = 0;
 
   // ---- written by the loop thread ----

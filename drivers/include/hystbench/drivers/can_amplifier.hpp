@@ -2,7 +2,7 @@
 // CAN piezo amplifier driver (SocketCAN raw socket, libsocketcan for the controller).
 // Per tick: write() sends the setpoint frame, read() takes every frame that arrived (never
 // blocks) and returns the newest position from the feedback frames, kStale (age_ticks) when
-// none came this tick.
+// none came this tick. A fresh position has response_ticks 1: it answers an earlier setpoint.
 //
 // Config [driver.can] (unknown keys are errors naming them):
 //   interface = "can0"            the SocketCAN interface (state, bitrate and restart through
@@ -54,6 +54,10 @@ class CanAmplifierDriver final : public Driver {
   double output_min_v() const noexcept override { return output_min_v_; }
   double output_max_v() const noexcept override { return output_max_v_; }
   double safe_output_v() const noexcept override { return safe_output_v_; }
+  /// |feedback.scale|: one count of the position field.
+  double measurement_resolution_um() const noexcept override {
+    return protocol_.feedback.scale < 0 ? -protocol_.feedback.scale : protocol_.feedback.scale;
+  }
   std::string_view type() const noexcept override { return "can"; }
   nlohmann::json diagnostics() const override;
 

@@ -28,6 +28,9 @@ std::string_view to_string(DriverStatus s) noexcept;
 struct Measurement {
   double position_um = 0.0;     ///< displacement [µm]
   std::uint64_t age_ticks = 0;  ///< ticks since the value was taken (0 = fresh this tick)
+  /// Ticks between the write() whose output this value answers and this tick (0 = this tick's
+  /// write; a thread-mode Modbus exchange or a CAN feedback frame answers an earlier one).
+  std::uint64_t response_ticks = 0;
 };
 
 /// Outcome of a lifecycle call: ok, or a message that names the cause.
@@ -68,6 +71,8 @@ class Driver {
   virtual double output_max_v() const noexcept = 0;
   /// The configured safe output [V].
   virtual double safe_output_v() const noexcept = 0;
+  /// One count of the measurement [µm] (the smallest change it can show); 0 = unknown.
+  virtual double measurement_resolution_um() const noexcept { return 0.0; }
   virtual std::string_view type() const noexcept = 0;
   /// Driver-specific counters and state for `status` (not real-time).
   virtual nlohmann::json diagnostics() const { return nlohmann::json::object(); }

@@ -37,6 +37,9 @@ class GpioDriver final : public Driver {
   double output_min_v() const noexcept override { return inner_->output_min_v(); }
   double output_max_v() const noexcept override { return inner_->output_max_v(); }
   double safe_output_v() const noexcept override { return inner_->safe_output_v(); }
+  double measurement_resolution_um() const noexcept override {
+    return inner_->measurement_resolution_um();
+  }
   std::string_view type() const noexcept override { return inner_->type(); }
   /// The inner driver's, with "gpio": {lines, estop, run_active}.
   nlohmann::json diagnostics() const override;

@@ -43,6 +43,8 @@ class LoopbackDriver final : public Driver {
   double output_min_v() const noexcept override;
   double output_max_v() const noexcept override;
   double safe_output_v() const noexcept override { return safe_output_v_; }
+  /// The simulated ADC's step (range / (2^bits - 1)); 0 with the ADC off or before configure().
+  double measurement_resolution_um() const noexcept override;
   std::string_view type() const noexcept override { return "loopback"; }
   nlohmann::json diagnostics() const override;
 

@@ -7,7 +7,9 @@
 //   "thread" (default): an I/O thread does one exchange (write the latest command, read the
 //     measurement) per loop tick, as fast as the device answers; write() and read() only touch
 //     a wait-free buffer, so they are real-time safe whatever the device does. read() returns
-//     kStale with age_ticks when no new measurement arrived since the previous tick.
+//     kStale with age_ticks when no new measurement arrived since the previous tick; a fresh
+//     one carries response_ticks, the ticks since the write() whose command its exchange took
+//     (usually 1; more when the device is slow).
 //   "loop": write()/read() do the transactions themselves and block for the round trip (up to
 //     response_timeout_ms per transaction, plus a reconnect attempt when the link is down).
 //     configure() refuses a loop rate above max_rate_hz; activate() measures the round trip and
@@ -58,6 +60,8 @@ class ModbusDaqDriver final : public Driver {
   double output_min_v() const noexcept override { return config_.output_min_v; }
   double output_max_v() const noexcept override { return config_.output_max_v; }
   double safe_output_v() const noexcept override { return config_.safe_output_v; }
+  /// |measurement.scale|: one register count.
+  double measurement_resolution_um() const noexcept override;
   std::string_view type() const noexcept override { return "modbus"; }
   nlohmann::json diagnostics() const override;
 
@@ -67,6 +71,7 @@ class ModbusDaqDriver final : public Driver {
   struct Sample {
     double position_um = 0.0;
     std::uint64_t seq = 0;
+    std::uint64_t command = 0;  ///< write() count when the exchange took its command
   };
   void io_thread_main() noexcept;
   /// 1 connected, 0 not yet time to retry, -1 a connection attempt failed.
@@ -86,8 +91,16 @@ class ModbusDaqDriver final : public Driver {
   bool configured_ = false;
   std::atomic<bool> active_{false};
 
-  // Command from the loop to the I/O thread.
+  // Command from the loop to the I/O thread with the write() count it belongs to, published
+  // together under a sequence lock (command_seq_ odd while the loop thread changes them), so a
+  // reading's response_ticks names the write its exchange really answered.
   std::atomic<double> command_v_{0.0};
+  std::atomic<std::uint64_t> writes_{0};
+  std::atomic<std::uint64_t> command_seq_{0};
+  /// Loop thread: sets the command (and counts a write when `count`).
+  void publish_command(double output_v, bool count) noexcept;
+  /// I/O thread: the command and its write count, consistent with each other.
+  double load_command(std::uint64_t& writes) const noexcept;
   sem_t wake_{};
   std::atomic<bool> quit_{false};
   std::thread io_thread_;

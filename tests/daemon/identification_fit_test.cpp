@@ -1,0 +1,127 @@
+#include "hystbench/daemon/identification_fit.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/sim/identification_excitation.hpp"
+
+namespace hc = hystbench::compensation;
+namespace hd = hystbench::daemon;
+
+namespace {
+
+constexpr double kDt = 2e-4;       // a 5 kHz loop
+constexpr std::size_t kBlock = 5;  // fitted at 1 kHz
+
+struct Record {
+  std::vector<double> u, y;
+};
+
+/// A noise-free classical PI (10 plays) whose measurement arrives `delay` ticks late, driven by
+/// a shortened identification excitation over 0..150 V.
+Record delayed_pi_record(std::size_t delay) {
+  hc::PiParameters p;
+  p.thresholds = hc::uniform_thresholds(10, 75.0);
+  for (std::size_t i = 0; i < p.thresholds.size(); ++i) p.weights.push_back(i == 0 ? 0.16 : 0.02);
+  hc::PiModel plant(p);
+  hystbench::sim::IdentificationExcitationOptions o;
+  o.rate_frequencies_hz = {0.5, 5.0};
+  o.rate_cycles = {1, 4};
+  o.minor_loops = 4;
+  o.hold_s = 0.5;
+  const auto x = hystbench::sim::identification_excitation(0.0, 150.0, kDt, o);
+  plant.reset(x.samples.front());
+  Record r;
+  r.u = x.samples;
+  for (std::size_t k = 0; k < r.u.size(); ++k) {
+    r.y.push_back(plant.step(r.u[k >= delay ? k - delay : 0]));
+  }
+  return r;
+}
+
+hc::FitOptions pi_options() {
+  hc::FitOptions o;
+  o.kind = hc::ModelKind::kPi;
+  o.operators = 10;
+  o.heldout_fraction = 0.1;
+  return o;
+}
+
+double heldout_percent(const hc::FitResult& f) { return f.heldout.rmse_percent(); }
+
+}  // namespace
+
+TEST(IdentificationFit, BlockAverageAdvancesTheMeasurementBeforeAveraging) {
+  const std::vector<double> u = {0, 1, 2, 3, 4, 5, 6, 7}, y = {10, 11, 12, 13, 14, 15, 16, 17};
+  const hd::AveragedRecord r = hd::block_average(u, y, 0.5, 2, 1);
+  ASSERT_EQ(r.u.size(), 3u);  // 7 pairs after the shift, 3 whole blocks
+  EXPECT_EQ(r.u, (std::vector<double>{0.5, 2.5, 4.5}));
+  EXPECT_EQ(r.y, (std::vector<double>{11.5, 13.5, 15.5}));
+  EXPECT_EQ(r.t, (std::vector<double>{0.0, 1.0, 2.0}));
+}
+
+TEST(IdentificationFit, AlignsEachReadingToTheOutputItAnswers) {
+  constexpr std::uint32_t kStale = hd::kNoAnswer;
+  // A step at k = 3; each reading answers the output of one tick before, except that the
+  // answer to the step (k = 3) was overtaken: the reading at k = 5 answers k = 4, and k = 4 had
+  // no fresh reading at all.
+  const std::vector<double> u = {0, 0, 0, 10, 10, 10, 10};
+  const std::vector<double> y = {0, 0, 0, 0, 0, 5, 5};
+  const std::vector<std::uint32_t> r = {0, 1, 1, 1, kStale, 1, 1};
+  // k = 3 (lost): between u = 0 (y 0) and u = 10 (y 5) at u = 10 is 5, exactly the step's
+  // answer; the last output (k = 6) has no answer yet and holds.
+  EXPECT_EQ(hd::align_to_outputs(u, y, r), (std::vector<double>{0, 0, 0, 5, 5, 5, 5}));
+  EXPECT_EQ(hd::median_response_ticks(r), 1);
+  // A ramp: a lost answer is interpolated linearly.
+  EXPECT_EQ(hd::align_to_outputs(std::vector<double>{0, 1, 2, 3}, std::vector<double>{9, 0, 9, 4},
+                                 std::vector<std::uint32_t>{0, kStale, kStale, 1}),
+            (std::vector<double>{9, 6.5, 4, 4}));
+}
+
+TEST(IdentificationFit, AJitteryExchangeLeavesNoTraceOnceAligned) {
+  // The 2-tick plant again, read through an exchange that answers the previous tick's output
+  // and is late (no fresh reading, the answer overtaken) every 7th tick.
+  const Record r = delayed_pi_record(2);
+  std::vector<double> y(r.y.size());
+  std::vector<std::uint32_t> response(r.y.size());
+  for (std::size_t k = 0; k < y.size(); ++k) {
+    const bool late = k % 7 == 3;
+    response[k] = late || k == 0 ? hd::kNoAnswer : 1;
+    y[k] = late || k == 0 ? y[k == 0 ? 0 : k - 1] : r.y[k - 1];
+  }
+  const hd::IdentificationFit as_read =
+      hd::fit_identification_record(r.u, y, {}, kDt, kBlock, pi_options(), 4);
+  const hd::IdentificationFit aligned =
+      hd::fit_identification_record(r.u, y, response, kDt, kBlock, pi_options(), 4);
+  EXPECT_EQ(aligned.exchange_ticks, 1);
+  EXPECT_EQ(aligned.delay_ticks, 3);  // the exchange's tick plus the plant's two
+  EXPECT_DOUBLE_EQ(aligned.fit.model.delay_s(), 3 * kDt);
+  EXPECT_LE(heldout_percent(aligned.fit), 0.3);
+  EXPECT_LT(heldout_percent(aligned.fit), heldout_percent(as_read.fit));
+}
+
+TEST(IdentificationFit, FindsAWholeTickDelayThatAveragingWouldHide) {
+  const Record r = delayed_pi_record(2);
+  // Without the delay search the 2-tick delay is 0.4 of a fit sample: the fit cannot see it.
+  const hd::IdentificationFit none =
+      hd::fit_identification_record(r.u, r.y, {}, kDt, kBlock, pi_options(), 0);
+  const hd::IdentificationFit with =
+      hd::fit_identification_record(r.u, r.y, {}, kDt, kBlock, pi_options(), 4);
+  EXPECT_EQ(none.delay_ticks, 0);
+  EXPECT_EQ(with.delay_ticks, 2);
+  EXPECT_DOUBLE_EQ(with.fit.model.delay_s(), 2 * kDt);
+  EXPECT_EQ(with.delay_heldout_rmse.size(), 5u);
+  EXPECT_LE(heldout_percent(with.fit), 0.3);
+  EXPECT_LT(heldout_percent(with.fit), 0.5 * heldout_percent(none.fit));
+}
+
+TEST(IdentificationFit, NoDelayIsFoundWhereThereIsNone) {
+  const Record r = delayed_pi_record(0);
+  const hd::IdentificationFit f =
+      hd::fit_identification_record(r.u, r.y, {}, kDt, kBlock, pi_options(), 4);
+  EXPECT_EQ(f.delay_ticks, 0);
+  EXPECT_EQ(f.fit.model.delay_s(), 0.0);
+  EXPECT_LE(heldout_percent(f.fit), 0.3);
+}
