@@ -172,3 +172,33 @@ TEST(IdentificationExcitation, ScalesToAnyRange) {
   EXPECT_NEAR(*std::max_element(e.samples.begin(), e.samples.end()), 30.0, 1e-9);
   EXPECT_EQ(e.samples.size(), hs::identification_excitation(kMin, kMax, 5e-4).samples.size());
 }
+
+// The bench's excitation: a sweep over the whole range and a hold before the major loops, so
+// every record starts in the same hysteresis state, and the reversals last, so the record's
+// end shows the loop's shape rather than creep.
+TEST(IdentificationExcitation, PreconditionSweepSettleAndReversalsLast) {
+  hs::IdentificationExcitationOptions o;
+  o.precondition_s = 1.0;
+  o.settle_s = 0.5;
+  o.reversals_last = true;
+  const auto e = hs::identification_excitation(kMin, kMax, kDt, o);
+  ASSERT_GE(e.segments.size(), 3u);
+  EXPECT_EQ(e.segments[0].name, "precondition");
+  EXPECT_EQ(e.segments[1].name, "settle");
+  EXPECT_EQ(e.segments[2].name, "major_loop");
+  EXPECT_EQ(e.segments.back().name, "reversals");
+  const auto sweep = slice(e, segment(e, "precondition"));
+  EXPECT_NEAR(sweep.size() * kDt, 1.0, 2 * kDt);
+  EXPECT_NEAR(*std::max_element(sweep.begin(), sweep.end()), kMax, 1e-3);
+  EXPECT_NEAR(sweep.back(), kMin, 0.01 * (kMax - kMin));  // the last sample before the end
+  EXPECT_EQ(peaks(sweep).size(), 1u);
+  const auto settle = slice(e, segment(e, "settle"));
+  EXPECT_NEAR(settle.size() * kDt, 0.5, 2 * kDt);
+  for (const double u : settle) ASSERT_EQ(u, kMin);
+  // The holds now come before the reversals, which start where the last hold (range_min) is.
+  EXPECT_LT(segment(e, "hold_4").end, segment(e, "reversals").begin + 1);
+  EXPECT_NEAR(e.samples.back(), kMin, 0.01 * (kMax - kMin));
+  // Same segments as without the options, only more of them.
+  const auto plain = hs::identification_excitation(kMin, kMax, kDt);
+  EXPECT_EQ(e.segments.size(), plain.segments.size() + 2);
+}
