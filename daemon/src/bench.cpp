@@ -91,6 +91,16 @@ std::string string_param(const json& params, const char* key, const std::string&
   return params[key].get<std::string>();
 }
 
+// What identify did so that the model does not depend on earlier runs (for the result).
+json identify_history_json(const json& fit_options) {
+  return {{"precondition_sweep_s", fit_options.value("precondition_s", 0.0)},
+          {"settle_s", fit_options.value("settle_s", 0.0)},
+          {"unscored_samples", fit_options.value("skip_samples", 0)},
+          {"note",
+           "sweep u_min -> u_max -> u_min and hold before the excitation; the fit simulates "
+           "them from the output's last value and scores from the first major loop on"}};
+}
+
 // Ramps linearly from a to b over n samples (b reached on the last one).
 void append_ramp(std::vector<double>& out, double a, double b, std::size_t n) {
   for (std::size_t k = 1; k <= n; ++k) out.push_back(a + (b - a) * static_cast<double>(k) / n);
@@ -367,9 +377,12 @@ json Bench::start_identify(const json& params) {
   p->run_id = new_run_id("identify");
   sim::Excitation exc;
   try {
-    sim::IdentificationExcitationOptions options;
+    sim::IdentificationExcitationOptions options = settings_.identify_excitation;
     options.major_loop_frequency_hz = settings_.identify_major_loop_hz;
     options.major_loop_cycles = settings_.identify_major_loop_cycles;
+    options.precondition_s = settings_.identify_precondition_s;
+    options.settle_s = settings_.identify_settle_s;
+    options.reversals_last = true;  // the held-out end of the record: loop shape, not creep
     exc = sim::identification_excitation(u_lo, u_hi, dt_, options);
   } catch (const std::exception& e) {
     throw CommandError("bad_params", e.what());
@@ -381,8 +394,10 @@ json Bench::start_identify(const json& params) {
   const std::size_t offset = p->excitation.size();
   p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
   p->total_samples = p->excitation.size();
-  p->metrics_from = offset;
-  p->record_capacity = std::min<std::uint64_t>(p->total_samples - offset, kMaxRecordedSamples);
+  // Recorded from the first sample: the fit simulates the ramp and the precondition sweep from
+  // where the output was, so its model enters the scored part in the actuator's state.
+  p->metrics_from = 0;
+  p->record_capacity = std::min<std::uint64_t>(p->total_samples, kMaxRecordedSamples);
   p->rec_u.resize(p->record_capacity);
   p->rec_y.resize(p->record_capacity);
   p->rec_yr.resize(p->record_capacity);
@@ -410,7 +425,13 @@ json Bench::start_identify(const json& params) {
   }
   active_run_ = {{"run_id", run_id}, {"kind", "identify"}, {"total", total}, {"log", log_path}};
   pending_identify_model_ = model;
-  pending_identify_options_ = {{"operators", operators}, {"dead_zones", dead_zones}};
+  const sim::ExcitationSegment* first_scored = exc.find("major_loop");
+  pending_identify_options_ = {
+      {"operators", operators},
+      {"dead_zones", dead_zones},
+      {"skip_samples", offset + (first_scored != nullptr ? first_scored->begin : 0)},
+      {"precondition_s", settings_.identify_precondition_s},
+      {"settle_s", settings_.identify_settle_s}};
   idle_cv_.notify_all();
   return {{"run_id", run_id},
           {"samples", total},
@@ -707,6 +728,9 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       // The feedforward inverts the static map only; a fitted input delay would stand in for the
       // actuator's dynamic lag and mislead the inverse (`hystbench diagnose` names real delays).
       opt.delay_samples = 0;
+      // The ramp, the precondition sweep and the settle hold are simulated, not scored.
+      const std::size_t skip = fit_options.value("skip_samples", std::size_t{0});
+      opt.skip_samples = (skip + block - 1) / block;
       const std::string run_id = run->run_id;
       opt.progress = [this, run_id](double f, const std::string& what) {
         emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});
@@ -718,6 +742,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
                              {"log", log_path},
                              {"samples", n},
                              {"fit_sample_period_s", block * dt_},
+                             {"history", identify_history_json(fit_options)},
                              {"method", fit.method},
                              {"operators", fit.operators},
                              {"dead_zones", fit.dead_zones},
@@ -732,6 +757,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
                          {"operators", fit.operators},
                          {"dead_zones", fit.dead_zones},
                          {"method", fit.method},
+                         {"history", identify_history_json(fit_options)},
                          {"fit", to_json(fit.fit)},
                          {"heldout", to_json(fit.heldout)}};
       std::lock_guard lock(mutex_);

@@ -20,6 +20,7 @@
 #include "hystbench/compensation/pid_controller.hpp"
 #include "hystbench/daemon/bench_loop.hpp"
 #include "hystbench/drivers/driver.hpp"
+#include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon {
 
@@ -51,9 +52,18 @@ struct BenchSettings {
   /// Input span of the identification excitation [V]; NaN = the whole [u_min, u_max].
   double identify_u_min = std::numeric_limits<double>::quiet_NaN();
   double identify_u_max = std::numeric_limits<double>::quiet_NaN();
-  /// Frequency and number of the excitation's full major loops (the rest is fixed).
-  double identify_major_loop_hz = 0.5;
-  int identify_major_loop_cycles = 2;
+  /// Frequency and number of the excitation's full major loops (the rest is fixed); the same
+  /// defaults as the config's [identify] section, so tests identify as the daemon does.
+  double identify_major_loop_hz = 1.0;
+  int identify_major_loop_cycles = 3;
+  /// Open-loop sweep u_min -> u_max -> u_min [s] and hold at u_min [s] before the recorded
+  /// excitation: the hysteresis state (and the fast creep) no longer depend on earlier runs.
+  /// Both are simulated by the fit but neither fitted nor scored.
+  double identify_precondition_s = 1.0;
+  double identify_settle_s = 2.0;
+  /// The excitation's other segments (minor loops, rates, holds, reversals); the fields above
+  /// override its major-loop and preconditioning options. The standard one by default.
+  sim::IdentificationExcitationOptions identify_excitation;
   double identify_heldout_fraction = 0.1;
   /// Highest sample rate the identification fit runs at; faster records are block-averaged.
   double identify_fit_rate_hz = 2000.0;
