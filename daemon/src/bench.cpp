@@ -12,8 +12,10 @@
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/compensation/tracking_metrics.hpp"
+#include "hystbench/daemon/inverse_track_program.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
+#include "identify_session.hpp"
 
 namespace hystbench::daemon {
 
@@ -225,17 +227,9 @@ std::unique_ptr<SampleLogWriter> Bench::open_log(const std::string& run_id, json
 std::optional<Bench::ActuatorRange> Bench::actuator_range() const {
   // Caller holds mutex_.
   if (model_) {
-    hc::ActuatorModel m = model_->model;
-    m.configure(dt_);
     const auto& lim = settings_.loop.limits;
-    m.reset(lim.u_min);
-    const std::size_t n = 2000;
-    double top = -INFINITY, bottom = INFINITY;
-    for (std::size_t k = 0; k <= n; ++k)
-      top = std::max(top, m.step(lim.u_min + (lim.u_max - lim.u_min) * k / n));
-    for (std::size_t k = 0; k <= n; ++k)
-      bottom = std::min(bottom, m.step(lim.u_max - (lim.u_max - lim.u_min) * k / n));
-    return ActuatorRange{bottom, top};
+    const ModelOutputRange r = major_loop_range(model_->model, lim.u_min, lim.u_max, dt_);
+    return ActuatorRange{r.y_bottom, r.y_top};
   }
   if (settings_.y_max > settings_.y_min) return ActuatorRange{settings_.y_min, settings_.y_max};
   return std::nullopt;
@@ -517,25 +511,13 @@ json Bench::start_track(const json& params) {
     throw CommandError("bad_params", e.what());
   }
   // Pre-conditioning: current output -> u_max -> u_min, open loop.
-  const std::size_t half = static_cast<std::size_t>(std::ceil(0.5 * precondition / dt_));
-  if (half > 0) {
-    append_ramp(p->excitation, loop_->last_output(), lim.u_max, half);
-    append_ramp(p->excitation, lim.u_max, lim.u_min, half);
-  }
+  p->excitation = precondition_sweep(loop_->last_output(), lim.u_min, lim.u_max, precondition, dt_);
   std::unique_ptr<hc::InverseModel> inverse;
   hc::LinearMap linear{span / (lim.u_max - lim.u_min),
                        range->y_bottom - span / (lim.u_max - lim.u_min) * lim.u_min};
   if (model_) {
-    hc::ActuatorModel m = model_->model;
-    m.configure(dt_);
-    m.reset(p->excitation.empty() ? loop_->last_output() : p->excitation.front());
-    for (const double u : p->excitation) m.step(u);
-    if (m.input_max <= m.input_min) {
-      m.input_min = lim.u_min;
-      m.input_max = lim.u_max;
-    }
-    m.input_min = std::max(m.input_min, lim.u_min);
-    m.input_max = std::min(m.input_max, lim.u_max);
+    const hc::ActuatorModel m =
+        model_after(model_->model, p->excitation, loop_->last_output(), lim.u_min, lim.u_max, dt_);
     if (hc::needs_model(*kind)) {
       try {
         inverse = hc::make_inverse(m, *kind == hc::CompensatorKind::kInverseMultiplicative
@@ -639,18 +621,24 @@ void Bench::supervise() {
       if (!run.is_null() && p != nullptr) {
         const auto done = p->done.load(std::memory_order_acquire);
         const auto total = run["total"].get<std::uint64_t>();
-        emit({{"event", "run.progress"},
-              {"run_id", run["run_id"]},
-              {"kind", run["kind"]},
-              {"done", done},
-              {"total", total},
-              {"fraction", total ? static_cast<double>(done) / total : 0.0}});
+        json event = {{"event", "run.progress"},
+                      {"run_id", run["run_id"]},
+                      {"kind", run["kind"]},
+                      {"done", done},
+                      {"total", total},
+                      {"fraction", total ? static_cast<double>(done) / total : 0.0}};
+        if (run.contains("stage")) event["stage"] = run["stage"];  // identify's verification
+        emit(event);
       }
     }
   }
 }
 
 void Bench::finalize(std::unique_ptr<RunProgram> run) {
+  if (session_ && run->run_id == session_->program_id) {
+    verification_finished(std::move(run));
+    return;
+  }
   {
     std::lock_guard lock(mutex_);
     finalizing_ = true;
@@ -679,18 +667,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
                  {"output_v_after", loop_->last_output()}};
   if (!counts.error.empty()) result["log_error"] = counts.error;
   const std::size_t n = run->recorded;
-  if (run->kind == RunKind::kTrack && n > 2) {
-    std::span<const double> yr(run->rec_yr.data(), n), y(run->rec_y.data(), n);
-    const hc::ErrorStats e = hc::error_stats(yr, y);  // range = reference span
-    const double rms = run->error_samples ? std::sqrt(run->error_sum2 / run->error_samples) : 0.0;
-    result["rms_error_um"] = rms;
-    result["max_error_um"] = run->error_max;
-    result["range_um"] = e.range;
-    result["rms_error_percent"] = e.range > 0 ? 100.0 * rms / e.range : 0.0;
-    result["max_error_percent"] = e.range > 0 ? 100.0 * run->error_max / e.range : 0.0;
-    result["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
-    result["error_samples"] = run->error_samples;
-  }
+  if (run->kind == RunKind::kTrack) result.update(tracking_error_json(*run));
   std::string fit_model_name;
   json fit_options;
   {
@@ -735,38 +712,26 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       opt.progress = [this, run_id](double f, const std::string& what) {
         emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});
       };
-      hc::FitResult fit = hc::fit_model(t, u, y, opt);
-      fit.model.units = {"V", "um"};
-      hc::ModelFile file{fit.model, json::object()};
-      file.identification = {{"run_id", run->run_id},
-                             {"log", log_path},
-                             {"samples", n},
-                             {"fit_sample_period_s", block * dt_},
-                             {"history", identify_history_json(fit_options)},
-                             {"method", fit.method},
-                             {"operators", fit.operators},
-                             {"dead_zones", fit.dead_zones},
-                             {"fit", to_json(fit.fit)},
-                             {"heldout", to_json(fit.heldout)}};
-      std::filesystem::create_directories(settings_.model_dir);
-      const std::string path =
-          (std::filesystem::path(settings_.model_dir) / (run->run_id + ".json")).string();
-      save_model_file(path, file);
-      result["model"] = {{"path", path},
-                         {"type", std::string(hc::to_string(fit.model.hysteresis().kind()))},
-                         {"operators", fit.operators},
-                         {"dead_zones", fit.dead_zones},
-                         {"method", fit.method},
-                         {"history", identify_history_json(fit_options)},
-                         {"fit", to_json(fit.fit)},
-                         {"heldout", to_json(fit.heldout)}};
-      std::lock_guard lock(mutex_);
-      model_ = std::move(file);
-      model_path_ = path;
+      // Each candidate (one family, or every family for auto) is verified on the loop by a
+      // tracking segment through its inverse before one is adopted and run.finished goes out.
+      auto session = std::make_unique<IdentifySession>();
+      session->candidates = fit_identify_candidates(t, u, y, opt);
+      session->log_path = log_path;
+      session->samples = n;
+      session->fit_sample_period_s = static_cast<double>(block) * dt_;
+      session->history = identify_history_json(fit_options);
+      session->result = result;
+      session_ = std::move(session);
+      if (!verify_next_candidate()) finish_identify();
+      return;
     } catch (const std::exception& e) {
       result["fit_error"] = e.what();
     }
   }
+  deliver_result(std::move(result));
+}
+
+void Bench::deliver_result(json result) {
   {
     std::lock_guard lock(mutex_);
     last_result_ = result;

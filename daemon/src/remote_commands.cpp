@@ -63,6 +63,25 @@ void print_run_result(const json& r, std::ostream& out) {
           << " %), max " << fixed(m["heldout"]["max_abs"], 4) << " um\n";
     }
   }
+  if (r.contains("verification") && r["verification"].is_object()) {
+    const json& v = r["verification"];
+    out << "  verified        ";
+    if (v.contains("max_error_percent")) {
+      out << "tracking rms " << fixed(v["rms_error_percent"], 3) << " %, max "
+          << fixed(v["max_error_percent"], 3) << " % (1 Hz triangle through the inverse, "
+          << v.value("end", "?") << ")\n";
+    } else {
+      out << "not (" << v.value("end", "?") << ": " << v.value("reason", "") << ")\n";
+    }
+  }
+  for (const json& c : r.value("candidates", json::array())) {
+    const json& v = c["verification"];
+    out << "  candidate       " << c.value("type", "?") << ": held-out rms "
+        << fixed(c["heldout"]["rmse_percent"], 3) << " %, verified max "
+        << (v.is_object() && v.contains("max_error_percent") ? fixed(v["max_error_percent"], 3)
+                                                             : std::string("-"))
+        << " %\n";
+  }
   if (r.contains("fit_error"))
     out << "  fit failed      " << r["fit_error"].get<std::string>() << "\n";
   if (r.contains("loop")) {
@@ -116,7 +135,8 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
       const std::string name = event->value("event", "");
       if (name == "run.progress" && event->value("run_id", "") == run_id && tty &&
           !cmd.json_output) {
-        progress_bar(err, event->value("fraction", 0.0), cmd.cmd + " " + run_id);
+        progress_bar(err, event->value("fraction", 0.0),
+                     event->contains("stage") ? event->value("stage", "") : cmd.cmd + " " + run_id);
       } else if (name == "fit.progress" && event->value("run_id", "") == run_id && tty &&
                  !cmd.json_output) {
         progress_bar(err, event->value("fraction", 0.0), "fitting: " + event->value("stage", ""));

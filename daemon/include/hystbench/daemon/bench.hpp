@@ -111,6 +111,15 @@ class Bench {
   nlohmann::json load_model(const nlohmann::json& params);
   void supervise();
   void finalize(std::unique_ptr<RunProgram> run);
+  /// Sets the last result, leaves the bench idle and emits run.finished.
+  void deliver_result(nlohmann::json result);
+  // identify's verification (bench_verification.cpp, identify_session.hpp).
+  struct IdentifySession;
+  /// Submits the next candidate's verification segment; false when none is left or it failed.
+  bool verify_next_candidate();
+  void verification_finished(std::unique_ptr<RunProgram> run);
+  /// Adopts the chosen candidate and delivers the identify result.
+  void finish_identify();
   std::unique_ptr<SampleLogWriter> open_log(const std::string& run_id, nlohmann::json header);
   std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
@@ -134,6 +143,7 @@ class Bench {
   bool delivering_result_ = false;  // run.finished is on its way to the sink (wait_idle waits)
   std::string pending_identify_model_;
   nlohmann::json pending_identify_options_;
+  std::unique_ptr<IdentifySession> session_;  // supervisor thread only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;
 
