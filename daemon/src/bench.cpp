@@ -99,8 +99,9 @@ json identify_history_json(const json& fit_options) {
           {"settle_s", fit_options.value("settle_s", 0.0)},
           {"unscored_samples", fit_options.value("skip_samples", 0)},
           {"note",
-           "sweep u_min -> u_max -> u_min and hold before the excitation; the fit simulates "
-           "them from the output's last value and scores from the first major loop on"}};
+           "hold at mid-range (creep), sweep to u_max and u_min (hysteresis memory) before the "
+           "excitation; the fit simulates both from the output's last value and scores from "
+           "the first major loop on"}};
 }
 
 // Ramps linearly from a to b over n samples (b reached on the last one).
@@ -388,7 +389,7 @@ json Bench::start_identify(const json& params) {
   const std::size_t offset = p->excitation.size();
   p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
   p->total_samples = p->excitation.size();
-  // Recorded from the first sample: the fit simulates the ramp and the precondition sweep from
+  // Recorded from the first sample: the fit simulates the ramp, settle and sweep from
   // where the output was, so its model enters the scored part in the actuator's state.
   p->metrics_from = 0;
   p->record_capacity = std::min<std::uint64_t>(p->total_samples, kMaxRecordedSamples);
@@ -705,7 +706,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       // The feedforward inverts the static map only; a fitted input delay would stand in for the
       // actuator's dynamic lag and mislead the inverse (`hystbench diagnose` names real delays).
       opt.delay_samples = 0;
-      // The ramp, the precondition sweep and the settle hold are simulated, not scored.
+      // The ramp, the settle hold and the precondition sweep are simulated, not scored.
       const std::size_t skip = fit_options.value("skip_samples", std::size_t{0});
       opt.skip_samples = (skip + block - 1) / block;
       const std::string run_id = run->run_id;

@@ -121,22 +121,28 @@ Excitation identification_excitation(double range_min, double range_max, double 
   const double span = range_max - range_min;
   ExcitationBuilder builder(range_min, range_max, dt_s);
 
-  if (o.precondition_s > 0.0) {
-    // One triangle min -> max -> min; sampled, so it needs at least a few samples per side.
-    SignalSpec sweep;
-    sweep.kind = SignalKind::kSamples;
-    sweep.amplitude = span;
-    sweep.offset = range_min;
-    sweep.samples = {{0.0, 0.0}, {0.5 * o.precondition_s, 1.0}, {o.precondition_s, 0.0}};
-    builder.append("precondition", sweep);
-  }
+  // Settle at mid-range first: creep lags approach the level the record works around, so
+  // what ran before leaves little creep transient in it. Then the sweep, from where the
+  // settle left the input, wipes the hysteresis memory and ends at range_min.
+  double sweep_from = 0.0;  // fraction of the range
   if (o.settle_s > 0.0) {
+    sweep_from = 0.5;
     SignalSpec hold;
     hold.kind = SignalKind::kSteps;
     hold.amplitude = span;
     hold.offset = range_min;
-    hold.steps = {{0.0, o.settle_s}};
+    hold.steps = {{sweep_from, o.settle_s}};
     builder.append("settle", hold);
+  }
+  if (o.precondition_s > 0.0) {
+    // sweep_from -> range_max -> range_min at one rate; sampled, so a few samples per side.
+    const double up = (1.0 - sweep_from) / (2.0 - sweep_from) * o.precondition_s;
+    SignalSpec sweep;
+    sweep.kind = SignalKind::kSamples;
+    sweep.amplitude = span;
+    sweep.offset = range_min;
+    sweep.samples = {{0.0, sweep_from}, {up, 1.0}, {o.precondition_s, 0.0}};
+    builder.append("precondition", sweep);
   }
   builder.append("major_loop", cycles_from_bottom(range_min, span, o.major_loop_frequency_hz,
                                                   o.major_loop_cycles));

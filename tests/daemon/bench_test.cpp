@@ -30,12 +30,11 @@ class BenchTest : public hystbench::test::BenchFixture {
     s.y_max = 45.0;
     return s;
   }
-  // The standard excitation's segments shortened so an identification takes about 15 s; the
+  // The standard excitation's segments shortened so an identification takes about 18 s; the
   // preconditioning, the major loops and the segment order stay the daemon's.
   hd::BenchSettings short_identify_settings() const {
     hd::BenchSettings s = settings();
     s.identify_major_loop_cycles = 2;
-    s.identify_settle_s = 1.0;
     auto& e = s.identify_excitation;
     e.minor_loops = 4;
     e.rate_frequencies_hz = {2.0, 10.0};

@@ -56,11 +56,11 @@ struct BenchSettings {
   /// defaults as the config's [identify] section, so tests identify as the daemon does.
   double identify_major_loop_hz = 1.0;
   int identify_major_loop_cycles = 3;
-  /// Open-loop sweep u_min -> u_max -> u_min [s] and hold at u_min [s] before the recorded
-  /// excitation: the hysteresis state (and the fast creep) no longer depend on earlier runs.
-  /// Both are simulated by the fit but neither fitted nor scored.
+  /// Hold at mid-range [s] (identify_settle_s), then an open-loop sweep to u_max and u_min [s]
+  /// before the excitation: the hysteresis state no longer depends on earlier runs and the creep
+  /// little. Both are simulated by the fit but neither fitted nor scored.
   double identify_precondition_s = 1.0;
-  double identify_settle_s = 2.0;
+  double identify_settle_s = 5.0;
   /// The excitation's other segments (minor loops, rates, holds, reversals); the fields above
   /// override its major-loop and preconditioning options. The standard one by default.
   sim::IdentificationExcitationOptions identify_excitation;

@@ -94,10 +94,10 @@ struct IdentifySection {
   double offset_v = 75.0;
   double frequency_hz = 1.0;  ///< (0, loop.rate_hz / 20]
   int cycles = 3;             ///< [1, 1000]
-  /// Sweep u_min -> u_max -> u_min before the recorded excitation [s], (0, 60]: every
+  /// Sweep to u_max and u_min before the recorded excitation [s], (0, 60]: every
   /// identification starts from the same hysteresis state whatever ran before.
   double precondition_s = 1.0;
-  double settle_s = 2.0;  ///< hold at u_min after the sweep [s], [0, 600]
+  double settle_s = 5.0;  ///< hold at mid-range before the sweep [s], [0, 600]
   /// End of the excitation kept out of the fit [0, 0.9]. Small: the excitation ends with holds at
   /// the range ends, which the model needs to see; held out they only judge the model order.
   double heldout_fraction = 0.1;

@@ -1,10 +1,11 @@
 #pragma once
 // The standard identification excitation: one input record that covers what the diagnosis and
 // the identification need, in this order (default about 34 s):
-//   precondition (only with precondition_s > 0) one sweep range_min -> range_max -> range_min:
-//                wipes the hysteresis memory whatever ran before, so every record starts in
-//                the same state (the descending major-loop branch at range_min)
-//   settle       (only with settle_s > 0) a hold at range_min: fast creep lags settle
+//   settle       (only with settle_s > 0) a hold at mid-range: creep lags approach the level
+//                the record works around, whatever ran before
+//   precondition (only with precondition_s > 0) one sweep from there to range_max and down to
+//                range_min at one rate: wipes the hysteresis memory, so every record starts
+//                in the same state (the descending major-loop branch at range_min)
 //   major_loop   full-range cycles from range_min (without a precondition sweep the first is
 //                the virgin loading curve of a relaxed actuator)
 //   minor_loops  nested loops of linearly decaying amplitude, all turning at range_min
@@ -38,9 +39,10 @@ struct Excitation {
 };
 
 struct IdentificationExcitationOptions {
-  /// Duration of the precondition sweep [s]; 0 = none. A fit should simulate but not score it.
+  /// Duration of the precondition sweep [s]; 0 = none. A fit should simulate but not score it,
+  /// nor the settle hold.
   double precondition_s = 0.0;           ///< >= 0
-  double settle_s = 0.0;                 ///< hold at range_min after the sweep [s], >= 0
+  double settle_s = 0.0;                 ///< hold at mid-range before the sweep [s], >= 0
   double major_loop_frequency_hz = 0.5;  ///< > 0
   int major_loop_cycles = 2;             ///< >= 1
   double minor_loop_frequency_hz = 1.0;  ///< loops per second, > 0
