@@ -170,8 +170,13 @@ int main(int argc, char** argv) {
   std::string id_model = "";
   int id_operators = -2, id_deadzones = -2;
   auto* identify_cmd = app.add_subcommand(
-      "identify", "Play the identification excitation, fit a model, make it the active model");
-  identify_cmd->add_option("--model", id_model, "pi, mpi, cpi, rpi or auto (default: the config's)")
+      "identify",
+      "Precondition, play the identification excitation, fit a model, verify it by tracking "
+      "through its inverse, make it the active model");
+  identify_cmd
+      ->add_option("--model", id_model,
+                   "pi, mpi, cpi, rpi or auto (every family, the best verified tracking "
+                   "kept; default: the config's)")
       ->check(CLI::IsMember({"pi", "mpi", "cpi", "rpi", "auto"}));
   identify_cmd->add_option("--operators", id_operators, "Number of plays (0 = by held-out error)");
   identify_cmd->add_option("--deadzones", id_deadzones,

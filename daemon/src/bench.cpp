@@ -16,8 +16,10 @@
 #include "hystbench/compensation/pid_tuning.hpp"
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/daemon/identification_fit.hpp"
+#include "hystbench/daemon/inverse_track_program.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
+#include "identify_session.hpp"
 
 namespace hystbench::daemon {
 
@@ -95,6 +97,17 @@ std::string string_param(const json& params, const char* key, const std::string&
   if (!params[key].is_string())
     throw CommandError("bad_params", std::string(key) + ": must be a string");
   return params[key].get<std::string>();
+}
+
+// What identify did so that the model does not depend on earlier runs (for the result).
+json identify_history_json(const json& fit_options) {
+  return {{"precondition_sweep_s", fit_options.value("precondition_s", 0.0)},
+          {"settle_s", fit_options.value("settle_s", 0.0)},
+          {"unscored_samples", fit_options.value("skip_samples", 0)},
+          {"note",
+           "hold at mid-range (creep), sweep to u_max and u_min (hysteresis memory) before the "
+           "excitation; the fit simulates both from the output's last value and scores from "
+           "the first major loop on"}};
 }
 
 // Ramps linearly from a to b over n samples (b reached on the last one).
@@ -230,17 +243,9 @@ std::uint64_t Bench::model_delay_ticks() const {
 std::optional<Bench::ActuatorRange> Bench::actuator_range() const {
   // Caller holds mutex_.
   if (model_) {
-    hc::ActuatorModel m = model_->model;
-    m.configure(dt_);
     const auto& lim = settings_.loop.limits;
-    m.reset(lim.u_min);
-    const std::size_t n = 2000;
-    double top = -INFINITY, bottom = INFINITY;
-    for (std::size_t k = 0; k <= n; ++k)
-      top = std::max(top, m.step(lim.u_min + (lim.u_max - lim.u_min) * k / n));
-    for (std::size_t k = 0; k <= n; ++k)
-      bottom = std::min(bottom, m.step(lim.u_max - (lim.u_max - lim.u_min) * k / n));
-    return ActuatorRange{bottom, top};
+    const ModelOutputRange r = major_loop_range(model_->model, lim.u_min, lim.u_max, dt_);
+    return ActuatorRange{r.y_bottom, r.y_top};
   }
   if (settings_.y_max > settings_.y_min) return ActuatorRange{settings_.y_min, settings_.y_max};
   return std::nullopt;
@@ -408,9 +413,12 @@ json Bench::start_identify(const json& params) {
   p->run_id = new_run_id("identify");
   sim::Excitation exc;
   try {
-    sim::IdentificationExcitationOptions options;
+    sim::IdentificationExcitationOptions options = settings_.identify_excitation;
     options.major_loop_frequency_hz = settings_.identify_major_loop_hz;
     options.major_loop_cycles = settings_.identify_major_loop_cycles;
+    options.precondition_s = settings_.identify_precondition_s;
+    options.settle_s = settings_.identify_settle_s;
+    options.reversals_last = true;  // the held-out end of the record: loop shape, not creep
     exc = sim::identification_excitation(u_lo, u_hi, dt_, options);
   } catch (const std::exception& e) {
     throw CommandError("bad_params", e.what());
@@ -423,8 +431,10 @@ json Bench::start_identify(const json& params) {
   const std::size_t offset = p->excitation.size();
   p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
   p->total_samples = p->excitation.size();
-  p->metrics_from = offset;
-  p->record_capacity = std::min<std::uint64_t>(p->total_samples - offset, kMaxRecordedSamples);
+  // Recorded from the first sample: the fit simulates the ramp, settle and sweep from
+  // where the output was, so its model enters the scored part in the actuator's state.
+  p->metrics_from = 0;
+  p->record_capacity = std::min<std::uint64_t>(p->total_samples, kMaxRecordedSamples);
   p->rec_u.resize(p->record_capacity);
   p->rec_y.resize(p->record_capacity);
   p->rec_yr.resize(p->record_capacity);
@@ -454,7 +464,13 @@ json Bench::start_identify(const json& params) {
   }
   active_run_ = {{"run_id", run_id}, {"kind", "identify"}, {"total", total}, {"log", log_path}};
   pending_identify_model_ = model;
-  pending_identify_options_ = {{"operators", operators}, {"dead_zones", dead_zones}};
+  const sim::ExcitationSegment* first_scored = exc.find("major_loop");
+  pending_identify_options_ = {
+      {"operators", operators},
+      {"dead_zones", dead_zones},
+      {"skip_samples", offset + (first_scored != nullptr ? first_scored->begin : 0)},
+      {"precondition_s", settings_.identify_precondition_s},
+      {"settle_s", settings_.identify_settle_s}};
   idle_cv_.notify_all();
   return {{"run_id", run_id},
           {"samples", total},
@@ -541,25 +557,13 @@ json Bench::start_track(const json& params) {
     throw CommandError("bad_params", e.what());
   }
   // Pre-conditioning: current output -> u_max -> u_min, open loop.
-  const std::size_t half = static_cast<std::size_t>(std::ceil(0.5 * precondition / dt_));
-  if (half > 0) {
-    append_ramp(p->excitation, loop_->last_output(), lim.u_max, half);
-    append_ramp(p->excitation, lim.u_max, lim.u_min, half);
-  }
+  p->excitation = precondition_sweep(loop_->last_output(), lim.u_min, lim.u_max, precondition, dt_);
   std::unique_ptr<hc::InverseModel> inverse;
   hc::LinearMap linear{span / (lim.u_max - lim.u_min),
                        range->y_bottom - span / (lim.u_max - lim.u_min) * lim.u_min};
   if (model_) {
-    hc::ActuatorModel m = model_->model;
-    m.configure(dt_);
-    m.reset(p->excitation.empty() ? loop_->last_output() : p->excitation.front());
-    for (const double u : p->excitation) m.step(u);
-    if (m.input_max <= m.input_min) {
-      m.input_min = lim.u_min;
-      m.input_max = lim.u_max;
-    }
-    m.input_min = std::max(m.input_min, lim.u_min);
-    m.input_max = std::min(m.input_max, lim.u_max);
+    const hc::ActuatorModel m =
+        model_after(model_->model, p->excitation, loop_->last_output(), lim.u_min, lim.u_max, dt_);
     if (hc::needs_model(*kind)) {
       try {
         inverse = hc::make_inverse(m, *kind == hc::CompensatorKind::kInverseMultiplicative
@@ -714,18 +718,24 @@ void Bench::supervise() {
       if (!run.is_null() && p != nullptr) {
         const auto done = p->done.load(std::memory_order_acquire);
         const auto total = run["total"].get<std::uint64_t>();
-        emit({{"event", "run.progress"},
-              {"run_id", run["run_id"]},
-              {"kind", run["kind"]},
-              {"done", done},
-              {"total", total},
-              {"fraction", total ? static_cast<double>(done) / total : 0.0}});
+        json event = {{"event", "run.progress"},
+                      {"run_id", run["run_id"]},
+                      {"kind", run["kind"]},
+                      {"done", done},
+                      {"total", total},
+                      {"fraction", total ? static_cast<double>(done) / total : 0.0}};
+        if (run.contains("stage")) event["stage"] = run["stage"];  // identify's verification
+        emit(event);
       }
     }
   }
 }
 
 void Bench::finalize(std::unique_ptr<RunProgram> run) {
+  if (session_ && run->run_id == session_->program_id) {
+    verification_finished(std::move(run));
+    return;
+  }
   {
     std::lock_guard lock(mutex_);
     finalizing_ = true;
@@ -755,18 +765,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
   if (!counts.error.empty()) result["log_error"] = counts.error;
   result.update(run->summary);
   const std::size_t n = run->recorded;
-  if (run->kind == RunKind::kTrack && n > 2) {
-    std::span<const double> yr(run->rec_yr.data(), n), y(run->rec_y.data(), n);
-    const hc::ErrorStats e = hc::error_stats(yr, y);  // range = reference span
-    const double rms = run->error_samples ? std::sqrt(run->error_sum2 / run->error_samples) : 0.0;
-    result["rms_error_um"] = rms;
-    result["max_error_um"] = run->error_max;
-    result["range_um"] = e.range;
-    result["rms_error_percent"] = e.range > 0 ? 100.0 * rms / e.range : 0.0;
-    result["max_error_percent"] = e.range > 0 ? 100.0 * run->error_max / e.range : 0.0;
-    result["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
-    result["error_samples"] = run->error_samples;
-  }
+  if (run->kind == RunKind::kTrack) result.update(tracking_error_json(*run));
   if (run->model_error_samples > 0 && n > 2) {
     // The simulation's error on the bench: y - y_model over the scored samples, in µm and in %
     // of the output range the run covered (the reference's for a tracking run).
@@ -801,52 +800,55 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       opt.operators = fit_options.value("operators", 0);
       opt.dead_zones = fit_options.value("dead_zones", -1);
       opt.heldout_fraction = settings_.identify_heldout_fraction;
+      // The ramp, the settle hold and the precondition sweep are simulated, not scored.
+      const std::size_t skip = fit_options.value("skip_samples", std::size_t{0});
+      opt.skip_samples = (skip + block - 1) / block;
       const std::string run_id = run->run_id;
       opt.progress = [this, run_id](double f, const std::string& what) {
         emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});
       };
-      // The measurement delay (a thread-mode exchange, transport) in whole ticks; the model
-      // keeps it, the feedforward inverse ignores it (it inverts the static map).
-      const IdentificationFit id = fit_identification_record(
-          std::span<const double>(run->rec_u.data(), n),
-          std::span<const double>(run->rec_y.data(), n),
-          std::span<const std::uint32_t>(run->rec_response.data(),
-                                         std::min(n, run->rec_response.size())),
-          dt_, block, opt, kMaxDelayTicks);
-      hc::FitResult fit = id.fit;
-      fit.model.units = {"V", "um"};
-      hc::ModelFile file{fit.model, json::object()};
-      file.identification = {{"run_id", run->run_id},
-                             {"log", log_path},
-                             {"samples", n},
-                             {"fit_sample_period_s", block * dt_},
-                             {"delay_ticks", id.delay_ticks},
-                             {"exchange_ticks", id.exchange_ticks},
-                             {"method", fit.method},
-                             {"operators", fit.operators},
-                             {"dead_zones", fit.dead_zones},
-                             {"fit", to_json(fit.fit)},
-                             {"heldout", to_json(fit.heldout)}};
-      std::filesystem::create_directories(settings_.model_dir);
-      const std::string path =
-          (std::filesystem::path(settings_.model_dir) / (run->run_id + ".json")).string();
-      save_model_file(path, file);
-      result["model"] = {{"path", path},
-                         {"type", std::string(hc::to_string(fit.model.hysteresis().kind()))},
-                         {"operators", fit.operators},
-                         {"dead_zones", fit.dead_zones},
-                         {"method", fit.method},
-                         {"delay_ticks", id.delay_ticks},
-                         {"exchange_ticks", id.exchange_ticks},
-                         {"fit", to_json(fit.fit)},
-                         {"heldout", to_json(fit.heldout)}};
-      std::lock_guard lock(mutex_);
-      model_ = std::move(file);
-      model_path_ = path;
+      // The measurement delay in whole ticks: the driver's exchange latency from the readings,
+      // then any further delay by held-out error, chosen with the requested family (mpi for
+      // auto). The model keeps it; the feedforward previews the reference by it.
+      const std::span<const double> u_rec(run->rec_u.data(), n), y_rec(run->rec_y.data(), n);
+      const std::span<const std::uint32_t> response(run->rec_response.data(),
+                                                    std::min(n, run->rec_response.size()));
+      hc::FitOptions delay_opt = opt;
+      if (!delay_opt.kind) delay_opt.kind = hc::ModelKind::kModifiedPi;
+      delay_opt.progress = nullptr;
+      const IdentificationFit id =
+          fit_identification_record(u_rec, y_rec, response, dt_, block, delay_opt, kMaxDelayTicks);
+      const std::vector<double> aligned = response.empty()
+                                              ? std::vector<double>(y_rec.begin(), y_rec.end())
+                                              : align_to_outputs(u_rec, y_rec, response);
+      const AveragedRecord rec = block_average(
+          u_rec, aligned, dt_, block, static_cast<std::size_t>(id.delay_ticks - id.exchange_ticks));
+      // Each candidate (one family, or every family for auto) is verified on the loop by a
+      // tracking segment through its inverse before one is adopted and run.finished goes out.
+      auto session = std::make_unique<IdentifySession>();
+      session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
+      for (IdentifyCandidate& c : session->candidates) {
+        c.fit.delay_samples = id.delay_ticks;
+        c.fit.model.set_delay(static_cast<double>(id.delay_ticks) * dt_);
+      }
+      session->log_path = log_path;
+      session->samples = n;
+      session->fit_sample_period_s = static_cast<double>(block) * dt_;
+      session->history = identify_history_json(fit_options);
+      session->history["delay_ticks"] = id.delay_ticks;
+      session->history["exchange_ticks"] = id.exchange_ticks;
+      session->result = result;
+      session_ = std::move(session);
+      if (!verify_next_candidate()) finish_identify();
+      return;
     } catch (const std::exception& e) {
       result["fit_error"] = e.what();
     }
   }
+  deliver_result(std::move(result));
+}
+
+void Bench::deliver_result(json result) {
   {
     std::lock_guard lock(mutex_);
     last_result_ = result;

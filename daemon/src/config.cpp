@@ -279,6 +279,8 @@ void read_identify(Section s, IdentifySection& id, const LoopSection& loop,
   }
   s.number("frequency_hz", id.frequency_hz, 0.0, loop.rate_hz / 20.0, true);
   s.integer("cycles", id.cycles, 1, 1000);
+  s.number("precondition_s", id.precondition_s, 0.0, 60.0, true);
+  s.number("settle_s", id.settle_s, 0.0, 600.0);
   s.number("heldout_fraction", id.heldout_fraction, 0.0, 0.9);
   s.number("fit_rate_hz", id.fit_rate_hz, 1.0, 20000.0);
   s.finish();
@@ -388,6 +390,8 @@ nlohmann::json to_json(const DaemonConfig& c) {
         {"offset_v", c.identify.offset_v},
         {"frequency_hz", c.identify.frequency_hz},
         {"cycles", c.identify.cycles},
+        {"precondition_s", c.identify.precondition_s},
+        {"settle_s", c.identify.settle_s},
         {"heldout_fraction", c.identify.heldout_fraction},
         {"fit_rate_hz", c.identify.fit_rate_hz}}},
       {"pid",

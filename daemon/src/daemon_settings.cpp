@@ -45,6 +45,8 @@ BenchSettings bench_settings_from(const DaemonConfig& c) {
   s.identify_u_max = c.identify.offset_v + c.identify.amplitude_v;
   s.identify_major_loop_hz = c.identify.frequency_hz;
   s.identify_major_loop_cycles = c.identify.cycles;
+  s.identify_precondition_s = c.identify.precondition_s;
+  s.identify_settle_s = c.identify.settle_s;
   s.identify_heldout_fraction = c.identify.heldout_fraction;
   s.identify_fit_rate_hz = c.identify.fit_rate_hz;
   s.pid_derived = !c.pid.kp && !c.pid.ki && !c.pid.kd;

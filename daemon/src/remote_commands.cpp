@@ -54,7 +54,7 @@ json wait_for_run(BenchClient& client, const std::string& run_id,
     }
     if (!progress || event->value("run_id", "") != run_id) continue;
     if (name == "run.progress") {
-      progress(event->value("fraction", 0.0), "");
+      progress(event->value("fraction", 0.0), event->value("stage", std::string()));
     } else if (name == "fit.progress") {
       progress(event->value("fraction", 0.0), "fitting: " + event->value("stage", ""));
     }
@@ -88,6 +88,25 @@ void print_run_result(const json& r, std::ostream& out) {
           << fixed(m["heldout"]["rmse"], 4) << " um (" << fixed(m["heldout"]["rmse_percent"], 3)
           << " %), max " << fixed(m["heldout"]["max_abs"], 4) << " um\n";
     }
+  }
+  if (r.contains("verification") && r["verification"].is_object()) {
+    const json& v = r["verification"];
+    out << "  verified        ";
+    if (v.contains("max_error_percent")) {
+      out << "tracking rms " << fixed(v["rms_error_percent"], 3) << " %, max "
+          << fixed(v["max_error_percent"], 3) << " % (1 Hz triangle through the inverse, "
+          << v.value("end", "?") << ")\n";
+    } else {
+      out << "not (" << v.value("end", "?") << ": " << v.value("reason", "") << ")\n";
+    }
+  }
+  for (const json& c : r.value("candidates", json::array())) {
+    const json& v = c["verification"];
+    out << "  candidate       " << c.value("type", "?") << ": held-out rms "
+        << fixed(c["heldout"]["rmse_percent"], 3) << " %, verified max "
+        << (v.is_object() && v.contains("max_error_percent") ? fixed(v["max_error_percent"], 3)
+                                                             : std::string("-"))
+        << " %\n";
   }
   if (r.contains("fit_error"))
     out << "  fit failed      " << r["fit_error"].get<std::string>() << "\n";

@@ -51,6 +51,9 @@ void validate(double range_min, double range_max, double dt_s,
   require(std::isfinite(range_min) && std::isfinite(range_max) && range_max > range_min,
           "range_max", "must be a finite number greater than range_min");
   require_positive(dt_s, "dt_s");
+  require(std::isfinite(o.precondition_s) && o.precondition_s >= 0.0, "precondition_s",
+          "must be >= 0");
+  require(std::isfinite(o.settle_s) && o.settle_s >= 0.0, "settle_s", "must be >= 0");
   require_positive(o.major_loop_frequency_hz, "major_loop_frequency_hz");
   require(o.major_loop_cycles >= 1, "major_loop_cycles", "must be >= 1");
   require_positive(o.minor_loop_frequency_hz, "minor_loop_frequency_hz");
@@ -118,6 +121,29 @@ Excitation identification_excitation(double range_min, double range_max, double 
   const double span = range_max - range_min;
   ExcitationBuilder builder(range_min, range_max, dt_s);
 
+  // Settle at mid-range first: creep lags approach the level the record works around, so
+  // what ran before leaves little creep transient in it. Then the sweep, from where the
+  // settle left the input, wipes the hysteresis memory and ends at range_min.
+  double sweep_from = 0.0;  // fraction of the range
+  if (o.settle_s > 0.0) {
+    sweep_from = 0.5;
+    SignalSpec hold;
+    hold.kind = SignalKind::kSteps;
+    hold.amplitude = span;
+    hold.offset = range_min;
+    hold.steps = {{sweep_from, o.settle_s}};
+    builder.append("settle", hold);
+  }
+  if (o.precondition_s > 0.0) {
+    // sweep_from -> range_max -> range_min at one rate; sampled, so a few samples per side.
+    const double up = (1.0 - sweep_from) / (2.0 - sweep_from) * o.precondition_s;
+    SignalSpec sweep;
+    sweep.kind = SignalKind::kSamples;
+    sweep.amplitude = span;
+    sweep.offset = range_min;
+    sweep.samples = {{0.0, sweep_from}, {up, 1.0}, {o.precondition_s, 0.0}};
+    builder.append("precondition", sweep);
+  }
   builder.append("major_loop", cycles_from_bottom(range_min, span, o.major_loop_frequency_hz,
                                                   o.major_loop_cycles));
 
@@ -138,29 +164,39 @@ Excitation identification_excitation(double range_min, double range_max, double 
                    cycles_from_bottom(range_min, o.rate_span_fraction * span, f, o.rate_cycles[k]));
   }
 
-  if (!o.reversal_points.empty()) {
-    SignalSpec reversals;
-    reversals.kind = SignalKind::kSamples;
-    reversals.amplitude = span;
-    reversals.offset = range_min;
-    double t = 0.0, previous = 0.0;
-    reversals.samples.push_back({0.0, 0.0});
-    for (const double point : o.reversal_points) {
-      if (point == previous) continue;
-      t += std::abs(point - previous) / o.reversal_rate_fraction_per_s;
-      reversals.samples.push_back({t, point});
-      previous = point;
+  auto append_reversals = [&] {
+    if (!o.reversal_points.empty()) {
+      SignalSpec reversals;
+      reversals.kind = SignalKind::kSamples;
+      reversals.amplitude = span;
+      reversals.offset = range_min;
+      double t = 0.0, previous = 0.0;
+      reversals.samples.push_back({0.0, 0.0});
+      for (const double point : o.reversal_points) {
+        if (point == previous) continue;
+        t += std::abs(point - previous) / o.reversal_rate_fraction_per_s;
+        reversals.samples.push_back({t, point});
+        previous = point;
+      }
+      if (reversals.samples.size() > 1) builder.append("reversals", reversals);
     }
-    if (reversals.samples.size() > 1) builder.append("reversals", reversals);
-  }
-
-  for (std::size_t k = 0; k < o.hold_levels.size(); ++k) {
-    SignalSpec hold;
-    hold.kind = SignalKind::kSteps;
-    hold.amplitude = span;
-    hold.offset = range_min;
-    hold.steps = {{o.hold_levels[k], o.hold_s}};
-    builder.append("hold_" + std::to_string(k + 1), hold);
+  };
+  auto append_holds = [&] {
+    for (std::size_t k = 0; k < o.hold_levels.size(); ++k) {
+      SignalSpec hold;
+      hold.kind = SignalKind::kSteps;
+      hold.amplitude = span;
+      hold.offset = range_min;
+      hold.steps = {{o.hold_levels[k], o.hold_s}};
+      builder.append("hold_" + std::to_string(k + 1), hold);
+    }
+  };
+  if (o.reversals_last) {
+    append_holds();
+    append_reversals();
+  } else {
+    append_reversals();
+    append_holds();
   }
   return std::move(builder).finish();
 }

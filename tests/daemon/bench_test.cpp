@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -27,6 +28,19 @@ class BenchTest : public hystbench::test::BenchFixture {
     hd::BenchSettings s = base_settings(rate_hz);
     s.y_min = 0.0;
     s.y_max = 45.0;
+    return s;
+  }
+  // The standard excitation's segments shortened so an identification takes about 18 s; the
+  // preconditioning, the major loops and the segment order stay the daemon's.
+  hd::BenchSettings short_identify_settings() const {
+    hd::BenchSettings s = settings();
+    s.identify_major_loop_cycles = 2;
+    auto& e = s.identify_excitation;
+    e.minor_loops = 4;
+    e.rate_frequencies_hz = {2.0, 10.0};
+    e.rate_cycles = {2, 5};
+    e.hold_levels = {1.0, 0.0};
+    e.hold_s = 1.0;
     return s;
   }
   std::string error_code(const std::string& cmd, const json& params) {
@@ -136,4 +150,74 @@ TEST_F(BenchTest, SixtySecondsAtTenKilohertzLogEverySample) {
   std::cout << "60 s at 10 kHz: wake latency p99 " << r["loop"]["wake_latency_ns"]["p99"]
             << " ns, max " << r["loop"]["wake_latency_ns"]["max"] << " ns, overruns "
             << r["overruns"] << "\n";
+}
+
+// identify on a bench with a history (issue 19): identify, track, identify, track. The second
+// identification starts after two runs have left the actuator's hysteresis and creep in another
+// state than the first found; both models must track alike (without the precondition sweep the
+// second tracked 0.57 -> 1.00 % here), and identify reports the tracking its verification saw.
+TEST_F(BenchTest, IdentifyAfterEarlierRunsTracksAsWellAsTheFirst) {
+  start(short_identify_settings());
+  auto identify_and_track = [&] {
+    const json id = run_and_wait("identify", {{"model", "mpi"}});
+    EXPECT_EQ(id["end"], "completed") << id.dump(2);
+    EXPECT_FALSE(id.contains("fit_error")) << id.dump(2);
+    const json tr = run_and_wait("track", {{"compensator", "inverse"}, {"periods", 3}});
+    EXPECT_EQ(tr["end"], "completed") << tr.dump(2);
+    std::cout << "[ repeat ] identify mpi: held-out rms " << id["model"]["heldout"]["rmse_percent"]
+              << " %, verified max " << id["verification"].value("max_error_percent", -1.0)
+              << " %, track max " << tr["max_error_percent"] << " %\n";
+    return json{{"identify", id}, {"track", tr}};
+  };
+  const json first = identify_and_track();
+  const json second = identify_and_track();
+  for (const json* r : {&first, &second}) {
+    const json& id = (*r)["identify"];
+    EXPECT_GT(id["model"]["history"]["precondition_sweep_s"].get<double>(), 0.0) << id.dump(2);
+    ASSERT_EQ(id["verification"]["end"], "completed") << id.dump(2);
+    EXPECT_LE(id["verification"]["max_error_percent"].get<double>(), 1.0) << id.dump(2);
+    EXPECT_LE((*r)["track"]["max_error_percent"].get<double>(), 1.0) << (*r)["track"].dump(2);
+  }
+  const double a = first["track"]["max_error_percent"].get<double>();
+  const double b = second["track"]["max_error_percent"].get<double>();
+  EXPECT_LE(std::max(a, b), 1.3 * std::min(a, b)) << "first " << a << " %, second " << b << " %";
+  EXPECT_TRUE(
+      std::filesystem::exists(second["identify"]["verification"]["log"].get<std::string>()));
+}
+
+// identify's verification is a run like any other: status names the stage, progress events
+// carry it, stop ends it; the fitted model is still adopted and the result says what happened.
+TEST_F(BenchTest, StopDuringIdentifyVerificationAdoptsTheModelAndSaysSo) {
+  start(short_identify_settings());
+  std::vector<json> progress;
+  bench_->set_event_sink([&](const json& e) {
+    std::lock_guard lock(m_);
+    if (e["event"] == "run.finished") results_.push_back(e["result"]);
+    if (e["event"] == "run.progress") progress.push_back(e);
+  });
+  const std::string run_id = bench_->handle("identify", {{"model", "mpi"}})["run_id"];
+  json st;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(90);
+  while (std::chrono::steady_clock::now() < until) {
+    st = status();
+    if (st["run"].is_object() && st["run"].value("stage", "") == "verify mpi") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(st["run"].value("stage", ""), "verify mpi") << st.dump(2);
+  EXPECT_EQ(st["run"]["run_id"], run_id);
+  EXPECT_EQ(error_code("track", {{"compensator", "none"}}), "busy");
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // a progress event or more
+  bench_->handle("stop", json::object());
+  ASSERT_TRUE(bench_->wait_idle(std::chrono::seconds(30)));
+  std::lock_guard lock(m_);
+  ASSERT_EQ(results_.size(), 1u);
+  const json& r = results_.back();
+  EXPECT_EQ(r["run_id"], run_id);
+  EXPECT_EQ(r["end"], "completed");  // the excitation and the fit completed
+  EXPECT_EQ(r["verification"]["end"], "stopped") << r.dump(2);
+  EXPECT_TRUE(r.contains("model")) << r.dump(2);
+  EXPECT_EQ(status()["model"]["path"], r["model"]["path"]);
+  bool saw_stage = false;
+  for (const json& e : progress) saw_stage = saw_stage || e.value("stage", "") == "verify mpi";
+  EXPECT_TRUE(saw_stage);
 }

@@ -172,3 +172,39 @@ TEST(IdentificationExcitation, ScalesToAnyRange) {
   EXPECT_NEAR(*std::max_element(e.samples.begin(), e.samples.end()), 30.0, 1e-9);
   EXPECT_EQ(e.samples.size(), hs::identification_excitation(kMin, kMax, 5e-4).samples.size());
 }
+
+// The bench's excitation: a hold at mid-range and a sweep over the whole range before the major
+// loops, so every record starts in the same hysteresis state with little creep transient, and
+// the reversals last, so the record's end shows the loop's shape rather than creep.
+TEST(IdentificationExcitation, SettleSweepAndReversalsLast) {
+  hs::IdentificationExcitationOptions o;
+  o.precondition_s = 1.5;
+  o.settle_s = 0.5;
+  o.reversals_last = true;
+  const auto e = hs::identification_excitation(kMin, kMax, kDt, o);
+  ASSERT_GE(e.segments.size(), 3u);
+  EXPECT_EQ(e.segments[0].name, "settle");
+  EXPECT_EQ(e.segments[1].name, "precondition");
+  EXPECT_EQ(e.segments[2].name, "major_loop");
+  EXPECT_EQ(e.segments.back().name, "reversals");
+  const auto settle = slice(e, segment(e, "settle"));
+  EXPECT_NEAR(settle.size() * kDt, 0.5, 2 * kDt);
+  for (const double u : settle) ASSERT_NEAR(u, 0.5 * (kMin + kMax), 1e-9);
+  // From the settle level up to range_max and down to range_min, at one rate.
+  const auto sweep = slice(e, segment(e, "precondition"));
+  EXPECT_NEAR(sweep.size() * kDt, 1.5, 2 * kDt);
+  EXPECT_NEAR(sweep.front(), 0.5 * (kMin + kMax), 0.01 * (kMax - kMin));
+  EXPECT_NEAR(*std::max_element(sweep.begin(), sweep.end()), kMax, 1e-3);
+  EXPECT_NEAR(sweep.back(), kMin, 0.01 * (kMax - kMin));  // the last sample before the end
+  EXPECT_EQ(peaks(sweep).size(), 1u);
+  double slope = 0.0;
+  for (std::size_t k = 1; k < sweep.size(); ++k)
+    slope = std::max(slope, std::abs(sweep[k] - sweep[k - 1]));
+  EXPECT_NEAR(slope, 1.5 * (kMax - kMin) / 1.5 * kDt, 1e-6 * (kMax - kMin));
+  // The holds now come before the reversals, which start where the last hold (range_min) is.
+  EXPECT_LT(segment(e, "hold_4").end, segment(e, "reversals").begin + 1);
+  EXPECT_NEAR(e.samples.back(), kMin, 0.01 * (kMax - kMin));
+  // Same segments as without the options, only more of them.
+  const auto plain = hs::identification_excitation(kMin, kMax, kDt);
+  EXPECT_EQ(e.segments.size(), plain.segments.size() + 2);
+}

@@ -20,6 +20,7 @@
 #include "hystbench/compensation/pid_controller.hpp"
 #include "hystbench/daemon/bench_loop.hpp"
 #include "hystbench/drivers/driver.hpp"
+#include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon {
 
@@ -51,9 +52,18 @@ struct BenchSettings {
   /// Input span of the identification excitation [V]; NaN = the whole [u_min, u_max].
   double identify_u_min = std::numeric_limits<double>::quiet_NaN();
   double identify_u_max = std::numeric_limits<double>::quiet_NaN();
-  /// Frequency and number of the excitation's full major loops (the rest is fixed).
-  double identify_major_loop_hz = 0.5;
-  int identify_major_loop_cycles = 2;
+  /// Frequency and number of the excitation's full major loops (the rest is fixed); the same
+  /// defaults as the config's [identify] section, so tests identify as the daemon does.
+  double identify_major_loop_hz = 1.0;
+  int identify_major_loop_cycles = 3;
+  /// Hold at mid-range [s] (identify_settle_s), then an open-loop sweep to u_max and u_min [s]
+  /// before the excitation: the hysteresis state no longer depends on earlier runs and the creep
+  /// little. Both are simulated by the fit but neither fitted nor scored.
+  double identify_precondition_s = 1.0;
+  double identify_settle_s = 5.0;
+  /// The excitation's other segments (minor loops, rates, holds, reversals); the fields above
+  /// override its major-loop and preconditioning options. The standard one by default.
+  sim::IdentificationExcitationOptions identify_excitation;
   double identify_heldout_fraction = 0.1;
   /// Highest sample rate the identification fit runs at; faster records are block-averaged.
   double identify_fit_rate_hz = 2000.0;
@@ -108,6 +118,15 @@ class Bench {
   nlohmann::json load_model(const nlohmann::json& params);
   void supervise();
   void finalize(std::unique_ptr<RunProgram> run);
+  /// Sets the last result, leaves the bench idle and emits run.finished.
+  void deliver_result(nlohmann::json result);
+  // identify's verification (bench_verification.cpp, identify_session.hpp).
+  struct IdentifySession;
+  /// Submits the next candidate's verification segment; false when none is left or it failed.
+  bool verify_next_candidate();
+  void verification_finished(std::unique_ptr<RunProgram> run);
+  /// Adopts the chosen candidate and delivers the identify result.
+  void finish_identify();
   std::unique_ptr<SampleLogWriter> open_log(const std::string& run_id, nlohmann::json header);
   std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
@@ -140,6 +159,7 @@ class Bench {
   bool delivering_result_ = false;  // run.finished is on its way to the sink (wait_idle waits)
   std::string pending_identify_model_;
   nlohmann::json pending_identify_options_;
+  std::unique_ptr<IdentifySession> session_;  // supervisor thread only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;
 

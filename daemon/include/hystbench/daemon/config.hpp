@@ -12,7 +12,7 @@
 //              kept as JSON and validated by the driver itself
 //   [actuator] the simulated actuator's truth, kept as JSON for the simulator to validate
 //   [identify] model, operators, dead_zones, amplitude_v, offset_v, frequency_hz, cycles,
-//              heldout_fraction, fit_rate_hz
+//              precondition_s, settle_s, heldout_fraction, fit_rate_hz
 //   [pid]      kp, ki, kd, bandwidth_hz, output_filter_hz, derivative_filter_hz, u_fb_min,
 //              u_fb_max
 // Not real-time safe (allocates, throws); read once at start-up.
@@ -99,6 +99,10 @@ struct IdentifySection {
   double offset_v = 75.0;
   double frequency_hz = 1.0;  ///< (0, loop.rate_hz / 20]
   int cycles = 3;             ///< [1, 1000]
+  /// Sweep to u_max and u_min before the recorded excitation [s], (0, 60]: every
+  /// identification starts from the same hysteresis state whatever ran before.
+  double precondition_s = 1.0;
+  double settle_s = 5.0;  ///< hold at mid-range before the sweep [s], [0, 600]
   /// End of the excitation kept out of the fit [0, 0.9]. Small: the excitation ends with holds at
   /// the range ends, which the model needs to see; held out they only judge the model order.
   double heldout_fraction = 0.1;

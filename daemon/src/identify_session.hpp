@@ -1,0 +1,41 @@
+#pragma once
+// identify after its excitation: the fitted candidates (one per family; several with
+// `--model auto`), each verified on the loop by a short tracking segment through its inverse
+// before the bench adopts one and reports run.finished. Supervisor thread only.
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/identification.hpp"
+#include "hystbench/daemon/bench.hpp"
+
+namespace hystbench::daemon {
+
+struct IdentifyCandidate {
+  compensation::FitResult fit;
+  /// null until verified; then {end, reason, log, rms/max error ...} or {end: "not_run", reason}.
+  nlohmann::json verification;
+};
+
+struct Bench::IdentifySession {
+  nlohmann::json result;  ///< the identify run's result so far (run.finished adds the model)
+  std::string log_path;
+  std::size_t samples = 0;
+  double fit_sample_period_s = 0.0;
+  nlohmann::json history;                     ///< what identify did against the actuator's history
+  std::vector<IdentifyCandidate> candidates;  ///< by held-out error, best first
+  std::size_t next = 0;                       ///< the candidate being (or to be) verified
+  std::string program_id;                     ///< run id of the verification on the loop
+  bool interrupted = false;                   ///< stop, abort or fault during a verification
+};
+
+/// Fits the requested family, or with options.kind unset ("auto") each of pi, mpi, cpi and rpi
+/// (a family that fails is left out); sorted by held-out error. Throws when none fits.
+std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t,
+                                                       std::span<const double> u,
+                                                       std::span<const double> y,
+                                                       const compensation::FitOptions& options);
+
+}  // namespace hystbench::daemon
