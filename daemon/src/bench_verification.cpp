@@ -172,13 +172,20 @@ void Bench::finish_identify() {
     const std::string chosen_by =
         std::isfinite(verified_max(c)) ? "verified tracking max error" : "held-out error";
     hc::ModelFile file{fit.model, json::object()};
-    file.identification = {
-        {"run_id", result["run_id"]},     {"log", s.log_path},
-        {"samples", s.samples},           {"fit_sample_period_s", s.fit_sample_period_s},
-        {"history", s.history},           {"method", fit.method},
-        {"operators", fit.operators},     {"dead_zones", fit.dead_zones},
-        {"fit", to_json(fit.fit)},        {"heldout", to_json(fit.heldout)},
-        {"verification", c.verification}, {"chosen_by", chosen_by}};
+    file.identification = {{"run_id", result["run_id"]},
+                           {"log", s.log_path},
+                           {"samples", s.samples},
+                           {"fit_sample_period_s", s.fit_sample_period_s},
+                           {"history", s.history},
+                           {"method", fit.method},
+                           {"operators", fit.operators},
+                           {"dead_zones", fit.dead_zones},
+                           {"fit", to_json(fit.fit)},
+                           {"heldout", to_json(fit.heldout)},
+                           {"verification", c.verification},
+                           {"chosen_by", chosen_by},
+                           {"delay_ticks", s.history.value("delay_ticks", 0)},
+                           {"exchange_ticks", s.history.value("exchange_ticks", 0)}};
     if (s.candidates.size() > 1) file.identification["candidates"] = candidates;
     std::filesystem::create_directories(settings_.model_dir);
     const std::string path = (std::filesystem::path(settings_.model_dir) /
@@ -191,6 +198,8 @@ void Bench::finish_identify() {
                        {"dead_zones", fit.dead_zones},
                        {"method", fit.method},
                        {"history", s.history},
+                       {"delay_ticks", s.history.value("delay_ticks", 0)},
+                       {"exchange_ticks", s.history.value("exchange_ticks", 0)},
                        {"fit", to_json(fit.fit)},
                        {"heldout", to_json(fit.heldout)},
                        {"chosen_by", chosen_by}};
