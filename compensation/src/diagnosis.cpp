@@ -238,11 +238,13 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
       stale ? std::span<const double>(base_fit.prediction) : d.baseline_prediction;
   const details::CandidateContext ctx{r,  base,         base_fit,     ref_prediction, ref_e,
                                       ev, ref_profiles, ref_response, d.noise_rms};
+  std::vector<details::ExtensionFit> fits;  // each candidate's, for the joint extended model
   for (std::size_t i = 0; i < kCandidates.size(); ++i) {
     const Cause c = kCandidates[i];
     progress(0.25 + 0.7 * static_cast<double>(i) / kCandidates.size(),
              "testing " + std::string(to_string(c)));
     details::CandidateOutcome o = test_of(c)(ctx);
+    fits.push_back(o.fit);
     CandidateReport rep;
     rep.cause = c;
     rep.statistic = o.statistic;
@@ -400,6 +402,50 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
     d.extended_fit = w.fit;
     d.extended_heldout = w.heldout;
     d.extended_prediction = w.prediction;
+    d.extended_parts = {std::string(to_string(d.cause))};
+    // Every other significant extension joins the named one when, tested again on top of it,
+    // the joint model gains on the held-out blocks (delay and dynamics together, for example).
+    progress(0.97, "joining the significant extensions");
+    std::size_t named = 0;
+    while (d.candidates[named].cause != d.cause) ++named;
+    details::ExtensionFit joint = fits[named];
+    std::vector<std::size_t> order;
+    for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+      const CandidateReport& c = d.candidates[i];
+      if (i != named && c.significant && c.cause != Cause::kDrift) order.push_back(i);
+    }
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return d.candidates[a].gain > d.candidates[b].gain;
+    });
+    std::vector<std::string> added;
+    for (const std::size_t i : order) {
+      // The candidate's test again, its baseline the joint model so far: its parameters (a
+      // resonance, a delay) are found on what the joint model leaves.
+      std::vector<double> joint_residual(r.n);
+      for (std::size_t k = 0; k < r.n; ++k) joint_residual[k] = r.y[k] - joint.prediction[k];
+      const details::CandidateContext jc{
+          r,  joint.spec,   joint,        joint.prediction, joint_residual,
+          ev, ref_profiles, ref_response, d.noise_rms};
+      try {
+        details::CandidateOutcome o = test_of(d.candidates[i].cause)(jc);
+        if (o.fit.heldout.rmse < joint.heldout.rmse) {
+          joint = std::move(o.fit);
+          added.push_back(o.extension);
+          d.extended_parts.push_back(std::string(to_string(d.candidates[i].cause)));
+        }
+      } catch (const std::exception&) {
+        // A combination the designs cannot fit is left out.
+      }
+    }
+    if (!added.empty()) {
+      d.extended = joint.model;
+      d.extended_fit = joint.fit;
+      d.extended_heldout = joint.heldout;
+      d.extended_prediction = joint.prediction;
+      d.extended_description = details::describe_model(joint.model) + " (" + w.extension;
+      for (const std::string& a : added) d.extended_description += "; " + a;
+      d.extended_description += ", refitted jointly)";
+    }
   }
   progress(1.0, "done");
   return d;

@@ -125,6 +125,7 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
           {"extended",
            {{"model", model_json(d.extended, identification_of(d, data_path, true))},
             {"description", d.extended_description},
+            {"parts", d.extended_parts},
             {"rmse", d.extended_heldout.rmse},
             {"max_abs", d.extended_heldout.max_abs},
             {"rmse_fit", d.extended_fit.rmse},

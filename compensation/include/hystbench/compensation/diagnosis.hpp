@@ -162,6 +162,10 @@ struct Diagnosis {
   /// The named cause's extended model (the baseline for none).
   ActuatorModel extended;
   std::string extended_description;
+  /// The causes the extended model holds: the named one first, then every other significant
+  /// one whose test, repeated on top of the joint model, lowered the held-out error (drift is
+  /// never extrapolated, so never joined).
+  std::vector<std::string> extended_parts;
   ErrorStats extended_fit, extended_heldout;
   std::vector<double> extended_prediction;
 
