@@ -4,6 +4,7 @@
 //   abort, reset, model, config.
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 
 #include "hystbench/daemon/diagnose_command.hpp"
@@ -259,7 +260,9 @@ int main(int argc, char** argv) {
   auto* model_get = model_cmd->add_subcommand("get", "Print the active model file");
   std::string model_path;
   auto* model_load =
-      model_cmd->add_subcommand("load", "Load a model file (as the daemon sees paths)");
+      model_cmd->add_subcommand("load",
+                                "Load a model file (a relative path is taken from the current "
+                                "folder; the daemon must be able to read it)");
   model_load->add_option("path", model_path, "Model file")->required();
   add_output_flags(model_get, false);
   add_output_flags(model_load, false);
@@ -305,7 +308,10 @@ int main(int argc, char** argv) {
   if (*abort_cmd) return remote_run("abort", nlohmann::json::object());
   if (*reset_cmd) return remote_run("reset", nlohmann::json::object());
   if (*model_get) return remote_run("model.get", nlohmann::json::object());
-  if (*model_load) return remote_run("model.load", {{"path", model_path}});
+  // The daemon resolves paths from its own folder: send the file as the user named it here.
+  if (*model_load) {
+    return remote_run("model.load", {{"path", std::filesystem::absolute(model_path).string()}});
+  }
   if (*config_cmd) return remote_run("config.get", nlohmann::json::object());
 
   if (*fit_cmd) return hd::run_fit(fit, std::cout, std::cerr);

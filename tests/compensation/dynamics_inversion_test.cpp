@@ -21,7 +21,7 @@ constexpr double kDt = 1e-4;  // 10 kHz
 
 // A stack-like modified PI with the loopback actuator's dynamics (3 kHz, damping 0.08) and a
 // 0.2 ms input delay.
-hc::ActuatorModel full_model(bool dynamics, double delay_s) {
+hc::ActuatorModel full_model(bool dynamics, double delay_s, double dt = kDt) {
   hc::PiParameters play;
   for (int i = 0; i < 10; ++i) {
     play.thresholds.push_back(7.5 * i);
@@ -34,7 +34,7 @@ hc::ActuatorModel full_model(bool dynamics, double delay_s) {
   m.set_delay(delay_s);
   m.input_min = 0.0;
   m.input_max = 150.0;
-  m.configure(kDt);
+  m.configure(dt);
   m.reset(0.0);
   return m;
 }
@@ -46,23 +46,23 @@ struct Tracking {
 // Drives `model` with the static inverse of its hysteresis fed either the reference itself or the
 // inversion's target, and scores y(k) against r(t_k) after the first period.
 Tracking track(const hc::ActuatorModel& truth, const std::function<double(double)>& r,
-               double periods_s, double skip_s, bool invert) {
+               double periods_s, double skip_s, bool invert, double dt = kDt) {
   hc::ActuatorModel model = truth;
   hc::ActuatorModel static_part = truth;
   static_part.set_delay(0.0);
   static_part.set_dynamics(std::nullopt);
-  static_part.configure(kDt);
+  static_part.configure(dt);
   const double u0 = 75.0;
   model.reset(u0);
   static_part.reset(u0);
   auto inverse = hc::make_inverse(static_part);
   inverse->reset(u0);
-  const hc::DynamicsInversion inversion(truth, kDt);
+  const hc::DynamicsInversion inversion(truth, dt);
   Tracking t;
   double sum2 = 0.0, u_prev = u0;
   std::size_t n = 0;
-  for (int k = 0; k * kDt < periods_s; ++k) {
-    const double tk = k * kDt;
+  for (int k = 0; k * dt < periods_s; ++k) {
+    const double tk = k * dt;
     double target = r(tk);
     if (invert) {
       const double tl = tk + inversion.lead_s(), h = inversion.step_s();
@@ -123,4 +123,21 @@ TEST(DynamicsInversion, AStaticModelNeedsNothingAndTheTargetIsTheReference) {
   EXPECT_TRUE(delay_only.active());
   EXPECT_NEAR(delay_only.lead_s(), 3e-4, 1e-12);
   EXPECT_EQ(delay_only.target(1.0, 2.0, 5.0), 2.0);
+}
+
+// A 500 Hz reference on a 2 kHz loop (4 samples a period) with the 3 kHz resonance above its
+// Nyquist frequency: the inversion is rolled off (default bandwidth a quarter of the loop rate),
+// so the drive stays bounded and within the input range and the error does not grow.
+TEST(DynamicsInversion, AFastReferenceOnASlowLoopStaysBounded) {
+  const double dt = 5e-4;
+  const hc::ActuatorModel truth = full_model(true, 2e-4, dt);
+  const hc::DynamicsInversion inversion(truth, dt);
+  EXPECT_DOUBLE_EQ(inversion.bandwidth_hz(), 500.0);
+  auto r = [](double t) { return 22.5 - 12.5 * std::cos(2.0 * std::numbers::pi * 500.0 * t); };
+  const Tracking first = track(truth, r, 0.05, 0.01, true, dt);
+  const Tracking longer = track(truth, r, 0.5, 0.4, true, dt);
+  EXPECT_TRUE(std::isfinite(longer.rms));
+  EXPECT_LE(longer.max_drive_step, 150.0);
+  EXPECT_LT(longer.rms, 1.5 * first.rms + 0.1) << "the error does not grow over the run";
+  EXPECT_LT(longer.max, 25.0) << "within the reference's span";
 }

@@ -42,13 +42,7 @@ enabled = true
 }  // namespace
 
 TEST_F(BenchFeedforwardTest, DiagnosedDelayAndResonanceAreInvertedFromThePreviewedReference) {
-  hd::BenchSettings s = hd::bench_settings_from(hd::parse_config(kDelayed));
-  const hd::BenchSettings base = base_settings(s.loop.rate_hz);
-  s.loop.realtime = base.loop.realtime;
-  s.loop.overrun_budget = base.loop.overrun_budget;
-  s.log_dir = base.log_dir;
-  s.model_dir = base.model_dir;
-  start(s);
+  start(settings_from_toml(kDelayed));
 
   const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);

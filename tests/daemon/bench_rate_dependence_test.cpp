@@ -27,17 +27,6 @@ class BenchRateDependenceTest : public hystbench::test::BenchFixture {
  protected:
   BenchRateDependenceTest() : BenchFixture("hystbench_rate_test") {}
 
-  /// The daemon's settings for `toml` (the loopback, the user's path), in the test's folder.
-  hd::BenchSettings from_config(const std::string& toml) const {
-    hd::BenchSettings s = hd::bench_settings_from(hd::parse_config(toml));
-    const hd::BenchSettings base = base_settings(s.loop.rate_hz);
-    s.loop.realtime = base.loop.realtime;
-    s.loop.overrun_budget = base.loop.overrun_budget;
-    s.log_dir = base.log_dir;
-    s.model_dir = base.model_dir;
-    return s;
-  }
-
   json track(const std::string& compensator, double f, double periods) {
     return run_and_wait("track", {{"reference", "sine"},
                                   {"frequency_hz", f},
@@ -63,7 +52,7 @@ enabled = true
 }  // namespace
 
 TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidNeverHurts) {
-  start(from_config(kRateDependent));
+  start(settings_from_toml(kRateDependent));
   const double freqs[] = {1.0, 5.0, 10.0, 19.0};
   std::map<double, double> mpi_rms, rpi_rms;
 
@@ -105,7 +94,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
 }
 
 TEST_F(BenchRateDependenceTest, WithoutRateDependenceTodaysFiguresHoldAndEverySampleHasYModel) {
-  start(from_config("[loop]\nrate_hz = 10000\n[limits]\ny_min = 0.0\ny_max = 44.0\n"));
+  start(settings_from_toml("[loop]\nrate_hz = 10000\n[limits]\ny_min = 0.0\ny_max = 44.0\n"));
   const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   // The first identify had only the linear map as predictor: y_model is filled all the same.

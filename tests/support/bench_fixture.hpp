@@ -15,6 +15,8 @@
 #include <vector>
 
 #include "hystbench/daemon/bench.hpp"
+#include "hystbench/daemon/config.hpp"
+#include "hystbench/daemon/daemon_settings.hpp"
 #include "support/temp_dir_test.hpp"
 
 namespace hystbench::test {
@@ -39,6 +41,18 @@ class BenchFixture : public TempDirTest {
     s.log_dir = (dir_ / "logs").string();
     s.model_dir = (dir_ / "models").string();
     s.precondition_s = 0.4;
+    return s;
+  }
+
+  /// The daemon's settings for a TOML config (the user's path: bench_settings_from), with the
+  /// test's folders and the shared-machine loop settings of base_settings().
+  daemon::BenchSettings settings_from_toml(const std::string& toml) const {
+    daemon::BenchSettings s = daemon::bench_settings_from(daemon::parse_config(toml));
+    const daemon::BenchSettings base = base_settings(s.loop.rate_hz);
+    s.loop.realtime = base.loop.realtime;
+    s.loop.overrun_budget = base.loop.overrun_budget;
+    s.log_dir = base.log_dir;
+    s.model_dir = base.model_dir;
     return s;
   }
 
