@@ -1,9 +1,10 @@
 // The dynamic feedforward on the bench, as a user closes the loop: the loopback actuator with its
 // 0.2 ms input delay switched on (every other effect at its default: creep, the 3 kHz resonance,
-// noise, 16-bit converters), `identify`, `hystbench diagnose` of the identify log with the active
-// model and --save-extended, `model load` of the extended model, then `track`. The extended model
-// holds the delay and the resonance together, and the feedforward previews the reference to
-// invert both: a 500 Hz sine within 2 % of range rms (issue target), far below identify's model.
+// noise, 16-bit converters), or with its resonance at 800 Hz, `identify`, `hystbench diagnose` of
+// the identify log with the active model and --save-extended, `model load` of the extended model,
+// then `track`. The extended model holds the delay and the resonance together, and the feedforward
+// previews the reference to invert both: a 500 Hz sine within 2 % of range rms (issue target), far
+// below identify's model.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -25,6 +26,7 @@ namespace {
 class BenchFeedforwardTest : public hystbench::test::BenchFixture {
  protected:
   BenchFeedforwardTest() : BenchFixture("hystbench_feedforward_test") {}
+  void closes_the_loop(const char* toml, const std::string& expected);
 };
 
 constexpr const char* kDelayed = R"(
@@ -39,11 +41,28 @@ type = "loopback"
 enabled = true
 )";
 
+// No delay; the structural resonance lowered from 3 kHz to 800 Hz (damping at its default).
+constexpr const char* kResonance800 = R"(
+[loop]
+rate_hz = 10000
+[limits]
+y_min = 0.0
+y_max = 44.0
+[driver]
+type = "loopback"
+[actuator.dynamics]
+natural_frequency_hz = 800.0
+enabled = true
+)";
+
 }  // namespace
 
-TEST_F(BenchFeedforwardTest, DiagnosedDelayAndResonanceAreInvertedFromThePreviewedReference) {
-  start(settings_from_toml(kDelayed));
-
+// identify, track a 500 Hz sine with identify's model, diagnose the identify log with
+// --save-extended, load the extended model, track 200 and 500 Hz: the extended model holds
+// `expected` and its inversion meets the issue's targets (<= 1 % at 200 Hz, <= 2 % at 500 Hz,
+// and at 500 Hz at most a quarter of identify's model's error).
+void BenchFeedforwardTest::closes_the_loop(const char* toml, const std::string& expected) {
+  start(settings_from_toml(toml));
   const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   ASSERT_FALSE(id.contains("fit_error")) << id.dump(2);
@@ -55,8 +74,6 @@ TEST_F(BenchFeedforwardTest, DiagnosedDelayAndResonanceAreInvertedFromThePreview
   const json plain = sine(500.0);
   ASSERT_EQ(plain["end"], "completed") << plain.dump(2);
 
-  // The user's next step: diagnose the identify log against the active model, save the model
-  // extended by every extension that gains, load it.
   hd::DiagnoseCommand diag;
   diag.data_path = id["log"].get<std::string>();
   diag.model_path = id["model"]["path"].get<std::string>();
@@ -67,7 +84,7 @@ TEST_F(BenchFeedforwardTest, DiagnosedDelayAndResonanceAreInvertedFromThePreview
   const json d = json::parse(out.str());
   const json parts = d["extended"]["parts"];
   std::cout << "diagnose: " << d["extended"]["description"] << "\n";
-  EXPECT_NE(std::find(parts.begin(), parts.end(), "dynamics"), parts.end()) << parts.dump();
+  EXPECT_NE(std::find(parts.begin(), parts.end(), expected), parts.end()) << parts.dump();
   bench_->handle("model.load", {{"path", diag.save_extended}});
 
   for (const double f : {200.0, 500.0}) {
@@ -76,14 +93,20 @@ TEST_F(BenchFeedforwardTest, DiagnosedDelayAndResonanceAreInvertedFromThePreview
     const json& ff = r["feedforward"];
     const json inverted = ff["inverted"];
     EXPECT_NE(std::find(inverted.begin(), inverted.end(), "dynamics"), inverted.end()) << ff;
-    EXPECT_GE(ff["preview_samples"].get<int>(), 1) << ff;
     const double rms = r["rms_error_percent"].get<double>();
-    std::cout << f << " Hz: " << rms << " % of range rms with the extended model ("
-              << (f == 500.0 ? plain["rms_error_percent"].get<double>() : 0.0)
-              << " % with identify's at 500 Hz)\n";
+    std::cout << f << " Hz: " << rms << " % of range rms with the extended model\n";
     EXPECT_LE(rms, f == 200.0 ? 1.0 : 2.0) << f << " Hz: " << r.dump(2);
+    if (f == 500.0) {
+      std::cout << "  identify's model: " << plain["rms_error_percent"] << " %\n";
+      EXPECT_LT(rms, 0.25 * plain["rms_error_percent"].get<double>());
+    }
   }
-  const json fast = sine(500.0);
-  EXPECT_LT(fast["rms_error_percent"].get<double>(),
-            0.25 * plain["rms_error_percent"].get<double>());
+}
+
+TEST_F(BenchFeedforwardTest, DiagnosedDelayAndResonanceAreInvertedFromThePreviewedReference) {
+  closes_the_loop(kDelayed, "delay");
+}
+
+TEST_F(BenchFeedforwardTest, ADiagnosedEightHundredHertzResonanceIsInverted) {
+  closes_the_loop(kResonance800, "dynamics");
 }
