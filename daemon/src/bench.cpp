@@ -626,11 +626,7 @@ json Bench::start_track(const json& params) {
   if (model_ && hc::needs_model(*kind)) {
     // The feedforward inverts the whole model: hysteresis, creep and rate in the static inverse,
     // the delay and dynamics from the previewed reference.
-    const double bandwidth =
-        model_->model.dynamics() && model_->model.dynamics()->feedforward_bandwidth_hz > 0
-            ? model_->model.dynamics()->feedforward_bandwidth_hz
-            : settings_.feedforward_bandwidth_hz;
-    hc::DynamicsInversion inversion(model_->model, dt_, bandwidth);
+    const hc::DynamicsInversion inversion(model_->model, dt_, settings_.feedforward_bandwidth_hz);
     json inverted = json::array({"hysteresis"});
     if (model_->model.creep()) inverted.push_back("creep");
     if (model_->model.hysteresis().kind() == hc::ModelKind::kRateDependentPi) {
@@ -814,8 +810,10 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       const std::span<const std::uint32_t> response(run->rec_response.data(),
                                                     std::min(n, run->rec_response.size()));
       hc::FitOptions delay_opt = opt;
-      if (!delay_opt.kind) delay_opt.kind = hc::ModelKind::kModifiedPi;
-      delay_opt.progress = nullptr;
+      if (!delay_opt.kind) {
+        delay_opt.kind = hc::ModelKind::kModifiedPi;
+        delay_opt.progress = nullptr;  // auto: the candidates' fits report progress
+      }
       const IdentificationFit id =
           fit_identification_record(u_rec, y_rec, response, dt_, block, delay_opt, kMaxDelayTicks);
       const std::vector<double> aligned = response.empty()
@@ -826,7 +824,12 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       // Each candidate (one family, or every family for auto) is verified on the loop by a
       // tracking segment through its inverse before one is adopted and run.finished goes out.
       auto session = std::make_unique<IdentifySession>();
-      session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
+      if (opt.kind) {
+        // One family: the delay search's fit at the chosen delay is that family's fit.
+        session->candidates.push_back({id.fit, json()});
+      } else {
+        session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
+      }
       for (IdentifyCandidate& c : session->candidates) {
         c.fit.delay_samples = id.delay_ticks;
         c.fit.model.set_delay(static_cast<double>(id.delay_ticks) * dt_);
