@@ -19,8 +19,13 @@ DynamicsInversion::DynamicsInversion(const ActuatorModel& model, double dt_s, do
     const double wn = 2.0 * std::numbers::pi * p_.natural_frequency_hz;
     c1_ = 2.0 * p_.damping_ratio / wn;
     c2_ = 1.0 / (wn * wn);
-    bandwidth_hz_ = bandwidth_hz > 0.0 ? bandwidth_hz
-                                       : std::min(0.25 / dt_s, 2.0 * p_.natural_frequency_hz);
+    if (p_.feedforward_bandwidth_hz > 0.0) {
+      bandwidth_hz_ = p_.feedforward_bandwidth_hz;
+    } else if (bandwidth_hz > 0.0) {
+      bandwidth_hz_ = bandwidth_hz;
+    } else {
+      bandwidth_hz_ = std::min(0.25 / dt_s, 2.0 * p_.natural_frequency_hz);
+    }
     h_s_ = std::max(dt_s, 1.0 / (std::numbers::pi * bandwidth_hz_));
     inv_2h_ = 1.0 / (2.0 * h_s_);
     inv_h2_ = 1.0 / (h_s_ * h_s_);
@@ -40,8 +45,8 @@ std::string DynamicsInversion::describe() const {
   if (dynamics_) {
     if (!s.empty()) s += ", ";
     s += "dynamics " + details::fmt(p_.natural_frequency_hz) + " Hz / " +
-         details::fmt(p_.damping_ratio) +
-         " (reference derivatives, rolled off above " + details::fmt(bandwidth_hz_) + " Hz)";
+         details::fmt(p_.damping_ratio) + " (reference derivatives, rolled off above " +
+         details::fmt(bandwidth_hz_) + " Hz)";
   }
   return s.empty() ? "nothing (a static model)" : s;
 }

@@ -86,6 +86,7 @@ bool Bench::verify_next_candidate() {
     try {
       VerificationSpec spec;
       spec.precondition_s = settings_.precondition_s;
+      spec.feedforward_bandwidth_hz = settings_.feedforward_bandwidth_hz;
       p = make_verification_program(c.fit.model, spec, loop_->last_output(), lim, dt_);
     } catch (const std::exception& e) {
       c.verification = {{"end", "not_run"}, {"reason", e.what()}};

@@ -96,7 +96,7 @@ std::unique_ptr<RunProgram> make_verification_program(const hc::ActuatorModel& m
   predictor.configure(dt_s);
   predictor.reset(p->excitation.empty() ? u_now : p->excitation.front());
   p->model = std::move(predictor);
-  const hc::DynamicsInversion inversion(model, dt_s);
+  const hc::DynamicsInversion inversion(model, dt_s, spec.feedforward_bandwidth_hz);
   if (inversion.active()) p->preview = inversion;
   const std::uint64_t prefix = p->excitation.size();
   const auto body = static_cast<std::uint64_t>(std::llround(ref.duration_s / dt_s));

@@ -19,8 +19,10 @@ namespace hystbench::compensation {
 
 class DynamicsInversion {
  public:
-  /// dt_s > 0 the loop period; bandwidth_hz <= 0 = the default, min(loop rate / 4,
-  /// 2 x the natural frequency). Throws std::invalid_argument for dt_s <= 0.
+  /// dt_s > 0 the loop period. The roll-off: the model's own
+  /// dynamics.feedforward_bandwidth_hz when set, else bandwidth_hz when > 0 (the bench's
+  /// [loop] feedforward_bandwidth_hz), else min(loop rate / 4, 2 x the natural frequency).
+  /// Throws std::invalid_argument for dt_s <= 0.
   DynamicsInversion(const ActuatorModel& model, double dt_s, double bandwidth_hz = 0.0);
 
   /// True when the model has a delay or dynamics to invert.

@@ -44,6 +44,8 @@ struct VerificationSpec {
   double periods = 2.0;         ///< >= 1; with 2 or more the first is left out of the figures
   double range_fraction = 0.8;  ///< of the model's major-loop range, (0, 1]
   double precondition_s = 1.0;  ///< sweep before the reference [s], >= 0
+  /// Roll-off of the dynamics inversion, as `track` uses it (DynamicsInversion) [Hz]; 0 = default.
+  double feedforward_bandwidth_hz = 0.0;
 };
 
 /// A kTrack program (no log: the caller opens one) following a triangle over
