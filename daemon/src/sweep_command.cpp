@@ -30,6 +30,14 @@ double number_or_nan(const json& r, const char* key) {
   return r.contains(key) && r[key].is_number() ? r[key].get<double>() : std::nan("");
 }
 
+// The row of frequency f and compensator c, or null.
+const json* find_row(const json& rows, double f, const std::string& c) {
+  for (const auto& r : rows) {
+    if (r["frequency_hz"].get<double>() == f && r["compensator"] == c) return &r;
+  }
+  return nullptr;
+}
+
 void print_table(const SweepCommand& cmd, const json& rows, std::ostream& out) {
   out << "sweep: " << cmd.reference << " over " << fixed(100 * cmd.range_fraction, 0)
       << " % of range; tracking error rms / max, % of range\n";
@@ -40,12 +48,10 @@ void print_table(const SweepCommand& cmd, const json& rows, std::ostream& out) {
     out << std::setw(12) << fixed(f, 3);
     for (const auto& c : cmd.compensators) {
       std::string cell = "-";
-      for (const auto& r : rows) {
-        if (r["frequency_hz"].get<double>() == f && r["compensator"] == c) {
-          cell = r.contains("rms_error_percent")
-                     ? fixed(r["rms_error_percent"], 3) + " / " + fixed(r["max_error_percent"], 3)
-                     : r.value("end", std::string("?"));
-        }
+      if (const json* r = find_row(rows, f, c)) {
+        cell = r->contains("rms_error_percent") ? fixed((*r)["rms_error_percent"], 3) + " / " +
+                                                      fixed((*r)["max_error_percent"], 3)
+                                                : r->value("end", std::string("?"));
       }
       out << std::setw(24) << cell;
     }
@@ -65,13 +71,9 @@ void write_plot(const SweepCommand& cmd, const json& rows) {
   for (const double f : cmd.frequencies_hz) {
     dat << f;
     for (const auto& c : cmd.compensators) {
-      double rms = std::nan(""), mx = std::nan("");
-      for (const auto& r : rows) {
-        if (r["frequency_hz"].get<double>() == f && r["compensator"] == c) {
-          rms = number_or_nan(r, "rms_error_percent");
-          mx = number_or_nan(r, "max_error_percent");
-        }
-      }
+      const json* r = find_row(rows, f, c);
+      const double rms = r != nullptr ? number_or_nan(*r, "rms_error_percent") : std::nan("");
+      const double mx = r != nullptr ? number_or_nan(*r, "max_error_percent") : std::nan("");
       dat << " " << (std::isnan(rms) ? std::string("NaN") : std::to_string(rms)) << " "
           << (std::isnan(mx) ? std::string("NaN") : std::to_string(mx));
     }

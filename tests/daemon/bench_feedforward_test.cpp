@@ -29,31 +29,10 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
   void closes_the_loop(const char* toml, const std::string& expected);
 };
 
-constexpr const char* kDelayed = R"(
-[loop]
-rate_hz = 10000
-[limits]
-y_min = 0.0
-y_max = 44.0
-[driver]
-type = "loopback"
-[actuator.delay]
-enabled = true
-)";
-
+constexpr const char* kDelayed = "[actuator.delay]\nenabled = true\n";
 // No delay; the structural resonance lowered from 3 kHz to 800 Hz (damping at its default).
-constexpr const char* kResonance800 = R"(
-[loop]
-rate_hz = 10000
-[limits]
-y_min = 0.0
-y_max = 44.0
-[driver]
-type = "loopback"
-[actuator.dynamics]
-natural_frequency_hz = 800.0
-enabled = true
-)";
+constexpr const char* kResonance800 =
+    "[actuator.dynamics]\nnatural_frequency_hz = 800.0\nenabled = true\n";
 
 }  // namespace
 
@@ -62,7 +41,7 @@ enabled = true
 // `expected` and its inversion meets the issue's targets (<= 1 % at 200 Hz, <= 2 % at 500 Hz,
 // and at 500 Hz at most a quarter of identify's model's error).
 void BenchFeedforwardTest::closes_the_loop(const char* toml, const std::string& expected) {
-  start(settings_from_toml(toml));
+  start(settings_from_toml(loopback_toml(toml)));
   const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   ASSERT_FALSE(id.contains("fit_error")) << id.dump(2);

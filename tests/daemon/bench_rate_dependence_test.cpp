@@ -37,22 +37,12 @@ class BenchRateDependenceTest : public hystbench::test::BenchFixture {
   static double rms(const json& r) { return r.at("rms_error_percent").get<double>(); }
 };
 
-constexpr const char* kRateDependent = R"(
-[loop]
-rate_hz = 10000
-[limits]
-y_min = 0.0
-y_max = 44.0
-[driver]
-type = "loopback"
-[actuator.rate_dependence]
-enabled = true
-)";
+constexpr const char* kRateDependent = "[actuator.rate_dependence]\nenabled = true\n";
 
 }  // namespace
 
 TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidNeverHurts) {
-  start(settings_from_toml(kRateDependent));
+  start(settings_from_toml(loopback_toml(kRateDependent)));
   const double freqs[] = {1.0, 5.0, 10.0, 19.0};
   std::map<double, double> mpi_rms, rpi_rms;
 
@@ -94,7 +84,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
 }
 
 TEST_F(BenchRateDependenceTest, WithoutRateDependenceTodaysFiguresHoldAndEverySampleHasYModel) {
-  start(settings_from_toml("[loop]\nrate_hz = 10000\n[limits]\ny_min = 0.0\ny_max = 44.0\n"));
+  start(settings_from_toml(loopback_toml()));
   const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   // The first identify had only the linear map as predictor: y_model is filled all the same.

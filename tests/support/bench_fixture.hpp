@@ -44,6 +44,14 @@ class BenchFixture : public TempDirTest {
     return s;
   }
 
+  /// A loopback config at 10 kHz with the 0..44 um range, then `tables` (e.g. "[actuator.delay]
+  /// enabled = true"): the loopback of config/loopback.toml with one effect switched on.
+  static std::string loopback_toml(const std::string& tables = {}) {
+    return "[loop]\nrate_hz = 10000\n[limits]\ny_min = 0.0\ny_max = 44.0\n[driver]\n"
+           "type = \"loopback\"\n" +
+           tables;
+  }
+
   /// The daemon's settings for a TOML config (the user's path: bench_settings_from), with the
   /// test's folders and the shared-machine loop settings of base_settings().
   daemon::BenchSettings settings_from_toml(const std::string& toml) const {
