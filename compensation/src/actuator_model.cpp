@@ -83,6 +83,10 @@ double ActuatorModel::peek_static_at_rate(double u, double rate) const noexcept 
   return y;
 }
 
+double ActuatorModel::rate_for_static_output(double u, double y) const noexcept {
+  return hysteresis_->rate_for_output(u, creep_.empty() ? y : y - creep_.peek(u));
+}
+
 void ActuatorModel::reset(double u0) noexcept {
   last_input_ = u0;
   delay_.reset(u0);

@@ -54,7 +54,8 @@ Compensator::Compensator(CompensatorKind kind, std::unique_ptr<InverseModel> inv
                    "linear map gain must be > 0");
 }
 
-CompensatorOutput Compensator::step(double y_ref, double y_measured, double ff_target) noexcept {
+CompensatorOutput Compensator::step(double y_ref, double y_measured,
+                                    std::span<const double> ff_targets) noexcept {
   CompensatorOutput out;
   switch (kind_) {
     case CompensatorKind::kNone:
@@ -63,7 +64,8 @@ CompensatorOutput Compensator::step(double y_ref, double y_measured, double ff_t
     case CompensatorKind::kInverse:
     case CompensatorKind::kInverseMultiplicative:
     case CompensatorKind::kInversePid:
-      out.u_ff = inverse_->step(ff_target);
+      out.u_ff = ff_targets.size() > 1 ? inverse_->step_previewed(ff_targets)
+                                       : inverse_->step(ff_targets.front());
       break;
     case CompensatorKind::kPid:
       break;

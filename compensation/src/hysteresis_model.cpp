@@ -1,6 +1,7 @@
 #include "hystbench/compensation/hysteresis_model.hpp"
 
 #include <array>
+#include <limits>
 #include <utility>
 
 namespace hystbench::compensation {
@@ -13,6 +14,10 @@ constexpr std::array<std::pair<ModelKind, std::string_view>, 4> kNames{{
     {ModelKind::kRateDependentPi, "rpi"},
 }};
 }  // namespace
+
+double HysteresisModel::rate_for_output(double /*u*/, double /*y*/) const noexcept {
+  return std::numeric_limits<double>::quiet_NaN();
+}
 
 std::string_view to_string(ModelKind kind) noexcept {
   for (const auto& [k, name] : kNames) {

@@ -91,6 +91,11 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
     for (const double w : p.base.play.weights) total_ += w;
     total_slope_ = p.rate_coefficients.empty() ? 0.0 : p.rate_coefficients.back();
     max_rate_ = p.max_rate;
+    if (p.rate_filter_s == 0.0 && p.max_rate > 0.0) {
+      const double dt = rpi.sample_period();
+      window_ = static_cast<std::size_t>(std::clamp(std::ceil(kPreviewS / dt), 4.0, 1024.0));
+      blend_ = std::min(1.0, dt / kFallingBlendS);
+    }
   }
 }
 
@@ -103,13 +108,22 @@ NumericInverse::NumericInverse(const NumericInverse& other)
       rate_free_rate_(other.rate_free_rate_),
       total_(other.total_),
       total_slope_(other.total_slope_),
-      max_rate_(other.max_rate_) {}
+      max_rate_(other.max_rate_),
+      window_(other.window_),
+      blend_(other.blend_),
+      w_prev_(other.w_prev_),
+      falling_(other.falling_) {}
 
 double NumericInverse::solve(const ActuatorModel& model, double y_ref, double u_start,
                              double rate) const noexcept {
+  return solve_with(y_ref, u_start, [&](double u) { return model.peek_static_at_rate(u, rate); });
+}
+
+template <typename Output>
+double NumericInverse::solve_with(double y_ref, double u_start, Output output) const noexcept {
   const double lo_bound = opt_.input_min;
   const double hi_bound = opt_.input_max;
-  auto f = [&](double u) { return model.peek_static_at_rate(u, rate) - y_ref; };
+  auto f = [&](double u) { return output(u) - y_ref; };
   // Bracket around the previous input, growing the step geometrically: first in the direction
   // an increasing map suggests, then the other way.
   const double start = std::clamp(u_start, lo_bound, hi_bound);
@@ -180,7 +194,75 @@ double NumericInverse::step(double y_ref) noexcept {
   return u;
 }
 
+double NumericInverse::falling_drive(std::span<const double> targets) const noexcept {
+  const double dt = model_.sample_period();
+  // The map's slope at rest just below the drive, for rates predicted from the targets.
+  const double du = 1e-3 * (opt_.input_max - opt_.input_min);
+  const double slope =
+      (model_.peek_static_at_rate(u_prev_, 0.0) - model_.peek_static_at_rate(u_prev_ - du, 0.0)) /
+      du;
+  auto predicted_rate = [&](std::size_t j) {
+    return slope > 0.0 ? (targets[j - 1] - targets[j]) / (dt * slope) : max_rate_;
+  };
+  // Falling faster than the rate cap, the map is static: solve this tick at the cap.
+  if (predicted_rate(1) >= max_rate_) return solve(model_, targets[0], u_prev_, max_rate_);
+  // The falling run ahead: targets[0 .. end] strictly decreasing.
+  std::size_t end = 1;
+  while (end + 1 < targets.size() && targets[end + 1] < targets[end]) ++end;
+  // Its last sample: rate 0 where the run ends in the window (a reversal or a hold), else the
+  // rate of the run's last step through the slope at rest (the error dies out backwards).
+  const double rate = end + 1 == targets.size() ? std::min(predicted_rate(end), max_rate_) : 0.0;
+  double u = solve(model_, targets[end], u_prev_, rate);
+  for (std::size_t j = end; j > 0; --j) {
+    // The previous sample of the drive is where this one's output needs it to come from.
+    const double r = model_.rate_for_static_output(u, targets[j]);
+    double u_before = u + (std::isfinite(r) ? std::min(r, max_rate_) : max_rate_) * dt;
+    if (!(r < max_rate_)) {
+      // Beyond the rate cap the map is static: the earlier sample is at least its static input.
+      u_before = std::max(u_before, solve(model_, targets[j - 1], u, max_rate_));
+    }
+    u = std::min(u_before, opt_.input_max);
+  }
+  return u;
+}
+
+double NumericInverse::step_previewed(std::span<const double> targets) noexcept {
+  if (window_ == 0 || targets.size() < 2) return step(targets.front());
+  const double y_ref = targets.front();
+  const double dt = model_.sample_period();
+  double u = 0.0;
+  if (targets[1] < y_ref) {
+    const double w = falling_drive(targets);
+    // Entering the run, the gap to the backward solution is the drive's distance from that
+    // solution's previous sample; it closes over kFallingBlendS rather than in one tick.
+    const double w_before =
+        falling_
+            ? w_prev_
+            : w + std::min(std::max(model_.rate_for_static_output(w, y_ref), 0.0), max_rate_) * dt;
+    u = std::clamp(w + (1.0 - blend_) * (u_prev_ - w_before), opt_.input_min, u_prev_);
+    w_prev_ = w;
+    falling_ = true;
+  } else {
+    // Rising or holding: the drive at its own per-sample rate (exact, stable forward), when
+    // the target is above the output at rest; below it (the end of a fall, a step down) the
+    // own rate would raise the output as the drive falls, so solve at rate 0 there.
+    const double u0 = u_prev_;
+    if (model_.peek_static_at_rate(u0, 0.0) < y_ref) {
+      u = solve_with(y_ref, u0, [&](double x) {
+        return model_.peek_static_at_rate(x, std::max(x - u0, 0.0) / dt);
+      });
+    } else {
+      u = solve(model_, y_ref, u0, 0.0);
+    }
+    falling_ = false;
+  }
+  model_.step(u);
+  u_prev_ = u;
+  return u;
+}
+
 void NumericInverse::reset(double u0) noexcept {
+  falling_ = false;
   model_.reset(u0);
   u_prev_ = u0;
   if (rate_free_) rate_free_->reset(u0);

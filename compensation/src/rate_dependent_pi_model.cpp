@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "details/validate.hpp"
@@ -10,6 +11,7 @@ namespace hystbench::compensation {
 
 RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double dt_s)
     : p_(std::move(p)), pi_(p_.base.play), dz_(p_.base.dead_zone) {
+  if (dz_.invertibility().invertible) dz_inverse_ = dz_.inverse();
   details::require_same_size(p_.rate_coefficients.size(), p_.base.play.weights.size(),
                              "rate.coefficients", "play.weights");
   details::require_finite(p_.rate_coefficients, "rate.coefficients");
@@ -49,6 +51,23 @@ double RateDependentPiModel::evaluate(double u, double rate, double* state_out) 
     y += (w[i] + dw_[i] * rate) * pl;
   }
   return p_.base.center + dz_.apply(y - p_.base.center);
+}
+
+double RateDependentPiModel::rate_for_output(double u, double y) const noexcept {
+  if (!dz_inverse_) return std::numeric_limits<double>::quiet_NaN();
+  const auto& r = p_.base.play.thresholds;
+  const auto& w = p_.base.play.weights;
+  const double* s = pi_.state().data();
+  double at_rest = p_.base.play.offset, per_rate = 0.0;
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    const double pl = std::max(u - r[i], std::min(u + r[i], s[i]));
+    at_rest += w[i] * pl;
+    per_rate += dw_[i] * pl;
+  }
+  const double wanted = p_.base.center + dz_inverse_->apply(y - p_.base.center) - at_rest;
+  if (wanted <= 0.0) return 0.0;
+  if (!(per_rate > 0.0)) return std::numeric_limits<double>::infinity();
+  return wanted / per_rate;
 }
 
 double RateDependentPiModel::step(double u) noexcept {

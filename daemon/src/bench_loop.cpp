@@ -2,6 +2,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <future>
 
@@ -60,6 +61,11 @@ void BenchLoop::shutdown() {
 std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> program) {
   if (state() != State::kIdle || finished_.load(std::memory_order_acquire) != nullptr) {
     return program;
+  }
+  // The targets ahead, for an inverse that uses them. Not yet together with a dynamics preview:
+  // its targets fed to the previewed rate inverse tracked worse at 500 Hz (2.9 % against 0.5 %).
+  if (program->compensator && !program->preview) {
+    program->targets.allocate(program->compensator->preview_samples());
   }
   RunProgram* expected = nullptr;
   RunProgram* raw = program.get();
@@ -182,14 +188,25 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
       rec.flags |= kSampleReferenceLimited;
       ++p.reference_clips;
     }
-    double target = y_ref;
-    if (p.preview) {
-      // The reference ahead by the model's delay, its derivatives for the dynamics.
-      const double tl = t + p.preview->lead_s(), h = p.preview->step_s();
-      target = p.preview->target(p.reference->value(tl - h), p.reference->value(tl),
-                                 p.reference->value(tl + h));
+    // The feedforward's target at run time tt: the reference, or with a preview the static
+    // target that inverts the model's delay and dynamics (the reference ahead by the delay).
+    auto target_at = [&p](double tt) noexcept {
+      if (!p.preview) return std::clamp(p.reference->value(tt), p.y_ref_min, p.y_ref_max);
+      const double tl = tt + p.preview->lead_s(), h = p.preview->step_s();
+      return p.preview->target(p.reference->value(tl - h), p.reference->value(tl),
+                               p.reference->value(tl + h));
+    };
+    compensation::CompensatorOutput out;
+    if (const std::size_t ahead = p.targets.capacity(); ahead > 1) {
+      if (p.targets.view().empty()) {
+        for (std::size_t j = 0; j + 1 < ahead; ++j)
+          p.targets.push(target_at(t + static_cast<double>(j) * dt_));
+      }
+      p.targets.push(target_at(t + static_cast<double>(ahead - 1) * dt_));
+      out = p.compensator->step(y_ref, y_prev_, p.targets.view());
+    } else {
+      out = p.compensator->step(y_ref, y_prev_, p.preview ? target_at(t) : y_ref);
     }
-    const auto out = p.compensator->step(y_ref, y_prev_, target);
     rec.u_ff = out.u_ff;
     rec.u_fb = out.u_fb;
     u_request = out.u;

@@ -43,6 +43,8 @@ class ActuatorModel {
   double peek_static(double u) const noexcept;
   /// peek_static() with the rate-dependent terms at `rate` (HysteresisModel::peek_at_rate).
   double peek_static_at_rate(double u, double rate) const noexcept;
+  /// The rate at which peek_static_at_rate(u, rate) = y (HysteresisModel::rate_for_output).
+  double rate_for_static_output(double u, double y) const noexcept;
   /// Relaxed at input u0, every part settled.
   void reset(double u0) noexcept;
 

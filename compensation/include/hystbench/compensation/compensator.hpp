@@ -9,6 +9,7 @@
 // does not show up as error. step() is real-time safe.
 #include <memory>
 #include <optional>
+#include <span>
 #include <string_view>
 
 #include "hystbench/compensation/inverse_model.hpp"
@@ -49,7 +50,17 @@ class Compensator {
   }
   /// As above, the feedforward inverting `ff_target` instead of y_ref: the static target a
   /// DynamicsInversion computed from the previewed reference (feedback still acts on y_ref).
-  CompensatorOutput step(double y_ref, double y_measured, double ff_target) noexcept;
+  CompensatorOutput step(double y_ref, double y_measured, double ff_target) noexcept {
+    return step(y_ref, y_measured, std::span<const double>(&ff_target, 1));
+  }
+  /// As above with the feedforward targets of this tick and the ticks ahead (ff_targets[0] is
+  /// this tick's; at most preview_samples() values, at least one): see InverseModel.
+  CompensatorOutput step(double y_ref, double y_measured,
+                         std::span<const double> ff_targets) noexcept;
+  /// How many feedforward targets ahead the inverse can use (0: only this tick's).
+  std::size_t preview_samples() const noexcept {
+    return inverse_ ? inverse_->preview_samples() : 0;
+  }
   /// The stage after the compensator clamped the output: +1 high, -1 low, 0 none.
   void notify_saturation(int direction) noexcept;
   /// Starts from a relaxed actuator at input u0.

@@ -37,6 +37,10 @@ class HysteresisModel {
   /// of the one u would make (an inverse solves against this with a rate it predicts from the
   /// reference). Rate-independent models ignore the rate.
   virtual double peek_at_rate(double u, double /*rate*/) const noexcept { return peek(u); }
+  /// The input rate [input unit / s] at which peek_at_rate(u, rate) = y, for a model whose
+  /// output grows with the rate: 0 when even rate 0 gives more than y, +inf when no rate gives
+  /// y (the caller caps it). Rate-independent models return NaN.
+  virtual double rate_for_output(double /*u*/, double /*y*/) const noexcept;
   /// Relaxed state at input u0: every play output equals u0 (and the previous input is u0).
   virtual void reset(double u0) noexcept = 0;
   /// Sample period in seconds; only rate-dependent models use it. Not real-time safe.

@@ -4,6 +4,7 @@
 // model through the actuator's known history first), or from reset(u0).
 // step() is real-time safe (no allocation, no exceptions, bounded work).
 #include <memory>
+#include <span>
 
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
@@ -17,6 +18,14 @@ class InverseModel {
   virtual ~InverseModel() = default;
   /// Returns the input u for desired output y_ref [output unit -> input unit].
   virtual double step(double y_ref) noexcept = 0;
+  /// How many targets ahead this inverse can use (0: none). When > 0 the caller may call
+  /// step_previewed() instead of step().
+  virtual std::size_t preview_samples() const noexcept { return 0; }
+  /// step() given the targets of this tick (targets[0]) and of the ticks ahead (targets[j] is
+  /// j ticks ahead; at most preview_samples() values, at least one).
+  virtual double step_previewed(std::span<const double> targets) noexcept {
+    return step(targets.front());
+  }
   /// State consistent with the model relaxed at input u0 (ActuatorModel::reset(u0)).
   virtual void reset(double u0) noexcept = 0;
   virtual std::unique_ptr<InverseModel> clone() const = 0;
@@ -60,6 +69,15 @@ class ModifiedPiInverse final : public InverseModel {
 /// reference, its drive's rate r_0 (the model's rate filter) is scaled to the rate-dependent
 /// map's larger slope, r = r_0 W_n(0) / W_n(r) (W_n the total cumulative play weight), and the
 /// drive is solved at r. Every step is a function of the reference alone.
+/// With the targets ahead (step_previewed(), a per-sample rate law, rate_filter_s = 0) the
+/// rate-dependent drive is solved where the rate law makes the inversion well posed: rising,
+/// the output grows with u and with its own rate, so the drive is solved at its own per-sample
+/// rate (exact, stable forward in time); falling, the faster fall raises the output, the forward
+/// solution is unstable, and the drive is integrated backwards from the end of the falling run
+/// ahead (rate 0 at a reversal in the window), rate = rate_for_output(u, y) per sample, which
+/// converges within a few time constants F_r / s of the rate law. Where a falling run starts,
+/// the drive joins that solution over kFallingBlendS instead of jumping (a jump is a one-tick
+/// rate spike to the per-sample law).
 class NumericInverse final : public InverseModel {
  public:
   struct Options {
@@ -73,13 +91,25 @@ class NumericInverse final : public InverseModel {
   NumericInverse(const NumericInverse& other);
   NumericInverse& operator=(const NumericInverse&) = delete;
   double step(double y_ref) noexcept override;
+  std::size_t preview_samples() const noexcept override { return window_; }
+  double step_previewed(std::span<const double> targets) noexcept override;
   void reset(double u0) noexcept override;
   std::unique_ptr<InverseModel> clone() const override;
 
+  /// Look-ahead of step_previewed() [s] (rate-dependent models with a per-sample rate law).
+  static constexpr double kPreviewS = 0.03;
+  /// Time over which a falling run's drive joins the backward solution [s].
+  static constexpr double kFallingBlendS = 0.005;
+
  private:
+  /// The drive of a falling run at this tick: integrated backwards from the run's end.
+  double falling_drive(std::span<const double> targets) const noexcept;
   /// The input near u_start with model.peek_static_at_rate(u, rate) = y_ref (or the bound).
   double solve(const ActuatorModel& model, double y_ref, double u_start,
                double rate) const noexcept;
+  /// The input near u_start with output(u) = y_ref (or the bound), output increasing in u.
+  template <typename Output>
+  double solve_with(double y_ref, double u_start, Output output) const noexcept;
 
   ActuatorModel model_;
   Options opt_;
@@ -90,6 +120,11 @@ class NumericInverse final : public InverseModel {
   std::unique_ptr<InverseModel> rate_free_;
   RateEstimator rate_free_rate_;
   double total_ = 0.0, total_slope_ = 0.0, max_rate_ = 0.0;
+  // step_previewed(): look-ahead in samples (0 = not available), and the falling run's state.
+  std::size_t window_ = 0;
+  double blend_ = 1.0;    // per-tick share of the gap to the backward solution closed
+  double w_prev_ = 0.0;   // the backward solution's drive at the last tick
+  bool falling_ = false;  // the last tick was in a falling run
 };
 
 /// Inverse multiplicative structure (classical-PI paper, Theorem 3.1), generalised with a

@@ -5,6 +5,7 @@
 // The rate is |du/dt| through a first-order low-pass of time constant rate_filter_s
 // (RateEstimator; 0 = the per-sample difference |u(k) - u(k-1)| / dt, the paper's form).
 // Needs set_sample_period(). Real-time safe step()/peek()/peek_at_rate().
+#include <optional>
 #include <vector>
 
 #include "hystbench/compensation/modified_pi_model.hpp"
@@ -29,6 +30,8 @@ class RateDependentPiModel final : public HysteresisModel {
   double step(double u) noexcept override;
   double peek(double u) const noexcept override;
   double peek_at_rate(double u, double rate) const noexcept override;
+  /// Exact: the output is S[a(u) + b(u) rate], so rate = (S^-1[y] - a) / b (before the cap).
+  double rate_for_output(double u, double y) const noexcept override;
   void reset(double u0) noexcept override;
   void set_sample_period(double dt_s) override;
   std::size_t operator_count() const noexcept override;
@@ -47,6 +50,8 @@ class RateDependentPiModel final : public HysteresisModel {
   RateDependentPiParameters p_;
   PiModel pi_;  // plays and their state; weights taken from p_ per rate
   DeadZoneSuperposition dz_;
+  std::optional<DeadZoneSuperposition>
+      dz_inverse_;          // absent when the dead zones are not invertible
   std::vector<double> dw_;  // c_i - c_{i-1}: per-weight rate slope
   double dt_ = 1e-3;
   RateEstimator rate_;

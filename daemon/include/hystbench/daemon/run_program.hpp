@@ -16,6 +16,7 @@
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/daemon/loop_statistics.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
+#include "hystbench/daemon/target_window.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 
 namespace hystbench::daemon {
@@ -38,6 +39,9 @@ struct RunProgram {
   /// track: the model's delay and dynamics inverted from the previewed reference (the
   /// feedforward then inverts its target, not y_ref); absent for a static model or `none`/`pid`.
   std::optional<compensation::DynamicsInversion> preview;
+  /// track: the feedforward targets ahead for an inverse that uses them (BenchLoop::submit()
+  /// sizes it from the compensator; capacity 0 = this tick's target only).
+  TargetWindow targets;
   /// The active model, configured at the loop's period and relaxed at the run's first output:
   /// stepped every tick with the drive actually applied, its output is y_model (absent = NaN).
   std::optional<compensation::ActuatorModel> model;
