@@ -113,6 +113,9 @@ struct HiddenCase {
   /// Drift only: a random walk instead of the slow (thermal) sinusoid. Its fast part is beyond
   /// any slow drift model and leaks into the hysteresis fit, so only the naming is checked.
   bool random_walk = false;
+  /// Dynamics only: the resonance [Hz] and damping; 0 = drawn at random.
+  double natural_frequency_hz = 0.0;
+  double damping_ratio = 0.0;
 };
 
 std::string name_of(const HiddenCase& c) {
@@ -195,6 +198,10 @@ HiddenData make_hidden(const HiddenCase& hc_case) {
       const double fastest = std::min(10.0, fs / 20.0);
       c.dynamics.natural_frequency_hz = uniform(rng, std::max(3.0 * fastest, 0.03 * fs), 0.25 * fs);
       c.dynamics.damping_ratio = uniform(rng, 0.02, 0.15);
+      if (hc_case.natural_frequency_hz > 0.0) {
+        c.dynamics.natural_frequency_hz = hc_case.natural_frequency_hz;
+        c.dynamics.damping_ratio = hc_case.damping_ratio;
+      }
       std::snprintf(buf, sizeof buf, "; dynamics %.1f Hz zeta %.3f",
                     c.dynamics.natural_frequency_hz, c.dynamics.damping_ratio);
       break;
@@ -374,6 +381,31 @@ TEST(DiagnosisHiddenEffect, NamesCreep) { expect_named({hc::Cause::kCreep, 500.0
 TEST(DiagnosisHiddenEffect, NamesDynamics) { expect_named({hc::Cause::kDynamics, 5000.0, 105}); }
 TEST(DiagnosisHiddenEffect, NamesDelay) { expect_named({hc::Cause::kDelay, 1000.0, 106}); }
 TEST(DiagnosisHiddenEffect, NamesDrift) { expect_named({hc::Cause::kDrift, 1000.0, 107}); }
+
+// The resonance is fitted jointly with the weights (variable projection), not only named: its
+// natural frequency within 2 % and its damping within 20 %, across the range the bench meets
+// (50 Hz to a fifth of the sample rate, damping 0.02 to 0.2). The first case is the one a user
+// met: 107 Hz, damping 0.078 at 1 kHz, read as 99.7 Hz and 0.131 by a fit of the baseline alone.
+TEST(DiagnosisHiddenEffect, FitsTheResonanceItNames) {
+  const HiddenCase cases[] = {{hc::Cause::kDynamics, 1000.0, 211, false, 107.0, 0.078},
+                              {hc::Cause::kDynamics, 1000.0, 212, false, 55.0, 0.2},
+                              {hc::Cause::kDynamics, 2000.0, 213, false, 380.0, 0.03},
+                              {hc::Cause::kDynamics, 5000.0, 214, false, 160.0, 0.02}};
+  for (const HiddenCase& c : cases) {
+    const HiddenData d = make_hidden(c);
+    const Outcome o = diagnose_case(d);
+    SCOPED_TRACE(name_of(c) + " (" + d.truth + ")\n" + summary(o));
+    ASSERT_EQ(o.named, hc::Cause::kDynamics);
+    ASSERT_TRUE(o.diagnosis.extended.dynamics().has_value());
+    const hc::DynamicsParameters& fitted = *o.diagnosis.extended.dynamics();
+    std::printf("%.0f Hz zeta %.3f at %.0f Hz: fitted %.2f Hz zeta %.4f, ratio %.3f, gain %.2f\n",
+                c.natural_frequency_hz, c.damping_ratio, c.fs, fitted.natural_frequency_hz,
+                fitted.damping_ratio, o.ratio, o.gain);
+    EXPECT_NEAR(fitted.natural_frequency_hz, c.natural_frequency_hz, 0.02 * c.natural_frequency_hz);
+    EXPECT_NEAR(fitted.damping_ratio, c.damping_ratio, 0.2 * c.damping_ratio);
+    EXPECT_LE(o.ratio, 0.3) << "extended / baseline rms on the second record";
+  }
+}
 
 // The extended model is an ordinary model file: it survives the JSON round trip and predicts
 // the second record exactly as the in-memory model does.

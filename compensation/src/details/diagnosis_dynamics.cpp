@@ -13,6 +13,7 @@
 #include <complex>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include "details/diagnosis_candidates.hpp"
 
@@ -94,6 +95,58 @@ Resonance search(const DiagnosisRecord& r, std::span<const double> x, double f_l
   return best;
 }
 
+// Variable projection: for fixed (fn, zeta) every other unknown is linear, so the joint fit's
+// mean square error is a function of those two alone. It is minimised over log fn and log zeta
+// by alternating golden-section searches in shrinking brackets; this fits the resonance with
+// the weights free, where the search above filters a fixed baseline prediction (whose weights
+// have already absorbed part of the resonance, which biases fn low and zeta high).
+class JointObjective {
+ public:
+  JointObjective(const DiagnosisRecord& r, const ExtensionSpec& base) : r_(r), spec_(base) {}
+  double operator()(double fn, double zeta) {
+    spec_.dynamics = DynamicsParameters{fn, zeta};
+    return fit_extension(r_, spec_, FitRows::kSearch, false).regression_mse;
+  }
+
+ private:
+  const DiagnosisRecord& r_;
+  ExtensionSpec spec_;
+};
+
+Resonance project(JointObjective& j, Resonance start, double f_lo, double f_hi) {
+  Resonance best = start;
+  best.mse = j(best.fn, best.zeta);
+  double f_span = 1.15, z_span = 2.0;  // bracket half-widths (factors)
+  for (int round = 0; round < 4; ++round) {
+    const double zeta = best.zeta;
+    const double lf = golden([&](double l) { return j(std::exp(l), zeta); },
+                             std::log(std::max(f_lo, best.fn / f_span)),
+                             std::log(std::min(f_hi, best.fn * f_span)), 10);
+    const double fn = std::exp(lf);
+    const double lz = golden([&](double l) { return j(fn, std::exp(l)); },
+                             std::log(std::max(kZetaMin, best.zeta / z_span)),
+                             std::log(std::min(kZetaMax, best.zeta * z_span)), 10);
+    const double mse = j(fn, std::exp(lz));
+    if (mse < best.mse) best = {fn, std::exp(lz), mse};
+    f_span = std::sqrt(f_span), z_span = std::sqrt(z_span);
+  }
+  return best;
+}
+
+// The resonance the measured response shows: its largest informative gain above f_lo, damping
+// from the peak height (1 / (2 zeta) at the natural frequency of a lightly damped mode).
+std::optional<Resonance> spectral_peak(const FrequencyResponse& fr, double f_lo, double f_hi) {
+  std::optional<Resonance> peak;
+  double gain = 1.0;
+  for (std::size_t i = 0; i < fr.frequency_hz.size(); ++i) {
+    const double f = fr.frequency_hz[i];
+    if (f < f_lo || f > f_hi || !fr.informative[i] || fr.gain[i] <= gain) continue;
+    gain = fr.gain[i];
+    peak = Resonance{f, std::clamp(0.5 / gain, 0.01, 0.5), 0.0};
+  }
+  return peak;
+}
+
 // The hysteresis-and-creep output of a model (its dynamics removed), delay kept.
 std::vector<double> static_prediction(const ExtensionFit& f, const DiagnosisRecord& r) {
   ActuatorModel m(f.model);
@@ -123,6 +176,19 @@ CandidateOutcome test_dynamics(const CandidateContext& c) {
   spec2.dynamics = DynamicsParameters{again.fn, again.zeta};
   ExtensionFit fit2 = fit_extension(r, spec2);
   if (fit2.fit.rmse < fit.fit.rmse) fit = std::move(fit2), res = again;
+  // Then jointly with the weights, from the better of that estimate and the spectral peak.
+  JointObjective joint(r, c.base);
+  Resonance start = res;
+  start.mse = joint(res.fn, res.zeta);
+  if (const auto peak = spectral_peak(c.response, f_lo, f_hi)) {
+    const double mse = joint(peak->fn, peak->zeta);
+    if (mse < start.mse) start = {peak->fn, peak->zeta, mse};
+  }
+  const Resonance projected = project(joint, start, f_lo, f_hi);
+  ExtensionSpec spec3 = c.base;
+  spec3.dynamics = DynamicsParameters{projected.fn, projected.zeta};
+  ExtensionFit fit3 = fit_extension(r, spec3);
+  if (fit3.fit.rmse < fit.fit.rmse) fit = std::move(fit3), res = projected;
   out.fit = std::move(fit);
   out.extension =
       "second-order dynamics: natural frequency " + num(res.fn) + " Hz, damping " + num(res.zeta);
