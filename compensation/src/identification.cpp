@@ -15,6 +15,7 @@
 #include "details/constrained_lsq.hpp"
 #include "details/designs.hpp"
 #include "details/rate_groups.hpp"
+#include "details/record_startup.hpp"
 #include "details/threshold_refinement.hpp"
 #include "details/validate.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
@@ -113,8 +114,9 @@ struct Record {
   std::size_t begin = 0;    // first fitted sample (after the skipped transient)
   std::size_t fit_end = 0;  // held-out part is [fit_end, n)
   int delay = 0;
-  std::vector<double> ud;  // u delayed by `delay` samples (u[0] before the start)
-  double u_lo = 0, u_hi = 0, y_lo = 0, y_hi = 0;  // ranges over the fitted part
+  std::vector<double> ud;     // u delayed by `delay` samples (u[0] before the start)
+  double u_lo = 0, u_hi = 0;  // input range up to the held-out part (skipped start included)
+  double y_lo = 0, y_hi = 0;  // output range over the fitted part
 
   void set_delay(int d) {
     delay = d;
@@ -122,7 +124,8 @@ struct Record {
     for (std::size_t k = 0; k < n; ++k) {
       ud[k] = k >= static_cast<std::size_t>(d) ? u[k - static_cast<std::size_t>(d)] : u[0];
     }
-    const auto [ulo, uhi] = std::minmax_element(ud.begin() + begin, ud.begin() + fit_end);
+    // Over the skipped start too: it is simulated, and its extremes set the plays' states.
+    const auto [ulo, uhi] = std::minmax_element(ud.begin(), ud.begin() + fit_end);
     u_lo = *ulo, u_hi = *uhi;
   }
 };
@@ -135,7 +138,8 @@ Record make_record(std::span<const double> t, std::span<const double> u, std::sp
   r.dt = (t.back() - t.front()) / static_cast<double>(r.n - 1);
   const auto heldout = static_cast<std::size_t>(std::floor(o.heldout_fraction * r.n));
   r.fit_end = r.n - heldout;
-  r.begin = o.skip_samples;
+  r.begin =
+      o.skip_samples ? *o.skip_samples : details::startup_samples(u, r.fit_end / 4, r.fit_end);
   details::require(r.begin + kMinFitRows <= r.fit_end,
                    "too few samples left to fit: " + std::to_string(r.n) + " samples minus " +
                        std::to_string(r.begin) + " skipped and " + std::to_string(heldout) +
@@ -210,7 +214,7 @@ class Identifier {
   template <class Key, class Eval>
   Key pick(const std::vector<Key>& keys, Eval eval);
 
-  int choose_delay();
+  int choose_delay(ModelKind kind);
   Candidate search(ModelKind kind);
   Candidate search_pi();
   Candidate search_mpi();
@@ -320,12 +324,10 @@ Key Identifier::pick(const std::vector<Key>& keys, Eval eval) {
   return keys.front();
 }
 
-int Identifier::choose_delay() {
+int Identifier::choose_delay(ModelKind family) {
   if (o_.delay_samples >= 0) return o_.delay_samples;
-  // A mid-size model of the requested family (MPI when automatic) at each delay.
-  const ModelKind kind = o_.kind.value_or(ModelKind::kModifiedPi) == ModelKind::kPi
-                             ? ModelKind::kPi
-                             : ModelKind::kModifiedPi;
+  // A mid-size model of the family (MPI for every family with dead zones or more) at each delay.
+  const ModelKind kind = family == ModelKind::kPi ? ModelKind::kPi : ModelKind::kModifiedPi;
   const std::vector<int> ns = operator_grid(2 * kDefaultDeadZones);
   const int plays = o_.operators > 0 ? ns.front() : ns[ns.size() / 2];
   const int m = o_.dead_zones >= 0 ? o_.dead_zones : kDefaultDeadZones;
@@ -524,12 +526,12 @@ void Identifier::add_creep(Candidate& c) {
       if (alt.fit.rmse < best.fit.rmse) best = std::move(alt);
     }
   }
-  if (best.score() < c.score()) c = std::move(best);
+  if (o_.creep_always || best.score() < c.score()) c = std::move(best);
 }
 
 FitResult Identifier::run() {
   progress(0.0, "checking the record");
-  const int delay = choose_delay();
+  int delay = choose_delay(o_.kind.value_or(ModelKind::kModifiedPi));
   r_.set_delay(delay);
   memo_.clear();
 
@@ -573,6 +575,30 @@ FitResult Identifier::run() {
     if (o_.creep) add_creep(mpi);
     if (mpi.score() <= best->score()) best = nested_rpi(mpi, best->structure);
   }
+  std::vector<std::string> notes;
+  if (o_.kind && *o_.kind != ModelKind::kPi && o_.play_thresholds.empty()) {
+    // The classical PI is contained in every richer family (no dead zones, unit coupling, zero
+    // rate coefficients): a richer fit that does worse on held-out data than it has fitted the
+    // record's noise or transients, not the device, and the PI is returned in its place.
+    progress(0.95, "checking against the classical PI it contains");
+    // At the delay a classical PI fit would choose itself, so that `--model pi` on the same
+    // record is never better than what this returns.
+    const int pi_delay = choose_delay(ModelKind::kPi);
+    if (pi_delay != delay) r_.set_delay(pi_delay), memo_.clear();
+    Candidate pi = search_pi();
+    if (o_.refine_thresholds) refine(pi);
+    if (o_.creep) add_creep(pi);
+    if (pi.score() < best->score()) {
+      const std::string unit = " " + o_.units.output;
+      notes.push_back("fell back to the classical PI: the " + std::string(to_string(*o_.kind)) +
+                      " fit's held-out rms was " + fmt(best->score()) + unit +
+                      ", the classical PI's " + fmt(pi.score()) + unit +
+                      " (a richer family is never returned worse than the PI it contains)");
+      pi.method += " (fall-back: better than " + std::string(to_string(*o_.kind)) + ")";
+      best = std::move(pi);
+      delay = pi_delay;
+    }
+  }
   progress(0.97, "scoring");
 
   FitResult out;
@@ -593,6 +619,19 @@ FitResult Identifier::run() {
   out.method = best->method;
   out.delay_samples = delay;
   out.creep = !best->structure.creep_time_constants.empty();
+  out.skipped_samples = r_.begin;
+  if (!o_.skip_samples && r_.begin > 0) {
+    notes.insert(notes.begin(),
+                 "left out the first " + fmt(static_cast<double>(r_.begin) * r_.dt) + " s (" +
+                     std::to_string(r_.begin) +
+                     " samples, until the input reached both its extremes: the state before the "
+                     "record is unknown); simulated, neither fitted nor scored");
+  }
+  if (o_.creep && !o_.creep_always) {
+    notes.push_back(out.creep ? "creep lags kept: they lowered the held-out error"
+                              : "no creep lags: they did not lower the held-out error");
+  }
+  out.notes = std::move(notes);
   out.candidates = std::move(log_);
   progress(1.0, "done");
   return out;

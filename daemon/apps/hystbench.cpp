@@ -81,6 +81,18 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   fit_cmd->add_flag("!--no-refine", fit.refine,
                     "Skip the Levenberg-Marquardt threshold refinement");
+  fit_cmd
+      ->add_option("--skip", fit.skip_s,
+                   "Seconds at the start left out of fit and score (default: until the input "
+                   "has reached both of its extremes, the start-up from an unknown state)")
+      ->check(CLI::NonNegativeNumber);
+  auto* creep_on = fit_cmd->add_flag_callback(
+      "--creep", [&fit] { fit.creep = true; },
+      "Always fit creep lags (default: tried, kept when they lower the held-out error)");
+  fit_cmd
+      ->add_flag_callback(
+          "--no-creep", [&fit] { fit.creep = false; }, "Never fit creep lags")
+      ->excludes(creep_on);
   fit_cmd->add_option("-o,--output", fit.output_path, "Model file to write (JSON)")->required();
   fit_cmd->add_flag("--json", fit.json_output, "Print the result as one JSON line");
   add_column_options(fit_cmd, fit.columns, false);

@@ -20,13 +20,25 @@ std::string trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
-std::vector<std::string> split(const std::string& line) {
+// Cells of one line: comma-separated, or (whitespace_separated) split on runs of blanks.
+std::vector<std::string> split(const std::string& line, bool whitespace_separated) {
   std::vector<std::string> out;
   std::string cell;
   std::stringstream ss(line);
+  if (whitespace_separated) {
+    while (ss >> cell) out.push_back(cell);
+    return out;
+  }
   while (std::getline(ss, cell, ',')) out.push_back(trim(cell));
   if (!line.empty() && line.back() == ',') out.emplace_back();
   return out;
+}
+
+bool is_number(const std::string& c) {
+  if (c.empty()) return false;
+  char* end = nullptr;
+  std::strtod(c.c_str(), &end);
+  return end == c.c_str() + c.size();
 }
 
 }  // namespace
@@ -38,6 +50,7 @@ DataTable DataTable::parse_csv(const std::string& text, const std::string& origi
   std::string line;
   std::size_t line_no = 0;
   bool have_header = false;
+  bool whitespace_separated = false;
   while (std::getline(in, line)) {
     ++line_no;
     const std::string s = trim(line);
@@ -46,8 +59,18 @@ DataTable DataTable::parse_csv(const std::string& text, const std::string& origi
       t.comments_.push_back(s.substr(1));
       continue;
     }
-    const auto cells = split(s);
-    if (!have_header) {
+    if (!have_header) whitespace_separated = s.find(',') == std::string::npos;
+    const auto cells = split(s, whitespace_separated);
+    if (!have_header && std::all_of(cells.begin(), cells.end(), is_number)) {
+      // No header: a bare numeric export (MATLAB's save -ascii, a DAQ's .dat). The columns are
+      // named by their 1-based position, and this line is the first row.
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        t.names_.push_back(std::to_string(i + 1));
+        t.index_.emplace(t.names_.back(), i);
+      }
+      t.columns_.resize(cells.size());
+      have_header = true;
+    } else if (!have_header) {
       for (std::size_t i = 0; i < cells.size(); ++i) {
         if (cells[i].empty()) {
           throw DataFileError(origin + ":" + std::to_string(line_no) + ": header column " +
@@ -146,6 +169,14 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
   }
   const DataTable data = DataTable::read_csv(path);
   Record r;
+  // A missing column is named with the columns the file has and the option that picks another.
+  auto require_column = [&](const std::string& name, const char* role, const char* option) {
+    if (data.has(name)) return;
+    std::string have;
+    for (const auto& n : data.names()) have += (have.empty() ? "" : ", ") + n;
+    throw DataFileError(path + ": no " + role + " column '" + name + "' (columns: " + have +
+                        "); name it with " + option);
+  };
   auto scaled = [&](const std::string& name, double scale) {
     std::vector<double> v = data.column(name);
     for (std::size_t k = 0; k < v.size(); ++k) {
@@ -163,12 +194,15 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
     for (std::size_t k = 0; k < r.t.size(); ++k) r.t[k] = static_cast<double>(k) / columns.rate_hz;
     r.sample_period_s = 1.0 / columns.rate_hz;
   } else {
+    require_column(columns.t, "time", "--t-column, or give the sample rate with --rate");
     data.require_increasing(columns.t);
     r.t = data.column(columns.t);
     if (r.t.size() < 2) throw DataFileError(path + ": need at least 2 rows");
     r.sample_period_s = median_step(r.t);
   }
+  require_column(columns.u, "input", "--u-column");
   r.u = scaled(columns.u, columns.u_scale);
+  if (y_required) require_column(columns.y, "output", "--y-column");
   if (y_required || data.has(columns.y)) r.y = scaled(columns.y, columns.y_scale);
   return r;
 }

@@ -88,6 +88,14 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     opt.dead_zones = cmd.dead_zones;
     opt.heldout_fraction = cmd.heldout_fraction;
     opt.refine_thresholds = cmd.refine;
+    // A file's history is unknown: by default its start is left out until the input has
+    // reached both extremes.
+    opt.skip_samples = std::nullopt;
+    if (cmd.skip_s) {
+      opt.skip_samples = static_cast<std::size_t>(std::lround(*cmd.skip_s / data.sample_period_s));
+    }
+    opt.creep = cmd.creep.value_or(true);  // unset: tried, kept when it lowers held-out error
+    opt.creep_always = cmd.creep.value_or(false);
     if (!cmd.json_output) {
       opt.progress = [&err](double fraction, const std::string& what) {
         err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction) << " %] " << what
@@ -105,19 +113,33 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
                            {"method", r.method},
                            {"operators", r.operators},
                            {"dead_zones", r.dead_zones},
+                           {"delay_samples", r.delay_samples},
+                           {"creep", r.creep},
+                           {"skipped_samples", r.skipped_samples},
+                           {"notes", r.notes},
                            {"fit", to_json(r.fit)},
                            {"heldout", to_json(r.heldout)}};
     save_model_file(cmd.output_path, file);
     const std::string type(hc::to_string(r.model.hysteresis().kind()));
     if (cmd.json_output) {
-      out << json{{"model", cmd.output_path},     {"type", type},       {"operators", r.operators},
-                  {"dead_zones", r.dead_zones},   {"method", r.method}, {"fit", to_json(r.fit)},
+      out << json{{"model", cmd.output_path},
+                  {"type", type},
+                  {"operators", r.operators},
+                  {"dead_zones", r.dead_zones},
+                  {"delay_samples", r.delay_samples},
+                  {"creep", r.creep},
+                  {"skipped_samples", r.skipped_samples},
+                  {"method", r.method},
+                  {"notes", r.notes},
+                  {"fit", to_json(r.fit)},
                   {"heldout", to_json(r.heldout)}}
                  .dump()
           << "\n";
     } else {
       out << "model     " << type << " with " << r.operators << " plays, " << r.dead_zones
-          << " dead zones per side (" << r.method << ")\n";
+          << " dead zones per side, delay " << r.delay_samples << " samples, "
+          << (r.creep ? "with" : "no") << " creep lags (" << r.method << ")\n";
+      for (const std::string& note : r.notes) out << "note      " << note << "\n";
       print_stats(out, "fit", r.fit, r.model.units.output);
       print_stats(out, "held-out", r.heldout, r.model.units.output);
       out << "saved     " << cmd.output_path << "\n";

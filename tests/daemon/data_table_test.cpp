@@ -52,6 +52,23 @@ TEST(DataTable, ErrorsCarryTheLineNumber) {
   }
 }
 
+TEST(DataTable, ReadsABlankSeparatedFileWithoutHeaderByColumnPosition) {
+  // The shape of a MATLAB `save -ascii` export (the NTU piezo records): blanks, no header.
+  const auto t = hd::DataTable::parse_csv(
+      "   1.8000000e+00   0.0   -1.2310000e+02\n\t1.9e+00\t0.0\t-1.2e+02\n", "m.dat");
+  ASSERT_EQ(t.rows(), 2u);
+  EXPECT_EQ(t.names(), (std::vector<std::string>{"1", "2", "3"}));
+  EXPECT_DOUBLE_EQ(t.column("1")[0], 1.8);
+  EXPECT_DOUBLE_EQ(t.column("3")[1], -120.0);
+  EXPECT_EQ(t.line_of_row(1), 2u);
+  // A blank-separated file may still have a header; a ragged row names its line.
+  EXPECT_DOUBLE_EQ(hd::DataTable::parse_csv("t u\n0 1\n1 2\n").column("u")[1], 2.0);
+  EXPECT_NE(error_of("1 2 3\n4 5\n").find("f.csv:2: expected 3 values, found 2"),
+            std::string::npos);
+  // A comma-separated file without header is read the same way.
+  EXPECT_DOUBLE_EQ(hd::DataTable::parse_csv("0,5\n1,6\n").column("2")[1], 6.0);
+}
+
 TEST(DataTable, WriteThenReadRoundTrips) {
   const auto path = std::filesystem::temp_directory_path() / "hystbench_data_table_test.csv";
   std::vector<double> a{0.0, 0.1, 0.2}, b{1.23456789012, -2.0, 3.5e-7};
@@ -94,7 +111,8 @@ TEST(DataTable, ReadRecordMapsNamesScalesAndARateForFilesWithoutTime) {
   hd::RecordColumns no_rate = c;
   no_rate.rate_hz = 0.0;
   EXPECT_NE(
-      error_of_record(no_rate).find("missing column 't' (columns: k, drive_mV, pos_m, other)"),
+      error_of_record(no_rate).find("no time column 't' (columns: k, drive_mV, pos_m, other); "
+                                    "name it with --t-column, or give the sample rate with --rate"),
       std::string::npos);
   no_rate.t = "k";
   EXPECT_DOUBLE_EQ(hd::read_record(path, no_rate, true).sample_period_s, 1.0);
@@ -106,6 +124,8 @@ TEST(DataTable, ReadRecordMapsNamesScalesAndARateForFilesWithoutTime) {
   hd::RecordColumns no_y = c;
   no_y.y = "absent";
   EXPECT_TRUE(hd::read_record(path, no_y, false).y.empty());
-  EXPECT_NE(error_of_record(no_y).find("missing column 'absent'"), std::string::npos);
+  EXPECT_NE(error_of_record(no_y).find("no output column 'absent' (columns: k, drive_mV, pos_m, "
+                                       "other); name it with --y-column"),
+            std::string::npos);
   std::filesystem::remove(path);
 }

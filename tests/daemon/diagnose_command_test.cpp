@@ -211,7 +211,7 @@ TEST_F(DiagnoseCommandTest, BadInputGivesAClearError) {
   std::string no_y = "t,u\n";
   for (int k = 0; k < 1000; ++k)
     no_y += std::to_string(k * 1e-3) + "," + std::to_string(k % 50) + "\n";
-  EXPECT_NE(error_of(no_y).find("missing column 'y'"), std::string::npos);
+  EXPECT_NE(error_of(no_y).find("no output column 'y' (columns: t, u)"), std::string::npos);
   EXPECT_EQ(error_of(no_y).rfind("hystbench: error: ", 0), 0u);
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "details/diagnosis_signals.hpp"
+#include "details/record_startup.hpp"
 #include "details/validate.hpp"
 
 namespace hystbench::compensation::details {
@@ -70,18 +71,6 @@ DataSplit make_split(std::span<const double> u, int blocks, int heldout_every) {
   }
   s.fit_samples = n - s.heldout_samples;
   return s;
-}
-
-std::size_t startup_samples(std::span<const double> u, std::size_t max_samples) {
-  const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
-  const double band = 0.005 * (*hi - *lo);
-  bool low = false, high = false;
-  for (std::size_t k = 0; k < u.size() && k < max_samples; ++k) {
-    low = low || u[k] <= *lo + band;
-    high = high || u[k] >= *hi - band;
-    if (low && high) return k;
-  }
-  return max_samples;
 }
 
 DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const double> u,

@@ -49,11 +49,6 @@ struct DiagnosisRecord {
 /// has two or more, at most half). Uses the input only.
 DataSplit make_split(std::span<const double> u, int blocks, int heldout_every);
 
-/// Samples at the start whose hysteresis state the record does not determine: until the input
-/// has come within 0.5 % of its span to both its minimum and its maximum (a PI's memory of what
-/// came before is then wiped out), at most one split block.
-std::size_t startup_samples(std::span<const double> u, std::size_t max_samples);
-
 /// Validated record (lengths, finiteness, increasing t, non-constant u and y, enough samples).
 /// Throws std::invalid_argument with a clear message.
 DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const double> u,

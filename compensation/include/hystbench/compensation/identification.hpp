@@ -50,11 +50,18 @@ struct FitOptions {
   int max_delay_samples = 3;
   /// Samples at the start that are simulated but neither fitted nor scored (a start-up
   /// transient, e.g. the first cycle of a measurement that began from an unknown state).
-  std::size_t skip_samples = 0;
+  /// 0 (default) suits a record that starts relaxed at u[0] (the bench's recordings, which
+  /// precondition the actuator first). std::nullopt = automatic, what `hystbench fit` uses for
+  /// a file of unknown history: until the input has reached both of its extremes (the hysteresis
+  /// memory of what came before is then wiped out), at most a quarter of the part before the
+  /// held-out part. FitResult::skipped_samples says how many.
+  std::optional<std::size_t> skip_samples = 0;
   /// Also try creep lags (CreepOperatorBank) fitted jointly with the weights; kept only when
-  /// the held-out error improves. Time constants: creep_time_constants_s, or when empty
-  /// `creep_operators` log-spaced between 5 % and 50 % of the record duration.
+  /// the held-out error improves (or always, with creep_always). Time constants:
+  /// creep_time_constants_s, or when empty `creep_operators` log-spaced between 5 % and 50 % of
+  /// the record duration.
   bool creep = false;
+  bool creep_always = false;
   int creep_operators = 4;
   std::vector<double> creep_time_constants_s;
   /// Fixed play thresholds (r_0 = 0, strictly increasing) [input unit]; overrides
@@ -92,6 +99,10 @@ struct FitResult {
   std::string method;  ///< e.g. "constrained-lsq+lm"
   int delay_samples = 0;
   bool creep = false;
+  std::size_t skipped_samples = 0;  ///< at the start, simulated but neither fitted nor scored
+  /// What the fit decided that the user did not ask for, one sentence each (the start left out,
+  /// a fall-back to the classical PI, creep kept or dropped).
+  std::vector<std::string> notes;
   /// Every candidate scored, in the order tried (the chosen one is `model`).
   std::vector<FitCandidate> candidates;
 };

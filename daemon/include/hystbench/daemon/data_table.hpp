@@ -1,7 +1,9 @@
 #pragma once
 // Columnar numeric data files (CSV): lines starting with '#' are comments, the first other line
 // is a header naming the columns, every following line is one row of numbers. Bench run logs
-// (sample_log) use the same format, so they can be read back here.
+// (sample_log) use the same format, so they can be read back here. A first line without a comma
+// makes the file blank-separated (spaces or tabs); a first line of numbers only means the file
+// has no header, and its columns are named "1", "2", ... by position (a MATLAB or DAQ .dat).
 // Errors carry the file name and line number. Not real-time safe.
 #include <map>
 #include <optional>

@@ -21,6 +21,11 @@ struct FitCommand {
   int dead_zones = -1;             ///< -1 = chosen by held-out error
   double heldout_fraction = 0.25;
   bool refine = true;
+  /// Seconds at the start neither fitted nor scored; unset = until the input has reached both
+  /// of its extremes (the record's start-up from an unknown state).
+  std::optional<double> skip_s;
+  /// Creep lags: true = always fitted, false = never, unset = kept when held-out error improves.
+  std::optional<bool> creep;
   std::string output_path;
   bool json_output = false;
   RecordColumns columns;  ///< which columns are t, u, y (default t, u, y)
