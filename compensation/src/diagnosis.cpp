@@ -3,13 +3,16 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "details/diagnosis_baseline.hpp"
 #include "details/diagnosis_candidates.hpp"
 #include "details/diagnosis_extension_fit.hpp"
+#include "details/diagnosis_left_out.hpp"
 #include "details/diagnosis_record.hpp"
 #include "details/diagnosis_signals.hpp"
+#include "details/record_startup.hpp"
 
 namespace hystbench::compensation {
 
@@ -26,6 +29,13 @@ constexpr double kOneLoopBand = 0.03;  // of the input span: a reversal this clo
 constexpr double kAmbiguity = 0.9;
 // Bins of the residual profiles.
 constexpr std::size_t kTimeBins = 32, kLevelBins = 24, kRateBins = 24, kSinceBins = 16;
+// Several records: an extension carries over when its geometric-mean gain on the records left
+// out whole is at least half the named gain's margin (1.1 with min_gain 1.2) and it loses on no
+// left-out record by more than this.
+constexpr double kMaxLeftOutLoss = 0.95;
+// The baseline family "does not fit the device" when, fitted on the others, it predicts some
+// record this many times worse than it predicts its own held-out blocks.
+constexpr double kFamilyMismatch = 3.0;
 
 using TestFunction = details::CandidateOutcome (*)(const details::CandidateContext&);
 
@@ -125,6 +135,35 @@ bool DataSplit::is_heldout(std::size_t k) const noexcept {
   return false;
 }
 
+bool DataSplit::is_skipped(std::size_t k) const noexcept {
+  for (const auto& [b, e] : skipped_ranges) {
+    if (k < b) return false;
+    if (k < e) return true;
+  }
+  return false;
+}
+
+ValidationScore validate_model(ActuatorModel model, std::span<const double> u,
+                               std::span<const double> y, double dt) {
+  if (u.size() != y.size() || u.size() < 2 || !(dt > 0.0)) {
+    throw std::invalid_argument("validate_model: u and y need equal lengths >= 2 and dt > 0");
+  }
+  const std::vector<double> yhat = model.simulate(u, dt);
+  ValidationScore v;
+  v.skipped = details::startup_samples(u, u.size() / 32);
+  v.samples = u.size() - v.skipped;
+  const auto n = static_cast<double>(v.samples);
+  for (std::size_t k = v.skipped; k < u.size(); ++k) v.offset += (y[k] - yhat[k]) / n;
+  double square = 0.0;
+  for (std::size_t k = v.skipped; k < u.size(); ++k) {
+    const double e = y[k] - yhat[k] - v.offset;
+    square += e * e;
+    v.max_abs = std::max(v.max_abs, std::abs(e));
+  }
+  v.rmse = std::sqrt(square / n);
+  return v;
+}
+
 std::string DataSplit::describe(double sample_period_s) const {
   std::string s = "record cut into " + std::to_string(blocks) + " equal blocks, " +
                   std::to_string(heldout.size()) + " interleaved ones held out (" +
@@ -134,7 +173,11 @@ std::string DataSplit::describe(double sample_period_s) const {
     s += (i ? ", " : " ") + num(static_cast<double>(heldout[i].first) * sample_period_s) + "-" +
          num(static_cast<double>(heldout[i].second) * sample_period_s) + " s";
   }
-  if (skipped > 0) {
+  if (skipped > 0 && records > 1) {
+    s += "; the start of each of the " + std::to_string(records) + " records (" +
+         num(static_cast<double>(skipped) * sample_period_s) +
+         " s in all, until its input has reached both its extremes) neither fitted nor scored";
+  } else if (skipped > 0) {
     s += "; the first " + num(static_cast<double>(skipped) * sample_period_s) +
          " s (until the input has reached both its extremes) neither fitted nor scored";
   }
@@ -155,14 +198,118 @@ const ResidualProfile* Diagnosis::profile(std::string_view variable) const noexc
   return nullptr;
 }
 
-Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::span<const double> y,
-                   const DiagnosisOptions& options) {
+namespace {
+
+// Leave-one-record-out scores of every candidate's structure against the baseline's (several
+// records only); marks the candidates that do not carry over and notes what the set shows.
+void score_left_out(Diagnosis& d, const details::DiagnosisRecord& r,
+                    const std::vector<details::RecordPart>& parts,
+                    const details::ExtensionSpec& base,
+                    const std::vector<details::ExtensionFit>& fits,
+                    const DiagnosisOptions& options) {
+  const details::LeftOutScorer scorer(r, parts, options);
+  const auto base_rms = scorer.rms(base);
+  if (!base_rms) {
+    d.notes.push_back(
+        "the baseline could not be fitted with a record left out; no candidate "
+        "is judged across records");
+    return;
+  }
+  const double carry = 1.0 + 0.5 * (options.min_gain - 1.0);
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    CandidateReport& c = d.candidates[i];
+    const auto rms = scorer.rms(fits[i].spec);
+    if (!rms) {
+      c.carries_over = false;
+      c.left_out_gain = 0.0;
+      continue;
+    }
+    double log_sum = 0.0;
+    bool loses = false;
+    for (std::size_t j = 0; j < parts.size(); ++j) {
+      const double gain = (*rms)[j] > 0.0 ? (*base_rms)[j] / (*rms)[j] : 1.0;
+      c.left_out.push_back({parts[j].name, (*base_rms)[j], (*rms)[j], gain});
+      log_sum += std::log(std::max(gain, 1e-12));
+      loses = loses || gain < kMaxLeftOutLoss;
+    }
+    c.left_out_gain = std::exp(log_sum / static_cast<double>(parts.size()));
+    c.carries_over = !loses && c.left_out_gain >= carry;
+  }
+  std::string worst;
+  double worst_ratio = 0.0;
+  for (std::size_t j = 0; j < parts.size(); ++j) {
+    const double ratio =
+        d.baseline_heldout.rmse > 0.0 ? (*base_rms)[j] / d.baseline_heldout.rmse : 0.0;
+    if (ratio > worst_ratio) worst_ratio = ratio, worst = parts[j].name;
+  }
+  if (worst_ratio >= kFamilyMismatch) {
+    bool any = false;
+    for (const CandidateReport& c : d.candidates) any = any || (c.carries_over && c.gain > 1.0);
+    d.notes.push_back(
+        "across records: fitted on the others, the baseline predicts " + worst + " " +
+        num(worst_ratio) + "x worse than its own held-out blocks" +
+        (any ? "; an extension that carries over is needed"
+             : "; no candidate carries over either: the model family does not fit this device "
+               "across records (its hysteresis or the effect changes from record to record)"));
+  }
+}
+
+std::string left_out_summary(const CandidateReport& c) {
+  std::string s;
+  for (const LeftOutScore& l : c.left_out) {
+    s += (s.empty() ? "" : ", ") + l.record + " " + num(l.gain);
+  }
+  return s;
+}
+
+// Sensor offsets differ between runs: each record's output is shifted onto the first's by its
+// mean residual against the baseline fitted on all (twice: the fit moves with the shifts).
+// Returns the shift of each record (0 for the first) [output unit]; y is shifted in place.
+std::vector<double> align_offsets(std::span<const double> t, std::span<const double> u,
+                                  std::vector<double>& y, const DiagnosisOptions& options,
+                                  const std::vector<details::RecordPart>& parts) {
+  std::vector<std::size_t> starts;
+  for (const details::RecordPart& p : parts) starts.push_back(p.begin);
+  std::vector<double> total(parts.size(), 0.0);
+  for (int iteration = 0; iteration < 2; ++iteration) {
+    const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options, starts);
+    std::vector<double> prediction;
+    if (options.baseline && options.baseline->valid()) {
+      prediction = ActuatorModel(*options.baseline).simulate(u, r.dt);
+    } else {
+      prediction = details::fit_pi_baseline(r).fit.prediction;
+    }
+    std::vector<double> mean(parts.size(), 0.0);
+    for (std::size_t i = 0; i < parts.size(); ++i) {
+      std::size_t n = 0;
+      for (std::size_t k = parts[i].begin; k < parts[i].end; ++k) {
+        if (r.part[k] == details::kSkippedPart) continue;
+        mean[i] += y[k] - prediction[k], ++n;
+      }
+      mean[i] /= static_cast<double>(std::max<std::size_t>(n, 1));
+    }
+    for (std::size_t i = 1; i < parts.size(); ++i) {
+      const double shift = mean[i] - mean[0];
+      for (std::size_t k = parts[i].begin; k < parts[i].end; ++k) y[k] -= shift;
+      total[i] += shift;
+    }
+  }
+  return total;
+}
+
+Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
+                        std::span<const double> y, const DiagnosisOptions& options,
+                        std::vector<details::RecordPart> parts) {
   auto progress = [&](double f, const std::string& what) {
     if (options.progress) options.progress(f, what);
   };
   progress(0.0, "checking the record");
-  const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options);
+  std::vector<std::size_t> starts;
+  for (const details::RecordPart& p : parts) starts.push_back(p.begin);
+  const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options, starts);
   Diagnosis d;
+  for (const details::RecordPart& p : parts) d.records.push_back(p.name);
+  d.record_starts = starts;
   d.samples = r.n;
   d.sample_period_s = r.dt;
   d.split = r.split;
@@ -260,6 +407,10 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
     rep.prediction = std::move(o.fit.prediction);
     d.candidates.push_back(std::move(rep));
   }
+  if (parts.size() > 1) {
+    progress(0.93, "leaving each record out");
+    score_left_out(d, r, parts, base, fits, options);
+  }
 
   // ---- decision
   progress(0.95, "deciding");
@@ -270,7 +421,15 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
   std::vector<const CandidateReport*> eligible;
   for (const CandidateReport& c : d.candidates) {
     if (c.significant && c.heldout.rmse > 0.0 && reference / c.heldout.rmse >= options.min_gain) {
-      eligible.push_back(&c);
+      if (c.carries_over) {
+        eligible.push_back(&c);
+      } else {
+        d.notes.push_back(std::string(to_string(c.cause)) + " does not carry over: it gains " +
+                          num(c.gain) +
+                          "x on the held-out blocks, but fitted on the other records it "
+                          "predicts each record left out whole at gain " +
+                          left_out_summary(c) + "; not named");
+      }
     }
   }
   std::sort(eligible.begin(), eligible.end(),
@@ -297,6 +456,10 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
     d.verdict = std::string(to_string(w.cause)) + ": " + w.evidence + ". " + w.extension +
                 " lowers the held-out rms error from " + num(d.baseline_heldout.rmse) + " to " +
                 num(w.heldout.rmse) + " " + unit + " (gain " + num(w.gain) + ")";
+    if (!w.left_out.empty()) {
+      d.verdict +=
+          ", and carries over to every record left out whole (gain " + left_out_summary(w) + ")";
+    }
   }
   if (!eligible.empty() && d.cause != Cause::kNone) {
     for (std::size_t i = 1; i < eligible.size(); ++i) {
@@ -412,7 +575,9 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
     std::vector<std::size_t> order;
     for (std::size_t i = 0; i < d.candidates.size(); ++i) {
       const CandidateReport& c = d.candidates[i];
-      if (i != named && c.significant && c.cause != Cause::kDrift) order.push_back(i);
+      if (i != named && c.significant && c.carries_over && c.cause != Cause::kDrift) {
+        order.push_back(i);
+      }
     }
     std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
       return d.candidates[a].gain > d.candidates[b].gain;
@@ -448,6 +613,63 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
     }
   }
   progress(1.0, "done");
+  return d;
+}
+
+}  // namespace
+
+Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::span<const double> y,
+                   const DiagnosisOptions& options) {
+  return run_diagnosis(t, u, y, options, {{"record", 0, u.size()}});
+}
+
+Diagnosis diagnose(std::span<const RecordView> records, const DiagnosisOptions& options) {
+  if (records.empty()) throw std::invalid_argument("no record to diagnose");
+  if (records.size() == 1) {
+    Diagnosis d = diagnose(records[0].t, records[0].u, records[0].y, options);
+    if (!records[0].name.empty()) d.records = {records[0].name};
+    return d;
+  }
+  std::vector<details::RecordPart> parts;
+  std::vector<double> t, u, y;
+  double dt0 = 0.0;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const RecordView& rec = records[i];
+    const std::string name = rec.name.empty() ? "record " + std::to_string(i + 1) : rec.name;
+    try {
+      // Each record on its own must be a record the diagnosis takes.
+      details::make_diagnosis_record(rec.t, rec.u, rec.y, options);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(name + ": " + e.what());
+    }
+    const double dt = (rec.t.back() - rec.t.front()) / static_cast<double>(rec.t.size() - 1);
+    if (i == 0) dt0 = dt;
+    if (std::abs(dt - dt0) > 0.01 * dt0) {
+      throw std::invalid_argument(name + ": sample period " + num(dt * 1e3) + " ms differs from " +
+                                  parts.front().name + "'s " + num(dt0 * 1e3) +
+                                  " ms; records diagnosed together need one sample rate");
+    }
+    parts.push_back({name, u.size(), u.size() + rec.u.size()});
+    u.insert(u.end(), rec.u.begin(), rec.u.end());
+    y.insert(y.end(), rec.y.begin(), rec.y.end());
+  }
+  t.resize(u.size());
+  for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) * dt0;
+  const std::vector<double> offsets = align_offsets(t, u, y, options, parts);
+  Diagnosis d = run_diagnosis(t, u, y, options, parts);
+  d.record_offsets = offsets;
+  std::string shifted;
+  for (std::size_t i = 1; i < parts.size(); ++i) {
+    if (std::abs(offsets[i]) <= 3.0 * d.noise_rms) continue;
+    shifted += (shifted.empty() ? "" : ", ") + parts[i].name + " by " + num(-offsets[i]) + " " +
+               options.units.output;
+  }
+  if (!shifted.empty()) {
+    d.notes.push_back(
+        "output offsets differ between the records (a sensor offset of the run, "
+        "not a property of the device): aligned to " +
+        parts.front().name + "'s, " + shifted);
+  }
   return d;
 }
 

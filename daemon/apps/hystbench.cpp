@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
       "  hystbench invert actuator.json reference.csv -o drive.csv\n"
       "  hystbench diagnose run.csv --report diagnosis/ --save-extended extended.json\n"
       "  hystbench diagnose daq.csv --u-column u1_V --y-column y1_m --y-scale 1e6 --rate 6400\n"
+      "  hystbench diagnose run_1hz.csv run_5hz.csv run_20hz.csv --validate run_10hz.csv\n"
       "  hystbench identify --wait                  (bench: identify the actuator on the bench)\n"
       "  hystbench track --reference triangle --frequency 1 --periods 5 --compensator inverse "
       "--wait --json\n"};
@@ -145,11 +146,19 @@ int main(int argc, char** argv) {
   hd::DiagnoseCommand diag;
   auto* diag_cmd = app.add_subcommand(
       "diagnose",
-      "Find what a model misses on a record (t,u,y): asymmetry, rate_dependence, creep, "
-      "dynamics, delay, drift or none; gains measured on a held-out part");
+      "Find what a model misses on records (t,u,y) of one device: asymmetry, rate_dependence, "
+      "creep, dynamics, delay, drift or none; gains measured on held-out parts, and with "
+      "several records on each record left out whole");
   diag_cmd
-      ->add_option("data", diag.data_path, "CSV with columns t, u, y (a bench run log works too)")
+      ->add_option("data", diag.data_paths,
+                   "CSV with columns t, u, y (a bench run log works too); several records of one "
+                   "device are diagnosed together (effects seen only across records, such as "
+                   "rate dependence between runs at different frequencies)")
       ->required()
+      ->check(CLI::ExistingFile);
+  diag_cmd
+      ->add_option("--validate", diag.validate_paths,
+                   "Record(s) never fitted: the baseline and extended models are scored on them")
       ->check(CLI::ExistingFile);
   diag_cmd
       ->add_option("--model", diag.model_path,

@@ -77,6 +77,33 @@ json identification_of(const hc::Diagnosis& d, const std::string& data_path, boo
   return j;
 }
 
+// The baseline and the extended model scored on a record neither was fitted on.
+struct Validation {
+  std::string path;
+  hc::ValidationScore baseline, extended;
+  double gain() const { return extended.rmse > 0.0 ? baseline.rmse / extended.rmse : 1.0; }
+};
+
+json to_json(const Validation& v) {
+  return {{"data", v.path},
+          {"baseline_rms", v.baseline.rmse},
+          {"extended_rms", v.extended.rmse},
+          {"gain", v.gain()},
+          {"baseline_offset", v.baseline.offset},
+          {"extended_offset", v.extended.offset},
+          {"baseline_max_abs", v.baseline.max_abs},
+          {"extended_max_abs", v.extended.max_abs},
+          {"samples", v.extended.samples},
+          {"skipped_samples", v.extended.skipped}};
+}
+
+void print_validation(std::ostream& out, const Validation& v, const std::string& unit) {
+  out << "validate  " << v.path << " (never fitted; " << v.extended.samples
+      << " samples after the start-up, mean error removed): baseline rms " << fmt(v.baseline.rmse)
+      << " " << unit << ", extended " << fmt(v.extended.rmse) << " " << unit << " (gain "
+      << fmt(v.gain(), 3) << ")\n";
+}
+
 std::ofstream open_for_writing(const std::filesystem::path& p) {
   std::ofstream out(p, std::ios::trunc);
   if (!out) throw std::runtime_error(p.string() + ": cannot write");
@@ -89,6 +116,13 @@ std::ofstream open_for_writing(const std::filesystem::path& p) {
 json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
   json candidates = json::array();
   for (const hc::CandidateReport& c : d.candidates) {
+    json left_out = json::array();
+    for (const hc::LeftOutScore& l : c.left_out) {
+      left_out.push_back({{"record", l.record},
+                          {"baseline_rms", l.baseline_rms},
+                          {"rms", l.rms},
+                          {"gain", l.gain}});
+    }
     candidates.push_back({{"cause", std::string(hc::to_string(c.cause))},
                           {"statistic", c.statistic},
                           {"threshold", c.threshold},
@@ -97,7 +131,20 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
                           {"rmse_fit", c.fit.rmse},
                           {"gain", c.gain},
                           {"evidence", c.evidence},
-                          {"extension", c.extension}});
+                          {"extension", c.extension},
+                          {"carries_over", c.carries_over},
+                          {"left_out_gain", c.left_out_gain},
+                          {"left_out", left_out}});
+  }
+  json records = json::array();
+  for (std::size_t i = 0; i < d.records.size(); ++i) {
+    const std::size_t start = i < d.record_starts.size() ? d.record_starts[i] : 0;
+    const std::size_t end = i + 1 < d.record_starts.size() ? d.record_starts[i + 1] : d.samples;
+    const double offset = i < d.record_offsets.size() ? d.record_offsets[i] : 0.0;
+    records.push_back({{"data", d.records[i]},
+                       {"start", start},
+                       {"samples", end - start},
+                       {"output_offset", offset}});
   }
   json structure = json::object();
   for (const hc::ResidualProfile& p : d.profiles) structure[p.variable] = p.explained;
@@ -114,6 +161,7 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
           {"cause", std::string(hc::to_string(d.cause))},
           {"verdict", d.verdict},
           {"notes", d.notes},
+          {"records", records},
           {"samples", d.samples},
           {"sample_period_s", d.sample_period_s},
           {"heldout", d.split.describe(d.sample_period_s)},
@@ -137,8 +185,9 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
 void print_diagnosis(std::ostream& out, const hc::Diagnosis& d, const std::string& data_path) {
   const std::string unit = d.baseline.units.output;
   const double seconds = d.sample_period_s * static_cast<double>(d.samples - 1);
-  out << "data      " << data_path << ": " << d.samples << " samples, "
-      << fmt(1.0 / d.sample_period_s) << " Hz, " << fmt(seconds) << " s\n";
+  out << "data      " << data_path << ": " << d.samples << " samples"
+      << (d.records.size() > 1 ? " in " + std::to_string(d.records.size()) + " records" : "")
+      << ", " << fmt(1.0 / d.sample_period_s) << " Hz, " << fmt(seconds) << " s\n";
   out << "held out  " << d.split.describe(d.sample_period_s) << "\n";
   out << "baseline  " << d.baseline_description << "\n"
       << "          held-out rms " << fmt(d.baseline_heldout.rmse) << " " << unit << " ("
@@ -173,6 +222,12 @@ void print_diagnosis(std::ostream& out, const hc::Diagnosis& d, const std::strin
         << std::setw(5) << fmt(c.threshold, 2) << "  rms " << std::setw(9) << fmt(c.heldout.rmse)
         << "  gain " << std::setw(7) << fmt(c.gain, 3) << "  " << c.extension << "\n"
         << "  " << std::string(16, ' ') << " " << c.evidence << "\n";
+    if (!c.left_out.empty()) {
+      out << "  " << std::string(16, ' ') << " records left out whole: gain";
+      for (const hc::LeftOutScore& l : c.left_out) out << " " << fmt(l.gain, 3);
+      out << " (geometric mean " << fmt(c.left_out_gain, 3) << ", "
+          << (c.carries_over ? "carries over" : "does not carry over") << ")\n";
+    }
   }
   out << "cause     " << hc::to_string(d.cause) << "\n          " << d.verdict << "\n";
   for (const std::string& n : d.notes) out << "note      " << n << "\n";
@@ -207,7 +262,7 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
          "(0 fit, 1 held out, 2 start-up: neither)\n";
     for (std::size_t k = 0; k < n; k += stride) {
       const double yb = d.baseline_prediction[k], ye = d.extended_prediction[k];
-      const int part = k < d.split.skipped ? 2 : d.split.is_heldout(k) ? 1 : 0;
+      const int part = d.split.is_skipped(k) ? 2 : d.split.is_heldout(k) ? 1 : 0;
       f << t[k] << ' ' << u[k] << ' ' << y[k] << ' ' << yb << ' ' << ye << ' ' << y[k] - yb << ' '
         << y[k] - ye << ' ' << part << '\n';
     }
@@ -298,10 +353,13 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
 
 int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
-    const Record data = read_record(cmd.data_path, cmd.columns, true);
-    const auto& t = data.t;
-    const auto& u = data.u;
-    const auto& y = data.y;
+    if (cmd.data_paths.empty()) throw std::invalid_argument("no record to diagnose");
+    std::vector<Record> records;
+    for (const std::string& path : cmd.data_paths) {
+      records.push_back(read_record(path, cmd.columns, true));
+    }
+    std::string label;
+    for (const std::string& path : cmd.data_paths) label += (label.empty() ? "" : " + ") + path;
     hc::DiagnosisOptions opt;
     if (!cmd.model_path.empty()) {
       opt.baseline = load_model_file(cmd.model_path).model;
@@ -314,25 +372,63 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
       };
     }
     hc::Diagnosis d;
-    try {
-      d = hc::diagnose(t, u, y, opt);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(cmd.data_path + ": " + e.what());
+    if (records.size() == 1) {
+      try {
+        d = hc::diagnose(records[0].t, records[0].u, records[0].y, opt);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(cmd.data_paths[0] + ": " + e.what());
+      }
+      d.records = {cmd.data_paths[0]};
+    } else {
+      std::vector<hc::RecordView> views;
+      for (std::size_t i = 0; i < records.size(); ++i) {
+        views.push_back({records[i].t, records[i].u, records[i].y, cmd.data_paths[i]});
+      }
+      d = hc::diagnose(views, opt);  // errors name the record
     }
     if (!cmd.json_output) err << "\n";
+    std::vector<Validation> validations;
+    for (const std::string& path : cmd.validate_paths) {
+      const Record v = read_record(path, cmd.columns, true);
+      try {
+        validations.push_back({path, hc::validate_model(d.baseline, v.u, v.y, v.sample_period_s),
+                               hc::validate_model(d.extended, v.u, v.y, v.sample_period_s)});
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(path + ": " + e.what());
+      }
+    }
     if (!cmd.save_baseline.empty()) {
       save_model_file(cmd.save_baseline,
-                      hc::ModelFile{d.baseline, identification_of(d, cmd.data_path, false)});
+                      hc::ModelFile{d.baseline, identification_of(d, label, false)});
     }
     if (!cmd.save_extended.empty()) {
       save_model_file(cmd.save_extended,
-                      hc::ModelFile{d.extended, identification_of(d, cmd.data_path, true)});
+                      hc::ModelFile{d.extended, identification_of(d, label, true)});
     }
-    if (!cmd.report_dir.empty()) write_diagnosis_report(cmd.report_dir, d, cmd.data_path, t, u, y);
+    if (!cmd.report_dir.empty()) {
+      // The records end to end, as the diagnosis saw them.
+      std::vector<double> t, u, y;
+      for (std::size_t i = 0; i < records.size(); ++i) {
+        const Record& r = records[i];
+        const double offset = i < d.record_offsets.size() ? d.record_offsets[i] : 0.0;
+        u.insert(u.end(), r.u.begin(), r.u.end());
+        for (const double v : r.y) y.push_back(v - offset);
+      }
+      for (std::size_t k = 0; k < u.size(); ++k) {
+        t.push_back(records.size() == 1 ? records[0].t[k]
+                                        : static_cast<double>(k) * d.sample_period_s);
+      }
+      write_diagnosis_report(cmd.report_dir, d, label, t, u, y);
+    }
     if (cmd.json_output) {
-      out << diagnosis_to_json(d, cmd.data_path).dump() << "\n";
+      json j = diagnosis_to_json(d, label);
+      json v = json::array();
+      for (const Validation& x : validations) v.push_back(to_json(x));
+      j["validation"] = v;
+      out << j.dump() << "\n";
     } else {
-      print_diagnosis(out, d, cmd.data_path);
+      print_diagnosis(out, d, label);
+      for (const Validation& x : validations) print_validation(out, x, d.baseline.units.output);
       if (!cmd.save_baseline.empty()) out << "saved     baseline " << cmd.save_baseline << "\n";
       if (!cmd.save_extended.empty()) out << "saved     extended " << cmd.save_extended << "\n";
       if (!cmd.report_dir.empty()) out << "report    " << cmd.report_dir << "\n";

@@ -54,7 +54,7 @@ void BenchFeedforwardTest::closes_the_loop(const char* toml, const std::string& 
   ASSERT_EQ(plain["end"], "completed") << plain.dump(2);
 
   hd::DiagnoseCommand diag;
-  diag.data_path = id["log"].get<std::string>();
+  diag.data_paths = {id["log"].get<std::string>()};
   diag.model_path = id["model"]["path"].get<std::string>();
   diag.save_extended = path("extended.json");
   diag.json_output = true;

@@ -74,7 +74,8 @@ DataSplit make_split(std::span<const double> u, int blocks, int heldout_every) {
 }
 
 DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const double> u,
-                                      std::span<const double> y, const DiagnosisOptions& o) {
+                                      std::span<const double> y, const DiagnosisOptions& o,
+                                      std::span<const std::size_t> record_starts) {
   require(t.size() == u.size() && u.size() == y.size(),
           "t, u and y must have the same length (t: " + std::to_string(t.size()) +
               ", u: " + std::to_string(u.size()) + ", y: " + std::to_string(y.size()) + ")");
@@ -103,11 +104,27 @@ DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const
     std::fill(r.part.begin() + static_cast<std::ptrdiff_t>(b),
               r.part.begin() + static_cast<std::ptrdiff_t>(e), kHeldoutPart);
   }
-  const std::size_t skip = startup_samples(u, r.n / r.split.blocks);
-  for (std::size_t k = 0; k < skip; ++k) {
-    if (r.part[k] == kFitPart) r.part[k] = kSkippedPart, ++r.split.skipped;
+  std::vector<std::size_t> starts{0};
+  for (const std::size_t s : record_starts) {
+    if (s > starts.back() && s < r.n) starts.push_back(s);
   }
-  r.split.fit_samples -= r.split.skipped;
+  r.split.records = starts.size();
+  for (std::size_t i = 0; i < starts.size(); ++i) {
+    const std::size_t end = i + 1 < starts.size() ? starts[i + 1] : r.n;
+    const std::size_t skip =
+        startup_samples(u.subspan(starts[i], end - starts[i]), r.n / r.split.blocks);
+    if (skip > 0) r.split.skipped_ranges.emplace_back(starts[i], starts[i] + skip);
+    for (std::size_t k = starts[i]; k < starts[i] + skip; ++k) {
+      // The first record's held-out rows are scored as before (a held-out block there starts
+      // later than the start-up); a later record's start follows another record, not the
+      // device's history, and is never scored.
+      if (r.part[k] == kFitPart) {
+        r.part[k] = kSkippedPart, ++r.split.skipped, --r.split.fit_samples;
+      } else if (i > 0 && r.part[k] == kHeldoutPart) {
+        r.part[k] = kSkippedPart, ++r.split.skipped, --r.split.heldout_samples;
+      }
+    }
+  }
   r.y_lo = std::numeric_limits<double>::infinity();
   r.y_hi = -r.y_lo;
   for (std::size_t k = 0; k < r.n; ++k) {

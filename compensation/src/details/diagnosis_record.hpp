@@ -50,9 +50,12 @@ struct DiagnosisRecord {
 DataSplit make_split(std::span<const double> u, int blocks, int heldout_every);
 
 /// Validated record (lengths, finiteness, increasing t, non-constant u and y, enough samples).
-/// Throws std::invalid_argument with a clear message.
+/// `record_starts`: the record is several records end to end, each starting at one of these
+/// samples (0 implied); each one's start is left out until its own input has reached both its
+/// extremes. Throws std::invalid_argument with a clear message.
 DiagnosisRecord make_diagnosis_record(std::span<const double> t, std::span<const double> u,
-                                      std::span<const double> y, const DiagnosisOptions& o);
+                                      std::span<const double> y, const DiagnosisOptions& o,
+                                      std::span<const std::size_t> record_starts = {});
 
 /// Error statistics of a whole-record prediction on the fit part and on the held-out part
 /// (the start-up samples in neither).

@@ -81,8 +81,13 @@ struct DataSplit {
   /// Samples at the start, before the input has reached both its extremes (the hysteresis
   /// state there depends on what came before the record): simulated, neither fitted nor scored.
   std::size_t skipped = 0;
+  /// Records end to end (diagnose() of a set): each one's start is skipped the same way.
+  std::size_t records = 1;
+  /// The skipped sample ranges [first, second), one per record at most, in time order.
+  std::vector<std::pair<std::size_t, std::size_t>> skipped_ranges;
 
   bool is_heldout(std::size_t k) const noexcept;
+  bool is_skipped(std::size_t k) const noexcept;
   /// One line, e.g. "4 interleaved blocks of 2125 samples held out (25 %): 4250-6375, ...".
   std::string describe(double sample_period_s) const;
 };
@@ -108,6 +113,16 @@ struct FrequencyResponse {
   std::vector<unsigned char> informative;
 };
 
+/// A model fitted on every other record of a set, predicting one record it never saw: rms
+/// error [output unit] on that record after its start-up, the record's mean error removed (a
+/// sensor offset differs between runs; it is not a property of the device).
+struct LeftOutScore {
+  std::string record;         ///< the record's name
+  double baseline_rms = 0.0;  ///< the baseline structure, fitted on the others
+  double rms = 0.0;           ///< this candidate's structure, fitted on the others
+  double gain = 0.0;          ///< baseline_rms / rms
+};
+
 struct CandidateReport {
   Cause cause = Cause::kNone;
   double statistic = 0.0;  ///< the cause's test statistic (what it is: see `evidence`)
@@ -123,10 +138,26 @@ struct CandidateReport {
   std::vector<double> drift;
   /// Whole-record prediction of the extended model (+ drift) [output unit].
   std::vector<double> prediction;
+  /// Several records: this structure fitted on all records but one, scored on that one, for
+  /// each record (leave-one-record-out); empty for a single record.
+  std::vector<LeftOutScore> left_out;
+  /// Geometric mean of the left-out gains (1 for a single record).
+  double left_out_gain = 1.0;
+  /// False when the extension gains in-record but not on the records left out whole: it
+  /// fits something of the records that is not a property of the device. Such a candidate is
+  /// never named.
+  bool carries_over = true;
 };
 
 struct Diagnosis {
   Cause cause = Cause::kNone;
+  /// The records diagnosed together (one name for a single record), and where each starts in
+  /// the concatenation every sample index and prediction here refers to.
+  std::vector<std::string> records;
+  std::vector<std::size_t> record_starts;
+  /// Several records: the output offset subtracted from each (0 for the first) so that their
+  /// sensor offsets agree [output unit]; every prediction here is of the shifted outputs.
+  std::vector<double> record_offsets;
   /// One paragraph: the named cause and why, or why none.
   std::string verdict;
   /// Caveats: ambiguous candidates, effects left over, missing excitation, ...
@@ -179,5 +210,36 @@ struct Diagnosis {
 /// u or y, or bad options.
 Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::span<const double> y,
                    const DiagnosisOptions& options = {});
+
+/// A model's error on a record it was not fitted on (`hystbench diagnose --validate`, and each
+/// record left out of a set): simulated from rest at u[0], scored after the start-up (until the
+/// input has reached both its extremes, at most 1/32 of the record), the mean error removed (a
+/// sensor offset differs between runs; it is not a property of the device) and reported apart.
+struct ValidationScore {
+  double rmse = 0.0;     ///< rms error, mean removed [output unit]
+  double max_abs = 0.0;  ///< largest |error - mean| [output unit]
+  double offset = 0.0;   ///< mean error [output unit]
+  std::size_t samples = 0, skipped = 0;
+};
+/// dt [s] > 0; u, y equal lengths, at least 2 samples. Throws std::invalid_argument otherwise.
+ValidationScore validate_model(ActuatorModel model, std::span<const double> u,
+                               std::span<const double> y, double dt);
+
+/// One record of a set of records of the same device (t [s], u, y as above).
+struct RecordView {
+  std::span<const double> t, u, y;
+  std::string name;
+};
+
+/// Diagnoses several records of one device together. They are taken end to end (same sample
+/// period within 1 %; each record's start is left out until its own input has reached both its
+/// extremes), fitted on every record's fit blocks and scored on the held-out blocks as above.
+/// Every candidate's structure (and the baseline's) is also fitted on all records but one and
+/// scored on that one, for each record in turn: a cause is named only when it gains on the
+/// records left out whole too, so effects seen only across records (rate dependence between
+/// runs at different frequencies) are found, and extensions that fit one record but not the
+/// device are not named. One record: the same as diagnose(t, u, y). Throws
+/// std::invalid_argument naming the record for a bad record or mismatched sample periods.
+Diagnosis diagnose(std::span<const RecordView> records, const DiagnosisOptions& options = {});
 
 }  // namespace hystbench::compensation

@@ -1,15 +1,23 @@
 #pragma once
-// `hystbench diagnose DATA.csv [--model MODEL.json] [--json] [--report DIR]
-//                     [--save-baseline FILE] [--save-extended FILE]`
-// Reads a record (columns t, u, y; bench run logs work too), runs compensation::diagnose()
-// and prints a short readable report, or one JSON object with --json:
+// `hystbench diagnose DATA.csv [MORE.csv ...] [--validate OTHER.csv ...] [--model MODEL.json]
+//                     [--json] [--report DIR] [--save-baseline FILE] [--save-extended FILE]`
+// Reads one or more records of one device (columns t, u, y; bench run logs work too), runs
+// compensation::diagnose() and prints a short readable report, or one JSON object with --json:
 //   {"cause": "<name>", "verdict": "..", "heldout": "<how the record was split>",
+//    "records": [{"data": path, "start": sample, "samples": n}, ...],
 //    "baseline": {"model": {model file}, "description": "..", "rmse": .., "max_abs": .., ...},
 //    "extended": {"model": {model file}, "description": "..", "rmse": .., "gain": .., ...},
 //    "candidates": [{"cause": .., "statistic": .., "threshold": .., "significant": ..,
-//                    "rmse_heldout": .., "gain": .., "evidence": "..", "extension": ".."}, ...],
+//                    "rmse_heldout": .., "gain": .., "evidence": "..", "extension": "..",
+//                    "carries_over": .., "left_out_gain": ..,
+//                    "left_out": [{"record", "baseline_rms", "rms", "gain"}, ...]}, ...],
+//    "validation": [{"data": path, "baseline_rms": .., "extended_rms": .., "gain": ..,
+//                    "baseline_offset": .., "extended_offset": .., "samples": ..}, ...],
 //    "residual_structure": {"time": share, "input": .., ...}, "noise_rms": .., "notes": [..]}
-// (rmse on the held-out part; gain = baseline rmse / candidate rmse).
+// (rmse on the held-out part; gain = baseline rmse / candidate rmse). Several records are
+// diagnosed together: fitted on every record's fit blocks, and every candidate also scored on
+// each record left out whole (left_out; empty for one record). --validate scores the baseline
+// and extended models on records that are never fitted (mean error removed, reported apart).
 // --report DIR writes report.txt, diagnosis.json, the plotted data, report.gp and the gnuplot
 // PNGs: loops.png (y against u with both models), residual_time.png (residual against time,
 // before and after), cause_<variable>.png (baseline residual against the named cause's
@@ -21,6 +29,7 @@
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "hystbench/compensation/diagnosis.hpp"
 #include "hystbench/daemon/data_table.hpp"
@@ -28,7 +37,8 @@
 namespace hystbench::daemon {
 
 struct DiagnoseCommand {
-  std::string data_path;
+  std::vector<std::string> data_paths;      ///< one or more records of one device
+  std::vector<std::string> validate_paths;  ///< records only scored, never fitted
   std::string model_path;  ///< empty: the baseline is a classical PI identified on the data
   bool json_output = false;
   std::string report_dir;     ///< empty: no report
