@@ -276,17 +276,25 @@ int main(int argc, char** argv) {
   add_output_flags(abort_cmd, false);
   auto* reset_cmd = app.add_subcommand("reset", "Leave FAULT after the cause is fixed");
   add_output_flags(reset_cmd, false);
-  auto* model_cmd = app.add_subcommand("model", "Show or load the active model");
+  auto* model_cmd = app.add_subcommand("model", "Show, list or load the active model");
   model_cmd->require_subcommand(1);
   auto* model_get = model_cmd->add_subcommand("get", "Print the active model file");
-  std::string model_path;
-  auto* model_load =
-      model_cmd->add_subcommand("load",
-                                "Load a model file (a relative path is taken from the current "
-                                "folder; the daemon must be able to read it)");
-  model_load->add_option("path", model_path, "Model file")->required();
+  std::string model_path, stored_model;
+  auto* model_load = model_cmd->add_subcommand(
+      "load",
+      "Make a model active: a model file here (read by this command and sent to the daemon, "
+      "which keeps a copy in its model folder), or --stored NAME from that folder");
+  auto* model_file_opt =
+      model_load->add_option("file", model_path, "Model file (JSON, from fit, diagnose, identify)")
+          ->check(CLI::ExistingFile);
+  model_load
+      ->add_option("--stored", stored_model,
+                   "Name of a model in the daemon's model folder (see `hystbench model list`)")
+      ->excludes(model_file_opt);
+  auto* model_list = model_cmd->add_subcommand("list", "The models in the daemon's model folder");
   add_output_flags(model_get, false);
   add_output_flags(model_load, false);
+  add_output_flags(model_list, false);
   auto* config_cmd = app.add_subcommand("config", "Print the daemon's effective configuration");
   add_output_flags(config_cmd, false);
 
@@ -330,8 +338,25 @@ int main(int argc, char** argv) {
   if (*reset_cmd) return remote_run("reset", nlohmann::json::object());
   if (*model_get) return remote_run("model.get", nlohmann::json::object());
   // The daemon resolves paths from its own folder: send the file as the user named it here.
+  if (*model_list) return remote_run("model.list", nlohmann::json::object());
   if (*model_load) {
-    return remote_run("model.load", {{"path", std::filesystem::absolute(model_path).string()}});
+    if (!stored_model.empty()) return remote_run("model.load", {{"stored", stored_model}});
+    if (model_path.empty()) {
+      std::cerr << "hystbench: error: model load: give a model file or --stored NAME\n";
+      return 2;
+    }
+    // The file is read here, with the user's rights, and its document travels over the
+    // socket: the daemon (its own user, its own /tmp and no /home) never opens a client's path.
+    nlohmann::json document;
+    try {
+      document = hd::read_model_document(model_path);
+    } catch (const std::exception& e) {
+      std::cerr << "hystbench: error: " << e.what() << "\n";
+      return 1;
+    }
+    return remote_run("model.load",
+                      {{"model", std::move(document)},
+                       {"name", std::filesystem::path(model_path).filename().string()}});
   }
   if (*config_cmd) return remote_run("config.get", nlohmann::json::object());
 

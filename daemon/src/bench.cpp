@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -318,6 +319,10 @@ json Bench::handle(const std::string& cmd, const json& params) {
     return {{"path", model_path_}, {"model", hc::to_json(*model_)}};
   }
   if (cmd == "model.load") return load_model(params);
+  if (cmd == "model.list") {
+    std::lock_guard lock(mutex_);
+    return list_models(params);
+  }
   if (cmd == "config.get") {
     check_keys(params, {});
     return settings_.config_json;
@@ -325,7 +330,7 @@ json Bench::handle(const std::string& cmd, const json& params) {
   throw CommandError("unknown_command",
                      "unknown command '" + cmd +
                          "' (status, identify, track, stop, abort, reset, model.get, model.load, "
-                         "config.get)");
+                         "model.list, config.get)");
 }
 
 json Bench::status() const {
@@ -361,26 +366,113 @@ json Bench::status() const {
   return s;
 }
 
+namespace {
+
+// A model name in the daemon's model folder: letters, digits, '.', '_', '-', not starting with
+// '.', at most 128 characters; ".json" appended when missing. Never a path.
+std::string model_file_name(const std::string& key, const std::string& name) {
+  const bool ok = !name.empty() && name.size() <= 128 && name.front() != '.' &&
+                  std::all_of(name.begin(), name.end(), [](unsigned char c) {
+                    return std::isalnum(c) || c == '.' || c == '_' || c == '-';
+                  });
+  if (!ok) {
+    throw CommandError("bad_params", key +
+                                         ": a model name (letters, digits, '.', '_', '-'; not a "
+                                         "path), as `hystbench model list` shows");
+  }
+  const bool has_json = name.size() > 5 && name.compare(name.size() - 5, 5, ".json") == 0;
+  return has_json ? name : name + ".json";
+}
+
+}  // namespace
+
 nlohmann::json Bench::load_model(const json& params) {
-  check_keys(params, {"path"});
-  const std::string path = string_param(params, "path", "");
-  if (path.empty()) throw CommandError("bad_params", "path: required");
+  if (params.is_object() && params.contains("path")) {
+    throw CommandError("bad_params",
+                       "path: model.load takes the model document ('model', which `hystbench "
+                       "model load FILE` reads and sends) or the name of a model in the daemon's "
+                       "model folder ('stored'); the daemon never opens a path a client names");
+  }
+  check_keys(params, {"model", "name", "stored"});
+  const bool stored = params.is_object() && params.contains("stored");
+  const bool document = params.is_object() && params.contains("model");
+  if (stored == document) {
+    throw CommandError("bad_params",
+                       "give either 'model' (the model document) or 'stored' (a name from "
+                       "model.list)");
+  }
+  const std::filesystem::path dir(settings_.model_dir);
   hc::ModelFile file;
-  try {
-    file = load_model_file(path);
-  } catch (const std::exception& e) {
-    throw CommandError("bad_model", e.what());
+  std::filesystem::path path;
+  if (stored) {
+    const std::string name = model_file_name("stored", string_param(params, "stored", ""));
+    path = dir / name;
+    if (!std::filesystem::is_regular_file(std::filesystem::symlink_status(path))) {
+      throw CommandError("bad_params", "stored: no model '" + name +
+                                           "' in the daemon's model folder (hystbench model list)");
+    }
+    try {
+      file = load_model_file(path.string());
+    } catch (const std::exception& e) {
+      throw CommandError("bad_model", e.what());
+    }
+  } else {
+    if (!params["model"].is_object()) {
+      throw CommandError("bad_params", "model: must be the model file's JSON object");
+    }
+    const std::string name = model_file_name("name", string_param(params, "name", "uploaded"));
+    try {
+      file = hc::model_file_from_json(params["model"]);
+    } catch (const std::exception& e) {
+      throw CommandError("bad_model", std::string("model: ") + e.what());
+    }
+    // Kept in the model folder: `model load --stored` after a restart, and `model list`.
+    path = dir / name;
+    try {
+      std::filesystem::create_directories(dir);
+      save_model_file(path.string(), file);
+    } catch (const std::exception& e) {
+      throw CommandError("io_error",
+                         "cannot keep the model in the model folder: " + std::string(e.what()));
+    }
   }
   const auto inv = file.model.hysteresis().invertibility();
   std::lock_guard lock(mutex_);
   if (!active_run_.is_null())
     throw CommandError("busy", "a run is active; load the model after it");
   model_ = std::move(file);
-  model_path_ = std::filesystem::absolute(path).string();
+  model_path_ = path.string();
   return {{"path", model_path_},
+          {"name", path.filename().string()},
           {"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
           {"invertible", inv.invertible},
           {"reason", inv.reason}};
+}
+
+nlohmann::json Bench::list_models(const json& params) const {
+  check_keys(params, {});
+  json models = json::array();
+  std::error_code ec;
+  const std::filesystem::path dir(settings_.model_dir);
+  std::vector<std::filesystem::directory_entry> entries;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    if (e.is_regular_file() && e.path().extension() == ".json") entries.push_back(e);
+  }
+  std::sort(entries.begin(), entries.end(),
+            [](const auto& a, const auto& b) { return a.path().filename() < b.path().filename(); });
+  for (const auto& e : entries) {
+    json m = {{"name", e.path().filename().string()}, {"bytes", e.file_size()}};
+    try {
+      const hc::ModelFile f = load_model_file(e.path().string());
+      m["type"] = std::string(hc::to_string(f.model.hysteresis().kind()));
+      m["operators"] = f.model.hysteresis().operator_count();
+    } catch (const std::exception&) {
+      m["type"] = "unreadable";  // never the file's text
+    }
+    m["active"] = e.path().string() == model_path_;
+    models.push_back(std::move(m));
+  }
+  return {{"folder", dir.string()}, {"models", models}};
 }
 
 json Bench::start_identify(const json& params) {

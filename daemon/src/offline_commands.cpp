@@ -37,6 +37,20 @@ hc::ModelFile load_model_file(const std::string& path) {
   }
 }
 
+nlohmann::json read_model_document(const std::string& path) {
+  constexpr std::uintmax_t kMaxBytes = 60000;
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot open model file (" + ec.message() + ")");
+  if (bytes > kMaxBytes) {
+    throw std::runtime_error(path + ": " + std::to_string(bytes) +
+                             " bytes is too large for a model file (at most " +
+                             std::to_string(kMaxBytes) + ")");
+  }
+  // Checked here as the daemon will check it, so the error comes at once and names the file.
+  return hc::to_json(load_model_file(path));
+}
+
 void save_model_file(const std::string& path, const hc::ModelFile& file) {
   const std::string tmp = path + ".tmp";
   {

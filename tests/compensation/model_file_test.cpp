@@ -89,6 +89,19 @@ TEST(ModelFile, ErrorsNameTheField) {
                 .find("not valid JSON"),
             std::string::npos);
 
+  // A file that is not JSON is described by where and what, never by its bytes: the text may be
+  // a file its reader can open and whoever asked cannot.
+  const std::string secret = error_of("{\n  \"type\": \"pi\",\n  Secret: hunter2\n}");
+  EXPECT_EQ(secret.rfind("not valid JSON at line 3, column 3: ", 0), 0u) << secret;
+  EXPECT_EQ(secret.find("Secret"), std::string::npos) << secret;
+  EXPECT_EQ(secret.find("hunter2"), std::string::npos) << secret;
+  EXPECT_EQ(secret.find("'S'"), std::string::npos) << secret;
+  const std::string first_byte = error_of("Secret: hunter2\n");
+  EXPECT_EQ(first_byte.rfind("not valid JSON at line 1, column 1: syntax error", 0), 0u)
+      << first_byte;
+  EXPECT_EQ(first_byte.find("'S'"), std::string::npos) << first_byte;
+  EXPECT_EQ(first_byte.find("Secret"), std::string::npos) << first_byte;
+
   j = valid_mpi();
   j["play"]["weights"][0] = "0.2";
   EXPECT_NE(error_of(j.dump()).find("play.weights[0]: must be a number"), std::string::npos);

@@ -16,6 +16,7 @@
 #include "hystbench/daemon/config.hpp"
 #include "hystbench/daemon/daemon_settings.hpp"
 #include "hystbench/daemon/diagnose_command.hpp"
+#include "hystbench/daemon/offline_commands.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
@@ -64,7 +65,8 @@ void BenchFeedforwardTest::closes_the_loop(const char* toml, const std::string& 
   const json parts = d["extended"]["parts"];
   std::cout << "diagnose: " << d["extended"]["description"] << "\n";
   EXPECT_NE(std::find(parts.begin(), parts.end(), expected), parts.end()) << parts.dump();
-  bench_->handle("model.load", {{"path", diag.save_extended}});
+  bench_->handle("model.load",
+                 {{"model", hd::read_model_document(diag.save_extended)}, {"name", "extended"}});
 
   for (const double f : {200.0, 500.0}) {
     const json r = sine(f);

@@ -7,16 +7,21 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
+namespace hc = hystbench::compensation;
+namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
@@ -73,6 +78,52 @@ TEST_F(BenchTest, TrackWithoutModelLogsEverySampleAndReportsHysteresis) {
   EXPECT_EQ(header["run"]["compensator"], "none");
 }
 
+// model.load carries the model document; the daemon keeps a copy in its model folder, lists it,
+// and loads it again by name. A path is refused: the daemon never opens a path a client names,
+// and a name cannot leave the model folder.
+TEST_F(BenchTest, ModelsTravelAsDocumentsAndLoadByNameFromTheModelFolder) {
+  start(settings());
+  hc::ActuatorModel model(
+      std::make_unique<hc::PiModel>(hc::PiParameters{{0.0, 20.0}, {0.3, 0.1}, 0.0}));
+  model.input_min = 0.0;
+  model.input_max = 150.0;
+  const json document = hc::to_json(hc::ModelFile{model, json::object()});
+  const json loaded = bench_->handle("model.load", {{"model", document}, {"name", "mine.json"}});
+  EXPECT_EQ(loaded["type"], "pi");
+  EXPECT_EQ(loaded["name"], "mine.json");
+  EXPECT_EQ(fs::path(loaded["path"].get<std::string>()).parent_path(),
+            fs::path(settings().model_dir));
+  EXPECT_EQ(bench_->handle("status", json::object())["model"]["type"], "pi");
+
+  const json list = bench_->handle("model.list", json::object());
+  ASSERT_EQ(list["models"].size(), 1u) << list.dump();
+  EXPECT_EQ(list["models"][0]["name"], "mine.json");
+  EXPECT_EQ(list["models"][0]["type"], "pi");
+  EXPECT_TRUE(list["models"][0]["active"].get<bool>());
+
+  EXPECT_EQ(bench_->handle("model.load", {{"stored", "mine"}})["type"], "pi");
+  EXPECT_EQ(error_code("model.load", {{"stored", "../mine.json"}}), "bad_params");
+  EXPECT_EQ(error_code("model.load", {{"stored", "/etc/passwd"}}), "bad_params");
+  EXPECT_EQ(error_code("model.load", {{"stored", "absent"}}), "bad_params");
+  EXPECT_EQ(error_code("model.load", {{"model", document}, {"name", "../escape"}}), "bad_params");
+  EXPECT_EQ(error_code("model.load", {{"path", "/etc/passwd"}}), "bad_params");
+  EXPECT_EQ(error_code("model.load", json::object()), "bad_params");
+  EXPECT_EQ(error_code("model.load", {{"model", "text"}}), "bad_params");
+  json broken = document;
+  broken["play"]["weights"] = {0.3};
+  EXPECT_EQ(error_code("model.load", {{"model", broken}}), "bad_model");
+  // A stored file that is not a model is reported without its text.
+  std::ofstream(fs::path(settings().model_dir) / "notes.json") << "Secret: hunter2\n";
+  try {
+    bench_->handle("model.load", {{"stored", "notes.json"}});
+    ADD_FAILURE() << "a text file loaded as a model";
+  } catch (const hd::CommandError& e) {
+    EXPECT_EQ(std::string(e.what()).find("hunter2"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("Secret"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(bench_->handle("model.list", json::object())["models"].size(), 2u);
+}
+
 TEST_F(BenchTest, BadRequestsChangeNothing) {
   start(settings());
   EXPECT_EQ(error_code("track", {{"compensator", "inverse"}}), "no_model");
@@ -81,7 +132,7 @@ TEST_F(BenchTest, BadRequestsChangeNothing) {
   EXPECT_EQ(error_code("track", {{"bogus", 1}}), "bad_params");
   EXPECT_EQ(error_code("fly", json::object()), "unknown_command");
   EXPECT_EQ(error_code("stop", json::object()), "no_run");
-  EXPECT_EQ(error_code("model.load", {{"path", "/nonexistent.json"}}), "bad_model");
+  EXPECT_EQ(error_code("model.load", {{"path", "/nonexistent.json"}}), "bad_params");
   EXPECT_EQ(bench_->handle("status", json::object())["state"], "idle");
   // A run while one is active is refused.
   bench_->handle("track", {{"compensator", "none"}, {"periods", 20}});

@@ -115,7 +115,11 @@ class Bench {
   nlohmann::json status() const;
   nlohmann::json start_identify(const nlohmann::json& params);
   nlohmann::json start_track(const nlohmann::json& params);
+  /// model.load: {"model": document, "name": file name} (kept in the model folder) or
+  /// {"stored": name in the model folder}; never a path.
   nlohmann::json load_model(const nlohmann::json& params);
+  /// model.list: the model folder's *.json files (name, bytes, type, active). Caller holds mutex_.
+  nlohmann::json list_models(const nlohmann::json& params) const;
   void supervise();
   void finalize(std::unique_ptr<RunProgram> run);
   /// Sets the last result, leaves the bench idle and emits run.finished.

@@ -61,6 +61,11 @@ nlohmann::json to_json(const compensation::ErrorStats& s);
 /// Reads and validates a model file; throws std::runtime_error naming the file and field.
 compensation::ModelFile load_model_file(const std::string& path);
 /// Writes a model file atomically (temp file + rename).
+/// Reads and checks a model file on the client side for `model load`: its JSON document, which
+/// is what travels to the daemon. Throws std::runtime_error naming the file and the fault (at
+/// most 60 KB: a request line must fit the daemon's 64 KiB limit).
+nlohmann::json read_model_document(const std::string& path);
+
 void save_model_file(const std::string& path, const compensation::ModelFile& file);
 
 }  // namespace hystbench::daemon
