@@ -38,7 +38,10 @@ seed() {  # seed corpora once from files in the repository
       for l in '{"id":1,"cmd":"status"}' '{"cmd":"track","params":{"compensator":"none","periods":2,"frequency_hz":2}}' \
         '{"id":"x","cmd":"identify","params":{"model":"mpi","operators":10,"u_min":0,"u_max":100}}' \
         '{"cmd":"stop"}' '{"cmd":"abort"}' '{"cmd":"reset"}' '{"cmd":"model.get"}' '{"cmd":"config.get"}' \
-        '{"cmd":"track","params":{"min_um":-5,"max_um":10,"waveform":"triangle"}}'; do
+        '{"cmd":"track","params":{"min_um":-5,"max_um":10,"waveform":"triangle"}}' \
+        '{"cmd":"model.load","params":{"name":"m.json","model":{"schema":"hystbench.model/1","type":"pi","input_range":[0,150],"play":{"thresholds":[0,10,20],"weights":[0.5,0.2,0.1],"offset":0}}}}' \
+        '{"cmd":"model.load","params":{"stored":"m"}}' '{"cmd":"model.list"}' \
+        '{"cmd":"model.load","params":{"path":"/etc/passwd"}}'; do
         printf '%s' "$l" >"$dir/seed$((i++))"
       done ;;
   esac

@@ -10,9 +10,14 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <thread>
 
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/daemon/bench_client.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "support/daemon_process.hpp"
@@ -161,4 +166,57 @@ TEST_F(HystbenchdTest, SigtermMidRunGoesSafeClosesTheLogAndExitsZero) {
   const auto& index = log.column("index");
   for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
   EXPECT_FALSE(fs::exists(daemon_->socket()));
+}
+
+// The service as its users meet it: the daemon runs where the client's folder does not exist for
+// it (the unit's ProtectHome and PrivateTmp; here a mount namespace with a tmpfs over the folder).
+// `hystbench model load FILE` of a model in that folder works, because the document travels;
+// a request naming the path is refused.
+TEST(HystbenchdService, ModelLoadWorksWhenTheDaemonCannotSeeTheClientsFolder) {
+  if (std::system("unshare -Urm true > /dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "unprivileged mount namespaces (unshare -Urm) are not available here";
+  }
+  const fs::path dir = fs::temp_directory_path() / ("hbd_ns_" + std::to_string(::getpid()));
+  const fs::path client = dir / "client";
+  fs::create_directories(client);
+  const fs::path model = client / "actuator.json";
+  {
+    hystbench::compensation::ActuatorModel m(std::make_unique<hystbench::compensation::PiModel>(
+        hystbench::compensation::PiParameters{{0.0, 20.0, 40.0}, {0.25, 0.05, 0.03}, 0.0}));
+    m.input_min = 0.0;
+    m.input_max = 150.0;
+    std::ofstream(model) << hystbench::compensation::to_json(
+        hystbench::compensation::ModelFile{m, json::object()});
+  }
+  {
+    // The daemon's world: a tmpfs over the client's folder (what it sees there is empty).
+    Daemon daemon(dir / "daemon", {},
+                  {"unshare", "-Urm", "--", "sh", "-c",
+                   "mount -t tmpfs tmpfs \"$0\" && exec \"$@\"", client.string()});
+    ASSERT_TRUE(daemon.running()) << "hystbenchd did not start in its namespace";
+    EXPECT_FALSE(fs::exists(fs::path("/proc") / std::to_string(daemon.pid()) / "root" /
+                            model.relative_path()))
+        << "the daemon can see the client's file: the test would prove nothing";
+
+    const std::string cli = std::string(HYSTBENCH_BIN_DIR) + "/hystbench --socket " +
+                            daemon.socket() + " model load " + model.string() + " --json 2>&1";
+    std::string output;
+    FILE* p = ::popen(cli.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    char buf[512];
+    while (std::fgets(buf, sizeof buf, p) != nullptr) output += buf;
+    EXPECT_EQ(::pclose(p), 0) << output;
+    const json loaded = json::parse(output);
+    EXPECT_EQ(loaded["type"], "pi") << output;
+    EXPECT_EQ(loaded["name"], "actuator.json") << output;
+
+    hd::BenchClient c(daemon.socket());
+    const json by_path = c.request("model.load", {{"path", model.string()}});
+    EXPECT_FALSE(by_path["ok"].get<bool>());
+    EXPECT_EQ(by_path["error"]["code"], "bad_params") << by_path.dump();
+    const json stored = c.request("model.load", {{"stored", "actuator.json"}});
+    EXPECT_TRUE(stored["ok"].get<bool>()) << stored.dump();
+    EXPECT_EQ(c.request("status")["result"]["model"]["type"], "pi");
+  }
+  fs::remove_all(dir);
 }

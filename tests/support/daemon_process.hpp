@@ -27,7 +27,11 @@ class Daemon {
  public:
   /// Starts hystbenchd with `config` (default config/loopback.toml) and its socket, logs and
   /// models in `dir`; returns once the socket answers (check running()).
-  explicit Daemon(const std::filesystem::path& dir, std::string config = {}) : dir_(dir) {
+  /// `wrapper`: a command the daemon runs under (its argv comes after it), e.g. unshare; the
+  /// wrapper is looked up in PATH.
+  explicit Daemon(const std::filesystem::path& dir, std::string config = {},
+                  std::vector<std::string> wrapper = {})
+      : dir_(dir) {
     std::filesystem::create_directories(dir_);
     socket_ = (dir_ / "s.sock").string();
     const std::string bin = std::string(HYSTBENCH_BIN_DIR) + "/hystbenchd";
@@ -36,6 +40,7 @@ class Daemon {
     const std::string out = (dir_ / "daemon.log").string();  // appended: restarts keep it
     std::vector<std::string> args{bin,         "--config", config,        "--socket", socket_,
                                   "--log-dir", logs,       "--model-dir", models};
+    args.insert(args.begin(), wrapper.begin(), wrapper.end());
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -43,7 +48,9 @@ class Daemon {
     posix_spawn_file_actions_init(&fa);
     posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     posix_spawn_file_actions_adddup2(&fa, 1, 2);
-    if (posix_spawn(&pid_, bin.c_str(), &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    if (posix_spawnp(&pid_, args.front().c_str(), &fa, nullptr, argv.data(), environ) != 0) {
+      pid_ = -1;
+    }
     posix_spawn_file_actions_destroy(&fa);
     for (int i = 0; i < 200 && pid_ > 0; ++i) {
       if (std::filesystem::exists(socket_)) {
