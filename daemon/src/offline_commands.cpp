@@ -47,8 +47,11 @@ nlohmann::json read_model_document(const std::string& path) {
                              " bytes is too large for a model file (at most " +
                              std::to_string(kMaxBytes) + ")");
   }
-  // Checked here as the daemon will check it, so the error comes at once and names the file.
-  return hc::to_json(load_model_file(path));
+  // Checked here as the daemon will check it, so the error comes at once and names the file;
+  // the file's own document is what travels (not a re-serialisation of the parsed model).
+  (void)load_model_file(path);
+  std::ifstream in(path, std::ios::binary);
+  return nlohmann::json::parse(in);
 }
 
 void save_model_file(const std::string& path, const hc::ModelFile& file) {

@@ -180,7 +180,8 @@ TEST_F(IndependentPeerTest, TrackACoarselyQuantisedPlantWithItsTrueModel) {
   // 0.25 um counts: about 180 codes over the 44 um range.
   start_peer({"--quantum-nm", "250"});
   start(settings());
-  bench_->handle("model.load", {{"path", true_model_file()}});
+  bench_->handle("model.load",
+                 {{"model", hdm::read_model_document(true_model_file())}, {"name", "true_plant"}});
   const json none = run_and_wait("track", {{"compensator", "none"}, {"periods", 2}});
   ASSERT_EQ(none["end"], "completed") << none.dump(2);
   const json inv = run_and_wait("track", {{"compensator", "inverse"}, {"periods", 3}});
