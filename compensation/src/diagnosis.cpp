@@ -262,14 +262,19 @@ std::string left_out_summary(const CandidateReport& c) {
   return s;
 }
 
+std::vector<std::size_t> starts_of(const std::vector<details::RecordPart>& parts) {
+  std::vector<std::size_t> starts;
+  for (const details::RecordPart& p : parts) starts.push_back(p.begin);
+  return starts;
+}
+
 // Sensor offsets differ between runs: each record's output is shifted onto the first's by its
 // mean residual against the baseline fitted on all (twice: the fit moves with the shifts).
 // Returns the shift of each record (0 for the first) [output unit]; y is shifted in place.
 std::vector<double> align_offsets(std::span<const double> t, std::span<const double> u,
                                   std::vector<double>& y, const DiagnosisOptions& options,
                                   const std::vector<details::RecordPart>& parts) {
-  std::vector<std::size_t> starts;
-  for (const details::RecordPart& p : parts) starts.push_back(p.begin);
+  const std::vector<std::size_t> starts = starts_of(parts);
   std::vector<double> total(parts.size(), 0.0);
   for (int iteration = 0; iteration < 2; ++iteration) {
     const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options, starts);
@@ -304,8 +309,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     if (options.progress) options.progress(f, what);
   };
   progress(0.0, "checking the record");
-  std::vector<std::size_t> starts;
-  for (const details::RecordPart& p : parts) starts.push_back(p.begin);
+  const std::vector<std::size_t> starts = starts_of(parts);
   const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options, starts);
   Diagnosis d;
   for (const details::RecordPart& p : parts) d.records.push_back(p.name);
@@ -626,8 +630,15 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
 Diagnosis diagnose(std::span<const RecordView> records, const DiagnosisOptions& options) {
   if (records.empty()) throw std::invalid_argument("no record to diagnose");
   if (records.size() == 1) {
-    Diagnosis d = diagnose(records[0].t, records[0].u, records[0].y, options);
-    if (!records[0].name.empty()) d.records = {records[0].name};
+    const RecordView& rec = records[0];
+    Diagnosis d;
+    try {
+      d = diagnose(rec.t, rec.u, rec.y, options);
+    } catch (const std::invalid_argument& e) {
+      if (rec.name.empty()) throw;
+      throw std::invalid_argument(rec.name + ": " + e.what());
+    }
+    if (!rec.name.empty()) d.records = {rec.name};
     return d;
   }
   std::vector<details::RecordPart> parts;

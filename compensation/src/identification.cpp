@@ -138,8 +138,8 @@ Record make_record(std::span<const double> t, std::span<const double> u, std::sp
   r.dt = (t.back() - t.front()) / static_cast<double>(r.n - 1);
   const auto heldout = static_cast<std::size_t>(std::floor(o.heldout_fraction * r.n));
   r.fit_end = r.n - heldout;
-  r.begin =
-      o.skip_samples ? *o.skip_samples : details::startup_samples(u, r.fit_end / 4, r.fit_end);
+  r.begin = o.skip_samples ? *o.skip_samples
+                           : details::startup_samples(u.first(r.fit_end), r.fit_end / 4);
   details::require(r.begin + kMinFitRows <= r.fit_end,
                    "too few samples left to fit: " + std::to_string(r.n) + " samples minus " +
                        std::to_string(r.begin) + " skipped and " + std::to_string(heldout) +

@@ -1,6 +1,5 @@
 #include "hystbench/compensation/model_file.hpp"
 
-#include <algorithm>
 #include <cmath>
 
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
@@ -231,28 +230,14 @@ namespace {
 
 // Where a JSON syntax error is, and what it is, without the bytes the parser read there (a model
 // file's text is never echoed: it may be a file the reader can open and the asker cannot).
-std::string syntax_error(const json::parse_error& e, const std::string& text) {
-  const std::size_t at = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
-  std::size_t line = 1, column = 1;
-  for (std::size_t k = 0; k < at; ++k) {
-    if (text[k] == '\n') {
-      ++line, column = 1;
-    } else {
-      ++column;
-    }
-  }
-  // nlohmann's text: "[json.exception.parse_error.101] parse error at line L, column C: <what>
-  // - <detail>; last read: '<bytes>'". Keep <what> and the kind of <detail>, drop the bytes.
+// nlohmann's text: "[json.exception.parse_error.101] parse error at line L, column C: <what>;
+// last read: '<bytes>'": the part from "line" to "; last read" is kept.
+std::string syntax_error(const json::parse_error& e) {
   std::string what = e.what();
   if (const auto cut = what.find("; last read"); cut != std::string::npos) what.resize(cut);
-  if (const auto col = what.find("column "); col != std::string::npos) {
-    const auto colon = what.find(": ", col);
-    what = colon == std::string::npos ? "syntax error" : what.substr(colon + 2);
-  } else {
-    what = "syntax error";
-  }
-  return "not valid JSON at line " + std::to_string(line) + ", column " + std::to_string(column) +
-         ": " + what;
+  const auto at = what.find("at line ");
+  return "not valid JSON " +
+         (at == std::string::npos ? std::string("(syntax error)") : what.substr(at));
 }
 
 }  // namespace
@@ -262,7 +247,7 @@ ModelFile parse_model_file(const std::string& text) {
   try {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw ModelFileError(syntax_error(e, text));
+    throw ModelFileError(syntax_error(e));
   } catch (const json::exception&) {
     // out_of_range (406) for a number beyond double such as 7e777: bad input too.
     throw ModelFileError("not valid JSON: a number is out of the range of a double");

@@ -401,6 +401,10 @@ nlohmann::json Bench::load_model(const json& params) {
                        "give either 'model' (the model document) or 'stored' (a name from "
                        "model.list)");
   }
+  // Checked first: a refused request changes nothing (an upload is not kept either).
+  std::lock_guard lock(mutex_);
+  if (!active_run_.is_null())
+    throw CommandError("busy", "a run is active; load the model after it");
   const std::filesystem::path dir(settings_.model_dir);
   hc::ModelFile file;
   std::filesystem::path path;
@@ -437,9 +441,6 @@ nlohmann::json Bench::load_model(const json& params) {
     }
   }
   const auto inv = file.model.hysteresis().invertibility();
-  std::lock_guard lock(mutex_);
-  if (!active_run_.is_null())
-    throw CommandError("busy", "a run is active; load the model after it");
   model_ = std::move(file);
   model_path_ = path.string();
   return {{"path", model_path_},

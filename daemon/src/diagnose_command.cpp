@@ -371,21 +371,11 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
             << "\x1b[K" << std::flush;
       };
     }
-    hc::Diagnosis d;
-    if (records.size() == 1) {
-      try {
-        d = hc::diagnose(records[0].t, records[0].u, records[0].y, opt);
-      } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument(cmd.data_paths[0] + ": " + e.what());
-      }
-      d.records = {cmd.data_paths[0]};
-    } else {
-      std::vector<hc::RecordView> views;
-      for (std::size_t i = 0; i < records.size(); ++i) {
-        views.push_back({records[i].t, records[i].u, records[i].y, cmd.data_paths[i]});
-      }
-      d = hc::diagnose(views, opt);  // errors name the record
+    std::vector<hc::RecordView> views;
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      views.push_back({records[i].t, records[i].u, records[i].y, cmd.data_paths[i]});
     }
+    const hc::Diagnosis d = hc::diagnose(views, opt);  // errors name the record
     if (!cmd.json_output) err << "\n";
     std::vector<Validation> validations;
     for (const std::string& path : cmd.validate_paths) {

@@ -25,33 +25,47 @@ nlohmann::json to_json(const hc::ErrorStats& s) {
           {"samples", s.samples}};
 }
 
-hc::ModelFile load_model_file(const std::string& path) {
+namespace {
+
+// A model file's text, read once (at most max_bytes when given).
+std::string read_model_text(const std::string& path, std::uintmax_t max_bytes = 0) {
+  if (max_bytes > 0) {
+    std::error_code ec;
+    const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+    if (ec) throw std::runtime_error(path + ": cannot open model file (" + ec.message() + ")");
+    if (bytes > max_bytes) {
+      throw std::runtime_error(path + ": " + std::to_string(bytes) +
+                               " bytes is too large for a model file (at most " +
+                               std::to_string(max_bytes) + ")");
+    }
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open model file");
   std::stringstream ss;
   ss << in.rdbuf();
+  return ss.str();
+}
+
+hc::ModelFile parse_model_text(const std::string& path, const std::string& text) {
   try {
-    return hc::parse_model_file(ss.str());
+    return hc::parse_model_file(text);
   } catch (const hc::ModelFileError& e) {
     throw std::runtime_error(path + ": " + e.what());
   }
 }
 
+}  // namespace
+
+hc::ModelFile load_model_file(const std::string& path) {
+  return parse_model_text(path, read_model_text(path));
+}
+
 nlohmann::json read_model_document(const std::string& path) {
-  constexpr std::uintmax_t kMaxBytes = 60000;
-  std::error_code ec;
-  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
-  if (ec) throw std::runtime_error(path + ": cannot open model file (" + ec.message() + ")");
-  if (bytes > kMaxBytes) {
-    throw std::runtime_error(path + ": " + std::to_string(bytes) +
-                             " bytes is too large for a model file (at most " +
-                             std::to_string(kMaxBytes) + ")");
-  }
+  const std::string text = read_model_text(path, 60000);
   // Checked here as the daemon will check it, so the error comes at once and names the file;
   // the file's own document is what travels (not a re-serialisation of the parsed model).
-  (void)load_model_file(path);
-  std::ifstream in(path, std::ios::binary);
-  return nlohmann::json::parse(in);
+  (void)parse_model_text(path, text);
+  return json::parse(text);
 }
 
 void save_model_file(const std::string& path, const hc::ModelFile& file) {
@@ -121,37 +135,28 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     }
     const hc::FitResult r = hc::fit_model(data.t, data.u, data.y, opt);
     if (!cmd.json_output) err << "\n";
-    hc::ModelFile file{r.model, json::object()};
-    file.identification = {{"data_file", cmd.data_path},
-                           {"samples", data.t.size()},
-                           {"fit_samples", r.fit_samples},
-                           {"heldout_samples", r.heldout_samples},
-                           {"sample_period_s", data.sample_period_s},
-                           {"method", r.method},
-                           {"operators", r.operators},
-                           {"dead_zones", r.dead_zones},
-                           {"delay_samples", r.delay_samples},
-                           {"creep", r.creep},
-                           {"skipped_samples", r.skipped_samples},
-                           {"notes", r.notes},
-                           {"fit", to_json(r.fit)},
-                           {"heldout", to_json(r.heldout)}};
+    // What the fit chose: kept in the model file and printed by --json alike.
+    const json fitted = {{"method", r.method},
+                         {"operators", r.operators},
+                         {"dead_zones", r.dead_zones},
+                         {"delay_samples", r.delay_samples},
+                         {"creep", r.creep},
+                         {"skipped_samples", r.skipped_samples},
+                         {"notes", r.notes},
+                         {"fit", to_json(r.fit)},
+                         {"heldout", to_json(r.heldout)}};
+    hc::ModelFile file{r.model, fitted};
+    file.identification.update({{"data_file", cmd.data_path},
+                                {"samples", data.t.size()},
+                                {"fit_samples", r.fit_samples},
+                                {"heldout_samples", r.heldout_samples},
+                                {"sample_period_s", data.sample_period_s}});
     save_model_file(cmd.output_path, file);
     const std::string type(hc::to_string(r.model.hysteresis().kind()));
     if (cmd.json_output) {
-      out << json{{"model", cmd.output_path},
-                  {"type", type},
-                  {"operators", r.operators},
-                  {"dead_zones", r.dead_zones},
-                  {"delay_samples", r.delay_samples},
-                  {"creep", r.creep},
-                  {"skipped_samples", r.skipped_samples},
-                  {"method", r.method},
-                  {"notes", r.notes},
-                  {"fit", to_json(r.fit)},
-                  {"heldout", to_json(r.heldout)}}
-                 .dump()
-          << "\n";
+      json result = fitted;
+      result.update({{"model", cmd.output_path}, {"type", type}});
+      out << result.dump() << "\n";
     } else {
       out << "model     " << type << " with " << r.operators << " plays, " << r.dead_zones
           << " dead zones per side, delay " << r.delay_samples << " samples, "

@@ -6,10 +6,9 @@
 
 namespace hystbench::compensation::details {
 
-/// Samples at the start of u[0, end) until the input has come within 0.5 % of its span to both
-/// its minimum and its maximum over u[0, end) (a PI's memory of what came before is then wiped
-/// out), at most max_samples. end = 0 means the whole of u.
-std::size_t startup_samples(std::span<const double> u, std::size_t max_samples,
-                            std::size_t end = 0);
+/// Samples at the start of u until the input has come within 0.5 % of its span to both its
+/// minimum and its maximum (a PI's memory of what came before is then wiped out), at most
+/// max_samples (and at most u's length).
+std::size_t startup_samples(std::span<const double> u, std::size_t max_samples);
 
 }  // namespace hystbench::compensation::details
