@@ -9,7 +9,9 @@
 namespace hystbench::compensation {
 
 CoupledPlayPiModel::CoupledPlayPiModel(CoupledPlayParameters p)
-    : p_(std::move(p)), z_(p_.weights.size(), 0.0) {
+    : p_(std::move(p)),
+      dz_(p_.has_dead_zones() ? DeadZoneSuperposition(p_.dead_zone) : DeadZoneSuperposition()),
+      z_(p_.weights.size(), 0.0) {
   const std::size_t n = p_.weights.size();
   details::require(n > 0, "coupled_play.weights must not be empty");
   const std::pair<const std::vector<double>*, const char*> blocks[] = {{&p_.r, "coupled_play.r"},
@@ -26,6 +28,7 @@ CoupledPlayPiModel::CoupledPlayPiModel(CoupledPlayParameters p)
   }
   details::require_finite(p_.weights, "coupled_play.weights");
   details::require_finite(p_.offset, "coupled_play.offset");
+  details::require_finite(p_.center, "deadzone.center");
 }
 
 double CoupledPlayPiModel::operator_output(double u, double u_prev, double z_prev, double r,
@@ -47,13 +50,13 @@ details::CoupledPlayArrays arrays(const CoupledPlayParameters& p) noexcept {
 }  // namespace
 
 double CoupledPlayPiModel::step(double u) noexcept {
-  const double y = p_.offset + details::coupled_play_step(u, u >= u_prev_, arrays(p_), z_.data());
+  const double v = p_.offset + details::coupled_play_step(u, u >= u_prev_, arrays(p_), z_.data());
   u_prev_ = u;
-  return y;
+  return output(v);
 }
 
 double CoupledPlayPiModel::peek(double u) const noexcept {
-  return p_.offset + details::coupled_play_peek(u, u >= u_prev_, arrays(p_), z_.data());
+  return output(p_.offset + details::coupled_play_peek(u, u >= u_prev_, arrays(p_), z_.data()));
 }
 
 void CoupledPlayPiModel::reset(double u0) noexcept {
@@ -76,8 +79,24 @@ Invertibility CoupledPlayPiModel::invertibility() const {
       return v;
     }
   }
-  return check_cumulative_weights(p_.weights.data(), p_.weights.size(), "coupled_play",
-                                  "cumulative coupled-play weight");
+  // An operator that jumps (rc > r: up when a rising input crosses rc; ra < rb: down when a
+  // falling one crosses -rb) moves the output against the input if its weight is negative.
+  for (std::size_t i = 0; i < p_.weights.size(); ++i) {
+    if ((p_.rc[i] > p_.r[i] || p_.ra[i] < p_.rb[i]) && p_.weights[i] < 0.0) {
+      Invertibility v;
+      v.invertible = false;
+      v.block = "coupled_play";
+      v.index = static_cast<int>(i);
+      v.value = p_.weights[i];
+      v.reason = "coupled-play operator " + std::to_string(i) +
+                 " jumps (rc > r or ra < rb) with a negative weight: its jump lowers the output";
+      return v;
+    }
+  }
+  Invertibility v = check_cumulative_weights(p_.weights.data(), p_.weights.size(), "coupled_play",
+                                             "cumulative coupled-play weight");
+  if (!v.invertible) return v;
+  return dz_.invertibility();
 }
 
 std::unique_ptr<HysteresisModel> CoupledPlayPiModel::clone() const {

@@ -248,7 +248,7 @@ ModelStructure Identifier::structure(ModelKind kind, int plays, int dead_zones) 
   s.min_play_slope = o_.min_cumulative_weight * y_span / u_span;
   s.min_dead_zone_slope = o_.min_cumulative_weight;
   s.center = center_;
-  if (s.has_dead_zones()) {
+  if (s.has_dead_zones() || (kind == ModelKind::kCoupledPlayPi && dead_zones > 0)) {
     if (!o_.dead_zone_thresholds.empty()) {
       s.dead_zone_thresholds = o_.dead_zone_thresholds;
     } else {
@@ -366,8 +366,18 @@ Candidate Identifier::search_mpi() {
 
 Candidate Identifier::search_cpi() {
   // Plain plays are coupled plays with unit scales: choose the order there, then the scales.
+  // The output dead zones (the modified PI's stage) are chosen with the plays by search_mpi():
+  // with unit scales the coupled-play model is that modified PI, so the scales only add.
+  // Without dead zones (--dead-zones 0) it is the paper's model on the classical PI's order.
   const std::vector<int> ns = operator_grid(0);
-  const int n = ns.size() == 1 ? ns.front() : static_cast<int>(search_pi().structure.plays());
+  int n = ns.size() == 1 ? ns.front() : 0;
+  int m = 0;
+  if (o_.dead_zones != 0) {
+    const Candidate mpi = search_mpi();
+    m = dead_zones_of(mpi.structure);
+    if (n == 0) n = static_cast<int>(mpi.structure.plays());
+  }
+  if (n == 0) n = static_cast<int>(search_pi().structure.plays());
   std::vector<std::array<double, 3>> grid;
   const bool bipolar = r_.u_lo < 0.0;
   for (const double kb : kCpWidthScales) {
@@ -381,11 +391,11 @@ Candidate Identifier::search_cpi() {
       }
     }
   }
-  Candidate best = memo(ModelKind::kCoupledPlayPi, n, 0);
+  Candidate best = memo(ModelKind::kCoupledPlayPi, n, m);
   for (std::size_t i = 0; i < grid.size(); ++i) {
     stage_progress(static_cast<double>(i) / static_cast<double>(grid.size()),
                    "coupled-play asymmetry scales");
-    const Candidate& c = memo(ModelKind::kCoupledPlayPi, n, 0, grid[i]);
+    const Candidate& c = memo(ModelKind::kCoupledPlayPi, n, m, grid[i]);
     if (c.score() < best.score()) best = c;
   }
   return best;

@@ -1,6 +1,7 @@
 #include "hystbench/compensation/model_file.hpp"
 
 #include <cmath>
+#include <tuple>
 
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
@@ -124,6 +125,7 @@ json to_json(const ModelFile& file) {
       const auto& p = static_cast<const CoupledPlayPiModel&>(m.hysteresis()).parameters();
       j["coupled_play"] = {{"r", p.r},   {"ra", p.ra},           {"rb", p.rb},
                            {"rc", p.rc}, {"weights", p.weights}, {"offset", p.offset}};
+      if (p.has_dead_zones()) j["deadzone"] = dead_zone_to_json(p.dead_zone, p.center);
       break;
     }
   }
@@ -177,10 +179,15 @@ ModelFile model_file_from_json(const json& j) {
       }
       case ModelKind::kCoupledPlayPi: {
         const json& c = member(j, "", "coupled_play");
-        CoupledPlayParameters p{
-            numbers(c, "coupled_play", "r"),       numbers(c, "coupled_play", "ra"),
-            numbers(c, "coupled_play", "rb"),      numbers(c, "coupled_play", "rc"),
-            numbers(c, "coupled_play", "weights"), number_member(c, "coupled_play", "offset", 0.0)};
+        CoupledPlayParameters p{numbers(c, "coupled_play", "r"),
+                                numbers(c, "coupled_play", "ra"),
+                                numbers(c, "coupled_play", "rb"),
+                                numbers(c, "coupled_play", "rc"),
+                                numbers(c, "coupled_play", "weights"),
+                                number_member(c, "coupled_play", "offset", 0.0),
+                                {},
+                                0.0};
+        if (j.contains("deadzone")) std::tie(p.dead_zone, p.center) = dead_zone_from_json(j);
         h = std::make_unique<CoupledPlayPiModel>(std::move(p));
         break;
       }

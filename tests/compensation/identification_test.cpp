@@ -192,7 +192,9 @@ TEST(Identification, FindsCoupledPlayAsymmetryOnItsGrid) {
     // operator never rises again.
     truth.ra.push_back(0.7 * r), truth.rb.push_back(0.7 * r), truth.rc.push_back(2.0 * r);
   }
-  truth.weights = {1.0, 0.3, -0.2, 0.2, 0.1, -0.1, 0.15, 0.05};
+  // Non-negative: a jumping operator with a negative weight would make the output fall as the
+  // input rises (not invertible); a zero weight puts the fit on its bound.
+  truth.weights = {1.0, 0.3, 0.0, 0.2, 0.1, 0.05, 0.15, 0.05};
   truth.offset = 3.0;
   hc::CoupledPlayPiModel model(truth);
   const std::vector<double> y = simulate(model, u);
@@ -206,6 +208,35 @@ TEST(Identification, FindsCoupledPlayAsymmetryOnItsGrid) {
   EXPECT_LT(relative_error(got.rc, truth.rc), 1e-12);
   EXPECT_LT(relative_error(got.weights, truth.weights), 1e-6);
   EXPECT_LT(r.heldout.rmse_percent(), 1e-6);
+}
+
+// A saturating output map (a modified PI's dead zones) is what coupled plays cannot form: their
+// widths depend on the input level, not the output. The coupled-play family's output dead-zone
+// stage fits it as the modified PI does, and the scales are searched on top of it.
+TEST(Identification, CoupledPlayFitsAnOutputSaturationWithItsDeadZones) {
+  std::mt19937_64 rng(33);
+  const std::vector<double> u = rich_excitation(12000, 0.0, 10.0);
+  hc::ModifiedPiModel model(known_mpi(rng, u));
+  const std::vector<double> y = simulate(model, u);
+  const hc::FitResult mpi =
+      hc::fit_model(times(u.size()), u, y, fixed_options(hc::ModelKind::kModifiedPi));
+  hc::FitOptions o = fixed_options(hc::ModelKind::kCoupledPlayPi);
+  const hc::FitResult cpi = hc::fit_model(times(u.size()), u, y, o);
+  o.dead_zones = 0;  // the coupled-play paper's model: plays only
+  const hc::FitResult plays_only = hc::fit_model(times(u.size()), u, y, o);
+
+  ASSERT_EQ(cpi.model.hysteresis().kind(), hc::ModelKind::kCoupledPlayPi);
+  const auto& p = dynamic_cast<const hc::CoupledPlayPiModel&>(cpi.model.hysteresis()).parameters();
+  EXPECT_TRUE(p.has_dead_zones());
+  EXPECT_EQ(cpi.dead_zones, mpi.dead_zones);
+  EXPECT_TRUE(cpi.model.hysteresis().invertibility().invertible);
+  // Unit scales make it the modified PI: never worse than it on held-out data.
+  EXPECT_LE(cpi.heldout.rmse, mpi.heldout.rmse * (1.0 + 1e-6) + 1e-12);
+  EXPECT_EQ(plays_only.dead_zones, 0);
+  // The saturation is what plays alone cannot shape: about a third of their error here.
+  EXPECT_LT(cpi.heldout.rmse, 0.5 * plays_only.heldout.rmse)
+      << "with dead zones " << cpi.heldout.rmse << ", plays only " << plays_only.heldout.rmse
+      << ", mpi " << mpi.heldout.rmse;
 }
 
 TEST(Identification, TriangularMethodRecoversPiFromOneAscendingBranch) {

@@ -131,7 +131,7 @@ TEST(NumericInverse, ComposesForCoupledPlayModels) {
 
 TEST(CoupledPlayPiModel, NonMonotoneOperatorIsReportedNotInverted) {
   hc::ActuatorModel model(std::make_unique<hc::CoupledPlayPiModel>(
-      hc::CoupledPlayParameters{{0, 2}, {0, 1}, {0, 1}, {0, 1}, {1.0, 0.5}, 0.0}));
+      hc::CoupledPlayParameters{{0, 2}, {0, 1}, {0, 1}, {0, 1}, {1.0, 0.5}, 0.0, {}, 0.0}));
   model.input_min = -10;
   model.input_max = 10;
   try {
@@ -140,6 +140,22 @@ TEST(CoupledPlayPiModel, NonMonotoneOperatorIsReportedNotInverted) {
   } catch (const hc::NotInvertibleError& e) {
     EXPECT_EQ(e.why().index, 1);  // rc = 1 < r = 2
   }
+}
+
+// An operator whose width switches at rc > r jumps up as a rising input crosses rc; with a
+// negative weight that jump lowers the output although the cumulative weights stay positive.
+TEST(CoupledPlayPiModel, NegativeWeightOnAJumpingOperatorIsReportedNotInverted) {
+  const hc::CoupledPlayParameters p{{0, 2}, {0, 2}, {0, 2}, {0, 6}, {1.0, -0.5}, 0.0, {}, 0.0};
+  hc::CoupledPlayPiModel model(p);
+  model.reset(0.0);
+  double before = model.step(5.9);
+  EXPECT_LT(model.step(6.1), before);  // the fall the check names
+  const hc::Invertibility why = model.invertibility();
+  EXPECT_FALSE(why.invertible);
+  EXPECT_EQ(why.index, 1);
+  hc::CoupledPlayParameters q = p;
+  q.rc = {0, 2};  // no jump: a negative increment is fine while the cumulative weight is > 0
+  EXPECT_TRUE(hc::CoupledPlayPiModel(q).invertibility().invertible);
 }
 
 // An RPI with zero rate coefficients is the modified PI it extends: its numeric inverse composes
@@ -309,7 +325,7 @@ TEST(NumericInverse, RateDependentDriveIsSmoothAndComposesOnASine) {
 // exactly as `track` builds it: the analytic inverse where one exists, the numeric otherwise.
 namespace {
 
-enum class Family { kPi, kMpi, kCpi, kRpi };
+enum class Family { kPi, kMpi, kCpi, kCpiDeadZones, kRpi };
 
 struct FamilyCase {
   Family family;
@@ -317,7 +333,7 @@ struct FamilyCase {
 };
 
 std::string case_name(const ::testing::TestParamInfo<FamilyCase>& info) {
-  static const char* names[] = {"Pi", "Mpi", "Cpi", "Rpi"};
+  static const char* names[] = {"Pi", "Mpi", "Cpi", "CpiDeadZones", "Rpi"};
   return std::string(names[static_cast<int>(info.param.family)]) +
          (info.param.creep ? "WithCreep" : "");
 }
@@ -335,8 +351,10 @@ hc::ActuatorModel family_model(Family family, std::mt19937_64& rng) {
     case Family::kMpi:
       h = std::make_unique<hc::ModifiedPiModel>(random_mpi(rng, 10, 2, 150.0));
       break;
-    case Family::kCpi: {
-      // As the identification builds them: r uniform, rb = ra = kb r, rc = kc r (kc >= 1).
+    case Family::kCpi:
+    case Family::kCpiDeadZones: {
+      // As the identification builds them: r uniform, rb = ra = kb r, rc = kc r (kc >= 1),
+      // optionally followed by the output dead zones of a modified PI.
       hc::CoupledPlayParameters p;
       const double kb = 0.5 + 1.5 * unit(rng), kc = 1.0 + 5.0 * unit(rng);
       for (int i = 0; i < 10; ++i) {
@@ -346,6 +364,11 @@ hc::ActuatorModel family_model(Family family, std::mt19937_64& rng) {
         p.rb.push_back(kb * r);
         p.rc.push_back(kc * r);
         p.weights.push_back(i == 0 ? 0.2 + 0.1 * unit(rng) : 0.03 * unit(rng));
+      }
+      if (family == Family::kCpiDeadZones) {
+        const hc::ModifiedPiParameters mpi = random_mpi(rng, 10, 2, 150.0);
+        p.dead_zone = mpi.dead_zone;
+        p.center = 20.0 + mpi.center;
       }
       h = std::make_unique<hc::CoupledPlayPiModel>(p);
       break;
@@ -424,7 +447,9 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(FamilyCase{Family::kPi, false}, FamilyCase{Family::kPi, true},
                       FamilyCase{Family::kMpi, false}, FamilyCase{Family::kMpi, true},
                       FamilyCase{Family::kCpi, false}, FamilyCase{Family::kCpi, true},
-                      FamilyCase{Family::kRpi, false}, FamilyCase{Family::kRpi, true}),
+                      FamilyCase{Family::kCpiDeadZones, false},
+                      FamilyCase{Family::kCpiDeadZones, true}, FamilyCase{Family::kRpi, false},
+                      FamilyCase{Family::kRpi, true}),
     case_name);
 
 TEST(RateDependentPiModel, RateForOutputInvertsTheRateLaw) {

@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
+#include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "support/random_models.hpp"
@@ -60,6 +63,41 @@ TEST(ModelFile, RateDependentRoundTrip) {
   const json j = hc::to_json(f);
   EXPECT_EQ(j["type"], "rpi");
   EXPECT_EQ(hc::to_json(hc::model_file_from_json(j)), j);
+}
+
+// A coupled-play model carries its output dead zones when it has them; a file without them
+// (the coupled-play paper's model, and every cpi file written before the stage existed) loads
+// as before, with an identity output stage.
+TEST(ModelFile, CoupledPlayRoundTripWithAndWithoutOutputDeadZones) {
+  json j = json::parse(R"({"schema":"hystbench.model/1","type":"cpi",
+    "units":{"input":"V","output":"um"},"input_range":[0,150],
+    "coupled_play":{"r":[0,10,20],"ra":[0,10,20],"rb":[0,10,20],"rc":[0,30,60],
+                    "weights":[0.2,0.05,0.03],"offset":1.5}})");
+  const hc::ModelFile plain = hc::model_file_from_json(j);
+  EXPECT_FALSE(hc::to_json(plain).contains("deadzone"));
+  j["deadzone"] = valid_mpi()["deadzone"];
+  const hc::ModelFile staged = hc::model_file_from_json(j);
+  const json again = hc::to_json(staged);
+  ASSERT_TRUE(again.contains("deadzone"));
+  EXPECT_EQ(hc::to_json(hc::model_file_from_json(again)), again);
+  const auto& p =
+      dynamic_cast<const hc::CoupledPlayPiModel&>(staged.model.hysteresis()).parameters();
+  EXPECT_DOUBLE_EQ(p.center, 20.0);
+  // The stage acts on the plays' output: y = center + S[v - center], v the plain model's.
+  hc::ActuatorModel a = plain.model, b = staged.model;
+  const hc::DeadZoneSuperposition s(p.dead_zone);
+  std::mt19937_64 rng(3);
+  const auto u = hystbench::testing::random_reversal_signal(rng, 2000, 0.0, 150.0);
+  const auto v = a.simulate(u, 1e-4);
+  const auto y = b.simulate(u, 1e-4);
+  double differs = 0.0;
+  for (std::size_t k = 0; k < u.size(); ++k) {
+    ASSERT_NEAR(y[k], 20.0 + s.apply(v[k] - 20.0), 1e-12) << k;
+    differs = std::max(differs, std::abs(y[k] - v[k]));
+  }
+  EXPECT_GT(differs, 0.1);  // the stage is not the identity on this range
+  j["deadzone"]["weights"] = {0.1, 1.0};
+  EXPECT_NE(error_of(j.dump()).find("deadzone.weights"), std::string::npos) << error_of(j.dump());
 }
 
 TEST(ModelFile, ErrorsNameTheField) {

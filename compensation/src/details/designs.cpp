@@ -44,7 +44,10 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
   if (s_.play_thresholds.empty()) throw std::invalid_argument("a design needs at least one play");
   if (s_.kind == ModelKind::kRateDependentPi) s_.input_reference = 0.0;  // see header
   n_ = static_cast<Eigen::Index>(s_.plays());
-  if (s_.kind == ModelKind::kCoupledPlayPi) cp_ = coupled_thresholds(s_);
+  if (s_.kind == ModelKind::kCoupledPlayPi) {
+    cp_ = coupled_thresholds(s_);
+    increments_ = s_.cp_scale[2] > 1.0 || s_.cp_scale[0] < s_.cp_scale[1];
+  }
   if (s_.has_dead_zones()) {
     const std::size_t zero = s_.zero_index();
     for (std::size_t j = zero + 1; j < s_.dead_zone_thresholds.size(); ++j) {
@@ -102,6 +105,8 @@ double Design::row(double u, double y, double* a) noexcept {
       a[i] = q;
       a[n_ + i] = q * rho;
     }
+  } else if (increments_) {
+    for (Eigen::Index i = 0; i < n_; ++i) a[i] = z[i] - s_.input_reference;
   } else {
     for (Eigen::Index i = 0; i + 1 < n_; ++i) a[i] = z[i] - z[i + 1];
     a[n_ - 1] = z[n_ - 1] - s_.input_reference;
@@ -139,6 +144,8 @@ double Design::row(double u, double y, double* a) noexcept {
 Eigen::VectorXd Design::lower_bounds() const {
   Eigen::VectorXd lo = Eigen::VectorXd::Constant(unknowns_, -kInf);
   lo.head(n_).setConstant(s_.min_play_slope);
+  // Jumping coupled plays: w_0 >= eps and w_i >= 0, so every cumulative weight is >= eps too.
+  if (increments_) lo.segment(1, n_ - 1).setConstant(0.0);
   // RPI: the rate parts D_i = W_i(max_rate) - W_i(0) >= 0: the loop widens with rate (the
   // rate-dependent paper's Fig. 8), and W_i >= eps holds on all of [0, max_rate].
   if (play_cols_ > n_) lo.segment(n_, play_cols_ - n_).setConstant(0.0);
@@ -152,12 +159,13 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
   const auto n = static_cast<std::size_t>(n_);
   PiParameters play;
   play.thresholds = s_.play_thresholds;
-  play.weights = cumulative_to_increments(x.data(), n);
-  const double total = x[n_ - 1];
+  play.weights = increments_ ? std::vector<double>(x.data(), x.data() + n)
+                             : cumulative_to_increments(x.data(), n);
+  const double total = increments_ ? x.head(n_).sum() : x[n_ - 1];
   play.offset = x[offset_col_] - s_.input_reference * total;
   if (!s_.has_dead_zones()) {
     if (s_.kind == ModelKind::kCoupledPlayPi) {
-      CoupledPlayParameters p{cp_.r, cp_.ra, cp_.rb, cp_.rc, play.weights, play.offset};
+      CoupledPlayParameters p{cp_.r, cp_.ra, cp_.rb, cp_.rc, play.weights, play.offset, {}, 0.0};
       return std::make_unique<CoupledPlayPiModel>(std::move(p));
     }
     return std::make_unique<PiModel>(std::move(play));
@@ -173,8 +181,13 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
   const auto neg = cumulative_to_increments(x.data() + dz_col_ + m_pos_, dz_neg_.size(), 1.0);
   for (std::size_t j = 0; j < pos.size(); ++j) inv.weights[zero + 1 + j] = pos[j];
   for (std::size_t j = 0; j < neg.size(); ++j) inv.weights[zero - 1 - j] = neg[j];
-  ModifiedPiParameters mpi{std::move(play),
-                           DeadZoneSuperposition(std::move(inv)).inverse().parameters(), s_.center};
+  DeadZoneParameters forward = DeadZoneSuperposition(std::move(inv)).inverse().parameters();
+  if (s_.kind == ModelKind::kCoupledPlayPi) {
+    CoupledPlayParameters p{
+        cp_.r, cp_.ra, cp_.rb, cp_.rc, play.weights, play.offset, std::move(forward), s_.center};
+    return std::make_unique<CoupledPlayPiModel>(std::move(p));
+  }
+  ModifiedPiParameters mpi{std::move(play), std::move(forward), s_.center};
   if (s_.kind == ModelKind::kModifiedPi) return std::make_unique<ModifiedPiModel>(std::move(mpi));
   // Rate-dependent: W_i(rate) = A_i + D_i rate / max_rate.
   RateDependentPiParameters rpi;

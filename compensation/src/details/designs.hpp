@@ -5,7 +5,10 @@
 // operators over a record and writes one regressor row per sample; its unknowns are the
 // CUMULATIVE weights, so invertibility constraints are plain lower bounds:
 //   PI / CPI : y            = sum_i W_i (p_i - p_{i+1}) + c                      (p_n := u_ref)
-//   MPI      : S'[y - ctr]  = sum_i W_i (p_i - p_{i+1}) + c0   (Kuhnen's error model)
+//   CPI whose operators jump (rc > r or ra < rb): y = sum_i w_i (p_i - u_ref) + c with the
+//              increments w_0 >= eps, w_i >= 0: a jump with a negative weight lowers the output
+//   MPI      : S'[y - ctr]  = sum_i W_i (p_i - p_{i+1}) + c0   (Kuhnen's error model;
+//              CPI with dead zones likewise, its coupled plays as the p_i)
 //              with S' = inverse dead zone, w'_0 = 1, cumulative V_j >= eps outward from 0
 //   RPI      : as MPI with W_i(rho) = A_i + D_i rho, rho = min(rate, max_rate) / max_rate,
 //              A_i >= eps and D_i >= 0 (weights grow with rate; invertible on [0, max_rate]).
@@ -28,9 +31,9 @@ struct ModelStructure {
   ModelKind kind = ModelKind::kPi;
   std::vector<double> play_thresholds;  ///< r_0 = 0 < r_1 < ... [input unit]
   /// Inverse dead-zone thresholds d' about `center`, strictly increasing with exactly one 0
-  /// (MPI / RPI only; {0} alone = no dead zones) [output unit].
+  /// (MPI / RPI / CPI only; {0} alone = no dead zones) [output unit].
   std::vector<double> dead_zone_thresholds{0.0};
-  double center = 0.0;           ///< [output unit] (MPI / RPI)
+  double center = 0.0;           ///< [output unit] (with dead zones)
   double input_reference = 0.0;  ///< subtracted from the last play for conditioning (not RPI)
   std::array<double, 3> cp_scale{1.0, 1.0, 1.0};  ///< CPI: ra, rb, rc as multiples of r_i
   double max_rate = 0.0;                          ///< RPI [input unit / s]
@@ -42,8 +45,10 @@ struct ModelStructure {
 
   std::size_t plays() const noexcept { return play_thresholds.size(); }
   std::size_t zero_index() const;  ///< index of 0 in dead_zone_thresholds
+  /// MPI and RPI always have the dead-zone stage; CPI when it has dead zones ({0} alone: none).
   bool has_dead_zones() const noexcept {
-    return kind == ModelKind::kModifiedPi || kind == ModelKind::kRateDependentPi;
+    return kind == ModelKind::kModifiedPi || kind == ModelKind::kRateDependentPi ||
+           (kind == ModelKind::kCoupledPlayPi && dead_zone_thresholds.size() > 1);
   }
 };
 
@@ -68,6 +73,8 @@ class Design {
   Eigen::Index dead_zone_column() const noexcept { return dz_col_; }
   Eigen::Index dead_zone_unknowns() const noexcept { return m_pos_ + m_neg_; }
   Eigen::Index creep_column() const noexcept { return creep_col_; }
+  /// True when the play unknowns are the weights themselves, not their cumulative sums.
+  bool increment_weights() const noexcept { return increments_; }
 
   void reset(double u0) noexcept;
   /// Steps the operators with input u (measured output y) and writes the regressors of this
@@ -95,6 +102,7 @@ class Design {
   Eigen::Index dz_col_ = 0;
   Eigen::Index creep_col_ = 0;
   Eigen::Index unknowns_ = 0;
+  bool increments_ = false;              // CPI with jumps: unknowns are w_i, not W_i
   std::vector<double> z_;                // operator outputs
   std::vector<double> creep_a_;          // lag poles
   std::vector<double> creep_x_;          // lag states

@@ -100,6 +100,11 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
           kc.push_back(p.rc[i] / p.r[i]);
         }
         s.cp_scale = {median(ka), median(kb), median(kc)};
+        if (p.has_dead_zones()) {
+          s.center = p.center;
+          s.dead_zone_thresholds =
+              DeadZoneSuperposition(p.dead_zone).inverse().parameters().thresholds;
+        }
         break;
       }
     }

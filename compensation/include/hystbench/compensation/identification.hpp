@@ -32,6 +32,7 @@ struct FitOptions {
   /// Number of plays; 0 = chosen by held-out error.
   int operators = 0;
   /// Dead zones per side m (2m+1 dead-zone operators in all); -1 = chosen by held-out error.
+  /// MPI and RPI; CPI too (its optional output stage; 0 = the coupled-play paper's model).
   int dead_zones = -1;
   /// Fraction of the record (at its end) kept out of the fit to measure held-out error.
   /// 0 = no held-out part (the order is then chosen on the fit error).
@@ -67,7 +68,7 @@ struct FitOptions {
   /// Fixed play thresholds (r_0 = 0, strictly increasing) [input unit]; overrides
   /// `operators` and disables their refinement. Empty = uniform on half the input span.
   std::vector<double> play_thresholds;
-  /// Fixed thresholds of the INVERSE dead zone S' (MPI / RPI), on the output about `center`:
+  /// Fixed thresholds of the INVERSE dead zone S' (MPI / RPI / CPI), on the output about `center`:
   /// strictly increasing with exactly one 0 [output unit]; overrides `dead_zones` and disables
   /// their refinement. Empty = 2m+1 thresholds uniform on the fitted output range.
   std::vector<double> dead_zone_thresholds;

@@ -3,8 +3,8 @@
 //   {"schema": "hystbench.model/1", "type": "pi|mpi|cpi|rpi",
 //    "units": {"input": "V", "output": "um"}, "input_range": [min, max],
 //    "play": {"thresholds": [...], "weights": [...], "offset": 0},          (pi, mpi, rpi)
-//    "deadzone": {"thresholds": [...], "weights": [...], "center": 0},      (mpi, rpi)
-//    "rate": {"coefficients": [...], "max_rate": 0},                         (rpi)
+//    "deadzone": {"thresholds": [...], "weights": [...], "center": 0},      (mpi, rpi; cpi:
+//    optional) "rate": {"coefficients": [...], "max_rate": 0},                         (rpi)
 //    "coupled_play": {"r": [...], "ra": [...], "rb": [...], "rc": [...],
 //                     "weights": [...], "offset": 0},                        (cpi)
 //    "creep": {"time_constants_s": [...], "gains": [...]},                   (optional)
