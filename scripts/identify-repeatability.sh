@@ -4,6 +4,7 @@
 # triangle, 5 periods, inverse) for every M given (default: mpi mpi cpi mpi), printing one table
 # row per pair: held-out error, verified error (when identify reports one), tracking error.
 # Usage: scripts/identify-repeatability.sh [model ...]   (needs build/bin; see scripts/build.sh)
+# HYSTBENCH_REPEAT_CONFIG=FILE runs another daemon config (default config/loopback.toml).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 models=("$@")
@@ -13,7 +14,7 @@ bench_tmp="${HYSTBENCH_REPEAT_DIR:-$(mktemp -d -t hystbench-repeat.XXXXXX)}"
 mkdir -p "$bench_tmp"
 . scripts/lib/daemon.sh
 trap stop_daemon EXIT
-start_daemon config/loopback.toml
+start_daemon "${HYSTBENCH_REPEAT_CONFIG:-config/loopback.toml}"
 printf '| identify | model | held-out rms %% | verified rms / max %% | tracking rms %% | tracking max %% |\n'
 printf '| --- | --- | --- | --- | --- | --- |\n'
 for m in "${models[@]}"; do

@@ -733,6 +733,7 @@ json Bench::start_track(const json& params) {
                                  {"bandwidth_hz", inversion.bandwidth_hz()},
                                  {"how", inversion.describe()}};
     if (inversion.active()) p->preview = inversion;
+    p->tare_from = precondition_tare_from(p->excitation.size());
   }
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
   const std::uint64_t prefix = p->excitation.size();
@@ -933,6 +934,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       session->history = identify_history_json(fit_options);
       session->history["delay_ticks"] = id.delay_ticks;
       session->history["exchange_ticks"] = id.exchange_ticks;
+      session->history["delay_note"] = id.delay_note;
       session->result = result;
       session_ = std::move(session);
       if (!verify_next_candidate()) finish_identify();

@@ -190,11 +190,14 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     }
     // The feedforward's target at run time tt: the reference, or with a preview the static
     // target that inverts the model's delay and dynamics (the reference ahead by the delay).
-    auto target_at = [&p](double tt) noexcept {
-      if (!p.preview) return std::clamp(p.reference->value(tt), p.y_ref_min, p.y_ref_max);
+    // Less the tare: the output offset the model did not predict on the open-loop prefix.
+    const double tare = p.tare_um();
+    auto target_at = [&p, tare](double tt) noexcept {
+      if (!p.preview) return std::clamp(p.reference->value(tt), p.y_ref_min, p.y_ref_max) - tare;
       const double tl = tt + p.preview->lead_s(), h = p.preview->step_s();
       return p.preview->target(p.reference->value(tl - h), p.reference->value(tl),
-                               p.reference->value(tl + h));
+                               p.reference->value(tl + h)) -
+             tare;
     };
     compensation::CompensatorOutput out;
     if (const std::size_t ahead = p.targets.capacity(); ahead > 1) {
@@ -205,7 +208,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
       p.targets.push(target_at(t + static_cast<double>(ahead - 1) * dt_));
       out = p.compensator->step(y_ref, y_prev_, p.targets.view());
     } else {
-      out = p.compensator->step(y_ref, y_prev_, p.preview ? target_at(t) : y_ref);
+      out = p.compensator->step(y_ref, y_prev_, target_at(t));
     }
     rec.u_ff = out.u_ff;
     rec.u_fb = out.u_fb;
@@ -258,6 +261,11 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     if (failure == nullptr) {
       y_prev_ = m.position_um;
       last_y_.store(m.position_um, std::memory_order_relaxed);
+      if (p.model && st == drivers::DriverStatus::kOk && k >= p.tare_from &&
+          k < p.excitation.size()) {
+        p.tare_sum += m.position_um - rec.y_model;
+        ++p.tare_samples;
+      }
     }
   }
   if (failure == nullptr && p.overruns > options_.overrun_budget) {

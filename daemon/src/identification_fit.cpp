@@ -1,7 +1,10 @@
 #include "hystbench/daemon/identification_fit.hpp"
 
+#include <spdlog/fmt/fmt.h>
+
 #include <algorithm>
 #include <limits>
+#include <string>
 
 namespace hystbench::daemon {
 
@@ -11,6 +14,10 @@ namespace {
 /// Held-out rms error, or the fit's without a held-out part.
 double score(const hc::FitResult& f) { return f.heldout.samples > 0 ? f.heldout.rmse : f.fit.rmse; }
 }  // namespace
+
+bool delayed_fit_is_better(const hc::FitResult& without, const hc::FitResult& with) {
+  return score(with) < score(without) && with.fit.rmse < without.fit.rmse;
+}
 
 AveragedRecord block_average(std::span<const double> u, std::span<const double> y, double dt_s,
                              std::size_t block, std::size_t shift) {
@@ -125,10 +132,22 @@ IdentificationFit fit_identification_record(std::span<const double> u, std::span
       best = d;
     }
   }
-  if (best == 0) return finish(0);
+  if (best == 0) {
+    out.delay_note = "no further delay: none scored a lower held-out error";
+    return finish(0);
+  }
   const AveragedRecord rd = block_average(u, y, dt_s, block, static_cast<std::size_t>(best));
   hc::FitResult delayed = hc::fit_model(rd.t, rd.u, rd.y, options);
-  if (!(score(delayed) < score(out.fit))) return finish(0);
+  const std::string figures =
+      fmt::format(" (held-out {:.4g} vs {:.4g}, fit part {:.4g} vs {:.4g} um)",
+                  delayed.heldout.rmse, score(out.fit), delayed.fit.rmse, out.fit.fit.rmse);
+  if (!delayed_fit_is_better(out.fit, delayed)) {
+    out.delay_note = "no further delay: the full fit at " + std::to_string(best) +
+                     " ticks was not better on both held-out and fit part" + figures;
+    return finish(0);
+  }
+  out.delay_note =
+      std::to_string(best) + " further ticks: lower held-out and fit-part error" + figures;
   out.fit = std::move(delayed);
   return finish(best);
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "hystbench/compensation/dynamics_inversion.hpp"
@@ -47,6 +48,12 @@ std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
     append_ramp(out, u_max, u_min, half);
   }
   return out;
+}
+
+std::uint64_t precondition_tare_from(std::size_t sweep_samples) {
+  const std::size_t half = sweep_samples / 2;
+  if (half < 10) return std::numeric_limits<std::uint64_t>::max();
+  return half + half / 5;  // skip the turn's transient (rate, dynamics, delay)
 }
 
 hc::ActuatorModel model_after(const hc::ActuatorModel& model, std::span<const double> prefix,
@@ -98,6 +105,7 @@ std::unique_ptr<RunProgram> make_verification_program(const hc::ActuatorModel& m
   p->model = std::move(predictor);
   const hc::DynamicsInversion inversion(model, dt_s, spec.feedforward_bandwidth_hz);
   if (inversion.active()) p->preview = inversion;
+  p->tare_from = precondition_tare_from(p->excitation.size());
   const std::uint64_t prefix = p->excitation.size();
   const auto body = static_cast<std::uint64_t>(std::llround(ref.duration_s / dt_s));
   const auto one_period = static_cast<std::uint64_t>(std::llround(1.0 / spec.frequency_hz / dt_s));
@@ -126,6 +134,7 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   r["max_error_percent"] = e.range > 0 ? 100.0 * run.error_max / e.range : 0.0;
   r["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
   r["error_samples"] = run.error_samples;
+  if (run.tare_samples > 0) r["tare_um"] = run.tare_um();
   return r;
 }
 

@@ -72,6 +72,11 @@ void print_run_result(const json& r, std::ostream& out) {
         << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %)\n";
     out << "  hysteresis      " << fixed(r["hysteresis_percent"], 3) << " % of the output range\n";
   }
+  if (r.contains("tare_um")) {
+    out << "  tare            " << fixed(r["tare_um"], 4)
+        << " um: the offset the model missed on the precondition sweep, taken off the "
+           "feedforward\n";
+  }
   if (r.contains("model_rms_error_um")) {
     out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
         << fixed(r["model_rms_error_percent"], 3) << " %)   max "

@@ -228,6 +228,8 @@ TEST(Identification, CoupledPlayFitsAnOutputSaturationWithItsDeadZones) {
   ASSERT_EQ(cpi.model.hysteresis().kind(), hc::ModelKind::kCoupledPlayPi);
   const auto& p = dynamic_cast<const hc::CoupledPlayPiModel&>(cpi.model.hysteresis()).parameters();
   EXPECT_TRUE(p.has_dead_zones());
+  EXPECT_EQ(p.rb, p.r);  // the truth is symmetric: no asymmetry beats the modified PI
+  EXPECT_EQ(p.rc, p.r);
   EXPECT_EQ(cpi.dead_zones, mpi.dead_zones);
   EXPECT_TRUE(cpi.model.hysteresis().invertibility().invertible);
   // Unit scales make it the modified PI: never worse than it on held-out data.

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "hystbench/compensation/identification.hpp"
@@ -50,12 +51,21 @@ struct IdentificationFit {
   int exchange_ticks = 0;
   /// Held-out rms error [µm] of the fixed-order fit at each further delay tried, index = ticks.
   std::vector<double> delay_heldout_rmse;
+  /// How the delay was chosen, in words (for the identify report).
+  std::string delay_note;
 };
+
+/// True when a fit at a longer delay is better than the one without: lower held-out AND lower
+/// fit-part rms error. A delay adds no unknown, so the fit part (nine tenths of the record) must
+/// agree; the held-out tenth alone scores near-equal delays by chance.
+bool delayed_fit_is_better(const compensation::FitResult& without,
+                           const compensation::FitResult& with);
 
 /// Fits `options` (its delay_samples is ignored) to the record averaged by `block`: y aligned
 /// by `response` (empty: every reading answers its own tick), then the further delay in ticks
 /// 0..max_delay_ticks with the lowest held-out error, kept only when the full fit at that delay
-/// beats the one without. Throws std::invalid_argument as compensation::fit_model does.
+/// beats the one without (delayed_fit_is_better). Throws std::invalid_argument as
+/// compensation::fit_model does.
 IdentificationFit fit_identification_record(std::span<const double> u, std::span<const double> y,
                                             std::span<const std::uint32_t> response, double dt_s,
                                             std::size_t block, compensation::FitOptions options,

@@ -31,6 +31,11 @@ ModelOutputRange major_loop_range(const compensation::ActuatorModel& model, doub
 std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
                                        double precondition_s, double dt_s);
 
+/// The first sample of a precondition sweep of `sweep_samples` samples over which the output's
+/// unpredicted offset (RunProgram::tare_from) is measured: the falling ramp, once the turn at
+/// u_max has wiped both the actuator's and the model's memory; no tare (max) without a sweep.
+std::uint64_t precondition_tare_from(std::size_t sweep_samples);
+
 /// A copy of `model` configured for dt_s, relaxed at u_start, simulated through `prefix`, its
 /// input range narrowed to [u_min, u_max] (or set to it when the model has none): the model an
 /// inverse should start from after the prefix.

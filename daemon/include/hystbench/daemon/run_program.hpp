@@ -56,6 +56,11 @@ struct RunProgram {
   /// The active model's identified input delay [ticks]: the stuck-sensor detector waits this
   /// much longer for the reading to answer the output.
   std::uint64_t response_delay_ticks = 0;
+  /// track: the output offset the model does not predict (slow creep, a sensor offset): the mean
+  /// of y - y_model over the open-loop prefix samples [tare_from, excitation.size()) is subtracted
+  /// from the feedforward's target (not from the reference the error and the PID see).
+  /// tare_from >= excitation.size() = no tare.
+  std::uint64_t tare_from = std::numeric_limits<std::uint64_t>::max();
   /// The per-run log (may be null in unit tests).
   std::unique_ptr<SampleLogWriter> log;
   /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).
@@ -77,6 +82,12 @@ struct RunProgram {
   std::uint64_t error_samples = 0;
   double model_error_sum2 = 0.0, model_error_max = 0.0;  ///< y - y_model from metrics_from [µm]
   std::uint64_t model_error_samples = 0;
+  double tare_sum = 0.0;  ///< sum of y - y_model over the tare window [µm]
+  std::uint64_t tare_samples = 0;
+  /// The tare the feedforward applies [µm] (0 until the window has a sample).
+  double tare_um() const noexcept {
+    return tare_samples > 0 ? tare_sum / static_cast<double>(tare_samples) : 0.0;
+  }
   LoopStatistics stats;  ///< this run's loop timing
 };
 
