@@ -3,7 +3,8 @@
 // with randomised parameters, seeds, sample rates and noise; drives it with the identification
 // excitation; and checks that diagnose() names the effect from the data alone (it sees t, u, y and
 // nothing of the configuration) and that the extended model's error on a second, independent record
-// of the same actuator is at most 0.6x the baseline's.
+// of the same actuator (scored as validate_model scores a record never fitted) is at most 0.6x the
+// baseline's.
 // The sweep (64 cases: 8 per cause and none at 100 Hz .. 20 kHz, all asserted; plus 8 random-walk
 // drifts, reported in their own row; confusion table and per-cause ratios printed) runs with
 // HYSTBENCH_LONG_TESTS=1 (HYSTBENCH_SWEEP_SEED draws other cases); by default one case per cause
@@ -264,8 +265,9 @@ double rms_error(hc::ActuatorModel model, const Record& r) {
 
 struct Outcome {
   hc::Cause named = hc::Cause::kNone;
-  double ratio = 0.0;  // extended / baseline rms on the second record
-  double gain = 0.0;   // held-out gain of the named cause
+  double ratio = 0.0;      // extended / baseline rms on the second record (validate_model)
+  double raw_ratio = 0.0;  // the same over the whole second record, from its first sample
+  double gain = 0.0;       // held-out gain of the named cause
   double seconds = 0.0;
   std::size_t samples = 0;
   hc::Diagnosis diagnosis;
@@ -280,9 +282,15 @@ Outcome diagnose_case(const HiddenData& d) {
   o.named = o.diagnosis.cause;
   o.gain = o.diagnosis.baseline_heldout.rmse / o.diagnosis.extended_heldout.rmse;
   // Drift is a disturbance of the day, not part of any model: both models are judged on the
-  // second record without its drift (the test knows it; the diagnosis never does).
-  o.ratio = rms_error(o.diagnosis.extended, d.second_without_drift) /
-            rms_error(o.diagnosis.baseline, d.second_without_drift);
+  // second record without its drift (the test knows it; the diagnosis never does). They are
+  // scored as the product scores a record never fitted (validate_model: after the start-up, whose
+  // virgin state no fit that leaves out its own start-up has seen, the mean error apart);
+  // raw_ratio scores the whole record from its first sample.
+  const Record& r2 = d.second_without_drift;
+  const double dt2 = r2.t[1] - r2.t[0];
+  o.ratio = hc::validate_model(o.diagnosis.extended, r2.u, r2.y, dt2).rmse /
+            hc::validate_model(o.diagnosis.baseline, r2.u, r2.y, dt2).rmse;
+  o.raw_ratio = rms_error(o.diagnosis.extended, r2) / rms_error(o.diagnosis.baseline, r2);
   return o;
 }
 
@@ -633,7 +641,7 @@ TEST(DiagnosisHiddenEffect, RandomisedSweepConfusionTable) {
   std::map<std::pair<int, int>, int> confusion;
   constexpr int kWalkRow = 100;  // confusion row of the random-walk drifts
   std::vector<double> walk_ratios;
-  std::map<int, std::vector<double>> ratios;
+  std::map<int, std::vector<double>> ratios, raw_ratios;
   int wrong = 0, count = 0, bad_ratio = 0;
   double slowest = 0.0;
   std::size_t slowest_samples = 0;
@@ -646,6 +654,7 @@ TEST(DiagnosisHiddenEffect, RandomisedSweepConfusionTable) {
       ++confusion[{c.random_walk ? kWalkRow : static_cast<int>(cause), static_cast<int>(o.named)}];
       const bool ratio_checked = cause != hc::Cause::kNone && !c.random_walk;
       if (ratio_checked) ratios[static_cast<int>(cause)].push_back(o.ratio);
+      if (ratio_checked) raw_ratios[static_cast<int>(cause)].push_back(o.raw_ratio);
       if (c.random_walk) walk_ratios.push_back(o.ratio);
       const bool ok = o.named == cause && (!ratio_checked || o.ratio <= kMaxRatio);
       // Random walks are the harder class beyond the issue's causes (a walk's fast part is not a
@@ -653,10 +662,10 @@ TEST(DiagnosisHiddenEffect, RandomisedSweepConfusionTable) {
       if (o.named != cause && !c.random_walk) ++wrong;
       if (ratio_checked && o.ratio > kMaxRatio) ++bad_ratio;
       if (o.seconds > slowest) slowest = o.seconds, slowest_samples = o.samples;
-      std::printf("%-40s %-18s named %-16s ratio %.3f gain %7.2f  %.2f s / %zu samples\n",
-                  name_of(c).c_str(), ok ? "ok" : "WRONG",
-                  std::string(hc::to_string(o.named)).c_str(), o.ratio, o.gain, o.seconds,
-                  o.samples);
+      std::printf(
+          "%-40s %-18s named %-16s ratio %.3f (raw %.3f) gain %7.2f  %.2f s / %zu samples\n",
+          name_of(c).c_str(), ok ? "ok" : "WRONG", std::string(hc::to_string(o.named)).c_str(),
+          o.ratio, o.raw_ratio, o.gain, o.seconds, o.samples);
       if (!ok) std::printf("  truth: %s\n%s", d.truth.c_str(), summary(o).c_str());
       std::fflush(stdout);
     }
@@ -672,13 +681,19 @@ TEST(DiagnosisHiddenEffect, RandomisedSweepConfusionTable) {
     for (const hc::Cause n : causes) std::printf("%9d", confusion[{row, static_cast<int>(n)}]);
     std::printf("\n");
   }
-  std::printf("\nextended / baseline rms on the second record (median, worst):\n");
+  std::printf(
+      "\nextended / baseline rms on the second record (median, worst; raw: from its first "
+      "sample):\n");
   for (auto& [cause, v] : ratios) {
+    std::vector<double>& raw = raw_ratios[cause];
     std::sort(v.begin(), v.end());
-    std::printf("  %-16s %.3f  %.3f\n",
+    std::sort(raw.begin(), raw.end());
+    std::printf("  %-16s %.3f  %.3f   raw %.3f  %.3f\n",
                 std::string(hc::to_string(static_cast<hc::Cause>(cause))).c_str(), v[v.size() / 2],
-                v.back());
+                v.back(), raw[raw.size() / 2], raw.back());
   }
+  // Issue 15: a fitted resonance carries over to another record of the same actuator.
+  EXPECT_LE(ratios[static_cast<int>(hc::Cause::kDynamics)].back(), 0.3);
   std::sort(walk_ratios.begin(), walk_ratios.end());
   std::printf("  %-16s %.3f  %.3f  (random-walk drift: naming and ratio reported, not asserted)\n",
               "drift (walk)", walk_ratios[walk_ratios.size() / 2], walk_ratios.back());
