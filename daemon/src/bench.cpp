@@ -232,12 +232,17 @@ std::unique_ptr<SampleLogWriter> Bench::open_log(const std::string& run_id, json
   }
 }
 
+std::uint64_t Bench::model_exchange_ticks() const {
+  if (!model_ || !model_->identification.is_object()) return 0;
+  return static_cast<std::uint64_t>(
+      std::max<std::int64_t>(0, model_->identification.value("exchange_ticks", 0)));
+}
+
 std::uint64_t Bench::model_delay_ticks() const {
   if (!model_) return 0;
   const auto total = static_cast<std::int64_t>(std::ceil(model_->model.delay_s() / dt_ - 1e-9));
   // The driver's exchange latency is part of the identified delay, and each reading reports it.
-  const std::int64_t exchange =
-      model_->identification.is_object() ? model_->identification.value("exchange_ticks", 0) : 0;
+  const auto exchange = static_cast<std::int64_t>(model_exchange_ticks());
   return static_cast<std::uint64_t>(std::max<std::int64_t>(0, total - exchange));
 }
 
@@ -734,6 +739,7 @@ json Bench::start_track(const json& params) {
                                  {"how", inversion.describe()}};
     if (inversion.active()) p->preview = inversion;
     p->tare_from = precondition_tare_from(p->excitation.size());
+    p->model_exchange_ticks = model_exchange_ticks();
   }
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
   const std::uint64_t prefix = p->excitation.size();

@@ -227,7 +227,10 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     ++p.slew_limits;
   }
   rec.u_out = lim.u;
-  if (p.model) rec.y_model = p.model->step(lim.u);
+  if (p.model) {
+    rec.y_model = p.model->step(lim.u);
+    p.y_model_history[k % RunProgram::kModelHistory] = rec.y_model;
+  }
 
   const char* failure = nullptr;
   std::uint32_t response = RunProgram::kNoFreshReading;
@@ -261,9 +264,13 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     if (failure == nullptr) {
       y_prev_ = m.position_um;
       last_y_.store(m.position_um, std::memory_order_relaxed);
+      // The reading answers the output of response_ticks ago: compare it with the model's
+      // prediction for that output (less the exchange latency the model's delay holds).
+      const std::uint64_t lag =
+          m.response_ticks > p.model_exchange_ticks ? m.response_ticks - p.model_exchange_ticks : 0;
       if (p.model && st == drivers::DriverStatus::kOk && k >= p.tare_from &&
-          k < p.excitation.size()) {
-        p.tare_sum += m.position_um - rec.y_model;
+          k < p.excitation.size() && lag < RunProgram::kModelHistory && lag <= k) {
+        p.tare_sum += m.position_um - p.y_model_history[(k - lag) % RunProgram::kModelHistory];
         ++p.tare_samples;
       }
     }

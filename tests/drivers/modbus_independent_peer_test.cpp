@@ -188,9 +188,13 @@ TEST_F(IndependentPeerTest, TrackACoarselyQuantisedPlantWithItsTrueModel) {
   ASSERT_EQ(inv["end"], "completed") << inv.dump(2);
   EXPECT_LE(inv["rms_error_percent"].get<double>(), 0.5) << inv.dump(2);
   EXPECT_LT(inv["rms_error_percent"].get<double>(), none["rms_error_percent"].get<double>());
+  // The true model predicts the plant: the tare sees only the counts, once each reading is
+  // compared with the output it answers (a thread-mode exchange answers an earlier tick's; the
+  // same-tick comparison read the ramp's lag as a 0.21 um offset and tracked at 0.75 %).
+  EXPECT_LT(std::abs(inv["tare_um"].get<double>()), 0.05) << inv.dump(2);
   std::cout << "[ pymodbus PI, 0.25 um counts ] track none rms " << none["rms_error_percent"]
             << " %, inverse rms " << inv["rms_error_percent"] << " % max "
-            << inv["max_error_percent"] << " %\n";
+            << inv["max_error_percent"] << " %, tare " << inv["tare_um"] << " um\n";
 }
 
 // Opt-in (HYSTBENCH_LONG_TESTS=1): identification on the quantised plant, another 35 s.

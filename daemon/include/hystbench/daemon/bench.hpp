@@ -147,6 +147,9 @@ class Bench {
   /// The active model's input delay beyond the driver's exchange latency (which every reading
   /// reports) in whole ticks, rounded up (0 without a model); mutex_ held.
   std::uint64_t model_delay_ticks() const;
+  /// The driver exchange latency the active model's delay holds (its identification's
+  /// exchange_ticks; 0 for a model made elsewhere) [ticks].
+  std::uint64_t model_exchange_ticks() const;
 
   BenchSettings settings_;
   std::unique_ptr<drivers::Driver> driver_;

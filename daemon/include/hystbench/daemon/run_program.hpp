@@ -2,6 +2,7 @@
 // Everything one run needs inside the loop, allocated by the control thread before the run and
 // handed to the loop whole, so the loop itself never allocates. The loop writes progress and the
 // outcome into it; the control thread reads them after the loop hands the program back.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <limits>
@@ -61,6 +62,10 @@ struct RunProgram {
   /// from the feedforward's target (not from the reference the error and the PID see).
   /// tare_from >= excitation.size() = no tare.
   std::uint64_t tare_from = std::numeric_limits<std::uint64_t>::max();
+  /// The driver exchange latency that the model's delay already holds [ticks]: an identified
+  /// model's exchange_ticks, 0 for a model made elsewhere. For the tare a reading that answers
+  /// the output of response_ticks ago is compared with y_model of (response_ticks - this) ago.
+  std::uint64_t model_exchange_ticks = 0;
   /// The per-run log (may be null in unit tests).
   std::unique_ptr<SampleLogWriter> log;
   /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).
@@ -82,6 +87,8 @@ struct RunProgram {
   std::uint64_t error_samples = 0;
   double model_error_sum2 = 0.0, model_error_max = 0.0;  ///< y - y_model from metrics_from [µm]
   std::uint64_t model_error_samples = 0;
+  static constexpr std::size_t kModelHistory = 64;      ///< y_model ticks kept for the tare
+  std::array<double, kModelHistory> y_model_history{};  ///< y_model of tick k at k % size
   double tare_sum = 0.0;  ///< sum of y - y_model over the tare window [µm]
   std::uint64_t tare_samples = 0;
   /// The tare the feedforward applies [µm] (0 until the window has a sample).
