@@ -24,6 +24,11 @@ class Packing {
       // when it is above r (rc = r is the plain rising play and stays so).
       scales_ = s.cp_scale[2] > 1.0 ? 2 : 1;
     }
+    // A gap the search drives towards zero stays a gap (next_threshold).
+    const auto& r = s.play_thresholds;
+    if (!r.empty()) play_gap_ = min_threshold_gap(r.back() - r.front());
+    const auto& d = s.dead_zone_thresholds;
+    if (!d.empty()) dz_gap_ = min_threshold_gap(d.back() - d.front());
   }
 
   Eigen::Index size() const noexcept { return plays_ + pos_ + neg_ + scales_; }
@@ -45,10 +50,13 @@ class Packing {
     ModelStructure s = base_;
     Eigen::Index k = 0;
     auto& r = s.play_thresholds;
-    for (Eigen::Index i = 1; i <= plays_; ++i) r[i] = r[i - 1] + std::exp(theta[k++]);
+    for (Eigen::Index i = 1; i <= plays_; ++i)
+      r[i] = next_threshold(r[i - 1], theta[k++], play_gap_);
     auto& d = s.dead_zone_thresholds;
-    for (Eigen::Index j = 1; j <= pos_; ++j) d[zero_ + j] = d[zero_ + j - 1] + std::exp(theta[k++]);
-    for (Eigen::Index j = 1; j <= neg_; ++j) d[zero_ - j] = d[zero_ - j + 1] - std::exp(theta[k++]);
+    for (Eigen::Index j = 1; j <= pos_; ++j)
+      d[zero_ + j] = next_threshold(d[zero_ + j - 1], theta[k++], dz_gap_);
+    for (Eigen::Index j = 1; j <= neg_; ++j)
+      d[zero_ - j] = -next_threshold(-d[zero_ - j + 1], theta[k++], dz_gap_);
     if (scales_ > 0) {
       s.cp_scale[1] = std::exp(theta[k++]);
       s.cp_scale[0] = base_.cp_scale[0] / base_.cp_scale[1] * s.cp_scale[1];
@@ -59,6 +67,7 @@ class Packing {
 
  private:
   ModelStructure base_;
+  double play_gap_ = 0.0, dz_gap_ = 0.0;
   Eigen::Index plays_ = 0;
   std::size_t zero_ = 0;
   Eigen::Index pos_ = 0;
@@ -119,6 +128,12 @@ struct Residuals : Eigen::DenseFunctor<double> {
 };
 
 }  // namespace
+
+double next_threshold(double previous, double log_gap, double min_gap) noexcept {
+  return previous + std::max(std::exp(log_gap), min_gap);
+}
+
+double min_threshold_gap(double span) noexcept { return 1e-6 * std::max(std::abs(span), 1.0); }
 
 double structure_rmse(const ModelStructure& s, const RefinementRecord& record) {
   Eigen::VectorXd f(static_cast<Eigen::Index>(record.residuals()));

@@ -38,6 +38,14 @@ struct RefinementResult {
   int evaluations = 0;
 };
 
+/// The threshold after `previous` at the gap exp(log_gap), at least min_gap above it: strictly
+/// increasing for any log_gap (a gap that exp() shrinks below previous's last digit would
+/// otherwise round to nothing, and equal thresholds are no model). min_gap > 0.
+double next_threshold(double previous, double log_gap, double min_gap) noexcept;
+/// The smallest gap kept between refined thresholds that span `span` (a millionth of it, of 1
+/// when it is smaller).
+double min_threshold_gap(double span) noexcept;
+
 /// Simulated output RMS error of the structure fitted on `record`.
 double structure_rmse(const ModelStructure& s, const RefinementRecord& record);
 
