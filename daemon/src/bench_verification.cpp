@@ -55,6 +55,7 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
   for (std::size_t i = 0; i < kinds.size(); ++i) {
     hc::FitOptions o = options;
     o.kind = kinds[i];
+    o.delay_samples = 0;  // the record is already shifted by the delay chosen in ticks
     if (options.progress) {
       const double begin = static_cast<double>(i) / kinds.size(), span = 1.0 / kinds.size();
       o.progress = [&options, begin, span, kind = kinds[i]](double f, const std::string& what) {

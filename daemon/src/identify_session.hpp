@@ -33,6 +33,9 @@ struct Bench::IdentifySession {
 
 /// Fits the requested family, or with options.kind unset ("auto") each of pi, mpi, cpi and rpi
 /// (a family that fails is left out); sorted by held-out error. Throws when none fits.
+/// t, u, y are already shifted by the delay chosen in ticks: no further delay is searched
+/// (options.delay_samples is ignored; at the fit rate it would step in blocks of ticks, and the
+/// caller sets the model's delay to the ticks).
 std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t,
                                                        std::span<const double> u,
                                                        std::span<const double> y,
