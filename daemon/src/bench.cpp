@@ -738,8 +738,7 @@ json Bench::start_track(const json& params) {
                                  {"bandwidth_hz", inversion.bandwidth_hz()},
                                  {"how", inversion.describe()}};
     if (inversion.active()) p->preview = inversion;
-    p->tare_from = precondition_tare_from(p->excitation.size());
-    p->model_exchange_ticks = model_exchange_ticks();
+    arm_tare(*p, model_exchange_ticks());
   }
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
   const std::uint64_t prefix = p->excitation.size();

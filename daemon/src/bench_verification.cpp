@@ -88,9 +88,9 @@ bool Bench::verify_next_candidate() {
       VerificationSpec spec;
       spec.precondition_s = settings_.precondition_s;
       spec.feedforward_bandwidth_hz = settings_.feedforward_bandwidth_hz;
-      p = make_verification_program(c.fit.model, spec, loop_->last_output(), lim, dt_);
-      p->model_exchange_ticks =
+      spec.model_exchange_ticks =
           static_cast<std::uint64_t>(std::max(0, s.history.value("exchange_ticks", 0)));
+      p = make_verification_program(c.fit.model, spec, loop_->last_output(), lim, dt_);
     } catch (const std::exception& e) {
       c.verification = {{"end", "not_run"}, {"reason", e.what()}};
       ++s.next;

@@ -139,8 +139,8 @@ IdentificationFit fit_identification_record(std::span<const double> u, std::span
   const AveragedRecord rd = block_average(u, y, dt_s, block, static_cast<std::size_t>(best));
   hc::FitResult delayed = hc::fit_model(rd.t, rd.u, rd.y, options);
   const std::string figures =
-      fmt::format(" (held-out {:.4g} vs {:.4g}, fit part {:.4g} vs {:.4g} um)",
-                  delayed.heldout.rmse, score(out.fit), delayed.fit.rmse, out.fit.fit.rmse);
+      fmt::format(" (held-out {:.4g} vs {:.4g}, fit part {:.4g} vs {:.4g} um)", score(delayed),
+                  score(out.fit), delayed.fit.rmse, out.fit.fit.rmse);
   if (!delayed_fit_is_better(out.fit, delayed)) {
     out.delay_note = "no further delay: the full fit at " + std::to_string(best) +
                      " ticks was not better on both held-out and fit part" + figures;

@@ -50,10 +50,11 @@ std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
   return out;
 }
 
-std::uint64_t precondition_tare_from(std::size_t sweep_samples) {
-  const std::size_t half = sweep_samples / 2;
-  if (half < 10) return std::numeric_limits<std::uint64_t>::max();
-  return half + half / 5;  // skip the turn's transient (rate, dynamics, delay)
+void arm_tare(RunProgram& program, std::uint64_t model_exchange_ticks) {
+  const std::size_t half = program.excitation.size() / 2;
+  program.tare_from = half < 10 ? std::numeric_limits<std::uint64_t>::max()
+                                : half + half / 5;  // skip the turn's transient
+  program.model_exchange_ticks = model_exchange_ticks;
 }
 
 hc::ActuatorModel model_after(const hc::ActuatorModel& model, std::span<const double> prefix,
@@ -105,7 +106,7 @@ std::unique_ptr<RunProgram> make_verification_program(const hc::ActuatorModel& m
   p->model = std::move(predictor);
   const hc::DynamicsInversion inversion(model, dt_s, spec.feedforward_bandwidth_hz);
   if (inversion.active()) p->preview = inversion;
-  p->tare_from = precondition_tare_from(p->excitation.size());
+  arm_tare(*p, spec.model_exchange_ticks);
   const std::uint64_t prefix = p->excitation.size();
   const auto body = static_cast<std::uint64_t>(std::llround(ref.duration_s / dt_s));
   const auto one_period = static_cast<std::uint64_t>(std::llround(1.0 / spec.frequency_hz / dt_s));

@@ -31,10 +31,11 @@ ModelOutputRange major_loop_range(const compensation::ActuatorModel& model, doub
 std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
                                        double precondition_s, double dt_s);
 
-/// The first sample of a precondition sweep of `sweep_samples` samples over which the output's
-/// unpredicted offset (RunProgram::tare_from) is measured: the falling ramp, once the turn at
-/// u_max has wiped both the actuator's and the model's memory; no tare (max) without a sweep.
-std::uint64_t precondition_tare_from(std::size_t sweep_samples);
+/// Arms the tare of a program whose excitation is a precondition sweep: the output's
+/// unpredicted offset is measured on the falling ramp (RunProgram::tare_from), once the turn at
+/// u_max has wiped both the actuator's and the model's memory (no tare without a sweep), with
+/// readings matched to the outputs they answer less `model_exchange_ticks`.
+void arm_tare(RunProgram& program, std::uint64_t model_exchange_ticks);
 
 /// A copy of `model` configured for dt_s, relaxed at u_start, simulated through `prefix`, its
 /// input range narrowed to [u_min, u_max] (or set to it when the model has none): the model an
@@ -51,6 +52,8 @@ struct VerificationSpec {
   double precondition_s = 1.0;  ///< sweep before the reference [s], >= 0
   /// Roll-off of the dynamics inversion, as `track` uses it (DynamicsInversion) [Hz]; 0 = default.
   double feedforward_bandwidth_hz = 0.0;
+  /// The driver exchange latency the model's delay holds (its identification's) [ticks].
+  std::uint64_t model_exchange_ticks = 0;
 };
 
 /// A kTrack program (no log: the caller opens one) following a triangle over
