@@ -118,6 +118,12 @@ struct Record {
   std::vector<double> ud;     // u delayed by `delay` samples (u[0] before the start)
   double u_lo = 0, u_hi = 0;  // input range up to the held-out part (skipped start included)
   double y_lo = 0, y_hi = 0;  // output range over the fitted part
+  double drift_t0_s = 0.0;    // FitOptions::drift: the drift line's zero, mid fitted part [s]
+
+  // A candidate's drift line at sample k [output unit] (FitOptions::drift).
+  double drift_at(double per_s, std::size_t k) const {
+    return per_s * (static_cast<double>(k) * dt - drift_t0_s);
+  }
 
   void set_delay(int d) {
     delay = d;
@@ -147,6 +153,7 @@ Record make_record(std::span<const double> t, std::span<const double> u, std::sp
                        " held out leaves fewer than " + std::to_string(kMinFitRows));
   const auto [ylo, yhi] = std::minmax_element(y.begin() + r.begin, y.begin() + r.fit_end);
   r.y_lo = *ylo, r.y_hi = *yhi;
+  r.drift_t0_s = 0.5 * static_cast<double>(r.begin + r.fit_end) * r.dt;
   details::require(r.y_hi > r.y_lo, "output y is constant over the fitted part (" + fmt(r.y_lo) +
                                         "): nothing to identify");
   r.set_delay(0);
@@ -161,6 +168,9 @@ struct Candidate {
   std::optional<ActuatorModel> model;
   ErrorStats fit, heldout;
   std::string method;
+  /// FitOptions::drift: the record's drift fitted with the weights [output unit / s]; no part
+  /// of the model, added to its output where it is scored.
+  double drift = 0.0;
 
   double score() const { return heldout.samples > 0 ? heldout.rmse : fit.rmse; }
 };
@@ -175,7 +185,10 @@ void score(Candidate& c, const Record& r) {
     c.method += " (rejected, not invertible: " + inv.reason + ")";
     return;
   }
-  const std::vector<double> yhat = c.model->simulate(r.ud, r.dt);
+  std::vector<double> yhat = c.model->simulate(r.ud, r.dt);
+  if (c.drift != 0.0) {
+    for (std::size_t k = 0; k < yhat.size(); ++k) yhat[k] += r.drift_at(c.drift, k);
+  }
   const auto y = r.y;
   c.fit = error_stats(y.subspan(r.begin, r.fit_end - r.begin),
                       std::span(yhat).subspan(r.begin, r.fit_end - r.begin));
@@ -253,6 +266,8 @@ ModelStructure Identifier::structure(ModelKind kind, int plays, int dead_zones) 
   s.min_play_slope = o_.min_cumulative_weight * y_span / u_span;
   s.min_dead_zone_slope = o_.min_cumulative_weight;
   s.center = center_;
+  s.drift = o_.drift;
+  s.drift_t0_s = r_.drift_t0_s;
   if (s.has_dead_zones() || (kind == ModelKind::kCoupledPlayPi && dead_zones > 0)) {
     if (!o_.dead_zone_thresholds.empty()) {
       s.dead_zone_thresholds = o_.dead_zone_thresholds;
@@ -276,6 +291,7 @@ Candidate Identifier::evaluate(const ModelStructure& s, std::string method) {
       details::fit_design(design, r_.ud, r_.y, r_.begin, r_.fit_end);
   c.x = fit.x;
   c.model = design.build(fit.x);
+  if (s.drift) c.drift = fit.x[design.drift_column()];
   score(c, r_);
   log_.push_back({s.kind, static_cast<int>(s.plays()), dead_zones_of(s), r_.delay, c.fit.rmse,
                   c.heldout.rmse, c.method});
@@ -539,6 +555,7 @@ void Identifier::add_creep(Candidate& c) {
       Design design(hs);
       const auto fit = details::fit_design(design, r_.ud, y_adj, r_.begin, r_.fit_end);
       auto hysteresis = design.build_hysteresis(fit.x);
+      const double drift = hs.drift ? fit.x[design.drift_column()] : 0.0;
       hysteresis->reset(r_.ud[0]);
       details::NormalEquations ne(K);
       bank.reset(r_.ud[0]);
@@ -547,7 +564,7 @@ void Identifier::add_creep(Candidate& c) {
         bank.step(r_.ud[k]);
         if (k < r_.begin) continue;
         std::copy(bank.state().begin(), bank.state().end(), ne.row());
-        ne.push(r_.y[k] - h);
+        ne.push(r_.y[k] - h - r_.drift_at(drift, k));
       }
       const Eigen::VectorXd inf =
           Eigen::VectorXd::Constant(K, std::numeric_limits<double>::infinity());
@@ -556,6 +573,7 @@ void Identifier::add_creep(Candidate& c) {
       Candidate alt;
       alt.structure = s;
       alt.method = c.method + "+creep-alternating";
+      alt.drift = drift;
       alt.model = ActuatorModel(design.build_hysteresis(fit.x));
       alt.model->set_creep(CreepParameters{s.creep_time_constants, gains});
       score(alt, r_);
@@ -652,6 +670,18 @@ FitResult Identifier::run() {
 
   FitResult out;
   out.model = std::move(*best->model);
+  out.drift_per_s = best->drift;
+  std::vector<double> y_without_drift;
+  if (o_.drift) {
+    const double duration = static_cast<double>(r_.n - 1) * r_.dt;
+    notes.push_back("fitted a drift of " + fmt(best->drift) + " " + o_.units.output + "/s (" +
+                    fmt(best->drift * duration) + " " + o_.units.output +
+                    " over the record) with the weights: the record's, not the model's (the "
+                    "errors are of the record without it)");
+    y_without_drift.assign(r_.y.begin(), r_.y.end());
+    for (std::size_t k = 0; k < r_.n; ++k) y_without_drift[k] -= r_.drift_at(best->drift, k);
+    r_.y = y_without_drift;
+  }
   out.model.configure(r_.dt);
   out.model.set_delay(delay * r_.dt);
   out.model.units = o_.units;

@@ -67,7 +67,8 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
   offset_col_ = play_cols_;
   dz_col_ = offset_col_ + 1;
   creep_col_ = dz_col_ + m_pos_ + m_neg_;
-  unknowns_ = creep_col_ + static_cast<Eigen::Index>(s_.creep_time_constants.size());
+  drift_col_ = creep_col_ + static_cast<Eigen::Index>(s_.creep_time_constants.size());
+  unknowns_ = drift_col_ + (s_.drift ? 1 : 0);
   z_.assign(s_.plays(), 0.0);
   for (const double tau : s_.creep_time_constants) creep_a_.push_back(std::exp(-s_.dt / tau));
   creep_x_.assign(creep_a_.size(), 0.0);
@@ -77,6 +78,7 @@ void Design::reset(double u0) noexcept {
   std::fill(z_.begin(), z_.end(), u0);
   std::fill(creep_x_.begin(), creep_x_.end(), u0);
   u_prev_ = u0;
+  sample_ = 0;
   rate_.reset(u0);
 }
 
@@ -137,6 +139,8 @@ double Design::row(double u, double y, double* a) noexcept {
     creep_x_[k] = creep_a_[k] * creep_x_[k] + (1.0 - creep_a_[k]) * u;
     c[k] = creep_x_[k];
   }
+  if (s_.drift) a[drift_col_] = static_cast<double>(sample_) * s_.dt - s_.drift_t0_s;
+  ++sample_;
   u_prev_ = u;
   return target;
 }
@@ -206,7 +210,7 @@ ActuatorModel Design::build(const Eigen::VectorXd& x) const {
   if (!s_.creep_time_constants.empty()) {
     CreepParameters creep;
     creep.time_constants_s = s_.creep_time_constants;
-    creep.gains.assign(x.data() + creep_col_, x.data() + unknowns_);
+    creep.gains.assign(x.data() + creep_col_, x.data() + drift_col_);
     model.set_creep(std::move(creep));
   }
   return model;

@@ -12,7 +12,8 @@
 //              with S' = inverse dead zone, w'_0 = 1, cumulative V_j >= eps outward from 0
 //   RPI      : as MPI with W_i(rho) = A_i + D_i rho, rho = min(rate, max_rate) / max_rate,
 //              A_i >= eps and D_i >= 0 (weights grow with rate; invertible on [0, max_rate]).
-// Creep lags, when present, are extra unconstrained columns.
+// Creep lags, when present, are extra unconstrained columns; so is the drift column (time from
+// drift_t0_s), which estimates a record's slow drift and is no part of the built model.
 #include <Eigen/Dense>
 #include <array>
 #include <memory>
@@ -42,6 +43,8 @@ struct ModelStructure {
   double min_play_slope = 0.0;       ///< lower bound on cumulative play weights
   double min_dead_zone_slope = 0.0;  ///< lower bound on cumulative inverse dead-zone weights
   std::vector<double> creep_time_constants;  ///< creep lag columns [s] (empty = none)
+  bool drift = false;       ///< a drift column: time since sample 0 less drift_t0_s [s]
+  double drift_t0_s = 0.0;  ///< the time the drift column is zero at [s]
 
   std::size_t plays() const noexcept { return play_thresholds.size(); }
   std::size_t zero_index() const;  ///< index of 0 in dead_zone_thresholds
@@ -73,6 +76,8 @@ class Design {
   Eigen::Index dead_zone_column() const noexcept { return dz_col_; }
   Eigen::Index dead_zone_unknowns() const noexcept { return m_pos_ + m_neg_; }
   Eigen::Index creep_column() const noexcept { return creep_col_; }
+  /// The drift column (ModelStructure::drift), its coefficient in output unit per second.
+  Eigen::Index drift_column() const noexcept { return drift_col_; }
   /// True when the play unknowns are the weights themselves, not their cumulative sums.
   bool increment_weights() const noexcept { return increments_; }
 
@@ -101,7 +106,9 @@ class Design {
   Eigen::Index offset_col_ = 0;
   Eigen::Index dz_col_ = 0;
   Eigen::Index creep_col_ = 0;
+  Eigen::Index drift_col_ = 0;
   Eigen::Index unknowns_ = 0;
+  std::size_t sample_ = 0;               // rows since reset (the drift column's clock)
   bool increments_ = false;              // CPI with jumps: unknowns are w_i, not W_i
   std::vector<double> z_;                // operator outputs
   std::vector<double> creep_a_;          // lag poles

@@ -82,7 +82,13 @@ void output_residuals(const ModelStructure& s, const RefinementRecord& rec, doub
     Design design(s);
     const BoundedLsqResult fit = fit_design(design, rec.u, rec.y, rec.begin, rec.end, rec.stride);
     ActuatorModel model = design.build(fit.x);
-    const std::vector<double> yhat = model.simulate(rec.u.first(rec.end), s.dt);
+    std::vector<double> yhat = model.simulate(rec.u.first(rec.end), s.dt);
+    if (s.drift) {
+      const double per_s = fit.x[design.drift_column()];
+      for (std::size_t k = 0; k < yhat.size(); ++k) {
+        yhat[k] += per_s * (static_cast<double>(k) * s.dt - s.drift_t0_s);
+      }
+    }
     for (std::size_t i = 0, k = rec.begin; i < n; ++i, k += rec.stride) f[i] = rec.y[k] - yhat[k];
   } catch (const std::exception&) {
     // A structure the models reject (it cannot happen with positive slope bounds): make it

@@ -65,6 +65,12 @@ struct FitOptions {
   bool creep_always = false;
   int creep_operators = 4;
   std::vector<double> creep_time_constants_s;
+  /// Estimate a straight-line drift of the output over the record (an earlier run's slow creep
+  /// still settling, a sensor warming up) jointly with a mid-size model of the family on the
+  /// fitted part, and take it off the whole record before the search. The drift is the
+  /// record's, not the model's: FitResult::drift_per_s reports it, and every error is of the
+  /// record without it.
+  bool drift = false;
   /// Fixed play thresholds (r_0 = 0, strictly increasing) [input unit]; overrides
   /// `operators` and disables their refinement. Empty = uniform on half the input span.
   std::vector<double> play_thresholds;
@@ -101,6 +107,7 @@ struct FitResult {
   int delay_samples = 0;
   bool creep = false;
   std::size_t skipped_samples = 0;  ///< at the start, simulated but neither fitted nor scored
+  double drift_per_s = 0.0;  ///< FitOptions::drift: the output drift taken off [output unit / s]
   /// What the fit decided that the user did not ask for, one sentence each (the start left out,
   /// a fall-back to the classical PI, creep kept or dropped).
   std::vector<std::string> notes;
