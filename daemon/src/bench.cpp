@@ -895,6 +895,9 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       opt.operators = fit_options.value("operators", 0);
       opt.dead_zones = fit_options.value("dead_zones", -1);
       opt.heldout_fraction = settings_.identify_heldout_fraction;
+      // A bench has a history: the creep of earlier runs still settles during the record (tens of
+      // seconds), as a slow drift the fit would otherwise bend the hysteresis to.
+      opt.drift = true;
       // The ramp, the settle hold and the precondition sweep are simulated, not scored.
       const std::size_t skip = fit_options.value("skip_samples", std::size_t{0});
       opt.skip_samples = (skip + block - 1) / block;
@@ -925,7 +928,9 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       auto session = std::make_unique<IdentifySession>();
       if (opt.kind) {
         // One family: the delay search's fit at the chosen delay is that family's fit.
-        session->candidates.push_back({id.fit, json()});
+        session->candidates.push_back(
+            {id.fit, json(), std::string(hc::to_string(id.fit.model.hysteresis().kind()))});
+        add_dead_zone_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
       } else {
         session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
       }

@@ -71,10 +71,35 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
     }
   }
   if (out.empty()) throw std::runtime_error("no family could be fitted: " + errors);
+  for (IdentifyCandidate& c : out) c.label = type_name(c.fit);
   std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
     return a.fit.heldout.rmse < b.fit.heldout.rmse;
   });
   return out;
+}
+
+void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
+                             std::span<const double> u, std::span<const double> y,
+                             const hc::FitOptions& options) {
+  if (!options.kind || options.dead_zones >= 0 || candidates.size() != 1) return;
+  const hc::FitResult& chosen = candidates.front().fit;
+  if (chosen.dead_zones < 1) return;
+  hc::FitOptions o = options;
+  o.dead_zones = chosen.dead_zones - 1;
+  o.delay_samples = 0;  // the record is already shifted by the delay chosen in ticks
+  if (options.progress) {
+    o.progress = [&options, m = o.dead_zones](double f, const std::string& what) {
+      options.progress(f, std::to_string(m) + " dead zones: " + what);
+    };
+  }
+  try {
+    hc::FitResult fit = hc::fit_model(t, u, y, o);
+    if (fit.dead_zones != o.dead_zones) return;  // e.g. a fall-back to the classical PI
+    const std::string label = type_name(fit) + "-" + std::to_string(fit.dead_zones) + "dz";
+    candidates.push_back({std::move(fit), json(), label});
+  } catch (const std::exception&) {
+    // The chosen order stands alone; its own fit succeeded.
+  }
 }
 
 bool Bench::verify_next_candidate() {
@@ -96,7 +121,8 @@ bool Bench::verify_next_candidate() {
       ++s.next;
       continue;
     }
-    p->run_id = s.result["run_id"].get<std::string>() + "-verify-" + type;
+    p->run_id =
+        s.result["run_id"].get<std::string>() + "-verify-" + (c.label.empty() ? type : c.label);
     json header = {{"run",
                     {{"kind", "verify"},
                      {"identify_run", s.result["run_id"]},
@@ -129,7 +155,7 @@ bool Bench::verify_next_candidate() {
       return false;
     }
     s.program_id = program_id;
-    active_run_["stage"] = "verify " + type;
+    active_run_["stage"] = "verify " + (c.label.empty() ? type : c.label);
     active_run_["total"] = total;
     active_run_["verification_log"] = log;
     finalizing_ = false;  // stop and abort now act on the verification
@@ -186,6 +212,8 @@ void Bench::finish_identify() {
                            {"dead_zones", fit.dead_zones},
                            {"fit", to_json(fit.fit)},
                            {"heldout", to_json(fit.heldout)},
+                           {"drift_um_per_s", fit.drift_per_s},
+                           {"notes", fit.notes},
                            {"verification", c.verification},
                            {"chosen_by", chosen_by},
                            {"delay_ticks", s.history.value("delay_ticks", 0)},
@@ -206,6 +234,8 @@ void Bench::finish_identify() {
                        {"exchange_ticks", s.history.value("exchange_ticks", 0)},
                        {"fit", to_json(fit.fit)},
                        {"heldout", to_json(fit.heldout)},
+                       {"drift_um_per_s", fit.drift_per_s},
+                       {"notes", fit.notes},
                        {"chosen_by", chosen_by}};
     result["verification"] = c.verification;
     if (s.candidates.size() > 1) result["candidates"] = candidates;

@@ -93,6 +93,9 @@ void print_run_result(const json& r, std::ostream& out) {
           << fixed(m["heldout"]["rmse"], 4) << " um (" << fixed(m["heldout"]["rmse_percent"], 3)
           << " %), max " << fixed(m["heldout"]["max_abs"], 4) << " um\n";
     }
+    for (const json& note : m.value("notes", json::array())) {
+      out << "  fit note        " << note.get<std::string>() << "\n";
+    }
   }
   if (r.contains("verification") && r["verification"].is_object()) {
     const json& v = r["verification"];
@@ -107,8 +110,9 @@ void print_run_result(const json& r, std::ostream& out) {
   }
   for (const json& c : r.value("candidates", json::array())) {
     const json& v = c["verification"];
-    out << "  candidate       " << c.value("type", "?") << ": held-out rms "
-        << fixed(c["heldout"]["rmse_percent"], 3) << " %, verified max "
+    out << "  candidate       " << c.value("type", "?") << " " << c.value("operators", 0) << "/"
+        << c.value("dead_zones", 0) << ": held-out rms " << fixed(c["heldout"]["rmse_percent"], 3)
+        << " %, verified max "
         << (v.is_object() && v.contains("max_error_percent") ? fixed(v["max_error_percent"], 3)
                                                              : std::string("-"))
         << " %\n";

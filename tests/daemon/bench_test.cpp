@@ -238,10 +238,11 @@ TEST_P(BenchRepeatTest, IdentifyAfterEarlierRunsTracksAsWellAsTheFirst) {
   }
   const double a = first["track"]["max_error_percent"].get<double>();
   const double b = second["track"]["max_error_percent"].get<double>();
-  // Issue 19 asks for 1.3x; the creep the models leave out still puts the fresh daemon's first
-  // run ahead by 1.08-1.53x here (mpi 0.430 / 0.656 %, cpi 0.461 / 0.661 %), so this guards
-  // 1.8x, against the issue's 4.6x, until creep is fitted with an unknown initial state.
-  EXPECT_LE(std::max(a, b), 1.8 * std::min(a, b)) << "first " << a << " %, second " << b << " %";
+  // Issue 19 asks for 1.3x on the default excitation, which identify-repeatability.sh measures
+  // (mpi 0.243 / 0.247 / 0.248 %). This shortened one (1 s holds, 4 minor loops) sees more of the
+  // creep the models leave out: mpi 0.445 / 0.526 %, cpi 0.442 / 0.625 % (1.18x, 1.41x; before
+  // the fitted drift and the verified dead-zone neighbour 1.08-1.53x), so it guards 1.6x.
+  EXPECT_LE(std::max(a, b), 1.6 * std::min(a, b)) << "first " << a << " %, second " << b << " %";
   EXPECT_TRUE(
       std::filesystem::exists(second["identify"]["verification"]["log"].get<std::string>()));
 }

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "../../daemon/src/identify_session.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 
@@ -157,4 +158,47 @@ TEST(IdentificationFit, AutoCandidatesAreFittedAtNoFurtherDelay) {
   EXPECT_EQ(candidates[0].fit.delay_samples, 0);
   // The same fit searching its own delay finds the two samples: the guard is needed.
   EXPECT_EQ(hc::fit_model(r.t, r.u, r.y, o).delay_samples, 2);
+}
+
+// identify --model mpi with its dead zones chosen by held-out error (issue 19): the held-out error
+// hardly tells m from m - 1, the verification does, so the neighbour with one dead zone per side
+// fewer is fitted on the same record and joins the candidates, named for its verification log.
+TEST(IdentificationFit, TheDeadZoneOrderIsVerifiedAgainstItsNeighbour) {
+  const Record pi = delayed_pi_record(0);
+  hc::ModifiedPiParameters p;
+  p.play.thresholds = hc::uniform_thresholds(10, 75.0);
+  for (std::size_t i = 0; i < 10; ++i) p.play.weights.push_back(i == 0 ? 0.16 : 0.02);
+  p.center = 25.0;
+  p.dead_zone.thresholds = {-12.0, -6.0, 0.0, 6.0, 12.0};
+  p.dead_zone.weights = {0.3, -0.2, 1.0, -0.2, 0.3};  // cumulative 1.0 | 0.8, 1.1 per side
+  hc::ModifiedPiModel plant(p);
+  plant.reset(pi.u.front());
+  std::vector<double> y;
+  for (const double u : pi.u) y.push_back(plant.step(u));
+  const hd::AveragedRecord r = hd::block_average(pi.u, y, kDt, kBlock, 0);
+  hc::FitOptions o;
+  o.kind = hc::ModelKind::kModifiedPi;
+  o.operators = 10;
+  o.heldout_fraction = 0.1;
+  auto candidates = hd::fit_identify_candidates(r.t, r.u, r.y, o);
+  ASSERT_EQ(candidates.size(), 1u);
+  const int m = candidates[0].fit.dead_zones;
+  ASSERT_GE(m, 1);
+  EXPECT_EQ(candidates[0].label, "mpi");
+  hd::add_dead_zone_neighbour(candidates, r.t, r.u, r.y, o);
+  ASSERT_EQ(candidates.size(), 2u);
+  EXPECT_EQ(candidates[1].fit.dead_zones, m - 1);
+  EXPECT_EQ(candidates[1].label, "mpi-" + std::to_string(m - 1) + "dz");
+  EXPECT_TRUE(candidates[1].verification.is_null());
+
+  // Dead zones the user fixed are not second-guessed; nor is auto, which verifies families.
+  o.dead_zones = m;
+  auto fixed = hd::fit_identify_candidates(r.t, r.u, r.y, o);
+  hd::add_dead_zone_neighbour(fixed, r.t, r.u, r.y, o);
+  EXPECT_EQ(fixed.size(), 1u);
+  o.dead_zones = -1;
+  o.kind = std::nullopt;
+  std::vector<hd::IdentifyCandidate> two(2, candidates[0]);
+  hd::add_dead_zone_neighbour(two, r.t, r.u, r.y, o);
+  EXPECT_EQ(two.size(), 2u);
 }
