@@ -9,6 +9,7 @@
 
 #include "hystbench/daemon/diagnose_command.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
+#include "hystbench/daemon/plot_command.hpp"
 #include "hystbench/daemon/remote_commands.hpp"
 #include "hystbench/daemon/sweep_command.hpp"
 
@@ -231,6 +232,22 @@ int main(int argc, char** argv) {
                         "Open-loop sweep u_max -> u_min before the reference [s] (default: the "
                         "daemon's, 1 s; 0 = none)");
   add_output_flags(track_cmd, true);
+  track_cmd->add_option("--plot", remote.plot_dir,
+                        "With --wait: write the run's plots (time.png, error.png, loop.png) here "
+                        "when it ends, as `hystbench plot` does");
+
+  hd::PlotCommand plot;
+  auto* plot_cmd = app.add_subcommand(
+      "plot",
+      "Draw a run log as PNGs (gnuplot): reference, measurement and model against time; the "
+      "tracking error against time; the output-input loop with the model's loop over it.\n"
+      "Example: hystbench plot /var/lib/hystbench/logs/20261125T120000Z-track-2.csv -o plots/");
+  plot_cmd->add_option("log", plot.log_path, "Run log (CSV with t, u, y; yr and y_model if any)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  plot_cmd->add_option("-o,--output", plot.out_dir,
+                       "Folder for the PNGs (default: the log's name with -plots, beside it)");
+  plot_cmd->add_flag("--json", plot.json_output, "Print the written files as one JSON line");
 
   hd::SweepCommand sweep;
   auto* sweep_cmd = app.add_subcommand(
@@ -314,6 +331,11 @@ int main(int argc, char** argv) {
     return remote_run("identify", p);
   }
   if (*track_cmd) {
+    if (!remote.plot_dir.empty() && !remote.wait) {
+      std::cerr << "hystbench: error: track --plot needs --wait (the plots are drawn when the run "
+                   "ends; or run `hystbench plot LOG` afterwards)\n";
+      return 2;
+    }
     nlohmann::json p = {{"reference", tr_reference}, {"frequency_hz", tr_frequency}};
     if (tr_duration > 0)
       p["duration_s"] = tr_duration;
@@ -329,6 +351,7 @@ int main(int argc, char** argv) {
     }
     return remote_run("track", p);
   }
+  if (*plot_cmd) return hd::run_plot(plot, std::cout, std::cerr);
   if (*sweep_cmd) {
     sweep.socket_path = remote.socket_path;
     return hd::run_sweep(sweep, std::cout, std::cerr);

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "hystbench/daemon/bench_client.hpp"
+#include "hystbench/daemon/plot_command.hpp"
 
 namespace hystbench::daemon {
 
@@ -172,12 +173,29 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
     }
     const json r = wait_for_run(client, run_id, show);
     if (show) err << "\r\x1b[K" << std::flush;
+    int status = r.value("end", "") == "completed" && !r.contains("fit_error") ? 0 : 1;
+    json plotted = r;
+    if (!cmd.plot_dir.empty() && !r.value("log", std::string()).empty()) {
+      try {
+        json files = json::array();
+        for (const auto& png : plot_run_log(r["log"].get<std::string>(), cmd.plot_dir)) {
+          files.push_back(png.string());
+        }
+        plotted["plots"] = files;
+      } catch (const std::exception& e) {
+        err << "hystbench: error: --plot: " << e.what() << "\n";
+        status = 1;
+      }
+    }
     if (cmd.json_output) {
-      out << r.dump() << "\n";
+      out << plotted.dump() << "\n";
     } else {
       print_run_result(r, out);
+      for (const auto& png : plotted.value("plots", json::array())) {
+        out << "  plot            " << png.get<std::string>() << "\n";
+      }
     }
-    return r.value("end", "") == "completed" && !r.contains("fit_error") ? 0 : 1;
+    return status;
   } catch (const ClientError& e) {
     err << "hystbench: " << e.what() << "\n";
     return 2;

@@ -19,6 +19,8 @@ struct RemoteCommand {
   nlohmann::json params = nlohmann::json::object();
   bool wait = false;  ///< identify/track: follow progress until the run ends, print its result
   bool json_output = false;
+  /// track --wait: when the run ends, its log's plots go here (plot_run_log); empty = none.
+  std::string plot_dir;
 };
 
 /// Returns the exit code: 0 ok, 1 refused by the daemon or the run did not complete,
