@@ -95,6 +95,10 @@ int main(int argc, char** argv) {
       ->add_flag_callback(
           "--no-creep", [&fit] { fit.creep = false; }, "Never fit creep lags")
       ->excludes(creep_on);
+  fit_cmd->add_flag("--drift", fit.drift,
+                    "Fit a straight-line drift of the output over the record with the weights and "
+                    "leave it out of the model (a record taken while earlier creep still settled, "
+                    "a sensor warming up); the errors are then of the record without it");
   fit_cmd->add_option("-o,--output", fit.output_path, "Model file to write (JSON)")->required();
   fit_cmd->add_flag("--json", fit.json_output, "Print the result as one JSON line");
   add_column_options(fit_cmd, fit.columns, false);

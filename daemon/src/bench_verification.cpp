@@ -63,7 +63,7 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
       };
     }
     try {
-      out.push_back({hc::fit_model(t, u, y, o), json()});
+      out.push_back({hc::fit_model(t, u, y, o), json(), std::string()});
     } catch (const std::exception& e) {
       if (kinds.size() == 1) throw;
       errors += std::string(errors.empty() ? "" : "; ") + std::string(hc::to_string(kinds[i])) +

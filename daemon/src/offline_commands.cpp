@@ -127,6 +127,7 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     }
     opt.creep = cmd.creep.value_or(true);  // unset: tried, kept when it lowers held-out error
     opt.creep_always = cmd.creep.value_or(false);
+    opt.drift = cmd.drift;
     if (!cmd.json_output) {
       opt.progress = [&err](double fraction, const std::string& what) {
         err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction) << " %] " << what
@@ -142,6 +143,7 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
                          {"delay_samples", r.delay_samples},
                          {"creep", r.creep},
                          {"skipped_samples", r.skipped_samples},
+                         {"drift_per_s", r.drift_per_s},
                          {"notes", r.notes},
                          {"fit", to_json(r.fit)},
                          {"heldout", to_json(r.heldout)}};

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -101,6 +102,31 @@ TEST_F(OfflineCommandsTest, FittedModelPredictsASecondRecordOfTheSameActuator) {
   for (const double r : residual) sum2 += r * r;
   EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(residual.size())),
               predicted.at("rmse").get<double>(), 1e-6);
+}
+
+// fit --drift: a record whose output drifts (a bench's settling creep, a warming sensor) fits as
+// well as one without once the drift is fitted with the weights; the result says how much.
+TEST_F(OfflineCommandsTest, FitDriftTakesASlowDriftOffTheRecord) {
+  SimulatedRecord r = hystbench::test::simulate_record(static_actuator(), 1e-3, {}, 11);
+  const double slope = 0.01;  // um/s: about 0.3 um over the record
+  for (std::size_t k = 0; k < r.y.size(); ++k) r.y[k] += slope * r.t[k];
+  hd::FitCommand fit;
+  fit.data_path = write_record("drifting.csv", r);
+  fit.output_path = path("drifting.json");
+  fit.json_output = true;
+  ASSERT_EQ(run(hd::run_fit, fit), 0) << err_;
+  const json plain = json::parse(out_);
+  EXPECT_EQ(plain.at("drift_per_s").get<double>(), 0.0);
+  fit.drift = true;
+  ASSERT_EQ(run(hd::run_fit, fit), 0) << err_;
+  const json drift = json::parse(out_);
+  std::cout << "fit --drift: " << drift.at("drift_per_s") << " um/s of " << slope << ", held-out "
+            << drift.at("heldout").at("rmse") << " um against " << plain.at("heldout").at("rmse")
+            << " um without\n";
+  EXPECT_NEAR(drift.at("drift_per_s").get<double>(), slope, 0.3 * slope) << out_;
+  EXPECT_LT(drift.at("heldout").at("rmse").get<double>(),
+            0.5 * plain.at("heldout").at("rmse").get<double>())
+      << "with --drift " << drift.dump() << "\nwithout " << plain.dump();
 }
 
 TEST_F(OfflineCommandsTest, InverseDrivesTheModelOntoTheReferenceWhateverTheFileLayout) {

@@ -26,6 +26,9 @@ struct FitCommand {
   std::optional<double> skip_s;
   /// Creep lags: true = always fitted, false = never, unset = kept when held-out error improves.
   std::optional<bool> creep;
+  /// Fit a straight-line output drift with the weights and leave it out of the model
+  /// (FitOptions::drift): a record taken while earlier creep still settled or a sensor warmed.
+  bool drift = false;
   std::string output_path;
   bool json_output = false;
   RecordColumns columns;  ///< which columns are t, u, y (default t, u, y)
