@@ -120,11 +120,6 @@ struct Record {
   double y_lo = 0, y_hi = 0;  // output range over the fitted part
   double drift_t0_s = 0.0;    // FitOptions::drift: the drift line's zero, mid fitted part [s]
 
-  // A candidate's drift line at sample k [output unit] (FitOptions::drift).
-  double drift_at(double per_s, std::size_t k) const {
-    return per_s * (static_cast<double>(k) * dt - drift_t0_s);
-  }
-
   void set_delay(int d) {
     delay = d;
     ud.resize(n);
@@ -186,9 +181,7 @@ void score(Candidate& c, const Record& r) {
     return;
   }
   std::vector<double> yhat = c.model->simulate(r.ud, r.dt);
-  if (c.drift != 0.0) {
-    for (std::size_t k = 0; k < yhat.size(); ++k) yhat[k] += r.drift_at(c.drift, k);
-  }
+  details::add_drift(c.structure, c.drift, yhat);
   const auto y = r.y;
   c.fit = error_stats(y.subspan(r.begin, r.fit_end - r.begin),
                       std::span(yhat).subspan(r.begin, r.fit_end - r.begin));
@@ -564,7 +557,7 @@ void Identifier::add_creep(Candidate& c) {
         bank.step(r_.ud[k]);
         if (k < r_.begin) continue;
         std::copy(bank.state().begin(), bank.state().end(), ne.row());
-        ne.push(r_.y[k] - h - r_.drift_at(drift, k));
+        ne.push(r_.y[k] - h - drift * hs.drift_time_s(k));
       }
       const Eigen::VectorXd inf =
           Eigen::VectorXd::Constant(K, std::numeric_limits<double>::infinity());
@@ -679,7 +672,7 @@ FitResult Identifier::run() {
                     " over the record) with the weights: the record's, not the model's (the "
                     "errors are of the record without it)");
     y_without_drift.assign(r_.y.begin(), r_.y.end());
-    for (std::size_t k = 0; k < r_.n; ++k) y_without_drift[k] -= r_.drift_at(best->drift, k);
+    details::add_drift(best->structure, -best->drift, y_without_drift);
     r_.y = y_without_drift;
   }
   out.model.configure(r_.dt);

@@ -928,8 +928,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       auto session = std::make_unique<IdentifySession>();
       if (opt.kind) {
         // One family: the delay search's fit at the chosen delay is that family's fit.
-        session->candidates.push_back(
-            {id.fit, json(), std::string(hc::to_string(id.fit.model.hysteresis().kind()))});
+        session->candidates.push_back(family_candidate(id.fit));
         add_dead_zone_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
       } else {
         session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);

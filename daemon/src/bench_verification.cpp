@@ -39,6 +39,11 @@ json candidate_summary(const IdentifyCandidate& c) {
 
 }  // namespace
 
+IdentifyCandidate family_candidate(hc::FitResult fit) {
+  std::string label = type_name(fit);
+  return {std::move(fit), json(), std::move(label)};
+}
+
 std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t,
                                                        std::span<const double> u,
                                                        std::span<const double> y,
@@ -63,7 +68,7 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
       };
     }
     try {
-      out.push_back({hc::fit_model(t, u, y, o), json(), std::string()});
+      out.push_back(family_candidate(hc::fit_model(t, u, y, o)));
     } catch (const std::exception& e) {
       if (kinds.size() == 1) throw;
       errors += std::string(errors.empty() ? "" : "; ") + std::string(hc::to_string(kinds[i])) +
@@ -71,7 +76,6 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
     }
   }
   if (out.empty()) throw std::runtime_error("no family could be fitted: " + errors);
-  for (IdentifyCandidate& c : out) c.label = type_name(c.fit);
   std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
     return a.fit.heldout.rmse < b.fit.heldout.rmse;
   });
@@ -107,7 +111,6 @@ bool Bench::verify_next_candidate() {
   const auto& lim = settings_.loop.limits;
   while (s.next < s.candidates.size()) {
     IdentifyCandidate& c = s.candidates[s.next];
-    const std::string type = type_name(c.fit);
     std::unique_ptr<RunProgram> p;
     try {
       VerificationSpec spec;
@@ -121,8 +124,7 @@ bool Bench::verify_next_candidate() {
       ++s.next;
       continue;
     }
-    p->run_id =
-        s.result["run_id"].get<std::string>() + "-verify-" + (c.label.empty() ? type : c.label);
+    p->run_id = s.result["run_id"].get<std::string>() + "-verify-" + c.label;
     json header = {{"run",
                     {{"kind", "verify"},
                      {"identify_run", s.result["run_id"]},
@@ -155,7 +157,7 @@ bool Bench::verify_next_candidate() {
       return false;
     }
     s.program_id = program_id;
-    active_run_["stage"] = "verify " + (c.label.empty() ? type : c.label);
+    active_run_["stage"] = "verify " + c.label;
     active_run_["total"] = total;
     active_run_["verification_log"] = log;
     finalizing_ = false;  // stop and abort now act on the verification

@@ -17,10 +17,13 @@ struct IdentifyCandidate {
   compensation::FitResult fit;
   /// null until verified; then {end, reason, log, rms/max error ...} or {end: "not_run", reason}.
   nlohmann::json verification;
-  /// Names the candidate in its verification's run id: the family, and for the order
-  /// neighbour its dead zones (e.g. "mpi-4dz").
+  /// Names the candidate in its verification's run id and stage: its family, and for the
+  /// dead-zone neighbour its order too (e.g. "mpi-4dz").
   std::string label;
 };
+
+/// A family's fit as a candidate not yet verified, labelled with the family.
+IdentifyCandidate family_candidate(compensation::FitResult fit);
 
 struct Bench::IdentifySession {
   nlohmann::json result;  ///< the identify run's result so far (run.finished adds the model)

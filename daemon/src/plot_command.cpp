@@ -21,13 +21,13 @@ namespace {
 // curve keeps each bin's extremes.
 constexpr std::size_t kMaxPoints = 20000;
 
-const std::vector<double>* optional_column(const DataTable& t, const std::string& name) {
-  return t.has(name) ? &t.column(name) : nullptr;
+bool any_finite(const std::vector<double>& c) {
+  return std::any_of(c.begin(), c.end(), [](double v) { return std::isfinite(v); });
 }
 
-bool any_finite(const std::vector<double>* c) {
-  return c != nullptr &&
-         std::any_of(c->begin(), c->end(), [](double v) { return std::isfinite(v); });
+// The column when the log has it with a value somewhere; else nullptr (not drawn).
+const std::vector<double>* drawn_column(const DataTable& t, const std::string& name) {
+  return t.has(name) && any_finite(t.column(name)) ? &t.column(name) : nullptr;
 }
 
 void put(std::ostream& o, double v) {
@@ -56,12 +56,10 @@ std::vector<fs::path> plot_run_log(const std::string& log_path, const fs::path& 
   const std::vector<double>& t = table.column("t");
   const std::vector<double>& u = table.column("u");
   const std::vector<double>& y = table.column("y");
-  const std::vector<double>* yr = optional_column(table, "yr");
-  const std::vector<double>* ym = optional_column(table, "y_model");
-  if (!yr || !any_finite(yr)) yr = nullptr;
-  if (!ym || !any_finite(ym)) ym = nullptr;
+  const std::vector<double>* yr = drawn_column(table, "yr");
+  const std::vector<double>* ym = drawn_column(table, "y_model");
   const std::size_t n = table.rows();
-  if (n == 0 || !any_finite(&y)) throw std::runtime_error(log_path + ": no finite sample of y");
+  if (n == 0 || !any_finite(y)) throw std::runtime_error(log_path + ": no finite sample of y");
 
   fs::create_directories(dir);
   const fs::path dat = dir / "plot.dat";

@@ -171,27 +171,26 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
         progress_bar(err, f, what.empty() ? cmd.cmd + " " + run_id : what);
       };
     }
-    const json r = wait_for_run(client, run_id, show);
+    json r = wait_for_run(client, run_id, show);
     if (show) err << "\r\x1b[K" << std::flush;
     int status = r.value("end", "") == "completed" && !r.contains("fit_error") ? 0 : 1;
-    json plotted = r;
     if (!cmd.plot_dir.empty() && !r.value("log", std::string()).empty()) {
       try {
         json files = json::array();
         for (const auto& png : plot_run_log(r["log"].get<std::string>(), cmd.plot_dir)) {
           files.push_back(png.string());
         }
-        plotted["plots"] = files;
+        r["plots"] = files;
       } catch (const std::exception& e) {
         err << "hystbench: error: --plot: " << e.what() << "\n";
         status = 1;
       }
     }
     if (cmd.json_output) {
-      out << plotted.dump() << "\n";
+      out << r.dump() << "\n";
     } else {
       print_run_result(r, out);
-      for (const auto& png : plotted.value("plots", json::array())) {
+      for (const auto& png : r.value("plots", json::array())) {
         out << "  plot            " << png.get<std::string>() << "\n";
       }
     }

@@ -25,6 +25,11 @@ std::size_t ModelStructure::zero_index() const {
   return static_cast<std::size_t>(it - dead_zone_thresholds.begin());
 }
 
+void add_drift(const ModelStructure& s, double per_s, std::span<double> y) noexcept {
+  if (per_s == 0.0) return;
+  for (std::size_t k = 0; k < y.size(); ++k) y[k] += per_s * s.drift_time_s(k);
+}
+
 CoupledThresholds coupled_thresholds(const ModelStructure& s) {
   CoupledThresholds t;
   t.r = s.play_thresholds;
@@ -139,7 +144,7 @@ double Design::row(double u, double y, double* a) noexcept {
     creep_x_[k] = creep_a_[k] * creep_x_[k] + (1.0 - creep_a_[k]) * u;
     c[k] = creep_x_[k];
   }
-  if (s_.drift) a[drift_col_] = static_cast<double>(sample_) * s_.dt - s_.drift_t0_s;
+  if (s_.drift) a[drift_col_] = s_.drift_time_s(sample_);
   ++sample_;
   u_prev_ = u;
   return target;

@@ -47,6 +47,10 @@ struct ModelStructure {
   double drift_t0_s = 0.0;  ///< the time the drift column is zero at [s]
 
   std::size_t plays() const noexcept { return play_thresholds.size(); }
+  /// The drift column's value at sample k: its time from drift_t0_s [s].
+  double drift_time_s(std::size_t k) const noexcept {
+    return static_cast<double>(k) * dt - drift_t0_s;
+  }
   std::size_t zero_index() const;  ///< index of 0 in dead_zone_thresholds
   /// MPI and RPI always have the dead-zone stage; CPI when it has dead zones ({0} alone: none).
   bool has_dead_zones() const noexcept {
@@ -54,6 +58,10 @@ struct ModelStructure {
            (kind == ModelKind::kCoupledPlayPi && dead_zone_thresholds.size() > 1);
   }
 };
+
+/// Adds the drift line per_s * s.drift_time_s(k) to every y[k] (a fitted drift to a model's
+/// simulated output; -per_s takes it off a record).
+void add_drift(const ModelStructure& s, double per_s, std::span<double> y) noexcept;
 
 /// The coupled-play thresholds (r, ra, rb, rc) of a structure.
 struct CoupledThresholds {

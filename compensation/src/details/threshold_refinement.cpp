@@ -83,12 +83,7 @@ void output_residuals(const ModelStructure& s, const RefinementRecord& rec, doub
     const BoundedLsqResult fit = fit_design(design, rec.u, rec.y, rec.begin, rec.end, rec.stride);
     ActuatorModel model = design.build(fit.x);
     std::vector<double> yhat = model.simulate(rec.u.first(rec.end), s.dt);
-    if (s.drift) {
-      const double per_s = fit.x[design.drift_column()];
-      for (std::size_t k = 0; k < yhat.size(); ++k) {
-        yhat[k] += per_s * (static_cast<double>(k) * s.dt - s.drift_t0_s);
-      }
-    }
+    if (s.drift) add_drift(s, fit.x[design.drift_column()], yhat);
     for (std::size_t i = 0, k = rec.begin; i < n; ++i, k += rec.stride) f[i] = rec.y[k] - yhat[k];
   } catch (const std::exception&) {
     // A structure the models reject (it cannot happen with positive slope bounds): make it

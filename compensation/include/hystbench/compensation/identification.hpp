@@ -65,11 +65,12 @@ struct FitOptions {
   bool creep_always = false;
   int creep_operators = 4;
   std::vector<double> creep_time_constants_s;
-  /// Estimate a straight-line drift of the output over the record (an earlier run's slow creep
-  /// still settling, a sensor warming up) jointly with a mid-size model of the family on the
-  /// fitted part, and take it off the whole record before the search. The drift is the
-  /// record's, not the model's: FitResult::drift_per_s reports it, and every error is of the
-  /// record without it.
+  /// Fit a straight-line drift of the output over the record (an earlier run's slow creep
+  /// still settling, a sensor warming up) with the weights of every candidate, and score each
+  /// with its drift added (extrapolated over the held-out part). The drift is the record's, not
+  /// the model's: FitResult::drift_per_s reports the chosen model's, and every error is of the
+  /// record without it. Exact for the classical PI; first order for the dead-zone families,
+  /// whose error model drifts the hysteresis before the output dead zone.
   bool drift = false;
   /// Fixed play thresholds (r_0 = 0, strictly increasing) [input unit]; overrides
   /// `operators` and disables their refinement. Empty = uniform on half the input span.
