@@ -1,0 +1,329 @@
+"""Every Bench command against a real hystbenchd on the loopback actuator.
+
+Two daemons: one that never gets a model (errors that need its absence, runs without a model,
+uploads), and one that identifies once in setUpClass (about 35 s) for what needs a model.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import unittest
+from typing import Any, Dict, List, Tuple
+
+import _support
+from hystbench import Bench, BenchError, RunEndedError, RunResult, SweepResult, read_run
+
+RATE_HZ = 10000.0  # config/loopback.toml's loop rate
+
+
+def rms_and_max(log: Any, start: int) -> Tuple[float, float]:
+    error = [y - yr for y, yr in zip(log["y"][start:], log["yr"][start:])]
+    return math.sqrt(sum(e * e for e in error) / len(error)), max(abs(e) for e in error)
+
+
+def ramps(points: List[Tuple[float, float]], rate_hz: float) -> List[float]:
+    """Straight lines through (time [s], value) points, sampled at rate_hz."""
+    out: List[float] = []
+    for (t0, v0), (t1, v1) in zip(points, points[1:]):
+        n = int(round((t1 - t0) * rate_hz))
+        out += [v0 + (v1 - v0) * k / n for k in range(n)]
+    out.append(points[-1][1])
+    return out
+
+
+class WithoutModelTest(unittest.TestCase):
+    daemon: _support.Daemon
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.daemon = _support.Daemon("hbpy-a")
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        cls.daemon.stop()
+
+    def setUp(self) -> None:
+        self.bench = self.daemon.bench()
+        self.addCleanup(self.bench.close)
+
+    def test_greeting_status_config_and_model_list(self) -> None:
+        self.assertEqual(self.bench.greeting["hello"], "hystbenchd")
+        self.assertEqual(self.bench.protocol, 1)
+        status = self.bench.status()
+        self.assertIn(status["state"], ("idle", "running"))
+        self.assertIsNone(status["model"])
+        config = self.bench.config_get()
+        self.assertEqual(config["loop"]["rate_hz"], RATE_HZ)
+        self.assertEqual(config["daemon"]["socket_path"], self.daemon.socket)
+        self.assertEqual(config["identify"]["settle_s"], 0.0)
+        models = self.bench.model_list()
+        self.assertEqual(models["models"], [])
+        self.assertEqual(models["folder"], str(self.daemon.model_dir))
+
+    def test_errors_carry_the_daemons_code_and_message(self) -> None:
+        def code(call: Any) -> str:
+            with self.assertRaises(BenchError) as caught:
+                call()
+            self.assertTrue(caught.exception.message)
+            return caught.exception.code
+
+        self.assertEqual(code(lambda: self.bench.track(compensator="inverse")), "no_model")
+        self.assertEqual(code(lambda: self.bench.model_get()), "no_model")
+        self.assertEqual(code(lambda: self.bench.track(frequency_hz="fast")), "bad_params")
+        self.assertEqual(code(lambda: self.bench.track(speed=3)), "bad_params")
+        self.assertEqual(
+            code(lambda: self.bench.track(min_um=-500.0, max_um=10.0)), "out_of_range"
+        )
+        self.assertEqual(code(lambda: self.bench.identify(model="spline")), "bad_params")
+        self.assertEqual(code(lambda: self.bench.model_load(stored="nothing-here")), "bad_params")
+        self.assertEqual(code(lambda: self.bench.model_load({"schema": "nope"})), "bad_model")
+        self.assertEqual(code(lambda: self.bench.request("fly")), "unknown_command")
+        with self.assertRaises(BenchError) as caught:
+            self.bench.sweep([1.0], ["inverse"])
+        self.assertEqual(caught.exception.code, "no_model")
+        self.assertEqual(caught.exception.rows, [])  # type: ignore[attr-defined]
+        with self.assertRaises(FileNotFoundError):
+            self.bench.model_load(os.path.join(str(self.daemon.dir), "missing.json"))
+        self.assertEqual(self.bench.status()["state"], "idle")  # nothing changed
+
+    def test_track_waits_with_progress_and_its_log_reads_back(self) -> None:
+        seen: List[Tuple[float, str]] = []
+        result = self.bench.track(
+            "triangle",
+            compensator="none",
+            frequency_hz=2.0,
+            periods=4,
+            precondition_s=0.2,
+            wait=True,
+            progress=lambda f, what: seen.append((f, what)),
+        )
+        self.assertIsInstance(result, RunResult)
+        self.assertTrue(result.completed, result)
+        self.assertIs(result.check(), result)
+        self.assertGreaterEqual(len(seen), 2)
+        self.assertTrue(all(0.0 <= f <= 1.0 and what == "track" for f, what in seen), seen)
+        self.assertEqual([f for f, _ in seen], sorted(f for f, _ in seen))
+
+        log = read_run(result["log"])
+        self.assertEqual(len(log), result["samples"])
+        self.assertEqual(log.names, log.header["columns"])
+        self.assertEqual(log.header["run"]["kind"], "track")
+        self.assertEqual(log.header["run_id"], result["run_id"])
+        self.assertEqual(log.units["y"], "um")
+        self.assertEqual(log["index"][:3], [0.0, 1.0, 2.0])
+        precondition = log.header["run"]["precondition_samples"]
+        self.assertEqual(precondition, 2000)
+        self.assertTrue(math.isnan(log["yr"][0]))
+        self.assertFalse(math.isnan(log["yr"][precondition]))
+        rms, peak = rms_and_max(log, log.header["run"]["metrics_from"])
+        self.assertAlmostEqual(rms, result["rms_error_um"], places=9)
+        self.assertAlmostEqual(peak, result["max_error_um"], places=9)
+        last = self.bench.status()["last_result"]
+        self.assertEqual(last["run_id"], result["run_id"])
+
+    def test_a_run_followed_from_another_connection(self) -> None:
+        started = self.bench.track(
+            compensator="none", frequency_hz=5.0, periods=5, precondition_s=0.1
+        )
+        self.assertEqual(set(started) >= {"run_id", "log", "duration_s", "samples"}, True)
+        self.assertAlmostEqual(started["duration_s"], 1.1)
+        with self.daemon.bench() as other:
+            running = other.status()
+            result = other.wait(started["run_id"], timeout=30)
+        self.assertEqual(running["run"]["run_id"], started["run_id"])
+        self.assertEqual(result["end"], "completed")
+        # Its starter sees the same result, from the event it kept.
+        self.assertEqual(
+            self.bench.wait(started["run_id"], timeout=30)["run_id"], started["run_id"]
+        )
+
+    def test_stop_abort_and_reset(self) -> None:
+        started = self.bench.track(compensator="none", frequency_hz=1.0, periods=100)
+        with self.assertRaises(BenchError) as caught:
+            self.bench.identify()
+        self.assertEqual(caught.exception.code, "busy")
+        self.assertEqual(self.bench.stop(), {"stopping": True})
+        stopped = self.bench.wait(started["run_id"], timeout=30)
+        self.assertEqual(stopped["end"], "stopped")
+        self.assertFalse(stopped.completed)
+        with self.assertRaises(RunEndedError) as ended:
+            stopped.check()
+        self.assertEqual(ended.exception.code, "stopped")
+
+        started = self.bench.track(compensator="none", frequency_hz=1.0, periods=100)
+        aborted = self.bench.abort()
+        self.assertTrue(aborted["aborted"])
+        self.assertIsInstance(aborted["output_v"], float)
+        result = self.bench.wait(started["run_id"], timeout=30)
+        self.assertEqual(result["end"], "aborted")
+        self.assertEqual(result["output_v_after"], aborted["output_v"])
+
+        with self.assertRaises(BenchError) as caught:
+            self.bench.stop()
+        self.assertEqual(caught.exception.code, "no_run")
+        self.assertEqual(self.bench.reset(), {"was_fault": False, "state": "idle"})
+
+    def test_track_an_uploaded_reference_without_a_model(self) -> None:
+        _support.skip_unless_uploads(self.bench)
+        reference = ramps([(0.0, 10.0), (0.25, 30.0), (0.3, 30.0), (0.55, 10.0)], RATE_HZ)
+        result = self.bench.track(
+            reference, rate_hz=RATE_HZ, compensator="none", precondition_s=0.1, wait=True
+        )
+        self.assertTrue(result.completed, result)
+        log = read_run(result["log"])
+        self.assertEqual(log.header["run"]["kind"], "track")
+        with self.assertRaises(BenchError) as caught:
+            self.bench.track([10.0, 20.0, 1000.0, 10.0], rate_hz=100.0, compensator="none")
+        e = caught.exception
+        self.assertEqual((e.code, e.details.get("sample")), ("out_of_range", 2), e)
+        self.assertIn("sample 2", e.message)
+        # From a file: the error names its line.
+        path = os.path.join(str(self.daemon.dir), "ref.csv")
+        with open(path, "w", encoding="utf-8") as f:
+            f.write("# yr in um\nt,yr\n0,10\n0.01,20\n0.02,46\n0.03,10\n")
+        with self.assertRaises(BenchError) as caught:
+            self.bench.track(reference_file=path, compensator="none")
+        e = caught.exception
+        self.assertEqual((e.code, e.details["line"], e.details["file"]), ("out_of_range", 5, path))
+        self.assertIn(f"{path}:5", str(e))
+
+    def test_excite_records_an_uploaded_drive(self) -> None:
+        _support.skip_unless_excite(self.bench)
+        times = [0.0, 0.2, 0.25, 0.45, 0.5]
+        drive = [0.0, 150.0, 150.0, 0.0, 0.0]
+        seen: List[Tuple[float, str]] = []
+        result = self.bench.excite(
+            drive, t=times, wait=True, progress=lambda f, what: seen.append((f, what))
+        )
+        self.assertTrue(result.completed, result)
+        self.assertIn((1.0, "upload"), seen)
+        log = read_run(result["log"])
+        self.assertEqual(log.header["run"]["kind"], "excite")
+        self.assertGreater(max(log["u"]), 149.0)
+        with self.assertRaises(BenchError) as caught:
+            # 150 V in one tick at 10 kHz: 1.5e6 V/s, beyond limits.slew_v_per_s (1e6).
+            self.bench.excite([0.0, 0.0, 150.0, 150.0], rate_hz=RATE_HZ)
+        e = caught.exception
+        # The sample the drive jumps to.
+        self.assertEqual((e.code, e.details.get("sample")), ("slew_limit", 2), e)
+
+
+class WithModelTest(unittest.TestCase):
+    daemon: _support.Daemon
+    identified: RunResult
+    progress: List[Tuple[float, str]]
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.daemon = _support.Daemon("hbpy-b")
+        cls.progress = []
+        try:
+            with cls.daemon.bench() as bench:
+                cls.identified = bench.identify(
+                    wait=True, timeout=300, progress=lambda f, what: cls.progress.append((f, what))
+                )
+        except BaseException:
+            cls.daemon.stop()
+            raise
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        cls.daemon.stop()
+
+    def setUp(self) -> None:
+        self.bench = self.daemon.bench()
+        self.addCleanup(self.bench.close)
+
+    def test_identify_reports_progress_and_adopts_its_model(self) -> None:
+        r = self.identified
+        self.assertTrue(r.completed, json.dumps(r)[:2000])
+        self.assertEqual(r["kind"], "identify")
+        self.assertEqual(r["model"]["type"], "mpi")
+        self.assertEqual(r["verification"]["end"], "completed")
+        labels = {what for _, what in self.progress}
+        self.assertIn("identify", labels)
+        self.assertTrue(any(w.startswith("fitting: ") for w in labels), labels)
+        self.assertTrue(any(w.startswith("verify") for w in labels), labels)
+        self.assertTrue(all(0.0 <= f <= 1.0 for f, _ in self.progress))
+        status = self.bench.status()
+        self.assertEqual(status["model"]["path"], r["model"]["path"])
+        self.assertEqual(read_run(r["log"], columns=["u", "y"]).names, ["u", "y"])
+
+    def test_sweep_two_frequencies_with_and_without_the_inverse(self) -> None:
+        seen: List[Tuple[float, str]] = []
+        rows = self.bench.sweep(
+            [5.0, 10.0],
+            ["none", "inverse"],
+            periods=2,
+            min_duration_s=0.0,
+            precondition_s=0.2,
+            progress=lambda f, what: seen.append((f, what)),
+        )
+        self.assertIsInstance(rows, SweepResult)
+        self.assertTrue(rows.completed, rows)
+        self.assertEqual(
+            [(r["compensator"], r["frequency_hz"]) for r in rows],
+            [("none", 5.0), ("none", 10.0), ("inverse", 5.0), ("inverse", 10.0)],
+        )
+        for r in rows:
+            self.assertEqual(r["end"], "completed")
+            self.assertGreater(r["max_error_percent"], r["rms_error_percent"])
+            self.assertLess(r["min_um"], r["max_um"])
+        for f in (5.0, 10.0):
+            none, inverse = rows.row(f, "none"), rows.row(f, "inverse")
+            self.assertLess(inverse["rms_error_percent"], none["rms_error_percent"] / 3)
+        self.assertEqual(seen[-1], (1.0, "inverse 10 Hz (4/4)"))
+        self.assertEqual([f for f, _ in seen], sorted(f for f, _ in seen))
+        table = rows.table()
+        self.assertIn("inverse", table)
+        self.assertIn(f"{rows[0]['rms_error_percent']:.3f}", table)
+
+    def test_model_get_and_load_round_trip(self) -> None:
+        active = self.bench.model_get()
+        self.assertEqual(active["path"], self.identified["model"]["path"])
+        document = active["model"]
+        self.assertEqual(document["schema"], "hystbench.model/1")
+        identified_name = os.path.basename(active["path"])
+
+        loaded = self.bench.model_load(document, name="roundtrip")
+        self.assertEqual(loaded["name"], "roundtrip.json")
+        self.assertTrue(loaded["invertible"])
+        self.assertEqual(self.bench.model_get()["model"], document)
+
+        path = os.path.join(str(self.daemon.dir), "copy-of-model.json")
+        with open(path, "w", encoding="utf-8") as f:
+            json.dump(document, f, indent=2)
+        loaded = self.bench.model_load(path)
+        self.assertEqual(loaded["name"], "copy-of-model.json")
+        self.assertEqual(self.bench.model_get()["model"], document)
+
+        listed = {m["name"]: m for m in self.bench.model_list()["models"]}
+        self.assertTrue(listed["copy-of-model.json"]["active"])
+        self.assertEqual(set(listed), {identified_name, "roundtrip.json", "copy-of-model.json"})
+        loaded = self.bench.model_load(stored=identified_name)
+        self.assertEqual(loaded["name"], identified_name)
+        self.assertEqual(self.bench.model_get()["path"], active["path"])
+        # The whole reply of model_get() is accepted as well.
+        self.assertEqual(self.bench.model_load(active, name="again")["type"], document["type"])
+        self.bench.model_load(stored=identified_name)
+
+    def test_track_an_uploaded_reference_through_the_inverse(self) -> None:
+        _support.skip_unless_uploads(self.bench)
+        points = [(0.0, 8.0), (0.2, 32.0), (0.25, 32.0), (0.45, 8.0), (0.5, 8.0)]
+        result = self.bench.track(
+            ramps(points, 2000.0),
+            rate_hz=2000.0,
+            compensator="inverse",
+            precondition_s=0.2,
+            wait=True,
+        )
+        self.assertTrue(result.completed, result)
+        log = read_run(result["log"], columns=["yr", "y"])
+        settled = [abs(y - yr) for y, yr in zip(log["y"], log["yr"]) if not math.isnan(yr)]
+        self.assertLess(max(settled[len(settled) // 4 :]), 2.0)  # µm, of a 24 µm stroke
+
+
+if __name__ == "__main__":
+    unittest.main()
