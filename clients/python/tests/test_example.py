@@ -1,0 +1,57 @@
+"""examples/identify_sweep_track.py --quick against its own hystbenchd (about 40 s)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import unittest
+
+import _support
+
+EXAMPLE = _support.REPO_ROOT / "examples" / "identify_sweep_track.py"
+
+
+class ExampleTest(unittest.TestCase):
+    def test_identify_sweep_track_quick(self) -> None:
+        daemon = _support.Daemon("hbpy-ex")
+        self.addCleanup(daemon.stop)
+        env = dict(os.environ, PYTHONPATH=str(_support.SRC_DIR))
+        env.pop("HYSTBENCH_SOCKET", None)
+        plots = daemon.dir / "plots"
+        run = subprocess.run(
+            [
+                sys.executable,
+                str(EXAMPLE),
+                "--quick",
+                "--socket",
+                daemon.socket,
+                "--plot-dir",
+                str(plots),
+            ],
+            cwd=str(daemon.dir),
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            timeout=240,
+        )
+        self.assertEqual(run.returncode, 0, run.stdout + daemon.daemon_log()[-3000:])
+        out = run.stdout
+        self.assertIn("identified mpi", out)
+        self.assertIn("      f [Hz]", out)
+        self.assertIn("10.000", out)
+        self.assertIn("raster: 2 lines", out)
+        if "this hystbenchd cannot take uploaded trajectories" not in out:
+            self.assertRegex(out, r"inverse: rms \d+\.\d+ um")
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            self.assertIn("matplotlib is not installed", out)
+        else:
+            self.assertTrue((plots / "sweep.png").is_file(), out)
+            self.assertTrue((plots / "raster.png").is_file(), out)
+
+
+if __name__ == "__main__":
+    unittest.main()
