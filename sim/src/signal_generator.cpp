@@ -201,6 +201,28 @@ class SamplesSignal final : public ShapedSignal {
   std::vector<TimedSample> samples_;
 };
 
+class UniformSignal final : public SignalGenerator {
+ public:
+  UniformSignal(std::vector<double> values, double dt_s)
+      : values_(std::move(values)), dt_s_(dt_s) {}
+  double value(double t_s) const noexcept override {
+    const double x = t_s / dt_s_;
+    if (!(x > 0.0)) return values_.front();  // before the start, and NaN
+    const double last = static_cast<double>(values_.size() - 1);
+    if (x >= last) return values_.back();
+    const auto k = static_cast<std::size_t>(x);
+    const double f = x - static_cast<double>(k);
+    return values_[k] + f * (values_[k + 1] - values_[k]);
+  }
+  double duration_s() const noexcept override {
+    return static_cast<double>(values_.size() - 1) * dt_s_;
+  }
+
+ private:
+  std::vector<double> values_;
+  double dt_s_;
+};
+
 void validate(const SignalSpec& spec) {
   require(std::isfinite(spec.amplitude), "amplitude", "must be a finite number");
   require(std::isfinite(spec.offset), "offset", "must be a finite number");
@@ -299,6 +321,16 @@ std::unique_ptr<SignalGenerator> make_signal_generator(const SignalSpec& spec) {
       return std::make_unique<SamplesSignal>(spec);
   }
   throw std::invalid_argument("signal.kind: unknown value");
+}
+
+std::unique_ptr<SignalGenerator> make_uniform_signal(std::vector<double> values, double dt_s) {
+  require(std::isfinite(dt_s) && dt_s > 0.0, "dt_s", "must be > 0");
+  require(!values.empty(), "values", "must not be empty");
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    require(std::isfinite(values[k]), "values[" + std::to_string(k) + "]",
+            "must be a finite number");
+  }
+  return std::make_unique<UniformSignal>(std::move(values), dt_s);
 }
 
 std::vector<double> sample_signal(const SignalGenerator& generator, double dt_s,

@@ -240,6 +240,26 @@ TEST(SamplesSignal, InterpolatesLinearlyAndHoldsTheEnds) {
   EXPECT_NE(error_of(s).find("samples"), std::string::npos);
 }
 
+TEST(UniformSignal, InterpolatesOnTheGridAndHoldsTheEnds) {
+  const auto g = hs::make_uniform_signal({1.0, 3.0, -1.0}, 0.5);
+  EXPECT_DOUBLE_EQ(g->duration_s(), 1.0);
+  EXPECT_DOUBLE_EQ(g->value(0.0), 1.0);
+  EXPECT_DOUBLE_EQ(g->value(0.25), 2.0);
+  EXPECT_DOUBLE_EQ(g->value(0.5), 3.0);
+  EXPECT_DOUBLE_EQ(g->value(0.75), 1.0);
+  EXPECT_DOUBLE_EQ(g->value(-1.0), 1.0);
+  EXPECT_DOUBLE_EQ(g->value(7.0), -1.0);
+  EXPECT_DOUBLE_EQ(g->value(NAN), 1.0);
+  EXPECT_THROW(hs::make_uniform_signal({}, 0.1), std::invalid_argument);
+  EXPECT_THROW(hs::make_uniform_signal({1.0}, 0.0), std::invalid_argument);
+  try {
+    (void)hs::make_uniform_signal({1.0, NAN}, 0.1);
+    ADD_FAILURE() << "a NaN value was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("values[1]"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SignalSpec, InvalidFieldsAreNamed) {
   auto s = periodic(hs::SignalKind::kSine, 1.0, 0.0, 0.0);
   EXPECT_NE(error_of(s).find("frequency_hz"), std::string::npos);

@@ -74,6 +74,11 @@ class SignalGenerator {
 /// Validates the spec for its kind; throws std::invalid_argument naming the field.
 std::unique_ptr<SignalGenerator> make_signal_generator(const SignalSpec& spec);
 
+/// A signal given on a uniform grid: values[k] at t = k dt_s, linear in between, the ends held
+/// (a user's trajectory resampled to the loop rate). duration = (n - 1) dt_s. Throws
+/// std::invalid_argument for no values, a non-finite value or dt_s <= 0.
+std::unique_ptr<SignalGenerator> make_uniform_signal(std::vector<double> values, double dt_s);
+
 /// value(k dt) for k = 0 .. n-1, n = round(duration / dt): the end point is left out, so
 /// consecutive signals concatenate. duration_s < 0 takes the generator's, which must then be
 /// finite. Throws std::invalid_argument for dt <= 0 or an infinite duration.
