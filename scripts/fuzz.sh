@@ -43,7 +43,9 @@ seed() {  # seed corpora once from files in the repository
         '{"cmd":"model.load","params":{"stored":"m"}}' '{"cmd":"model.list"}' \
         '{"cmd":"model.load","params":{"path":"/etc/passwd"}}'; do
         printf '%s' "$l" >"$dir/seed$((i++))"
-      done ;;
+      done
+      # Multi-line inputs are one connection's requests in order: upload sequences.
+      cp fuzz/regressions/request/* "$dir"/ ;;
   esac
 }
 

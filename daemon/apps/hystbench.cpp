@@ -1,7 +1,7 @@
 // hystbench: the bench's command-line tool.
 //   Offline (no daemon needed): fit, simulate, invert, diagnose on CSV files.
-//   Bench (talks to hystbenchd over its Unix socket): status, identify, track, sweep, stop,
-//   abort, reset, model, config.
+//   Bench (talks to hystbenchd over its Unix socket): status, identify, track, excite, sweep,
+//   stop, abort, reset, model, config.
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <filesystem>
@@ -33,7 +33,9 @@ int main(int argc, char** argv) {
       "  hystbench diagnose run_1hz.csv run_5hz.csv run_20hz.csv --validate run_10hz.csv\n"
       "  hystbench identify --wait                  (bench: identify the actuator on the bench)\n"
       "  hystbench track --reference triangle --frequency 1 --periods 5 --compensator inverse "
-      "--wait --json\n"};
+      "--wait --json\n"
+      "  hystbench track --reference-file raster.csv --compensator inverse --wait\n"
+      "  hystbench excite --input-file drive.csv --wait   (then: hystbench fit <its log> ...)\n"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string(HYSTBENCH_VERSION));
 
@@ -239,6 +241,60 @@ int main(int argc, char** argv) {
   track_cmd->add_option("--plot", remote.plot_dir,
                         "With --wait: write the run's plots (time.png, error.png, loop.png) here "
                         "when it ends, as `hystbench plot` does");
+  // A user's trajectory instead of a built-in reference: read here, uploaded over the socket.
+  std::string tr_file, tr_t_column = "t", tr_yr_column = "yr";
+  double tr_yr_scale = 1.0, tr_rate = 0.0, tr_approach = NAN;
+  auto* tr_file_opt =
+      track_cmd
+          ->add_option("--reference-file", tr_file,
+                       "Follow your own trajectory: a CSV with columns t [s] and yr [um] (an AFM "
+                       "raster line, a recorded motion). The daemon resamples it to the loop "
+                       "rate and refuses it, naming the first offending row, when it leaves the "
+                       "actuator range or moves faster than the slew limit")
+          ->check(CLI::ExistingFile);
+  for (const char* other : {"--reference", "--frequency", "--periods", "--duration",
+                            "--range-fraction", "--min", "--max"}) {
+    tr_file_opt->excludes(track_cmd->get_option(other));
+  }
+  track_cmd->add_option("--t-column", tr_t_column, "--reference-file: time column [s]")
+      ->capture_default_str();
+  track_cmd->add_option("--yr-column", tr_yr_column, "--reference-file: reference column")
+      ->capture_default_str();
+  track_cmd
+      ->add_option("--yr-scale", tr_yr_scale,
+                   "--reference-file: multiply the reference by this (m -> um: 1e6)")
+      ->capture_default_str();
+  track_cmd
+      ->add_option("--rate", tr_rate,
+                   "--reference-file: sample rate [Hz] of a file without a time column")
+      ->check(CLI::PositiveNumber);
+  track_cmd->add_option("--approach", tr_approach,
+                        "--reference-file: unscored move from the precondition's end to the "
+                        "first value [s] (default 0.2, longer when the slew limit needs it)");
+
+  hd::RecordColumns ex_columns;
+  ex_columns.y.clear();
+  std::string ex_file;
+  auto* excite_cmd = app.add_subcommand(
+      "excite",
+      "Play your own open-loop drive (t [s], u [V]) and log every sample: the run log is a "
+      "record that `hystbench fit` and `diagnose` read as it is");
+  excite_cmd
+      ->add_option("--input-file", ex_file,
+                   "CSV with columns t [s] and u [V]; refused, naming the first offending row, "
+                   "when it leaves [u_min, u_max] or moves faster than the slew limit")
+      ->required()
+      ->check(CLI::ExistingFile);
+  excite_cmd->add_option("--t-column", ex_columns.t, "Time column [s]")->capture_default_str();
+  excite_cmd->add_option("--u-column", ex_columns.u, "Drive column")->capture_default_str();
+  excite_cmd
+      ->add_option("--u-scale", ex_columns.u_scale, "Multiply the drive by this (mV -> V: 1e-3)")
+      ->capture_default_str();
+  excite_cmd
+      ->add_option("--rate", ex_columns.rate_hz,
+                   "Sample rate [Hz] of a file without a time column (t = row / rate)")
+      ->check(CLI::PositiveNumber);
+  add_output_flags(excite_cmd, true);
 
   hd::PlotCommand plot;
   auto* plot_cmd = app.add_subcommand(
@@ -340,6 +396,20 @@ int main(int argc, char** argv) {
                    "ends; or run `hystbench plot LOG` afterwards)\n";
       return 2;
     }
+    if (!tr_file.empty()) {
+      nlohmann::json p = nlohmann::json::object();
+      if (!tr_compensator.empty()) p["compensator"] = tr_compensator;
+      if (!std::isnan(tr_precondition)) p["precondition_s"] = tr_precondition;
+      if (!std::isnan(tr_approach)) p["approach_s"] = tr_approach;
+      try {
+        remote.upload =
+            hd::read_upload(tr_file, "reference", tr_t_column, tr_yr_column, tr_yr_scale, tr_rate);
+      } catch (const std::exception& e) {
+        std::cerr << "hystbench: error: " << e.what() << "\n";
+        return 1;
+      }
+      return remote_run("track", p);
+    }
     nlohmann::json p = {{"reference", tr_reference}, {"frequency_hz", tr_frequency}};
     if (tr_duration > 0)
       p["duration_s"] = tr_duration;
@@ -354,6 +424,16 @@ int main(int argc, char** argv) {
       p["range_fraction"] = tr_fraction;
     }
     return remote_run("track", p);
+  }
+  if (*excite_cmd) {
+    try {
+      remote.upload = hd::read_upload(ex_file, "drive", ex_columns.t, ex_columns.u,
+                                      ex_columns.u_scale, ex_columns.rate_hz);
+    } catch (const std::exception& e) {
+      std::cerr << "hystbench: error: " << e.what() << "\n";
+      return 1;
+    }
+    return remote_run("excite", nlohmann::json::object());
   }
   if (*plot_cmd) return hd::run_plot(plot, std::cout, std::cerr);
   if (*sweep_cmd) {

@@ -86,18 +86,21 @@ int main(int argc, char** argv) {
   }
 
   hd::SocketServer server(
-      {config.daemon.socket_path}, [&bench](const hd::Request& req) -> hd::Reply {
+      {config.daemon.socket_path},
+      [&bench](const hd::Request& req) -> hd::Reply {
         try {
           spdlog::debug("client {}: {}", req.client, req.cmd);
-          return hd::Reply::success(bench->handle(req.cmd, req.params));
+          return hd::Reply::success(bench->handle(req.cmd, req.params, req.client));
         } catch (const hd::CommandError& e) {
           spdlog::info("client {}: {} refused: {}", req.client, req.cmd, e.what());
-          return hd::Reply::failure(e.code(), e.what());
+          return hd::Reply::failure(e.code(), e.what(), e.detail());
         } catch (const std::exception& e) {
           spdlog::error("client {}: {} failed: {}", req.client, req.cmd, e.what());
           return hd::Reply::failure("internal", e.what());
         }
-      });
+      },
+      // A connection that goes away mid-upload leaves nothing behind.
+      [&bench](std::uint64_t client) { bench->client_closed(client); });
   try {
     server.start();
   } catch (const std::exception& e) {

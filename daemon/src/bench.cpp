@@ -9,6 +9,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "details/request_params.hpp"
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
@@ -21,10 +22,15 @@
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "identify_session.hpp"
+#include "track_reference.hpp"
 
 namespace hystbench::daemon {
 
 namespace hc = compensation;
+using details::check_keys;
+using details::int_param;
+using details::number_param;
+using details::string_param;
 using nlohmann::json;
 
 namespace {
@@ -45,59 +51,6 @@ const char* state_name(BenchLoop::State s) {
       return "fault";
   }
   return "unknown";
-}
-
-// Parameters must be an object with only the listed keys.
-void check_keys(const json& params, std::initializer_list<const char*> allowed) {
-  if (params.is_null()) return;
-  if (!params.is_object()) throw CommandError("bad_params", "params must be an object");
-  for (const auto& [key, value] : params.items()) {
-    bool ok = false;
-    std::string list;
-    for (const char* a : allowed) {
-      ok = ok || key == a;
-      list += (list.empty() ? "" : ", ") + std::string(a);
-    }
-    if (!ok)
-      throw CommandError("bad_params", "unknown parameter '" + key + "' (valid: " + list + ")");
-  }
-}
-
-double number_param(const json& params, const char* key, double fallback, double lo, double hi) {
-  if (params.is_null() || !params.contains(key)) return fallback;
-  const json& v = params[key];
-  if (!v.is_number()) {
-    throw CommandError("bad_params", std::string(key) + ": must be a number, got " + v.type_name());
-  }
-  const double d = v.get<double>();
-  if (!std::isfinite(d) || d < lo || d > hi) {
-    throw CommandError("bad_params", std::string(key) + ": " + std::to_string(d) +
-                                         " is out of range [" + std::to_string(lo) + ", " +
-                                         std::to_string(hi) + "]");
-  }
-  return d;
-}
-
-int int_param(const json& params, const char* key, int fallback, int lo, int hi) {
-  if (params.is_null() || !params.contains(key)) return fallback;
-  const json& v = params[key];
-  if (!v.is_number_integer()) {
-    throw CommandError("bad_params", std::string(key) + ": must be an integer");
-  }
-  const auto d = v.get<long long>();
-  if (d < lo || d > hi) {
-    throw CommandError("bad_params", std::string(key) + ": " + std::to_string(d) +
-                                         " is out of range [" + std::to_string(lo) + ", " +
-                                         std::to_string(hi) + "]");
-  }
-  return static_cast<int>(d);
-}
-
-std::string string_param(const json& params, const char* key, const std::string& fallback) {
-  if (params.is_null() || !params.contains(key)) return fallback;
-  if (!params[key].is_string())
-    throw CommandError("bad_params", std::string(key) + ": must be a string");
-  return params[key].get<std::string>();
 }
 
 // What identify did so that the model does not depend on earlier runs (for the result).
@@ -282,13 +235,17 @@ const char* Bench::predictor_name() const {
   return "none (NaN): no model and no limits.y_min/y_max";
 }
 
-json Bench::handle(const std::string& cmd, const json& params) {
+json Bench::handle(const std::string& cmd, const json& params, std::uint64_t client) {
   if (cmd == "status") {
     check_keys(params, {});
     return status();
   }
   if (cmd == "identify") return start_identify(params);
-  if (cmd == "track") return start_track(params);
+  if (cmd == "track") return start_track(params, client);
+  if (cmd == "excite") return start_excite(params, client);
+  if (cmd == "upload.begin") return uploads_.begin(params, client);
+  if (cmd == "upload.chunk") return uploads_.chunk(params, client);
+  if (cmd == "upload.cancel") return uploads_.cancel(params, client);
   if (cmd == "stop") {
     check_keys(params, {});
     {
@@ -334,9 +291,12 @@ json Bench::handle(const std::string& cmd, const json& params) {
   }
   throw CommandError("unknown_command",
                      "unknown command '" + cmd +
-                         "' (status, identify, track, stop, abort, reset, model.get, model.load, "
-                         "model.list, config.get)");
+                         "' (status, identify, track, excite, upload.begin, upload.chunk, "
+                         "upload.cancel, stop, abort, reset, model.get, model.load, model.list, "
+                         "config.get)");
 }
+
+void Bench::client_closed(std::uint64_t client) { uploads_.drop_client(client); }
 
 json Bench::status() const {
   json s;
@@ -367,6 +327,9 @@ json Bench::status() const {
                {"degraded", realtime_.degraded()},
                {"statistics", to_json(loop_->statistics())}};
   s["driver"] = driver_->diagnostics();
+  s["uploads"] = {{"open", uploads_.open()},
+                  {"staged_samples", uploads_.staged_samples()},
+                  {"max_samples", uploads_.limits().max_samples}};
   s["last_result"] = last_result_;
   return s;
 }
@@ -481,6 +444,24 @@ nlohmann::json Bench::list_models(const json& params) const {
   return {{"folder", dir.string()}, {"models", models}};
 }
 
+void Bench::require_idle() const {
+  if (loop_->state() == BenchLoop::State::kFault) {
+    throw CommandError("fault", std::string("the bench is in FAULT (") + loop_->fault_reason() +
+                                    "); send reset first");
+  }
+  if (!active_run_.is_null() || finalizing_) throw CommandError("busy", "a run is active");
+}
+
+Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json& header) {
+  p->log = open_log(p->run_id, header);
+  SubmittedRun s{p->run_id, p->log->path().string(), p->total_samples};
+  if (auto refused = loop_->submit(std::move(p))) {
+    refused->log->close();
+    throw CommandError("busy", "the loop did not accept the run");
+  }
+  return s;
+}
+
 json Bench::start_identify(const json& params) {
   check_keys(params, {"model", "operators", "dead_zones", "u_min", "u_max"});
   const auto& lim = settings_.loop.limits;
@@ -499,11 +480,7 @@ json Bench::start_identify(const json& params) {
   if (!(u_hi > u_lo)) throw CommandError("bad_params", "u_max must be greater than u_min");
 
   std::lock_guard lock(mutex_);
-  if (loop_->state() == BenchLoop::State::kFault) {
-    throw CommandError("fault", std::string("the bench is in FAULT (") + loop_->fault_reason() +
-                                    "); send reset first");
-  }
-  if (!active_run_.is_null() || finalizing_) throw CommandError("busy", "a run is active");
+  require_idle();
 
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kIdentify;
@@ -552,14 +529,7 @@ json Bench::start_identify(const json& params) {
                    {"segments", segments}}},
                  {"driver", settings_.driver_type},
                  {"y_model", predictor_name()}};
-  p->log = open_log(p->run_id, header);
-  const std::string log_path = p->log->path().string();
-  const std::string run_id = p->run_id;
-  const std::uint64_t total = p->total_samples;
-  if (auto refused = loop_->submit(std::move(p))) {
-    refused->log->close();
-    throw CommandError("busy", "the loop did not accept the run");
-  }
+  const auto [run_id, log_path, total] = submit_run(std::move(p), header);
   active_run_ = {{"run_id", run_id}, {"kind", "identify"}, {"total", total}, {"log", log_path}};
   pending_identify_model_ = model;
   const sim::ExcitationSegment* first_scored = exc.find("major_loop");
@@ -576,37 +546,79 @@ json Bench::start_identify(const json& params) {
           {"log", log_path}};
 }
 
-json Bench::start_track(const json& params) {
-  check_keys(params, {"reference", "frequency_hz", "periods", "duration_s", "compensator",
-                      "range_fraction", "min_um", "max_um", "kp", "ki", "kd", "precondition_s"});
+json Bench::start_excite(const json& params, std::uint64_t client) {
+  check_keys(params, {"drive_upload"});
   const auto& lim = settings_.loop.limits;
-  const std::string ref_name = string_param(params, "reference", "triangle");
-  sim::SignalSpec spec;
-  try {
-    spec.kind = sim::signal_kind_from_string(ref_name);
-  } catch (const std::exception& e) {
-    throw CommandError("bad_params", std::string("reference: ") + e.what());
+  if (!params.is_object() || !params.contains("drive_upload")) {
+    throw CommandError("bad_params", "drive_upload: missing (the name of a complete drive upload)");
   }
-  if (spec.kind == sim::SignalKind::kSteps || spec.kind == sim::SignalKind::kSamples) {
-    throw CommandError("bad_params", "reference: '" + ref_name +
-                                         "' needs data; use sine, triangle, sawtooth, "
-                                         "decaying_sine, multi_frequency or chirp");
-  }
-  spec.frequency_hz =
-      number_param(params, "frequency_hz", 1.0, 1e-3, settings_.loop.rate_hz / 20.0);
-  const double periods = number_param(params, "periods", 5.0, 0.0, 1e7);
-  double duration = number_param(params, "duration_s", 0.0, 0.0, 7.0 * 24 * 3600);
-  if (duration <= 0.0) duration = periods / spec.frequency_hz;
-  if (!(duration > 0.0)) throw CommandError("bad_params", "periods or duration_s must be > 0");
-  const double precondition =
-      number_param(params, "precondition_s", settings_.precondition_s, 0.0, 60.0);
+  const std::string upload_name = string_param(params, "drive_upload", "");
 
   std::lock_guard lock(mutex_);
-  if (loop_->state() == BenchLoop::State::kFault) {
-    throw CommandError("fault", std::string("the bench is in FAULT (") + loop_->fault_reason() +
-                                    "); send reset first");
+  require_idle();
+  const auto upload = uploads_.complete(upload_name, client, UploadKind::kDrive);
+  const std::vector<double> drive =
+      details::checked_drive(*upload, lim.u_min, lim.u_max, lim.slew_v_per_s, dt_);
+
+  auto p = std::make_unique<RunProgram>();
+  p->kind = RunKind::kExcite;
+  p->response_delay_ticks = model_delay_ticks();
+  p->run_id = new_run_id("excite");
+  // From where the output is to the drive's first value within the slew limit (at least 0.1 s),
+  // logged like the rest: the record starts from a known output.
+  const double u_now = loop_->last_output();
+  const double ramp_s = std::max(0.1, 2.0 * std::abs(drive.front() - u_now) / lim.slew_v_per_s);
+  append_ramp(p->excitation, u_now, drive.front(),
+              static_cast<std::size_t>(std::ceil(ramp_s / dt_)));
+  const std::size_t offset = p->excitation.size();
+  p->excitation.insert(p->excitation.end(), drive.begin(), drive.end());
+  p->model = predictor(u_now);
+  p->total_samples = p->excitation.size();
+  p->metrics_from = offset;
+  p->record_capacity =
+      std::min<std::uint64_t>(p->total_samples - p->metrics_from, kMaxRecordedSamples);
+  p->rec_u.resize(p->record_capacity);
+  p->rec_y.resize(p->record_capacity);
+  p->rec_yr.resize(p->record_capacity);
+  json header = {{"run",
+                  {{"kind", "excite"},
+                   {"source", upload->source},
+                   {"upload_samples", upload->values.size()},
+                   {"ramp_samples", offset},
+                   {"metrics_from", p->metrics_from},
+                   {"u_min", *std::min_element(drive.begin(), drive.end())},
+                   {"u_max", *std::max_element(drive.begin(), drive.end())},
+                   {"rate_hz", settings_.loop.rate_hz}}},
+                 {"driver", settings_.driver_type},
+                 {"y_model", predictor_name()},
+                 {"model", model_ ? hc::to_json(*model_) : json(nullptr)}};
+  const auto [run_id, log_path, total] = submit_run(std::move(p), header);
+  uploads_.erase(upload_name, client);  // the run has it now
+  active_run_ = {{"run_id", run_id}, {"kind", "excite"}, {"total", total}, {"log", log_path}};
+  return {{"run_id", run_id},
+          {"samples", total},
+          {"drive_samples", drive.size()},
+          {"ramp_samples", offset},
+          {"duration_s", static_cast<double>(total) * dt_},
+          {"log", log_path}};
+}
+
+json Bench::start_track(const json& params, std::uint64_t client) {
+  const bool uploaded = params.is_object() && params.contains("reference_upload");
+  if (uploaded) {
+    check_keys(params, {"reference_upload", "approach_s", "compensator", "kp", "ki", "kd",
+                        "precondition_s"});
+  } else {
+    check_keys(params, {"reference", "frequency_hz", "periods", "duration_s", "compensator",
+                        "range_fraction", "min_um", "max_um", "kp", "ki", "kd", "precondition_s"});
   }
-  if (!active_run_.is_null() || finalizing_) throw CommandError("busy", "a run is active");
+  const auto& lim = settings_.loop.limits;
+  const double precondition =
+      number_param(params, "precondition_s", settings_.precondition_s, 0.0, 60.0);
+  const double approach = number_param(params, "approach_s", 0.2, 0.0, 60.0);
+
+  std::lock_guard lock(mutex_);
+  require_idle();
   const std::string comp_name = string_param(params, "compensator", model_ ? "inverse" : "none");
   const auto kind = hc::compensator_kind_from_string(comp_name);
   if (!kind) {
@@ -625,35 +637,25 @@ json Bench::start_track(const json& params) {
                        "limits.y_min and limits.y_max");
   }
   const double span = range->y_top - range->y_bottom;
-  const double fraction = number_param(params, "range_fraction", 0.8, 0.01, 1.0);
-  double y_lo = range->y_bottom + 0.5 * (1.0 - fraction) * span;
-  double y_hi = range->y_top - 0.5 * (1.0 - fraction) * span;
-  if (params.is_object() && (params.contains("min_um") || params.contains("max_um"))) {
-    y_lo = number_param(params, "min_um", y_lo, -1e9, 1e9);
-    y_hi = number_param(params, "max_um", y_hi, -1e9, 1e9);
-    if (!(y_hi > y_lo)) throw CommandError("bad_params", "max_um must be greater than min_um");
-    if (y_lo < range->y_bottom - 1e-9 || y_hi > range->y_top + 1e-9) {
-      throw CommandError("out_of_range", "reference [" + std::to_string(y_lo) + ", " +
-                                             std::to_string(y_hi) +
-                                             "] um is beyond the actuator range [" +
-                                             std::to_string(range->y_bottom) + ", " +
-                                             std::to_string(range->y_top) + "] um");
-    }
+  const details::ReferenceLimits ref_limits{range->y_bottom, range->y_top,
+                                            lim.slew_v_per_s * span / (lim.u_max - lim.u_min),
+                                            settings_.loop.rate_hz};
+  std::string upload_name;
+  details::TrackReference ref;
+  if (uploaded) {
+    upload_name = string_param(params, "reference_upload", "");
+    const auto upload = uploads_.complete(upload_name, client, UploadKind::kReference);
+    // The precondition sweep leaves the output at the bottom of its range.
+    ref = details::uploaded_reference(*upload, ref_limits, range->y_bottom, approach);
+  } else {
+    ref = details::builtin_reference(params, ref_limits);
   }
-  spec.amplitude = 0.5 * (y_hi - y_lo);
-  spec.offset = 0.5 * (y_hi + y_lo);
-  spec.phase_rad = -M_PI / 2.0;  // start at the bottom of the range, rising
-  spec.duration_s = duration;
 
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kTrack;
   p->response_delay_ticks = model_delay_ticks();
   p->run_id = new_run_id("track");
-  try {
-    p->reference = sim::make_signal_generator(spec);
-  } catch (const std::exception& e) {
-    throw CommandError("bad_params", e.what());
-  }
+  p->reference = std::move(ref.signal);
   // Pre-conditioning: current output -> u_max -> u_min, open loop.
   p->excitation = precondition_sweep(loop_->last_output(), lim.u_min, lim.u_max, precondition, dt_);
   std::unique_ptr<hc::InverseModel> inverse;
@@ -742,11 +744,8 @@ json Bench::start_track(const json& params) {
   }
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
   const std::uint64_t prefix = p->excitation.size();
-  const std::uint64_t body = static_cast<std::uint64_t>(std::llround(duration / dt_));
-  const std::uint64_t one_period =
-      static_cast<std::uint64_t>(std::llround(1.0 / spec.frequency_hz / dt_));
-  p->total_samples = prefix + body;
-  p->metrics_from = prefix + (body >= 2 * one_period ? one_period : 0);
+  p->total_samples = prefix + ref.samples;
+  p->metrics_from = prefix + ref.unscored;
   p->y_ref_min = range->y_bottom;
   p->y_ref_max = range->y_top;
   p->record_capacity =
@@ -754,30 +753,20 @@ json Bench::start_track(const json& params) {
   p->rec_u.resize(p->record_capacity);
   p->rec_y.resize(p->record_capacity);
   p->rec_yr.resize(p->record_capacity);
-  json header = {{"run",
-                  {{"kind", "track"},
-                   {"reference", ref_name},
-                   {"frequency_hz", spec.frequency_hz},
-                   {"duration_s", duration},
-                   {"min_um", y_lo},
-                   {"max_um", y_hi},
-                   {"compensator", comp_name},
-                   {"precondition_samples", prefix},
-                   {"metrics_from", p->metrics_from},
-                   {"rate_hz", settings_.loop.rate_hz},
-                   {"feedback", feedback}}},
+  json run_header = {{"kind", "track"}};
+  run_header.update(ref.header);
+  run_header.update({{"compensator", comp_name},
+                     {"precondition_samples", prefix},
+                     {"metrics_from", p->metrics_from},
+                     {"rate_hz", settings_.loop.rate_hz},
+                     {"feedback", feedback}});
+  json header = {{"run", run_header},
                  {"driver", settings_.driver_type},
                  {"y_model", predictor_name()},
                  {"model", model_ ? hc::to_json(*model_) : json(nullptr)}};
-  p->log = open_log(p->run_id, header);
-  const std::string log_path = p->log->path().string();
-  const std::string run_id = p->run_id;
   const json p_summary_feedforward = p->summary.value("feedforward", json(nullptr));
-  const std::uint64_t total = p->total_samples;
-  if (auto refused = loop_->submit(std::move(p))) {
-    refused->log->close();
-    throw CommandError("busy", "the loop did not accept the run");
-  }
+  const auto [run_id, log_path, total] = submit_run(std::move(p), header);
+  if (uploaded) uploads_.erase(upload_name, client);  // the run has it now
   active_run_ = {{"run_id", run_id},
                  {"kind", "track"},
                  {"total", total},
@@ -786,7 +775,7 @@ json Bench::start_track(const json& params) {
   return {{"run_id", run_id},
           {"samples", total},
           {"duration_s", static_cast<double>(total) * dt_},
-          {"reference", {{"kind", ref_name}, {"min_um", y_lo}, {"max_um", y_hi}}},
+          {"reference", ref.reply},
           {"compensator", comp_name},
           {"feedback", feedback},
           {"feedforward", p_summary_feedforward},

@@ -176,8 +176,8 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
 
   double y_ref = std::numeric_limits<double>::quiet_NaN();
   double u_request = 0.0;
-  if (p.kind == RunKind::kIdentify || k < p.excitation.size()) {
-    // Identification drive, or the open-loop pre-conditioning prefix of a tracking run.
+  if (p.kind != RunKind::kTrack || k < p.excitation.size()) {
+    // An open-loop drive (identify, excite), or the pre-conditioning prefix of a tracking run.
     u_request = p.excitation[k];
     rec.u_ff = u_request;
   } else {

@@ -169,6 +169,8 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
   }
   const DataTable data = DataTable::read_csv(path);
   Record r;
+  r.lines.resize(data.rows());
+  for (std::size_t k = 0; k < r.lines.size(); ++k) r.lines[k] = data.line_of_row(k);
   // A missing column is named with the columns the file has and the option that picks another.
   auto require_column = [&](const std::string& name, const char* role, const char* option) {
     if (data.has(name)) return;

@@ -6,11 +6,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <iomanip>
 #include <ostream>
 #include <sstream>
 
 #include "hystbench/daemon/bench_client.hpp"
+#include "hystbench/daemon/command_error.hpp"
+#include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/plot_command.hpp"
 
 namespace hystbench::daemon {
@@ -137,22 +140,107 @@ void print_run_result(const json& r, std::ostream& out) {
     out << "  log             " << r["log"].get<std::string>() << "\n";
 }
 
+RemoteUpload read_upload(const std::string& path, const std::string& kind,
+                         const std::string& t_column, const std::string& value_column, double scale,
+                         double rate_hz) {
+  RecordColumns columns;
+  columns.t = t_column;
+  columns.u = value_column;
+  columns.y.clear();  // no output column to read
+  columns.u_scale = scale;
+  columns.rate_hz = rate_hz;
+  Record r = read_record(path, columns, false);
+  RemoteUpload u;
+  u.kind = kind;
+  u.param = kind == "drive" ? "drive_upload" : "reference_upload";
+  u.source = path;
+  u.rate_hz = rate_hz;
+  if (rate_hz <= 0.0) u.t = std::move(r.t);
+  u.values = std::move(r.u);
+  u.lines = std::move(r.lines);
+  return u;
+}
+
+namespace {
+
+/// The daemon's reply's result, or CommandError with its code, message and details.
+json result_or_throw(const json& reply) {
+  if (reply.value("ok", false)) return reply["result"];
+  json e = reply.value("error", json::object());
+  const std::string code = e.value("code", "error");
+  const std::string message = e.value("message", "?");
+  e.erase("code");
+  e.erase("message");
+  throw CommandError(code, message, e);
+}
+
+}  // namespace
+
+std::string send_upload(BenchClient& client, const RemoteUpload& upload,
+                        const std::function<void(double)>& progress) {
+  const std::size_t n = upload.values.size();
+  json begin = {{"kind", upload.kind},
+                {"samples", n},
+                {"source", std::filesystem::path(upload.source).filename().string()}};
+  if (upload.rate_hz > 0.0) begin["rate_hz"] = upload.rate_hz;
+  const json started = result_or_throw(client.request("upload.begin", begin));
+  const std::string name = started.value("upload", "");
+  // Below the daemon's bound and well inside the 64 KiB request line with t and values.
+  const std::size_t chunk =
+      std::clamp<std::size_t>(started.value("max_chunk_samples", std::size_t{1000}), 1, 1000);
+  for (std::size_t k = 0; k < n; k += chunk) {
+    const std::size_t m = std::min(chunk, n - k);
+    json params = {
+        {"upload", name},
+        {"offset", k},
+        {"values", std::vector<double>(upload.values.begin() + k, upload.values.begin() + k + m)}};
+    if (upload.rate_hz <= 0.0) {
+      params["t"] = std::vector<double>(upload.t.begin() + k, upload.t.begin() + k + m);
+    }
+    (void)result_or_throw(client.request("upload.chunk", params));
+    if (progress) progress(static_cast<double>(k + m) / static_cast<double>(n));
+  }
+  return name;
+}
+
 int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
     BenchClient client(cmd.socket_path);
-    json reply = client.request(cmd.cmd, cmd.params);
-    if (!reply.value("ok", false)) {
-      const json& e = reply["error"];
+    const bool tty = ::isatty(STDERR_FILENO) == 1;
+    json params = cmd.params;
+    json reply;
+    try {
+      if (cmd.upload) {
+        std::function<void(double)> shown;
+        if (tty && !cmd.json_output && cmd.upload->values.size() > 100'000) {
+          shown = [&](double f) { progress_bar(err, f, "uploading " + cmd.upload->source); };
+        }
+        params[cmd.upload->param] = send_upload(client, *cmd.upload, shown);
+        if (shown) err << "\r\x1b[K" << std::flush;
+      }
+      reply = client.request(cmd.cmd, params);
+      (void)result_or_throw(reply);
+    } catch (const CommandError& e) {
       if (cmd.json_output) {
-        out << reply.dump() << "\n";
+        json error = e.detail();
+        error["code"] = e.code();
+        error["message"] = e.what();
+        out << json{{"ok", false}, {"error", error}}.dump() << "\n";
       } else {
-        err << "hystbench: " << cmd.cmd << " refused: " << e.value("message", "?") << " ["
-            << e.value("code", "?") << "]\n";
+        err << "hystbench: " << cmd.cmd << " refused: " << e.what() << " [" << e.code() << "]\n";
+        // The first offending sample, as the line of the user's file.
+        if (cmd.upload && e.detail().contains("sample") && e.detail()["sample"].is_number()) {
+          const auto k = e.detail()["sample"].get<std::size_t>();
+          if (k < cmd.upload->lines.size()) {
+            err << "hystbench: " << cmd.upload->source << ":" << cmd.upload->lines[k]
+                << ": the first offending row (data row " << k + 1 << ")\n";
+          }
+        }
       }
       return 1;
     }
     const json& result = reply["result"];
-    const bool is_run = cmd.cmd == "identify" || cmd.cmd == "track";
+    const bool is_run = cmd.cmd == "identify" || cmd.cmd == "track" || cmd.cmd == "excite";
     if (!(is_run && cmd.wait)) {
       if (cmd.json_output || !is_run) {
         out << (cmd.json_output ? result.dump() : result.dump(2)) << "\n";
@@ -164,7 +252,6 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
       return 0;
     }
     const std::string run_id = result.value("run_id", "");
-    const bool tty = ::isatty(STDERR_FILENO) == 1;
     std::function<void(double, const std::string&)> show;
     if (tty && !cmd.json_output) {
       show = [&](double f, const std::string& what) {

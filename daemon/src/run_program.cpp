@@ -3,7 +3,15 @@
 namespace hystbench::daemon {
 
 const char* to_string(RunKind kind) noexcept {
-  return kind == RunKind::kIdentify ? "identify" : "track";
+  switch (kind) {
+    case RunKind::kIdentify:
+      return "identify";
+    case RunKind::kTrack:
+      return "track";
+    case RunKind::kExcite:
+      return "excite";
+  }
+  return "unknown";
 }
 
 const char* to_string(RunEnd end) noexcept {

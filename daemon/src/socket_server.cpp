@@ -78,8 +78,8 @@ void wake(int event_fd) {
 
 Reply Reply::success(nlohmann::json result) { return {true, std::move(result), {}, {}}; }
 
-Reply Reply::failure(std::string code, std::string message) {
-  return {false, nlohmann::json::object(), std::move(code), std::move(message)};
+Reply Reply::failure(std::string code, std::string message, nlohmann::json detail) {
+  return {false, nlohmann::json::object(), std::move(code), std::move(message), std::move(detail)};
 }
 
 struct SocketServer::Client {
@@ -94,8 +94,11 @@ struct SocketServer::Client {
   std::size_t pending() const { return out.size() - out_offset; }
 };
 
-SocketServer::SocketServer(SocketServerOptions options, Dispatcher dispatcher)
-    : options_(std::move(options)), dispatcher_(std::move(dispatcher)) {
+SocketServer::SocketServer(SocketServerOptions options, Dispatcher dispatcher,
+                           DisconnectHandler on_disconnect)
+    : options_(std::move(options)),
+      dispatcher_(std::move(dispatcher)),
+      on_disconnect_(std::move(on_disconnect)) {
   if (!dispatcher_) throw std::invalid_argument("SocketServer needs a dispatcher");
   if (options_.max_clients == 0 || options_.max_line_bytes == 0 ||
       options_.max_output_bytes < 2 * kReadChunk) {
@@ -235,6 +238,7 @@ void SocketServer::run() noexcept {
       ::close(c->fd);
       counters_.clients.fetch_sub(1, std::memory_order_relaxed);
       spdlog::debug("socket client {} closed", c->id);
+      disconnected(c->id);
       return true;
     });
   }
@@ -247,8 +251,22 @@ void SocketServer::run() noexcept {
   close_all();
 }
 
+void SocketServer::disconnected(std::uint64_t client) noexcept {
+  if (!on_disconnect_) return;
+  try {
+    on_disconnect_(client);
+  } catch (const std::exception& e) {
+    spdlog::error("socket client {}: disconnect handler failed: {}", client, e.what());
+  } catch (...) {
+    spdlog::error("socket client {}: disconnect handler failed", client);
+  }
+}
+
 void SocketServer::close_all() {
-  for (const auto& c : clients_) ::close(c->fd);
+  for (const auto& c : clients_) {
+    ::close(c->fd);
+    disconnected(c->id);
+  }
   counters_.clients.store(0, std::memory_order_relaxed);
   clients_.clear();
 }

@@ -21,9 +21,12 @@
 
 namespace hystbench::fuzz {
 
-/// One request line through the socket protocol parser and, when it parses, the bench's
-/// dispatcher (a loopback bench whose loop is not started: runs are accepted but never tick),
-/// then the reply serialisation, exactly as SocketServer::handle_line and hystbenchd do.
+/// Request lines (the input split at '\n', as the server splits a connection's bytes) through
+/// the socket protocol parser and, when one parses, the bench's dispatcher (a loopback bench
+/// whose loop is not started: runs are accepted but never tick), then the reply serialisation,
+/// exactly as SocketServer::handle_line and hystbenchd do. The lines come from one connection
+/// that closes at the end, so upload sequences (begin, chunks, a run that uses the upload,
+/// cancel) are fuzzed together with the disconnect that discards them.
 inline void request_line(const std::uint8_t* data, std::size_t size) {
   static daemon::Bench* bench = [] {
     const auto dir =
@@ -35,26 +38,34 @@ inline void request_line(const std::uint8_t* data, std::size_t size) {
     s.log_ring_capacity = 1024;
     return new daemon::Bench(s);  // never destroyed: shared by every input
   }();
-  const std::string_view line(reinterpret_cast<const char*>(data), size);
-  if (line.find('\n') != std::string_view::npos) return;  // the server splits at '\n'
-  daemon::Request request;
-  daemon::details::ProtocolError error;
-  if (!daemon::details::parse_request(line, request, error)) {
-    (void)daemon::details::error_line(error.id, error.code, error.message);
-    return;
+  static std::uint64_t client = 0;
+  ++client;
+  std::string_view input(reinterpret_cast<const char*>(data), size);
+  for (;;) {
+    const std::size_t end = input.find('\n');
+    const std::string_view line = input.substr(0, end);
+    daemon::Request request;
+    daemon::details::ProtocolError error;
+    if (!daemon::details::parse_request(line, request, error)) {
+      (void)daemon::details::error_line(error.id, error.code, error.message);
+    } else {
+      // model.load carries the model document (kept in the bench's model folder, a temporary
+      // folder here) or names a model in that folder; it never opens a path a request names,
+      // so the fuzzer drives it too.
+      daemon::Reply reply;
+      try {
+        reply = daemon::Reply::success(bench->handle(request.cmd, request.params, client));
+      } catch (const daemon::CommandError& e) {
+        reply = daemon::Reply::failure(e.code(), e.what(), e.detail());
+      } catch (const std::exception& e) {
+        reply = daemon::Reply::failure("internal", e.what());
+      }
+      (void)daemon::details::reply_line(request.id, reply);
+    }
+    if (end == std::string_view::npos) break;
+    input.remove_prefix(end + 1);
   }
-  // model.load carries the model document (kept in the bench's model folder, a temporary
-  // folder here) or names a model in that folder; it never opens a path a request names, so
-  // the fuzzer drives it too.
-  daemon::Reply reply;
-  try {
-    reply = daemon::Reply::success(bench->handle(request.cmd, request.params));
-  } catch (const daemon::CommandError& e) {
-    reply = daemon::Reply::failure(e.code(), e.what());
-  } catch (const std::exception& e) {
-    reply = daemon::Reply::failure("internal", e.what());
-  }
-  (void)daemon::details::reply_line(request.id, reply);
+  bench->client_closed(client);
 }
 
 /// TOML configuration text through the loader and the mapping onto the bench settings.

@@ -59,7 +59,15 @@ std::string json_line(const nlohmann::json& value) {
 }
 
 std::string reply_line(const nlohmann::json& id, const Reply& reply) {
-  if (!reply.ok) return error_line(id, reply.error_code, reply.error_message);
+  if (!reply.ok) {
+    nlohmann::json error = {{"code", reply.error_code.empty() ? "error" : reply.error_code},
+                            {"message", reply.error_message}};
+    // Details add keys; they never replace the code or the message.
+    if (reply.error_detail.is_object()) {
+      for (const auto& [key, value] : reply.error_detail.items()) error.emplace(key, value);
+    }
+    return json_line({{"id", id}, {"ok", false}, {"error", std::move(error)}});
+  }
   return json_line({{"id", id}, {"ok", true}, {"result", reply.result}});
 }
 

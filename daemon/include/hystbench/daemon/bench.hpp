@@ -19,21 +19,12 @@
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pid_controller.hpp"
 #include "hystbench/daemon/bench_loop.hpp"
+#include "hystbench/daemon/command_error.hpp"
+#include "hystbench/daemon/upload_store.hpp"
 #include "hystbench/drivers/driver.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon {
-
-/// A command refused: `code` is machine-readable ("bad_params", "busy", "no_model", ...).
-class CommandError : public std::runtime_error {
- public:
-  CommandError(std::string code, const std::string& message)
-      : std::runtime_error(message), code_(std::move(code)) {}
-  const std::string& code() const noexcept { return code_; }
-
- private:
-  std::string code_;
-};
 
 struct BenchSettings {
   BenchLoopOptions loop;
@@ -98,8 +89,13 @@ class Bench {
   /// Ends a run (aborted, log closed), safe output, stops threads, deactivates the driver.
   void shutdown();
 
-  /// Executes one command; returns its result object. Throws CommandError.
-  nlohmann::json handle(const std::string& cmd, const nlohmann::json& params);
+  /// Executes one command of connection `client` (its uploads are its own); returns its result
+  /// object. Throws CommandError.
+  nlohmann::json handle(const std::string& cmd, const nlohmann::json& params,
+                        std::uint64_t client = 0);
+  /// Connection `client` went away: its uploads are discarded (a run already started keeps
+  /// what it took).
+  void client_closed(std::uint64_t client);
   /// Receives progress and run events (from the supervisor thread).
   void set_event_sink(EventSink sink);
 
@@ -114,12 +110,23 @@ class Bench {
  private:
   nlohmann::json status() const;
   nlohmann::json start_identify(const nlohmann::json& params);
-  nlohmann::json start_track(const nlohmann::json& params);
+  nlohmann::json start_track(const nlohmann::json& params, std::uint64_t client);
+  /// excite: a complete drive upload played open loop after a ramp from the present output.
+  nlohmann::json start_excite(const nlohmann::json& params, std::uint64_t client);
   /// model.load: {"model": document, "name": file name} (kept in the model folder) or
   /// {"stored": name in the model folder}; never a path.
   nlohmann::json load_model(const nlohmann::json& params);
   /// model.list: the model folder's *.json files (name, bytes, type, active). Caller holds mutex_.
   nlohmann::json list_models(const nlohmann::json& params) const;
+  /// Throws CommandError fault or busy unless a run may start. Caller holds mutex_.
+  void require_idle() const;
+  struct SubmittedRun {
+    std::string run_id, log_path;
+    std::uint64_t total;
+  };
+  /// Opens the run's log with `header` and hands the run to the loop; throws busy when the loop
+  /// does not take it (the log is closed). Caller holds mutex_.
+  SubmittedRun submit_run(std::unique_ptr<RunProgram> p, const nlohmann::json& header);
   void supervise();
   void finalize(std::unique_ptr<RunProgram> run);
   /// Sets the last result, leaves the bench idle and emits run.finished.
@@ -169,6 +176,7 @@ class Bench {
   std::unique_ptr<IdentifySession> session_;  // supervisor thread only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;
+  UploadStore uploads_;  // its own lock
 
   std::thread supervisor_;
   std::atomic<bool> quit_{false};

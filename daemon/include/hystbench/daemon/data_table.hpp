@@ -63,7 +63,8 @@ struct RecordColumns {
 /// the file has no y column and it was optional).
 struct Record {
   std::vector<double> t, u, y;
-  double sample_period_s = 0.0;  ///< median of the t increments
+  double sample_period_s = 0.0;    ///< median of the t increments
+  std::vector<std::size_t> lines;  ///< the file's line number of each row, for messages
 };
 
 /// Reads path's CSV as a record. Throws DataFileError naming the file, the column and the line

@@ -3,7 +3,9 @@
 #include <functional>
 #include <iosfwd>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace hystbench::daemon {
 
@@ -11,6 +13,29 @@ class BenchClient;
 
 /// Socket path: $HYSTBENCH_SOCKET when set, else /run/hystbench/hystbench.sock.
 std::string default_socket_path();
+
+/// Samples a command sends ahead of itself in upload.chunk requests (upload_store.hpp): a
+/// trajectory for track, a drive for excite, read from the user's file by the CLI.
+struct RemoteUpload {
+  std::string kind;    ///< "reference" (µm) or "drive" (V)
+  std::string param;   ///< the command's key that names the upload: reference_upload, drive_upload
+  std::string source;  ///< the file, for messages
+  std::vector<double> t, values;  ///< t [s] is not sent when rate_hz > 0
+  double rate_hz = 0.0;
+  std::vector<std::size_t> lines;  ///< the file's line of each value (may be empty)
+};
+
+/// Reads `path`'s time column and one value column (scaled; t = row / rate_hz when rate_hz > 0)
+/// as an upload of `kind`. Throws DataFileError naming the file, column and line.
+RemoteUpload read_upload(const std::string& path, const std::string& kind,
+                         const std::string& t_column, const std::string& value_column, double scale,
+                         double rate_hz);
+
+/// Sends `upload` in chunks on `client`'s connection and returns its name; `progress` (may be
+/// empty) gets the fraction sent. Throws ClientError, or std::runtime_error with the daemon's
+/// refusal.
+std::string send_upload(BenchClient& client, const RemoteUpload& upload,
+                        const std::function<void(double)>& progress);
 
 struct RemoteCommand {
   std::string socket_path;
@@ -21,6 +46,8 @@ struct RemoteCommand {
   bool json_output = false;
   /// track --wait: when the run ends, its log's plots go here (plot_run_log); empty = none.
   std::string plot_dir;
+  /// Sent first on the same connection; its name goes into params[upload->param].
+  std::optional<RemoteUpload> upload;
 };
 
 /// Returns the exit code: 0 ok, 1 refused by the daemon or the run did not complete,

@@ -22,7 +22,9 @@
 
 namespace hystbench::daemon {
 
-enum class RunKind { kIdentify, kTrack };
+/// identify: the built-in excitation, then a fit; track: a reference through a compensator;
+/// excite: a user's drive, open loop, logged for fit and diagnose.
+enum class RunKind { kIdentify, kTrack, kExcite };
 enum class RunEnd { kCompleted, kStopped, kAborted, kFault };
 const char* to_string(RunKind kind) noexcept;
 const char* to_string(RunEnd end) noexcept;
@@ -32,7 +34,8 @@ struct RunProgram {
   std::string run_id;
   RunKind kind = RunKind::kTrack;
   std::uint64_t total_samples = 0;
-  /// identify: the open-loop drive, one value per sample [V].
+  /// identify, excite: the open-loop drive, one value per sample [V]; track: its open-loop
+  /// prefix (the precondition sweep).
   std::vector<double> excitation;
   /// track: the reference [µm] as a function of run time, and the compensator.
   std::unique_ptr<sim::SignalGenerator> reference;

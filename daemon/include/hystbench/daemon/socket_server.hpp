@@ -49,9 +49,12 @@ struct Reply {
   nlohmann::json result = nlohmann::json::object();
   std::string error_code;  ///< machine-readable, e.g. "unknown_cmd", "busy"
   std::string error_message;
+  /// Extra keys of the error object, e.g. {"sample": 1234} (an object; code and message win).
+  nlohmann::json error_detail = nlohmann::json::object();
 
   static Reply success(nlohmann::json result = nlohmann::json::object());
-  static Reply failure(std::string code, std::string message);
+  static Reply failure(std::string code, std::string message,
+                       nlohmann::json detail = nlohmann::json::object());
 };
 
 struct SocketServerOptions {
@@ -82,8 +85,12 @@ struct SocketServerCounters {
 class SocketServer {
  public:
   using Dispatcher = std::function<Reply(const Request&)>;
+  /// Told the connection number of every client that goes away (it closed, was dropped as
+  /// slow, or the server stopped), on the event thread, after its last request was handled.
+  using DisconnectHandler = std::function<void(std::uint64_t client)>;
 
-  SocketServer(SocketServerOptions options, Dispatcher dispatcher);
+  SocketServer(SocketServerOptions options, Dispatcher dispatcher,
+               DisconnectHandler on_disconnect = {});
   /// Calls stop().
   ~SocketServer();
   SocketServer(const SocketServer&) = delete;
@@ -116,9 +123,11 @@ class SocketServer {
   void flush(Client& c);
   void deliver_events();
   void close_all();
+  void disconnected(std::uint64_t client) noexcept;
 
   SocketServerOptions options_;
   Dispatcher dispatcher_;
+  DisconnectHandler on_disconnect_;
   int listen_fd_ = -1;
   int wake_fd_ = -1;
   unsigned long long socket_inode_ = 0;

@@ -1,0 +1,190 @@
+#include "track_reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "details/request_params.hpp"
+#include "hystbench/daemon/command_error.hpp"
+
+namespace hystbench::daemon::details {
+
+using nlohmann::json;
+
+namespace {
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+
+/// Names the upload's sample k as the client knows it (the k-th value it sent).
+std::string sample_words(const Upload& u, std::size_t k) {
+  return "sample " + std::to_string(k) + " (t = " + num(u.time_of(k)) + " s" +
+         (u.source.empty() ? "" : " of " + u.source) + ")";
+}
+
+/// Every value within [lo, hi], else out_of_range naming the first one outside.
+void check_range(const Upload& u, double lo, double hi, const char* unit, const char* what) {
+  for (std::size_t k = 0; k < u.values.size(); ++k) {
+    const double v = u.values[k];
+    if (v < lo - 1e-9 || v > hi + 1e-9) {
+      throw CommandError("out_of_range",
+                         std::string(what) + " " + sample_words(u, k) + ": " + num(v) + " " + unit +
+                             " is beyond the " + (unit[0] == 'V' ? "output" : "actuator") +
+                             " range [" + num(lo) + ", " + num(hi) + "] " + unit + "; nothing ran",
+                         {{"sample", k}, {"t_s", u.time_of(k)}});
+    }
+  }
+}
+
+/// The resampled values move at most max_step per tick, else slew_limit naming the sample.
+void check_slew(const Upload& u, const std::vector<double>& v, double max_step, double dt_s,
+                double limit_per_s, const char* unit, const char* what) {
+  for (std::size_t k = 1; k < v.size(); ++k) {
+    const double step = std::abs(v[k] - v[k - 1]);
+    if (step > max_step * (1.0 + 1e-9) + 1e-12) {
+      const std::size_t s = u.sample_from(static_cast<double>(k) * dt_s);
+      throw CommandError("slew_limit",
+                         std::string(what) + " " + sample_words(u, s) + ": moves " +
+                             num(step / dt_s) + " " + unit + "/s, faster than the slew limit " +
+                             num(limit_per_s) + " " + unit + "/s; nothing ran",
+                         {{"sample", s}, {"t_s", u.time_of(s)}});
+    }
+  }
+}
+
+}  // namespace
+
+TrackReference builtin_reference(const json& params, const ReferenceLimits& limits) {
+  const std::string ref_name = string_param(params, "reference", "triangle");
+  sim::SignalSpec spec;
+  try {
+    spec.kind = sim::signal_kind_from_string(ref_name);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", std::string("reference: ") + e.what());
+  }
+  if (spec.kind == sim::SignalKind::kSteps || spec.kind == sim::SignalKind::kSamples) {
+    throw CommandError("bad_params", "reference: '" + ref_name +
+                                         "' needs data; use sine, triangle, sawtooth, "
+                                         "decaying_sine, multi_frequency or chirp, or upload "
+                                         "a trajectory (reference_upload)");
+  }
+  spec.frequency_hz = number_param(params, "frequency_hz", 1.0, 1e-3, limits.rate_hz / 20.0);
+  const double periods = number_param(params, "periods", 5.0, 0.0, 1e7);
+  double duration = number_param(params, "duration_s", 0.0, 0.0, 7.0 * 24 * 3600);
+  if (duration <= 0.0) duration = periods / spec.frequency_hz;
+  if (!(duration > 0.0)) throw CommandError("bad_params", "periods or duration_s must be > 0");
+
+  const double span = limits.y_top - limits.y_bottom;
+  const double fraction = number_param(params, "range_fraction", 0.8, 0.01, 1.0);
+  double y_lo = limits.y_bottom + 0.5 * (1.0 - fraction) * span;
+  double y_hi = limits.y_top - 0.5 * (1.0 - fraction) * span;
+  if (params.is_object() && (params.contains("min_um") || params.contains("max_um"))) {
+    y_lo = number_param(params, "min_um", y_lo, -1e9, 1e9);
+    y_hi = number_param(params, "max_um", y_hi, -1e9, 1e9);
+    if (!(y_hi > y_lo)) throw CommandError("bad_params", "max_um must be greater than min_um");
+    if (y_lo < limits.y_bottom - 1e-9 || y_hi > limits.y_top + 1e-9) {
+      throw CommandError("out_of_range", "reference [" + std::to_string(y_lo) + ", " +
+                                             std::to_string(y_hi) +
+                                             "] um is beyond the actuator range [" +
+                                             std::to_string(limits.y_bottom) + ", " +
+                                             std::to_string(limits.y_top) + "] um");
+    }
+  }
+  spec.amplitude = 0.5 * (y_hi - y_lo);
+  spec.offset = 0.5 * (y_hi + y_lo);
+  spec.phase_rad = -M_PI / 2.0;  // start at the bottom of the range, rising
+  spec.duration_s = duration;
+
+  TrackReference r;
+  try {
+    r.signal = sim::make_signal_generator(spec);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  const double dt = 1.0 / limits.rate_hz;
+  r.samples = static_cast<std::uint64_t>(std::llround(duration / dt));
+  const auto one_period = static_cast<std::uint64_t>(std::llround(1.0 / spec.frequency_hz / dt));
+  r.unscored = r.samples >= 2 * one_period ? one_period : 0;
+  r.min_um = y_lo;
+  r.max_um = y_hi;
+  r.header = {{"reference", ref_name},
+              {"frequency_hz", spec.frequency_hz},
+              {"duration_s", duration},
+              {"min_um", y_lo},
+              {"max_um", y_hi}};
+  r.reply = {{"kind", ref_name}, {"min_um", y_lo}, {"max_um", y_hi}};
+  return r;
+}
+
+TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& limits,
+                                  double y_start, double approach_s) {
+  const double dt = 1.0 / limits.rate_hz;
+  check_range(upload, limits.y_bottom, limits.y_top, "um", "reference");
+  std::vector<double> traj = upload.resampled(dt);
+  if (traj.size() < 2) {
+    throw CommandError("bad_params", "reference upload '" + upload.name + "' lasts " +
+                                         num(upload.duration_s()) +
+                                         " s: shorter than two loop periods");
+  }
+  const double max_step = limits.slew_um_per_s * dt;
+  check_slew(upload, traj, max_step, dt, limits.slew_um_per_s, "um", "reference");
+
+  // The approach: a raised cosine from where the precondition left the output to the first
+  // value, long enough that its steepest point moves at most half the slew limit.
+  const double jump = std::abs(traj.front() - y_start);
+  const double needed = M_PI / 2.0 * jump / (0.5 * limits.slew_um_per_s);
+  const double approach = std::max(approach_s, needed);
+  const auto n_a = static_cast<std::size_t>(std::ceil(approach / dt));
+  std::vector<double> values;
+  values.reserve(n_a + traj.size());
+  for (std::size_t k = 0; k < n_a; ++k) {
+    const double f = 0.5 * (1.0 - std::cos(M_PI * static_cast<double>(k) / n_a));
+    values.push_back(y_start + f * (traj.front() - y_start));
+  }
+  const auto [lo, hi] = std::minmax_element(traj.begin(), traj.end());
+  TrackReference r;
+  r.min_um = *lo;
+  r.max_um = *hi;
+  r.samples = n_a + traj.size();
+  r.unscored = n_a;
+  const std::size_t resampled = traj.size();
+  values.insert(values.end(), traj.begin(), traj.end());
+  traj = {};
+  r.signal = sim::make_uniform_signal(std::move(values), dt);
+  r.header = {{"reference", "upload"},
+              {"source", upload.source},
+              {"upload_samples", upload.values.size()},
+              {"resampled_samples", resampled},
+              {"approach_s", static_cast<double>(n_a) * dt},
+              {"duration_s", static_cast<double>(r.samples) * dt},
+              {"min_um", r.min_um},
+              {"max_um", r.max_um}};
+  r.reply = {{"kind", "upload"},
+             {"source", upload.source},
+             {"samples", upload.values.size()},
+             {"resampled_samples", resampled},
+             {"approach_s", static_cast<double>(n_a) * dt},
+             {"min_um", r.min_um},
+             {"max_um", r.max_um}};
+  return r;
+}
+
+std::vector<double> checked_drive(const Upload& upload, double u_min, double u_max,
+                                  double slew_v_per_s, double dt_s) {
+  check_range(upload, u_min, u_max, "V", "drive");
+  std::vector<double> drive = upload.resampled(dt_s);
+  if (drive.size() < 2) {
+    throw CommandError("bad_params", "drive upload '" + upload.name + "' lasts " +
+                                         num(upload.duration_s()) +
+                                         " s: shorter than two loop periods");
+  }
+  check_slew(upload, drive, slew_v_per_s * dt_s, dt_s, slew_v_per_s, "V", "drive");
+  return drive;
+}
+
+}  // namespace hystbench::daemon::details

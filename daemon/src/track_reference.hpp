@@ -1,0 +1,48 @@
+#pragma once
+// What a track or excite run plays, built and checked before anything moves (pure functions,
+// no threads; throw CommandError naming the cause). Not real-time safe.
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "hystbench/daemon/upload_store.hpp"
+#include "hystbench/sim/signal_generator.hpp"
+
+namespace hystbench::daemon::details {
+
+/// A tracking run's reference after the open-loop prefix.
+struct TrackReference {
+  std::unique_ptr<sim::SignalGenerator> signal;  ///< [µm] against time from the prefix's end
+  std::uint64_t samples = 0;                     ///< ticks of the reference part of the run
+  std::uint64_t unscored = 0;  ///< its leading ticks left out of the error figures
+  double min_um = 0.0, max_um = 0.0;
+  nlohmann::json header;  ///< keys of the run log header's "run" object
+  nlohmann::json reply;   ///< the start reply's "reference" object
+};
+
+/// The actuator's output range and how fast the reference may move [µm, µm/s].
+struct ReferenceLimits {
+  double y_bottom = 0.0, y_top = 0.0;
+  double slew_um_per_s = 0.0;  ///< the output slew limit through the range's mean gain
+  double rate_hz = 0.0;        ///< the loop rate
+};
+
+/// A built-in periodic reference from a track request's keys: reference (kind), frequency_hz,
+/// periods or duration_s, range_fraction or min_um/max_um. The first period is unscored when
+/// the run has at least two.
+TrackReference builtin_reference(const nlohmann::json& params, const ReferenceLimits& limits);
+
+/// A user's trajectory, resampled to the loop rate, after an approach of approach_s (at least
+/// long enough for the slew limit) from y_start to its first value, which is unscored. Refused
+/// (out_of_range, slew_limit) with the first offending sample named, in words and as
+/// {"sample": k, "t_s": t} details.
+TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& limits,
+                                  double y_start, double approach_s);
+
+/// A user's drive resampled to the loop period dt_s, checked against the output range and the
+/// slew limit in the same way [V].
+std::vector<double> checked_drive(const Upload& upload, double u_min, double u_max,
+                                  double slew_v_per_s, double dt_s);
+
+}  // namespace hystbench::daemon::details
