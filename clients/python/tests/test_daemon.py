@@ -188,6 +188,7 @@ class WithoutModelTest(unittest.TestCase):
         e = caught.exception
         self.assertEqual((e.code, e.details["line"], e.details["file"]), ("out_of_range", 5, path))
         self.assertIn(f"{path}:5", str(e))
+        self.assertIn("of ref.csv", e.message)  # the daemon names the file it was told
 
     def test_excite_records_an_uploaded_drive(self) -> None:
         _support.skip_unless_excite(self.bench)

@@ -359,6 +359,11 @@ class ProtocolTest(unittest.TestCase):
             f.write("0.0 10\n0.5 20\n1.0 30\n")
         bench.track(reference_file=ref, wait=True)
         bench.excite(input_file=drive, columns=(None, "2"), rate_hz=2.0, wait=True)
+        begins = [r["params"] for r in fake.requests if r["cmd"] == "upload.begin"]
+        self.assertEqual(begins[0], {"kind": "reference", "samples": 3, "source": "ref.csv"})
+        self.assertEqual(
+            begins[1], {"kind": "drive", "samples": 3, "rate_hz": 2.0, "source": "drive.dat"}
+        )
         chunks = [r["params"] for r in fake.requests if r["cmd"] == "upload.chunk"]
         self.assertEqual(
             chunks[0],

@@ -474,6 +474,7 @@ class Bench:
         rate_hz: Optional[float] = None,
         t: Optional[Iterable[float]] = None,
         progress: Optional[Progress] = None,
+        source: Optional[str] = None,
     ) -> str:
         """Sends a signal to the daemon in chunks; returns the upload's id for one run.
 
@@ -483,6 +484,8 @@ class Bench:
             rate_hz: the samples are uniform at this rate [Hz]; or
             t: one time per value [s], strictly increasing.
             progress: called with (fraction sent, ``"upload"``).
+            source: what to call it in the daemon's messages and the run log's header (a file
+                name; the daemon never opens it).
 
         The upload belongs to this connection: the daemon discards it when the connection
         closes, and the run that uses it consumes it. ``track(reference=[...])`` and
@@ -499,6 +502,8 @@ class Bench:
         begin: Dict[str, Any] = {"kind": kind, "samples": len(vals)}
         if rate_hz is not None:
             begin["rate_hz"] = float(rate_hz)
+        if source is not None:
+            begin["source"] = source
         reply = self.request("upload.begin", begin)
         upload_id = str(reply["upload"])
         try:
@@ -583,7 +588,14 @@ class Bench:
         if values is None:
             raise ValueError("no samples")
         try:
-            upload_id = self.upload(kind, values, rate_hz=rate_hz, t=t, progress=progress)
+            upload_id = self.upload(
+                kind,
+                values,
+                rate_hz=rate_hz,
+                t=t,
+                progress=progress,
+                source=os.path.basename(source[0]) if source is not None else None,
+            )
         except BenchError as e:
             _name_the_line(e, source)
             raise
@@ -604,6 +616,8 @@ class Bench:
         try:
             started = self.request(cmd, params)
         except BenchError as e:
+            # The daemon keeps a refused run's upload for a retry; this client uploads again on
+            # the next call, so it frees it (at most 16 may be open on the daemon).
             if upload_id is not None:
                 self._cancel_quietly(upload_id)
             _name_the_line(e, source)
@@ -760,8 +774,10 @@ class Bench:
             compensator: ``none``, ``inverse``, ``inverse_multiplicative``, ``inverse+pid``,
                 ``pid`` (default: inverse with a model, none without).
             precondition_s: open-loop sweep u_max -> u_min first [s] (daemon default 1 s).
-            approach_s: uploaded reference only: the smooth approach from where the
-                precondition left the output to the first sample [s] (daemon default 0.2 s).
+            approach_s: uploaded reference only: the unscored approach from where the
+                precondition left the output to the first sample [s] (daemon default 0.2 s,
+                longer when the slew limit needs it); the error is scored over the whole
+                trajectory after it.
             **params: further request parameters, sent as given (``kp``, ``ki``, ``kd``).
             wait, progress, timeout: as for ``identify``; ``progress`` also sees the upload
                 (label ``"upload"``).
