@@ -10,16 +10,19 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/daemon/bench_client.hpp"
 #include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/remote_commands.hpp"
 #include "support/daemon_process.hpp"
 #include "support/temp_dir_test.hpp"
 
@@ -99,6 +102,63 @@ TEST_F(HystbenchdTest, BadInputGetsAClearErrorAndChangesNothing) {
   EXPECT_FALSE(busy["ok"]);
   EXPECT_EQ(busy["error"]["code"], "busy");
   EXPECT_TRUE(c.request("stop")["ok"]);
+}
+
+// The user's path for their own trajectory: the CLI's reader and uploader against the real
+// daemon. A file that leaves the range is refused naming its line; a client gone mid-upload
+// leaves nothing behind; a good file is tracked.
+TEST_F(HystbenchdTest, UploadedTrajectoriesOverTheSocket) {
+  {
+    hd::BenchClient gone(daemon_->socket());
+    ASSERT_TRUE(gone.request("upload.begin", {{"kind", "reference"}, {"samples", 100}})["ok"]);
+    ASSERT_TRUE(gone.request("upload.chunk", {{"upload", "upload-1"},
+                                              {"offset", 0},
+                                              {"t", {0.0, 0.001}},
+                                              {"values", {10.0, 10.1}}})["ok"]);
+    EXPECT_EQ(gone.request("status")["result"]["uploads"]["open"], 1);
+  }  // disconnects mid-upload
+  hd::BenchClient c(daemon_->socket());
+  json status;
+  for (int i = 0; i < 200; ++i) {
+    status = c.request("status")["result"];
+    if (status["uploads"]["open"] == 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(status["uploads"]["open"], 0);
+  EXPECT_EQ(status["uploads"]["staged_samples"], 0);
+  EXPECT_EQ(status["state"], "idle");
+
+  const fs::path bad = dir_ / "bad.csv", good = dir_ / "good.csv";
+  {
+    std::ofstream b(bad), g(good);
+    b << "# a ramp out of the 0..44 um range\nt,yr\n";
+    g << "t,yr\n";
+    for (int k = 0; k < 1000; ++k) {
+      b << k * 1e-3 << "," << 10.0 + 40.0 * k * 1e-3 << "\n";  // 44 um passed at row 851
+      g << k * 1e-3 << "," << 20.0 + 5.0 * std::sin(2.0 * M_PI * 2.0 * k * 1e-3) << "\n";
+    }
+  }
+  hd::RemoteCommand cmd;
+  cmd.socket_path = daemon_->socket();
+  cmd.cmd = "track";
+  cmd.params = {{"compensator", "none"}};
+  cmd.upload = hd::read_upload(bad.string(), "reference", "t", "yr", 1.0, 0.0);
+  std::ostringstream out, err;
+  EXPECT_EQ(hd::run_remote(cmd, out, err), 1);
+  EXPECT_NE(err.str().find("[out_of_range]"), std::string::npos) << err.str();
+  // Data row 852 (sample 851) is on line 854: a comment and the header come first.
+  EXPECT_NE(err.str().find("bad.csv:854: the first offending row"), std::string::npos) << err.str();
+  EXPECT_TRUE(c.request("status")["result"]["last_result"].is_null());  // nothing ran
+
+  cmd.upload = hd::read_upload(good.string(), "reference", "t", "yr", 1.0, 0.0);
+  cmd.wait = true;
+  cmd.json_output = true;
+  out.str("");
+  ASSERT_EQ(hd::run_remote(cmd, out, err), 0) << err.str();
+  const json r = json::parse(out.str());
+  EXPECT_EQ(r["end"], "completed");
+  EXPECT_NEAR(r["range_um"].get<double>(), 10.0, 0.01);
+  EXPECT_GT(r["rms_error_percent"].get<double>(), 0.0);
 }
 
 TEST_F(HystbenchdTest, ClientKilledMidRunDoesNotDisturbTheRun) {

@@ -12,6 +12,7 @@
 #include <csignal>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <optional>
 #include <thread>
 #include <vector>
@@ -170,6 +171,43 @@ TEST_F(SocketServerTest, RequestsRoundTripWithTheirIds) {
   EXPECT_EQ(r["error"]["message"], "dispatcher exploded");
   r = c.request({{"id", 10}, {"cmd", "nosuch"}});
   EXPECT_EQ(r["error"]["code"], "unknown_cmd");
+}
+
+// The disconnect handler hears the number of every connection that goes: one that closes, and
+// at stop() the ones still open; the error details travel as extra keys of the error object.
+TEST_F(SocketServerTest, TheDisconnectHandlerHearsEveryClientThatGoes) {
+  std::mutex m;
+  std::vector<std::uint64_t> gone;
+  server_.reset();
+  hd::SocketServerOptions options;
+  options.path = path_;
+  server_ = std::make_unique<hd::SocketServer>(
+      options,
+      [](const hd::Request& r) {
+        if (r.cmd == "detail") return hd::Reply::failure("bad", "no", {{"sample", 12}});
+        return dispatch(r);
+      },
+      [&](std::uint64_t client) {
+        std::lock_guard lock(m);
+        gone.push_back(client);
+      });
+  server_->start();
+  TestClient a(path_), b(path_);
+  ASSERT_TRUE(a.greeted());
+  ASSERT_TRUE(b.greeted());
+  const auto id_a = a.request({{"cmd", "echo"}})["result"]["client"].get<std::uint64_t>();
+  const auto id_b = b.request({{"cmd", "echo"}})["result"]["client"].get<std::uint64_t>();
+  EXPECT_EQ(b.request({{"cmd", "detail"}})["error"],
+            json::parse(R"({"code":"bad","message":"no","sample":12})"));
+  a.close();
+  ASSERT_TRUE(eventually([&] {
+    std::lock_guard lock(m);
+    return gone.size() == 1;
+  }));
+  EXPECT_EQ(gone.front(), id_a);
+  server_->stop();
+  std::lock_guard lock(m);
+  EXPECT_EQ(gone, (std::vector<std::uint64_t>{id_a, id_b}));
 }
 
 TEST_F(SocketServerTest, EveryBadInputGetsItsErrorAndTheConnectionStaysUsable) {
