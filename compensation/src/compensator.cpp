@@ -76,6 +76,7 @@ CompensatorOutput Compensator::step(double y_ref, double y_measured,
   }
   y_ref_prev_ = y_ref;
   have_prev_ = true;
+  out.feedback_saturated = pid_ && pid_->saturated();
   out.u = out.u_ff + out.u_fb;
   return out;
 }

@@ -307,11 +307,7 @@ json Bench::status() const {
   s["output_v"] = loop_->last_output();
   s["position_um"] = loop_->last_measurement();
   if (!active_run_.is_null()) {
-    json run = active_run_;
-    if (const RunProgram* p = loop_->active()) {
-      (void)p;  // progress is read through active_run_ bookkeeping below
-    }
-    s["run"] = run;
+    s["run"] = active_run_;
   } else {
     s["run"] = nullptr;
   }
@@ -539,7 +535,6 @@ json Bench::start_identify(const json& params) {
       {"skip_samples", offset + (first_scored != nullptr ? first_scored->begin : 0)},
       {"precondition_s", settings_.identify_precondition_s},
       {"settle_s", settings_.identify_settle_s}};
-  idle_cv_.notify_all();
   return {{"run_id", run_id},
           {"samples", total},
           {"duration_s", static_cast<double>(total) * dt_},

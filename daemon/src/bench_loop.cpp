@@ -99,7 +99,7 @@ void BenchLoop::run() {
     // A tick that wakes after its successor's deadline (the previous work or the scheduler
     // made it late by a period or more, so deadlines were skipped) counts as an overrun.
     overran_ = t.skipped > 0;
-    tick(t.scheduled_ns, t.wake_ns, period_ns_);
+    tick(t.scheduled_ns, t.wake_ns);
     const std::int64_t done = LoopTimer::now_ns();
     stats_.record(t.latency_ns(), done - t.wake_ns, overran_ || timer.overran(t, done), t.skipped);
   }
@@ -107,8 +107,7 @@ void BenchLoop::run() {
   driver_.safe_state();
 }
 
-void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns,
-                     std::int64_t /*period_ns*/) noexcept {
+void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   ticks_.fetch_add(1, std::memory_order_relaxed);
   if (reset_requested_.exchange(false, std::memory_order_acq_rel) && state() == State::kFault) {
     fault_reason_.store("", std::memory_order_release);
@@ -212,6 +211,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     }
     rec.u_ff = out.u_ff;
     rec.u_fb = out.u_fb;
+    if (out.feedback_saturated) rec.flags |= kSampleFeedbackSaturated;
     u_request = out.u;
   }
   rec.reference = y_ref;

@@ -81,6 +81,24 @@ TEST(Compensator, PidAloneFollowsASlowReferenceOnAMismatchedPlant) {
   EXPECT_LT(pid.hysteresis, none.hysteresis);
 }
 
+// The run log's feedback_saturated flag comes from here: set while u_fb sits at its clamp.
+TEST(Compensator, SaysWhenTheFeedbackIsAtItsClamp) {
+  hc::Compensator c(hc::CompensatorKind::kPid, nullptr,
+                    hc::PidController(hc::PidParameters{0.0, 1000.0, 0.0, 0.0, -5.0, 5.0}, 1e-3),
+                    {});
+  c.reset(0.0);
+  hc::CompensatorOutput out = c.step(1.0, 0.0);
+  EXPECT_FALSE(out.feedback_saturated);
+  for (int k = 0; k < 20; ++k) out = c.step(1.0, 0.0);  // 1 um short: integrates 1 V per tick
+  EXPECT_TRUE(out.feedback_saturated);
+  EXPECT_DOUBLE_EQ(out.u_fb, 5.0);
+  for (int k = 0; k < 20 && out.feedback_saturated; ++k) out = c.step(0.0, 1.0);
+  EXPECT_FALSE(out.feedback_saturated);
+  EXPECT_LT(out.u_fb, 5.0);
+  hc::Compensator none(hc::CompensatorKind::kNone, nullptr, std::nullopt, {1.0, 0.0});
+  EXPECT_FALSE(none.step(1e9, 0.0).feedback_saturated);
+}
+
 TEST(Compensator, RefusesAnInverseKindWithoutAModel) {
   EXPECT_THROW(hc::Compensator(hc::CompensatorKind::kInverse, nullptr, std::nullopt, {}),
                std::invalid_argument);

@@ -32,9 +32,10 @@ struct LinearMap {
 };
 
 struct CompensatorOutput {
-  double u_ff = 0.0;  ///< feedforward [input unit]
-  double u_fb = 0.0;  ///< feedback [input unit]
-  double u = 0.0;     ///< sum, before the output limits
+  double u_ff = 0.0;                ///< feedforward [input unit]
+  double u_fb = 0.0;                ///< feedback [input unit]
+  double u = 0.0;                   ///< sum, before the output limits
+  bool feedback_saturated = false;  ///< u_fb at the PID's clamp [u_fb_min, u_fb_max]
 };
 
 class Compensator {

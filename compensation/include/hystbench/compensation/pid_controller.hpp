@@ -35,6 +35,8 @@ class PidController {
   void reset(double initial_output = 0.0) noexcept;
 
   double output() const noexcept { return out_; }
+  /// True while u_fb sits at output_min or output_max (before the output filter).
+  bool saturated() const noexcept { return u_ >= p_.output_max || u_ <= p_.output_min; }
   const PidParameters& parameters() const noexcept { return p_; }
 
  private:

@@ -4,7 +4,6 @@
 // progress events and model fitting happen on the bench's supervisor thread. Nothing here runs
 // on the loop thread except through BenchLoop.
 #include <atomic>
-#include <condition_variable>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -180,7 +179,6 @@ class Bench {
 
   std::thread supervisor_;
   std::atomic<bool> quit_{false};
-  std::condition_variable idle_cv_;
   std::uint64_t watchdog_ticks_ = 0;
 };
 

@@ -83,7 +83,7 @@ class BenchLoop {
 
  private:
   void run();
-  void tick(std::int64_t scheduled_ns, std::int64_t wake_ns, std::int64_t period_ns) noexcept;
+  void tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
   void run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
   void idle_tick() noexcept;
   void end_run(RunEnd end, const char* reason) noexcept;
@@ -108,7 +108,6 @@ class BenchLoop {
   std::atomic<double> last_u_{0.0};
   std::atomic<std::uint64_t> ticks_{0};
   RealtimeReport realtime_report_;
-  std::atomic<bool> started_{false};
 
   // Loop-thread state.
   RunProgram* active_ = nullptr;

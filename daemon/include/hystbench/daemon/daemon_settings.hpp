@@ -5,7 +5,8 @@
 
 namespace hystbench::daemon {
 
-/// Throws ConfigError naming the key when the combination is invalid.
+/// A plain mapping: parse_config() has already checked every key and range, so this cannot fail
+/// for a configuration it returned.
 BenchSettings bench_settings_from(const DaemonConfig& config);
 
 }  // namespace hystbench::daemon

@@ -12,12 +12,10 @@
 //     (usually 1; more when the device is slow).
 //   "loop": write()/read() do the transactions themselves and block for the round trip (up to
 //     response_timeout_ms per transaction, plus a reconnect attempt when the link is down).
-//     configure() refuses a loop rate above max_rate_hz; activate() measures the round trip and
-//     refuses a rate whose period it does not fit in.
+//     configure() refuses a loop rate above max_rate_hz; activate() refuses a rate whose period
+//     the 90th percentile of 100 exchanges does not fit in.
 // Failures: a failed transaction reads as kStale (the previous value, aged); max_failed_
-// transactions failures or max_stale_reads stale reads in a row read as kFault.
-// In io = "loop", activate() refuses a rate whose period the 90th percentile of 100 exchanges
-// does not fit in. A fault clears
+// transactions failures or max_stale_reads stale reads in a row read as kFault. A fault clears
 // by itself once fresh values arrive again (the link reconnects every reconnect_interval_ms).
 // safe_state() commands safe_output_v (in "loop" mode it writes it at once).
 // diagnostics(): connection, counters, the last error in words, round-trip percentiles.
