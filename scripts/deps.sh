@@ -12,7 +12,7 @@ BUILD_PKGS=(
   gnuplot-nox
 )
 # Peers and tools used only by the test suite (independent implementations to test against).
-TEST_PKGS=(python3 socat python3-pymodbus python3-serial python3-serial-asyncio mbpoll can-utils)
+TEST_PKGS=(python3 python3-pip python3-setuptools python3-wheel socat python3-pymodbus python3-serial python3-serial-asyncio mbpoll can-utils)
 # clang with the libFuzzer and sanitizer runtimes, for scripts/fuzz.sh only.
 FUZZ_PKGS=(clang libclang-rt-14-dev)
 
