@@ -47,6 +47,20 @@ Result LoopbackDriver::configure(const nlohmann::json& params, double rate_hz) {
     actuator_ = std::make_unique<sim::SimulatedActuator>(cfg, 1.0 / rate_hz);
     if (p.contains("faults")) {
       const auto& f = p["faults"];
+      if (!f.is_object()) return Result::failure("driver.loopback.faults: must be a table");
+      // A misspelt fault would silently never fire: the test it was meant for would pass.
+      for (const auto& [key, value] : f.items()) {
+        if (key != "read_error_at_tick" && key != "nan_at_tick" && key != "stuck_at_tick" &&
+            key != "write_error_at_tick") {
+          return Result::failure("driver.loopback.faults." + key +
+                                 ": unknown key (read_error_at_tick, nan_at_tick, stuck_at_tick, "
+                                 "write_error_at_tick)");
+        }
+        if (!value.is_number_integer() || value.get<long long>() < 0) {
+          return Result::failure("driver.loopback.faults." + key +
+                                 ": must be a tick number >= 0 (0 = never)");
+        }
+      }
       FaultInjection fi;
       fi.read_error_at_tick = f.value("read_error_at_tick", std::uint64_t{0});
       fi.nan_at_tick = f.value("nan_at_tick", std::uint64_t{0});
