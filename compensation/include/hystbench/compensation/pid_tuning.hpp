@@ -2,16 +2,21 @@
 // Default feedback gains for `inverse+pid` and `pid`, derived from the model and the loop rate so
 // that the feedback never makes tracking worse than the feedforward alone:
 //   - integral action only (kp = kd = 0): u_fb changes smoothly, sensor noise is not amplified;
-//   - crossover f_c = bandwidth_hz, by default min(loop rate / 500, 20 Hz), at most a twentieth
+//   - crossover f_c = bandwidth_hz, by default min(loop rate / 500, 2 Hz), at most a twentieth
 //     of the model's natural frequency when it has dynamics: ki = 2 pi f_c / g, g the model's
-//     mean slope [µm/V], so |S| <= ~1 at every frequency. The margin is for what a model may not
-//     hold: a lightly damped resonance and a gain that grows with |du/dt| together turn per-tick
-//     feedback changes into a limit cycle at the resonance (seen at 50 Hz on the loopback with
-//     rate dependence on: 5 % rms at 1 Hz instead of 0.7 %);
-//   - the output low-passed at 4 f_c;
+//     mean slope [µm/V]. Low, because above f_c an integral loop with any extra lag (delay,
+//     output filter, a hysteretic or rate-dependent gain) has |S| > 1: at 20 Hz with the output
+//     filter at 80 Hz it made the rate-free loopback 33 % worse at 50 Hz and left a 35-40 Hz
+//     limit cycle on the rate-dependent one (issue 13);
+//   - the output low-passed at 100 f_c for a rate-free model (a filter near f_c is itself the lag
+//     that makes |S| > 1 a little above it), at 4 f_c for a rate-dependent one;
 //   - for a rate-dependent model, whose output reacts to |du/dt| with a gain up to
-//     K_r = sum_i |c_i - c_{i-1}| * max|u| [µm per V/s], f_c is lowered until the high-frequency
-//     loop gain ki * 2 pi f_lp * K_r stays at a quarter of 1 / (1.5 loop periods) (phase margin).
+//     K_r = sum_i |c_i - c_{i-1}| * max|u| [µm per V/s]: on a falling branch a faster fall raises
+//     the output, so to a small change of the drive the actuator is g - K_r s, a right-half-plane
+//     zero at g / K_r. f_c is lowered to (g / K_r) / (2 pi 14) (measured: with 2 Hz on a 14 Hz zero
+//     the integrator answered the transients at the reversal tops and left a tail, 5-10 Hz worse
+//     than the inverse alone; with 1 Hz it is not worse at any frequency), and further until the
+//     high-frequency loop gain ki * 2 pi f_lp * K_r stays at a quarter of 1 / (1.5 loop periods).
 // Not real-time (runs when a run is built).
 #include <string>
 
