@@ -12,10 +12,12 @@
 #include <thread>
 
 #include "details/clock.hpp"
+#include "details/format.hpp"
 #include "details/json_params.hpp"
 
 namespace hystbench::drivers {
 
+using details::fixed;
 using details::monotonic_ns;
 using details::ParamError;
 using details::Params;
@@ -23,12 +25,6 @@ using details::Params;
 namespace {
 constexpr int kMaxFramesPerRead = 64;
 constexpr int kMaxSendFailures = 3;
-
-std::string fmt(double v, int digits = 0) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
 }  // namespace
 
 CanAmplifierDriver::CanAmplifierDriver() = default;
@@ -38,8 +34,7 @@ CanAmplifierDriver::CanAmplifierDriver(std::unique_ptr<CanController> controller
 
 CanAmplifierDriver::~CanAmplifierDriver() { stop_supervisor(); }
 
-Result CanAmplifierDriver::configure(const nlohmann::json& params, double rate_hz) {
-  if (active_) return Result::failure("driver.can: configure() while active");
+Result CanAmplifierDriver::on_configure(const nlohmann::json& params, double rate_hz) {
   try {
     const Params p(params, "driver.can");
     p.allow_only({"interface", "socket_fd", "heartbeat_timeout_ms", "restart_on_bus_off",
@@ -70,20 +65,17 @@ Result CanAmplifierDriver::configure(const nlohmann::json& params, double rate_h
   if (!(rate_hz > 0.0)) return Result::failure("loop.rate_hz: must be > 0");
   max_rate_hz_ = declared_max_rate_hz_ > 0.0 ? declared_max_rate_hz_ : 20000.0;
   if (rate_hz > max_rate_hz_) {
-    return Result::failure("loop.rate_hz: " + fmt(rate_hz) +
-                           " Hz is beyond driver.can.max_rate_hz = " + fmt(max_rate_hz_));
+    return Result::failure("loop.rate_hz: " + fixed(rate_hz, 0) +
+                           " Hz is beyond driver.can.max_rate_hz = " + fixed(max_rate_hz_, 0));
   }
   rate_hz_ = rate_hz;
   if (!injected_controller_) {
     controller_ = interface_.empty() ? nullptr : make_libsocketcan_controller(interface_);
   }
-  configured_ = true;
   return Result::success();
 }
 
-Result CanAmplifierDriver::activate() {
-  if (!configured_) return Result::failure("driver.can: activate() before configure()");
-  if (active_) return Result::success();
+Result CanAmplifierDriver::on_activate() {
   const std::string where = interface_.empty() ? "socket " + std::to_string(socket_fd_)
                                                : "interface '" + interface_ + "'";
   try {
@@ -120,10 +112,10 @@ Result CanAmplifierDriver::activate() {
     const double bus_max = std::floor(static_cast<double>(bitrate_) / bits);
     max_rate_hz_ = declared_max_rate_hz_ > 0.0 ? std::min(declared_max_rate_hz_, bus_max) : bus_max;
     if (rate_hz_ > max_rate_hz_) {
-      return Result::failure("loop.rate_hz: " + fmt(rate_hz_) + " Hz is beyond what " + where +
+      return Result::failure("loop.rate_hz: " + fixed(rate_hz_, 0) + " Hz is beyond what " + where +
                              " carries at " + std::to_string(bitrate_) + " bit/s: a setpoint and " +
                              "a feedback frame take up to " + std::to_string(bits) +
-                             " bits, so at most " + fmt(bus_max) + " Hz");
+                             " bits, so at most " + fixed(bus_max, 0) + " Hz");
     }
   }
   try {
@@ -167,7 +159,7 @@ Result CanAmplifierDriver::activate() {
   }
   if (!answered) {
     return release(("driver.can: no feedback frame " + protocol_.feedback_id.describe() + " on " +
-                    where + " within " + fmt(wait_ns / 1e6) + " ms of the enable frame " +
+                    where + " within " + fixed(wait_ns / 1e6, 0) + " ms of the enable frame " +
                     protocol_.enable_id.describe() + ": is the amplifier powered and on the bus?"));
   }
   if ((status & protocol_.fault_mask) != 0) {
@@ -177,17 +169,11 @@ Result CanAmplifierDriver::activate() {
       return std::string(b);
     }() + ") on " + where));
   }
-  last_y_ = y;
-  position_um_ = y;
-  age_ = 0;
+  activation_y_ = y;
   consecutive_send_failures_ = 0;
   last_feedback_ns_ = monotonic_ns();
   bus_off_ = false;
   socket_dead_ = false;
-  last_fault_ = 0;
-  last_fault_detail_ = 0;
-  output_v_ = safe_output_v_;
-  active_ = true;
   if (restart_on_bus_off_ && controller_) {
     quit_ = false;
     supervisor_ = std::thread([this] { supervise(); });
@@ -227,11 +213,8 @@ void CanAmplifierDriver::stop_supervisor() noexcept {
   if (supervisor_.joinable()) supervisor_.join();
 }
 
-Result CanAmplifierDriver::deactivate() {
-  if (!active_) return Result::success();
+Result CanAmplifierDriver::on_deactivate() {
   stop_supervisor();
-  active_ = false;
-  output_v_ = safe_output_v_;
   const bool ok = socket_->send(protocol_.setpoint_frame(safe_output_v_)) &&
                   socket_->send(protocol_.disable_frame());
   const int err = errno;
@@ -243,37 +226,24 @@ Result CanAmplifierDriver::deactivate() {
   return Result::success();
 }
 
-Result CanAmplifierDriver::on_error() {
-  if (!active_) return Result::success();
-  return deactivate();
-}
-
-void CanAmplifierDriver::fault(Fault cause, std::int64_t detail) noexcept {
-  last_fault_.store(static_cast<int>(cause), std::memory_order_relaxed);
-  last_fault_detail_.store(detail, std::memory_order_relaxed);
-}
-
 DriverStatus CanAmplifierDriver::write(double output_v) noexcept {
-  if (!active_.load(std::memory_order_relaxed) || socket_dead_.load(std::memory_order_relaxed)) {
+  if (socket_dead_.load(std::memory_order_relaxed) || bus_off_.load(std::memory_order_relaxed)) {
     return DriverStatus::kFault;
   }
-  if (bus_off_.load(std::memory_order_relaxed)) return DriverStatus::kFault;
   if (socket_->send(protocol_.setpoint_frame(output_v))) {
     sent_.fetch_add(1, std::memory_order_relaxed);
     consecutive_send_failures_ = 0;
-    output_v_.store(output_v, std::memory_order_relaxed);
     return DriverStatus::kOk;
   }
   send_failures_.fetch_add(1, std::memory_order_relaxed);
   if (++consecutive_send_failures_ >= kMaxSendFailures) {
-    fault(Fault::kSend, errno);
+    report_fault(Fault::kSend, errno);
     return DriverStatus::kFault;
   }
   return DriverStatus::kOk;
 }
 
 DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
-  if (!active_.load(std::memory_order_relaxed)) return DriverStatus::kFault;
   bool fresh = false, malformed = false, amp_fault = false;
   std::int64_t detail = 0;
   can_frame f{};
@@ -282,7 +252,7 @@ DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
     if (rc == 0) break;
     if (rc < 0) {
       socket_dead_.store(true, std::memory_order_relaxed);
-      fault(Fault::kSocket, errno);
+      report_fault(Fault::kSocket, errno);
       break;
     }
     received_.fetch_add(1, std::memory_order_relaxed);
@@ -290,7 +260,7 @@ DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
       if ((f.can_id & CAN_ERR_BUSOFF) != 0) {
         bus_off_.store(true, std::memory_order_relaxed);
         bus_offs_.fetch_add(1, std::memory_order_relaxed);
-        fault(Fault::kBusOff, 0);
+        report_fault(Fault::kBusOff);
       } else if ((f.can_id & CAN_ERR_RESTARTED) != 0) {
         bus_off_.store(false, std::memory_order_relaxed);
       }
@@ -305,7 +275,7 @@ DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
           amp_fault = true;
           detail = status;
         } else {
-          last_y_ = y;
+          out.position_um = y;
           fresh = true;
         }
         break;
@@ -319,87 +289,80 @@ DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
     }
   }
   const std::int64_t now = monotonic_ns();
-  if (fresh) {
-    age_ = 0;
-    last_feedback_ns_.store(now, std::memory_order_relaxed);
-    position_um_.store(last_y_, std::memory_order_relaxed);
-  } else {
-    ++age_;
-    stale_reads_.fetch_add(1, std::memory_order_relaxed);
-  }
+  if (fresh) last_feedback_ns_.store(now, std::memory_order_relaxed);
   // A feedback frame read in the tick of a setpoint answers an earlier one: the amplifier
   // cannot sample and send within the microseconds between write() and read().
-  out = {last_y_, age_, age_ + 1};
+  out.response_ticks = 1;
   if (socket_dead_.load(std::memory_order_relaxed) || bus_off_.load(std::memory_order_relaxed)) {
     return DriverStatus::kFault;
   }
   if (malformed) {
-    fault(Fault::kMalformed, detail);
+    report_fault(Fault::kMalformed, detail);
     return DriverStatus::kFault;
   }
   if (amp_fault) {
-    fault(Fault::kAmplifier, detail);
+    report_fault(Fault::kAmplifier, detail);
     return DriverStatus::kFault;
   }
   const std::int64_t silent = now - last_feedback_ns_.load(std::memory_order_relaxed);
   if (silent > heartbeat_ns_) {
-    fault(Fault::kHeartbeat, silent);
+    report_fault(Fault::kHeartbeat, silent);
     return DriverStatus::kFault;
   }
   return fresh ? DriverStatus::kOk : DriverStatus::kStale;
 }
 
 DriverStatus CanAmplifierDriver::safe_state() noexcept {
-  output_v_.store(safe_output_v_, std::memory_order_relaxed);
-  if (!active_.load(std::memory_order_relaxed) || socket_dead_.load(std::memory_order_relaxed)) {
-    return DriverStatus::kFault;
-  }
+  if (socket_dead_.load(std::memory_order_relaxed)) return DriverStatus::kFault;
   // Sent even when bus-off: the frame waits in the queue for the restart.
   return socket_->send(protocol_.setpoint_frame(safe_output_v_)) ? DriverStatus::kOk
                                                                  : DriverStatus::kError;
 }
 
-nlohmann::json CanAmplifierDriver::diagnostics() const {
-  const auto cause = static_cast<Fault>(last_fault_.load(std::memory_order_relaxed));
-  const std::int64_t detail = last_fault_detail_.load(std::memory_order_relaxed);
-  std::string fault;
-  switch (cause) {
+DriverInfo CanAmplifierDriver::info() const noexcept {
+  DriverInfo i;
+  i.max_rate_hz = max_rate_hz_;
+  i.output_min_v = output_min_v_;
+  i.output_max_v = output_max_v_;
+  i.safe_output_v = safe_output_v_;
+  i.measurement_resolution_um = std::abs(protocol_.feedback.scale);
+  return i;
+}
+
+std::string CanAmplifierDriver::describe_fault(int cause, std::int64_t detail) const {
+  switch (static_cast<Fault>(cause)) {
     case Fault::kNone:
       break;
     case Fault::kHeartbeat:
-      fault = "no feedback frame " + protocol_.feedback_id.describe() + " for " +
-              fmt(detail / 1e6, 1) + " ms (heartbeat_timeout_ms = " + fmt(heartbeat_ns_ / 1e6, 1) +
-              ")";
-      break;
+      return "no feedback frame " + protocol_.feedback_id.describe() + " for " +
+             fixed(detail / 1e6, 1) +
+             " ms (heartbeat_timeout_ms = " + fixed(heartbeat_ns_ / 1e6, 1) + ")";
     case Fault::kMalformed:
-      fault = "malformed feedback frame " + protocol_.feedback_id.describe() + ": " +
-              std::to_string(detail) + " data bytes, expected " +
-              std::to_string(protocol_.feedback_length);
-      break;
+      return "malformed feedback frame " + protocol_.feedback_id.describe() + ": " +
+             std::to_string(detail) + " data bytes, expected " +
+             std::to_string(protocol_.feedback_length);
     case Fault::kBusOff:
-      fault = "bus-off (error frame)" + std::string(restart_on_bus_off_ && controller_
-                                                        ? ": restarting the controller"
-                                                        : ": restart the interface");
-      break;
+      return "bus-off (error frame)" + std::string(restart_on_bus_off_ && controller_
+                                                       ? ": restarting the controller"
+                                                       : ": restart the interface");
     case Fault::kAmplifier:
-      fault = "the amplifier reports a fault: status byte " + std::to_string(detail) +
-              " & fault_mask " + std::to_string(protocol_.fault_mask);
-      break;
+      return "the amplifier reports a fault: status byte " + std::to_string(detail) +
+             " & fault_mask " + std::to_string(protocol_.fault_mask);
     case Fault::kSocket:
-      fault = std::string("the CAN socket failed: ") +
-              (detail == 0 ? "the peer closed it" : std::strerror(static_cast<int>(detail)));
-      break;
+      return std::string("the CAN socket failed: ") +
+             (detail == 0 ? "the peer closed it" : std::strerror(static_cast<int>(detail)));
     case Fault::kSend:
-      fault = std::to_string(kMaxSendFailures) +
-              " setpoint frames in a row not sent: " + std::strerror(static_cast<int>(detail));
-      break;
+      return std::to_string(kMaxSendFailures) +
+             " setpoint frames in a row not sent: " + std::strerror(static_cast<int>(detail));
   }
+  return DriverInterface::describe_fault(cause, detail);
+}
+
+nlohmann::json CanAmplifierDriver::diagnostics() const {
   return {{"type", "can"},
           {"interface", interface_},
-          {"active", active_.load()},
           {"controller_state", controller_state_},
           {"bitrate", bitrate_},
-          {"max_rate_hz", max_rate_hz_},
           {"bus_off", bus_off_.load()},
           {"frames_sent", sent_.load()},
           {"frames_received", received_.load()},
@@ -407,11 +370,7 @@ nlohmann::json CanAmplifierDriver::diagnostics() const {
           {"malformed_frames", malformed_.load()},
           {"bus_offs", bus_offs_.load()},
           {"restarts", restarts_.load()},
-          {"send_failures", send_failures_.load()},
-          {"stale_reads", stale_reads_.load()},
-          {"output_v", output_v_.load()},
-          {"position_um", position_um_.load()},
-          {"last_fault", fault}};
+          {"send_failures", send_failures_.load()}};
 }
 
 }  // namespace hystbench::drivers

@@ -1,50 +1,150 @@
 #include "hystbench/drivers/driver.hpp"
 
-#include <stdexcept>
+#include <cmath>
+#include <string>
 
-#include "hystbench/drivers/can_amplifier.hpp"
-#include "hystbench/drivers/gpio_driver.hpp"
-#include "hystbench/drivers/loopback_driver.hpp"
-#include "hystbench/drivers/modbus_daq.hpp"
+#include "details/format.hpp"
 
 namespace hystbench::drivers {
 
-std::string_view to_string(DriverStatus s) noexcept {
-  switch (s) {
-    case DriverStatus::kOk:
-      return "ok";
-    case DriverStatus::kStale:
-      return "stale";
-    case DriverStatus::kTimeout:
-      return "timeout";
-    case DriverStatus::kError:
-      return "error";
-    case DriverStatus::kFault:
-      return "fault";
-  }
-  return "unknown";
+using details::fixed;
+
+Driver::Driver(std::unique_ptr<DriverInterface> driver) : driver_(std::move(driver)) {
+  driver_->attach(faults_);
 }
 
-const std::vector<DriverBackend>& driver_backends() {
-  static const std::vector<DriverBackend> table{
-      {"loopback", "simulated actuator in the loop (no hardware)",
-       []() -> std::unique_ptr<Driver> { return std::make_unique<LoopbackDriver>(); }},
-      {"modbus", "Modbus DAQ over TCP or RTU (libmodbus); [driver.modbus], [driver.modbus.gpio]",
-       with_gpio<ModbusDaqDriver>},
-      {"can", "CAN piezo amplifier over SocketCAN (libsocketcan); [driver.can], [driver.can.gpio]",
-       with_gpio<CanAmplifierDriver>},
-  };
-  return table;
+Driver::~Driver() = default;
+
+template <typename Hook>
+Result Driver::guarded(Hook&& hook) const {
+  try {
+    return hook();
+  } catch (const std::exception& e) {
+    return Result::failure("driver." + std::string(type()) + ": " + e.what());
+  }
 }
 
-std::unique_ptr<Driver> make_driver(std::string_view type) {
-  std::string names;
-  for (const auto& b : driver_backends()) {
-    if (b.type == type) return b.create();
-    names += (names.empty() ? "" : ", ") + std::string(b.type);
+Result Driver::refuse_rate(const char* when) const {
+  if (rate_hz_ <= info_.max_rate_hz) return Result::success();
+  return Result::failure("loop.rate_hz: " + fixed(rate_hz_, 0) + " Hz is beyond what the " +
+                         std::string(type()) + " driver holds " + when + " (at most " +
+                         fixed(info_.max_rate_hz, 0) + " Hz)");
+}
+
+Result Driver::configure(const nlohmann::json& params, double rate_hz) {
+  if (state() == State::kActive) {
+    return Result::failure("driver." + std::string(type()) + ": configure() while active");
   }
-  throw std::invalid_argument("driver.type: unknown driver '" + std::string(type) +
-                              "' (available: " + names + ")");
+  state_.store(State::kUnconfigured, std::memory_order_release);
+  Result r = guarded([&] { return driver_->on_configure(params, rate_hz); });
+  if (!r) return r;
+  info_ = driver_->info();
+  rate_hz_ = rate_hz;
+  if (r = refuse_rate("as configured"); !r) return r;
+  state_.store(State::kInactive, std::memory_order_release);
+  return r;
+}
+
+Result Driver::activate() {
+  if (state() == State::kActive) return Result::success();
+  if (state() == State::kUnconfigured) {
+    return Result::failure("driver." + std::string(type()) + ": activate() before configure()");
+  }
+  faults_.clear();
+  Result r = guarded([&] { return driver_->on_activate(); });
+  if (!r) return r;
+  info_ = driver_->info();
+  if (r = refuse_rate("as activated"); !r) {
+    driver_->on_deactivate();
+    return r;
+  }
+  in_fault_ = false;
+  last_y_ = driver_->activation_position_um();
+  age_ = 0;
+  response_ticks_ = 0;
+  position_um_.store(last_y_);
+  output_v_.store(info_.safe_output_v);
+  stale_reads_.store(0);
+  state_.store(State::kActive, std::memory_order_release);
+  return r;
+}
+
+Result Driver::deactivate() {
+  if (state() != State::kActive) return Result::success();
+  state_.store(State::kInactive, std::memory_order_release);
+  output_v_.store(info_.safe_output_v);
+  return guarded([&] { return driver_->on_deactivate(); });
+}
+
+DriverStatus Driver::faulted(DriverStatus s) noexcept {
+  if (s == DriverStatus::kFault && !in_fault_) {
+    in_fault_ = true;
+    driver_->on_error();
+    output_v_.store(info_.safe_output_v, std::memory_order_relaxed);
+  }
+  return s;
+}
+
+DriverStatus Driver::write(double output_v) noexcept {
+  if (state_.load(std::memory_order_relaxed) != State::kActive) return DriverStatus::kFault;
+  const DriverStatus s = driver_->write(output_v);
+  if (s == DriverStatus::kOk) output_v_.store(output_v, std::memory_order_relaxed);
+  return faulted(s);
+}
+
+DriverStatus Driver::read(Measurement& out) noexcept {
+  if (state_.load(std::memory_order_relaxed) != State::kActive) return DriverStatus::kFault;
+  Measurement m;
+  DriverStatus s = driver_->read(m);
+  if (s == DriverStatus::kOk) {
+    in_fault_ = false;
+    last_y_ = m.position_um;
+    age_ = 0;
+    response_ticks_ = m.response_ticks;
+    if (std::isfinite(last_y_)) position_um_.store(last_y_, std::memory_order_relaxed);
+    out = {last_y_, 0, response_ticks_};
+    return s;
+  }
+  ++age_;
+  stale_reads_.fetch_add(1, std::memory_order_relaxed);
+  out = {last_y_, age_, response_ticks_ + age_};
+  if (s == DriverStatus::kStale && info_.max_stale_reads > 0 && age_ >= info_.max_stale_reads) {
+    faults_.store(*this, Fault::kStaleReads, static_cast<std::int64_t>(info_.max_stale_reads));
+    s = DriverStatus::kFault;
+  }
+  return faulted(s);
+}
+
+DriverStatus Driver::safe_state() noexcept {
+  output_v_.store(info_.safe_output_v, std::memory_order_relaxed);
+  if (state_.load(std::memory_order_relaxed) != State::kActive) return DriverStatus::kOk;
+  return driver_->safe_state();
+}
+
+void Driver::set_run_active(bool active) noexcept {
+  if (state_.load(std::memory_order_relaxed) == State::kActive) driver_->set_run_active(active);
+}
+
+std::string Driver::describe_fault(int cause, std::int64_t detail) const {
+  switch (static_cast<Fault>(cause)) {
+    case Fault::kStaleReads:
+      return "no fresh measurement for max_stale_reads = " + std::to_string(detail) +
+             " reads in a row";
+    case Fault::kNone:
+      break;
+  }
+  return "";
+}
+
+nlohmann::json Driver::diagnostics() const {
+  nlohmann::json d = driver_->diagnostics();
+  d["active"] = state() == State::kActive;
+  d["output_v"] = output_v_.load(std::memory_order_relaxed);
+  d["position_um"] = position_um_.load(std::memory_order_relaxed);
+  d["stale_reads"] = stale_reads_.load(std::memory_order_relaxed);
+  d["max_rate_hz"] = info_.max_rate_hz;
+  d["last_fault"] = faults_.describe();
+  return d;
 }
 
 }  // namespace hystbench::drivers

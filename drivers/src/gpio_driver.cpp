@@ -2,12 +2,13 @@
 
 namespace hystbench::drivers {
 
-GpioDriver::GpioDriver(std::unique_ptr<Driver> inner, std::shared_ptr<GpioBackend> backend)
-    : inner_(std::move(inner)), backend_(backend ? std::move(backend) : make_libgpiod_backend()) {}
+GpioDriver::GpioDriver(std::unique_ptr<DriverInterface> inner, std::shared_ptr<GpioBackend> backend)
+    : DriverWrapper(std::move(inner)),
+      backend_(backend ? std::move(backend) : make_libgpiod_backend()) {}
 
 GpioDriver::~GpioDriver() { lines_.release(); }
 
-Result GpioDriver::configure(const nlohmann::json& params, double rate_hz) {
+Result GpioDriver::on_configure(const nlohmann::json& params, double rate_hz) {
   nlohmann::json rest = params;
   config_ = GpioConfig{};
   if (rest.is_object() && rest.contains("gpio")) {
@@ -18,10 +19,10 @@ Result GpioDriver::configure(const nlohmann::json& params, double rate_hz) {
     }
     rest.erase("gpio");
   }
-  return inner_->configure(rest, rate_hz);
+  return inner_->on_configure(rest, rate_hz);
 }
 
-Result GpioDriver::activate() {
+Result GpioDriver::on_activate() {
   try {
     lines_.request(config_, *backend_);
   } catch (const std::exception& e) {
@@ -33,19 +34,19 @@ Result GpioDriver::activate() {
                            ".gpio: the e-stop is asserted (" + config_.estop->describe() +
                            "); release it first");
   }
-  Result r = inner_->activate();
+  Result r = inner_->on_activate();
   if (!r) lines_.release();
   return r;
 }
 
-Result GpioDriver::deactivate() {
+Result GpioDriver::on_deactivate() {
   lines_.safe();
-  Result r = inner_->deactivate();
+  Result r = inner_->on_deactivate();
   lines_.release();
   return r;
 }
 
-Result GpioDriver::on_error() {
+DriverStatus GpioDriver::on_error() noexcept {
   lines_.safe();
   return inner_->on_error();
 }
@@ -58,6 +59,7 @@ bool GpioDriver::estop() noexcept {
   if (!estop_asserted_.exchange(true, std::memory_order_relaxed)) {
     estop_trips_.fetch_add(1, std::memory_order_relaxed);
   }
+  report_fault(Fault::kEstop);
   lines_.safe();
   inner_->safe_state();
   return true;
@@ -102,9 +104,14 @@ nlohmann::json GpioDriver::diagnostics() const {
                {"estop_asserted", estop_asserted_.load()},
                {"estop_trips", estop_trips_.load()},
                {"run_active", run_active_.load()}};
-  if (estop_asserted_.load())
-    d["last_fault"] = "e-stop asserted (" + config_.estop->describe() + ")";
   return d;
+}
+
+std::string GpioDriver::describe_fault(int cause, std::int64_t detail) const {
+  if (static_cast<Fault>(cause) != Fault::kEstop || !config_.estop) {
+    return DriverInterface::describe_fault(cause, detail);
+  }
+  return "e-stop asserted (" + config_.estop->describe() + ")";
 }
 
 }  // namespace hystbench::drivers

@@ -17,7 +17,7 @@ bool armed(const std::atomic<std::uint64_t>& at, std::uint64_t tick) noexcept {
 LoopbackDriver::LoopbackDriver() = default;
 LoopbackDriver::~LoopbackDriver() = default;
 
-Result LoopbackDriver::configure(const nlohmann::json& params, double rate_hz) {
+Result LoopbackDriver::on_configure(const nlohmann::json& params, double rate_hz) {
   if (!params.is_null() && !params.is_object()) {
     return Result::failure("driver.loopback: must be a table");
   }
@@ -77,28 +77,19 @@ Result LoopbackDriver::configure(const nlohmann::json& params, double rate_hz) {
   return Result::success();
 }
 
-Result LoopbackDriver::activate() {
-  if (!actuator_) return Result::failure("loopback driver: activate() before configure()");
+Result LoopbackDriver::on_activate() {
   actuator_->reset(safe_output_v_);
   output_v_ = safe_output_v_;
   tick_.store(0, std::memory_order_relaxed);
-  active_ = true;
   return Result::success();
 }
 
-Result LoopbackDriver::deactivate() {
-  output_v_ = safe_output_v_;
-  active_ = false;
-  return Result::success();
-}
-
-Result LoopbackDriver::on_error() {
+Result LoopbackDriver::on_deactivate() {
   output_v_ = safe_output_v_;
   return Result::success();
 }
 
 DriverStatus LoopbackDriver::write(double output_v) noexcept {
-  if (!active_) return DriverStatus::kFault;
   if (armed(write_error_at_, tick_.load(std::memory_order_relaxed) + 1)) {
     return DriverStatus::kError;
   }
@@ -107,7 +98,6 @@ DriverStatus LoopbackDriver::write(double output_v) noexcept {
 }
 
 DriverStatus LoopbackDriver::read(Measurement& out) noexcept {
-  if (!active_) return DriverStatus::kFault;
   const std::uint64_t tick = tick_.fetch_add(1, std::memory_order_relaxed) + 1;
   const double y = actuator_->step(output_v_);  // the plant advances whatever the sensor does
   out.age_ticks = 0;
@@ -126,12 +116,18 @@ DriverStatus LoopbackDriver::safe_state() noexcept {
   return DriverStatus::kOk;
 }
 
-double LoopbackDriver::output_min_v() const noexcept {
-  return actuator_ ? actuator_->input_min() : 0.0;
-}
-
-double LoopbackDriver::output_max_v() const noexcept {
-  return actuator_ ? actuator_->input_max() : 0.0;
+DriverInfo LoopbackDriver::info() const noexcept {
+  DriverInfo i;
+  i.max_rate_hz = max_rate_hz_;
+  i.safe_output_v = safe_output_v_;
+  if (!actuator_) return i;
+  i.output_min_v = actuator_->input_min();
+  i.output_max_v = actuator_->input_max();
+  const auto& adc = actuator_->config().adc;
+  if (adc.enabled)
+    i.measurement_resolution_um =
+        (adc.range_max - adc.range_min) / (std::ldexp(1.0, adc.bits) - 1.0);
+  return i;
 }
 
 nlohmann::json LoopbackDriver::diagnostics() const {
@@ -147,13 +143,6 @@ void LoopbackDriver::inject(const FaultInjection& f) noexcept {
   nan_at_ = rel(f.nan_at_tick);
   stuck_at_ = rel(f.stuck_at_tick);
   write_error_at_ = rel(f.write_error_at_tick);
-}
-
-double LoopbackDriver::measurement_resolution_um() const noexcept {
-  if (!actuator_) return 0.0;
-  const auto& adc = actuator_->config().adc;
-  if (!adc.enabled) return 0.0;
-  return (adc.range_max - adc.range_min) / (std::ldexp(1.0, adc.bits) - 1.0);
 }
 
 }  // namespace hystbench::drivers

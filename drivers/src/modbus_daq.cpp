@@ -1,44 +1,29 @@
 #include "hystbench/drivers/modbus_daq.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <ctime>
 #include <vector>
 
+#include "details/format.hpp"
 #include "details/modbus_link.hpp"
 #include "details/rtt_histogram.hpp"
-#include "details/triple_buffer.hpp"
 
 namespace hystbench::drivers {
 
+using details::fixed;
 using details::ModbusLink;
 using details::monotonic_ns;
 
 namespace {
 constexpr int kActivationExchanges = 100;
-constexpr std::int64_t kIdlePollNs = 20'000'000;  // I/O thread: an exchange at least this often
-
-std::string fmt(double v, int digits = 1) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
+constexpr double kIoThreadMaxRateHz = 20000.0;
 }  // namespace
 
-ModbusDaqDriver::ModbusDaqDriver()
-    : rtt_(std::make_unique<details::RttHistogram>()),
-      samples_(std::make_unique<details::TripleBuffer<Sample>>()) {
-  sem_init(&wake_, 0, 0);
-}
+ModbusDaqDriver::ModbusDaqDriver() : rtt_(std::make_unique<details::RttHistogram>()) {}
 
-ModbusDaqDriver::~ModbusDaqDriver() {
-  stop_io_thread();
-  sem_destroy(&wake_);
-}
+ModbusDaqDriver::~ModbusDaqDriver() = default;
 
-Result ModbusDaqDriver::configure(const nlohmann::json& params, double rate_hz) {
-  if (active_) return Result::failure("driver.modbus: configure() while active");
+Result ModbusDaqDriver::on_configure(const nlohmann::json& params, double rate_hz) {
   try {
     config_ = parse_modbus_daq_config(params);
   } catch (const std::exception& e) {
@@ -46,13 +31,14 @@ Result ModbusDaqDriver::configure(const nlohmann::json& params, double rate_hz) 
   }
   if (!(rate_hz > 0.0)) return Result::failure("loop.rate_hz: must be > 0");
   if (config_.io == ModbusDaqConfig::IoMode::kLoop && rate_hz > config_.max_rate_hz) {
-    return Result::failure(
-        "loop.rate_hz: " + fmt(rate_hz, 0) + " Hz is beyond what the Modbus DAQ holds with io = " +
-        "\"loop\" (" + config_.endpoint() + ": at most " + fmt(config_.max_rate_hz, 0) +
-        " Hz, driver.modbus.max_rate_hz): lower loop.rate_hz or set driver.modbus.io = "
-        "\"thread\"");
+    return Result::failure("loop.rate_hz: " + fixed(rate_hz, 0) +
+                           " Hz is beyond what the Modbus DAQ holds with io = \"loop\" (" +
+                           config_.endpoint() + ": at most " + fixed(config_.max_rate_hz, 0) +
+                           " Hz, driver.modbus.max_rate_hz): lower loop.rate_hz or set "
+                           "driver.modbus.io = \"thread\"");
   }
   rate_hz_ = rate_hz;
+  measured_max_rate_hz_ = 0.0;
   max_stale_reads_ =
       config_.max_stale_reads > 0
           ? config_.max_stale_reads
@@ -62,27 +48,26 @@ Result ModbusDaqDriver::configure(const nlohmann::json& params, double rate_hz) 
   } catch (const std::exception& e) {
     return Result::failure(e.what());
   }
-  configured_ = true;
   return Result::success();
 }
 
-int ModbusDaqDriver::link_up(std::int64_t now_ns) noexcept {
-  if (link_->connected()) return 1;
-  if (now_ns < next_connect_ns_) return 0;
+ModbusDaqDriver::Link ModbusDaqDriver::link_up(std::int64_t now_ns) noexcept {
+  if (link_->connected()) return Link::kUp;
+  if (now_ns < next_connect_ns_) return Link::kWaiting;
   if (!link_->connect()) {
     next_connect_ns_ = now_ns + static_cast<std::int64_t>(config_.reconnect_interval_ms * 1e6);
     connected_.store(false, std::memory_order_relaxed);
-    return -1;
+    return Link::kFailed;
   }
   reconnects_.fetch_add(1, std::memory_order_relaxed);
   connected_.store(true, std::memory_order_relaxed);
-  return 1;
+  return Link::kUp;
 }
 
 bool ModbusDaqDriver::exchange(double output_v, bool write, bool read, double& y) noexcept {
-  const int up = link_up(monotonic_ns());
-  if (up == 0) return false;  // waiting for the next connection attempt: nothing was tried
-  bool ok = up > 0;
+  const Link link = link_up(monotonic_ns());
+  if (link == Link::kWaiting) return false;  // nothing was tried
+  bool ok = link == Link::kUp;
   if (ok) {
     std::uint16_t out[2] = {0, 0}, in[2] = {0, 0};
     config_.output.encode(output_v, out);
@@ -105,9 +90,7 @@ bool ModbusDaqDriver::exchange(double output_v, bool write, bool read, double& y
   return ok;
 }
 
-Result ModbusDaqDriver::activate() {
-  if (!configured_) return Result::failure("driver.modbus: activate() before configure()");
-  if (active_) return Result::success();
+Result ModbusDaqDriver::on_activate() {
   next_connect_ns_ = 0;
   if (!link_->connect()) {
     return Result::failure("driver.modbus: " + ModbusLink::describe(ModbusLink::Op::kConnect,
@@ -146,89 +129,36 @@ Result ModbusDaqDriver::activate() {
     link_->close();
     connected_.store(false);
     return Result::failure(
-        "loop.rate_hz: " + fmt(rate_hz_, 0) + " Hz gives " + fmt(1e6 / rate_hz_) +
+        "loop.rate_hz: " + fixed(rate_hz_, 0) + " Hz gives " + fixed(1e6 / rate_hz_, 1) +
         " us per tick, but one tick's Modbus exchange with " + config_.endpoint() + " takes " +
-        fmt(activation_rtt_p90_us_) + " us (p90 of " + std::to_string(kActivationExchanges) +
-        " at activation; p50 " + fmt(activation_rtt_p50_us_) + " us, p99 " +
-        fmt(activation_rtt_p99_us_) + " us): lower loop.rate_hz to " +
-        fmt(measured_max_rate_hz_, 0) + " or set driver.modbus.io = \"thread\"");
+        fixed(activation_rtt_p90_us_, 1) + " us (p90 of " + std::to_string(kActivationExchanges) +
+        " at activation; p50 " + fixed(activation_rtt_p50_us_, 1) + " us, p99 " +
+        fixed(activation_rtt_p99_us_, 1) + " us): lower loop.rate_hz to " +
+        fixed(measured_max_rate_hz_, 0) + " or set driver.modbus.io = \"thread\"");
   }
   rtt_->clear();
   transactions_ = 0;
   failed_ = 0;
   consecutive_failures_ = 0;
-  stale_reads_ = 0;
   reconnects_ = 0;
   last_errno_ = 0;
   last_op_ = 0;
-  fault_cause_ = 0;
-  seq_ = 0;
-  last_y_ = y;
-  last_position_ = y;
-  age_ = 0;
-  consecutive_stale_ = 0;
-  command_v_.store(config_.safe_output_v);
-  writes_.store(0);
-  samples_->reset(Sample{y, 0, 0});
-  active_.store(true);
-  if (config_.io == ModbusDaqConfig::IoMode::kThread) {
-    while (sem_trywait(&wake_) == 0) {
-    }
-    quit_.store(false);
-    io_thread_ = std::thread([this] { io_thread_main(); });
-  }
+  activation_y_ = y;
+  command_v_ = config_.safe_output_v;
+  write_failed_ = false;
   return Result::success();
-}
-
-void ModbusDaqDriver::io_thread_main() noexcept {
-  while (!quit_.load(std::memory_order_acquire)) {
-    timespec deadline{};
-    clock_gettime(CLOCK_MONOTONIC, &deadline);
-    const std::int64_t until = deadline.tv_nsec + kIdlePollNs;
-    deadline.tv_sec += until / 1000000000;
-    deadline.tv_nsec = until % 1000000000;
-    while (sem_clockwait(&wake_, CLOCK_MONOTONIC, &deadline) != 0 && errno == EINTR) {
-    }
-    while (sem_trywait(&wake_) == 0) {
-    }
-    if (quit_.load(std::memory_order_acquire)) break;
-    double y = 0.0;
-    std::uint64_t command = 0;
-    const double u = load_command(command);
-    if (exchange(u, true, true, y)) {
-      samples_->publish(Sample{y, ++seq_, command});
-    } else if (!link_->connected()) {
-      // Do not spin on a dead link: wait for the next attempt unless told to quit.
-      const std::int64_t wait = std::max<std::int64_t>(0, next_connect_ns_ - monotonic_ns());
-      timespec ts{};
-      clock_gettime(CLOCK_MONOTONIC, &ts);
-      const std::int64_t ns = ts.tv_nsec + std::min<std::int64_t>(wait, kIdlePollNs);
-      ts.tv_sec += ns / 1000000000;
-      ts.tv_nsec = ns % 1000000000;
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
-    }
-  }
-}
-
-void ModbusDaqDriver::stop_io_thread() noexcept {
-  if (!io_thread_.joinable()) return;
-  quit_.store(true, std::memory_order_release);
-  sem_post(&wake_);
-  io_thread_.join();
 }
 
 Result ModbusDaqDriver::write_safe_now() {
   double y = 0.0;
+  command_v_ = config_.safe_output_v;
   if (exchange(config_.safe_output_v, true, false, y)) return Result::success();
   return Result::failure(
-      "driver.modbus: could not write the safe output " + fmt(config_.safe_output_v, 3) +
+      "driver.modbus: could not write the safe output " + fixed(config_.safe_output_v, 3) +
       " V: " + ModbusLink::describe(link_->last_op(), link_->last_errno(), config_));
 }
 
-Result ModbusDaqDriver::deactivate() {
-  if (!active_) return Result::success();
-  stop_io_thread();
-  active_ = false;
+Result ModbusDaqDriver::on_deactivate() {
   next_connect_ns_ = 0;
   Result r = write_safe_now();
   link_->close();
@@ -236,148 +166,74 @@ Result ModbusDaqDriver::deactivate() {
   return r;
 }
 
-Result ModbusDaqDriver::on_error() {
-  command_v_.store(config_.safe_output_v);
-  stop_io_thread();
-  next_connect_ns_ = 0;
-  Result r = link_ ? write_safe_now() : Result::success();
-  if (link_) link_->close();
-  connected_.store(false);
-  active_ = false;
-  return r;
-}
-
-void ModbusDaqDriver::publish_command(double output_v, bool count) noexcept {
-  const std::uint64_t seq = command_seq_.load(std::memory_order_relaxed);
-  command_seq_.store(seq + 1, std::memory_order_relaxed);
-  std::atomic_thread_fence(std::memory_order_release);
-  command_v_.store(output_v, std::memory_order_relaxed);
-  if (count) writes_.store(writes_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-  command_seq_.store(seq + 2, std::memory_order_release);
-}
-
-double ModbusDaqDriver::load_command(std::uint64_t& writes) const noexcept {
-  for (;;) {
-    const std::uint64_t before = command_seq_.load(std::memory_order_acquire);
-    const double v = command_v_.load(std::memory_order_relaxed);
-    writes = writes_.load(std::memory_order_relaxed);
-    std::atomic_thread_fence(std::memory_order_acquire);
-    if ((before & 1) == 0 && command_seq_.load(std::memory_order_relaxed) == before) return v;
-  }
-}
-
 DriverStatus ModbusDaqDriver::write(double output_v) noexcept {
-  if (!active_) return DriverStatus::kFault;
-  publish_command(output_v, true);
-  if (config_.io == ModbusDaqConfig::IoMode::kThread) {
-    sem_post(&wake_);
-    return DriverStatus::kOk;
-  }
-  if (!config_.write_read) {
-    double y = 0.0;
-    exchange(output_v, true, false, y);  // a failure counts; read() reports it
-  }
-  return DriverStatus::kOk;
-}
-
-DriverStatus ModbusDaqDriver::read_status() noexcept {
-  if (consecutive_failures_.load(std::memory_order_relaxed) >= config_.max_failed_transactions) {
-    fault_cause_.store(1, std::memory_order_relaxed);
-    return DriverStatus::kFault;
-  }
-  if (consecutive_stale_ >= max_stale_reads_) {
-    fault_cause_.store(2, std::memory_order_relaxed);
-    return DriverStatus::kFault;
-  }
-  return DriverStatus::kStale;
+  command_v_ = output_v;
+  // With write_read the output goes out with the measurement, in read()'s function 23.
+  double y = 0.0;
+  write_failed_ = !config_.write_read && !exchange(output_v, true, false, y);
+  return DriverStatus::kOk;  // a failure counts; read() reports it
 }
 
 DriverStatus ModbusDaqDriver::read(Measurement& out) noexcept {
-  if (!active_) return DriverStatus::kFault;
-  bool fresh = false;
-  std::uint64_t response = 0;
-  if (config_.io == ModbusDaqConfig::IoMode::kThread) {
-    Sample s;
-    fresh = samples_->take(s);
-    if (fresh) {
-      last_y_ = s.position_um;
-      const std::uint64_t writes = writes_.load(std::memory_order_relaxed);
-      response = writes > s.command ? writes - s.command : 0;
-    }
-  } else {
-    double y = 0.0;
-    fresh = exchange(command_v_.load(std::memory_order_relaxed), config_.write_read, true, y);
-    if (fresh) last_y_ = y;
-  }
+  double y = 0.0;
+  // One exchange per tick: after a failed write the read is not tried.
+  const bool fresh = !write_failed_ && exchange(command_v_, config_.write_read, true, y);
+  write_failed_ = false;
   if (fresh) {
-    age_ = 0;
-    consecutive_stale_ = 0;
-    last_position_.store(last_y_, std::memory_order_relaxed);
-    out = {last_y_, 0, response};
+    out.position_um = y;
     return DriverStatus::kOk;
   }
-  ++age_;
-  ++consecutive_stale_;
-  stale_reads_.fetch_add(1, std::memory_order_relaxed);
-  out = {last_y_, age_};
-  return read_status();
+  const std::uint64_t failures = consecutive_failures_.load(std::memory_order_relaxed);
+  if (failures < config_.max_failed_transactions) return DriverStatus::kStale;
+  report_fault(Fault::kFailedTransactions, static_cast<std::int64_t>(failures));
+  return DriverStatus::kFault;
 }
 
 DriverStatus ModbusDaqDriver::safe_state() noexcept {
-  publish_command(config_.safe_output_v, false);
-  if (!active_) return DriverStatus::kOk;
-  if (config_.io == ModbusDaqConfig::IoMode::kThread) {
-    sem_post(&wake_);
-    return DriverStatus::kOk;
-  }
   double y = 0.0;
+  command_v_ = config_.safe_output_v;
   return exchange(config_.safe_output_v, true, false, y) ? DriverStatus::kOk : DriverStatus::kError;
 }
 
-double ModbusDaqDriver::measurement_resolution_um() const noexcept {
-  return std::abs(config_.measurement.scale);
+DriverInfo ModbusDaqDriver::info() const noexcept {
+  DriverInfo i;
+  const bool thread = config_.io == ModbusDaqConfig::IoMode::kThread;
+  i.max_rate_hz = thread ? kIoThreadMaxRateHz
+                  : measured_max_rate_hz_ > 0.0
+                      ? std::min(config_.max_rate_hz, measured_max_rate_hz_)
+                      : config_.max_rate_hz;
+  i.output_min_v = config_.output_min_v;
+  i.output_max_v = config_.output_max_v;
+  i.safe_output_v = config_.safe_output_v;
+  i.measurement_resolution_um = std::abs(config_.measurement.scale);
+  i.max_stale_reads = max_stale_reads_;
+  i.io_thread = thread;
+  return i;
 }
 
-double ModbusDaqDriver::max_rate_hz() const noexcept {
-  if (config_.io == ModbusDaqConfig::IoMode::kThread) return 20000.0;
-  return measured_max_rate_hz_ > 0.0 ? std::min(config_.max_rate_hz, measured_max_rate_hz_)
-                                     : config_.max_rate_hz;
+std::string ModbusDaqDriver::describe_fault(int cause, std::int64_t detail) const {
+  if (static_cast<Fault>(cause) != Fault::kFailedTransactions) {
+    return DriverInterface::describe_fault(cause, detail);
+  }
+  const auto op = static_cast<ModbusLink::Op>(last_op_.load(std::memory_order_relaxed));
+  return std::to_string(detail) + " failed transactions in a row (max_failed_transactions = " +
+         std::to_string(config_.max_failed_transactions) +
+         "): " + ModbusLink::describe(op, last_errno_.load(std::memory_order_relaxed), config_);
 }
 
 nlohmann::json ModbusDaqDriver::diagnostics() const {
   const int err = last_errno_.load(std::memory_order_relaxed);
   const auto op = static_cast<ModbusLink::Op>(last_op_.load(std::memory_order_relaxed));
-  const std::uint64_t consecutive = consecutive_failures_.load(std::memory_order_relaxed);
-  std::string fault;
-  switch (fault_cause_.load(std::memory_order_relaxed)) {
-    case 1:
-      fault = std::to_string(consecutive) + " failed transactions in a row (max_failed_" +
-              "transactions = " + std::to_string(config_.max_failed_transactions) +
-              "): " + ModbusLink::describe(op, err, config_);
-      break;
-    case 2:
-      fault = "no fresh measurement for max_stale_reads = " + std::to_string(max_stale_reads_) +
-              " reads in a row";
-      break;
-    default:
-      break;
-  }
   return {{"type", "modbus"},
           {"endpoint", config_.endpoint()},
           {"io", config_.io == ModbusDaqConfig::IoMode::kThread ? "thread" : "loop"},
           {"write_read", config_.write_read},
-          {"active", active_.load()},
           {"connected", connected_.load(std::memory_order_relaxed)},
           {"transactions", transactions_.load(std::memory_order_relaxed)},
           {"failed_transactions", failed_.load(std::memory_order_relaxed)},
-          {"consecutive_failures", consecutive},
-          {"stale_reads", stale_reads_.load(std::memory_order_relaxed)},
+          {"consecutive_failures", consecutive_failures_.load(std::memory_order_relaxed)},
           {"reconnects", reconnects_.load(std::memory_order_relaxed)},
           {"last_error", err == 0 ? "" : ModbusLink::describe(op, err, config_)},
-          {"last_fault", fault},
-          {"output_v", command_v_.load(std::memory_order_relaxed)},
-          {"position_um", last_position_.load(std::memory_order_relaxed)},
-          {"max_rate_hz", max_rate_hz()},
           {"rtt_us",
            {{"count", rtt_->count()},
             {"p50", static_cast<double>(rtt_->quantile_ns(0.5)) / 1e3},

@@ -15,94 +15,19 @@
 #include <set>
 #include <thread>
 
+#include "hystbench/drivers/driver.hpp"
 #include "peer_process.hpp"
+#include "test_amplifier.hpp"
 
 namespace hd = hystbench::drivers;
 namespace ht = hystbench::test;
+using ht::FakeController;
+using ht::FakeControllerState;
+using ht::TestAmplifier;
 using nlohmann::json;
 using namespace std::chrono_literals;
 
 namespace {
-
-/// The amplifier's end of the socketpair, answered from a thread.
-class TestAmplifier {
- public:
-  enum class Mode { kAnswer, kSilent, kMalformed, kFaultBit };
-  TestAmplifier() {
-    int sv[2];
-    EXPECT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, sv), 0);
-    driver_fd = sv[0];
-    amp_fd_ = sv[1];
-    thread_ = std::thread([this] { run(); });
-  }
-  ~TestAmplifier() {
-    quit_ = true;
-    thread_.join();
-    ::close(amp_fd_);
-    ::close(driver_fd);
-  }
-  void set_mode(Mode m) { mode_ = m; }
-  /// Answer only one setpoint in `n` (a slow amplifier; 1 = every one).
-  void set_answer_every(int n) { answer_every_ = n; }
-  void send(const can_frame& f) { ::send(amp_fd_, &f, sizeof f, MSG_NOSIGNAL); }
-  std::vector<can_frame> frames() {
-    std::lock_guard lock(m_);
-    return frames_;
-  }
-  int driver_fd = -1;
-
- private:
-  void run() {
-    const hd::CanProtocol p;  // the defaults
-    while (!quit_) {
-      can_frame f{};
-      const ssize_t n = ::recv(amp_fd_, &f, sizeof f, MSG_DONTWAIT);
-      if (n != sizeof f) {
-        std::this_thread::sleep_for(200us);
-        continue;
-      }
-      {
-        std::lock_guard lock(m_);
-        frames_.push_back(f);
-      }
-      double v = 0.0;
-      if (!p.decode_setpoint(f, v)) continue;
-      can_frame fb = p.feedback_frame(0.3 * v, mode_ == Mode::kFaultBit ? 0x1 : 0x2);
-      if (mode_ == Mode::kSilent || ++setpoints_ % answer_every_ != 0) continue;
-      if (mode_ == Mode::kMalformed) fb.can_dlc = 3;
-      send(fb);
-    }
-  }
-  int amp_fd_ = -1;
-  std::atomic<bool> quit_{false};
-  std::atomic<Mode> mode_{Mode::kAnswer};
-  std::atomic<int> answer_every_{1};
-  int setpoints_ = 0;
-  std::mutex m_;
-  std::vector<can_frame> frames_;
-  std::thread thread_;
-};
-
-struct FakeControllerState {
-  hd::CanController::State state = hd::CanController::State::kErrorActive;
-  std::uint32_t bitrate = 1000000;
-  std::atomic<int> restarts{0};
-};
-
-class FakeController : public hd::CanController {
- public:
-  explicit FakeController(std::shared_ptr<FakeControllerState> s) : s_(std::move(s)) {}
-  State state() override { return s_->state; }
-  std::uint32_t bitrate() override { return s_->bitrate; }
-  hd::Result restart() override {
-    ++s_->restarts;
-    s_->state = State::kErrorActive;
-    return hd::Result::success();
-  }
-
- private:
-  std::shared_ptr<FakeControllerState> s_;
-};
 
 json params(int fd, json extra = json::object()) {
   json p = {{"socket_fd", fd}, {"heartbeat_timeout_ms", 30}};
@@ -128,7 +53,7 @@ hd::DriverStatus tick_until(hd::Driver& d, hd::DriverStatus want, int n, double 
 
 TEST(CanAmplifier, EnablesSendsScaledSetpointsAndReadsFeedback) {
   TestAmplifier amp;
-  hd::CanAmplifierDriver d;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
   ASSERT_TRUE(d.configure(params(amp.driver_fd), 1000.0).ok);
   const auto r = d.activate();
   ASSERT_TRUE(r.ok) << r.message;
@@ -160,7 +85,7 @@ TEST(CanAmplifier, EnablesSendsScaledSetpointsAndReadsFeedback) {
 TEST(CanAmplifier, ActivationRefusesASilentAmplifier) {
   TestAmplifier amp;
   amp.set_mode(TestAmplifier::Mode::kSilent);
-  hd::CanAmplifierDriver d;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
   ASSERT_TRUE(d.configure(params(amp.driver_fd), 1000.0).ok);
   const auto r = d.activate();
   ASSERT_FALSE(r.ok);
@@ -170,7 +95,7 @@ TEST(CanAmplifier, ActivationRefusesASilentAmplifier) {
 
 TEST(CanAmplifier, MissingFeedbackBeyondTheHeartbeatFaultsAndTheSetpointGoesSafe) {
   TestAmplifier amp;
-  hd::CanAmplifierDriver d;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
   ASSERT_TRUE(d.configure(params(amp.driver_fd), 1000.0).ok);
   ASSERT_TRUE(d.activate().ok);
   ASSERT_EQ(tick_until(d, hd::DriverStatus::kOk, 50), hd::DriverStatus::kOk);
@@ -206,7 +131,7 @@ TEST(CanAmplifier, ASlowNoiseFreeAmplifierWithinTheHeartbeatIsNotAFault) {
   // of the other tests: under a loaded parallel test run the amplifier thread was once starved
   // past 30 ms (a real heartbeat fault, not the behaviour this test is about).
   TestAmplifier amp;
-  hd::CanAmplifierDriver d;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
   ASSERT_TRUE(d.configure(params(amp.driver_fd, {{"heartbeat_timeout_ms", 250}}), 1000.0).ok);
   ASSERT_TRUE(d.activate().ok);
   ASSERT_EQ(tick_until(d, hd::DriverStatus::kOk, 50), hd::DriverStatus::kOk);
@@ -235,7 +160,7 @@ TEST(CanAmplifier, ASlowNoiseFreeAmplifierWithinTheHeartbeatIsNotAFault) {
 
 TEST(CanAmplifier, MalformedFeedbackFrameFaultsNamingIt) {
   TestAmplifier amp;
-  hd::CanAmplifierDriver d;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
   ASSERT_TRUE(d.configure(params(amp.driver_fd), 1000.0).ok);
   ASSERT_TRUE(d.activate().ok);
   amp.set_mode(TestAmplifier::Mode::kMalformed);
@@ -247,7 +172,7 @@ TEST(CanAmplifier, MalformedFeedbackFrameFaultsNamingIt) {
 
 TEST(CanAmplifier, AmplifierFaultBitFaults) {
   TestAmplifier amp;
-  hd::CanAmplifierDriver d;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
   ASSERT_TRUE(d.configure(params(amp.driver_fd), 1000.0).ok);
   ASSERT_TRUE(d.activate().ok);
   amp.set_mode(TestAmplifier::Mode::kFaultBit);
@@ -261,7 +186,7 @@ TEST(CanAmplifier, BusOffFaultsAndTheControllerIsRestartedWhenConfigured) {
     SCOPED_TRACE(restart ? "restart_on_bus_off" : "no restart");
     TestAmplifier amp;
     auto ctl = std::make_shared<FakeControllerState>();
-    hd::CanAmplifierDriver d(std::make_unique<FakeController>(ctl));
+    hd::Driver d(std::make_unique<hd::CanAmplifierDriver>(std::make_unique<FakeController>(ctl)));
     ASSERT_TRUE(d.configure(params(amp.driver_fd, {{"restart_on_bus_off", restart}}), 1000.0).ok);
     ASSERT_TRUE(d.activate().ok);
     ASSERT_EQ(tick_until(d, hd::DriverStatus::kOk, 50), hd::DriverStatus::kOk);
@@ -289,7 +214,7 @@ TEST(CanAmplifier, BusOffFaultsAndTheControllerIsRestartedWhenConfigured) {
 TEST(CanAmplifier, ActivationRefusesBusOffStoppedAndTooFastForTheBitrate) {
   TestAmplifier amp;
   auto ctl = std::make_shared<FakeControllerState>();
-  hd::CanAmplifierDriver d(std::make_unique<FakeController>(ctl));
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>(std::make_unique<FakeController>(ctl)));
   ASSERT_TRUE(d.configure(params(amp.driver_fd, {{"interface", "can7"}}), 5000.0).ok);
   ctl->state = hd::CanController::State::kBusOff;
   auto r = d.activate();
@@ -312,7 +237,7 @@ TEST(CanAmplifier, ActivationRefusesBusOffStoppedAndTooFastForTheBitrate) {
 }
 
 TEST(CanAmplifier, ConfigErrorsNameTheKey) {
-  hd::CanAmplifierDriver d;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
   EXPECT_EQ(d.configure(json::object(), 1000.0).message,
             "driver.can.interface: required (the SocketCAN interface, e.g. \"can0\")");
   EXPECT_EQ(d.configure({{"interface", "can0"}, {"feedback", {{"bytes", 3}}}}, 1000.0).message,
@@ -356,7 +281,7 @@ TEST(CanAmplifier, OverRealVcanWithHystbenchSimamp) {
   }
   ht::PeerProcess amp({ht::bin("hystbench-simamp"), "--interface", "vcan0"});
   ASSERT_TRUE(amp.wait_for("ready on interface vcan0", 5s));
-  hd::CanAmplifierDriver d;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
   ASSERT_TRUE(d.configure({{"interface", "vcan0"}, {"heartbeat_timeout_ms", 100}}, 1000.0).ok);
   const auto r = d.activate();
   ASSERT_TRUE(r.ok) << r.message;

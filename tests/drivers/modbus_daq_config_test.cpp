@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "hystbench/drivers/driver.hpp"
+#include "hystbench/drivers/io_thread_driver.hpp"
 #include "hystbench/drivers/modbus_daq.hpp"
 
 namespace hd = hystbench::drivers;
@@ -55,7 +57,7 @@ TEST(ModbusDaqConfig, RtuRateFollowsTheWireTime) {
 }
 
 TEST(ModbusDaqConfig, LoopModeRefusesARateAboveTheDeclaredMaximum) {
-  hd::ModbusDaqDriver d;
+  hd::Driver d(hd::make_interface<hd::ModbusDaqDriver, hd::IoThreadDriver>());
   const auto r = d.configure({{"io", "loop"}, {"max_rate_hz", 500}}, 1000.0);
   ASSERT_FALSE(r.ok);
   EXPECT_NE(r.message.find("loop.rate_hz: 1000 Hz is beyond"), std::string::npos) << r.message;

@@ -23,6 +23,8 @@
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/daemon/stuck_sensor_detector.hpp"
+#include "hystbench/drivers/driver.hpp"
+#include "hystbench/drivers/io_thread_driver.hpp"
 #include "hystbench/drivers/modbus_daq.hpp"
 #include "pymodbus_peer.hpp"
 #include "support/bench_fixture.hpp"
@@ -247,7 +249,7 @@ TEST_F(IndependentPeerTest, ASlowHealthyDeviceHeldThenSteppedIsNotStuckAFrozenOn
   // Every request answered 25 ms late: the reading answers the step 25-50 ticks after it,
   // beyond the 20-tick window; each reading's response_ticks says how late it is.
   start_peer({"--delay-ms", "25"});
-  hd::ModbusDaqDriver d;
+  hd::Driver d(hd::make_interface<hd::ModbusDaqDriver, hd::IoThreadDriver>());
   json params = plant_driver_params(peer_->port);
   params["max_stale_reads"] = 200;  // a device known to be this slow is configured so
   ASSERT_TRUE(d.configure(params, kRateHz).ok);
@@ -277,7 +279,7 @@ TEST_F(IndependentPeerTest, StaleReadsASlowDeviceIsNotAFaultAStoppedOneIs) {
   // stale limit (100 reads in a row here: a loaded CI machine stalls the Python server for tens
   // of milliseconds now and then).
   start_peer({"--delay-ms", "3"});
-  hd::ModbusDaqDriver d;
+  hd::Driver d(hd::make_interface<hd::ModbusDaqDriver, hd::IoThreadDriver>());
   json params = plant_driver_params(peer_->port);
   params["max_stale_reads"] = 100;
   ASSERT_TRUE(d.configure(params, kRateHz).ok);

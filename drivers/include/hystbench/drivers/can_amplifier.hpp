@@ -21,7 +21,7 @@
 // within max(heartbeat_timeout_ms, 200 ms); every message names the interface and the cause.
 // Faults (read() returns kFault): feedback silent beyond the heartbeat timeout, a malformed
 // feedback frame (wrong length), bus-off (error frame), the amplifier's fault bit, the socket
-// closed, 3 failed sends in a row. diagnostics()["last_fault"] says which, in words.
+// closed, 3 failed sends in a row. describe_fault() says which, in words.
 // Real-time: write()/read()/safe_state() make non-blocking socket calls only.
 #include <atomic>
 #include <cstdint>
@@ -34,39 +34,38 @@
 
 namespace hystbench::drivers {
 
-class CanAmplifierDriver final : public Driver {
+class CanAmplifierDriver final : public DriverInterface {
  public:
+  enum class Fault : int { kNone = 0, kHeartbeat, kMalformed, kBusOff, kAmplifier, kSocket, kSend };
+
   CanAmplifierDriver();
   /// Uses `controller` instead of libsocketcan on the interface (tests).
   explicit CanAmplifierDriver(std::unique_ptr<CanController> controller);
   ~CanAmplifierDriver() override;
 
-  Result configure(const nlohmann::json& params, double rate_hz) override;
-  Result activate() override;
-  Result deactivate() override;
-  Result on_error() override;
+  Result on_configure(const nlohmann::json& params, double rate_hz) override;
+  /// Checks the controller, enables the amplifier and waits for its first feedback frame.
+  Result on_activate() override;
+  /// The safe setpoint and the disable frame, then the socket closes.
+  Result on_deactivate() override;
 
+  /// Sends the setpoint frame (non-blocking).
   DriverStatus write(double output_v) noexcept override;
+  /// Takes every frame that arrived (at most 64, non-blocking); fresh when one was feedback.
   DriverStatus read(Measurement& out) noexcept override;
   DriverStatus safe_state() noexcept override;
 
-  double max_rate_hz() const noexcept override { return max_rate_hz_; }
-  double output_min_v() const noexcept override { return output_min_v_; }
-  double output_max_v() const noexcept override { return output_max_v_; }
-  double safe_output_v() const noexcept override { return safe_output_v_; }
-  /// |feedback.scale|: one count of the position field.
-  double measurement_resolution_um() const noexcept override {
-    return protocol_.feedback.scale < 0 ? -protocol_.feedback.scale : protocol_.feedback.scale;
-  }
+  /// max_rate_hz from max_rate_hz and, after activation, the bitrate; measurement_resolution_um
+  /// = |feedback.scale| (one count of the position field).
+  DriverInfo info() const noexcept override;
+  double activation_position_um() const noexcept override { return activation_y_; }
   std::string_view type() const noexcept override { return "can"; }
   nlohmann::json diagnostics() const override;
+  std::string describe_fault(int cause, std::int64_t detail) const override;
 
   const CanProtocol& protocol() const noexcept { return protocol_; }
 
-  enum class Fault : int { kNone = 0, kHeartbeat, kMalformed, kBusOff, kAmplifier, kSocket, kSend };
-
  private:
-  void fault(Fault cause, std::int64_t detail) noexcept;
   void supervise() noexcept;
   void stop_supervisor() noexcept;
   /// Safe setpoint and disable frame, socket closed; returns the failure `message`.
@@ -81,30 +80,23 @@ class CanAmplifierDriver final : public Driver {
   double max_rate_hz_ = 20000.0;
   double rate_hz_ = 0.0;
   double safe_output_v_ = 0.0, output_min_v_ = 0.0, output_max_v_ = 150.0;
-  bool configured_ = false;
 
   std::unique_ptr<CanController> controller_;
   bool injected_controller_ = false;
   std::unique_ptr<CanSocket> socket_;
-  std::atomic<bool> active_{false};
   std::uint32_t bitrate_ = 0;
   std::string controller_state_ = "unknown";
+  double activation_y_ = 0.0;
 
   // Loop-thread state.
-  double last_y_ = 0.0;
-  std::uint64_t age_ = 0;
   int consecutive_send_failures_ = 0;
 
   // Shared with diagnostics() and the supervisor.
   std::atomic<std::int64_t> last_feedback_ns_{0};
   std::atomic<bool> bus_off_{false};
   std::atomic<bool> socket_dead_{false};
-  std::atomic<double> output_v_{0.0};
-  std::atomic<double> position_um_{0.0};
   std::atomic<std::uint64_t> sent_{0}, received_{0}, feedback_{0}, malformed_{0}, bus_offs_{0};
-  std::atomic<std::uint64_t> send_failures_{0}, stale_reads_{0}, restarts_{0};
-  std::atomic<int> last_fault_{0};
-  std::atomic<std::int64_t> last_fault_detail_{0};
+  std::atomic<std::uint64_t> send_failures_{0}, restarts_{0};
   std::atomic<bool> quit_{false};
   std::thread supervisor_;
 };

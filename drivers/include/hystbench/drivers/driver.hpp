@@ -1,93 +1,91 @@
 #pragma once
-// One interface for every I/O path between the bench loop and an actuator (ros2_control style).
-//
-// Lifecycle (not real-time, may allocate and block; each returns a Result naming the cause):
-//   configure(params, rate) -> activate() -> [loop: write()/read() per tick] -> deactivate()
-//   on_error() is called once after a fault; it must leave the output safe.
-// Real-time path: write(), read(), safe_state() never throw, never allocate, never block longer
-// than the driver's documented bound; they return a DriverStatus.
-// Units: output in volts (the amplifier command), measurement in micrometres.
+// The framework side of a driver (as ros2_control's System wraps a SystemInterface): the bench
+// talks to this class only; it owns a DriverInterface (driver_interface.hpp) and
+//   - owns the lifecycle state and refuses calls out of order (write()/read() while not active
+//     return kFault without reaching the driver; activate() before configure() fails);
+//   - refuses a loop rate above DriverInfo::max_rate_hz, after configure and after activate;
+//   - turns an exception a lifecycle hook throws into a failed Result naming the driver;
+//   - calls the driver's on_error() in the write()/read() that first reports kFault, once per
+//     fault (a fault ends with the next fresh read);
+//   - keeps the last value across stale reads: age_ticks, the stale count, and kFault after
+//     DriverInfo::max_stale_reads stale reads in a row;
+//   - turns the stored fault cause into words: diagnostics()["last_fault"].
+// Real-time path: write(), read(), safe_state(), set_run_active() and the getters: no allocation,
+// no lock, no exception; they add a few atomic stores to the driver's own bound.
+#include <atomic>
 #include <cstdint>
 #include <memory>
-#include <nlohmann/json.hpp>
-#include <string>
 #include <string_view>
-#include <vector>
+
+#include "hystbench/drivers/driver_interface.hpp"
+#include "hystbench/drivers/driver_registry.hpp"
 
 namespace hystbench::drivers {
 
-enum class DriverStatus : std::uint8_t {
-  kOk = 0,
-  kStale,    ///< no new measurement this tick (I/O thread has not delivered yet); value is old
-  kTimeout,  ///< the device did not answer in time
-  kError,    ///< transfer failed (bad frame, exception reply, ...)
-  kFault,    ///< the driver is unusable until on_error()/re-activation (bus-off, peer gone, e-stop)
-};
-std::string_view to_string(DriverStatus s) noexcept;
-
-struct Measurement {
-  double position_um = 0.0;     ///< displacement [µm]
-  std::uint64_t age_ticks = 0;  ///< ticks since the value was taken (0 = fresh this tick)
-  /// Ticks between the write() whose output this value answers and this tick (0 = this tick's
-  /// write; a thread-mode Modbus exchange or a CAN feedback frame answers an earlier one).
-  std::uint64_t response_ticks = 0;
-};
-
-/// Outcome of a lifecycle call: ok, or a message that names the cause.
-struct Result {
-  bool ok = true;
-  std::string message;
-  static Result success() { return {}; }
-  static Result failure(std::string why) { return {false, std::move(why)}; }
-  explicit operator bool() const noexcept { return ok; }
-};
-
-class Driver {
+class Driver final : private FaultSource {
  public:
-  virtual ~Driver() = default;
+  enum class State : std::uint8_t { kUnconfigured, kInactive, kActive };
 
-  /// Validates `params` (the driver's own config table as JSON; unknown keys are errors naming
-  /// them) and prepares for a loop at `rate_hz`. Refuses a rate it cannot hold.
-  virtual Result configure(const nlohmann::json& params, double rate_hz) = 0;
-  virtual Result activate() = 0;
-  virtual Result deactivate() = 0;
-  /// After a fault: drive the safe output if at all possible, release what can be released.
-  virtual Result on_error() = 0;
+  explicit Driver(std::unique_ptr<DriverInterface> driver);
+  ~Driver();
+  Driver(const Driver&) = delete;
+  Driver& operator=(const Driver&) = delete;
 
-  /// Commands the output [V] for this tick.
-  virtual DriverStatus write(double output_v) noexcept = 0;
-  /// The measurement for this tick.
-  virtual DriverStatus read(Measurement& out) noexcept = 0;
-  /// Drives the configured safe output now.
-  virtual DriverStatus safe_state() noexcept = 0;
-  /// A run starts (true) or ends (false), called from the loop thread in that tick (real-time
-  /// path). For run-bound outputs such as an amplifier-enable GPIO; the default does nothing.
-  virtual void set_run_active(bool /*active*/) noexcept {}
+  /// Unconfigured or inactive -> inactive (unconfigured on failure). Refused while active.
+  Result configure(const nlohmann::json& params, double rate_hz);
+  /// Inactive -> active; success without effect when already active.
+  Result activate();
+  /// Active -> inactive (the driver drives the safe output); success when not active.
+  Result deactivate();
 
-  /// Highest loop rate this driver can hold [Hz].
-  virtual double max_rate_hz() const noexcept = 0;
-  /// Output range the hardware accepts [V].
-  virtual double output_min_v() const noexcept = 0;
-  virtual double output_max_v() const noexcept = 0;
-  /// The configured safe output [V].
-  virtual double safe_output_v() const noexcept = 0;
-  /// One count of the measurement [µm] (the smallest change it can show); 0 = unknown.
-  virtual double measurement_resolution_um() const noexcept { return 0.0; }
-  virtual std::string_view type() const noexcept = 0;
-  /// Driver-specific counters and state for `status` (not real-time).
-  virtual nlohmann::json diagnostics() const { return nlohmann::json::object(); }
+  /// Commands the output [V]; kFault while not active.
+  DriverStatus write(double output_v) noexcept;
+  /// This tick's measurement: fresh (kOk, age 0) or the last one with its age (kStale); on any
+  /// other status `out` still holds the last value.
+  DriverStatus read(Measurement& out) noexcept;
+  /// Drives the safe output now, in any state (a no-op before configure()).
+  DriverStatus safe_state() noexcept;
+  void set_run_active(bool active) noexcept;
+
+  State state() const noexcept { return state_.load(std::memory_order_acquire); }
+  /// The driver's limits and ranges (DriverInfo), as of the last configure()/activate().
+  double max_rate_hz() const noexcept { return info_.max_rate_hz; }
+  double output_min_v() const noexcept { return info_.output_min_v; }
+  double output_max_v() const noexcept { return info_.output_max_v; }
+  double safe_output_v() const noexcept { return info_.safe_output_v; }
+  double measurement_resolution_um() const noexcept { return info_.measurement_resolution_um; }
+  std::string_view type() const noexcept { return driver_->type(); }
+  /// The driver's, plus output_v, position_um, stale_reads and last_fault (not real-time).
+  nlohmann::json diagnostics() const;
+
+  DriverInterface& interface() noexcept { return *driver_; }
+
+ private:
+  enum class Fault : int { kNone = 0, kStaleReads };
+  std::string describe_fault(int cause, std::int64_t detail) const override;
+  /// A kFault from the driver: on_error() once per fault.
+  DriverStatus faulted(DriverStatus s) noexcept;
+  Result refuse_rate(const char* when) const;
+  /// A lifecycle hook's Result; an exception it throws becomes a failure naming the driver.
+  template <typename Hook>
+  Result guarded(Hook&& hook) const;
+
+  std::unique_ptr<DriverInterface> driver_;
+  FaultLog faults_;
+  std::atomic<State> state_{State::kUnconfigured};
+  DriverInfo info_;
+  double rate_hz_ = 0.0;
+
+  // Loop-thread state.
+  bool in_fault_ = false;
+  double last_y_ = 0.0;
+  std::uint64_t age_ = 0;
+  std::uint64_t response_ticks_ = 0;
+
+  // Written by the loop thread, read by diagnostics().
+  std::atomic<double> output_v_{0.0};
+  std::atomic<double> position_um_{0.0};
+  std::atomic<std::uint64_t> stale_reads_{0};
 };
-
-/// One row of the driver table: how to make a backend and what it is.
-struct DriverBackend {
-  std::string_view type;
-  std::string_view description;
-  std::unique_ptr<Driver> (*create)();
-};
-
-/// Every compiled-in backend.
-const std::vector<DriverBackend>& driver_backends();
-/// Creates the backend named `type`; throws std::invalid_argument listing the valid names.
-std::unique_ptr<Driver> make_driver(std::string_view type);
 
 }  // namespace hystbench::drivers

@@ -25,26 +25,25 @@ struct FaultInjection {
   std::uint64_t write_error_at_tick = 0;  ///< write() returns kError from this tick on
 };
 
-class LoopbackDriver final : public Driver {
+class LoopbackDriver final : public DriverInterface {
  public:
   LoopbackDriver();
   ~LoopbackDriver() override;
 
-  Result configure(const nlohmann::json& params, double rate_hz) override;
-  Result activate() override;
-  Result deactivate() override;
-  Result on_error() override;
+  Result on_configure(const nlohmann::json& params, double rate_hz) override;
+  /// The simulated actuator starts from rest at the safe output.
+  Result on_activate() override;
+  Result on_deactivate() override;
 
+  /// Holds the output for the tick.
   DriverStatus write(double output_v) noexcept override;
+  /// Advances the simulation by one sample with the held output.
   DriverStatus read(Measurement& out) noexcept override;
   DriverStatus safe_state() noexcept override;
 
-  double max_rate_hz() const noexcept override { return max_rate_hz_; }
-  double output_min_v() const noexcept override;
-  double output_max_v() const noexcept override;
-  double safe_output_v() const noexcept override { return safe_output_v_; }
-  /// The simulated ADC's step (range / (2^bits - 1)); 0 with the ADC off or before configure().
-  double measurement_resolution_um() const noexcept override;
+  /// Output range: the actuator's input range; measurement_resolution_um: the simulated ADC's
+  /// step (range / (2^bits - 1)), 0 with the ADC off.
+  DriverInfo info() const noexcept override;
   std::string_view type() const noexcept override { return "loopback"; }
   nlohmann::json diagnostics() const override;
 
@@ -60,7 +59,6 @@ class LoopbackDriver final : public Driver {
   double output_v_ = 0.0;
   double last_position_ = 0.0;
   std::atomic<std::uint64_t> tick_{0};  // read by inject()/diagnostics() from other threads
-  bool active_ = false;
   std::atomic<std::uint64_t> read_error_at_{0}, nan_at_{0}, stuck_at_{0}, write_error_at_{0};
 };
 

@@ -8,8 +8,9 @@
 //   slave_id                                       [0, 255]    (1)
 //   response_timeout_ms                            (0, 10000]  (20)
 //   io = "thread" | "loop"                         where the transactions run (thread)
-//       thread: an I/O thread exchanges the latest command and measurement with the loop through
-//               a wait-free buffer; read() says kStale when nothing new arrived this tick.
+//       thread: an I/O thread (IoThreadDriver) exchanges the latest command and measurement
+//               with the loop through a wait-free buffer; read() says kStale when nothing new
+//               arrived this tick.
 //       loop:   write()/read() do the transactions in the loop thread; the loop rate must fit.
 //   write_read = false                             one function-23 transaction per tick
 //                                                  (the measurement must be in holding registers)
@@ -50,7 +51,7 @@ struct ModbusDaqConfig {
   double response_timeout_ms = 20.0;
   IoMode io = IoMode::kThread;
   bool write_read = false;
-  double max_rate_hz = 0.0;  ///< 0 = derived (see above)
+  double max_rate_hz = 0.0;           ///< 0 = derived (see above)
   std::uint64_t max_stale_reads = 0;  ///< 0 = 20 ms of loop ticks, at least 10
   std::uint64_t max_failed_transactions = 3;
   double reconnect_interval_ms = 200.0;

@@ -1,0 +1,18 @@
+#include "hystbench/drivers/driver_interface.hpp"
+
+#include <iterator>
+
+namespace hystbench::drivers {
+
+std::string_view to_string(DriverStatus s) noexcept {
+  constexpr std::string_view kNames[] = {"ok", "stale", "timeout", "error", "fault"};
+  const auto i = static_cast<std::size_t>(s);
+  return i < std::size(kNames) ? kNames[i] : "unknown";
+}
+
+std::string DriverInterface::describe_fault(int cause, std::int64_t detail) const {
+  return std::string(type()) + " driver fault " + std::to_string(cause) + " (detail " +
+         std::to_string(detail) + ")";
+}
+
+}  // namespace hystbench::drivers
