@@ -1,0 +1,116 @@
+// The per-tick driver path allocates nothing: write(), read() and safe_state() through the
+// framework's Driver, for the loopback, Modbus (io = "loop" and "thread", hystbench-simdaq as
+// the device) and CAN (a socketpair the test owns) drivers, and the framework's fault path.
+// This file replaces the global operator new of drivers_tests with one that counts the
+// allocations of the thread that asks (support/counting_new.hpp; the I/O and peer threads are
+// not counted).
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+#include "example_driver.hpp"
+#include "hystbench/drivers/can_amplifier.hpp"
+#include "hystbench/drivers/driver.hpp"
+#include "peer_process.hpp"
+#include "support/counting_new.hpp"
+#include "test_amplifier.hpp"
+
+namespace hd = hystbench::drivers;
+namespace ht = hystbench::test;
+using nlohmann::json;
+using namespace std::chrono_literals;
+
+namespace {
+
+struct Ticks {
+  long allocations = 0;
+  int fresh = 0;
+};
+
+/// `n` ticks of write() and read() (a safe_state() every 100th) at about `period`; counts the
+/// allocations on this thread and the fresh readings.
+Ticks tick(hd::Driver& d, int n, std::chrono::microseconds period = 0us) {
+  Ticks t;
+  hd::Measurement m;
+  for (int k = 0; k < n; ++k) {
+    t.allocations += ht::allocations_during([&] {
+      d.write(50.0 + (k % 10));
+      if (d.read(m) == hd::DriverStatus::kOk) ++t.fresh;
+      if (k % 100 == 99) d.safe_state();
+    });
+    if (period > 0us) std::this_thread::sleep_for(period);
+  }
+  return t;
+}
+
+}  // namespace
+
+TEST(RealTimePath, LoopbackAllocatesNothing) {
+  const auto d = hd::make_driver("loopback");
+  ASSERT_TRUE(d->configure(json::object(), 10000.0).ok);
+  ASSERT_TRUE(d->activate().ok);
+  const Ticks t = tick(*d, 5000);
+  EXPECT_EQ(t.allocations, 0);
+  EXPECT_EQ(t.fresh, 5000);
+  std::cout << "[ loopback ] " << t.allocations << " allocations in 5000 ticks\n";
+}
+
+TEST(RealTimePath, TheFrameworksStaleAndFaultPathsAllocateNothing) {
+  hd::Driver d(std::make_unique<example::FirstOrderDriver>());
+  ASSERT_TRUE(d.configure(json::object(), 1000.0).ok);
+  ASSERT_TRUE(d.activate().ok);
+  hd::Measurement m;
+  int faults = 0;
+  EXPECT_EQ(ht::allocations_during([&] {
+              for (int k = 0; k < 2000; ++k) {
+                d.write(k % 400 < 200 ? 150.0 : 0.0);  // over travel, on_error(), recovery
+                faults += d.read(m) == hd::DriverStatus::kFault;
+              }
+            }),
+            0);
+  EXPECT_GT(faults, 5);
+}
+
+TEST(RealTimePath, ModbusAllocatesNothingInLoopAndThreadMode) {
+  ht::PeerProcess simdaq({ht::bin("hystbench-simdaq"), "--port", "0"});
+  const auto line = simdaq.wait_for("listening on tcp", 10s);
+  ASSERT_TRUE(line) << "hystbench-simdaq did not start";
+  const int port = std::stoi(line->substr(line->rfind(':') + 1));
+  for (const char* io : {"loop", "thread"}) {
+    SCOPED_TRACE(io);
+    const auto d = hd::make_driver("modbus");
+    const json params = {
+        {"port", port},
+        {"io", io},
+        {"response_timeout_ms", 250},
+        {"write_read", std::string(io) == "loop"},
+        {"output", {{"address", 1}, {"format", "s32"}, {"scale", 0.001}}},
+        {"measurement",
+         {{"table", "holding"}, {"address", 11}, {"format", "s32"}, {"scale", 0.001}}}};
+    ASSERT_TRUE(d->configure(params, 500.0).ok);
+    const auto r = d->activate();
+    ASSERT_TRUE(r.ok) << r.message;
+    const Ticks t = tick(*d, 1000, 1000us);
+    EXPECT_EQ(t.allocations, 0);
+    EXPECT_GT(t.fresh, 100);
+    EXPECT_EQ(d->diagnostics()["failed_transactions"], 0) << d->diagnostics().dump();
+    std::cout << "[ modbus io = " << io << " ] " << t.allocations << " allocations in 1000 ticks, "
+              << t.fresh << " fresh\n";
+    EXPECT_TRUE(d->deactivate().ok);
+  }
+}
+
+TEST(RealTimePath, CanAllocatesNothing) {
+  ht::TestAmplifier amp;
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
+  ASSERT_TRUE(
+      d.configure({{"socket_fd", amp.driver_fd}, {"heartbeat_timeout_ms", 250}}, 1000.0).ok);
+  const auto r = d.activate();
+  ASSERT_TRUE(r.ok) << r.message;
+  const Ticks t = tick(d, 1000, 500us);
+  EXPECT_EQ(t.allocations, 0);
+  EXPECT_GT(t.fresh, 100);
+  std::cout << "[ can ] " << t.allocations << " allocations in 1000 ticks, " << t.fresh
+            << " fresh\n";
+  EXPECT_TRUE(d.deactivate().ok);
+}
