@@ -70,8 +70,8 @@ class Driver final : private FaultSource {
   template <typename Hook>
   Result guarded(Hook&& hook) const;
 
+  FaultLog faults_;  // before driver_: its threads may report until it is destroyed
   std::unique_ptr<DriverInterface> driver_;
-  FaultLog faults_;
   std::atomic<State> state_{State::kUnconfigured};
   DriverInfo info_;
   double rate_hz_ = 0.0;
