@@ -17,6 +17,7 @@
 #include "hystbench/drivers/can_bus.hpp"
 #include "hystbench/drivers/can_protocol.hpp"
 #include "realtime_plant.hpp"
+#include "run_main.hpp"
 
 namespace hd = hystbench::drivers;
 using hystbench::apps::RealtimePlant;
@@ -140,10 +141,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "hystbench-simamp: " << e.what() << "\n";
-    return 1;
-  }
+  return hystbench::apps::run_main("hystbench-simamp", run, argc, argv);
 }

@@ -21,6 +21,7 @@
 
 #include "hystbench/drivers/simdaq_register_map.hpp"
 #include "realtime_plant.hpp"
+#include "run_main.hpp"
 
 namespace map = hystbench::drivers::simdaq;
 using hystbench::apps::RealtimePlant;
@@ -264,10 +265,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "hystbench-simdaq: " << e.what() << "\n";
-    return 1;
-  }
+  return hystbench::apps::run_main("hystbench-simdaq", run, argc, argv);
 }

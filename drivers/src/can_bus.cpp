@@ -11,6 +11,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <iterator>
 #include <stdexcept>
 
 namespace hystbench::drivers {
@@ -81,23 +82,11 @@ bool interface_is_up(const std::string& interface) {
 }
 
 const char* to_string(CanController::State s) noexcept {
-  switch (s) {
-    case CanController::State::kErrorActive:
-      return "error-active";
-    case CanController::State::kErrorWarning:
-      return "error-warning";
-    case CanController::State::kErrorPassive:
-      return "error-passive";
-    case CanController::State::kBusOff:
-      return "bus-off";
-    case CanController::State::kStopped:
-      return "stopped";
-    case CanController::State::kSleeping:
-      return "sleeping";
-    case CanController::State::kUnknown:
-      return "unknown";
-  }
-  return "unknown";
+  // In CanController::State order.
+  constexpr const char* kNames[] = {"error-active", "error-warning", "error-passive", "bus-off",
+                                    "stopped",      "sleeping",      "unknown"};
+  const auto i = static_cast<std::size_t>(s);
+  return i < std::size(kNames) ? kNames[i] : "unknown";
 }
 
 namespace {

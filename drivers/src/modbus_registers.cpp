@@ -1,6 +1,7 @@
 #include "hystbench/drivers/modbus_registers.hpp"
 
 #include <cmath>
+#include <iterator>
 
 namespace hystbench::drivers {
 
@@ -8,43 +9,36 @@ std::string_view to_string(RegisterTable t) noexcept {
   return t == RegisterTable::kHolding ? "holding" : "input";
 }
 
+namespace {
+/// Each format's name and count range, in RegisterFormat order.
+struct FormatRange {
+  std::string_view name;
+  std::int64_t min, max;
+};
+constexpr FormatRange kFormats[] = {{"u16", 0, UINT16_MAX},
+                                    {"s16", INT16_MIN, INT16_MAX},
+                                    {"u32", 0, UINT32_MAX},
+                                    {"s32", INT32_MIN, INT32_MAX}};
+
+const FormatRange* range(RegisterFormat f) noexcept {
+  const auto i = static_cast<std::size_t>(f);
+  return i < std::size(kFormats) ? &kFormats[i] : nullptr;
+}
+}  // namespace
+
 std::string_view to_string(RegisterFormat f) noexcept {
-  switch (f) {
-    case RegisterFormat::kU16:
-      return "u16";
-    case RegisterFormat::kS16:
-      return "s16";
-    case RegisterFormat::kU32:
-      return "u32";
-    case RegisterFormat::kS32:
-      return "s32";
-  }
-  return "unknown";
+  const FormatRange* r = range(f);
+  return r ? r->name : "unknown";
 }
 
 std::int64_t RegisterChannel::count_min() const noexcept {
-  switch (format) {
-    case RegisterFormat::kS16:
-      return INT16_MIN;
-    case RegisterFormat::kS32:
-      return INT32_MIN;
-    default:
-      return 0;
-  }
+  const FormatRange* r = range(format);
+  return r ? r->min : 0;
 }
 
 std::int64_t RegisterChannel::count_max() const noexcept {
-  switch (format) {
-    case RegisterFormat::kU16:
-      return UINT16_MAX;
-    case RegisterFormat::kS16:
-      return INT16_MAX;
-    case RegisterFormat::kU32:
-      return UINT32_MAX;
-    case RegisterFormat::kS32:
-      return INT32_MAX;
-  }
-  return 0;
+  const FormatRange* r = range(format);
+  return r ? r->max : 0;
 }
 
 std::int64_t RegisterChannel::to_count(double physical) const noexcept {
