@@ -62,7 +62,6 @@ Result CanAmplifierDriver::on_configure(const nlohmann::json& params, double rat
   } catch (const std::invalid_argument& e) {
     return Result::failure(e.what());
   }
-  if (!(rate_hz > 0.0)) return Result::failure("loop.rate_hz: must be > 0");
   max_rate_hz_ = declared_max_rate_hz_ > 0.0 ? declared_max_rate_hz_ : 20000.0;
   if (rate_hz > max_rate_hz_) {
     return Result::failure("loop.rate_hz: " + fixed(rate_hz, 0) +

@@ -36,6 +36,7 @@ Result Driver::configure(const nlohmann::json& params, double rate_hz) {
     return Result::failure("driver." + std::string(type()) + ": configure() while active");
   }
   state_.store(State::kUnconfigured, std::memory_order_release);
+  if (!(rate_hz > 0.0)) return Result::failure("loop.rate_hz: must be > 0");
   Result r = guarded([&] { return driver_->on_configure(params, rate_hz); });
   if (!r) return r;
   info_ = driver_->info();

@@ -33,11 +33,6 @@ Result LoopbackDriver::on_configure(const nlohmann::json& params, double rate_hz
         sim::from_json(p.value("actuator", nlohmann::json::object()));
     max_rate_hz_ = p.value("max_rate_hz", 20000.0);
     if (!(max_rate_hz_ > 0.0)) return Result::failure("driver.loopback.max_rate_hz: must be > 0");
-    if (!(rate_hz > 0.0) || rate_hz > max_rate_hz_) {
-      return Result::failure("loop.rate_hz: " + std::to_string(rate_hz) +
-                             " Hz is beyond what the loopback driver holds (max " +
-                             std::to_string(max_rate_hz_) + " Hz)");
-    }
     safe_output_v_ = p.value("safe_output_v", cfg.input.min_v);
     if (!(safe_output_v_ >= cfg.input.min_v && safe_output_v_ <= cfg.input.max_v)) {
       return Result::failure(

@@ -29,7 +29,6 @@ Result ModbusDaqDriver::on_configure(const nlohmann::json& params, double rate_h
   } catch (const std::exception& e) {
     return Result::failure(e.what());
   }
-  if (!(rate_hz > 0.0)) return Result::failure("loop.rate_hz: must be > 0");
   if (config_.io == ModbusDaqConfig::IoMode::kLoop && rate_hz > config_.max_rate_hz) {
     return Result::failure("loop.rate_hz: " + fixed(rate_hz, 0) +
                            " Hz is beyond what the Modbus DAQ holds with io = \"loop\" (" +

@@ -46,6 +46,8 @@ TEST(ExampleDriver, TheFrameworkRefusesCallsOutOfOrderAndRatesTheDriverCannotHol
   EXPECT_EQ(d.configure(json::object(), 20000.0).message,
             "loop.rate_hz: 20000 Hz is beyond what the first_order driver holds as configured "
             "(at most 10000 Hz)");
+  EXPECT_EQ(d.configure(json::object(), 0.0).message, "loop.rate_hz: must be > 0");
+  EXPECT_EQ(d.state(), hd::Driver::State::kUnconfigured);
   ASSERT_TRUE(d.configure(json::object(), 1000.0).ok);
   EXPECT_EQ(d.state(), hd::Driver::State::kInactive);
   EXPECT_EQ(d.write(1.0), hd::DriverStatus::kFault);

@@ -1,5 +1,5 @@
 // The loopback driver's [driver.loopback] table: a misspelt fault key is an error naming it,
-// not a fault that silently never fires.
+// not a fault that silently never fires; a rate above its max_rate_hz is refused.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -23,4 +23,13 @@ TEST(LoopbackDriver, FaultKeysAreCheckedAndNamed) {
   EXPECT_NE(r.message.find("faults.stuck_at_tick"), std::string::npos) << r.message;
   driver = hd::make_driver("loopback");
   EXPECT_FALSE(driver->configure({{"faults", 5}}, 1000.0).ok);
+}
+
+TEST(LoopbackDriver, RefusesARateAboveItsMaxRate) {
+  auto driver = hd::make_driver("loopback");
+  const hd::Result r = driver->configure({{"max_rate_hz", 5000}}, 10000.0);
+  EXPECT_EQ(r.message,
+            "loop.rate_hz: 10000 Hz is beyond what the loopback driver holds as configured (at "
+            "most 5000 Hz)");
+  EXPECT_TRUE(driver->configure({{"max_rate_hz", 5000}}, 5000.0).ok);
 }

@@ -31,7 +31,8 @@ class Driver final : private FaultSource {
   Driver(const Driver&) = delete;
   Driver& operator=(const Driver&) = delete;
 
-  /// Unconfigured or inactive -> inactive (unconfigured on failure). Refused while active.
+  /// Unconfigured or inactive -> inactive (unconfigured on failure). Refused while active, and
+  /// for a rate <= 0 or above the driver's max_rate_hz.
   Result configure(const nlohmann::json& params, double rate_hz);
   /// Inactive -> active; success without effect when already active.
   Result activate();

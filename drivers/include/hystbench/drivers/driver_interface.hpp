@@ -66,7 +66,8 @@ class DriverInterface : public FaultSource {
   virtual ~DriverInterface() = default;
 
   /// Validates `params` (the driver's own config table as JSON; unknown keys are errors naming
-  /// them) and prepares for a loop at `rate_hz`. Refuses a rate it cannot hold.
+  /// them) and prepares for a loop at `rate_hz` (> 0: the framework checks, and refuses a rate
+  /// above info().max_rate_hz afterwards; a driver refuses earlier to say why).
   virtual Result on_configure(const nlohmann::json& params, double rate_hz) = 0;
   /// Connects and checks the device answers; the output starts at the safe output.
   virtual Result on_activate() = 0;
