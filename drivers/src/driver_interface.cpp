@@ -10,6 +10,14 @@ std::string_view to_string(DriverStatus s) noexcept {
   return i < std::size(kNames) ? kNames[i] : "unknown";
 }
 
+Result DriverInterface::on_deactivate() {
+  const DriverStatus s = safe_state();
+  if (s == DriverStatus::kOk) return Result::success();
+  return Result::failure("driver." + std::string(type()) +
+                         ": the safe output at deactivation failed (" + std::string(to_string(s)) +
+                         ")");
+}
+
 std::string DriverInterface::describe_fault(int cause, std::int64_t detail) const {
   return std::string(type()) + " driver fault " + std::to_string(cause) + " (detail " +
          std::to_string(detail) + ")";

@@ -21,15 +21,10 @@ IoThreadDriver::~IoThreadDriver() {
   sem_destroy(&wake_);
 }
 
-Result IoThreadDriver::on_configure(const nlohmann::json& params, double rate_hz) {
-  Result r = inner_->on_configure(params, rate_hz);
-  threaded_ = r.ok && inner_->info().io_thread;
-  return r;
-}
-
 Result IoThreadDriver::on_activate() {
   Result r = inner_->on_activate();
-  if (!r || !threaded_) return r;
+  threaded_ = r.ok && inner_->info().io_thread;
+  if (!threaded_) return r;
   samples_->reset(Sample{inner_->activation_position_um(), 0});
   io_status_.store(DriverStatus::kStale);
   safe_output_v_ = inner_->info().safe_output_v;

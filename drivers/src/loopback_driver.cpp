@@ -79,11 +79,6 @@ Result LoopbackDriver::on_activate() {
   return Result::success();
 }
 
-Result LoopbackDriver::on_deactivate() {
-  output_v_ = safe_output_v_;
-  return Result::success();
-}
-
 DriverStatus LoopbackDriver::write(double output_v) noexcept {
   if (armed(write_error_at_, tick_.load(std::memory_order_relaxed) + 1)) {
     return DriverStatus::kError;

@@ -28,10 +28,6 @@ class FirstOrderDriver final : public DriverInterface {
     tick_ = 0;
     return Result::success();
   }
-  Result on_deactivate() override {
-    safe_state();
-    return Result::success();
-  }
 
   DriverStatus write(double output_v) noexcept override {
     u_ = output_v;

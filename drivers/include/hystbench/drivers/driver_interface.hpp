@@ -71,8 +71,9 @@ class DriverInterface : public FaultSource {
   virtual Result on_configure(const nlohmann::json& params, double rate_hz) = 0;
   /// Connects and checks the device answers; the output starts at the safe output.
   virtual Result on_activate() = 0;
-  /// Drives the safe output and releases the device.
-  virtual Result on_deactivate() = 0;
+  /// Drives the safe output and releases the device. Default: safe_state(), a failure if that
+  /// is not kOk.
+  virtual Result on_deactivate();
   /// Called by the framework in the write()/read() that first reports kFault (real-time path):
   /// drive the safe output now. Must not release what recovery needs: a fault may clear by
   /// itself (a link that reconnects), and on_deactivate() releases. Default: safe_state().

@@ -33,8 +33,7 @@ class IoThreadDriver final : public DriverWrapper {
   explicit IoThreadDriver(std::unique_ptr<DriverInterface> inner);
   ~IoThreadDriver() override;
 
-  Result on_configure(const nlohmann::json& params, double rate_hz) override;
-  /// Activates the wrapped driver, then starts the I/O thread.
+  /// Activates the wrapped driver, then starts the I/O thread if its info() asks for one.
   Result on_activate() override;
   /// Stops the I/O thread, then deactivates the wrapped driver.
   Result on_deactivate() override;

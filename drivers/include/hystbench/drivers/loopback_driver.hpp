@@ -33,7 +33,6 @@ class LoopbackDriver final : public DriverInterface {
   Result on_configure(const nlohmann::json& params, double rate_hz) override;
   /// The simulated actuator starts from rest at the safe output.
   Result on_activate() override;
-  Result on_deactivate() override;
 
   /// Holds the output for the tick.
   DriverStatus write(double output_v) noexcept override;
