@@ -91,6 +91,20 @@ bool BenchLoop::reset_fault() noexcept {
   return state() != State::kFault;
 }
 
+std::int64_t BenchLoop::now_ns() const noexcept {
+  return stepped_ && options_.clock_ns != nullptr ? options_.clock_ns() : LoopTimer::now_ns();
+}
+
+void BenchLoop::step() noexcept {
+  if (thread_.joinable()) return;
+  stepped_ = true;
+  if (state() == State::kStopped) state_.store(State::kIdle, std::memory_order_release);
+  const std::int64_t t = now_ns();
+  overran_ = false;
+  tick(t, t);
+  stats_.record(0, now_ns() - t, false, 0);
+}
+
 void BenchLoop::run() {
   LoopTimer timer{std::chrono::nanoseconds(period_ns_)};
   timer.start();
@@ -299,7 +313,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     p.model_error_max = std::max(p.model_error_max, std::abs(e));
     ++p.model_error_samples;
   }
-  rec.exec_ns = LoopTimer::now_ns() - wake_ns;
+  rec.exec_ns = now_ns() - wake_ns;
   if (p.log && !p.log->push(rec)) ++p.log_drops;
   p.stats.record(wake_ns - scheduled_ns, rec.exec_ns, overran_);
   p.done.store(k + 1, std::memory_order_release);

@@ -1,35 +1,12 @@
 // SimulatedActuator::step()/reset() and SignalGenerator::value() must not allocate: this file
-// replaces the global operator new of the sim_tests executable with a counting one.
+// counts the allocations of the test thread (support/allocation_counter.hpp).
 #include <gtest/gtest.h>
-
-#include <cstdlib>
-#include <new>
 
 #include "hystbench/sim/signal_generator.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
+#include "support/allocation_counter.hpp"
 
-namespace {
-thread_local bool counting = false;
-thread_local long allocations = 0;
-
-/// Counts the allocations made by f on this thread.
-template <class F>
-long allocations_during(F&& f) {
-  allocations = 0;
-  counting = true;
-  f();
-  counting = false;
-  return allocations;
-}
-}  // namespace
-
-void* operator new(std::size_t size) {
-  if (counting) ++allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+using hystbench::test::allocations_during;
 
 namespace hs = hystbench::sim;
 
