@@ -9,6 +9,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "details/fit_families.hpp"
 #include "details/request_params.hpp"
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
@@ -19,7 +20,7 @@
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/daemon/identification_fit.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
-#include "hystbench/daemon/offline_commands.hpp"
+#include "hystbench/daemon/model_file_io.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "identify_session.hpp"
 #include "track_reference.hpp"
@@ -462,8 +463,9 @@ json Bench::start_identify(const json& params) {
   check_keys(params, {"model", "operators", "dead_zones", "u_min", "u_max"});
   const auto& lim = settings_.loop.limits;
   const std::string model = string_param(params, "model", settings_.identify_model);
-  if (model != "auto" && !hc::model_kind_from_string(model)) {
-    throw CommandError("bad_params", "model: unknown '" + model + "' (pi, mpi, cpi, rpi, auto)");
+  if (!details::is_fit_family(model)) {
+    throw CommandError("bad_params",
+                       "model: unknown '" + model + "' (" + details::fit_family_names() + ")");
   }
   const int operators = int_param(params, "operators", settings_.identify_operators, 0, 500);
   const int dead_zones = int_param(params, "dead_zones", settings_.identify_dead_zones, -1, 100);
@@ -871,11 +873,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
           1, static_cast<std::size_t>(
                  std::floor(settings_.loop.rate_hz / settings_.identify_fit_rate_hz)));
       hc::FitOptions opt;
-      if (fit_model_name == "auto") {
-        opt.kind = std::nullopt;
-      } else {
-        opt.kind = hc::model_kind_from_string(fit_model_name);
-      }
+      opt.kind = details::parse_fit_family(fit_model_name);
       opt.operators = fit_options.value("operators", 0);
       opt.dead_zones = fit_options.value("dead_zones", -1);
       opt.heldout_fraction = settings_.identify_heldout_fraction;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "details/fit_families.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "identify_session.hpp"
@@ -52,8 +53,7 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
   if (options.kind) {
     kinds = {*options.kind};
   } else {
-    kinds = {hc::ModelKind::kPi, hc::ModelKind::kModifiedPi, hc::ModelKind::kCoupledPlayPi,
-             hc::ModelKind::kRateDependentPi};
+    kinds.assign(details::fit_families().begin(), details::fit_families().end());
   }
   std::vector<IdentifyCandidate> out;
   std::string errors;
