@@ -9,6 +9,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "command_table.hpp"
 #include "details/fit_families.hpp"
 #include "details/request_params.hpp"
 #include "hystbench/compensation/compensator.hpp"
@@ -28,10 +29,6 @@
 namespace hystbench::daemon {
 
 namespace hc = compensation;
-using details::check_keys;
-using details::int_param;
-using details::number_param;
-using details::string_param;
 using nlohmann::json;
 
 namespace {
@@ -237,64 +234,43 @@ const char* Bench::predictor_name() const {
 }
 
 json Bench::handle(const std::string& cmd, const json& params, std::uint64_t client) {
-  if (cmd == "status") {
-    check_keys(params, {});
-    return status();
-  }
-  if (cmd == "identify") return start_identify(params);
-  if (cmd == "track") return start_track(params, client);
-  if (cmd == "excite") return start_excite(params, client);
-  if (cmd == "upload.begin") return uploads_.begin(params, client);
-  if (cmd == "upload.chunk") return uploads_.chunk(params, client);
-  if (cmd == "upload.cancel") return uploads_.cancel(params, client);
-  if (cmd == "stop") {
-    check_keys(params, {});
-    {
-      std::lock_guard lock(mutex_);
-      // A run submitted but not yet picked up by the loop counts as active.
-      if (active_run_.is_null() || finalizing_) throw CommandError("no_run", "no run is active");
-    }
-    loop_->request_stop();
-    return {{"stopping", true}};
-  }
-  if (cmd == "abort") {
-    check_keys(params, {});
-    bool running = false;
-    {
-      std::lock_guard lock(mutex_);
-      running = !active_run_.is_null() && !finalizing_;
-    }
-    loop_->request_abort();
-    return {{"aborted", running}, {"output_v", driver_->safe_output_v()}};
-  }
-  if (cmd == "reset") {
-    check_keys(params, {});
-    const bool was_fault = loop_->state() == BenchLoop::State::kFault;
-    if (was_fault && !loop_->reset_fault()) {
-      throw CommandError("reset_failed", "the loop did not leave FAULT");
-    }
-    return {{"was_fault", was_fault}, {"state", state_name(loop_->state())}};
-  }
-  if (cmd == "model.get") {
-    check_keys(params, {});
+  const details::Command& command = details::find_command(cmd, params);
+  const details::Request request(params, command.params);
+  return command.handle(*this, request, client);
+}
+
+json Bench::stop_run() {
+  {
     std::lock_guard lock(mutex_);
-    if (!model_) throw CommandError("no_model", "no active model (identify or model.load first)");
-    return {{"path", model_path_}, {"model", hc::to_json(*model_)}};
+    // A run submitted but not yet picked up by the loop counts as active.
+    if (active_run_.is_null() || finalizing_) throw CommandError("no_run", "no run is active");
   }
-  if (cmd == "model.load") return load_model(params);
-  if (cmd == "model.list") {
+  loop_->request_stop();
+  return {{"stopping", true}};
+}
+
+json Bench::abort_run() {
+  bool running = false;
+  {
     std::lock_guard lock(mutex_);
-    return list_models(params);
+    running = !active_run_.is_null() && !finalizing_;
   }
-  if (cmd == "config.get") {
-    check_keys(params, {});
-    return settings_.config_json;
+  loop_->request_abort();
+  return {{"aborted", running}, {"output_v", driver_->safe_output_v()}};
+}
+
+json Bench::reset() {
+  const bool was_fault = loop_->state() == BenchLoop::State::kFault;
+  if (was_fault && !loop_->reset_fault()) {
+    throw CommandError("reset_failed", "the loop did not leave FAULT");
   }
-  throw CommandError("unknown_command",
-                     "unknown command '" + cmd +
-                         "' (status, identify, track, excite, upload.begin, upload.chunk, "
-                         "upload.cancel, stop, abort, reset, model.get, model.load, model.list, "
-                         "config.get)");
+  return {{"was_fault", was_fault}, {"state", state_name(loop_->state())}};
+}
+
+json Bench::model_get() const {
+  std::lock_guard lock(mutex_);
+  if (!model_) throw CommandError("no_model", "no active model (identify or model.load first)");
+  return {{"path", model_path_}, {"model", hc::to_json(*model_)}};
 }
 
 void Bench::client_closed(std::uint64_t client) { uploads_.drop_client(client); }
@@ -351,16 +327,9 @@ std::string model_file_name(const std::string& key, const std::string& name) {
 
 }  // namespace
 
-nlohmann::json Bench::load_model(const json& params) {
-  if (params.is_object() && params.contains("path")) {
-    throw CommandError("bad_params",
-                       "path: model.load takes the model document ('model', which `hystbench "
-                       "model load FILE` reads and sends) or the name of a model in the daemon's "
-                       "model folder ('stored'); the daemon never opens a path a client names");
-  }
-  check_keys(params, {"model", "name", "stored"});
-  const bool stored = params.is_object() && params.contains("stored");
-  const bool document = params.is_object() && params.contains("model");
+nlohmann::json Bench::load_model(const details::Request& request) {
+  const bool stored = request.has("stored");
+  const bool document = request.has("model");
   if (stored == document) {
     throw CommandError("bad_params",
                        "give either 'model' (the model document) or 'stored' (a name from "
@@ -374,7 +343,7 @@ nlohmann::json Bench::load_model(const json& params) {
   hc::ModelFile file;
   std::filesystem::path path;
   if (stored) {
-    const std::string name = model_file_name("stored", string_param(params, "stored", ""));
+    const std::string name = model_file_name("stored", request.string("stored", ""));
     path = dir / name;
     if (!std::filesystem::is_regular_file(std::filesystem::symlink_status(path))) {
       throw CommandError("bad_params", "stored: no model '" + name +
@@ -386,12 +355,9 @@ nlohmann::json Bench::load_model(const json& params) {
       throw CommandError("bad_model", e.what());
     }
   } else {
-    if (!params["model"].is_object()) {
-      throw CommandError("bad_params", "model: must be the model file's JSON object");
-    }
-    const std::string name = model_file_name("name", string_param(params, "name", "uploaded"));
+    const std::string name = model_file_name("name", request.string("name", "uploaded"));
     try {
-      file = hc::model_file_from_json(params["model"]);
+      file = hc::model_file_from_json(request.params()["model"]);
     } catch (const std::exception& e) {
       throw CommandError("bad_model", std::string("model: ") + e.what());
     }
@@ -415,8 +381,8 @@ nlohmann::json Bench::load_model(const json& params) {
           {"reason", inv.reason}};
 }
 
-nlohmann::json Bench::list_models(const json& params) const {
-  check_keys(params, {});
+nlohmann::json Bench::list_models() const {
+  std::lock_guard lock(mutex_);
   json models = json::array();
   std::error_code ec;
   const std::filesystem::path dir(settings_.model_dir);
@@ -459,21 +425,20 @@ Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json&
   return s;
 }
 
-json Bench::start_identify(const json& params) {
-  check_keys(params, {"model", "operators", "dead_zones", "u_min", "u_max"});
+json Bench::start_identify(const details::Request& request) {
   const auto& lim = settings_.loop.limits;
-  const std::string model = string_param(params, "model", settings_.identify_model);
+  const std::string model = request.string("model", settings_.identify_model);
   if (!details::is_fit_family(model)) {
     throw CommandError("bad_params",
                        "model: unknown '" + model + "' (" + details::fit_family_names() + ")");
   }
-  const int operators = int_param(params, "operators", settings_.identify_operators, 0, 500);
-  const int dead_zones = int_param(params, "dead_zones", settings_.identify_dead_zones, -1, 100);
-  const double u_lo = number_param(
-      params, "u_min", std::isnan(settings_.identify_u_min) ? lim.u_min : settings_.identify_u_min,
+  const int operators = request.integer("operators", settings_.identify_operators);
+  const int dead_zones = request.integer("dead_zones", settings_.identify_dead_zones);
+  const double u_lo = request.number(
+      "u_min", std::isnan(settings_.identify_u_min) ? lim.u_min : settings_.identify_u_min,
       lim.u_min, lim.u_max);
-  const double u_hi = number_param(
-      params, "u_max", std::isnan(settings_.identify_u_max) ? lim.u_max : settings_.identify_u_max,
+  const double u_hi = request.number(
+      "u_max", std::isnan(settings_.identify_u_max) ? lim.u_max : settings_.identify_u_max,
       lim.u_min, lim.u_max);
   if (!(u_hi > u_lo)) throw CommandError("bad_params", "u_max must be greater than u_min");
 
@@ -543,13 +508,12 @@ json Bench::start_identify(const json& params) {
           {"log", log_path}};
 }
 
-json Bench::start_excite(const json& params, std::uint64_t client) {
-  check_keys(params, {"drive_upload"});
+json Bench::start_excite(const details::Request& request, std::uint64_t client) {
   const auto& lim = settings_.loop.limits;
-  if (!params.is_object() || !params.contains("drive_upload")) {
+  if (!request.has("drive_upload")) {
     throw CommandError("bad_params", "drive_upload: missing (the name of a complete drive upload)");
   }
-  const std::string upload_name = string_param(params, "drive_upload", "");
+  const std::string upload_name = request.string("drive_upload", "");
 
   std::lock_guard lock(mutex_);
   require_idle();
@@ -600,23 +564,15 @@ json Bench::start_excite(const json& params, std::uint64_t client) {
           {"log", log_path}};
 }
 
-json Bench::start_track(const json& params, std::uint64_t client) {
-  const bool uploaded = params.is_object() && params.contains("reference_upload");
-  if (uploaded) {
-    check_keys(params, {"reference_upload", "approach_s", "compensator", "kp", "ki", "kd",
-                        "precondition_s"});
-  } else {
-    check_keys(params, {"reference", "frequency_hz", "periods", "duration_s", "compensator",
-                        "range_fraction", "min_um", "max_um", "kp", "ki", "kd", "precondition_s"});
-  }
+json Bench::start_track(const details::Request& request, std::uint64_t client) {
+  const bool uploaded = request.has("reference_upload");
   const auto& lim = settings_.loop.limits;
-  const double precondition =
-      number_param(params, "precondition_s", settings_.precondition_s, 0.0, 60.0);
-  const double approach = number_param(params, "approach_s", 0.2, 0.0, 60.0);
+  const double precondition = request.number("precondition_s", settings_.precondition_s);
+  const double approach = uploaded ? request.number("approach_s", 0.2) : 0.2;
 
   std::lock_guard lock(mutex_);
   require_idle();
-  const std::string comp_name = string_param(params, "compensator", model_ ? "inverse" : "none");
+  const std::string comp_name = request.string("compensator", model_ ? "inverse" : "none");
   const auto kind = hc::compensator_kind_from_string(comp_name);
   if (!kind) {
     throw CommandError("bad_params",
@@ -640,12 +596,12 @@ json Bench::start_track(const json& params, std::uint64_t client) {
   std::string upload_name;
   details::TrackReference ref;
   if (uploaded) {
-    upload_name = string_param(params, "reference_upload", "");
+    upload_name = request.string("reference_upload", "");
     const auto upload = uploads_.complete(upload_name, client, UploadKind::kReference);
     // The precondition sweep leaves the output at the bottom of its range.
     ref = details::uploaded_reference(*upload, ref_limits, range->y_bottom, approach);
   } else {
-    ref = details::builtin_reference(params, ref_limits);
+    ref = details::builtin_reference(request, ref_limits);
   }
 
   auto p = std::make_unique<RunProgram>();
@@ -677,8 +633,7 @@ json Bench::start_track(const json& params, std::uint64_t client) {
   json feedback = nullptr;
   if (hc::uses_feedback(*kind)) {
     hc::PidParameters pp = settings_.pid;
-    const bool given = params.is_object() &&
-                       (params.contains("kp") || params.contains("ki") || params.contains("kd"));
+    const bool given = request.has("kp") || request.has("ki") || request.has("kd");
     if (settings_.pid_derived && !given) {
       const hc::ActuatorModel* m = model_ ? &model_->model : nullptr;
       const hc::PidTuning t =
@@ -689,9 +644,9 @@ json Bench::start_track(const json& params, std::uint64_t client) {
       pp.output_filter_hz = settings_.pid_output_filter_hz.value_or(t.output_filter_hz);
       feedback = {{"gains", "derived"}, {"basis", t.basis}};
     } else {
-      pp.kp = number_param(params, "kp", pp.kp, 0.0, 1e6);
-      pp.ki = number_param(params, "ki", pp.ki, 0.0, 1e9);
-      pp.kd = number_param(params, "kd", pp.kd, 0.0, 1e3);
+      pp.kp = request.number("kp", pp.kp);
+      pp.ki = request.number("ki", pp.ki);
+      pp.kd = request.number("kd", pp.kd);
       feedback = {{"gains", given ? "request" : "config"}};
     }
     if (*kind == hc::CompensatorKind::kPid) {

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -24,6 +25,12 @@
 #include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon {
+
+namespace details {
+class Request;
+struct Command;
+std::span<const Command> bench_commands();
+}  // namespace details
 
 struct BenchSettings {
   BenchLoopOptions loop;
@@ -107,16 +114,24 @@ class Bench {
   drivers::Driver& driver() { return *driver_; }
 
  private:
+  // The socket commands (command_table.cpp): its rows call these handlers with the request
+  // already checked against the row's parameters.
+  friend std::span<const details::Command> details::bench_commands();
   nlohmann::json status() const;
-  nlohmann::json start_identify(const nlohmann::json& params);
-  nlohmann::json start_track(const nlohmann::json& params, std::uint64_t client);
+  nlohmann::json start_identify(const details::Request& request);
+  nlohmann::json start_track(const details::Request& request, std::uint64_t client);
   /// excite: a complete drive upload played open loop after a ramp from the present output.
-  nlohmann::json start_excite(const nlohmann::json& params, std::uint64_t client);
+  nlohmann::json start_excite(const details::Request& request, std::uint64_t client);
+  nlohmann::json stop_run();
+  nlohmann::json abort_run();
+  /// reset: leaves FAULT (reset_failed when the loop does not).
+  nlohmann::json reset();
+  nlohmann::json model_get() const;
   /// model.load: {"model": document, "name": file name} (kept in the model folder) or
   /// {"stored": name in the model folder}; never a path.
-  nlohmann::json load_model(const nlohmann::json& params);
-  /// model.list: the model folder's *.json files (name, bytes, type, active). Caller holds mutex_.
-  nlohmann::json list_models(const nlohmann::json& params) const;
+  nlohmann::json load_model(const details::Request& request);
+  /// model.list: the model folder's *.json files (name, bytes, type, active).
+  nlohmann::json list_models() const;
   /// Throws CommandError fault or busy unless a run may start. Caller holds mutex_.
   void require_idle() const;
   struct SubmittedRun {
