@@ -28,21 +28,9 @@ long long integer_bound(double v) {
   return static_cast<long long>(std::clamp(v, -kMax, kMax));
 }
 
-const char* default_what(ParamType type) {
-  switch (type) {
-    case ParamType::kNumber:
-      return "a number";
-    case ParamType::kInteger:
-      return "an integer";
-    case ParamType::kString:
-      return "a string";
-    case ParamType::kObject:
-      return "an object";
-    case ParamType::kArray:
-      return "an array";
-  }
-  return "a value";
-}
+// What a value of each ParamType is called in errors, in the enum's order.
+constexpr const char* kTypeWords[] = {"a number", "an integer", "a string", "an object",
+                                      "an array"};
 
 // The value of params[spec.key] (present) against its spec.
 void check_value(const json& params, const ParamSpec& spec) {
@@ -73,9 +61,10 @@ void check_value(const json& params, const ParamSpec& spec) {
       if (v.is_array()) return;
       break;
   }
-  throw CommandError("bad_params",
-                     std::string(spec.key) + ": must be " +
-                         (spec.what != nullptr ? spec.what : default_what(spec.type)));
+  throw CommandError(
+      "bad_params",
+      std::string(spec.key) + ": must be " +
+          (spec.what != nullptr ? spec.what : kTypeWords[static_cast<int>(spec.type)]));
 }
 
 }  // namespace

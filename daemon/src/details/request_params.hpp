@@ -10,7 +10,7 @@
 
 namespace hystbench::daemon::details {
 
-/// What a parameter's value must be.
+/// What a parameter's value must be (request_params.cpp words them in this order).
 enum class ParamType { kNumber, kInteger, kString, kObject, kArray };
 
 /// One parameter of a command: key, type and the range a number or integer must lie in (a
