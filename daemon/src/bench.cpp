@@ -2,17 +2,15 @@
 
 #include <spdlog/spdlog.h>
 
-#include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <ctime>
 #include <filesystem>
 
 #include "command_table.hpp"
 #include "excite_program.hpp"
-#include "hystbench/daemon/model_file_io.hpp"
 #include "identify_program.hpp"
 #include "identify_session.hpp"
+#include "model_folder.hpp"
 #include "run_context.hpp"
 #include "run_result.hpp"
 #include "track_program.hpp"
@@ -229,26 +227,6 @@ json Bench::status() const {
   return s;
 }
 
-namespace {
-
-// A model name in the daemon's model folder: letters, digits, '.', '_', '-', not starting with
-// '.', at most 128 characters; ".json" appended when missing. Never a path.
-std::string model_file_name(const std::string& key, const std::string& name) {
-  const bool ok = !name.empty() && name.size() <= 128 && name.front() != '.' &&
-                  std::all_of(name.begin(), name.end(), [](unsigned char c) {
-                    return std::isalnum(c) || c == '.' || c == '_' || c == '-';
-                  });
-  if (!ok) {
-    throw CommandError("bad_params", key +
-                                         ": a model name (letters, digits, '.', '_', '-'; not a "
-                                         "path), as `hystbench model list` shows");
-  }
-  const bool has_json = name.size() > 5 && name.compare(name.size() - 5, 5, ".json") == 0;
-  return has_json ? name : name + ".json";
-}
-
-}  // namespace
-
 nlohmann::json Bench::load_model(const details::Request& request) {
   const bool stored = request.has("stored");
   const bool document = request.has("model");
@@ -262,43 +240,15 @@ nlohmann::json Bench::load_model(const details::Request& request) {
   if (phase_ != RunPhase::kIdle) {
     throw CommandError("busy", "a run is active; load the model after it");
   }
-  const std::filesystem::path dir(settings_.model_dir);
-  hc::ModelFile file;
-  std::filesystem::path path;
-  if (stored) {
-    const std::string name = model_file_name("stored", request.string("stored", ""));
-    path = dir / name;
-    if (!std::filesystem::is_regular_file(std::filesystem::symlink_status(path))) {
-      throw CommandError("bad_params", "stored: no model '" + name +
-                                           "' in the daemon's model folder (hystbench model list)");
-    }
-    try {
-      file = load_model_file(path.string());
-    } catch (const std::exception& e) {
-      throw CommandError("bad_model", e.what());
-    }
-  } else {
-    const std::string name = model_file_name("name", request.string("name", "uploaded"));
-    try {
-      file = hc::model_file_from_json(request.params()["model"]);
-    } catch (const std::exception& e) {
-      throw CommandError("bad_model", std::string("model: ") + e.what());
-    }
-    // Kept in the model folder: `model load --stored` after a restart, and `model list`.
-    path = dir / name;
-    try {
-      std::filesystem::create_directories(dir);
-      save_model_file(path.string(), file);
-    } catch (const std::exception& e) {
-      throw CommandError("io_error",
-                         "cannot keep the model in the model folder: " + std::string(e.what()));
-    }
-  }
-  const auto inv = file.model.hysteresis().invertibility();
-  model_ = std::move(file);
-  model_path_ = path.string();
+  details::FolderModel m =
+      stored ? details::load_stored_model(settings_.model_dir, request.string("stored", ""))
+             : details::keep_model_document(settings_.model_dir, request.string("name", "uploaded"),
+                                            request.params()["model"]);
+  const auto inv = m.file.model.hysteresis().invertibility();
+  model_ = std::move(m.file);
+  model_path_ = m.path;
   return {{"path", model_path_},
-          {"name", path.filename().string()},
+          {"name", std::filesystem::path(m.path).filename().string()},
           {"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
           {"invertible", inv.invertible},
           {"reason", inv.reason}};
@@ -306,28 +256,7 @@ nlohmann::json Bench::load_model(const details::Request& request) {
 
 nlohmann::json Bench::list_models() const {
   std::lock_guard lock(mutex_);
-  json models = json::array();
-  std::error_code ec;
-  const std::filesystem::path dir(settings_.model_dir);
-  std::vector<std::filesystem::directory_entry> entries;
-  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
-    if (e.is_regular_file() && e.path().extension() == ".json") entries.push_back(e);
-  }
-  std::sort(entries.begin(), entries.end(),
-            [](const auto& a, const auto& b) { return a.path().filename() < b.path().filename(); });
-  for (const auto& e : entries) {
-    json m = {{"name", e.path().filename().string()}, {"bytes", e.file_size()}};
-    try {
-      const hc::ModelFile f = load_model_file(e.path().string());
-      m["type"] = std::string(hc::to_string(f.model.hysteresis().kind()));
-      m["operators"] = f.model.hysteresis().operator_count();
-    } catch (const std::exception&) {
-      m["type"] = "unreadable";  // never the file's text
-    }
-    m["active"] = e.path().string() == model_path_;
-    models.push_back(std::move(m));
-  }
-  return {{"folder", dir.string()}, {"models", models}};
+  return details::list_model_folder(settings_.model_dir, model_path_);
 }
 
 void Bench::require_idle() const {
