@@ -4,12 +4,14 @@
 // progress events and model fitting happen on the bench's supervisor thread. Nothing here runs
 // on the loop thread except through BenchLoop.
 #include <atomic>
+#include <condition_variable>
 #include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -24,6 +26,15 @@
 #include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon {
+
+namespace details {
+class Request;
+struct Command;
+struct RunContext;
+struct BuiltRun;
+struct RunResult;
+std::span<const Command> bench_commands();
+}  // namespace details
 
 struct BenchSettings {
   BenchLoopOptions loop;
@@ -107,26 +118,46 @@ class Bench {
   drivers::Driver& driver() { return *driver_; }
 
  private:
+  // The socket commands (command_table.cpp): its rows call these handlers with the request
+  // already checked against the row's parameters.
+  friend std::span<const details::Command> details::bench_commands();
   nlohmann::json status() const;
-  nlohmann::json start_identify(const nlohmann::json& params);
-  nlohmann::json start_track(const nlohmann::json& params, std::uint64_t client);
+  nlohmann::json start_identify(const details::Request& request);
+  nlohmann::json start_track(const details::Request& request, std::uint64_t client);
   /// excite: a complete drive upload played open loop after a ramp from the present output.
-  nlohmann::json start_excite(const nlohmann::json& params, std::uint64_t client);
+  nlohmann::json start_excite(const details::Request& request, std::uint64_t client);
+  nlohmann::json stop_run();
+  nlohmann::json abort_run();
+  /// reset: leaves FAULT (reset_failed when the loop does not).
+  nlohmann::json reset();
+  nlohmann::json model_get() const;
   /// model.load: {"model": document, "name": file name} (kept in the model folder) or
   /// {"stored": name in the model folder}; never a path.
-  nlohmann::json load_model(const nlohmann::json& params);
-  /// model.list: the model folder's *.json files (name, bytes, type, active). Caller holds mutex_.
-  nlohmann::json list_models(const nlohmann::json& params) const;
+  nlohmann::json load_model(const details::Request& request);
+  /// model.list: the model folder's *.json files (name, bytes, type, active).
+  nlohmann::json list_models() const;
   /// Throws CommandError fault or busy unless a run may start. Caller holds mutex_.
   void require_idle() const;
   struct SubmittedRun {
     std::string run_id, log_path;
     std::uint64_t total;
   };
+  /// What the run builders need to know (settings, model, present output). Caller holds mutex_.
+  details::RunContext run_context() const;
+  /// Names the built run, submits it and makes it the active run; returns the start reply.
+  /// Caller holds mutex_.
+  nlohmann::json launch(const char* kind, details::BuiltRun run);
   /// Opens the run's log with `header` and hands the run to the loop; throws busy when the loop
   /// does not take it (the log is closed). Caller holds mutex_.
   SubmittedRun submit_run(std::unique_ptr<RunProgram> p, const nlohmann::json& header);
+  /// Where the bench is with its run. kRunning: submitted to the loop (stop and abort act on
+  /// it); kFinalizing: ended, its result or identify's fit being made. Guarded by mutex_.
+  enum class RunPhase { kIdle, kRunning, kFinalizing };
+  void set_phase(RunPhase phase);
+  /// The supervisor thread: finalises each run the loop hands back (woken by the loop's
+  /// events), and emits run.progress every 0.5 s while one runs.
   void supervise();
+  void emit_progress();
   void finalize(std::unique_ptr<RunProgram> run);
   /// Sets the last result, leaves the bench idle and emits run.finished.
   void deliver_result(nlohmann::json result);
@@ -135,27 +166,18 @@ class Bench {
   /// Submits the next candidate's verification segment; false when none is left or it failed.
   bool verify_next_candidate();
   void verification_finished(std::unique_ptr<RunProgram> run);
+  /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
+  /// when the fit fails).
+  void fit_identify(const RunProgram& run, details::RunResult result);
+  /// The fitted candidates of identify's record, not yet verified. Throws when none fits.
+  std::unique_ptr<IdentifySession> fit_candidates(const RunProgram& run,
+                                                  const details::RunResult& result,
+                                                  const nlohmann::json& fit_request);
   /// Adopts the chosen candidate and delivers the identify result.
   void finish_identify();
   std::unique_ptr<SampleLogWriter> open_log(const std::string& run_id, nlohmann::json header);
   std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
-  struct ActuatorRange {
-    double y_bottom, y_top;
-  };
-  std::optional<ActuatorRange> actuator_range() const;
-  /// The run's predictor of y (RunProgram::model) relaxed at output u0: the active model, or
-  /// without one the linear map of limits.y_min/y_max; nullopt when neither is known.
-  /// Caller holds mutex_.
-  std::optional<compensation::ActuatorModel> predictor(double u0) const;
-  /// What predictor() gives, in words, for the log header. Caller holds mutex_.
-  const char* predictor_name() const;
-  /// The active model's input delay beyond the driver's exchange latency (which every reading
-  /// reports) in whole ticks, rounded up (0 without a model); mutex_ held.
-  std::uint64_t model_delay_ticks() const;
-  /// The driver exchange latency the active model's delay holds (its identification's
-  /// exchange_ticks; 0 for a model made elsewhere) [ticks].
-  std::uint64_t model_exchange_ticks() const;
 
   BenchSettings settings_;
   std::unique_ptr<drivers::Driver> driver_;
@@ -168,10 +190,10 @@ class Bench {
   std::string model_path_;
   nlohmann::json last_result_;
   nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
-  bool finalizing_ = false;
-  bool delivering_result_ = false;  // run.finished is on its way to the sink (wait_idle waits)
-  std::string pending_identify_model_;
-  nlohmann::json pending_identify_options_;
+  RunPhase phase_ = RunPhase::kIdle;
+  bool delivering_result_ = false;   // run.finished is on its way to the sink (wait_idle waits)
+  std::condition_variable idle_cv_;  // phase_ back to kIdle and run.finished delivered
+  nlohmann::json pending_fit_;       // identify's fit request (details::BuiltRun::fit)
   std::unique_ptr<IdentifySession> session_;  // supervisor thread only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;

@@ -14,6 +14,7 @@
 // limits): the driver goes to its safe state in the same tick, the run ends with the reason and the
 // loop stays in kFault, writing the safe output, until reset_fault().
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <thread>
@@ -73,8 +74,14 @@ class BenchLoop {
   void request_abort() noexcept { abort_requested_.store(true, std::memory_order_release); }
   /// A finished run (completed, stopped, aborted or faulted), or null.
   std::unique_ptr<RunProgram> take_finished() noexcept;
-  /// Leaves kFault for kIdle; false when not in kFault.
+  /// Leaves kFault for kIdle, waiting up to a second for the loop to acknowledge; false when
+  /// not in kFault or the loop did not leave it.
   bool reset_fault() noexcept;
+  /// Counts what the control thread waits for: a run finished, a fault, a reset, shutdown.
+  std::uint32_t events() const noexcept { return events_.load(std::memory_order_acquire); }
+  /// Blocks until events() differs from `seen` or `timeout` has passed (control thread; the
+  /// loop wakes it without a lock). True when it changed.
+  bool wait_event(std::uint32_t seen, std::chrono::nanoseconds timeout) const noexcept;
 
   State state() const noexcept { return state_.load(std::memory_order_acquire); }
   /// Why the loop is in kFault (static string; empty otherwise).
@@ -100,6 +107,8 @@ class BenchLoop {
   void idle_tick() noexcept;
   void end_run(RunEnd end, const char* reason) noexcept;
   void fault(const char* reason) noexcept;
+  /// Bumps events() and wakes wait_event(): one non-blocking system call.
+  void signal_event() noexcept;
 
   drivers::Driver& driver_;
   BenchLoopOptions options_;
@@ -119,6 +128,7 @@ class BenchLoop {
   std::atomic<double> last_y_{0.0};
   std::atomic<double> last_u_{0.0};
   std::atomic<std::uint64_t> ticks_{0};
+  std::atomic<std::uint32_t> events_{0};
   RealtimeReport realtime_report_;
 
   // Loop-thread state.
