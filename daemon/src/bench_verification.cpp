@@ -5,7 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "details/fit_families.hpp"
+#include "hystbench/daemon/fit_families.hpp"
 #include "hystbench/daemon/identification_fit.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
@@ -59,10 +59,10 @@ json identify_history_json(const json& fit_request) {
 hc::FitOptions identify_fit_options(const json& fit_request, const BenchSettings& settings,
                                     std::size_t block) {
   hc::FitOptions opt;
-  opt.kind = details::parse_fit_family(fit_request.value("model", ""));
+  opt.kind = parse_fit_family(fit_request.value("model", ""));
   opt.operators = fit_request.value("operators", 0);
   opt.dead_zones = fit_request.value("dead_zones", -1);
-  opt.heldout_fraction = settings.identify_heldout_fraction;
+  opt.heldout_fraction = settings.identify.heldout_fraction;
   // A bench has a history: the creep of earlier runs still settles during the record (tens of
   // seconds), as a slow drift the fit would otherwise bend the hysteresis to.
   opt.drift = true;
@@ -87,7 +87,7 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
   if (options.kind) {
     kinds = {*options.kind};
   } else {
-    kinds.assign(details::fit_families().begin(), details::fit_families().end());
+    kinds.assign(fit_families().begin(), fit_families().end());
   }
   std::vector<IdentifyCandidate> out;
   std::string errors;
@@ -163,7 +163,7 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
   // cost grows with the sample count. The input delay is chosen in ticks before averaging.
   const std::size_t block = std::max<std::size_t>(
       1, static_cast<std::size_t>(
-             std::floor(settings_.loop.rate_hz / settings_.identify_fit_rate_hz)));
+             std::floor(settings_.loop.rate_hz / settings_.identify.fit_rate_hz)));
   hc::FitOptions opt = identify_fit_options(fit_request, settings_, block);
   opt.progress = [this, run_id = run.run_id](double f, const std::string& what) {
     emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "details/toml_json.hpp"
+#include "hystbench/daemon/fit_families.hpp"
 
 namespace hystbench::daemon {
 
@@ -30,11 +31,14 @@ std::string number_text(double v) {
 
 template <typename T>
 std::string range_text(T lo, T hi) {
+  // Appended piece by piece: "[" + a + ", " + b + "]" trips GCC 12's -Wrestrict false positive.
+  std::string s = "[";
   if constexpr (std::is_floating_point_v<T>) {
-    return "[" + number_text(lo) + ", " + number_text(hi) + "]";
+    s.append(number_text(lo)).append(", ").append(number_text(hi));
   } else {
-    return "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    s.append(std::to_string(lo)).append(", ").append(std::to_string(hi));
   }
+  return s.append("]");
 }
 
 std::string number_requirement(double lo, double hi, bool open_low) {
@@ -246,7 +250,7 @@ void visit_limits(S& l, Visit&& visit) {
 /// The excitation's bounds depend on the limits, its top frequency on the loop rate.
 template <class S, class Visit>
 void visit_identify(S& id, Visit&& visit, const LoopSection& loop, const LimitsSection& limits) {
-  visit("model", id.model, std::vector<std::string>{"pi", "mpi", "cpi", "rpi", "auto"});
+  visit("model", id.model, fit_family_name_list());
   visit("operators", id.operators, 0, 100);
   visit("dead_zones", id.dead_zones, -1, 50);
   visit("amplitude_v", id.amplitude_v, Bounds{0.0, limits.u_max - limits.u_min, true});
@@ -331,8 +335,7 @@ void check_limits(const Section& s, const LimitsSection& l) {
 }
 
 void check_identify(const Section& s, const IdentifySection& id, const LimitsSection& limits) {
-  const double low = id.offset_v - id.amplitude_v;
-  const double high = id.offset_v + id.amplitude_v;
+  const auto [low, high] = id.span_v(limits.u_min, limits.u_max);
   if (low < limits.u_min - 1e-9 || high > limits.u_max + 1e-9) {
     s.fail("amplitude_v", "offset_v +- amplitude_v = " + range_text(low, high) +
                               " V must lie within [limits.u_min, limits.u_max] = " +
@@ -419,9 +422,6 @@ DaemonConfig parse_config(std::string_view toml_text, std::string_view origin) {
   }
   {
     Section s = section("identify");
-    // Default excitation: the whole output range.
-    c.identify.offset_v = 0.5 * (c.limits.u_min + c.limits.u_max);
-    c.identify.amplitude_v = 0.5 * (c.limits.u_max - c.limits.u_min);
     visit_identify(c.identify, Reader(s), c.loop, c.limits);
     check_identify(s, c.identify, c.limits);
     s.finish();
@@ -452,6 +452,10 @@ nlohmann::json to_json(const DaemonConfig& c) {
   j["driver"]["type"] = c.driver.type;
   j["actuator"] = c.actuator;
   visit_identify(c.identify, Writer(j["identify"]), c.loop, c.limits);
+  // The excitation as it will run: absent offset and amplitude are the whole output range.
+  const auto [low, high] = c.identify.span_v(c.limits.u_min, c.limits.u_max);
+  j["identify"]["offset_v"] = 0.5 * (low + high);
+  j["identify"]["amplitude_v"] = 0.5 * (high - low);
   visit_pid(c.pid, Writer(j["pid"]), c.loop);
   return j;
 }

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "details/fit_families.hpp"
 #include "hystbench/daemon/command_error.hpp"
+#include "hystbench/daemon/fit_families.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon::details {
@@ -16,10 +16,10 @@ sim::Excitation excitation(const IdentifyRequest& request, const RunContext& ctx
   const BenchSettings& s = ctx.settings;
   try {
     sim::IdentificationExcitationOptions options = s.identify_excitation;
-    options.major_loop_frequency_hz = s.identify_major_loop_hz;
-    options.major_loop_cycles = s.identify_major_loop_cycles;
-    options.precondition_s = s.identify_precondition_s;
-    options.settle_s = s.identify_settle_s;
+    options.major_loop_frequency_hz = s.identify.frequency_hz;
+    options.major_loop_cycles = s.identify.cycles;
+    options.precondition_s = s.identify.precondition_s;
+    options.settle_s = s.identify.settle_s;
     options.reversals_last = true;  // the held-out end of the record: loop shape, not creep
     return sim::identification_excitation(request.u_min, request.u_max, ctx.dt(), options);
   } catch (const std::exception& e) {
@@ -32,15 +32,14 @@ sim::Excitation excitation(const IdentifyRequest& request, const RunContext& ctx
 IdentifyRequest parse_identify_request(const Request& request, const BenchSettings& settings) {
   const auto& lim = settings.loop.limits;
   IdentifyRequest r;
-  r.model = request.string("model", settings.identify_model);
+  r.model = request.string("model", settings.identify.model);
   if (!is_fit_family(r.model)) {
     throw CommandError("bad_params",
                        "model: unknown '" + r.model + "' (" + fit_family_names() + ")");
   }
-  r.operators = request.integer("operators", settings.identify_operators);
-  r.dead_zones = request.integer("dead_zones", settings.identify_dead_zones);
-  const double u_min = std::isnan(settings.identify_u_min) ? lim.u_min : settings.identify_u_min;
-  const double u_max = std::isnan(settings.identify_u_max) ? lim.u_max : settings.identify_u_max;
+  r.operators = request.integer("operators", settings.identify.operators);
+  r.dead_zones = request.integer("dead_zones", settings.identify.dead_zones);
+  const auto [u_min, u_max] = settings.identify.span_v(lim.u_min, lim.u_max);
   r.u_min = request.number("u_min", u_min, lim.u_min, lim.u_max);
   r.u_max = request.number("u_max", u_max, lim.u_min, lim.u_max);
   if (!(r.u_max > r.u_min)) throw CommandError("bad_params", "u_max must be greater than u_min");
@@ -88,8 +87,8 @@ BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext&
              {"operators", request.operators},
              {"dead_zones", request.dead_zones},
              {"skip_samples", offset + (first_scored != nullptr ? first_scored->begin : 0)},
-             {"precondition_s", s.identify_precondition_s},
-             {"settle_s", s.identify_settle_s}};
+             {"precondition_s", s.identify.precondition_s},
+             {"settle_s", s.identify.settle_s}};
   return run;
 }
 

@@ -8,9 +8,9 @@
 #include <ostream>
 #include <sstream>
 
-#include "details/fit_families.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/fit_families.hpp"
 
 namespace hystbench::daemon {
 
@@ -54,7 +54,7 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     const Record data = read_record(cmd.data_path, cmd.columns, true);
     hc::FitOptions opt;
     try {
-      opt.kind = details::parse_fit_family(cmd.model_name);
+      opt.kind = parse_fit_family(cmd.model_name);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(std::string("--model: ") + e.what());
     }

@@ -80,15 +80,23 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
                                                      json& summary) {
   if (!hc::uses_feedback(kind)) return std::nullopt;
   const BenchSettings& s = ctx.settings;
-  hc::PidParameters pp = s.pid;
+  const PidSection& c = s.pid;
+  hc::PidParameters pp{c.kp.value_or(0.0),
+                       c.ki.value_or(0.0),
+                       c.kd.value_or(0.0),
+                       c.derivative_filter_hz,
+                       c.u_fb_min,
+                       c.u_fb_max,
+                       c.output_filter_hz.value_or(0.0)};
+  const bool derived = !c.kp && !c.ki && !c.kd;
   const bool given = request.has("kp") || request.has("ki") || request.has("kd");
-  if (s.pid_derived && !given) {
+  if (derived && !given) {
     const hc::ActuatorModel* m = ctx.model != nullptr ? &ctx.model->model : nullptr;
-    const hc::PidTuning t = hc::tune_pid(gain, s.loop.rate_hz, s.pid_bandwidth_hz, m);
+    const hc::PidTuning t = hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m);
     pp.kp = t.kp;
     pp.ki = t.ki;
     pp.kd = t.kd;
-    pp.output_filter_hz = s.pid_output_filter_hz.value_or(t.output_filter_hz);
+    pp.output_filter_hz = c.output_filter_hz.value_or(t.output_filter_hz);
     summary = {{"gains", "derived"}, {"basis", t.basis}};
   } else {
     pp.kp = request.number("kp", pp.kp);

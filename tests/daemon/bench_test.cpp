@@ -39,7 +39,7 @@ class BenchTest : public hystbench::test::BenchFixture {
   // preconditioning, the major loops and the segment order stay the daemon's.
   hd::BenchSettings short_identify_settings() const {
     hd::BenchSettings s = settings();
-    s.identify_major_loop_cycles = 2;
+    s.identify.cycles = 2;
     auto& e = s.identify_excitation;
     e.minor_loops = 4;
     e.rate_frequencies_hz = {2.0, 10.0};

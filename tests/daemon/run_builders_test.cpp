@@ -175,7 +175,7 @@ TEST(IdentifyProgram, TheRequestOverTheDefaultsWithinTheLimits) {
   const hdd::Request request(params, hdd::find_command("identify", params).params);
   const hdd::IdentifyRequest r = hdd::parse_identify_request(request, s);
   EXPECT_EQ(r.model, "cpi");
-  EXPECT_EQ(r.operators, s.identify_operators);
+  EXPECT_EQ(r.operators, s.identify.operators);
   EXPECT_DOUBLE_EQ(r.u_min, 0.0);
   EXPECT_DOUBLE_EQ(r.u_max, 120.0);
   const auto refused = [&](const json& bad) {

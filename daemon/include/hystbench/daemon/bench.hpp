@@ -21,6 +21,7 @@
 #include "hystbench/compensation/pid_controller.hpp"
 #include "hystbench/daemon/bench_loop.hpp"
 #include "hystbench/daemon/command_error.hpp"
+#include "hystbench/daemon/config.hpp"
 #include "hystbench/daemon/upload_store.hpp"
 #include "hystbench/drivers/driver.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
@@ -46,35 +47,16 @@ struct BenchSettings {
   /// Reference range without a model [µm]; with a model its major loop defines the range.
   double y_min = 0.0;
   double y_max = 0.0;
-  /// identify defaults (overridable per request)
-  std::string identify_model = "mpi";
-  int identify_operators = 0;
-  int identify_dead_zones = -1;
-  /// Input span of the identification excitation [V]; NaN = the whole [u_min, u_max].
-  double identify_u_min = std::numeric_limits<double>::quiet_NaN();
-  double identify_u_max = std::numeric_limits<double>::quiet_NaN();
-  /// Frequency and number of the excitation's full major loops (the rest is fixed); the same
-  /// defaults as the config's [identify] section, so tests identify as the daemon does.
-  double identify_major_loop_hz = 1.0;
-  int identify_major_loop_cycles = 3;
-  /// Hold at mid-range [s] (identify_settle_s), then an open-loop sweep to u_max and u_min [s]
-  /// before the excitation: the hysteresis state no longer depends on earlier runs and the creep
-  /// little. Both are simulated by the fit but neither fitted nor scored.
-  double identify_precondition_s = 1.0;
-  double identify_settle_s = 5.0;
-  /// The excitation's other segments (minor loops, rates, holds, reversals); the fields above
-  /// override its major-loop and preconditioning options. The standard one by default.
+  /// identify's defaults (a request overrides model, operators, dead_zones and the span): the
+  /// configuration's [identify] section, the same struct and defaults, so tests identify as the
+  /// daemon does.
+  IdentifySection identify;
+  /// The excitation's other segments (minor loops, rates, holds, reversals); `identify` sets
+  /// its major-loop and preconditioning options. The standard one by default.
   sim::IdentificationExcitationOptions identify_excitation;
-  double identify_heldout_fraction = 0.1;
-  /// Highest sample rate the identification fit runs at; faster records are block-averaged.
-  double identify_fit_rate_hz = 2000.0;
-  /// track defaults: the PID's clamp and filters; its gains when pid_derived is false.
-  compensation::PidParameters pid{0.0, 0.0, 0.0, 0.0, -30.0, 30.0};
-  /// Gains derived per run from the model and the loop rate (compensation::tune_pid), unless a
-  /// request gives kp, ki or kd.
-  bool pid_derived = true;
-  double pid_bandwidth_hz = 0.0;  ///< crossover of derived gains; 0 = tune_pid's default
-  std::optional<double> pid_output_filter_hz;  ///< overrides the derived output filter
+  /// track's feedback: the configuration's [pid] section (no gains = derived per run from the
+  /// model and the loop rate, compensation::tune_pid, unless a request gives kp, ki or kd).
+  PidSection pid;
   /// Open-loop sweep to u_max and back to u_min before every track run [s], so the actuator's
   /// hysteresis state is known and the inverse starts consistent with it.
   double precondition_s = 1.0;

@@ -1,9 +1,9 @@
-#include "fit_families.hpp"
+#include "hystbench/daemon/fit_families.hpp"
 
 #include <array>
 #include <stdexcept>
 
-namespace hystbench::daemon::details {
+namespace hystbench::daemon {
 
 namespace hc = compensation;
 
@@ -21,6 +21,13 @@ std::string fit_family_names() {
   return names + kAuto;
 }
 
+std::vector<std::string> fit_family_name_list() {
+  std::vector<std::string> names;
+  for (const hc::ModelKind k : kFamilies) names.emplace_back(hc::to_string(k));
+  names.emplace_back(kAuto);
+  return names;
+}
+
 bool is_fit_family(const std::string& name) noexcept {
   return name == kAuto || hc::model_kind_from_string(name).has_value();
 }
@@ -31,4 +38,4 @@ std::optional<hc::ModelKind> parse_fit_family(const std::string& name) {
   throw std::invalid_argument("unknown '" + name + "' (" + fit_family_names() + ")");
 }
 
-}  // namespace hystbench::daemon::details
+}  // namespace hystbench::daemon
