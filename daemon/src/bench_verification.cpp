@@ -8,7 +8,8 @@
 #include "hystbench/daemon/fit_families.hpp"
 #include "hystbench/daemon/identification_fit.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
-#include "hystbench/daemon/offline_commands.hpp"
+#include "hystbench/compensation/error_metrics.hpp"
+#include "hystbench/daemon/model_file_io.hpp"
 #include "identify_session.hpp"
 #include "run_result.hpp"
 

@@ -17,15 +17,6 @@ namespace hystbench::daemon {
 namespace hc = compensation;
 using nlohmann::json;
 
-nlohmann::json to_json(const hc::ErrorStats& s) {
-  return {{"rmse", s.rmse},
-          {"max_abs", s.max_abs},
-          {"range", s.range},
-          {"rmse_percent", s.rmse_percent()},
-          {"max_percent", s.max_percent()},
-          {"samples", s.samples}};
-}
-
 namespace {
 
 void print_stats(std::ostream& out, const char* label, const hc::ErrorStats& s,

@@ -59,7 +59,4 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err);
 int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& err);
 int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err);
 
-/// {"rmse":..,"max_abs":..,"range":..,"rmse_percent":..,"max_percent":..,"samples":..}
-nlohmann::json to_json(const compensation::ErrorStats& s);
-
 }  // namespace hystbench::daemon
