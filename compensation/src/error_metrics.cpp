@@ -26,4 +26,13 @@ ErrorStats error_stats(std::span<const double> measured, std::span<const double>
   return s;
 }
 
+nlohmann::json to_json(const ErrorStats& s) {
+  return {{"rmse", s.rmse},
+          {"max_abs", s.max_abs},
+          {"range", s.range},
+          {"rmse_percent", s.rmse_percent()},
+          {"max_percent", s.max_percent()},
+          {"samples", s.samples}};
+}
+
 }  // namespace hystbench::compensation

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "hystbench/daemon/diagnose_command.hpp"
+#include "hystbench/daemon/fit_families.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 #include "hystbench/daemon/plot_command.hpp"
 #include "hystbench/daemon/remote_commands.hpp"
@@ -66,7 +67,7 @@ int main(int argc, char** argv) {
       ->add_option("--model", fit.model_name,
                    "Model family: pi (classical), mpi (modified, asymmetric), cpi (coupled-play), "
                    "rpi (rate-dependent), auto (lowest held-out error)")
-      ->check(CLI::IsMember({"pi", "mpi", "cpi", "rpi", "auto"}))
+      ->check(CLI::IsMember(hd::fit_family_name_list()))
       ->capture_default_str();
   fit_cmd
       ->add_option("--operators", fit.operators,
@@ -206,7 +207,7 @@ int main(int argc, char** argv) {
       ->add_option("--model", id_model,
                    "pi, mpi, cpi, rpi or auto (every family, the best verified tracking "
                    "kept; default: the config's)")
-      ->check(CLI::IsMember({"pi", "mpi", "cpi", "rpi", "auto"}));
+      ->check(CLI::IsMember(hd::fit_family_name_list()));
   identify_cmd->add_option("--operators", id_operators, "Number of plays (0 = by held-out error)");
   identify_cmd->add_option("--deadzones", id_deadzones,
                            "Dead zones per side (-1 = by held-out error)");

@@ -1,11 +1,10 @@
 #include "hystbench/daemon/bench_loop.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <future>
 
+#include "details/futex.hpp"
 #include "hystbench/daemon/loop_timer.hpp"
 
 namespace hystbench::daemon {
@@ -56,6 +55,7 @@ void BenchLoop::shutdown() {
   state_.store(State::kStopped, std::memory_order_release);
   // A program the loop never picked up is dropped; a finished one stays for take_finished().
   delete pending_.exchange(nullptr);
+  signal_event();
 }
 
 std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> program) {
@@ -83,12 +83,43 @@ std::unique_ptr<RunProgram> BenchLoop::take_finished() noexcept {
 bool BenchLoop::reset_fault() noexcept {
   if (state() != State::kFault) return false;
   reset_requested_.store(true, std::memory_order_release);
-  // The loop acknowledges within a tick; wait briefly so the caller sees the new state.
-  for (int i = 0; i < 2000 && state() == State::kFault; ++i) {
-    timespec ts{0, 500000};
-    nanosleep(&ts, nullptr);
+  // The loop acknowledges within a tick; wait so the caller sees the new state.
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+  for (;;) {
+    const std::uint32_t seen = events();
+    if (state() != State::kFault) return true;
+    const auto left = until - std::chrono::steady_clock::now();
+    if (left <= left.zero() || !wait_event(seen, left)) return state() != State::kFault;
   }
-  return state() != State::kFault;
+}
+
+bool BenchLoop::wait_event(std::uint32_t seen, std::chrono::nanoseconds timeout) const noexcept {
+  const auto until = std::chrono::steady_clock::now() + timeout;
+  while (events() == seen) {
+    const auto left = until - std::chrono::steady_clock::now();
+    if (left <= left.zero()) return false;
+    details::futex_wait(events_, seen, left);
+  }
+  return true;
+}
+
+void BenchLoop::signal_event() noexcept {
+  events_.fetch_add(1, std::memory_order_acq_rel);
+  details::futex_wake_all(events_);
+}
+
+std::int64_t BenchLoop::now_ns() const noexcept {
+  return stepped_ && options_.clock_ns != nullptr ? options_.clock_ns() : LoopTimer::now_ns();
+}
+
+void BenchLoop::step() noexcept {
+  if (thread_.joinable()) return;
+  stepped_ = true;
+  if (state() == State::kStopped) state_.store(State::kIdle, std::memory_order_release);
+  const std::int64_t t = now_ns();
+  overran_ = false;
+  tick(t, t);
+  stats_.record(0, now_ns() - t, false, 0);
 }
 
 void BenchLoop::run() {
@@ -112,6 +143,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   if (reset_requested_.exchange(false, std::memory_order_acq_rel) && state() == State::kFault) {
     fault_reason_.store("", std::memory_order_release);
     state_.store(State::kIdle, std::memory_order_release);
+    signal_event();
   }
   if (state() == State::kFault) {
     driver_.safe_state();
@@ -299,7 +331,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     p.model_error_max = std::max(p.model_error_max, std::abs(e));
     ++p.model_error_samples;
   }
-  rec.exec_ns = LoopTimer::now_ns() - wake_ns;
+  rec.exec_ns = now_ns() - wake_ns;
   if (p.log && !p.log->push(rec)) ++p.log_drops;
   p.stats.record(wake_ns - scheduled_ns, rec.exec_ns, overran_);
   p.done.store(k + 1, std::memory_order_release);
@@ -323,6 +355,7 @@ void BenchLoop::end_run(RunEnd end, const char* reason) noexcept {
   active_pub_.store(nullptr, std::memory_order_release);
   if (end != RunEnd::kFault) state_.store(State::kIdle, std::memory_order_release);
   finished_.store(p, std::memory_order_release);
+  signal_event();
 }
 
 void BenchLoop::fault(const char* reason) noexcept {
@@ -332,6 +365,7 @@ void BenchLoop::fault(const char* reason) noexcept {
   fault_reason_.store(reason, std::memory_order_release);
   state_.store(State::kFault, std::memory_order_release);
   end_run(RunEnd::kFault, reason);
+  signal_event();
 }
 
 }  // namespace hystbench::daemon

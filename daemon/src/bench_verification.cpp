@@ -5,9 +5,13 @@
 #include <cmath>
 #include <filesystem>
 
+#include "hystbench/daemon/fit_families.hpp"
+#include "hystbench/daemon/identification_fit.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
-#include "hystbench/daemon/offline_commands.hpp"
+#include "hystbench/compensation/error_metrics.hpp"
+#include "hystbench/daemon/model_file_io.hpp"
 #include "identify_session.hpp"
+#include "run_result.hpp"
 
 namespace hystbench::daemon {
 
@@ -37,6 +41,38 @@ json candidate_summary(const IdentifyCandidate& c) {
           {"verification", c.verification}};
 }
 
+// Largest measurement delay identify looks for [ticks].
+constexpr int kMaxDelayTicks = 4;
+
+// What identify did so that the model does not depend on earlier runs (for the result).
+json identify_history_json(const json& fit_request) {
+  return {{"precondition_sweep_s", fit_request.value("precondition_s", 0.0)},
+          {"settle_s", fit_request.value("settle_s", 0.0)},
+          {"unscored_samples", fit_request.value("skip_samples", 0)},
+          {"note",
+           "hold at mid-range (creep), sweep to u_max and u_min (hysteresis memory) before the "
+           "excitation; the fit simulates both from the output's last value and scores from "
+           "the first major loop on"}};
+}
+
+// The fit's options for identify's request (details::BuiltRun::fit), at the fit rate: records
+// are block-averaged by `block` ticks.
+hc::FitOptions identify_fit_options(const json& fit_request, const BenchSettings& settings,
+                                    std::size_t block) {
+  hc::FitOptions opt;
+  opt.kind = parse_fit_family(fit_request.value("model", ""));
+  opt.operators = fit_request.value("operators", 0);
+  opt.dead_zones = fit_request.value("dead_zones", -1);
+  opt.heldout_fraction = settings.identify.heldout_fraction;
+  // A bench has a history: the creep of earlier runs still settles during the record (tens of
+  // seconds), as a slow drift the fit would otherwise bend the hysteresis to.
+  opt.drift = true;
+  // The ramp, the settle hold and the precondition sweep are simulated, not scored.
+  const std::size_t skip = fit_request.value("skip_samples", std::size_t{0});
+  opt.skip_samples = (skip + block - 1) / block;
+  return opt;
+}
+
 }  // namespace
 
 IdentifyCandidate family_candidate(hc::FitResult fit) {
@@ -52,8 +88,7 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
   if (options.kind) {
     kinds = {*options.kind};
   } else {
-    kinds = {hc::ModelKind::kPi, hc::ModelKind::kModifiedPi, hc::ModelKind::kCoupledPlayPi,
-             hc::ModelKind::kRateDependentPi};
+    kinds.assign(fit_families().begin(), fit_families().end());
   }
   std::vector<IdentifyCandidate> out;
   std::string errors;
@@ -104,6 +139,78 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
   } catch (const std::exception&) {
     // The chosen order stands alone; its own fit succeeded.
   }
+}
+
+void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
+  json fit_request;
+  {
+    std::lock_guard lock(mutex_);
+    fit_request = pending_fit_;
+  }
+  try {
+    session_ = fit_candidates(run, result, fit_request);
+    if (!verify_next_candidate()) finish_identify();
+    return;
+  } catch (const std::exception& e) {
+    result.report["fit_error"] = e.what();
+  }
+  deliver_result(std::move(result.report));
+}
+
+std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& run,
+                                                              const details::RunResult& result,
+                                                              const json& fit_request) {
+  // Block-average down to the fit rate: the hysteresis is rate independent and the fit's
+  // cost grows with the sample count. The input delay is chosen in ticks before averaging.
+  const std::size_t block = std::max<std::size_t>(
+      1, static_cast<std::size_t>(
+             std::floor(settings_.loop.rate_hz / settings_.identify.fit_rate_hz)));
+  hc::FitOptions opt = identify_fit_options(fit_request, settings_, block);
+  opt.progress = [this, run_id = run.run_id](double f, const std::string& what) {
+    emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});
+  };
+  // The measurement delay in whole ticks: the driver's exchange latency from the readings,
+  // then any further delay by held-out error, chosen with the requested family (mpi for
+  // auto). The model keeps it; the feedforward previews the reference by it.
+  const std::size_t n = result.recorded;
+  const std::span<const double> u_rec(run.rec_u.data(), n), y_rec(run.rec_y.data(), n);
+  const std::span<const std::uint32_t> response(run.rec_response.data(),
+                                                std::min(n, run.rec_response.size()));
+  hc::FitOptions delay_opt = opt;
+  if (!delay_opt.kind) {
+    delay_opt.kind = hc::ModelKind::kModifiedPi;
+    delay_opt.progress = nullptr;  // auto: the candidates' fits report progress
+  }
+  const IdentificationFit id =
+      fit_identification_record(u_rec, y_rec, response, dt_, block, delay_opt, kMaxDelayTicks);
+  const std::vector<double> aligned = response.empty()
+                                          ? std::vector<double>(y_rec.begin(), y_rec.end())
+                                          : align_to_outputs(u_rec, y_rec, response);
+  const AveragedRecord rec = block_average(
+      u_rec, aligned, dt_, block, static_cast<std::size_t>(id.delay_ticks - id.exchange_ticks));
+  // Each candidate (one family, or every family for auto) is verified on the loop by a
+  // tracking segment through its inverse before one is adopted and run.finished goes out.
+  auto session = std::make_unique<IdentifySession>();
+  if (opt.kind) {
+    // One family: the delay search's fit at the chosen delay is that family's fit.
+    session->candidates.push_back(family_candidate(id.fit));
+    add_dead_zone_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
+  } else {
+    session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
+  }
+  for (IdentifyCandidate& c : session->candidates) {
+    c.fit.delay_samples = id.delay_ticks;
+    c.fit.model.set_delay(static_cast<double>(id.delay_ticks) * dt_);
+  }
+  session->log_path = result.log_path;
+  session->samples = n;
+  session->fit_sample_period_s = static_cast<double>(block) * dt_;
+  session->history = identify_history_json(fit_request);
+  session->history["delay_ticks"] = id.delay_ticks;
+  session->history["exchange_ticks"] = id.exchange_ticks;
+  session->history["delay_note"] = id.delay_note;
+  session->result = result.report;
+  return session;
 }
 
 bool Bench::verify_next_candidate() {
@@ -160,7 +267,7 @@ bool Bench::verify_next_candidate() {
     active_run_["stage"] = "verify " + c.label;
     active_run_["total"] = total;
     active_run_["verification_log"] = log;
-    finalizing_ = false;  // stop and abort now act on the verification
+    phase_ = RunPhase::kRunning;  // stop and abort now act on the verification
     return true;
   }
   return false;
@@ -170,7 +277,7 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   IdentifySession& s = *session_;
   {
     std::lock_guard lock(mutex_);
-    finalizing_ = true;
+    phase_ = RunPhase::kFinalizing;
     active_run_["stage"] = "choosing the model";
   }
   IdentifyCandidate& c = s.candidates[s.next];

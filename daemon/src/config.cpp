@@ -5,12 +5,17 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <concepts>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "details/toml_json.hpp"
+#include "hystbench/daemon/fit_families.hpp"
 
 namespace hystbench::daemon {
 
@@ -26,11 +31,14 @@ std::string number_text(double v) {
 
 template <typename T>
 std::string range_text(T lo, T hi) {
+  // Appended piece by piece: "[" + a + ", " + b + "]" trips GCC 12's -Wrestrict false positive.
+  std::string s = "[";
   if constexpr (std::is_floating_point_v<T>) {
-    return "[" + number_text(lo) + ", " + number_text(hi) + "]";
+    s.append(number_text(lo)).append(", ").append(number_text(hi));
   } else {
-    return "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    s.append(std::to_string(lo)).append(", ").append(std::to_string(hi));
   }
+  return s.append("]");
 }
 
 std::string number_requirement(double lo, double hi, bool open_low) {
@@ -195,41 +203,128 @@ toml::table parse_toml(std::string_view text, std::string_view origin) {
   }
 }
 
-void read_daemon(Section s, DaemonSection& d) {
-  s.string("socket_path", d.socket_path);
+// ---- Every key of every section, declared once ----
+// visit_<section>(section, visit, ...) names each key with its field and its bounds; the reader
+// turns that into checked getters, the writer into JSON, so a new key is one line here (and
+// its member in config.hpp). Checks across keys follow in check_<section>().
+
+struct Bounds {
+  double lo = -kInf;
+  double hi = kInf;
+  bool open_low = false;  ///< (lo, hi] instead of [lo, hi]
+};
+
+template <class S, class Visit>
+void visit_daemon(S& d, Visit&& visit) {
+  visit("socket_path", d.socket_path);
+  visit("log_dir", d.log_dir);
+  visit("model_dir", d.model_dir);
+  visit("log_level", d.log_level,
+        std::vector<std::string>{"trace", "debug", "info", "warn", "error", "critical", "off"});
+}
+
+template <class S, class Visit>
+void visit_loop(S& l, Visit&& visit) {
+  visit("rate_hz", l.rate_hz, Bounds{1.0, 20000.0});
+  visit("realtime", l.realtime);
+  visit("priority", l.priority, 1, 99);
+  visit("cpu", l.cpu, -1, 1023);
+  visit("lock_memory", l.lock_memory);
+  visit("overrun_budget", l.overrun_budget, std::uint64_t{0}, std::uint64_t{1'000'000'000});
+  visit("ring_capacity", l.ring_capacity, std::size_t{1024}, std::size_t{1} << 24);
+  visit("stuck_sensor_ms", l.stuck_sensor_ms, Bounds{0.0, 10000.0});
+  visit("stuck_sensor_span", l.stuck_sensor_span, Bounds{0.0, 1.0, true});
+  visit("feedforward_bandwidth_hz", l.feedforward_bandwidth_hz, Bounds{0.0, 1e6});
+}
+
+template <class S, class Visit>
+void visit_limits(S& l, Visit&& visit) {
+  visit("u_min", l.u_min, Bounds{});
+  visit("u_max", l.u_max, Bounds{});
+  visit("slew_v_per_s", l.slew_v_per_s, Bounds{0.0, kInf, true});
+  visit("fatal_on_limit", l.fatal_on_limit);
+  visit("y_min", l.y_min, Bounds{});
+  visit("y_max", l.y_max, Bounds{});
+}
+
+/// The excitation's bounds depend on the limits, its top frequency on the loop rate.
+template <class S, class Visit>
+void visit_identify(S& id, Visit&& visit, const LoopSection& loop, const LimitsSection& limits) {
+  visit("model", id.model, fit_family_name_list());
+  visit("operators", id.operators, 0, 100);
+  visit("dead_zones", id.dead_zones, -1, 50);
+  visit("amplitude_v", id.amplitude_v, Bounds{0.0, limits.u_max - limits.u_min, true});
+  visit("offset_v", id.offset_v, Bounds{limits.u_min, limits.u_max});
+  visit("frequency_hz", id.frequency_hz, Bounds{0.0, loop.rate_hz / 20.0, true});
+  visit("cycles", id.cycles, 1, 1000);
+  visit("precondition_s", id.precondition_s, Bounds{0.0, 60.0, true});
+  visit("settle_s", id.settle_s, Bounds{0.0, 600.0});
+  visit("heldout_fraction", id.heldout_fraction, Bounds{0.0, 0.9});
+  visit("fit_rate_hz", id.fit_rate_hz, Bounds{1.0, 20000.0});
+}
+
+template <class S, class Visit>
+void visit_pid(S& p, Visit&& visit, const LoopSection& loop) {
+  visit("kp", p.kp, Bounds{0.0});
+  visit("ki", p.ki, Bounds{0.0});
+  visit("kd", p.kd, Bounds{0.0});
+  visit("bandwidth_hz", p.bandwidth_hz, Bounds{0.0, loop.rate_hz / 20.0, true});
+  visit("output_filter_hz", p.output_filter_hz, Bounds{0.0});
+  visit("derivative_filter_hz", p.derivative_filter_hz, Bounds{0.0});
+  visit("u_fb_min", p.u_fb_min, Bounds{});
+  visit("u_fb_max", p.u_fb_max, Bounds{});
+}
+
+/// Reads each visited key from a Section with the checks its type and bounds call for.
+class Reader {
+ public:
+  explicit Reader(Section& s) : s_(s) {}
+  void operator()(std::string_view key, double& v, Bounds b) {
+    s_.number(key, v, b.lo, b.hi, b.open_low);
+  }
+  void operator()(std::string_view key, std::optional<double>& v, Bounds b) {
+    s_.optional_number(key, v, b.lo, b.hi, b.open_low);
+  }
+  template <std::integral T>
+  void operator()(std::string_view key, T& v, T lo, T hi) {
+    s_.integer(key, v, lo, hi);
+  }
+  void operator()(std::string_view key, bool& v) { s_.boolean(key, v); }
+  void operator()(std::string_view key, std::string& v,
+                  const std::vector<std::string>& allowed = {}) {
+    s_.string(key, v, allowed);
+  }
+
+ private:
+  Section& s_;
+};
+
+/// Writes each visited key into a JSON object (an absent optional as null).
+class Writer {
+ public:
+  explicit Writer(nlohmann::json& j) : j_(j) {}
+  template <class T, class... Checks>
+  void operator()(std::string_view key, const T& v, const Checks&... /*ignored*/) {
+    if constexpr (std::is_same_v<T, std::optional<double>>) {
+      j_[std::string(key)] = v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+    } else {
+      j_[std::string(key)] = v;
+    }
+  }
+
+ private:
+  nlohmann::json& j_;
+};
+
+void check_daemon(const Section& s, const DaemonSection& d) {
   if (d.socket_path.size() > 107) s.fail("socket_path", "must be at most 107 bytes long");
-  s.string("log_dir", d.log_dir);
-  s.string("model_dir", d.model_dir);
-  s.string("log_level", d.log_level,
-           {"trace", "debug", "info", "warn", "error", "critical", "off"});
-  s.finish();
 }
 
-void read_loop(Section s, LoopSection& l) {
-  s.number("rate_hz", l.rate_hz, 1.0, 20000.0);
-  s.boolean("realtime", l.realtime);
-  s.integer("priority", l.priority, 1, 99);
-  s.integer("cpu", l.cpu, -1, 1023);
-  s.boolean("lock_memory", l.lock_memory);
-  s.integer<std::uint64_t>("overrun_budget", l.overrun_budget, 0, 1'000'000'000);
-  s.integer<std::size_t>("ring_capacity", l.ring_capacity, 1024, std::size_t{1} << 24);
-  s.number("stuck_sensor_ms", l.stuck_sensor_ms, 0.0, 10000.0);
-  s.number("stuck_sensor_span", l.stuck_sensor_span, 0.0, 1.0, true);
-  s.number("feedforward_bandwidth_hz", l.feedforward_bandwidth_hz, 0.0, 1e6);
-  s.finish();
-}
-
-void read_limits(Section s, LimitsSection& l) {
-  s.number("u_min", l.u_min, -kInf, kInf);
-  s.number("u_max", l.u_max, -kInf, kInf);
+void check_limits(const Section& s, const LimitsSection& l) {
   if (!(l.u_min < l.u_max)) {
     s.fail("u_max", "must be greater than limits.u_min (" + number_text(l.u_min) + "), got " +
                         number_text(l.u_max));
   }
-  s.number("slew_v_per_s", l.slew_v_per_s, 0.0, kInf, true);
-  s.boolean("fatal_on_limit", l.fatal_on_limit);
-  s.optional_number("y_min", l.y_min, -kInf, kInf);
-  s.optional_number("y_max", l.y_max, -kInf, kInf);
   if (l.y_min.has_value() != l.y_max.has_value()) {
     s.fail(l.y_min ? "y_max" : "y_min", "limits.y_min and limits.y_max must be given together");
   }
@@ -237,7 +332,30 @@ void read_limits(Section s, LimitsSection& l) {
     s.fail("y_max", "must be greater than limits.y_min (" + number_text(*l.y_min) + "), got " +
                         number_text(*l.y_max));
   }
-  s.finish();
+}
+
+void check_identify(const Section& s, const IdentifySection& id, const LimitsSection& limits) {
+  const auto [low, high] = id.span_v(limits.u_min, limits.u_max);
+  if (low < limits.u_min - 1e-9 || high > limits.u_max + 1e-9) {
+    s.fail("amplitude_v", "offset_v +- amplitude_v = " + range_text(low, high) +
+                              " V must lie within [limits.u_min, limits.u_max] = " +
+                              range_text(limits.u_min, limits.u_max));
+  }
+}
+
+void check_pid(const Section& s, const PidSection& p, const LoopSection& loop) {
+  const double nyquist = loop.rate_hz / 2.0;
+  for (const auto& [key, hz] : {std::pair{"output_filter_hz", p.output_filter_hz.value_or(0.0)},
+                                std::pair{"derivative_filter_hz", p.derivative_filter_hz}}) {
+    if (hz >= nyquist) {
+      s.fail(key, "must be below loop.rate_hz / 2 = " + number_text(nyquist) + " Hz, got " +
+                      number_text(hz));
+    }
+  }
+  if (!(p.u_fb_min <= p.u_fb_max)) {
+    s.fail("u_fb_max", "must be at least pid.u_fb_min (" + number_text(p.u_fb_min) + "), got " +
+                           number_text(p.u_fb_max));
+  }
 }
 
 void read_driver(const Context& ctx, const toml::table* table, DriverSection& d) {
@@ -260,58 +378,6 @@ void read_driver(const Context& ctx, const toml::table* table, DriverSection& d)
   }
 }
 
-void read_identify(Section s, IdentifySection& id, const LoopSection& loop,
-                   const LimitsSection& limits) {
-  s.string("model", id.model, {"pi", "mpi", "cpi", "rpi", "auto"});
-  s.integer("operators", id.operators, 0, 100);
-  s.integer("dead_zones", id.dead_zones, -1, 50);
-  // Default excitation: the whole output range.
-  id.offset_v = 0.5 * (limits.u_min + limits.u_max);
-  id.amplitude_v = 0.5 * (limits.u_max - limits.u_min);
-  s.number("offset_v", id.offset_v, limits.u_min, limits.u_max);
-  s.number("amplitude_v", id.amplitude_v, 0.0, limits.u_max - limits.u_min, true);
-  const double low = id.offset_v - id.amplitude_v;
-  const double high = id.offset_v + id.amplitude_v;
-  if (low < limits.u_min - 1e-9 || high > limits.u_max + 1e-9) {
-    s.fail("amplitude_v", "offset_v +- amplitude_v = " + range_text(low, high) +
-                              " V must lie within [limits.u_min, limits.u_max] = " +
-                              range_text(limits.u_min, limits.u_max));
-  }
-  s.number("frequency_hz", id.frequency_hz, 0.0, loop.rate_hz / 20.0, true);
-  s.integer("cycles", id.cycles, 1, 1000);
-  s.number("precondition_s", id.precondition_s, 0.0, 60.0, true);
-  s.number("settle_s", id.settle_s, 0.0, 600.0);
-  s.number("heldout_fraction", id.heldout_fraction, 0.0, 0.9);
-  s.number("fit_rate_hz", id.fit_rate_hz, 1.0, 20000.0);
-  s.finish();
-}
-
-void read_pid(Section s, PidSection& p, const LoopSection& loop) {
-  s.optional_number("kp", p.kp, 0.0, kInf);
-  s.optional_number("ki", p.ki, 0.0, kInf);
-  s.optional_number("kd", p.kd, 0.0, kInf);
-  s.optional_number("bandwidth_hz", p.bandwidth_hz, 0.0, loop.rate_hz / 20.0, true);
-  s.optional_number("output_filter_hz", p.output_filter_hz, 0.0, kInf);
-  if (p.output_filter_hz && *p.output_filter_hz >= loop.rate_hz / 2.0) {
-    s.fail("output_filter_hz",
-           "must be below loop.rate_hz / 2 = " + number_text(loop.rate_hz / 2.0) + " Hz, got " +
-               number_text(*p.output_filter_hz));
-  }
-  s.number("derivative_filter_hz", p.derivative_filter_hz, 0.0, kInf);
-  if (p.derivative_filter_hz >= loop.rate_hz / 2.0) {
-    s.fail("derivative_filter_hz",
-           "must be below loop.rate_hz / 2 = " + number_text(loop.rate_hz / 2.0) + " Hz, got " +
-               number_text(p.derivative_filter_hz));
-  }
-  s.number("u_fb_min", p.u_fb_min, -kInf, kInf);
-  s.number("u_fb_max", p.u_fb_max, -kInf, kInf);
-  if (!(p.u_fb_min <= p.u_fb_max)) {
-    s.fail("u_fb_max", "must be at least pid.u_fb_min (" + number_text(p.u_fb_min) + "), got " +
-                           number_text(p.u_fb_max));
-  }
-  s.finish();
-}
-
 }  // namespace
 
 nlohmann::json DriverSection::params() const {
@@ -329,16 +395,43 @@ DaemonConfig parse_config(std::string_view toml_text, std::string_view origin) {
     }
   }
   DaemonConfig c;
-  read_daemon(Section(ctx, "daemon", section_table(ctx, root, "daemon")), c.daemon);
-  read_loop(Section(ctx, "loop", section_table(ctx, root, "loop")), c.loop);
-  read_limits(Section(ctx, "limits", section_table(ctx, root, "limits")), c.limits);
+  // Each section: its keys read and checked one by one, then across keys, then unknown keys.
+  auto section = [&](const char* name) {
+    return Section(ctx, name, section_table(ctx, root, name));
+  };
+  {
+    Section s = section("daemon");
+    visit_daemon(c.daemon, Reader(s));
+    check_daemon(s, c.daemon);
+    s.finish();
+  }
+  {
+    Section s = section("loop");
+    visit_loop(c.loop, Reader(s));
+    s.finish();
+  }
+  {
+    Section s = section("limits");
+    visit_limits(c.limits, Reader(s));
+    check_limits(s, c.limits);
+    s.finish();
+  }
   read_driver(ctx, section_table(ctx, root, "driver"), c.driver);
   if (const toml::table* actuator = section_table(ctx, root, "actuator")) {
     c.actuator = details::toml_node_to_json(*actuator);
   }
-  read_identify(Section(ctx, "identify", section_table(ctx, root, "identify")), c.identify, c.loop,
-                c.limits);
-  read_pid(Section(ctx, "pid", section_table(ctx, root, "pid")), c.pid, c.loop);
+  {
+    Section s = section("identify");
+    visit_identify(c.identify, Reader(s), c.loop, c.limits);
+    check_identify(s, c.identify, c.limits);
+    s.finish();
+  }
+  {
+    Section s = section("pid");
+    visit_pid(c.pid, Reader(s), c.loop);
+    check_pid(s, c.pid, c.loop);
+    s.finish();
+  }
   return c;
 }
 
@@ -351,59 +444,20 @@ DaemonConfig load_config(const std::filesystem::path& path) {
 }
 
 nlohmann::json to_json(const DaemonConfig& c) {
-  const auto optional = [](const std::optional<double>& v) -> nlohmann::json {
-    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-  };
-  nlohmann::json driver = c.driver.tables;
-  driver["type"] = c.driver.type;
-  return {
-      {"daemon",
-       {{"socket_path", c.daemon.socket_path},
-        {"log_dir", c.daemon.log_dir},
-        {"model_dir", c.daemon.model_dir},
-        {"log_level", c.daemon.log_level}}},
-      {"loop",
-       {{"rate_hz", c.loop.rate_hz},
-        {"realtime", c.loop.realtime},
-        {"priority", c.loop.priority},
-        {"cpu", c.loop.cpu},
-        {"lock_memory", c.loop.lock_memory},
-        {"overrun_budget", c.loop.overrun_budget},
-        {"ring_capacity", c.loop.ring_capacity},
-        {"stuck_sensor_ms", c.loop.stuck_sensor_ms},
-        {"stuck_sensor_span", c.loop.stuck_sensor_span},
-        {"feedforward_bandwidth_hz", c.loop.feedforward_bandwidth_hz}}},
-      {"limits",
-       {{"u_min", c.limits.u_min},
-        {"u_max", c.limits.u_max},
-        {"slew_v_per_s", c.limits.slew_v_per_s},
-        {"fatal_on_limit", c.limits.fatal_on_limit},
-        {"y_min", optional(c.limits.y_min)},
-        {"y_max", optional(c.limits.y_max)}}},
-      {"driver", driver},
-      {"actuator", c.actuator},
-      {"identify",
-       {{"model", c.identify.model},
-        {"operators", c.identify.operators},
-        {"dead_zones", c.identify.dead_zones},
-        {"amplitude_v", c.identify.amplitude_v},
-        {"offset_v", c.identify.offset_v},
-        {"frequency_hz", c.identify.frequency_hz},
-        {"cycles", c.identify.cycles},
-        {"precondition_s", c.identify.precondition_s},
-        {"settle_s", c.identify.settle_s},
-        {"heldout_fraction", c.identify.heldout_fraction},
-        {"fit_rate_hz", c.identify.fit_rate_hz}}},
-      {"pid",
-       {{"kp", optional(c.pid.kp)},
-        {"ki", optional(c.pid.ki)},
-        {"kd", optional(c.pid.kd)},
-        {"bandwidth_hz", optional(c.pid.bandwidth_hz)},
-        {"output_filter_hz", optional(c.pid.output_filter_hz)},
-        {"derivative_filter_hz", c.pid.derivative_filter_hz},
-        {"u_fb_min", c.pid.u_fb_min},
-        {"u_fb_max", c.pid.u_fb_max}}},
-  };
+  nlohmann::json j = nlohmann::json::object();
+  visit_daemon(c.daemon, Writer(j["daemon"]));
+  visit_loop(c.loop, Writer(j["loop"]));
+  visit_limits(c.limits, Writer(j["limits"]));
+  j["driver"] = c.driver.tables;
+  j["driver"]["type"] = c.driver.type;
+  j["actuator"] = c.actuator;
+  visit_identify(c.identify, Writer(j["identify"]), c.loop, c.limits);
+  // The excitation as it will run: absent offset and amplitude are the whole output range.
+  const auto [low, high] = c.identify.span_v(c.limits.u_min, c.limits.u_max);
+  j["identify"]["offset_v"] = 0.5 * (low + high);
+  j["identify"]["amplitude_v"] = 0.5 * (high - low);
+  visit_pid(c.pid, Writer(j["pid"]), c.loop);
+  return j;
 }
 
 nlohmann::json toml_to_json(std::string_view toml_text) {

@@ -38,27 +38,8 @@ BenchSettings bench_settings_from(const DaemonConfig& c) {
     s.y_min = *c.limits.y_min;
     s.y_max = *c.limits.y_max;
   }
-  s.identify_model = c.identify.model;
-  s.identify_operators = c.identify.operators;
-  s.identify_dead_zones = c.identify.dead_zones;
-  s.identify_u_min = c.identify.offset_v - c.identify.amplitude_v;
-  s.identify_u_max = c.identify.offset_v + c.identify.amplitude_v;
-  s.identify_major_loop_hz = c.identify.frequency_hz;
-  s.identify_major_loop_cycles = c.identify.cycles;
-  s.identify_precondition_s = c.identify.precondition_s;
-  s.identify_settle_s = c.identify.settle_s;
-  s.identify_heldout_fraction = c.identify.heldout_fraction;
-  s.identify_fit_rate_hz = c.identify.fit_rate_hz;
-  s.pid_derived = !c.pid.kp && !c.pid.ki && !c.pid.kd;
-  s.pid = {c.pid.kp.value_or(0.0),
-           c.pid.ki.value_or(0.0),
-           c.pid.kd.value_or(0.0),
-           c.pid.derivative_filter_hz,
-           c.pid.u_fb_min,
-           c.pid.u_fb_max,
-           c.pid.output_filter_hz.value_or(0.0)};
-  s.pid_bandwidth_hz = c.pid.bandwidth_hz.value_or(0.0);
-  s.pid_output_filter_hz = c.pid.output_filter_hz;
+  s.identify = c.identify;
+  s.pid = c.pid;
   s.config_json = to_json(c);
   return s;
 }

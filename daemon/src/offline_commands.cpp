@@ -10,74 +10,12 @@
 
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/fit_families.hpp"
 
 namespace hystbench::daemon {
 
 namespace hc = compensation;
 using nlohmann::json;
-
-nlohmann::json to_json(const hc::ErrorStats& s) {
-  return {{"rmse", s.rmse},
-          {"max_abs", s.max_abs},
-          {"range", s.range},
-          {"rmse_percent", s.rmse_percent()},
-          {"max_percent", s.max_percent()},
-          {"samples", s.samples}};
-}
-
-namespace {
-
-// A model file's text, read once (at most max_bytes when given).
-std::string read_model_text(const std::string& path, std::uintmax_t max_bytes = 0) {
-  if (max_bytes > 0) {
-    std::error_code ec;
-    const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
-    if (ec) throw std::runtime_error(path + ": cannot open model file (" + ec.message() + ")");
-    if (bytes > max_bytes) {
-      throw std::runtime_error(path + ": " + std::to_string(bytes) +
-                               " bytes is too large for a model file (at most " +
-                               std::to_string(max_bytes) + ")");
-    }
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open model file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-hc::ModelFile parse_model_text(const std::string& path, const std::string& text) {
-  try {
-    return hc::parse_model_file(text);
-  } catch (const hc::ModelFileError& e) {
-    throw std::runtime_error(path + ": " + e.what());
-  }
-}
-
-}  // namespace
-
-hc::ModelFile load_model_file(const std::string& path) {
-  return parse_model_text(path, read_model_text(path));
-}
-
-nlohmann::json read_model_document(const std::string& path) {
-  const std::string text = read_model_text(path, 60000);
-  // Checked here as the daemon will check it, so the error comes at once and names the file;
-  // the file's own document is what travels (not a re-serialisation of the parsed model).
-  (void)parse_model_text(path, text);
-  return json::parse(text);
-}
-
-void save_model_file(const std::string& path, const hc::ModelFile& file) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path + ": cannot write model file");
-    out << std::setw(2) << hc::to_json(file) << "\n";
-    if (!out) throw std::runtime_error(path + ": write failed");
-  }
-  std::filesystem::rename(tmp, path);
-}
 
 namespace {
 
@@ -106,14 +44,10 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
   return guarded(err, [&] {
     const Record data = read_record(cmd.data_path, cmd.columns, true);
     hc::FitOptions opt;
-    if (cmd.model_name == "auto") {
-      opt.kind = std::nullopt;
-    } else {
-      opt.kind = hc::model_kind_from_string(cmd.model_name);
-      if (!opt.kind) {
-        throw std::invalid_argument("--model: unknown model '" + cmd.model_name +
-                                    "' (pi, mpi, cpi, rpi, auto)");
-      }
+    try {
+      opt.kind = parse_fit_family(cmd.model_name);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("--model: ") + e.what());
     }
     opt.operators = cmd.operators;
     opt.dead_zones = cmd.dead_zones;

@@ -59,8 +59,8 @@ void check_slew(const Upload& u, const std::vector<double>& v, double max_step, 
 
 }  // namespace
 
-TrackReference builtin_reference(const json& params, const ReferenceLimits& limits) {
-  const std::string ref_name = string_param(params, "reference", "triangle");
+TrackReference builtin_reference(const Request& request, const ReferenceLimits& limits) {
+  const std::string ref_name = request.string("reference", "triangle");
   sim::SignalSpec spec;
   try {
     spec.kind = sim::signal_kind_from_string(ref_name);
@@ -73,19 +73,19 @@ TrackReference builtin_reference(const json& params, const ReferenceLimits& limi
                                          "decaying_sine, multi_frequency or chirp, or upload "
                                          "a trajectory (reference_upload)");
   }
-  spec.frequency_hz = number_param(params, "frequency_hz", 1.0, 1e-3, limits.rate_hz / 20.0);
-  const double periods = number_param(params, "periods", 5.0, 0.0, 1e7);
-  double duration = number_param(params, "duration_s", 0.0, 0.0, 7.0 * 24 * 3600);
+  spec.frequency_hz = request.number("frequency_hz", 1.0, 1e-3, limits.rate_hz / 20.0);
+  const double periods = request.number("periods", 5.0);
+  double duration = request.number("duration_s", 0.0);
   if (duration <= 0.0) duration = periods / spec.frequency_hz;
   if (!(duration > 0.0)) throw CommandError("bad_params", "periods or duration_s must be > 0");
 
   const double span = limits.y_top - limits.y_bottom;
-  const double fraction = number_param(params, "range_fraction", 0.8, 0.01, 1.0);
+  const double fraction = request.number("range_fraction", 0.8);
   double y_lo = limits.y_bottom + 0.5 * (1.0 - fraction) * span;
   double y_hi = limits.y_top - 0.5 * (1.0 - fraction) * span;
-  if (params.is_object() && (params.contains("min_um") || params.contains("max_um"))) {
-    y_lo = number_param(params, "min_um", y_lo, -1e9, 1e9);
-    y_hi = number_param(params, "max_um", y_hi, -1e9, 1e9);
+  if (request.has("min_um") || request.has("max_um")) {
+    y_lo = request.number("min_um", y_lo);
+    y_hi = request.number("max_um", y_hi);
     if (!(y_hi > y_lo)) throw CommandError("bad_params", "max_um must be greater than min_um");
     if (y_lo < limits.y_bottom - 1e-9 || y_hi > limits.y_top + 1e-9) {
       throw CommandError("out_of_range", "reference [" + std::to_string(y_lo) + ", " +

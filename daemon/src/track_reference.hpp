@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "details/request_params.hpp"
 #include "hystbench/daemon/upload_store.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 
@@ -28,10 +29,10 @@ struct ReferenceLimits {
   double rate_hz = 0.0;        ///< the loop rate
 };
 
-/// A built-in periodic reference from a track request's keys: reference (kind), frequency_hz,
-/// periods or duration_s, range_fraction or min_um/max_um. The first period is unscored when
-/// the run has at least two.
-TrackReference builtin_reference(const nlohmann::json& params, const ReferenceLimits& limits);
+/// A built-in periodic reference from a track request's keys (checked against its command):
+/// reference (kind), frequency_hz, periods or duration_s, range_fraction or min_um/max_um. The
+/// first period is unscored when the run has at least two.
+TrackReference builtin_reference(const Request& request, const ReferenceLimits& limits);
 
 /// A user's trajectory, resampled to the loop rate, after an approach of approach_s (at least
 /// long enough for the slew limit) from y_start to its first value, which is unscored. Refused

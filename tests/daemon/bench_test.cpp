@@ -39,7 +39,7 @@ class BenchTest : public hystbench::test::BenchFixture {
   // preconditioning, the major loops and the segment order stay the daemon's.
   hd::BenchSettings short_identify_settings() const {
     hd::BenchSettings s = settings();
-    s.identify_major_loop_cycles = 2;
+    s.identify.cycles = 2;
     auto& e = s.identify_excitation;
     e.minor_loops = 4;
     e.rate_frequencies_hz = {2.0, 10.0};
@@ -180,6 +180,18 @@ TEST_F(BenchTest, DriverFaultGoesSafeAndStaysInFaultUntilReset) {
   // Log intact: every sample up to and including the faulted one.
   const auto table = hd::DataTable::read_csv(r["log"].get<std::string>());
   EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
+
+  // reset leaves FAULT as soon as the loop acknowledges (the loop wakes the waiting command).
+  const auto before = std::chrono::steady_clock::now();
+  EXPECT_EQ(bench_->handle("reset", json::object()),
+            json({{"was_fault", true}, {"state", "idle"}}));
+  EXPECT_LT(std::chrono::steady_clock::now() - before, std::chrono::milliseconds(500));
+  EXPECT_EQ(bench_->handle("reset", json::object()),
+            json({{"was_fault", false}, {"state", "idle"}}));
+  // The loopback's sensor stays broken: the next run is accepted, and faults again.
+  const json next = run_and_wait("track", {{"compensator", "none"}, {"periods", 1}});
+  EXPECT_EQ(next["end"], "fault") << next.dump(2);
+  EXPECT_GT(next["samples"].get<int>(), 0);
 }
 
 // Opt-in (HYSTBENCH_LONG_TESTS=1): a 60 s track at 10 kHz logs exactly 600 000 samples.

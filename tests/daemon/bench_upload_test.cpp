@@ -183,7 +183,7 @@ TEST_F(BenchUploadTest, AMillionSampleTrajectoryIsTrackedWithItsErrorReported) {
 // a model as good as the identification run's own record does.
 TEST_F(BenchUploadTest, AnUploadedTrajectoryAndExcitationWorkAsTheBuiltInOnes) {
   hd::BenchSettings s = settings();
-  s.identify_major_loop_cycles = 2;  // the short identification of BenchTest (about 18 s)
+  s.identify.cycles = 2;  // the short identification of BenchTest (about 18 s)
   auto& e = s.identify_excitation;
   e.minor_loops = 4;
   e.rate_frequencies_hz = {2.0, 10.0};

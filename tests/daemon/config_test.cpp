@@ -112,8 +112,9 @@ TEST(Config, EmptyTextGivesTheDocumentedDefaults) {
   EXPECT_EQ(c.identify.model, "mpi");
   EXPECT_EQ(c.identify.operators, 0);
   EXPECT_EQ(c.identify.dead_zones, -1);
-  EXPECT_EQ(c.identify.offset_v, 75.0);  // the whole default output range
-  EXPECT_EQ(c.identify.amplitude_v, 75.0);
+  EXPECT_FALSE(c.identify.offset_v.has_value());  // the whole output range
+  EXPECT_FALSE(c.identify.amplitude_v.has_value());
+  EXPECT_EQ(c.identify.span_v(c.limits.u_min, c.limits.u_max), std::pair(0.0, 150.0));
   EXPECT_EQ(c.pid.u_fb_min, -30.0);
   EXPECT_EQ(c.pid.u_fb_max, 30.0);
   // Empty sections are the same as absent ones.
@@ -154,8 +155,8 @@ TEST(Config, ExampleFileParsesWithEveryValue) {
   EXPECT_EQ(c.identify.model, "rpi");
   EXPECT_EQ(c.identify.operators, 12);
   EXPECT_EQ(c.identify.dead_zones, 3);
-  EXPECT_EQ(c.identify.amplitude_v, 50.0);
-  EXPECT_EQ(c.identify.offset_v, 60.0);
+  EXPECT_EQ(c.identify.amplitude_v.value_or(0.0), 50.0);
+  EXPECT_EQ(c.identify.offset_v.value_or(0.0), 60.0);
   EXPECT_EQ(c.identify.frequency_hz, 2.5);
   EXPECT_EQ(c.identify.cycles, 4);
   EXPECT_EQ(c.identify.heldout_fraction, 0.3);
@@ -275,8 +276,16 @@ TEST(Config, SyntaxErrorsAndUnreadableFilesAreConfigErrors) {
 
 TEST(Config, ExcitationDefaultsFollowTheOutputLimits) {
   const hd::DaemonConfig c = hd::parse_config("[limits]\nu_min = -10\nu_max = 110\n");
-  EXPECT_EQ(c.identify.offset_v, 50.0);
-  EXPECT_EQ(c.identify.amplitude_v, 60.0);
+  EXPECT_EQ(c.identify.span_v(c.limits.u_min, c.limits.u_max), std::pair(-10.0, 110.0));
+  // config.get shows the excitation as it will run.
+  EXPECT_EQ(hd::to_json(c)["identify"]["offset_v"], 50.0);
+  EXPECT_EQ(hd::to_json(c)["identify"]["amplitude_v"], 60.0);
+  // Half given: the other half from the limits, and the span checked against them.
+  const hd::DaemonConfig o =
+      hd::parse_config("[limits]\nu_min = -10\nu_max = 110\n[identify]\namplitude_v = 30\n");
+  EXPECT_EQ(o.identify.span_v(o.limits.u_min, o.limits.u_max), std::pair(20.0, 80.0));
+  EXPECT_THROW(hd::parse_config("[limits]\nu_min = -10\nu_max = 110\n[identify]\noffset_v = 40\n"),
+               hd::ConfigError);
 }
 
 TEST(Config, TomlToJsonConvertsEveryType) {

@@ -1,9 +1,8 @@
 // The per-tick driver path allocates nothing: write(), read() and safe_state() through the
 // framework's Driver, for the loopback, Modbus (io = "loop" and "thread", hystbench-simdaq as
 // the device) and CAN (a socketpair the test owns) drivers, and the framework's fault path.
-// This file replaces the global operator new of drivers_tests with one that counts the
-// allocations of the thread that asks (support/counting_new.hpp; the I/O and peer threads are
-// not counted).
+// Counts the allocations of the test thread (support/allocation_counter.hpp); the I/O and peer
+// threads are not counted.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -12,7 +11,7 @@
 #include "hystbench/drivers/can_amplifier.hpp"
 #include "hystbench/drivers/driver.hpp"
 #include "peer_process.hpp"
-#include "support/counting_new.hpp"
+#include "support/allocation_counter.hpp"
 #include "test_amplifier.hpp"
 
 namespace hd = hystbench::drivers;

@@ -1,11 +1,10 @@
 // SimulatedActuator::step()/reset() and SignalGenerator::value() must not allocate: this file
-// replaces the global operator new of the sim_tests executable with a counting one
-// (support/counting_new.hpp).
+// counts the allocations of the test thread (support/allocation_counter.hpp).
 #include <gtest/gtest.h>
 
 #include "hystbench/sim/signal_generator.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
-#include "support/counting_new.hpp"
+#include "support/allocation_counter.hpp"
 
 using hystbench::test::allocations_during;
 

@@ -1,6 +1,9 @@
 #include "request_params.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string_view>
 
 #include "hystbench/daemon/command_error.hpp"
 
@@ -8,9 +11,115 @@ namespace hystbench::daemon::details {
 
 using nlohmann::json;
 
-void check_keys(const json& params, std::initializer_list<const char*> allowed) {
+namespace {
+
+void check_object(const json& params) {
+  if (!params.is_null() && !params.is_object()) {
+    throw CommandError("bad_params", "params must be an object");
+  }
+}
+
+[[noreturn]] void unknown_key(const std::string& key, const std::string& valid) {
+  throw CommandError("bad_params", "unknown parameter '" + key + "' (valid: " + valid + ")");
+}
+
+long long integer_bound(double v) {
+  constexpr double kMax = 9.2e18;  // inside long long's range
+  return static_cast<long long>(std::clamp(v, -kMax, kMax));
+}
+
+// What a value of each ParamType is called in errors, in the enum's order.
+constexpr const char* kTypeWords[] = {"a number", "an integer", "a string", "an object",
+                                      "an array"};
+
+// The value of params[spec.key] (present) against its spec.
+void check_value(const json& params, const ParamSpec& spec) {
+  if (spec.refusal != nullptr) {
+    throw CommandError("bad_params", std::string(spec.key) + ": " + spec.refusal);
+  }
+  const json& v = params[spec.key];
+  switch (spec.type) {
+    case ParamType::kNumber:
+      if (spec.what == nullptr || v.is_number()) {
+        (void)number_param(params, spec.key, 0.0, spec.lo, spec.hi);
+        return;
+      }
+      break;
+    case ParamType::kInteger:
+      if (spec.what == nullptr || v.is_number_integer()) {
+        (void)integer_param(params, spec.key, 0, integer_bound(spec.lo), integer_bound(spec.hi));
+        return;
+      }
+      break;
+    case ParamType::kString:
+      if (v.is_string()) return;
+      break;
+    case ParamType::kObject:
+      if (v.is_object()) return;
+      break;
+    case ParamType::kArray:
+      if (v.is_array()) return;
+      break;
+  }
+  throw CommandError(
+      "bad_params",
+      std::string(spec.key) + ": must be " +
+          (spec.what != nullptr ? spec.what : kTypeWords[static_cast<int>(spec.type)]));
+}
+
+}  // namespace
+
+void check_params(const json& params, std::span<const ParamSpec> specs) {
+  check_object(params);
   if (params.is_null()) return;
-  if (!params.is_object()) throw CommandError("bad_params", "params must be an object");
+  for (const auto& [key, value] : params.items()) {
+    const ParamSpec* found = nullptr;
+    std::string valid;
+    for (const ParamSpec& s : specs) {
+      if (key == s.key) found = &s;
+      if (s.refusal == nullptr) valid += (valid.empty() ? "" : ", ") + std::string(s.key);
+    }
+    if (found == nullptr) unknown_key(key, valid);
+    check_value(params, *found);
+  }
+}
+
+Request::Request(const json& params, std::span<const ParamSpec> specs)
+    : params_(params), specs_(specs) {
+  check_params(params_, specs_);
+}
+
+const ParamSpec& Request::spec(const char* key) const {
+  for (const ParamSpec& s : specs_) {
+    if (std::string_view(s.key) == key) return s;
+  }
+  throw std::logic_error(std::string("request parameter '") + key + "' is not in its command");
+}
+
+double Request::number(const char* key, double fallback) const {
+  const ParamSpec& s = spec(key);
+  return number_param(params_, key, fallback, s.lo, s.hi);
+}
+
+double Request::number(const char* key, double fallback, double lo, double hi) const {
+  (void)spec(key);
+  return number_param(params_, key, fallback, lo, hi);
+}
+
+int Request::integer(const char* key, int fallback) const {
+  const ParamSpec& s = spec(key);
+  return static_cast<int>(
+      integer_param(params_, key, fallback, integer_bound(s.lo), integer_bound(s.hi)));
+}
+
+std::string Request::string(const char* key, const std::string& fallback) const {
+  (void)spec(key);
+  return string_param(params_, key, fallback);
+}
+
+void check_keys(const json& params, std::initializer_list<const char*> allowed) {
+  check_object(params);
+  if (params.is_null()) return;
   for (const auto& [key, value] : params.items()) {
     bool ok = false;
     std::string list;
@@ -18,8 +127,7 @@ void check_keys(const json& params, std::initializer_list<const char*> allowed) 
       ok = ok || key == a;
       list += (list.empty() ? "" : ", ") + std::string(a);
     }
-    if (!ok)
-      throw CommandError("bad_params", "unknown parameter '" + key + "' (valid: " + list + ")");
+    if (!ok) unknown_key(key, list);
   }
 }
 

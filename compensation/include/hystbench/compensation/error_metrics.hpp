@@ -1,6 +1,7 @@
 #pragma once
 // Error statistics between a measurement and a prediction, in output units and % of range.
 #include <cstddef>
+#include <nlohmann/json.hpp>
 #include <span>
 
 namespace hystbench::compensation {
@@ -16,5 +17,9 @@ struct ErrorStats {
 
 /// Statistics of measured - predicted over equal-length spans (the shorter length is used).
 ErrorStats error_stats(std::span<const double> measured, std::span<const double> predicted);
+
+/// {"rmse", "max_abs", "range", "rmse_percent", "max_percent", "samples"}, as fit results,
+/// model files and the CLI report them.
+nlohmann::json to_json(const ErrorStats& s);
 
 }  // namespace hystbench::compensation

@@ -4,12 +4,14 @@
 // progress events and model fitting happen on the bench's supervisor thread. Nothing here runs
 // on the loop thread except through BenchLoop.
 #include <atomic>
+#include <condition_variable>
 #include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -19,11 +21,21 @@
 #include "hystbench/compensation/pid_controller.hpp"
 #include "hystbench/daemon/bench_loop.hpp"
 #include "hystbench/daemon/command_error.hpp"
+#include "hystbench/daemon/config.hpp"
 #include "hystbench/daemon/upload_store.hpp"
 #include "hystbench/drivers/driver.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon {
+
+namespace details {
+class Request;
+struct Command;
+struct RunContext;
+struct BuiltRun;
+struct RunResult;
+std::span<const Command> bench_commands();
+}  // namespace details
 
 struct BenchSettings {
   BenchLoopOptions loop;
@@ -35,35 +47,16 @@ struct BenchSettings {
   /// Reference range without a model [µm]; with a model its major loop defines the range.
   double y_min = 0.0;
   double y_max = 0.0;
-  /// identify defaults (overridable per request)
-  std::string identify_model = "mpi";
-  int identify_operators = 0;
-  int identify_dead_zones = -1;
-  /// Input span of the identification excitation [V]; NaN = the whole [u_min, u_max].
-  double identify_u_min = std::numeric_limits<double>::quiet_NaN();
-  double identify_u_max = std::numeric_limits<double>::quiet_NaN();
-  /// Frequency and number of the excitation's full major loops (the rest is fixed); the same
-  /// defaults as the config's [identify] section, so tests identify as the daemon does.
-  double identify_major_loop_hz = 1.0;
-  int identify_major_loop_cycles = 3;
-  /// Hold at mid-range [s] (identify_settle_s), then an open-loop sweep to u_max and u_min [s]
-  /// before the excitation: the hysteresis state no longer depends on earlier runs and the creep
-  /// little. Both are simulated by the fit but neither fitted nor scored.
-  double identify_precondition_s = 1.0;
-  double identify_settle_s = 5.0;
-  /// The excitation's other segments (minor loops, rates, holds, reversals); the fields above
-  /// override its major-loop and preconditioning options. The standard one by default.
+  /// identify's defaults (a request overrides model, operators, dead_zones and the span): the
+  /// configuration's [identify] section, the same struct and defaults, so tests identify as the
+  /// daemon does.
+  IdentifySection identify;
+  /// The excitation's other segments (minor loops, rates, holds, reversals); `identify` sets
+  /// its major-loop and preconditioning options. The standard one by default.
   sim::IdentificationExcitationOptions identify_excitation;
-  double identify_heldout_fraction = 0.1;
-  /// Highest sample rate the identification fit runs at; faster records are block-averaged.
-  double identify_fit_rate_hz = 2000.0;
-  /// track defaults: the PID's clamp and filters; its gains when pid_derived is false.
-  compensation::PidParameters pid{0.0, 0.0, 0.0, 0.0, -30.0, 30.0};
-  /// Gains derived per run from the model and the loop rate (compensation::tune_pid), unless a
-  /// request gives kp, ki or kd.
-  bool pid_derived = true;
-  double pid_bandwidth_hz = 0.0;  ///< crossover of derived gains; 0 = tune_pid's default
-  std::optional<double> pid_output_filter_hz;  ///< overrides the derived output filter
+  /// track's feedback: the configuration's [pid] section (no gains = derived per run from the
+  /// model and the loop rate, compensation::tune_pid, unless a request gives kp, ki or kd).
+  PidSection pid;
   /// Open-loop sweep to u_max and back to u_min before every track run [s], so the actuator's
   /// hysteresis state is known and the inverse starts consistent with it.
   double precondition_s = 1.0;
@@ -107,26 +100,46 @@ class Bench {
   drivers::Driver& driver() { return *driver_; }
 
  private:
+  // The socket commands (command_table.cpp): its rows call these handlers with the request
+  // already checked against the row's parameters.
+  friend std::span<const details::Command> details::bench_commands();
   nlohmann::json status() const;
-  nlohmann::json start_identify(const nlohmann::json& params);
-  nlohmann::json start_track(const nlohmann::json& params, std::uint64_t client);
+  nlohmann::json start_identify(const details::Request& request);
+  nlohmann::json start_track(const details::Request& request, std::uint64_t client);
   /// excite: a complete drive upload played open loop after a ramp from the present output.
-  nlohmann::json start_excite(const nlohmann::json& params, std::uint64_t client);
+  nlohmann::json start_excite(const details::Request& request, std::uint64_t client);
+  nlohmann::json stop_run();
+  nlohmann::json abort_run();
+  /// reset: leaves FAULT (reset_failed when the loop does not).
+  nlohmann::json reset();
+  nlohmann::json model_get() const;
   /// model.load: {"model": document, "name": file name} (kept in the model folder) or
   /// {"stored": name in the model folder}; never a path.
-  nlohmann::json load_model(const nlohmann::json& params);
-  /// model.list: the model folder's *.json files (name, bytes, type, active). Caller holds mutex_.
-  nlohmann::json list_models(const nlohmann::json& params) const;
+  nlohmann::json load_model(const details::Request& request);
+  /// model.list: the model folder's *.json files (name, bytes, type, active).
+  nlohmann::json list_models() const;
   /// Throws CommandError fault or busy unless a run may start. Caller holds mutex_.
   void require_idle() const;
   struct SubmittedRun {
     std::string run_id, log_path;
     std::uint64_t total;
   };
+  /// What the run builders need to know (settings, model, present output). Caller holds mutex_.
+  details::RunContext run_context() const;
+  /// Names the built run, submits it and makes it the active run; returns the start reply.
+  /// Caller holds mutex_.
+  nlohmann::json launch(const char* kind, details::BuiltRun run);
   /// Opens the run's log with `header` and hands the run to the loop; throws busy when the loop
   /// does not take it (the log is closed). Caller holds mutex_.
   SubmittedRun submit_run(std::unique_ptr<RunProgram> p, const nlohmann::json& header);
+  /// Where the bench is with its run. kRunning: submitted to the loop (stop and abort act on
+  /// it); kFinalizing: ended, its result or identify's fit being made. Guarded by mutex_.
+  enum class RunPhase { kIdle, kRunning, kFinalizing };
+  void set_phase(RunPhase phase);
+  /// The supervisor thread: finalises each run the loop hands back (woken by the loop's
+  /// events), and emits run.progress every 0.5 s while one runs.
   void supervise();
+  void emit_progress();
   void finalize(std::unique_ptr<RunProgram> run);
   /// Sets the last result, leaves the bench idle and emits run.finished.
   void deliver_result(nlohmann::json result);
@@ -135,27 +148,18 @@ class Bench {
   /// Submits the next candidate's verification segment; false when none is left or it failed.
   bool verify_next_candidate();
   void verification_finished(std::unique_ptr<RunProgram> run);
+  /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
+  /// when the fit fails).
+  void fit_identify(const RunProgram& run, details::RunResult result);
+  /// The fitted candidates of identify's record, not yet verified. Throws when none fits.
+  std::unique_ptr<IdentifySession> fit_candidates(const RunProgram& run,
+                                                  const details::RunResult& result,
+                                                  const nlohmann::json& fit_request);
   /// Adopts the chosen candidate and delivers the identify result.
   void finish_identify();
   std::unique_ptr<SampleLogWriter> open_log(const std::string& run_id, nlohmann::json header);
   std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
-  struct ActuatorRange {
-    double y_bottom, y_top;
-  };
-  std::optional<ActuatorRange> actuator_range() const;
-  /// The run's predictor of y (RunProgram::model) relaxed at output u0: the active model, or
-  /// without one the linear map of limits.y_min/y_max; nullopt when neither is known.
-  /// Caller holds mutex_.
-  std::optional<compensation::ActuatorModel> predictor(double u0) const;
-  /// What predictor() gives, in words, for the log header. Caller holds mutex_.
-  const char* predictor_name() const;
-  /// The active model's input delay beyond the driver's exchange latency (which every reading
-  /// reports) in whole ticks, rounded up (0 without a model); mutex_ held.
-  std::uint64_t model_delay_ticks() const;
-  /// The driver exchange latency the active model's delay holds (its identification's
-  /// exchange_ticks; 0 for a model made elsewhere) [ticks].
-  std::uint64_t model_exchange_ticks() const;
 
   BenchSettings settings_;
   std::unique_ptr<drivers::Driver> driver_;
@@ -168,10 +172,10 @@ class Bench {
   std::string model_path_;
   nlohmann::json last_result_;
   nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
-  bool finalizing_ = false;
-  bool delivering_result_ = false;  // run.finished is on its way to the sink (wait_idle waits)
-  std::string pending_identify_model_;
-  nlohmann::json pending_identify_options_;
+  RunPhase phase_ = RunPhase::kIdle;
+  bool delivering_result_ = false;   // run.finished is on its way to the sink (wait_idle waits)
+  std::condition_variable idle_cv_;  // phase_ back to kIdle and run.finished delivered
+  nlohmann::json pending_fit_;       // identify's fit request (details::BuiltRun::fit)
   std::unique_ptr<IdentifySession> session_;  // supervisor thread only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;

@@ -4,14 +4,17 @@
 // driver write -> driver read -> record and log. Idle ticks ramp the output to the driver's safe
 // value through the slew limit and keep reading, so timing statistics are kept all the time.
 //
-// Threads: the loop thread runs tick(); every public method except the constructor, start()
-// and shutdown() is for the control thread and is lock-free. Runs are handed over as whole
-// RunProgram objects (see run_program.hpp); the loop never allocates, locks or throws.
+// Threads: the loop thread runs tick(); every public method except the constructor, start(),
+// step() and shutdown() is for the control thread and is lock-free. step() runs one tick on the
+// caller's thread instead (no loop thread, the clock of BenchLoopOptions::clock_ns): tests drive
+// the loop deterministically, tick by tick, through the same per-tick path. Runs are handed over as
+// whole RunProgram objects (see run_program.hpp); the loop never allocates, locks or throws.
 //
 // Faults (driver error, non-finite or stuck measurement, overrun budget, a limit hit with fatal
 // limits): the driver goes to its safe state in the same tick, the run ends with the reason and the
 // loop stays in kFault, writing the safe output, until reset_fault().
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <thread>
@@ -36,6 +39,10 @@ struct BenchLoopOptions {
   /// A fresh reading repeated bit for bit after the output has moved a span faults the run (see
   /// stuck_sensor_detector.hpp); resolution_um 0 takes the driver's measurement count.
   StuckSensorOptions stuck_sensor;
+  /// Monotonic time [ns] for the sample times and execution figures; null = CLOCK_MONOTONIC
+  /// (LoopTimer::now_ns). Must be real-time safe. Used by step() only: the loop thread's
+  /// deadlines and figures stay on CLOCK_MONOTONIC.
+  std::int64_t (*clock_ns)() noexcept = nullptr;
 };
 
 class BenchLoop {
@@ -52,6 +59,11 @@ class BenchLoop {
   RealtimeReport start();
   /// Ends any run (aborted), drives the safe output, joins the thread. Idempotent.
   void shutdown();
+  /// One tick now (the clock's time is both its deadline and its wake-up), on the caller's
+  /// thread, for a loop that was not start()ed: idle -> running -> finished exactly as on the
+  /// loop thread, without the real-time setup or sleeping. Real-time safe. Ignored while the
+  /// loop thread runs.
+  void step() noexcept;
 
   /// Hands a run to the loop. Fails (returns the program back) when a run is active, another
   /// is pending, a finished one has not been taken yet, or the loop is in kFault.
@@ -62,8 +74,14 @@ class BenchLoop {
   void request_abort() noexcept { abort_requested_.store(true, std::memory_order_release); }
   /// A finished run (completed, stopped, aborted or faulted), or null.
   std::unique_ptr<RunProgram> take_finished() noexcept;
-  /// Leaves kFault for kIdle; false when not in kFault.
+  /// Leaves kFault for kIdle, waiting up to a second for the loop to acknowledge; false when
+  /// not in kFault or the loop did not leave it.
   bool reset_fault() noexcept;
+  /// Counts what the control thread waits for: a run finished, a fault, a reset, shutdown.
+  std::uint32_t events() const noexcept { return events_.load(std::memory_order_acquire); }
+  /// Blocks until events() differs from `seen` or `timeout` has passed (control thread; the
+  /// loop wakes it without a lock). True when it changed.
+  bool wait_event(std::uint32_t seen, std::chrono::nanoseconds timeout) const noexcept;
 
   State state() const noexcept { return state_.load(std::memory_order_acquire); }
   /// Why the loop is in kFault (static string; empty otherwise).
@@ -83,11 +101,14 @@ class BenchLoop {
 
  private:
   void run();
+  std::int64_t now_ns() const noexcept;
   void tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
   void run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
   void idle_tick() noexcept;
   void end_run(RunEnd end, const char* reason) noexcept;
   void fault(const char* reason) noexcept;
+  /// Bumps events() and wakes wait_event(): one non-blocking system call.
+  void signal_event() noexcept;
 
   drivers::Driver& driver_;
   BenchLoopOptions options_;
@@ -107,6 +128,7 @@ class BenchLoop {
   std::atomic<double> last_y_{0.0};
   std::atomic<double> last_u_{0.0};
   std::atomic<std::uint64_t> ticks_{0};
+  std::atomic<std::uint32_t> events_{0};
   RealtimeReport realtime_report_;
 
   // Loop-thread state.
@@ -116,6 +138,7 @@ class BenchLoop {
   double dt_ = 1e-4;
   std::int64_t period_ns_ = 100000;
   bool overran_ = false;
+  bool stepped_ = false;  // driven by step(): the injected clock applies
 };
 
 }  // namespace hystbench::daemon

@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace hystbench::daemon {
 
@@ -93,10 +94,10 @@ struct IdentifySection {
   std::string model = "mpi";  ///< pi | mpi | cpi | rpi | auto
   int operators = 0;          ///< plays [0, 100]; 0 = chosen by held-out error
   int dead_zones = -1;        ///< dead zones per side [-1, 50]; -1 = chosen by held-out error
-  /// Excitation u = offset_v + amplitude_v * wave: by default the whole [u_min, u_max] range;
-  /// must stay inside it. [V]
-  double amplitude_v = 75.0;
-  double offset_v = 75.0;
+  /// Excitation u = offset_v + amplitude_v * wave, inside [u_min, u_max] [V]; absent: half the
+  /// range and its middle (the whole range).
+  std::optional<double> amplitude_v;
+  std::optional<double> offset_v;
   double frequency_hz = 1.0;  ///< (0, loop.rate_hz / 20]
   int cycles = 3;             ///< [1, 1000]
   /// Sweep to u_max and u_min before the recorded excitation [s], (0, 60]: every
@@ -107,6 +108,13 @@ struct IdentifySection {
   /// the range ends, which the model needs to see; held out they only judge the model order.
   double heldout_fraction = 0.1;
   double fit_rate_hz = 2000.0;  ///< records are block-averaged to this rate for the fit
+
+  /// The excitation's lowest and highest input within output limits [u_min, u_max] [V].
+  std::pair<double, double> span_v(double u_min, double u_max) const {
+    const double offset = offset_v.value_or(0.5 * (u_min + u_max));
+    const double amplitude = amplitude_v.value_or(0.5 * (u_max - u_min));
+    return {offset - amplitude, offset + amplitude};
+  }
 };
 
 struct PidSection {

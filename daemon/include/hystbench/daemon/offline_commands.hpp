@@ -11,6 +11,7 @@
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/model_file_io.hpp"  // the model files the commands read and write
 
 namespace hystbench::daemon {
 
@@ -57,18 +58,5 @@ struct InvertCommand {
 int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err);
 int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& err);
 int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err);
-
-/// {"rmse":..,"max_abs":..,"range":..,"rmse_percent":..,"max_percent":..,"samples":..}
-nlohmann::json to_json(const compensation::ErrorStats& s);
-
-/// Reads and validates a model file; throws std::runtime_error naming the file and field.
-compensation::ModelFile load_model_file(const std::string& path);
-/// Writes a model file atomically (temp file + rename).
-/// Reads and checks a model file on the client side for `model load`: its JSON document, which
-/// is what travels to the daemon. Throws std::runtime_error naming the file and the fault (at
-/// most 60 KB: a request line must fit the daemon's 64 KiB limit).
-nlohmann::json read_model_document(const std::string& path);
-
-void save_model_file(const std::string& path, const compensation::ModelFile& file);
 
 }  // namespace hystbench::daemon

@@ -1,0 +1,21 @@
+#pragma once
+// Model files on disk: read, checked and written atomically, for the daemon's model folder and
+// the CLI's offline commands. Errors are std::runtime_error naming the file and the fault.
+// Not real-time safe (file I/O, allocation).
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "hystbench/compensation/model_file.hpp"
+
+namespace hystbench::daemon {
+
+/// Reads and validates a model file; throws std::runtime_error naming the file and field.
+compensation::ModelFile load_model_file(const std::string& path);
+/// Writes a model file atomically (temp file + rename).
+void save_model_file(const std::string& path, const compensation::ModelFile& file);
+/// Reads and checks a model file on the client side for `model load`: its JSON document, which
+/// is what travels to the daemon. Throws std::runtime_error naming the file and the fault (at
+/// most 60 KB: a request line must fit the daemon's 64 KiB limit).
+nlohmann::json read_model_document(const std::string& path);
+
+}  // namespace hystbench::daemon

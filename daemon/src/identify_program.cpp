@@ -1,0 +1,95 @@
+#include "identify_program.hpp"
+
+#include <cmath>
+
+#include "hystbench/daemon/command_error.hpp"
+#include "hystbench/daemon/fit_families.hpp"
+#include "hystbench/sim/identification_excitation.hpp"
+
+namespace hystbench::daemon::details {
+
+using nlohmann::json;
+
+namespace {
+
+sim::Excitation excitation(const IdentifyRequest& request, const RunContext& ctx) {
+  const BenchSettings& s = ctx.settings;
+  try {
+    sim::IdentificationExcitationOptions options = s.identify_excitation;
+    options.major_loop_frequency_hz = s.identify.frequency_hz;
+    options.major_loop_cycles = s.identify.cycles;
+    options.precondition_s = s.identify.precondition_s;
+    options.settle_s = s.identify.settle_s;
+    options.reversals_last = true;  // the held-out end of the record: loop shape, not creep
+    return sim::identification_excitation(request.u_min, request.u_max, ctx.dt(), options);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+}
+
+}  // namespace
+
+IdentifyRequest parse_identify_request(const Request& request, const BenchSettings& settings) {
+  const auto& lim = settings.loop.limits;
+  IdentifyRequest r;
+  r.model = request.string("model", settings.identify.model);
+  if (!is_fit_family(r.model)) {
+    throw CommandError("bad_params",
+                       "model: unknown '" + r.model + "' (" + fit_family_names() + ")");
+  }
+  r.operators = request.integer("operators", settings.identify.operators);
+  r.dead_zones = request.integer("dead_zones", settings.identify.dead_zones);
+  const auto [u_min, u_max] = settings.identify.span_v(lim.u_min, lim.u_max);
+  r.u_min = request.number("u_min", u_min, lim.u_min, lim.u_max);
+  r.u_max = request.number("u_max", u_max, lim.u_min, lim.u_max);
+  if (!(r.u_max > r.u_min)) throw CommandError("bad_params", "u_max must be greater than u_min");
+  return r;
+}
+
+BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext& ctx) {
+  const BenchSettings& s = ctx.settings;
+  const sim::Excitation exc = excitation(request, ctx);
+  auto p = std::make_unique<RunProgram>();
+  p->kind = RunKind::kIdentify;
+  p->response_delay_ticks = model_delay_ticks(ctx);
+  // Start from where the output is: a short ramp to the excitation's first value.
+  append_ramp(p->excitation, ctx.u_now, exc.samples.front(),
+              static_cast<std::size_t>(std::ceil(0.1 / ctx.dt())));
+  p->model = predictor(ctx, ctx.u_now);
+  const std::size_t offset = p->excitation.size();
+  p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
+  p->total_samples = p->excitation.size();
+  // Recorded from the first sample: the fit simulates the ramp, settle and sweep from
+  // where the output was, so its model enters the scored part in the actuator's state.
+  p->metrics_from = 0;
+  allocate_records(*p, true);
+
+  json segments = json::array();
+  for (const auto& seg : exc.segments) {
+    segments.push_back(
+        {{"name", seg.name}, {"begin", seg.begin + offset}, {"end", seg.end + offset}});
+  }
+  BuiltRun run;
+  run.program = std::move(p);
+  run.header = {{"run",
+                 {{"kind", "identify"},
+                  {"model", request.model},
+                  {"operators", request.operators},
+                  {"dead_zones", request.dead_zones},
+                  {"u_min", request.u_min},
+                  {"u_max", request.u_max},
+                  {"rate_hz", s.loop.rate_hz},
+                  {"segments", segments}}},
+                {"driver", s.driver_type},
+                {"y_model", predictor_name(ctx)}};
+  const sim::ExcitationSegment* first_scored = exc.find("major_loop");
+  run.fit = {{"model", request.model},
+             {"operators", request.operators},
+             {"dead_zones", request.dead_zones},
+             {"skip_samples", offset + (first_scored != nullptr ? first_scored->begin : 0)},
+             {"precondition_s", s.identify.precondition_s},
+             {"settle_s", s.identify.settle_s}};
+  return run;
+}
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,65 @@
+#pragma once
+// What the bench knows when a run starts (settings, active model, present output) and what a
+// run builder returns: the program, its log header and the start reply's keys. The builders
+// (track_program.hpp, identify_program.hpp, excite_program.hpp) are pure functions of these:
+// no threads, no files, no loop; errors are CommandError naming the cause. Not real-time safe.
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/daemon/bench.hpp"
+#include "hystbench/daemon/run_program.hpp"
+
+namespace hystbench::daemon::details {
+
+struct RunContext {
+  const BenchSettings& settings;
+  const compensation::ModelFile* model = nullptr;            ///< the active model, or null
+  double u_now = 0.0;                                        ///< the loop's present output [V]
+  double dt() const { return 1.0 / settings.loop.rate_hz; }  ///< loop period [s]
+};
+
+/// A run ready for the loop: the program (its run id and log are the bench's to add), the run
+/// log's header, and the keys the bench adds to the start reply and to status' "run".
+struct BuiltRun {
+  std::unique_ptr<RunProgram> program;
+  nlohmann::json header;
+  nlohmann::json reply = nlohmann::json::object();
+  nlohmann::json status = nlohmann::json::object();
+  /// identify: what the fit after the run needs (model, operators, dead_zones, skip_samples,
+  /// precondition_s, settle_s); null otherwise.
+  nlohmann::json fit;
+};
+
+/// Most samples a run records for its figures and fit (the log keeps every sample).
+inline constexpr std::uint64_t kMaxRecordedSamples = 2'000'000;
+
+/// The reference range [µm]: the active model's major loop over the output limits, else the
+/// configured limits.y_min..y_max; nullopt when neither is known.
+struct ActuatorRange {
+  double y_bottom, y_top;
+};
+std::optional<ActuatorRange> actuator_range(const RunContext& ctx);
+
+/// The run's predictor of y (RunProgram::model) relaxed at output u0: the active model, or
+/// without one the linear map of limits.y_min/y_max; nullopt when neither is known.
+std::optional<compensation::ActuatorModel> predictor(const RunContext& ctx, double u0);
+/// What predictor() gives, in words, for the log header.
+const char* predictor_name(const RunContext& ctx);
+
+/// The driver exchange latency the active model's delay holds (its identification's
+/// exchange_ticks; 0 for a model made elsewhere or none) [ticks].
+std::uint64_t model_exchange_ticks(const RunContext& ctx);
+/// The active model's input delay beyond that latency in whole ticks, rounded up (0 without).
+std::uint64_t model_delay_ticks(const RunContext& ctx);
+
+/// Appends a linear ramp from a to b over n samples (b on the last one) [V].
+void append_ramp(std::vector<double>& out, double a, double b, std::size_t n);
+/// Sizes the program's record from metrics_from to total_samples (at most
+/// kMaxRecordedSamples); with `responses` the readings' response ticks too (identify).
+void allocate_records(RunProgram& program, bool responses = false);
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,210 @@
+#include "track_program.hpp"
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "hystbench/compensation/compensator.hpp"
+#include "hystbench/compensation/dynamics_inversion.hpp"
+#include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/compensation/pid_tuning.hpp"
+#include "hystbench/daemon/command_error.hpp"
+#include "hystbench/daemon/inverse_track_program.hpp"
+#include "track_reference.hpp"
+
+namespace hystbench::daemon::details {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+namespace {
+
+hc::CompensatorKind compensator_kind(const std::string& name, const RunContext& ctx) {
+  const auto kind = hc::compensator_kind_from_string(name);
+  if (!kind) {
+    throw CommandError("bad_params", "compensator: unknown '" + name +
+                                         "' (none, inverse, inverse_multiplicative, "
+                                         "inverse+pid, pid)");
+  }
+  if (hc::needs_model(*kind) && ctx.model == nullptr) {
+    throw CommandError(
+        "no_model", "compensator '" + name + "' needs a model: run identify or model.load first");
+  }
+  return *kind;
+}
+
+ActuatorRange known_range(const RunContext& ctx) {
+  if (const auto range = actuator_range(ctx)) return *range;
+  throw CommandError("no_range",
+                     "the actuator range is unknown: identify or load a model, or set "
+                     "limits.y_min and limits.y_max");
+}
+
+TrackReference reference(const Request& request, const RunContext& ctx, const ActuatorRange& range,
+                         const Upload* upload) {
+  const auto& lim = ctx.settings.loop.limits;
+  const double span = range.y_top - range.y_bottom;
+  const ReferenceLimits limits{range.y_bottom, range.y_top,
+                               lim.slew_v_per_s * span / (lim.u_max - lim.u_min),
+                               ctx.settings.loop.rate_hz};
+  if (upload == nullptr) return builtin_reference(request, limits);
+  // The precondition sweep leaves the output at the bottom of its range.
+  return uploaded_reference(*upload, limits, range.y_bottom, request.number("approach_s", 0.2));
+}
+
+// The model's inverse, started in the state the sweep `prefix` leaves it in; null for a
+// compensator without one.
+std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
+                                                      const RunContext& ctx,
+                                                      const std::vector<double>& prefix) {
+  if (ctx.model == nullptr || !hc::needs_model(kind)) return nullptr;
+  const auto& lim = ctx.settings.loop.limits;
+  const hc::ActuatorModel m =
+      model_after(ctx.model->model, prefix, ctx.u_now, lim.u_min, lim.u_max, ctx.dt());
+  try {
+    return hc::make_inverse(m, kind == hc::CompensatorKind::kInverseMultiplicative
+                                   ? hc::InverseKind::kMultiplicative
+                                   : hc::InverseKind::kAuto);
+  } catch (const hc::NotInvertibleError& e) {
+    throw CommandError("not_invertible", e.what());
+  } catch (const std::exception& e) {
+    throw CommandError("bad_model", e.what());
+  }
+}
+
+// The PID's gains (derived, the request's or the configuration's) and clamp; `summary` says
+// which. nullopt for a compensator without feedback.
+std::optional<hc::PidController> feedback_controller(const Request& request,
+                                                     hc::CompensatorKind kind,
+                                                     const RunContext& ctx, double gain,
+                                                     json& summary) {
+  if (!hc::uses_feedback(kind)) return std::nullopt;
+  const BenchSettings& s = ctx.settings;
+  const PidSection& c = s.pid;
+  hc::PidParameters pp{c.kp.value_or(0.0),
+                       c.ki.value_or(0.0),
+                       c.kd.value_or(0.0),
+                       c.derivative_filter_hz,
+                       c.u_fb_min,
+                       c.u_fb_max,
+                       c.output_filter_hz.value_or(0.0)};
+  const bool derived = !c.kp && !c.ki && !c.kd;
+  const bool given = request.has("kp") || request.has("ki") || request.has("kd");
+  if (derived && !given) {
+    const hc::ActuatorModel* m = ctx.model != nullptr ? &ctx.model->model : nullptr;
+    const hc::PidTuning t = hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m);
+    pp.kp = t.kp;
+    pp.ki = t.ki;
+    pp.kd = t.kd;
+    pp.output_filter_hz = c.output_filter_hz.value_or(t.output_filter_hz);
+    summary = {{"gains", "derived"}, {"basis", t.basis}};
+  } else {
+    pp.kp = request.number("kp", pp.kp);
+    pp.ki = request.number("ki", pp.ki);
+    pp.kd = request.number("kd", pp.kd);
+    summary = {{"gains", given ? "request" : "config"}};
+  }
+  if (kind == hc::CompensatorKind::kPid) {
+    pp.output_min = s.loop.limits.u_min;
+    pp.output_max = s.loop.limits.u_max;
+  }
+  std::optional<hc::PidController> pid;
+  try {
+    pid.emplace(pp, ctx.dt());
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  summary.update({{"kp", pp.kp},
+                  {"ki", pp.ki},
+                  {"kd", pp.kd},
+                  {"output_filter_hz", pp.output_filter_hz},
+                  {"u_fb_min", pp.output_min},
+                  {"u_fb_max", pp.output_max}});
+  return pid;
+}
+
+// The feedforward inverts the whole model: hysteresis, creep and rate in the static inverse,
+// the delay and dynamics from the previewed reference. Sets the preview and the tare; returns
+// the summary.
+json arm_feedforward(RunProgram& p, const RunContext& ctx) {
+  const hc::ActuatorModel& model = ctx.model->model;
+  const hc::DynamicsInversion inversion(model, ctx.dt(), ctx.settings.feedforward_bandwidth_hz);
+  json inverted = json::array({"hysteresis"});
+  if (model.creep()) inverted.push_back("creep");
+  if (model.hysteresis().kind() == hc::ModelKind::kRateDependentPi) inverted.push_back("rate");
+  if (model.delay_samples() > 0 || model.delay_s() > 0.0) inverted.push_back("delay");
+  if (model.dynamics()) inverted.push_back("dynamics");
+  if (inversion.active()) p.preview = inversion;
+  arm_tare(p, model_exchange_ticks(ctx));
+  return {{"inverted", inverted},
+          {"preview_samples", inversion.preview_samples()},
+          {"bandwidth_hz", inversion.bandwidth_hz()},
+          {"how", inversion.describe()}};
+}
+
+}  // namespace
+
+BuiltRun make_track_program(const Request& request, const RunContext& ctx, const Upload* upload) {
+  const BenchSettings& s = ctx.settings;
+  const auto& lim = s.loop.limits;
+  const std::string comp_name = request.string("compensator", ctx.model ? "inverse" : "none");
+  const hc::CompensatorKind kind = compensator_kind(comp_name, ctx);
+  const ActuatorRange range = known_range(ctx);
+  TrackReference ref = reference(request, ctx, range, upload);
+
+  auto p = std::make_unique<RunProgram>();
+  p->kind = RunKind::kTrack;
+  p->response_delay_ticks = model_delay_ticks(ctx);
+  p->reference = std::move(ref.signal);
+  // Pre-conditioning: current output -> u_max -> u_min, open loop.
+  p->excitation = precondition_sweep(ctx.u_now, lim.u_min, lim.u_max,
+                                     request.number("precondition_s", s.precondition_s), ctx.dt());
+  const double gain = (range.y_top - range.y_bottom) / (lim.u_max - lim.u_min);
+  const hc::LinearMap linear{gain, range.y_bottom - gain * lim.u_min};
+  std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
+  json feedback = nullptr;
+  const std::optional<hc::PidController> pid =
+      feedback_controller(request, kind, ctx, linear.gain, feedback);
+  try {
+    p->compensator.emplace(kind, std::move(inverse), pid, linear);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  const double u_start = p->excitation.empty() ? ctx.u_now : p->excitation.back();
+  if (kind == hc::CompensatorKind::kPid) p->compensator->reset(u_start);
+  p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
+  p->summary = {{"compensator", comp_name}};
+  if (ctx.model != nullptr && hc::needs_model(kind)) {
+    p->summary["feedforward"] = arm_feedforward(*p, ctx);
+  }
+  if (!feedback.is_null()) p->summary["feedback"] = feedback;
+
+  const std::uint64_t prefix = p->excitation.size();
+  p->total_samples = prefix + ref.samples;
+  p->metrics_from = prefix + ref.unscored;
+  p->y_ref_min = range.y_bottom;
+  p->y_ref_max = range.y_top;
+  allocate_records(*p);
+
+  BuiltRun run;
+  json run_header = {{"kind", "track"}};
+  run_header.update(ref.header);
+  run_header.update({{"compensator", comp_name},
+                     {"precondition_samples", prefix},
+                     {"metrics_from", p->metrics_from},
+                     {"rate_hz", s.loop.rate_hz},
+                     {"feedback", feedback}});
+  run.header = {{"run", run_header},
+                {"driver", s.driver_type},
+                {"y_model", predictor_name(ctx)},
+                {"model", ctx.model != nullptr ? hc::to_json(*ctx.model) : json(nullptr)}};
+  run.reply = {{"reference", ref.reply},
+               {"compensator", comp_name},
+               {"feedback", feedback},
+               {"feedforward", p->summary.value("feedforward", json(nullptr))}};
+  run.status = {{"compensator", comp_name}};
+  run.program = std::move(p);
+  return run;
+}
+
+}  // namespace hystbench::daemon::details
