@@ -79,12 +79,8 @@ void Bench::shutdown() {
   if (loop_) {
     loop_->request_abort();
     // Give the loop a few ticks (at most 0.2 s) to end the run cleanly, then stop it.
-    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
-    for (;;) {
-      const std::uint32_t seen = loop_->events();
-      if (loop_->state() != BenchLoop::State::kRunning) break;
-      if (!loop_->wait_event(seen, until - std::chrono::steady_clock::now())) break;
-    }
+    loop_->wait_for([this] { return loop_->state() != BenchLoop::State::kRunning; },
+                    std::chrono::milliseconds(200));
     loop_->shutdown();
   }
   if (supervisor_.joinable()) supervisor_.join();

@@ -84,13 +84,7 @@ bool BenchLoop::reset_fault() noexcept {
   if (state() != State::kFault) return false;
   reset_requested_.store(true, std::memory_order_release);
   // The loop acknowledges within a tick; wait so the caller sees the new state.
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-  for (;;) {
-    const std::uint32_t seen = events();
-    if (state() != State::kFault) return true;
-    const auto left = until - std::chrono::steady_clock::now();
-    if (left <= left.zero() || !wait_event(seen, left)) return state() != State::kFault;
-  }
+  return wait_for([this] { return state() != State::kFault; }, std::chrono::seconds(1));
 }
 
 bool BenchLoop::wait_event(std::uint32_t seen, std::chrono::nanoseconds timeout) const noexcept {

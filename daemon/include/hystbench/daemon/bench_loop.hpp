@@ -82,6 +82,17 @@ class BenchLoop {
   /// Blocks until events() differs from `seen` or `timeout` has passed (control thread; the
   /// loop wakes it without a lock). True when it changed.
   bool wait_event(std::uint32_t seen, std::chrono::nanoseconds timeout) const noexcept;
+  /// Blocks until done() holds, re-checked on every event, or `timeout` has passed; returns
+  /// done() (control thread).
+  template <class Done>
+  bool wait_for(Done done, std::chrono::nanoseconds timeout) const {
+    const auto until = std::chrono::steady_clock::now() + timeout;
+    for (;;) {
+      const std::uint32_t seen = events();
+      if (done()) return true;
+      if (!wait_event(seen, until - std::chrono::steady_clock::now())) return done();
+    }
+  }
 
   State state() const noexcept { return state_.load(std::memory_order_acquire); }
   /// Why the loop is in kFault (static string; empty otherwise).
