@@ -53,6 +53,8 @@ constexpr double kMinRateSpread = 1.25;
 // RPI rate filter time constants tried, in fit samples (RateEstimator; 0 = the per-sample
 // difference): the one with the lowest held-out error is kept.
 constexpr double kRateFilterSamples[] = {0.0, 2.0, 5.0, 20.0};
+// Caps of the rate law tried, as fractions of the record's largest smooth rate.
+constexpr double kRateCapFractions[] = {1.0, 0.8, 0.64, 0.51};
 
 void validate_record(std::span<const double> t, std::span<const double> u,
                      std::span<const double> y) {
@@ -429,6 +431,7 @@ Candidate Identifier::search_rpi() {
     const std::vector<double> rates = details::sample_rates(r_.ud, r_.dt);
     s.max_rate = std::max(*std::max_element(rates.begin(), rates.end()), 1e-300);
   }
+  s.record_max_rate = s.max_rate;
   // The nested model: the MPI with zero rate coefficients is a feasible RPI, so the RPI the
   // search returns is never worse on held-out data than the MPI it extends.
   Candidate best = nested_rpi(mpi, s);
@@ -439,7 +442,17 @@ Candidate Identifier::search_rpi() {
   for (const double samples : kRateFilterSamples) {
     s.rate_filter_s = samples * r_.dt;
     stage_progress(0.0, "rate filter " + fmt(s.rate_filter_s * 1e3) + " ms");
-    Candidate joint = evaluate(s, "constrained-lsq-rate-joint");
+    // The rate law may level off inside the record's rate range (the rate-dependent paper's
+    // weights saturate at high rates): the cap on a grid below the record's largest smooth rate,
+    // chosen by the fit's error over the whole record (one structural number; the held-out end,
+    // slow reversals, cannot tell caps apart).
+    Candidate joint;
+    for (const double fraction : kRateCapFractions) {
+      ModelStructure capped = s;
+      capped.max_rate = s.max_rate * fraction;
+      Candidate c = evaluate(capped, "constrained-lsq-rate-joint");
+      if (!joint.model || c.fit.rmse < joint.fit.rmse) joint = std::move(c);
+    }
     if (joint.score() < best.score()) best = std::move(joint);
     const auto x = details::fit_rate_groups(s, v, r_.ud, r_.y, r_.begin, r_.fit_end);
     if (!x) continue;
@@ -466,7 +479,7 @@ Candidate Identifier::nested_rpi(const Candidate& mpi, const ModelStructure& s) 
   ActuatorModel m(std::make_unique<RateDependentPiModel>(
       RateDependentPiParameters{h.parameters(),
                                 std::vector<double>(h.parameters().play.weights.size(), 0.0),
-                                s.max_rate, 0.0},
+                                s.max_rate, 0.0, s.max_rate},
       r_.dt));
   finish_nested(c, std::move(m), mpi, " (rate-free: no rate law beat the modified PI it extends)");
   return c;

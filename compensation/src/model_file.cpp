@@ -118,7 +118,8 @@ json to_json(const ModelFile& file) {
       j["deadzone"] = dead_zone_to_json(p.base.dead_zone, p.base.center);
       j["rate"] = {{"coefficients", p.rate_coefficients},
                    {"max_rate", p.max_rate},
-                   {"filter_s", p.rate_filter_s}};
+                   {"filter_s", p.rate_filter_s},
+                   {"record_max_rate", p.record_max_rate}};
       break;
     }
     case ModelKind::kCoupledPlayPi: {
@@ -173,7 +174,8 @@ ModelFile model_file_from_json(const json& j) {
         const json& r = member(j, "", "rate");
         RateDependentPiParameters p{
             ModifiedPiParameters{play_from_json(j), dz, center}, numbers(r, "rate", "coefficients"),
-            number_member(r, "rate", "max_rate", 0.0), number_member(r, "rate", "filter_s", 0.0)};
+            number_member(r, "rate", "max_rate", 0.0), number_member(r, "rate", "filter_s", 0.0),
+            number_member(r, "rate", "record_max_rate", 0.0)};
         h = std::make_unique<RateDependentPiModel>(std::move(p));
         break;
       }

@@ -19,6 +19,8 @@ RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double d
   details::require(p_.max_rate >= 0.0, "rate.max_rate must be >= 0");
   details::require_finite(p_.rate_filter_s, "rate.filter_s");
   details::require(p_.rate_filter_s >= 0.0, "rate.filter_s must be >= 0");
+  details::require_finite(p_.record_max_rate, "rate.record_max_rate");
+  details::require(p_.record_max_rate >= 0.0, "rate.record_max_rate must be >= 0");
   details::require_finite(p_.base.center, "deadzone.center");
   dw_.resize(p_.rate_coefficients.size());
   double prev = 0.0;

@@ -1,6 +1,7 @@
 #include "identify_program.hpp"
 
 #include <cmath>
+#include <string>
 
 #include "hystbench/daemon/command_error.hpp"
 #include "hystbench/daemon/fit_families.hpp"
@@ -12,10 +13,29 @@ using nlohmann::json;
 
 namespace {
 
+// A rate law is identified only up to the rates its record holds: for a family that fits one
+// the excitation adds kRateLawCycles at kRateLawFrequencyHz over the rate segments' span, which
+// covers a 19 Hz sine over 80 % of the range. A rate-free fit gains nothing from them but a bias
+// towards fast loops, so the other families go without.
+constexpr double kRateLawFrequencyHz = 20.0;
+constexpr int kRateLawCycles = 20;
+
+void add_rate_law_segment(sim::IdentificationExcitationOptions& options, const std::string& model,
+                          double loop_rate_hz) {
+  if (model != "rpi" && model != "auto") return;
+  if (kRateLawFrequencyHz > loop_rate_hz / 20.0) return;  // too few samples per cycle
+  for (const double f : options.rate_frequencies_hz) {
+    if (f >= kRateLawFrequencyHz) return;
+  }
+  options.rate_frequencies_hz.push_back(kRateLawFrequencyHz);
+  options.rate_cycles.push_back(kRateLawCycles);
+}
+
 sim::Excitation excitation(const IdentifyRequest& request, const RunContext& ctx) {
   const BenchSettings& s = ctx.settings;
   try {
     sim::IdentificationExcitationOptions options = s.identify_excitation;
+    add_rate_law_segment(options, request.model, s.loop.rate_hz);
     options.major_loop_frequency_hz = s.identify.frequency_hz;
     options.major_loop_cycles = s.identify.cycles;
     options.precondition_s = s.identify.precondition_s;

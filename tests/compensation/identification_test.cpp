@@ -152,6 +152,17 @@ TEST(Identification, RecoversModifiedPiParametersFromNoiseFreeData) {
   EXPECT_LT(r.heldout.rmse_percent(), 1e-6);
 }
 
+// An rpi fit on the true thresholds, dead zones and centre: only weights and the rate law left.
+hc::FitResult fit_rate_law(const hc::RateDependentPiParameters& truth,
+                           const std::vector<double>& u, const std::vector<double>& y) {
+  hc::FitOptions o = fixed_options(hc::ModelKind::kRateDependentPi);
+  o.play_thresholds = truth.base.play.thresholds;
+  o.dead_zone_thresholds =
+      hc::DeadZoneSuperposition(truth.base.dead_zone).inverse().parameters().thresholds;
+  o.center = truth.base.center;
+  return hc::fit_model(times(u.size()), u, y, o);
+}
+
 TEST(Identification, RecoversRateDependentWeightsFromNoiseFreeData) {
   // Frequency sweep: the same input levels are crossed at different rates.
   std::mt19937_64 rng(13);
@@ -165,12 +176,7 @@ TEST(Identification, RecoversRateDependentWeightsFromNoiseFreeData) {
   ASSERT_TRUE(model.invertibility().invertible);
   const std::vector<double> y = simulate(model, u);
 
-  hc::FitOptions o = fixed_options(hc::ModelKind::kRateDependentPi);
-  o.play_thresholds = truth.base.play.thresholds;
-  o.dead_zone_thresholds =
-      hc::DeadZoneSuperposition(truth.base.dead_zone).inverse().parameters().thresholds;
-  o.center = truth.base.center;
-  const hc::FitResult r = hc::fit_model(times(u.size()), u, y, o);
+  const hc::FitResult r = fit_rate_law(truth, u, y);
 
   ASSERT_EQ(r.model.hysteresis().kind(), hc::ModelKind::kRateDependentPi);
   const auto& got =
@@ -181,6 +187,29 @@ TEST(Identification, RecoversRateDependentWeightsFromNoiseFreeData) {
   // max_rate is the fastest rate of the record, and the model is invertible up to it.
   EXPECT_GT(got.max_rate, 0.0);
   EXPECT_TRUE(r.model.hysteresis().invertibility().invertible);
+}
+
+// A rate law that levels off inside the record's rates (the paper's weights saturate at high
+// rates) is found on the cap grid, and the model keeps both the cap and the record's range.
+TEST(Identification, FindsWhereTheRateLawLevelsOff) {
+  std::mt19937_64 rng(13);
+  const std::vector<double> u = rich_excitation(20000, 0.0, 10.0, 3.0);
+  const double record_rate = hc::smooth_max_rate(u, kDt);
+  hc::RateDependentPiParameters truth;
+  truth.base = known_mpi(rng, u);
+  for (std::size_t i = 0; i < truth.base.play.weights.size(); ++i)
+    truth.rate_coefficients.push_back(5e-4 * (1.0 + 0.1 * i));
+  truth.max_rate = 0.64 * record_rate;  // a point of the grid
+  hc::RateDependentPiModel model(truth, kDt);
+  const std::vector<double> y = simulate(model, u);
+
+  const hc::FitResult r = fit_rate_law(truth, u, y);
+  const auto& got =
+      dynamic_cast<const hc::RateDependentPiModel&>(r.model.hysteresis()).parameters();
+  EXPECT_NEAR(got.max_rate, truth.max_rate, 1e-9 * record_rate);
+  EXPECT_NEAR(got.record_max_rate, record_rate, 1e-9 * record_rate);
+  EXPECT_LT(relative_error(got.rate_coefficients, truth.rate_coefficients), 1e-6);
+  EXPECT_LT(r.fit.rmse, 1e-6);
 }
 
 TEST(Identification, FindsCoupledPlayAsymmetryOnItsGrid) {

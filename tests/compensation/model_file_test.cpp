@@ -57,12 +57,25 @@ TEST(ModelFile, RoundTripsEveryFieldAndBehavesIdentically) {
 TEST(ModelFile, RateDependentRoundTrip) {
   std::mt19937_64 rng(2);
   hc::ModelFile f;
-  f.model =
-      hc::ActuatorModel(std::make_unique<hc::RateDependentPiModel>(hc::RateDependentPiParameters{
-          hystbench::testing::random_mpi(rng, 5, 1, 10.0), {0, 1e-4, 2e-4, 3e-4, 4e-4}, 300.0}));
+  f.model = hc::ActuatorModel(std::make_unique<hc::RateDependentPiModel>(
+      hc::RateDependentPiParameters{hystbench::testing::random_mpi(rng, 5, 1, 10.0),
+                                    {0, 1e-4, 2e-4, 3e-4, 4e-4},
+                                    300.0,
+                                    0.0,
+                                    450.0}));
   const json j = hc::to_json(f);
   EXPECT_EQ(j["type"], "rpi");
+  EXPECT_EQ(j["rate"]["record_max_rate"], 450.0);
   EXPECT_EQ(hc::to_json(hc::model_file_from_json(j)), j);
+  // A file written before the record's rate was kept loads with it unknown (0).
+  json old = j;
+  old["rate"].erase("record_max_rate");
+  const auto& p = dynamic_cast<const hc::RateDependentPiModel&>(
+                      hc::model_file_from_json(old).model.hysteresis())
+                      .parameters();
+  EXPECT_EQ(p.record_max_rate, 0.0);
+  old["rate"]["record_max_rate"] = -1.0;
+  EXPECT_THROW(hc::model_file_from_json(old), std::exception);
 }
 
 // A coupled-play model carries its output dead zones when it has them; a file without them

@@ -206,6 +206,7 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
     rpi.rate_coefficients[i] = x[n_ + static_cast<Eigen::Index>(i)] * inv_max_rate_;
   }
   rpi.max_rate = s_.max_rate;
+  rpi.record_max_rate = s_.record_max_rate;
   rpi.rate_filter_s = s_.rate_filter_s;
   return std::make_unique<RateDependentPiModel>(std::move(rpi), s_.dt);
 }

@@ -37,7 +37,8 @@ struct ModelStructure {
   double center = 0.0;           ///< [output unit] (with dead zones)
   double input_reference = 0.0;  ///< subtracted from the last play for conditioning (not RPI)
   std::array<double, 3> cp_scale{1.0, 1.0, 1.0};  ///< CPI: ra, rb, rc as multiples of r_i
-  double max_rate = 0.0;                          ///< RPI [input unit / s]
+  double max_rate = 0.0;                          ///< RPI: the rate law's cap [input unit / s]
+  double record_max_rate = 0.0;      ///< RPI: the record's largest smooth rate [input unit / s]
   double rate_filter_s = 0.0;        ///< RPI: the rate's low-pass time constant (RateEstimator) [s]
   double dt = 1e-3;                  ///< sample period [s]
   double min_play_slope = 0.0;       ///< lower bound on cumulative play weights

@@ -20,6 +20,11 @@ struct RateDependentPiParameters {
                           ///< rate is capped there and invertibility is checked on [0, max_rate]
                           ///< [input unit / s]
   double rate_filter_s = 0.0;  ///< time constant of the rate's low-pass [s], >= 0
+  /// The largest rate of the identification record's smooth parts [input unit / s], >= 0; 0 =
+  /// unknown (taken as max_rate). Above max_rate: the record showed the law level off at
+  /// max_rate (a saturation); equal: max_rate is only where the record ended (an extrapolation
+  /// guard).
+  double record_max_rate = 0.0;
 };
 
 class RateDependentPiModel final : public HysteresisModel {
