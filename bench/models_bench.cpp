@@ -6,6 +6,7 @@
 #include <random>
 
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
+#include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
@@ -102,8 +103,32 @@ void dynamic_feedforward_step(benchmark::State& state) {
   state.SetLabel("ns/tick = time");
 }
 
+// Planning the drive of a 10 Hz sine (1 s at 10 kHz, 10 000 samples) on an rpi of n plays:
+// the time a track run's start waits for its planned feedforward. Per sample = time / 10 000.
+void plan_drive_10hz(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::mt19937_64 rng(static_cast<unsigned>(n));
+  auto mpi = hystbench::testing::random_mpi(rng, n, n / 10, 150.0);
+  std::vector<double> c;
+  for (int i = 0; i < n; ++i) c.push_back(2e-5 * i / n);
+  hc::ActuatorModel m(
+      std::make_unique<hc::RateDependentPiModel>(hc::RateDependentPiParameters{mpi, c, 1e4}, 1e-4));
+  m.input_min = 0.0;
+  m.input_max = 150.0;
+  m.configure(1e-4);
+  m.reset(0.0);
+  // A reachable reference: the model's output for a 10 Hz input sine over 15-135 V.
+  std::vector<double> targets;
+  auto shaper = m;
+  for (int k = 0; k < 10000; ++k)
+    targets.push_back(shaper.step(75.0 - 60.0 * std::cos(2.0 * M_PI * 10.0 * k * 1e-4)));
+  for (auto _ : state) benchmark::DoNotOptimize(hc::plan_drive(m, 0.0, {}, targets).rms);
+  state.SetLabel("10 000 samples");
+}
+
 }  // namespace
 
+BENCHMARK(plan_drive_10hz)->Arg(10)->Arg(50)->Unit(benchmark::kMillisecond);
 BENCHMARK(dynamic_feedforward_step)->Arg(10)->Arg(50)->Arg(200);
 BENCHMARK_CAPTURE(model_step, pi, std::string("pi"))->Arg(10)->Arg(50)->Arg(200);
 BENCHMARK_CAPTURE(model_step, mpi, std::string("mpi"))->Arg(10)->Arg(50)->Arg(200);
