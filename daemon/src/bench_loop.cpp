@@ -217,13 +217,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     // target that inverts the model's delay and dynamics (the reference ahead by the delay).
     // Less the tare: the output offset the model did not predict on the open-loop prefix.
     const double tare = p.tare_um();
-    auto target_at = [&p, tare](double tt) noexcept {
-      if (!p.preview) return std::clamp(p.reference->value(tt), p.y_ref_min, p.y_ref_max) - tare;
-      const double tl = tt + p.preview->lead_s(), h = p.preview->step_s();
-      return p.preview->target(p.reference->value(tl - h), p.reference->value(tl),
-                               p.reference->value(tl + h)) -
-             tare;
-    };
+    auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
     compensation::CompensatorOutput out;
     if (const std::size_t ahead = p.targets.capacity(); ahead > 1) {
       if (p.targets.view().empty()) {

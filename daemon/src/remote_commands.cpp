@@ -81,6 +81,16 @@ void print_run_result(const json& r, std::ostream& out) {
         << " um: the offset the model missed on the precondition sweep, taken off the "
            "feedforward\n";
   }
+  if (const auto ff = r.find("feedforward"); ff != r.end() && ff->contains("planned")) {
+    const json& p = (*ff)["planned"];
+    if (p.value("samples", 0) > 0) {
+      out << "  feedforward     planned over " << p.value("samples", 0) << " samples in "
+          << fixed(p["seconds"], 2) << " s: model rms " << fixed(p["model_rms_um"], 4)
+          << " um (the previewed inverse's " << fixed(p["previewed_model_rms_um"], 4) << " um)\n";
+    } else {
+      out << "  feedforward     not planned: " << p.value("why_not", std::string("?")) << "\n";
+    }
+  }
   if (r.contains("model_rms_error_um")) {
     out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
         << fixed(r["model_rms_error_percent"], 3) << " %)   max "

@@ -1,5 +1,7 @@
 #include "hystbench/daemon/run_program.hpp"
 
+#include <algorithm>
+
 namespace hystbench::daemon {
 
 const char* to_string(RunKind kind) noexcept {
@@ -26,6 +28,13 @@ const char* to_string(RunEnd end) noexcept {
       return "fault";
   }
   return "unknown";
+}
+
+double RunProgram::feedforward_target(double t_s, double tare_um) const noexcept {
+  if (!preview) return std::clamp(reference->value(t_s), y_ref_min, y_ref_max) - tare_um;
+  const double tl = t_s + preview->lead_s(), h = preview->step_s();
+  return preview->target(reference->value(tl - h), reference->value(tl), reference->value(tl + h)) -
+         tare_um;
 }
 
 }  // namespace hystbench::daemon

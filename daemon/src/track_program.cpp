@@ -1,13 +1,16 @@
 #include "track_program.hpp"
 
+#include <chrono>
 #include <memory>
 #include <optional>
 #include <string>
 
 #include "hystbench/compensation/compensator.hpp"
+#include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/compensation/pid_tuning.hpp"
+#include "hystbench/compensation/planned_inverse.hpp"
 #include "hystbench/daemon/command_error.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
 #include "track_reference.hpp"
@@ -18,6 +21,11 @@ namespace hc = compensation;
 using nlohmann::json;
 
 namespace {
+
+// The most planning a track request waits for (compensation::plan_drive_work: about 10 s on one
+// core; 120 000 samples, 12 s at 10 kHz, for a model of 6 plays). A client's request times out
+// after 30 s.
+constexpr double kMaxPlanWork = 1.0e6;
 
 hc::CompensatorKind compensator_kind(const std::string& name, const RunContext& ctx) {
   const auto kind = hc::compensator_kind_from_string(name);
@@ -142,6 +150,66 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
           {"how", inversion.describe()}};
 }
 
+// The feedforward planned over the whole known reference for a rate-dependent model
+// (compensation::plan_drive: the per-sample rate law leaves a tick-by-tick inverse no good
+// choice at a fast reference's tops); null, with the reason in `feedforward`, where the
+// previewed inverse stays: another model kind, the multiplicative structure, a reference too
+// long to plan in kMaxPlanWork, a plan that is not better on the model. The targets are the loop's
+// (RunProgram::feedforward_target) without the tare, which the planned inverse meets through the
+// plan's gain once the prefix measured it.
+std::unique_ptr<hc::InverseModel> planned_inverse(const RunProgram& p, const RunContext& ctx,
+                                                  hc::CompensatorKind kind, std::uint64_t samples,
+                                                  json& feedforward) {
+  if (kind == hc::CompensatorKind::kInverseMultiplicative ||
+      !hc::can_plan_drive(ctx.model->model) || samples == 0) {
+    return nullptr;
+  }
+  if (hc::plan_drive_work(ctx.model->model, samples) > kMaxPlanWork) {
+    const auto longest =
+        static_cast<std::uint64_t>(kMaxPlanWork / hc::plan_drive_work(ctx.model->model, 1));
+    feedforward["planned"] = {
+        {"samples", 0},
+        {"why_not", "the reference (" + std::to_string(samples) +
+                        " samples) is longer than the planner takes for this model (" +
+                        std::to_string(longest) + "): the previewed inverse follows it"}};
+    return nullptr;
+  }
+  const auto& lim = ctx.settings.loop.limits;
+  const double dt = ctx.dt();
+  std::vector<double> targets(samples);
+  for (std::uint64_t k = 0; k < samples; ++k) {
+    targets[k] = p.feedforward_target(static_cast<double>(k) * dt, 0.0);
+  }
+  const hc::ActuatorModel relaxed =
+      model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt);
+  const auto start = std::chrono::steady_clock::now();
+  hc::DrivePlan plan;
+  try {
+    plan = hc::plan_drive(relaxed, ctx.u_now, p.excitation, targets);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_model", std::string("planning the feedforward: ") + e.what());
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  json planned = {{"samples", samples},
+                  {"seconds", seconds},
+                  {"model_rms_um", plan.rms},
+                  {"previewed_model_rms_um", plan.start_rms}};
+  // The plan pays for its smoothness, and beyond the rates its model was identified at it
+  // plans on the continued law: where that leaves it worse on the model as it is, the previewed
+  // inverse plays.
+  if (!(plan.rms <= plan.start_rms)) {
+    planned["samples"] = 0;
+    planned["why_not"] = "on the model the plan's error (" + std::to_string(plan.rms) +
+                         " um rms) is not below the previewed inverse's (" +
+                         std::to_string(plan.start_rms) + " um): the previewed inverse follows it";
+    feedforward["planned"] = planned;
+    return nullptr;
+  }
+  feedforward["planned"] = planned;
+  return std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(plan));
+}
+
 }  // namespace
 
 BuiltRun make_track_program(const Request& request, const RunContext& ctx, const Upload* upload) {
@@ -156,12 +224,21 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   p->kind = RunKind::kTrack;
   p->response_delay_ticks = model_delay_ticks(ctx);
   p->reference = std::move(ref.signal);
+  p->y_ref_min = range.y_bottom;
+  p->y_ref_max = range.y_top;
   // Pre-conditioning: current output -> u_max -> u_min, open loop.
   p->excitation = precondition_sweep(ctx.u_now, lim.u_min, lim.u_max,
                                      request.number("precondition_s", s.precondition_s), ctx.dt());
   const double gain = (range.y_top - range.y_bottom) / (lim.u_max - lim.u_min);
   const hc::LinearMap linear{gain, range.y_bottom - gain * lim.u_min};
+  json feedforward = nullptr;
+  if (ctx.model != nullptr && hc::needs_model(kind)) feedforward = arm_feedforward(*p, ctx);
   std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
+  if (inverse) {
+    if (auto planned = planned_inverse(*p, ctx, kind, ref.samples, feedforward)) {
+      inverse = std::move(planned);
+    }
+  }
   json feedback = nullptr;
   const std::optional<hc::PidController> pid =
       feedback_controller(request, kind, ctx, linear.gain, feedback);
@@ -174,16 +251,12 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   if (kind == hc::CompensatorKind::kPid) p->compensator->reset(u_start);
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
   p->summary = {{"compensator", comp_name}};
-  if (ctx.model != nullptr && hc::needs_model(kind)) {
-    p->summary["feedforward"] = arm_feedforward(*p, ctx);
-  }
+  if (!feedforward.is_null()) p->summary["feedforward"] = feedforward;
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
 
   const std::uint64_t prefix = p->excitation.size();
   p->total_samples = prefix + ref.samples;
   p->metrics_from = prefix + ref.unscored;
-  p->y_ref_min = range.y_bottom;
-  p->y_ref_max = range.y_top;
   allocate_records(*p);
 
   BuiltRun run;

@@ -12,6 +12,7 @@
 #include "../../daemon/src/identify_program.hpp"
 #include "../../daemon/src/track_program.hpp"
 #include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/command_error.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
 
@@ -109,11 +110,68 @@ TEST(TrackProgram, AModelsInverseIsPreviewedAndTaredOverTheModelsRange) {
   EXPECT_DOUBLE_EQ(p.y_ref_max, range.y_top);
   EXPECT_EQ(run.reply["compensator"], "inverse");
   EXPECT_EQ(p.summary["feedforward"]["inverted"], json::array({"hysteresis"}));
+  EXPECT_FALSE(p.summary["feedforward"].contains("planned"));  // nothing to plan for a PI
   EXPECT_EQ(run.reply["feedforward"], p.summary["feedforward"]);
   // A static model has no delay or dynamics to preview, but the offset is tared on the sweep.
   EXPECT_FALSE(p.preview);
   EXPECT_LT(p.tare_from, p.excitation.size());
   EXPECT_EQ(run.header["model"], hc::to_json(model));
+}
+
+// A rate-dependent model's feedforward is planned over the reference before the run: the plan
+// the compensator plays, for the targets the loop will give it, meets them on the model as the
+// reply says and better than the previewed inverse; a reference too long to plan keeps the
+// previewed inverse and says why.
+TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
+  hd::BenchSettings s = settings();
+  s.loop.rate_hz = 10000.0;
+  hc::PiParameters play;
+  std::vector<double> c;
+  for (int i = 0; i < 10; ++i) {
+    play.thresholds.push_back(7.5 * i);
+    play.weights.push_back(i == 0 ? 0.18 : 0.02);
+    c.push_back(2e-6 * i);
+  }
+  play.offset = -6.75;
+  hc::ActuatorModel rpi(std::make_unique<hc::RateDependentPiModel>(
+      hc::RateDependentPiParameters{
+          {play, hc::DeadZoneParameters{{-15.0, 0.0, 12.0}, {0.15, 1.0, 0.4}}, 21.0},
+          c,
+          1e4,
+          0.0,
+          0.0},
+      1e-4));
+  rpi.input_min = 0.0;
+  rpi.input_max = 150.0;
+  const hc::ModelFile model{std::move(rpi), json::object()};
+  const hdd::RunContext ctx{s, &model, 0.0};
+  const hdd::BuiltRun run =
+      track({{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 3}}, ctx);
+  hd::RunProgram& p = *run.program;
+  const json& planned = run.reply["feedforward"]["planned"];
+  const std::uint64_t prefix = p.excitation.size(), samples = p.total_samples - prefix;
+  ASSERT_EQ(planned["samples"], samples) << run.reply.dump(2);
+  EXPECT_LT(planned["model_rms_um"].get<double>(),
+            0.7 * planned["previewed_model_rms_um"].get<double>());
+  // The compensator's drive through the model, for the loop's own targets.
+  hc::ActuatorModel m = model.model;
+  m.configure(1e-4);
+  m.reset(0.0);
+  for (const double u : p.excitation) m.step(u);
+  double sum2 = 0.0;
+  for (std::uint64_t k = 0; k < samples; ++k) {
+    const double target = p.feedforward_target(static_cast<double>(k) * 1e-4, 0.0);
+    const double e = m.step(p.compensator->step(target, std::nan(""), target).u) - target;
+    sum2 += e * e;
+  }
+  EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(samples)), planned["model_rms_um"], 1e-9);
+
+  const hdd::BuiltRun slow =
+      track({{"reference", "sine"}, {"frequency_hz", 1.0}, {"periods", 10}}, ctx);
+  const json& not_planned = slow.reply["feedforward"]["planned"];
+  EXPECT_EQ(not_planned["samples"], 0);
+  EXPECT_THAT(not_planned["why_not"].get<std::string>(),
+              HasSubstr("is longer than the planner takes for this model"));
 }
 
 TEST(TrackProgram, FeedbackGainsAreDerivedUnlessTheRequestGivesThem) {
@@ -211,6 +269,24 @@ TEST(IdentifyProgram, RampsFromThePresentOutputAndRecordsEverySampleForTheFit) {
   EXPECT_EQ(run.fit["model"], "mpi");
   EXPECT_GT(run.fit["skip_samples"].get<std::size_t>(), 100u);
   EXPECT_EQ(run.header["run"]["segments"].front()["begin"], 100);
+}
+
+// A rate law is identified only up to the rates its record holds: rpi and auto add cycles at
+// 20 Hz (a 19 Hz sine's rates over 80 % of the range); a rate-free family goes without them.
+TEST(IdentifyProgram, ARateDependentFamilyGetsTheFastRateSegment) {
+  const hd::BenchSettings s = settings();  // 1 kHz: 20 Hz has 50 samples per cycle
+  const hdd::RunContext ctx{s, nullptr, 0.0};
+  const auto names = [&](const std::string& model) {
+    const hdd::BuiltRun run =
+        hdd::make_identify_program(hdd::IdentifyRequest{model, 0, -1, 0.0, 150.0}, ctx);
+    std::vector<std::string> out;
+    for (const json& seg : run.header["run"]["segments"]) out.push_back(seg["name"]);
+    return out;
+  };
+  EXPECT_THAT(names("rpi"), ::testing::Contains("rate_20hz"));
+  EXPECT_THAT(names("auto"), ::testing::Contains("rate_20hz"));
+  EXPECT_THAT(names("mpi"), ::testing::Not(::testing::Contains("rate_20hz")));
+  EXPECT_THAT(names("mpi"), ::testing::Contains("rate_10hz"));
 }
 
 TEST(ExciteProgram, ADriveIsRampedToWithinTheSlewLimitAndRecordedFromItsStart) {

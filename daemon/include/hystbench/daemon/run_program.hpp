@@ -99,6 +99,11 @@ struct RunProgram {
     return tare_samples > 0 ? tare_sum / static_cast<double>(tare_samples) : 0.0;
   }
   LoopStatistics stats;  ///< this run's loop timing
+
+  /// track: the feedforward's target at run time t_s [s] (0 = the reference's first sample): the
+  /// reference clipped to [y_ref_min, y_ref_max], or with a preview the static target that
+  /// inverts the model's delay and dynamics (the reference ahead); less `tare_um`. Real-time safe.
+  double feedforward_target(double t_s, double tare_um) const noexcept;
 };
 
 }  // namespace hystbench::daemon
