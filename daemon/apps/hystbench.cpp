@@ -145,8 +145,10 @@ int main(int argc, char** argv) {
   inv_cmd->add_option("-o,--output", inv.output_path, "CSV file to write (t,yr,u)")->required();
   inv_cmd
       ->add_option("--inverse", inv.inverse,
-                   "auto (analytic where a closed form exists, else numeric), analytic, numeric, "
-                   "multiplicative (inverse multiplicative structure)")
+                   "auto (analytic where a closed form exists, else numeric; for a rate-dependent "
+                   "model (rpi) the drive is planned over the whole reference), analytic, "
+                   "numeric (a rate-dependent model's looks 30 ms ahead), multiplicative "
+                   "(inverse multiplicative structure)")
       ->check(CLI::IsMember({"auto", "analytic", "numeric", "multiplicative"}))
       ->capture_default_str();
   inv_cmd->add_flag("--json", inv.json_output, "Print the result as one JSON line");

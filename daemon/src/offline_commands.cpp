@@ -6,8 +6,10 @@
 #include <fstream>
 #include <iomanip>
 #include <ostream>
+#include <span>
 #include <sstream>
 
+#include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/fit_families.hpp"
@@ -171,11 +173,40 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
     const double u0 = file.model.input_min < file.model.input_max ? file.model.input_min : 0.0;
     inverse->reset(u0);
     std::vector<double> u(yr.size());
-    for (std::size_t k = 0; k < yr.size(); ++k) u[k] = inverse->step(yr[k]);
+    json result = {{"samples", u.size()}, {"output", cmd.output_path}};
+    if (kind == hc::InverseKind::kAuto && hc::can_plan_drive(file.model)) {
+      // The whole reference is known: plan the drive of a rate-dependent model over it.
+      hc::DrivePlanOptions options;
+      if (!cmd.json_output) {
+        options.progress = [&err](double fraction) {
+          err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction)
+              << " %] planning the drive\x1b[K" << std::flush;
+        };
+      }
+      file.model.reset(u0);
+      hc::DrivePlan plan = hc::plan_drive(file.model, u0, {}, yr, options);
+      if (!cmd.json_output) err << "\n";
+      u = std::move(plan.u);
+      result["planned"] = {{"model_rms", plan.rms}, {"previewed_model_rms", plan.start_rms}};
+      if (!cmd.json_output) {
+        out << "planned   model rms " << std::fixed << std::setprecision(4) << plan.rms << " "
+            << file.model.units.output << " (the previewed inverse's " << plan.start_rms << ")\n";
+      }
+    } else {
+      // An inverse that looks ahead (a rate-dependent numeric one) sees the reference ahead.
+      const std::size_t ahead = std::max<std::size_t>(inverse->preview_samples(), 1);
+      const std::span<const double> targets(yr);
+      for (std::size_t k = 0; k < yr.size(); ++k) {
+        u[k] =
+            ahead > 1
+                ? inverse->step_previewed(targets.subspan(k, std::min(ahead, targets.size() - k)))
+                : inverse->step(yr[k]);
+      }
+    }
     write_csv(cmd.output_path, {"t", "yr", "u"}, {&t, &yr, &u},
               {"hystbench invert model=" + cmd.model_path + " reference=" + cmd.reference_path});
     if (cmd.json_output) {
-      out << json{{"samples", u.size()}, {"output", cmd.output_path}}.dump() << "\n";
+      out << result.dump() << "\n";
     } else {
       out << "wrote " << cmd.output_path << " (" << u.size() << " samples)\n";
     }

@@ -17,11 +17,13 @@
 
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/model_file_io.hpp"
 #include "support/simulated_record.hpp"
 #include "support/temp_dir_test.hpp"
 
 namespace hd = hystbench::daemon;
 namespace hs = hystbench::sim;
+namespace hc = hystbench::compensation;
 namespace fs = std::filesystem;
 using hystbench::test::SimulatedRecord;
 using nlohmann::json;
@@ -327,4 +329,53 @@ TEST_F(OfflineCommandsTest, MeasuredNtuRecordsFitWithTheDefaults) {
           << family << ", segment " << s << " (classical PI " << pi[s] << " um)";
     }
   }
+}
+
+// With a rate-dependent model the whole reference is known to `invert`, so its default plans
+// the drive over it: on the model it follows a 10 Hz sine well below the per-tick (previewed)
+// numeric inverse, and the figure it prints is the model's own.
+TEST_F(OfflineCommandsTest, InvertPlansARateDependentModelsDrive) {
+  hs::SimulatedActuatorConfig c = static_actuator();
+  c.rate_dependence.enabled = true;
+  c.delay.enabled = false;
+  const double dt = 1e-4;
+  hc::ModelFile file{hs::make_truth_model(c, dt), json::object()};
+  const std::string model = path("rpi.json");
+  hd::save_model_file(model, file);
+  std::vector<double> t, yr;
+  for (int k = 0; k < 3000; ++k) {
+    t.push_back(k * dt);
+    yr.push_back(22.5 - 18.0 * std::cos(2.0 * M_PI * 10.0 * k * dt));
+  }
+  hd::InvertCommand inv;
+  inv.model_path = model;
+  inv.reference_path = path("sine.csv");
+  hd::write_csv(inv.reference_path, {"t", "yr"}, {&t, &yr});
+  const auto model_rms = [&](const std::string& drive_path) {
+    const std::vector<double> u = hd::DataTable::read_csv(drive_path).column("u");
+    // invert's drive starts from the actuator relaxed at the model's lowest input.
+    hc::ActuatorModel m = file.model;
+    m.configure(dt);
+    m.reset(m.input_min);
+    double sum2 = 0.0;
+    for (std::size_t k = 0; k < u.size(); ++k) {
+      const double e = m.step(u[k]) - yr[k];
+      sum2 += e * e;
+    }
+    return std::sqrt(sum2 / static_cast<double>(u.size()));
+  };
+  inv.output_path = path("planned.csv");
+  inv.json_output = true;
+  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
+  const json planned = json::parse(out_).at("planned");
+  const double planned_rms = model_rms(inv.output_path);
+  EXPECT_NEAR(planned_rms, planned["model_rms"].get<double>(), 1e-9);
+  inv.inverse = "numeric";
+  inv.output_path = path("numeric.csv");
+  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
+  EXPECT_FALSE(json::parse(out_).contains("planned"));
+  const double numeric_rms = model_rms(inv.output_path);
+  std::cout << "10 Hz on the model: planned " << planned_rms << " um, numeric " << numeric_rms
+            << " um\n";
+  EXPECT_LT(planned_rms, 0.7 * numeric_rms);
 }
