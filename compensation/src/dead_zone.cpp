@@ -41,6 +41,13 @@ DeadZoneSuperposition::DeadZoneSuperposition(DeadZoneParameters p) : p_(std::mov
   }
 }
 
+double DeadZoneSuperposition::slope(double v) const noexcept {
+  double s = w0_;
+  for (std::size_t j = 0; j < pos_d_.size(); ++j) s += v > pos_d_[j] ? pos_w_[j] : 0.0;
+  for (std::size_t j = 0; j < neg_d_.size(); ++j) s += v < neg_d_[j] ? neg_w_[j] : 0.0;
+  return s;
+}
+
 double DeadZoneSuperposition::apply(double v) const noexcept {
   double zp = 0.0, zn = 0.0;
   for (std::size_t j = 0; j < pos_d_.size(); ++j) {

@@ -6,9 +6,12 @@
 #include <stdexcept>
 
 #include "details/validate.hpp"
+#include "hystbench/compensation/creep_operator_bank.hpp"
+#include "hystbench/compensation/dead_zone.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "hystbench/compensation/rate_estimator.hpp"
 
 namespace hystbench::compensation {
 
@@ -20,7 +23,7 @@ namespace {
 struct StaticPath {
   std::vector<double> r, w, dw;
   double offset = 0.0, center = 0.0;
-  DeadZoneParameters dz;
+  DeadZoneSuperposition dz;
   double max_rate = 0.0;
   double a = 1.0;  // the rate filter's coefficient (1: the per-sample difference)
   double dt = 1e-3;
@@ -42,43 +45,23 @@ StaticPath static_path(const ActuatorModel& model) {
   StaticPath s;
   s.r = p.base.play.thresholds;
   s.w = p.base.play.weights;
-  s.dw.resize(p.rate_coefficients.size());
-  double prev = 0.0;
-  for (std::size_t i = 0; i < s.dw.size(); ++i) {
-    s.dw[i] = p.rate_coefficients[i] - prev;
-    prev = p.rate_coefficients[i];
-  }
+  s.dw.assign(h.rate_slopes().begin(), h.rate_slopes().end());
   s.offset = p.base.play.offset;
   s.center = p.base.center;
-  s.dz = p.base.dead_zone;
+  s.dz = DeadZoneSuperposition(p.base.dead_zone);
   s.max_rate = p.max_rate;
   s.dt = h.sample_period();
-  s.a = p.rate_filter_s > 0.0 ? 1.0 - std::exp(-s.dt / p.rate_filter_s) : 1.0;
+  s.a = RateEstimator(p.rate_filter_s, s.dt).coefficient();
   if (const auto& c = model.creep()) {
-    for (std::size_t j = 0; j < c->gains.size(); ++j) {
-      s.creep_a.push_back(std::exp(-s.dt / c->time_constants_s[j]));
-      s.creep_g.push_back(c->gains[j]);
-    }
+    const CreepOperatorBank bank(*c, s.dt);
+    s.creep_a.assign(bank.coefficients().begin(), bank.coefficients().end());
+    s.creep_g = c->gains;
   }
   return s;
 }
 
 PathState relaxed(const StaticPath& s, double u0) {
   return {std::vector<double>(s.plays(), u0), u0, 0.0, std::vector<double>(s.creep_a.size(), u0)};
-}
-
-// Sum of the one-sided dead zones at z, and its slope there.
-void dead_zones(const DeadZoneParameters& p, double z, double& value, double& slope) noexcept {
-  value = 0.0;
-  slope = 0.0;
-  for (std::size_t j = 0; j < p.thresholds.size(); ++j) {
-    const double d = p.thresholds[j];
-    const bool active = d > 0.0 ? z > d : (d < 0.0 ? z < d : true);
-    if (active) {
-      value += p.weights[j] * (z - d);
-      slope += p.weights[j];
-    }
-  }
 }
 
 // One chunk of the plan: the forward pass with what the Jacobian needs, and the Jacobian's
@@ -96,19 +79,21 @@ class Chunk {
         n_(targets.size()),
         np_(s.plays()),
         step_bound_(step_bound),
-        bound_from_(bound_from) {
-    last_.resize(n_ * np_);
-    coef_.resize(n_ * np_);
-    rate_gain_.resize(n_);
-    step_sign_.resize(n_);
-    residual_.resize(2 * n_);
-  }
+        bound_from_(bound_from) {}
 
   // Simulates u from `start`; returns the sum of squared errors. With `record` keeps the
-  // Jacobian's entries. `end` (when not null) receives the state after `count` samples.
+  // Jacobian's entries (allocated then: a chunk that only simulates holds none). `end` (when not
+  // null) receives the state after `count` samples.
   double forward(std::span<const double> u, const PathState& start, bool record,
                  std::vector<double>* gain = nullptr, PathState* end = nullptr,
                  std::size_t count = 0) {
+    if (record && residual_.empty()) {
+      last_.resize(n_ * np_);
+      coef_.resize(n_ * np_);
+      rate_gain_.resize(n_);
+      step_sign_.resize(n_);
+      residual_.resize(2 * n_);
+    }
     PathState st = start;
     std::vector<std::int32_t> last(np_, -1);
     double cost = 0.0;
@@ -143,9 +128,8 @@ class Chunk {
         per_rate += s_.dw[i] * pl;
         total_w += wi;
       }
-      double z = 0.0, dz = 0.0;
-      dead_zones(s_.dz, h - s_.center, z, dz);
-      double y = s_.center + z, creep_slope = 0.0;
+      const double dz = s_.dz.slope(h - s_.center);
+      double y = s_.center + s_.dz.apply(h - s_.center), creep_slope = 0.0;
       for (std::size_t j = 0; j < st.creep.size(); ++j) {
         st.creep[j] = s_.creep_a[j] * st.creep[j] + (1.0 - s_.creep_a[j]) * uk;
         y += s_.creep_g[j] * st.creep[j];
@@ -410,17 +394,12 @@ DrivePlan plan_drive(const ActuatorModel& model, double u_start, std::span<const
   // The start: the previewed inverse's drive, from the state the prefix leaves.
   const std::size_t n = targets.size();
   DrivePlan plan;
-  plan.u.resize(n);
   {
     ActuatorModel m = model;
     m.reset(u_start);
     for (const double u : prefix) m.step(u);
-    const std::unique_ptr<InverseModel> inverse = make_inverse(m);
-    const std::size_t ahead = std::max<std::size_t>(inverse->preview_samples(), 1);
-    for (std::size_t k = 0; k < n; ++k) {
-      plan.u[k] =
-          std::clamp(inverse->step_previewed(targets.subspan(k, std::min(ahead, n - k))), lo, hi);
-    }
+    plan.u = invert_sequence(*make_inverse(m), targets);
+    for (double& u : plan.u) u = std::clamp(u, lo, hi);
   }
 
   const double step_bound =

@@ -325,6 +325,15 @@ std::unique_ptr<InverseModel> InverseMultiplicativeCompensator::clone() const {
   return std::make_unique<InverseMultiplicativeCompensator>(*this);
 }
 
+std::vector<double> invert_sequence(InverseModel& inverse, std::span<const double> targets) {
+  const std::size_t ahead = std::max<std::size_t>(inverse.preview_samples(), 1);
+  std::vector<double> u(targets.size());
+  for (std::size_t k = 0; k < targets.size(); ++k) {
+    u[k] = inverse.step_previewed(targets.subspan(k, std::min(ahead, targets.size() - k)));
+  }
+  return u;
+}
+
 // ---------------------------------------------------------------- factory
 
 std::unique_ptr<InverseModel> make_inverse(const ActuatorModel& model, InverseKind kind) {

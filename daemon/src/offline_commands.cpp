@@ -6,7 +6,6 @@
 #include <fstream>
 #include <iomanip>
 #include <ostream>
-#include <span>
 #include <sstream>
 
 #include "hystbench/compensation/drive_planner.hpp"
@@ -172,8 +171,8 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
     auto inverse = hc::make_inverse(file.model, kind);
     const double u0 = file.model.input_min < file.model.input_max ? file.model.input_min : 0.0;
     inverse->reset(u0);
-    std::vector<double> u(yr.size());
-    json result = {{"samples", u.size()}, {"output", cmd.output_path}};
+    std::vector<double> u;
+    json result = {{"samples", yr.size()}, {"output", cmd.output_path}};
     if (kind == hc::InverseKind::kAuto && hc::can_plan_drive(file.model)) {
       // The whole reference is known: plan the drive of a rate-dependent model over it.
       hc::DrivePlanOptions options;
@@ -183,7 +182,6 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
               << " %] planning the drive\x1b[K" << std::flush;
         };
       }
-      file.model.reset(u0);
       hc::DrivePlan plan = hc::plan_drive(file.model, u0, {}, yr, options);
       if (!cmd.json_output) err << "\n";
       u = std::move(plan.u);
@@ -194,14 +192,7 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
       }
     } else {
       // An inverse that looks ahead (a rate-dependent numeric one) sees the reference ahead.
-      const std::size_t ahead = std::max<std::size_t>(inverse->preview_samples(), 1);
-      const std::span<const double> targets(yr);
-      for (std::size_t k = 0; k < yr.size(); ++k) {
-        u[k] =
-            ahead > 1
-                ? inverse->step_previewed(targets.subspan(k, std::min(ahead, targets.size() - k)))
-                : inverse->step(yr[k]);
-      }
+      u = hc::invert_sequence(*inverse, yr);
     }
     write_csv(cmd.output_path, {"t", "yr", "u"}, {&t, &yr, &u},
               {"hystbench invert model=" + cmd.model_path + " reference=" + cmd.reference_path});

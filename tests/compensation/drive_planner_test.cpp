@@ -87,13 +87,7 @@ std::vector<double> previewed_drive(const hc::ActuatorModel& model,
                                     const std::vector<double>& targets) {
   hc::ActuatorModel m = model;
   m.reset(0.0);
-  auto inverse = hc::make_inverse(m);
-  const std::size_t ahead = std::max<std::size_t>(inverse->preview_samples(), 1);
-  std::vector<double> u;
-  const std::span<const double> t(targets);
-  for (std::size_t k = 0; k < t.size(); ++k)
-    u.push_back(inverse->step_previewed(t.subspan(k, std::min(ahead, t.size() - k))));
-  return u;
+  return hc::invert_sequence(*hc::make_inverse(m), targets);
 }
 
 // The rate-free (modified PI) inverse's drive over the same targets: the smoothness yardstick.

@@ -128,6 +128,19 @@ TEST(DeadZoneSuperposition, InverseUndoesTheMapOnBothSides) {
   EXPECT_THROW(bad.inverse(), hc::NotInvertibleError);
 }
 
+// slope() is the derivative of apply() between thresholds, on both sides of 0.
+TEST(DeadZoneSuperposition, SlopeIsTheDerivativeOfTheMap) {
+  const hc::DeadZoneSuperposition s(
+      hc::DeadZoneParameters{{-15.0, -5.0, 0.0, 12.0}, {0.15, 0.1, 1.0, 0.4}});
+  for (const double v : {-20.0, -10.0, -1.0, 3.0, 11.0, 13.0, 30.0}) {
+    const double h = 1e-6;
+    EXPECT_NEAR(s.slope(v), (s.apply(v + h) - s.apply(v - h)) / (2 * h), 1e-6) << v;
+  }
+  EXPECT_DOUBLE_EQ(s.slope(-20.0), 1.25);
+  EXPECT_DOUBLE_EQ(s.slope(3.0), 1.0);
+  EXPECT_DOUBLE_EQ(s.slope(13.0), 1.4);
+}
+
 TEST(DeadZoneSuperposition, UniformThresholdsSpreadEachSideEvenlyAndAreAccepted) {
   // m = 3 on an output range 4 below and 8 above the center: steps of 1 and 2.
   const auto d = hc::uniform_dead_zone_thresholds(3, 4.0, 8.0);

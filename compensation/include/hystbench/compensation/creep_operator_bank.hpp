@@ -32,6 +32,8 @@ class CreepOperatorBank {
 
   const CreepParameters& parameters() const noexcept { return p_; }
   std::span<const double> state() const noexcept { return x_; }
+  /// Per lag, a_k = exp(-dt / tau_k) at the sample period set.
+  std::span<const double> coefficients() const noexcept { return a_; }
 
  private:
   CreepParameters p_;

@@ -35,6 +35,9 @@ class DeadZoneSuperposition {
   explicit DeadZoneSuperposition(DeadZoneParameters p);
 
   double apply(double v) const noexcept;
+  /// dS/dv at v: w_0 plus the weights of the operators past their threshold (v on a threshold
+  /// counts as not past it, as apply() does).
+  double slope(double v) const noexcept;
   /// Cumulative weights must be > 0 outward from d = 0 on both sides.
   Invertibility invertibility() const;
   /// The analytic inverse (Kuhnen; rate-dependent paper eq. 14, extended to d < 0).

@@ -153,6 +153,11 @@ enum class InverseKind { kAnalytic, kNumeric, kMultiplicative, kAuto };
 /// Builds the inverse for a model: kAuto picks analytic for PI / modified PI without creep,
 /// numeric otherwise. Dynamics and delay are not inverted (quasi-static feedforward).
 /// Throws NotInvertibleError naming the offending index, or std::invalid_argument.
+/// The drive for a whole known target sequence, stepping `inverse` on from its present state:
+/// each tick sees the targets ahead it can use (preview_samples()), fewer near the end.
+/// Allocates: not for the real-time path.
+std::vector<double> invert_sequence(InverseModel& inverse, std::span<const double> targets);
+
 std::unique_ptr<InverseModel> make_inverse(const ActuatorModel& model,
                                            InverseKind kind = InverseKind::kAuto);
 

@@ -6,6 +6,7 @@
 // (RateEstimator; 0 = the per-sample difference |u(k) - u(k-1)| / dt, the paper's form).
 // Needs set_sample_period(). Real-time safe step()/peek()/peek_at_rate().
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "hystbench/compensation/modified_pi_model.hpp"
@@ -45,6 +46,8 @@ class RateDependentPiModel final : public HysteresisModel {
 
   const RateDependentPiParameters& parameters() const noexcept { return p_; }
   double sample_period() const noexcept { return dt_; }
+  /// Per play, how its weight grows with the rate: c_i - c_{i-1} [output/input per (input/s)].
+  std::span<const double> rate_slopes() const noexcept { return dw_; }
 
  private:
   /// Output for input u at the given rate; writes the new play outputs to state_out when it is

@@ -37,6 +37,8 @@ class RateEstimator {
   }
   /// Rate after the last step() [input unit / s, >= 0].
   double value() const noexcept { return std::abs(v_); }
+  /// The low-pass coefficient a (1: the bare per-sample difference).
+  double coefficient() const noexcept { return a_; }
 
  private:
   double next(double u) const noexcept { return v_ + a_ * ((u - u_prev_) / dt_ - v_); }
