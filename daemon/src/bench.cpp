@@ -84,6 +84,15 @@ void Bench::shutdown() {
     loop_->shutdown();
   }
   if (supervisor_.joinable()) supervisor_.join();
+  if (preparation_queued()) {  // queued as the bench shut down: never prepared
+    std::unique_ptr<RunProgram> run;
+    {
+      std::lock_guard lock(mutex_);
+      run = std::move(preparing_);
+      preparation_.reset();
+    }
+    end_unplayed(std::move(run), RunEnd::kAborted, "the daemon shut down before the run started");
+  }
   if (loop_) {
     if (auto finished = loop_->take_finished()) finalize(std::move(finished));
   }
@@ -157,6 +166,10 @@ json Bench::handle(const std::string& cmd, const json& params, std::uint64_t cli
 json Bench::stop_run() {
   {
     std::lock_guard lock(mutex_);
+    if (phase_ == RunPhase::kPreparing) {  // ends unplayed once the preparation stops
+      if (cancel_preparation_ == RunEnd::kCompleted) cancel_preparation_ = RunEnd::kStopped;
+      return {{"stopping", true}};
+    }
     // A run submitted but not yet picked up by the loop counts as active.
     if (phase_ != RunPhase::kRunning) throw CommandError("no_run", "no run is active");
   }
@@ -168,7 +181,8 @@ json Bench::abort_run() {
   bool running = false;
   {
     std::lock_guard lock(mutex_);
-    running = phase_ == RunPhase::kRunning;
+    running = phase_ == RunPhase::kRunning || phase_ == RunPhase::kPreparing;
+    if (phase_ == RunPhase::kPreparing) cancel_preparation_ = RunEnd::kAborted;
   }
   loop_->request_abort();
   return {{"aborted", running}, {"output_v", driver_->safe_output_v()}};
@@ -195,7 +209,8 @@ json Bench::status() const {
   const auto state = loop_->state();
   std::lock_guard lock(mutex_);
   const bool finalizing = phase_ == RunPhase::kFinalizing && state == BenchLoop::State::kIdle;
-  s["state"] = finalizing ? "finalizing" : state_name(state);
+  const bool preparing = phase_ == RunPhase::kPreparing && state == BenchLoop::State::kIdle;
+  s["state"] = finalizing ? "finalizing" : preparing ? "preparing" : state_name(state);
   if (state == BenchLoop::State::kFault) s["fault_reason"] = loop_->fault_reason();
   s["output_v"] = loop_->last_output();
   s["position_um"] = loop_->last_measurement();
@@ -279,10 +294,30 @@ details::RunContext Bench::run_context() const {
 
 json Bench::launch(const char* kind, details::BuiltRun run) {
   run.program->run_id = new_run_id(kind);
-  const auto [run_id, log_path, total] = submit_run(std::move(run.program), run.header);
+  std::string run_id, log_path;
+  std::uint64_t total = 0;
+  if (run.preparation.work) {
+    // Prepared on the supervisor thread, then submitted: the reply does not wait for it.
+    RunProgram& p = *run.program;
+    p.log = open_log(p.run_id, run.header);
+    run_id = p.run_id;
+    log_path = p.log->path().string();
+    total = p.total_samples;
+    preparing_ = std::move(run.program);
+    preparation_ = std::make_unique<details::RunPreparation>(std::move(run.preparation));
+    cancel_preparation_ = RunEnd::kCompleted;
+    phase_ = RunPhase::kPreparing;
+    loop_->wake_control();
+  } else {
+    SubmittedRun r = submit_run(std::move(run.program), run.header);
+    run_id = std::move(r.run_id);
+    log_path = std::move(r.log_path);
+    total = r.total;
+    phase_ = RunPhase::kRunning;
+  }
   active_run_ = {{"run_id", run_id}, {"kind", kind}, {"total", total}, {"log", log_path}};
   active_run_.update(run.status);
-  phase_ = RunPhase::kRunning;
+  if (phase_ == RunPhase::kPreparing) active_run_["stage"] = preparation_->stage;
   json reply = {{"run_id", run_id},
                 {"samples", total},
                 {"duration_s", static_cast<double>(total) * dt_},
@@ -335,6 +370,10 @@ void Bench::supervise() {
   while (!quit_.load()) {
     // Read before looking, so a run that ends in between wakes the wait at once.
     const std::uint32_t seen = loop_->events();
+    if (preparation_queued()) {
+      prepare();
+      continue;
+    }
     if (auto finished = loop_->take_finished()) {
       finalize(std::move(finished));
       continue;
@@ -364,6 +403,74 @@ void Bench::emit_progress() {
       {"total", total},          {"fraction", total ? static_cast<double>(done) / total : 0.0}};
   if (run.contains("stage")) event["stage"] = run["stage"];  // identify's verification
   emit(event);
+}
+
+bool Bench::preparation_queued() const {
+  std::lock_guard lock(mutex_);
+  return preparing_ != nullptr;
+}
+
+void Bench::prepare() {
+  std::unique_ptr<RunProgram> run;
+  std::unique_ptr<details::RunPreparation> preparation;
+  {
+    std::lock_guard lock(mutex_);
+    run = std::move(preparing_);
+    preparation = std::move(preparation_);
+  }
+  const json progress = {{"event", "run.progress"},      {"run_id", run->run_id},
+                         {"kind", to_string(run->kind)}, {"done", 0},
+                         {"total", run->total_samples},  {"stage", preparation->stage}};
+  bool cancelled = false;
+  try {
+    preparation->work(*run, [&](double fraction) {
+      {
+        std::lock_guard lock(mutex_);
+        if (cancel_preparation_ != RunEnd::kCompleted || quit_.load()) {
+          throw details::PreparationCancelled{};
+        }
+      }
+      json event = progress;
+      event["fraction"] = fraction;
+      emit(event);
+    });
+  } catch (const details::PreparationCancelled&) {
+    cancelled = true;
+  }
+  RunEnd cancel = RunEnd::kCompleted;
+  {
+    std::lock_guard lock(mutex_);
+    cancel = cancel_preparation_;
+    if (quit_.load()) cancel = RunEnd::kAborted;
+    if (!cancelled && cancel == RunEnd::kCompleted) {
+      active_run_.erase("stage");
+      if (auto refused = loop_->submit(std::move(run))) {
+        run = std::move(refused);
+      } else {
+        phase_ = RunPhase::kRunning;
+        return;
+      }
+    }
+  }
+  if (cancel == RunEnd::kCompleted) {
+    end_unplayed(std::move(run), RunEnd::kAborted,
+                 loop_->state() == BenchLoop::State::kFault
+                     ? std::string("the loop went into FAULT (") + loop_->fault_reason() +
+                           ") while the run was prepared: nothing was played"
+                     : "the loop did not accept the run: nothing was played");
+    return;
+  }
+  end_unplayed(std::move(run), cancel,
+               std::string(cancel == RunEnd::kStopped ? "stopped" : "aborted") + " while " +
+                   preparation->stage + ": nothing was played");
+}
+
+void Bench::end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason) {
+  set_phase(RunPhase::kFinalizing);
+  run->end = end;
+  json report = details::collect_result(*run, loop_->last_output()).report;
+  report["reason"] = reason;
+  deliver_result(std::move(report));
 }
 
 void Bench::finalize(std::unique_ptr<RunProgram> run) {

@@ -133,7 +133,7 @@ void print_run_result(const json& r, std::ostream& out) {
   }
   if (r.contains("fit_error"))
     out << "  fit failed      " << r["fit_error"].get<std::string>() << "\n";
-  if (r.contains("loop")) {
+  if (r.contains("loop") && r.value("samples", 0) > 0) {  // an unplayed run has no timing
     const json& l = r["loop"];
     const json w = l.value("wake_latency_ns", json::object());
     const json e = l.value("exec_ns", json::object());

@@ -4,9 +4,11 @@
 // (track_program.hpp, identify_program.hpp, excite_program.hpp) are pure functions of these:
 // no threads, no files, no loop; errors are CommandError naming the cause. Not real-time safe.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <string>
 
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/model_file.hpp"
@@ -22,8 +24,24 @@ struct RunContext {
   double dt() const { return 1.0 / settings.loop.rate_hz; }  ///< loop period [s]
 };
 
+/// Thrown by a preparation's progress callback to cancel it (stop, abort, shutdown); not a
+/// std::exception, so work that catches those lets it through.
+struct PreparationCancelled {};
+
+/// Work a run needs before the loop may start it, too long to hold the command's reply (track:
+/// the feedforward planned over the reference, seconds). The bench calls `work` once, on its
+/// supervisor thread, with the program (run id and log set); it completes the program (its
+/// compensator, its summary) and calls `progress` with the fraction done (0..1), which throws
+/// PreparationCancelled to cancel. Work that fails otherwise leaves the program as built (it
+/// can run) and says why in its summary. Not real-time safe.
+struct RunPreparation {
+  std::string stage;  ///< what it does, for progress events and status ("planning ...")
+  std::function<void(RunProgram&, const std::function<void(double)>& progress)> work;
+};
+
 /// A run ready for the loop: the program (its run id and log are the bench's to add), the run
-/// log's header, and the keys the bench adds to the start reply and to status' "run".
+/// log's header, the keys the bench adds to the start reply and to status' "run", and the
+/// preparation before the loop may start it (none when `preparation.work` is empty).
 struct BuiltRun {
   std::unique_ptr<RunProgram> program;
   nlohmann::json header;
@@ -32,6 +50,7 @@ struct BuiltRun {
   /// identify: what the fit after the run needs (model, operators, dead_zones, skip_samples,
   /// precondition_s, settle_s); null otherwise.
   nlohmann::json fit;
+  RunPreparation preparation;
 };
 
 /// Most samples a run records for its figures and fit (the log keeps every sample).

@@ -134,9 +134,11 @@ int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
                                   "/" + std::to_string(total) + ")";
         std::function<void(double, const std::string&)> show;
         if (tty) {
-          show = [&](double frac, const std::string&) {
-            progress_bar(err, (static_cast<double>(done) + frac) / static_cast<double>(total),
-                         "sweep " + label);
+          // A stage before the run (the planned feedforward) names itself and holds the bar.
+          show = [&](double frac, const std::string& stage) {
+            const double run_part = stage.empty() ? frac : 0.0;
+            progress_bar(err, (static_cast<double>(done) + run_part) / static_cast<double>(total),
+                         "sweep " + label + (stage.empty() ? "" : ": " + stage));
           };
         }
         const json r = wait_for_run(client, reply["result"].value("run_id", ""), show);

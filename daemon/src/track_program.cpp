@@ -22,9 +22,8 @@ using nlohmann::json;
 
 namespace {
 
-// The most planning a track request waits for (compensation::plan_drive_work: about 10 s on one
-// core; 120 000 samples, 12 s at 10 kHz, for a model of 6 plays). A client's request times out
-// after 30 s.
+// The most planning a track run waits for before it starts (compensation::plan_drive_work:
+// about 10 s on one core; 120 000 samples, 12 s at 10 kHz, for a model of 6 plays).
 constexpr double kMaxPlanWork = 1.0e6;
 
 hc::CompensatorKind compensator_kind(const std::string& name, const RunContext& ctx) {
@@ -152,17 +151,20 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
 
 // The feedforward planned over the whole known reference for a rate-dependent model
 // (compensation::plan_drive: the per-sample rate law leaves a tick-by-tick inverse no good
-// choice at a fast reference's tops); null, with the reason in `feedforward`, where the
-// previewed inverse stays: another model kind, the multiplicative structure, a reference too
-// long to plan in kMaxPlanWork, a plan that is not better on the model. The targets are the loop's
-// (RunProgram::feedforward_target) without the tare, which the planned inverse meets through the
-// plan's gain once the prefix measured it.
-std::unique_ptr<hc::InverseModel> planned_inverse(const RunProgram& p, const RunContext& ctx,
-                                                  hc::CompensatorKind kind, std::uint64_t samples,
-                                                  json& feedforward) {
+// choice at a fast reference's tops), as the run's preparation: the bench plans on its
+// supervisor thread, with progress, and the plan replaces the previewed inverse the program was
+// built with. No preparation, with the reason in `feedforward`, where the previewed inverse
+// stays: another model kind, the multiplicative structure, a reference too long to plan in
+// kMaxPlanWork; a plan that is not better on the model, or that fails, also leaves it and says
+// why in the run's result. The targets are the loop's (RunProgram::feedforward_target) without
+// the tare, which the planned inverse meets through the plan's gain once the prefix measured it.
+RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
+                                hc::CompensatorKind kind, std::uint64_t samples, json& feedforward,
+                                const std::optional<hc::PidController>& pid,
+                                const hc::LinearMap& linear) {
   if (kind == hc::CompensatorKind::kInverseMultiplicative ||
       !hc::can_plan_drive(ctx.model->model) || samples == 0) {
-    return nullptr;
+    return {};
   }
   if (hc::plan_drive_work(ctx.model->model, samples) > kMaxPlanWork) {
     const auto longest =
@@ -172,7 +174,7 @@ std::unique_ptr<hc::InverseModel> planned_inverse(const RunProgram& p, const Run
         {"why_not", "the reference (" + std::to_string(samples) +
                         " samples) is longer than the planner takes for this model (" +
                         std::to_string(longest) + "): the previewed inverse follows it"}};
-    return nullptr;
+    return {};
   }
   const auto& lim = ctx.settings.loop.limits;
   const double dt = ctx.dt();
@@ -180,34 +182,51 @@ std::unique_ptr<hc::InverseModel> planned_inverse(const RunProgram& p, const Run
   for (std::uint64_t k = 0; k < samples; ++k) {
     targets[k] = p.feedforward_target(static_cast<double>(k) * dt, 0.0);
   }
-  const hc::ActuatorModel relaxed =
-      model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt);
-  const auto start = std::chrono::steady_clock::now();
-  hc::DrivePlan plan;
-  try {
-    plan = hc::plan_drive(relaxed, ctx.u_now, p.excitation, targets);
-  } catch (const std::exception& e) {
-    throw CommandError("bad_model", std::string("planning the feedforward: ") + e.what());
-  }
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  json planned = {{"samples", samples},
-                  {"seconds", seconds},
-                  {"model_rms_um", plan.rms},
-                  {"previewed_model_rms_um", plan.start_rms}};
-  // The plan pays for its smoothness, and beyond the rates its model was identified at it
-  // plans on the continued law: where that leaves it worse on the model as it is, the previewed
-  // inverse plays.
-  if (!(plan.rms <= plan.start_rms)) {
-    planned["samples"] = 0;
-    planned["why_not"] = "on the model the plan's error (" + std::to_string(plan.rms) +
-                         " um rms) is not below the previewed inverse's (" +
-                         std::to_string(plan.start_rms) + " um): the previewed inverse follows it";
-    feedforward["planned"] = planned;
-    return nullptr;
-  }
-  feedforward["planned"] = planned;
-  return std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(plan));
+  feedforward["planned"] = {{"samples", samples}, {"planning", true}};
+  return {"planning the feedforward",
+          [relaxed = model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt),
+           u_now = ctx.u_now, targets = std::move(targets), kind, pid,
+           linear](RunProgram& program, const std::function<void(double)>& progress) mutable {
+            hc::DrivePlanOptions options;
+            options.progress = progress;
+            const auto start = std::chrono::steady_clock::now();
+            json planned = {{"samples", 0}};
+            std::optional<hc::DrivePlan> plan;
+            try {
+              plan = hc::plan_drive(relaxed, u_now, program.excitation, targets, options);
+            } catch (const PreparationCancelled&) {
+              program.summary["feedforward"]["planned"] = {
+                  {"samples", 0}, {"why_not", "cancelled before the plan was done"}};
+              throw;
+            } catch (const std::exception& e) {
+              planned["why_not"] = std::string("planning failed (") + e.what() +
+                                   "): the previewed inverse follows it";
+            }
+            if (plan) {
+              const double seconds =
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+              planned = {{"samples", targets.size()},
+                         {"seconds", seconds},
+                         {"model_rms_um", plan->rms},
+                         {"previewed_model_rms_um", plan->start_rms}};
+              // The plan pays for its smoothness, and beyond the rates its model was identified
+              // at it plans on the continued law: where that leaves it worse on the model as it
+              // is, the previewed inverse plays.
+              if (plan->rms <= plan->start_rms) {
+                program.compensator.emplace(
+                    kind,
+                    std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(*plan)), pid,
+                    linear);
+              } else {
+                planned["samples"] = 0;
+                planned["why_not"] = "on the model the plan's error (" + std::to_string(plan->rms) +
+                                     " um rms) is not below the previewed inverse's (" +
+                                     std::to_string(plan->start_rms) +
+                                     " um): the previewed inverse follows it";
+              }
+            }
+            program.summary["feedforward"]["planned"] = planned;
+          }};
 }
 
 }  // namespace
@@ -234,14 +253,11 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   json feedforward = nullptr;
   if (ctx.model != nullptr && hc::needs_model(kind)) feedforward = arm_feedforward(*p, ctx);
   std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
-  if (inverse) {
-    if (auto planned = planned_inverse(*p, ctx, kind, ref.samples, feedforward)) {
-      inverse = std::move(planned);
-    }
-  }
   json feedback = nullptr;
   const std::optional<hc::PidController> pid =
       feedback_controller(request, kind, ctx, linear.gain, feedback);
+  RunPreparation preparation;
+  if (inverse) preparation = feedforward_plan(*p, ctx, kind, ref.samples, feedforward, pid, linear);
   try {
     p->compensator.emplace(kind, std::move(inverse), pid, linear);
   } catch (const std::exception& e) {
@@ -277,6 +293,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
                {"feedforward", p->summary.value("feedforward", json(nullptr))}};
   run.status = {{"compensator", comp_name}};
   run.program = std::move(p);
+  run.preparation = std::move(preparation);
   return run;
 }
 

@@ -17,10 +17,12 @@
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
+#include "hystbench/sim/simulated_actuator.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
 namespace hc = hystbench::compensation;
+namespace hs = hystbench::sim;
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -47,6 +49,14 @@ class BenchTest : public hystbench::test::BenchFixture {
     e.hold_levels = {1.0, 0.0};
     e.hold_s = 1.0;
     return s;
+  }
+  // The loopback with its rate dependence on (the user's config), and its truth as the model.
+  void start_rate_dependent_with_its_truth() {
+    start(settings_from_toml(loopback_toml("[actuator.rate_dependence]\nenabled = true\n")));
+    hs::SimulatedActuatorConfig truth;
+    truth.rate_dependence.enabled = true;
+    const hc::ModelFile model{hs::make_truth_model(truth, 1e-4), json::object()};
+    bench_->handle("model.load", {{"model", hc::to_json(model)}, {"name", "truth-rpi.json"}});
   }
   std::string error_code(const std::string& cmd, const json& params) {
     try {
@@ -330,4 +340,76 @@ TEST_F(BenchTest, StopDuringIdentifyVerificationAdoptsTheModelAndSaysSo) {
   bool saw_stage = false;
   for (const json& e : progress) saw_stage = saw_stage || e.value("stage", "") == "verify mpi";
   EXPECT_TRUE(saw_stage);
+}
+
+// A rate-dependent model's feedforward is planned before the run starts, off the command
+// thread: the track reply comes at once and says so, status answers "preparing" with the stage,
+// progress events count the plan. Stop and abort cancel the plan and end the run unplayed (0
+// samples, the log closed with its header, the output untouched), and the next run plans and
+// plays as usual.
+TEST_F(BenchTest, ARateDependentTrackIsPlannedBeforeItStartsAndStopCancelsThePlan) {
+  start_rate_dependent_with_its_truth();
+  std::vector<json> planning;
+  bench_->set_event_sink([&](const json& e) {
+    std::lock_guard lock(m_);
+    if (e["event"] == "run.finished") results_.push_back(e["result"]);
+    if (e["event"] == "run.progress" && e.value("stage", "") == "planning the feedforward") {
+      planning.push_back(e);
+    }
+  });
+  const double output_before = status()["output_v"];
+  // 40 000 samples to plan: seconds of work.
+  const json long_track = {{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 40}};
+  for (const char* cancel : {"stop", "abort"}) {
+    const json reply = bench_->handle("track", long_track);
+    EXPECT_EQ(reply["feedforward"]["planned"]["planning"], true) << reply.dump(2);
+    const json st = status();
+    EXPECT_EQ(st["state"], "preparing") << st.dump(2);
+    EXPECT_EQ(st["run"]["stage"], "planning the feedforward") << st.dump(2);
+    EXPECT_EQ(st["run"]["run_id"], reply["run_id"]);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    for (;;) {
+      {
+        std::lock_guard lock(m_);
+        if (!planning.empty() && planning.back()["run_id"] == reply["run_id"]) break;
+      }
+      ASSERT_LT(std::chrono::steady_clock::now(), until) << "no planning progress";
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    EXPECT_EQ(error_code("track", long_track), "busy");
+    bench_->handle(cancel, json::object());
+    ASSERT_TRUE(bench_->wait_idle(std::chrono::seconds(30)));
+    const json r = last_result();
+    EXPECT_EQ(r["run_id"], reply["run_id"]);
+    EXPECT_EQ(r["end"], std::string(cancel) == "stop" ? "stopped" : "aborted") << r.dump(2);
+    EXPECT_EQ(r["samples"], 0);
+    EXPECT_NE(r["reason"].get<std::string>().find("while planning the feedforward"),
+              std::string::npos)
+        << r.dump(2);
+    EXPECT_EQ(r["feedforward"]["planned"]["samples"], 0) << r.dump(2);
+    EXPECT_TRUE(fs::exists(r["log"].get<std::string>()));
+    EXPECT_EQ(status()["state"], "idle");
+    EXPECT_EQ(status()["output_v"], output_before);
+  }
+  EXPECT_EQ(error_code("stop", json::object()), "no_run");
+  // The next run is planned and played.
+  const json r =
+      run_and_wait("track", {{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 3}});
+  EXPECT_EQ(r["end"], "completed") << r.dump(2);
+  EXPECT_GT(r["feedforward"]["planned"]["samples"].get<double>(), 0.0) << r.dump(2);
+  EXPECT_LT(r["rms_error_percent"].get<double>(), 3.0) << r.dump(2);
+  std::lock_guard lock(m_);
+  EXPECT_DOUBLE_EQ(planning.back()["fraction"].get<double>(), 1.0);
+}
+
+// A run still being prepared when the daemon shuts down ends aborted, with its result delivered.
+TEST_F(BenchTest, ShutdownWhilePlanningEndsTheRunUnplayed) {
+  start_rate_dependent_with_its_truth();
+  const json reply =
+      bench_->handle("track", {{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 40}});
+  bench_->shutdown();
+  const json r = last_result();
+  EXPECT_EQ(r["run_id"], reply["run_id"]);
+  EXPECT_EQ(r["end"], "aborted") << r.dump(2);
+  EXPECT_EQ(r["samples"], 0);
 }

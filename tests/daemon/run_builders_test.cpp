@@ -3,9 +3,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "../../daemon/src/command_table.hpp"
 #include "../../daemon/src/excite_program.hpp"
@@ -118,10 +120,11 @@ TEST(TrackProgram, AModelsInverseIsPreviewedAndTaredOverTheModelsRange) {
   EXPECT_EQ(run.header["model"], hc::to_json(model));
 }
 
-// A rate-dependent model's feedforward is planned over the reference before the run: the plan
-// the compensator plays, for the targets the loop will give it, meets them on the model as the
-// reply says and better than the previewed inverse; a reference too long to plan keeps the
-// previewed inverse and says why.
+// A rate-dependent model's feedforward is planned over the reference before the run, as the
+// run's preparation (the reply says it is being planned): the plan the compensator then plays,
+// for the targets the loop will give it, meets them on the model as the result's summary says
+// and better than the previewed inverse, with progress on the way; a reference too long to plan
+// keeps the previewed inverse, prepares nothing and says why.
 TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
   hd::BenchSettings s = settings();
   s.loop.rate_hz = 10000.0;
@@ -148,9 +151,17 @@ TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
   const hdd::BuiltRun run =
       track({{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 3}}, ctx);
   hd::RunProgram& p = *run.program;
-  const json& planned = run.reply["feedforward"]["planned"];
   const std::uint64_t prefix = p.excitation.size(), samples = p.total_samples - prefix;
-  ASSERT_EQ(planned["samples"], samples) << run.reply.dump(2);
+  EXPECT_EQ(run.reply["feedforward"]["planned"], json({{"samples", samples}, {"planning", true}}));
+  ASSERT_TRUE(run.preparation.work);
+  EXPECT_EQ(run.preparation.stage, "planning the feedforward");
+  std::vector<double> fractions;
+  run.preparation.work(p, [&](double f) { fractions.push_back(f); });
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  const json& planned = p.summary["feedforward"]["planned"];
+  ASSERT_EQ(planned["samples"], samples) << p.summary.dump(2);
   EXPECT_LT(planned["model_rms_um"].get<double>(),
             0.7 * planned["previewed_model_rms_um"].get<double>());
   // The compensator's drive through the model, for the loop's own targets.
@@ -169,6 +180,7 @@ TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
   const hdd::BuiltRun slow =
       track({{"reference", "sine"}, {"frequency_hz", 1.0}, {"periods", 10}}, ctx);
   const json& not_planned = slow.reply["feedforward"]["planned"];
+  EXPECT_FALSE(slow.preparation.work);
   EXPECT_EQ(not_planned["samples"], 0);
   EXPECT_THAT(not_planned["why_not"].get<std::string>(),
               HasSubstr("is longer than the planner takes for this model"));

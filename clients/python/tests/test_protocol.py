@@ -247,6 +247,40 @@ class ProtocolTest(unittest.TestCase):
         self.assertEqual(caught.exception.code, "aborted")
         self.assertIs(caught.exception.result, result)
 
+    def test_a_sweep_holds_its_bar_while_a_run_is_prepared(self) -> None:
+        # A track run of a rate-dependent model plans its feedforward before it starts: the
+        # sweep's bar names the stage and moves only with the run itself.
+        def handler(cmd: str, p: Dict[str, Any], rid: Any) -> List[Dict[str, Any]]:
+            if cmd != "track":
+                return [err(rid, "unknown_command", cmd)]
+            run_id = f"r{p['frequency_hz']:g}"
+            progress = {"event": "run.progress", "run_id": run_id, "kind": "track"}
+            return [
+                ok(rid, {"run_id": run_id, "feedforward": {"planned": {"planning": True}}}),
+                dict(progress, fraction=0.5, stage="planning the feedforward"),
+                dict(progress, fraction=1.0, stage="planning the feedforward"),
+                dict(progress, fraction=0.5),
+                {"event": "run.finished", "result": {"run_id": run_id, "end": "completed"}},
+            ]
+
+        bench = self.connect(self.serve(handler))
+        seen: List[Any] = []
+        rows = bench.sweep([5.0, 10.0], ["inverse"], progress=lambda f, w: seen.append((f, w)))
+        self.assertTrue(rows.completed)
+        self.assertEqual(
+            seen,
+            [
+                (0.0, "inverse 5 Hz (1/2): planning the feedforward"),
+                (0.0, "inverse 5 Hz (1/2): planning the feedforward"),
+                (0.25, "inverse 5 Hz (1/2)"),
+                (0.5, "inverse 5 Hz (1/2)"),  # the run finished
+                (0.5, "inverse 10 Hz (2/2): planning the feedforward"),
+                (0.5, "inverse 10 Hz (2/2): planning the feedforward"),
+                (0.75, "inverse 10 Hz (2/2)"),
+                (1.0, "inverse 10 Hz (2/2)"),
+            ],
+        )
+
     def test_wait_for_a_run_that_already_ended_uses_the_last_result(self) -> None:
         def handler(cmd: str, p: Dict[str, Any], rid: Any) -> List[Dict[str, Any]]:
             return [

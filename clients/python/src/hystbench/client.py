@@ -376,8 +376,9 @@ class Bench:
     # ---- simple commands ----------------------------------------------------------------------
 
     def status(self) -> Dict[str, Any]:
-        """State (``idle``, ``running``, ``fault``, ...), active run, model, loop timing, output
-        (``output_v`` [V], ``position_um`` [µm]) and the last run's result (``last_result``)."""
+        """State (``idle``, ``preparing``, ``running``, ``finalizing``, ``fault``, ...), active run,
+        model, loop timing, output (``output_v`` [V], ``position_um`` [µm]) and the last run's
+        result (``last_result``)."""
         return self.request("status")
 
     def config_get(self) -> Dict[str, Any]:
@@ -959,7 +960,13 @@ def _name_the_line(error: BenchError, source: Optional[Tuple[str, List[int]]]) -
 def _scaled(
     progress: Progress, start: float, span: float, label: Optional[str] = None
 ) -> Progress:
+    """The run's own progress (label "track", its kind) maps onto [start, start + span]; a stage
+    before it (e.g. "planning the feedforward") holds the bar at start and names itself."""
+
     def report(fraction: float, what: str) -> None:
+        if label is not None and what != "track":
+            progress(start, f"{label}: {what}")
+            return
         progress(start + span * min(max(fraction, 0.0), 1.0), label if label is not None else what)
 
     return report

@@ -33,6 +33,7 @@ class Request;
 struct Command;
 struct RunContext;
 struct BuiltRun;
+struct RunPreparation;
 struct RunResult;
 std::span<const Command> bench_commands();
 }  // namespace details
@@ -132,14 +133,23 @@ class Bench {
   /// Opens the run's log with `header` and hands the run to the loop; throws busy when the loop
   /// does not take it (the log is closed). Caller holds mutex_.
   SubmittedRun submit_run(std::unique_ptr<RunProgram> p, const nlohmann::json& header);
-  /// Where the bench is with its run. kRunning: submitted to the loop (stop and abort act on
-  /// it); kFinalizing: ended, its result or identify's fit being made. Guarded by mutex_.
-  enum class RunPhase { kIdle, kRunning, kFinalizing };
+  /// Where the bench is with its run. kPreparing: started, its preparation (track's planned
+  /// feedforward) queued or under way on the supervisor thread, not yet on the loop (stop and
+  /// abort cancel it); kRunning: submitted to the loop (stop and abort act on it); kFinalizing:
+  /// ended, its result or identify's fit being made. Guarded by mutex_.
+  enum class RunPhase { kIdle, kPreparing, kRunning, kFinalizing };
   void set_phase(RunPhase phase);
   /// The supervisor thread: finalises each run the loop hands back (woken by the loop's
   /// events), and emits run.progress every 0.5 s while one runs.
   void supervise();
   void emit_progress();
+  bool preparation_queued() const;
+  /// Runs the queued preparation (supervisor thread), then hands the run to the loop; a
+  /// cancelled one ends unplayed.
+  void prepare();
+  /// The result of a run that ends before the loop played it (stopped or aborted while it was
+  /// prepared, refused by the loop): delivered with 0 samples and `reason`.
+  void end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason);
   void finalize(std::unique_ptr<RunProgram> run);
   /// Sets the last result, leaves the bench idle and emits run.finished.
   void deliver_result(nlohmann::json result);
@@ -176,6 +186,11 @@ class Bench {
   bool delivering_result_ = false;   // run.finished is on its way to the sink (wait_idle waits)
   std::condition_variable idle_cv_;  // phase_ back to kIdle and run.finished delivered
   nlohmann::json pending_fit_;       // identify's fit request (details::BuiltRun::fit)
+  // The run being prepared (phase_ kPreparing): its program and preparation until the
+  // supervisor takes them; what stop or abort asked for meanwhile (kCompleted = nothing).
+  std::unique_ptr<RunProgram> preparing_;
+  std::unique_ptr<details::RunPreparation> preparation_;
+  RunEnd cancel_preparation_ = RunEnd::kCompleted;
   std::unique_ptr<IdentifySession> session_;  // supervisor thread only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;

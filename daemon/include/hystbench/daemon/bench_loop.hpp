@@ -79,6 +79,9 @@ class BenchLoop {
   bool reset_fault() noexcept;
   /// Counts what the control thread waits for: a run finished, a fault, a reset, shutdown.
   std::uint32_t events() const noexcept { return events_.load(std::memory_order_acquire); }
+  /// Bumps events(): wakes the control thread's wait_event() for work of its own (the bench
+  /// queued a run's preparation). Real-time safe.
+  void wake_control() noexcept { signal_event(); }
   /// Blocks until events() differs from `seen` or `timeout` has passed (control thread; the
   /// loop wakes it without a lock). True when it changed.
   bool wait_event(std::uint32_t seen, std::chrono::nanoseconds timeout) const noexcept;
