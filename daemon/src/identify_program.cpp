@@ -76,6 +76,9 @@ BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext&
   append_ramp(p->excitation, ctx.u_now, exc.samples.front(),
               static_cast<std::size_t>(std::ceil(0.1 / ctx.dt())));
   p->model = predictor(ctx, ctx.u_now);
+  // The result's model_rms_error is this predictor's: not the model identified from the run.
+  p->summary["y_model"] =
+      ctx.model != nullptr ? "the model active before this identification" : predictor_name(ctx);
   const std::size_t offset = p->excitation.size();
   p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
   p->total_samples = p->excitation.size();

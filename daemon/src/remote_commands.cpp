@@ -95,7 +95,7 @@ void print_run_result(const json& r, std::ostream& out) {
     out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
         << fixed(r["model_rms_error_percent"], 3) << " %)   max "
         << fixed(r["model_max_error_um"], 4) << " um (" << fixed(r["model_max_error_percent"], 3)
-        << " %): y - y_model, the simulation's error\n";
+        << " %): y - y_model (y_model: " << r.value("y_model", std::string("?")) << ")\n";
   }
   if (r.contains("model")) {
     const json& m = r["model"];

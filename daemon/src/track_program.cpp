@@ -266,7 +266,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   const double u_start = p->excitation.empty() ? ctx.u_now : p->excitation.back();
   if (kind == hc::CompensatorKind::kPid) p->compensator->reset(u_start);
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
-  p->summary = {{"compensator", comp_name}};
+  p->summary = {{"compensator", comp_name}, {"y_model", predictor_name(ctx)}};
   if (!feedforward.is_null()) p->summary["feedforward"] = feedforward;
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
 

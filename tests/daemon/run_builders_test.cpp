@@ -98,6 +98,7 @@ TEST(TrackProgram, ABuiltInTriangleWithoutAModelFollowsTheConfiguredRange) {
   EXPECT_TRUE(run.reply["feedforward"].is_null());
   EXPECT_EQ(run.header["run"]["precondition_samples"], prefix);
   EXPECT_EQ(run.header["y_model"], "linear map of limits.y_min..y_max, stepped with u");
+  EXPECT_EQ(p.summary["y_model"], run.header["y_model"]);  // the result says whose error it gives
   EXPECT_EQ(run.status["compensator"], "none");
 }
 
@@ -281,6 +282,12 @@ TEST(IdentifyProgram, RampsFromThePresentOutputAndRecordsEverySampleForTheFit) {
   EXPECT_EQ(run.fit["model"], "mpi");
   EXPECT_GT(run.fit["skip_samples"].get<std::size_t>(), 100u);
   EXPECT_EQ(run.header["run"]["segments"].front()["begin"], 100);
+  // The result's model error is the predictor's over the run, not the identified model's: it
+  // says so, with and without a model before.
+  EXPECT_EQ(p.summary["y_model"], "linear map of limits.y_min..y_max, stepped with u");
+  const hc::ModelFile before = pi_model();
+  const hdd::BuiltRun again = hdd::make_identify_program(r, hdd::RunContext{s, &before, 75.0});
+  EXPECT_EQ(again.program->summary["y_model"], "the model active before this identification");
 }
 
 // A rate law is identified only up to the rates its record holds: rpi and auto add cycles at
