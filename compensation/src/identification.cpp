@@ -660,7 +660,10 @@ FitResult Identifier::run() {
     progress(0.9, "fitting creep");
     add_creep(*best);
   }
-  if (o_.kind == ModelKind::kRateDependentPi && rpi_by_mpi_order_) {
+  // The nesting checks hold for a family's fit whether it was asked for or won `auto`; in
+  // `auto` the nested model is returned as its own family.
+  const ModelKind best_kind = best->structure.kind;
+  if (best_kind == ModelKind::kRateDependentPi && rpi_by_mpi_order_) {
     // The order search_rpi() preferred over the modified PI's, finished alike, must still win.
     progress(0.92, "checking the dead zones against the modified PI's order");
     Candidate other = std::move(*rpi_by_mpi_order_);
@@ -669,16 +672,18 @@ FitResult Identifier::run() {
     if (o_.creep) add_creep(other);
     if (other.score() < best->score()) best = std::move(other);
   }
-  if (o_.kind == ModelKind::kRateDependentPi) {
+  if (best_kind == ModelKind::kRateDependentPi) {
     // Nesting: the modified PI, refined and with creep as the RPI was, is a feasible RPI (zero
     // rate coefficients); the RPI returned is never worse on held-out data.
     progress(0.93, "checking the rate law against the modified PI it extends");
     Candidate mpi = search_mpi();
     if (o_.refine_thresholds) refine(mpi);
     if (o_.creep) add_creep(mpi);
-    if (mpi.score() <= best->score()) best = nested_rpi(mpi, best->structure);
+    if (mpi.score() <= best->score()) {
+      best = o_.kind ? nested_rpi(mpi, best->structure) : std::move(mpi);
+    }
   }
-  if (o_.kind == ModelKind::kCoupledPlayPi && best->structure.has_dead_zones() &&
+  if (best_kind == ModelKind::kCoupledPlayPi && best->structure.has_dead_zones() &&
       best->structure.cp_scale != std::array<double, 3>{1.0, 1.0, 1.0}) {
     // Nesting, as for the order: the asymmetry must beat the modified PI it extends (refined
     // and with creep alike) by the parsimony margin. On the loopback (a modified PI) it gained
@@ -687,7 +692,9 @@ FitResult Identifier::run() {
     Candidate mpi = search_mpi();
     if (o_.refine_thresholds) refine(mpi);
     if (o_.creep) add_creep(mpi);
-    if (best->score() > mpi.score() * (1.0 - kParsimony)) best = nested_cpi(mpi);
+    if (best->score() > mpi.score() * (1.0 - kParsimony)) {
+      best = o_.kind ? nested_cpi(mpi) : std::move(mpi);
+    }
   }
   std::vector<std::string> notes;
   if (o_.kind && *o_.kind != ModelKind::kPi && o_.play_thresholds.empty()) {

@@ -362,6 +362,14 @@ TEST_F(OfflineCommandsTest, MeasuredNtuRecordsFitWithTheDefaults) {
       EXPECT_LE(e[s], pi[s] * (1.0 + 1e-6))
           << family << ", segment " << s << " (classical PI " << pi[s] << " um)";
     }
+    // `auto` keeps the nesting checks a family asked for keeps: an asymmetry or a rate law
+    // that does not beat the modified PI it extends is not returned (it was: auto chose a cpi
+    // 0.16757 um held-out against the modified PI's 0.16710, 0.190 um on segment 1 against 0.159).
+    if (family == "auto") {
+      for (std::size_t s = 0; s < 3; ++s) {
+        EXPECT_LE(e[s], defaults[s] * (1.0 + 1e-6)) << "auto, segment " << s;
+      }
+    }
   }
 }
 
