@@ -423,7 +423,8 @@ DrivePlan plan_drive(const ActuatorModel& model, double u_start, std::span<const
     plan.start_rms = std::sqrt(whole.forward(plan.u, after_prefix, false) / static_cast<double>(n));
   }
   const std::size_t chunk = options.chunk_samples;
-  for (std::size_t begin = 0; begin < n; begin += chunk) {
+  const bool start_is_good_enough = plan.start_rms <= options.accept_start_rms;
+  for (std::size_t begin = 0; begin < n && !start_is_good_enough; begin += chunk) {
     const std::size_t end = std::min(n, begin + chunk + options.overlap_samples);
     const std::size_t keep = std::min(chunk, n - begin);
     const std::span<double> u(plan.u.data() + begin, end - begin);

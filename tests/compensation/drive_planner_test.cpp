@@ -293,3 +293,28 @@ TEST(DrivePlanner, SharesTheRateLawsMismatchAtEachTop) {
     EXPECT_GT(previewed, delta) << f << " Hz";
   }
 }
+
+// A slow reference the previewed inverse already meets on the model is not worth a plan: below
+// accept_start_rms its drive is the plan, without a step of Levenberg-Marquardt; above, planned.
+TEST(DrivePlanner, KeepsThePreviewedDriveWhenItIsGoodEnough) {
+  const hc::ActuatorModel model = loopback_rpi(false);
+  const std::vector<double> targets = sine(1.0, 1.0);
+  hc::DrivePlanOptions o;
+  int calls = 0;
+  o.progress = [&](double f) {
+    ++calls;
+    EXPECT_LE(f, 1.0);
+  };
+  o.accept_start_rms = 0.01 * 36.0;
+  const hc::DrivePlan kept = hc::plan_drive(model, 0.0, {}, targets, o);
+  EXPECT_EQ(kept.u, previewed_drive(model, targets));
+  EXPECT_DOUBLE_EQ(kept.rms, kept.start_rms);
+  EXPECT_LT(kept.start_rms, o.accept_start_rms);
+  EXPECT_EQ(calls, 1);  // done at once
+  EXPECT_EQ(kept.gain.size(), targets.size());
+  o.accept_start_rms = 0.1 * kept.start_rms;
+  calls = 0;
+  const hc::DrivePlan planned = hc::plan_drive(model, 0.0, {}, targets, o);
+  EXPECT_NE(planned.u, kept.u);
+  EXPECT_GT(calls, 1);
+}

@@ -178,6 +178,15 @@ TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
   }
   EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(samples)), planned["model_rms_um"], 1e-9);
 
+  // 1 Hz: the previewed inverse already meets the targets on the model; it is kept, and the
+  // result says why.
+  hdd::BuiltRun one_hz = track({{"reference", "sine"}, {"frequency_hz", 1.0}, {"periods", 2}}, ctx);
+  ASSERT_TRUE(one_hz.preparation.work);
+  one_hz.preparation.work(*one_hz.program, {});
+  const json& kept = one_hz.program->summary["feedforward"]["planned"];
+  EXPECT_EQ(kept["samples"], 0) << kept.dump();
+  EXPECT_THAT(kept["why_not"].get<std::string>(), HasSubstr("already meets the targets"));
+
   const hdd::BuiltRun slow =
       track({{"reference", "sine"}, {"frequency_hz", 1.0}, {"periods", 10}}, ctx);
   const json& not_planned = slow.reply["feedforward"]["planned"];

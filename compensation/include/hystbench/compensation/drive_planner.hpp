@@ -38,6 +38,10 @@ struct DrivePlanOptions {
   /// the linear law continued instead, so it never gains from rates the model was not
   /// identified at. Set: hold (true) or continue (false) whatever the model says.
   std::optional<bool> hold_rate_beyond_max;
+  /// The previewed inverse's drive is the plan, without iterating, when its rms on the model is
+  /// at most this [output unit] (a slow reference: a second of planning would not gain); 0:
+  /// always iterate.
+  double accept_start_rms = 0.0;
   int iterations = 25;     ///< Levenberg-Marquardt steps per chunk, >= 1
   int cg_iterations = 80;  ///< conjugate-gradient steps per Levenberg-Marquardt step, >= 1
   /// Samples planned together, and how many of the next chunk's they also plan (the end of a
