@@ -241,6 +241,11 @@ class Identifier {
   void finish_nested(Candidate& c, ActuatorModel m, const Candidate& base, const char* note);
   void refine(Candidate& c);
   void add_creep(Candidate& c);
+  // What the chosen candidate gets after the search (refinement, creep, as the options ask), for
+  // a rival it is compared with.
+  void finish(Candidate& c);
+  // The modified PI's plays for m dead zones per side, by held-out error.
+  int mpi_plays(int m);
   std::vector<double> creep_time_constants() const;
 
   FitOptions o_;
@@ -368,18 +373,24 @@ Candidate Identifier::search_pi() {
   return memo(ModelKind::kPi, n, 0);
 }
 
+int Identifier::mpi_plays(int m) {
+  return pick(operator_grid(2 * m),
+              [&](int n) { return memo(ModelKind::kModifiedPi, n, m).score(); });
+}
+
+void Identifier::finish(Candidate& c) {
+  if (o_.refine_thresholds) refine(c);
+  if (o_.creep) add_creep(c);
+}
+
 Candidate Identifier::search_mpi() {
   if (best_mpi_) return *best_mpi_;
   const std::vector<int> ms = dead_zone_grid();
   int m = ms.size() == 1 ? ms.front() : std::min(kDefaultDeadZones, ms.back());
-  auto by_n = [&](int mm) {
-    return pick(operator_grid(2 * mm),
-                [&](int n) { return memo(ModelKind::kModifiedPi, n, mm).score(); });
-  };
-  int n = by_n(m);
+  int n = mpi_plays(m);
   if (ms.size() > 1) {
     const int m2 = pick(ms, [&](int mm) { return memo(ModelKind::kModifiedPi, n, mm).score(); });
-    if (m2 != m) n = by_n(m = m2);
+    if (m2 != m) n = mpi_plays(m = m2);
   }
   best_mpi_ = memo(ModelKind::kModifiedPi, n, m);
   return *best_mpi_;
@@ -441,9 +452,7 @@ Candidate Identifier::search_rpi() {
     rpi_by_mpi_order_ = best;
     for (const int m : ms) {
       if (m == chosen) continue;
-      const int n = pick(operator_grid(2 * m),
-                         [&](int nn) { return memo(ModelKind::kModifiedPi, nn, m).score(); });
-      Candidate c = rpi_over(memo(ModelKind::kModifiedPi, n, m));
+      Candidate c = rpi_over(memo(ModelKind::kModifiedPi, mpi_plays(m), m));
       if (c.score() < (1.0 - kParsimony) * best.score()) best = std::move(c);
     }
     if (dead_zones_of(best.structure) == dead_zones_of(rpi_by_mpi_order_->structure)) {
@@ -668,8 +677,7 @@ FitResult Identifier::run() {
     progress(0.92, "checking the dead zones against the modified PI's order");
     Candidate other = std::move(*rpi_by_mpi_order_);
     rpi_by_mpi_order_.reset();
-    if (o_.refine_thresholds) refine(other);
-    if (o_.creep) add_creep(other);
+    finish(other);
     if (other.score() < best->score()) best = std::move(other);
   }
   if (best_kind == ModelKind::kRateDependentPi) {
@@ -677,8 +685,7 @@ FitResult Identifier::run() {
     // rate coefficients); the RPI returned is never worse on held-out data.
     progress(0.93, "checking the rate law against the modified PI it extends");
     Candidate mpi = search_mpi();
-    if (o_.refine_thresholds) refine(mpi);
-    if (o_.creep) add_creep(mpi);
+    finish(mpi);
     if (mpi.score() <= best->score()) {
       best = o_.kind ? nested_rpi(mpi, best->structure) : std::move(mpi);
     }
@@ -690,8 +697,7 @@ FitResult Identifier::run() {
     // nothing held-out once both were refined, and tracked 0.27 to 0.48 % max as it varied.
     progress(0.93, "checking the asymmetry against the modified PI it extends");
     Candidate mpi = search_mpi();
-    if (o_.refine_thresholds) refine(mpi);
-    if (o_.creep) add_creep(mpi);
+    finish(mpi);
     if (best->score() > mpi.score() * (1.0 - kParsimony)) {
       best = o_.kind ? nested_cpi(mpi) : std::move(mpi);
     }
@@ -707,8 +713,7 @@ FitResult Identifier::run() {
     const int pi_delay = choose_delay(ModelKind::kPi);
     if (pi_delay != delay) r_.set_delay(pi_delay), memo_.clear();
     Candidate pi = search_pi();
-    if (o_.refine_thresholds) refine(pi);
-    if (o_.creep) add_creep(pi);
+    finish(pi);
     if (pi.score() < best->score()) {
       const std::string unit = " " + o_.units.output;
       notes.push_back("fell back to the classical PI: the " + std::string(to_string(*o_.kind)) +
