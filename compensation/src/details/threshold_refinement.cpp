@@ -9,6 +9,10 @@ namespace hystbench::compensation::details {
 
 namespace {
 
+// Refined thresholds stay at least this fraction of their starting grid's mean gap apart.
+constexpr double kMinMeanGapFraction = 0.1;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
 // Thresholds <-> log-increments.
 class Packing {
  public:
@@ -24,11 +28,31 @@ class Packing {
       // when it is above r (rc = r is the plain rising play and stays so).
       scales_ = s.cp_scale[2] > 1.0 ? 2 : 1;
     }
-    // A gap the search drives towards zero stays a gap (next_threshold).
+    // A gap the search drives towards zero stays a gap (next_threshold), of at least a tenth of
+    // the starting grid's mean gap: two thresholds that merge are one operator with a near-step
+    // weight pair (+1000 / -994 on a 5 nm dead-zone gap, say), which fits a record's fast parts
+    // to the last nanometre and makes an inverse that jumps there.
+    auto floor_gap = [](const std::vector<double>& t) {
+      if (t.size() < 2) return 0.0;
+      const double span = t.back() - t.front();
+      return std::max(min_threshold_gap(span),
+                      kMinMeanGapFraction * span / static_cast<double>(t.size() - 1));
+    };
+    play_gap_ = floor_gap(s.play_thresholds);
+    dz_gap_ = floor_gap(s.dead_zone_thresholds);
+    // And at most one mean grid step beyond the starting grid's outermost threshold (half the
+    // input range for the uniform plays): a play whose threshold exceeds half the range, or a
+    // dead zone beyond the outputs, never acts, and is a constant that depends on where the
+    // record began.
     const auto& r = s.play_thresholds;
-    if (!r.empty()) play_gap_ = min_threshold_gap(r.back() - r.front());
+    if (r.size() >= 2)
+      play_top_ = r.back() + (r.back() - r.front()) / static_cast<double>(r.size() - 1);
     const auto& d = s.dead_zone_thresholds;
-    if (!d.empty()) dz_gap_ = min_threshold_gap(d.back() - d.front());
+    if (s.has_dead_zones() && d.size() >= 2) {
+      const std::size_t z = s.zero_index(), above = d.size() - 1 - z;
+      if (above > 0) dz_top_pos_ = d.back() * (1.0 + 1.0 / static_cast<double>(above));
+      if (z > 0) dz_top_neg_ = -d.front() * (1.0 + 1.0 / static_cast<double>(z));
+    }
   }
 
   Eigen::Index size() const noexcept { return plays_ + pos_ + neg_ + scales_; }
@@ -51,12 +75,14 @@ class Packing {
     Eigen::Index k = 0;
     auto& r = s.play_thresholds;
     for (Eigen::Index i = 1; i <= plays_; ++i)
-      r[i] = next_threshold(r[i - 1], theta[k++], play_gap_);
+      r[i] = next_threshold(r[i - 1], theta[k++], play_gap_, play_top_ - r[i - 1]);
     auto& d = s.dead_zone_thresholds;
     for (Eigen::Index j = 1; j <= pos_; ++j)
-      d[zero_ + j] = next_threshold(d[zero_ + j - 1], theta[k++], dz_gap_);
+      d[zero_ + j] =
+          next_threshold(d[zero_ + j - 1], theta[k++], dz_gap_, dz_top_pos_ - d[zero_ + j - 1]);
     for (Eigen::Index j = 1; j <= neg_; ++j)
-      d[zero_ - j] = -next_threshold(-d[zero_ - j + 1], theta[k++], dz_gap_);
+      d[zero_ - j] =
+          -next_threshold(-d[zero_ - j + 1], theta[k++], dz_gap_, dz_top_neg_ + d[zero_ - j + 1]);
     if (scales_ > 0) {
       s.cp_scale[1] = std::exp(theta[k++]);
       s.cp_scale[0] = base_.cp_scale[0] / base_.cp_scale[1] * s.cp_scale[1];
@@ -68,6 +94,7 @@ class Packing {
  private:
   ModelStructure base_;
   double play_gap_ = 0.0, dz_gap_ = 0.0;
+  double play_top_ = kInf, dz_top_pos_ = kInf, dz_top_neg_ = kInf;  // outermost thresholds
   Eigen::Index plays_ = 0;
   std::size_t zero_ = 0;
   Eigen::Index pos_ = 0;
@@ -130,8 +157,8 @@ struct Residuals : Eigen::DenseFunctor<double> {
 
 }  // namespace
 
-double next_threshold(double previous, double log_gap, double min_gap) noexcept {
-  return previous + std::max(std::exp(log_gap), min_gap);
+double next_threshold(double previous, double log_gap, double min_gap, double max_gap) noexcept {
+  return previous + std::max(std::min(std::exp(log_gap), max_gap), min_gap);
 }
 
 double min_threshold_gap(double span) noexcept { return 1e-6 * std::max(std::abs(span), 1.0); }

@@ -1,4 +1,5 @@
 #pragma once
+#include <limits>
 // Levenberg-Marquardt refinement of a structure's thresholds by variable projection: for given
 // thresholds the weights are the constrained least-squares solution (fit_design), and LM
 // minimises the simulated output error over the thresholds alone. Thresholds are packed as
@@ -40,8 +41,11 @@ struct RefinementResult {
 
 /// The threshold after `previous` at the gap exp(log_gap), at least min_gap above it: strictly
 /// increasing for any log_gap (a gap that exp() shrinks below previous's last digit would
-/// otherwise round to nothing, and equal thresholds are no model). min_gap > 0.
-double next_threshold(double previous, double log_gap, double min_gap) noexcept;
+/// otherwise round to nothing, and equal thresholds are no model). min_gap > 0. At most max_gap
+/// above it (>= min_gap): a threshold the search drives beyond the data never moves, and its
+/// play is a constant that depends on where the record began.
+double next_threshold(double previous, double log_gap, double min_gap,
+                      double max_gap = std::numeric_limits<double>::infinity()) noexcept;
 /// The smallest gap kept between refined thresholds that span `span` (a millionth of it, of 1
 /// when it is smaller).
 double min_threshold_gap(double span) noexcept;
