@@ -19,13 +19,15 @@ namespace {
 
 // The model's static path (rate-dependent PI hysteresis plus creep) in the form the planner
 // differentiates: y = center + S[offset + sum_i (w_i + dw_i rho) p_i - center] + sum_j g_j x_j,
-// rho = min(|v|, max_rate), v the rate's low-pass, x_j the creep lags.
+// rho = min(|v|, max_rate) (signed law: v clamped to +-max_rate), v the rate's low-pass, x_j the
+// creep lags.
 struct StaticPath {
   std::vector<double> r, w, dw;
   double offset = 0.0, center = 0.0;
   DeadZoneSuperposition dz;
   double max_rate = 0.0;
   double a = 1.0;  // the rate filter's coefficient (1: the per-sample difference)
+  bool signed_law = false;
   double dt = 1e-3;
   std::vector<double> creep_a, creep_g;
 
@@ -50,6 +52,7 @@ StaticPath static_path(const ActuatorModel& model) {
   s.center = p.base.center;
   s.dz = DeadZoneSuperposition(p.base.dead_zone);
   s.max_rate = p.max_rate;
+  s.signed_law = p.rate_law == RateLaw::kSigned;
   s.dt = h.sample_period();
   s.a = RateEstimator(p.rate_filter_s, s.dt).coefficient();
   if (const auto& c = model.creep()) {
@@ -110,9 +113,9 @@ class Chunk {
       }
       st.v += s_.a * ((uk - st.u_prev) / s_.dt - st.v);
       st.u_prev = uk;
-      double rho = std::abs(st.v);
-      const bool capped = s_.max_rate > 0.0 && rho > s_.max_rate;
-      if (capped) rho = s_.max_rate;
+      double rho = s_.signed_law ? st.v : std::abs(st.v);
+      const bool capped = s_.max_rate > 0.0 && std::abs(rho) > s_.max_rate;
+      if (capped) rho = std::copysign(s_.max_rate, rho);
       double h = s_.offset, per_rate = 0.0, total_w = 0.0;
       for (std::size_t i = 0; i < np_; ++i) {
         double& pl = st.play[i];
@@ -143,7 +146,7 @@ class Chunk {
           last_[k * np_ + i] = last[i];
           coef_[k * np_ + i] = dz * (s_.w[i] + s_.dw[i] * rho);
         }
-        const double sign = st.v > 0.0 ? 1.0 : (st.v < 0.0 ? -1.0 : 0.0);
+        const double sign = s_.signed_law ? 1.0 : (st.v > 0.0 ? 1.0 : (st.v < 0.0 ? -1.0 : 0.0));
         rate_gain_[k] = capped ? 0.0 : dz * per_rate * sign;
       }
       if (gain != nullptr) (*gain)[k] = std::max(dz * total_w + creep_slope, 1e-12);
@@ -363,8 +366,14 @@ std::vector<double> smoothed(const std::vector<double>& x, std::size_t window) {
 }  // namespace
 
 bool can_plan_drive(const ActuatorModel& model) noexcept {
-  return model.valid() && model.hysteresis().kind() == ModelKind::kRateDependentPi &&
-         dynamic_cast<const RateDependentPiModel*>(&model.hysteresis()) != nullptr;
+  if (!model.valid() || model.hysteresis().kind() != ModelKind::kRateDependentPi) return false;
+  const auto* h = dynamic_cast<const RateDependentPiModel*>(&model.hysteresis());
+  if (h == nullptr) return false;
+  // A signed rate law whose weights grow with the rate is inverted exactly, forward in time, by
+  // the previewed inverse (its drive at its own rate): nothing is left to plan.
+  const auto slopes = h->rate_slopes();
+  return h->parameters().rate_law != RateLaw::kSigned ||
+         std::any_of(slopes.begin(), slopes.end(), [](double d) { return d < 0.0; });
 }
 
 double plan_drive_work(const ActuatorModel& model, std::size_t samples) noexcept {

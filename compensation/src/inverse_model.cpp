@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "details/validate.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
@@ -12,6 +13,10 @@ namespace hystbench::compensation {
 namespace {
 // The rate-dependent inverse's rate prediction is low-passed over at least this many samples.
 constexpr double kMinRatePredictionSamples = 5.0;
+// Signed law falling with the rate, step(): per-tick drive change at most this many times the
+// rate-free inverse's, and at least this fraction of max_rate per tick.
+constexpr double kSignedStepFactor = 2.0;
+constexpr double kSignedSettleRateFraction = 0.01;
 }  // namespace
 
 // ---------------------------------------------------------------- PiInverse
@@ -86,12 +91,20 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
     // A prediction, so smoothed at least over a few samples even for the per-sample rate law.
     rate_free_rate_.configure(
         std::max(p.rate_filter_s, kMinRatePredictionSamples * rpi.sample_period()),
-        rpi.sample_period());
+        rpi.sample_period(), p.rate_law);
     rate_free_rate_.reset(u_prev_);
+    u_free_prev_ = u_prev_;
     for (const double w : p.base.play.weights) total_ += w;
     total_slope_ = p.rate_coefficients.empty() ? 0.0 : p.rate_coefficients.back();
     max_rate_ = p.max_rate;
-    if (p.rate_filter_s == 0.0 && p.max_rate > 0.0) {
+    signed_ = p.rate_law == RateLaw::kSigned;
+    if (signed_) {
+      // Weights that grow with the signed rate: the output grows with u and with its own rate
+      // on both branches, so the own-rate solution is exact and stable forward in time.
+      const auto slopes = rpi.rate_slopes();
+      own_rate_ = p.max_rate > 0.0 &&
+                  std::all_of(slopes.begin(), slopes.end(), [](double d) { return d >= 0.0; });
+    } else if (p.rate_filter_s == 0.0 && p.max_rate > 0.0) {
       const double dt = rpi.sample_period();
       window_ = static_cast<std::size_t>(std::clamp(std::ceil(kPreviewS / dt), 4.0, 1024.0));
       blend_ = std::min(1.0, dt / kFallingBlendS);
@@ -109,6 +122,9 @@ NumericInverse::NumericInverse(const NumericInverse& other)
       total_(other.total_),
       total_slope_(other.total_slope_),
       max_rate_(other.max_rate_),
+      signed_(other.signed_),
+      u_free_prev_(other.u_free_prev_),
+      own_rate_(other.own_rate_),
       window_(other.window_),
       blend_(other.blend_),
       w_prev_(other.w_prev_),
@@ -176,11 +192,29 @@ double NumericInverse::solve_with(double y_ref, double u_start, Output output) c
 }
 
 double NumericInverse::step(double y_ref) noexcept {
+  if (own_rate_) {
+    // Signed rate law growing with the rate: the drive at its own (filtered) rate, exact.
+    const double u = solve_with(y_ref, u_prev_, [&](double x) { return model_.peek_static(x); });
+    model_.step(u);
+    u_prev_ = u;
+    return u;
+  }
   double rate = 0.0;
+  double step_bound = std::numeric_limits<double>::infinity();
   if (rate_free_) {
     // r W_n(r) = r_0 W_n(0): the rate-dependent map is steeper, so its drive moves slower.
-    double r0 = rate_free_rate_.step(rate_free_->step(y_ref));
-    if (max_rate_ > 0.0) r0 = std::min(r0, max_rate_);
+    const double u_free = rate_free_->step(y_ref);
+    double r0 = rate_free_rate_.step(u_free);
+    if (signed_) {
+      // A signed law whose weights fall with the rate: the drive's own rate raises the output
+      // as it falls (a lag), so where the predicted rate turns at once (a triangle's corner) the
+      // solved drive would jump and its own rate undo the solution. Its per-tick change stays
+      // within twice the rate-free drive's (and a slow floor, so it can settle on a hold).
+      step_bound = std::max(kSignedStepFactor * std::abs(u_free - u_free_prev_),
+                            kSignedSettleRateFraction * max_rate_ * model_.sample_period());
+      u_free_prev_ = u_free;
+    }
+    if (max_rate_ > 0.0) r0 = std::clamp(r0, signed_ ? -max_rate_ : 0.0, max_rate_);
     rate = r0;
     if (total_slope_ != 0.0 && total_ > 0.0) {
       // total_slope_ r^2 + total_ r - total_ r0 = 0, the positive root.
@@ -188,7 +222,8 @@ double NumericInverse::step(double y_ref) noexcept {
       if (disc >= 0.0) rate = (2.0 * total_ * r0) / (total_ + std::sqrt(disc));
     }
   }
-  const double u = solve(model_, y_ref, u_prev_, rate);
+  const double u =
+      std::clamp(solve(model_, y_ref, u_prev_, rate), u_prev_ - step_bound, u_prev_ + step_bound);
   model_.step(u);
   u_prev_ = u;
   return u;
@@ -267,6 +302,7 @@ void NumericInverse::reset(double u0) noexcept {
   u_prev_ = u0;
   if (rate_free_) rate_free_->reset(u0);
   rate_free_rate_.reset(u0);
+  u_free_prev_ = u0;
 }
 
 std::unique_ptr<InverseModel> NumericInverse::clone() const {

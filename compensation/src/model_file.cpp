@@ -39,6 +39,18 @@ double number_member(const json& obj, const std::string& parent, const char* key
   return number(member(obj, parent, key), parent + "." + key);
 }
 
+// rate.law: "signed" or "magnitude"; absent (files written before it was a choice): magnitude.
+RateLaw rate_law_from_json(const json& rate) {
+  const auto it = rate.find("law");
+  if (it == rate.end()) return RateLaw::kMagnitude;
+  if (it->is_string()) {
+    for (const RateLaw law : {RateLaw::kSigned, RateLaw::kMagnitude}) {
+      if (it->get<std::string>() == to_string(law)) return law;
+    }
+  }
+  fail("rate.law", "must be \"signed\" or \"magnitude\", got " + it->dump());
+}
+
 std::vector<double> numbers(const json& obj, const std::string& parent, const char* key) {
   const json& v = member(obj, parent, key);
   const std::string field = parent + "." + key;
@@ -119,7 +131,8 @@ json to_json(const ModelFile& file) {
       j["rate"] = {{"coefficients", p.rate_coefficients},
                    {"max_rate", p.max_rate},
                    {"filter_s", p.rate_filter_s},
-                   {"record_max_rate", p.record_max_rate}};
+                   {"record_max_rate", p.record_max_rate},
+                   {"law", to_string(p.rate_law)}};
       break;
     }
     case ModelKind::kCoupledPlayPi: {
@@ -176,6 +189,7 @@ ModelFile model_file_from_json(const json& j) {
             ModifiedPiParameters{play_from_json(j), dz, center}, numbers(r, "rate", "coefficients"),
             number_member(r, "rate", "max_rate", 0.0), number_member(r, "rate", "filter_s", 0.0),
             number_member(r, "rate", "record_max_rate", 0.0)};
+        p.rate_law = rate_law_from_json(r);
         h = std::make_unique<RateDependentPiModel>(std::move(p));
         break;
       }

@@ -9,6 +9,10 @@
 
 namespace hystbench::compensation {
 
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}  // namespace
+
 RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double dt_s)
     : p_(std::move(p)), pi_(p_.base.play), dz_(p_.base.dead_zone) {
   if (dz_.invertibility().invertible) dz_inverse_ = dz_.inverse();
@@ -34,12 +38,13 @@ RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double d
 void RateDependentPiModel::set_sample_period(double dt_s) {
   details::require(std::isfinite(dt_s) && dt_s > 0.0, "sample period must be > 0");
   dt_ = dt_s;
-  rate_.configure(p_.rate_filter_s, dt_);
+  rate_.configure(p_.rate_filter_s, dt_, p_.rate_law);
 }
 
 double RateDependentPiModel::capped(double rate) const noexcept {
   // Capped at the identified range: beyond it the linear law is an extrapolation.
-  return p_.max_rate > 0.0 && rate > p_.max_rate ? p_.max_rate : rate;
+  if (!(p_.max_rate > 0.0)) return rate;
+  return std::clamp(rate, p_.rate_law == RateLaw::kSigned ? -p_.max_rate : 0.0, p_.max_rate);
 }
 
 double RateDependentPiModel::evaluate(double u, double rate, double* state_out) const noexcept {
@@ -67,8 +72,12 @@ double RateDependentPiModel::rate_for_output(double u, double y) const noexcept 
     per_rate += dw_[i] * pl;
   }
   const double wanted = p_.base.center + dz_inverse_->apply(y - p_.base.center) - at_rest;
+  if (p_.rate_law == RateLaw::kSigned) {
+    if (per_rate == 0.0) return wanted == 0.0 ? 0.0 : std::copysign(kInf, wanted);
+    return wanted / per_rate;
+  }
   if (wanted <= 0.0) return 0.0;
-  if (!(per_rate > 0.0)) return std::numeric_limits<double>::infinity();
+  if (!(per_rate > 0.0)) return kInf;
   return wanted / per_rate;
 }
 
@@ -94,8 +103,10 @@ std::size_t RateDependentPiModel::operator_count() const noexcept {
 }
 
 Invertibility RateDependentPiModel::invertibility() const {
-  // W_i(rate) is linear in rate, so positivity on [0, max_rate] is checked at both ends.
-  for (const double rate : {0.0, p_.max_rate}) {
+  // W_i(rate) is linear in rate, so positivity on [0 or -max_rate, max_rate] is checked at both
+  // ends (and at 0, the law's own rest).
+  const double lowest = p_.rate_law == RateLaw::kSigned ? -p_.max_rate : 0.0;
+  for (const double rate : {0.0, p_.max_rate, lowest}) {
     Invertibility v = check_cumulative_weights(p_.base.play.weights.data(), dw_.size(), "rate",
                                                "cumulative play weight", rate, dw_.data());
     if (!v.invertible) return v;

@@ -4,10 +4,15 @@
 
 namespace hystbench::compensation {
 
-std::vector<double> estimate_rates(std::span<const double> u, double dt_s, double tau_s) {
+const char* to_string(RateLaw law) noexcept {
+  return law == RateLaw::kSigned ? "signed" : "magnitude";
+}
+
+std::vector<double> estimate_rates(std::span<const double> u, double dt_s, double tau_s,
+                                   RateLaw law) {
   std::vector<double> rate(u.size(), 0.0);
   if (u.empty()) return rate;
-  RateEstimator e(tau_s, dt_s);
+  RateEstimator e(tau_s, dt_s, law);
   e.reset(u[0]);
   for (std::size_t k = 1; k < u.size(); ++k) rate[k] = e.step(u[k]);
   return rate;

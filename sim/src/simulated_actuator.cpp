@@ -44,10 +44,10 @@ std::unique_ptr<hc::HysteresisModel> make_hysteresis(const SimulatedActuatorConf
   hc::ModifiedPiParameters mpi = modified_pi_parameters(c.hysteresis);
   if (!c.hysteresis.enabled) return linear_equivalent(mpi, c.input);
   if (!c.rate_dependence.enabled) return std::make_unique<hc::ModifiedPiModel>(std::move(mpi));
-  return std::make_unique<hc::RateDependentPiModel>(
-      hc::RateDependentPiParameters{std::move(mpi), c.rate_dependence.rate_coefficients,
-                                    c.rate_dependence.max_rate_v_per_s},
-      dt_s);
+  hc::RateDependentPiParameters p{std::move(mpi), c.rate_dependence.rate_coefficients,
+                                  c.rate_dependence.max_rate_v_per_s};
+  p.rate_law = c.rate_dependence.rate_law;
+  return std::make_unique<hc::RateDependentPiModel>(std::move(p), dt_s);
 }
 
 }  // namespace

@@ -106,6 +106,21 @@ void validate(const SimulatedActuatorConfig& c) {
                         c.hysteresis.play_thresholds_v.size(), "hysteresis.play_thresholds_v");
     require_finite(c.rate_dependence.rate_coefficients, "rate_dependence.rate_coefficients");
     require_non_negative(c.rate_dependence.max_rate_v_per_s, "rate_dependence.max_rate_v_per_s");
+    // The loading curve keeps rising at every rate the law sees: W_i + c_i rate > 0 on
+    // [-max_rate, max_rate] (signed) or [0, max_rate] (magnitude), checked at both ends.
+    const double lowest = c.rate_dependence.rate_law == compensation::RateLaw::kSigned
+                              ? -c.rate_dependence.max_rate_v_per_s
+                              : 0.0;
+    for (const double rate : {lowest, c.rate_dependence.max_rate_v_per_s}) {
+      double w = 0.0;
+      for (std::size_t i = 0; i < c.rate_dependence.rate_coefficients.size(); ++i) {
+        w += c.hysteresis.play_weights_um_per_v[i];
+        require(w + c.rate_dependence.rate_coefficients[i] * rate > 0.0,
+                element("rate_dependence.rate_coefficients", i),
+                "makes the cumulative play weight " + std::to_string(w) + " + c * " +
+                    std::to_string(rate) + " V/s not positive (the loading curve would fall)");
+      }
+    }
   }
   if (c.creep.enabled) {
     require_same_length(c.creep.gains_um_per_v, "creep.gains_um_per_v",

@@ -59,6 +59,7 @@ template <class S, class Visit>
 requires Is<S, Config::RateDependence>
 void visit_fields(S& s, Visit&& visit) {
   visit("enabled", s.enabled);
+  visit("rate_law", s.rate_law);
   visit("rate_coefficients", s.rate_coefficients);
   visit("max_rate_v_per_s", s.max_rate_v_per_s);
 }
@@ -131,6 +132,7 @@ void visit_fields(S& s, Visit&& visit) {
 
 json encode(const auto& value) { return value; }
 json encode(DriftShape shape) { return std::string(to_string(shape)); }
+json encode(compensation::RateLaw law) { return std::string(compensation::to_string(law)); }
 
 // --- decoding: every reader names the key path on a type error ---
 
@@ -178,6 +180,16 @@ void decode(const json& j, const std::string& path, DriftShape& out) {
     }
   }
   fail(path, "expected \"sinusoid\" or \"random_walk\", got " + j.dump());
+}
+
+void decode(const json& j, const std::string& path, compensation::RateLaw& out) {
+  for (const auto law : {compensation::RateLaw::kSigned, compensation::RateLaw::kMagnitude}) {
+    if (j.is_string() && j.get<std::string>() == compensation::to_string(law)) {
+      out = law;
+      return;
+    }
+  }
+  fail(path, "expected \"signed\" or \"magnitude\", got " + j.dump());
 }
 
 /// Names accepted by a visitor function, for "unknown key" messages.

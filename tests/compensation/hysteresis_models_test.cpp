@@ -1,8 +1,12 @@
 // Properties of the forward models: play definition, wiping-out, rate independence, asymmetry.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
@@ -209,6 +213,55 @@ TEST(RateDependentPiModel, ReducesToModifiedPiAtZeroRateCoefficients) {
   for (double u : hystbench::testing::random_reversal_signal(rng, 2000, 0.0, 20.0)) {
     ASSERT_NEAR(rate.step(u), mpi.step(u), 1e-12);
   }
+}
+
+// The signed rate (the rate-dependent paper's eq. 16) raises the loading branch and lowers the
+// unloading one; its output is smooth through a reversal of a smooth input, where |du/dt| puts a
+// corner (the weights jump back up as the rate's magnitude turns).
+TEST(RateDependentPiModel, TheSignedLawIsSmoothThroughAReversalWhereTheMagnitudeHasACorner) {
+  hc::ModifiedPiParameters base{
+      {{0.0, 2.0, 4.0, 6.0}, {0.5, 0.2, 0.2, 0.1}, 0.0}, {{0.0}, {1.0}}, 0.0};
+  const double dt = 1e-4;
+  auto run = [&](hc::RateLaw law, double* rising, double* falling) {
+    hc::RateDependentPiParameters p{base, {0.0, 0.001, 0.002, 0.003}, 1e4};
+    p.rate_law = law;
+    hc::RateDependentPiModel m(p, dt);
+    m.reset(0.0);
+    std::vector<double> y;
+    for (int k = 0; k <= 2000; ++k) {  // 5 Hz sine 0..40, one period
+      y.push_back(m.step(20.0 - 20.0 * std::cos(2.0 * std::numbers::pi * 5.0 * k * dt)));
+    }
+    *rising = y[500];     // u = 20 rising
+    *falling = y[1500];   // u = 20 falling
+    double corner = 0.0;  // largest second difference around the top (k = 1000)
+    for (int k = 990; k <= 1010; ++k)
+      corner = std::max(corner, std::abs(y[k + 1] - 2 * y[k] + y[k - 1]));
+    return corner;
+  };
+  double up_s = 0, down_s = 0, up_m = 0, down_m = 0;
+  const double corner_signed = run(hc::RateLaw::kSigned, &up_s, &down_s);
+  const double corner_magnitude = run(hc::RateLaw::kMagnitude, &up_m, &down_m);
+  EXPECT_GT(corner_magnitude, 20.0 * corner_signed);
+  // The same law on the loading branch; unloading the signed one lowers the output instead.
+  EXPECT_NEAR(up_s, up_m, 1e-9);
+  EXPECT_LT(down_s, down_m - 0.1);
+}
+
+TEST(RateDependentPiModel, TheSignedLawIsCheckedAtTheFastestFallToo) {
+  hc::ModifiedPiParameters base{{{0.0, 2.0}, {0.5, 0.2}, 0.0}, {{0.0}, {1.0}}, 0.0};
+  // W_0(rate) = 0.5 + 1e-4 rate: positive on [0, 1e4], not at -1e4.
+  hc::RateDependentPiParameters p{base, {1e-4, 1e-4}, 1e4};
+  EXPECT_TRUE(hc::RateDependentPiModel(p, 1e-4).invertibility().invertible);
+  p.rate_law = hc::RateLaw::kSigned;
+  const hc::Invertibility v = hc::RateDependentPiModel(p, 1e-4).invertibility();
+  EXPECT_FALSE(v.invertible);
+  EXPECT_NE(v.reason.find("at rate -"), std::string::npos) << v.reason;
+  // Capped at +-max_rate: a faster fall reads as -max_rate.
+  p.rate_coefficients = {1e-5, 1e-5};
+  hc::RateDependentPiModel m(p, 1e-4);
+  m.reset(5.0);
+  EXPECT_DOUBLE_EQ(m.peek_at_rate(5.0, -1e6), m.peek_at_rate(5.0, -1e4));
+  EXPECT_LT(m.peek_at_rate(5.0, -1e4), m.peek_at_rate(5.0, 0.0));
 }
 
 TEST(RateDependentPiModel, LoopWidensWithRateWhenCoefficientsArePositive) {

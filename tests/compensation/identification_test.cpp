@@ -153,8 +153,8 @@ TEST(Identification, RecoversModifiedPiParametersFromNoiseFreeData) {
 }
 
 // An rpi fit on the true thresholds, dead zones and centre: only weights and the rate law left.
-hc::FitResult fit_rate_law(const hc::RateDependentPiParameters& truth,
-                           const std::vector<double>& u, const std::vector<double>& y) {
+hc::FitResult fit_rate_law(const hc::RateDependentPiParameters& truth, const std::vector<double>& u,
+                           const std::vector<double>& y) {
   hc::FitOptions o = fixed_options(hc::ModelKind::kRateDependentPi);
   o.play_thresholds = truth.base.play.thresholds;
   o.dead_zone_thresholds =
@@ -187,6 +187,38 @@ TEST(Identification, RecoversRateDependentWeightsFromNoiseFreeData) {
   // max_rate is the fastest rate of the record, and the model is invertible up to it.
   EXPECT_GT(got.max_rate, 0.0);
   EXPECT_TRUE(r.model.hysteresis().invertibility().invertible);
+}
+
+// The record says which rate law its actuator follows: a signed-rate truth (the paper's eq. 16)
+// is fitted with the signed law and a |du/dt| truth with the magnitude, each exactly. Both laws
+// widen the loop with rate, as the fit constrains them: the magnitude's weights grow with |rate|,
+// the signed law's fall with the rate (lower on loading, higher on unloading).
+TEST(Identification, TellsTheSignedRateLawFromItsMagnitude) {
+  std::mt19937_64 rng(13);
+  const std::vector<double> u = rich_excitation(20000, 0.0, 10.0, 3.0);
+  for (const hc::RateLaw law : {hc::RateLaw::kSigned, hc::RateLaw::kMagnitude}) {
+    hc::RateDependentPiParameters truth;
+    truth.base = known_mpi(rng, u);
+    for (std::size_t i = 0; i < truth.base.play.weights.size(); ++i)
+      truth.rate_coefficients.push_back((law == hc::RateLaw::kSigned ? -1e-4 : 2e-4) *
+                                        (1.0 + 0.1 * static_cast<double>(i)));
+    truth.max_rate = 300.0;
+    truth.rate_law = law;
+    hc::RateDependentPiModel model(truth, kDt);
+    ASSERT_TRUE(model.invertibility().invertible) << hc::to_string(law);
+    const std::vector<double> y = simulate(model, u);
+
+    const hc::FitResult r = fit_rate_law(truth, u, y);
+    ASSERT_EQ(r.model.hysteresis().kind(), hc::ModelKind::kRateDependentPi);
+    const auto& got =
+        dynamic_cast<const hc::RateDependentPiModel&>(r.model.hysteresis()).parameters();
+    EXPECT_EQ(got.rate_law, law) << hc::to_string(law);
+    EXPECT_LT(relative_error(got.rate_coefficients, truth.rate_coefficients), 1e-6)
+        << hc::to_string(law);
+    EXPECT_LT(relative_error(got.base.play.weights, truth.base.play.weights), 1e-6)
+        << hc::to_string(law);
+    EXPECT_TRUE(r.model.hysteresis().invertibility().invertible) << hc::to_string(law);
+  }
 }
 
 // A rate law that levels off inside the record's rates (the paper's weights saturate at high

@@ -78,6 +78,33 @@ TEST(ModelFile, RateDependentRoundTrip) {
   EXPECT_THROW(hc::model_file_from_json(old), std::exception);
 }
 
+TEST(ModelFile, TheRateLawRoundTripsAndAFileWithoutItIsTheMagnitude) {
+  std::mt19937_64 rng(3);
+  hc::RateDependentPiParameters p{
+      hystbench::testing::random_mpi(rng, 3, 1, 10.0), {0, 1e-4, 2e-4}, 300.0};
+  p.rate_law = hc::RateLaw::kSigned;
+  hc::ModelFile f;
+  f.model = hc::ActuatorModel(std::make_unique<hc::RateDependentPiModel>(p));
+  json j = hc::to_json(f);
+  EXPECT_EQ(j["rate"]["law"], "signed");
+  auto law_of = [](const json& file) {
+    return dynamic_cast<const hc::RateDependentPiModel&>(
+               hc::model_file_from_json(file).model.hysteresis())
+        .parameters()
+        .rate_law;
+  };
+  EXPECT_EQ(law_of(j), hc::RateLaw::kSigned);
+  j["rate"].erase("law");  // written before the law was a choice
+  EXPECT_EQ(law_of(j), hc::RateLaw::kMagnitude);
+  j["rate"]["law"] = "sign";
+  try {
+    hc::model_file_from_json(j);
+    ADD_FAILURE() << "a bad law loaded";
+  } catch (const hc::ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("rate.law"), std::string::npos) << e.what();
+  }
+}
+
 // A coupled-play model carries its output dead zones when it has them; a file without them
 // (the coupled-play paper's model, and every cpi file written before the stage existed) loads
 // as before, with an identity output stage.

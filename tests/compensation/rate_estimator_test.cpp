@@ -21,6 +21,20 @@ TEST(RateEstimator, FollowsARampAndSettlesOnItsRate) {
   EXPECT_NEAR(rate, 50.0, 1e-6);
 }
 
+TEST(RateEstimator, TheSignedLawKeepsTheDirection) {
+  hc::RateEstimator e(2e-3, 1e-4, hc::RateLaw::kSigned);
+  e.reset(0.0);
+  double rate = 0.0;
+  for (int k = 1; k <= 400; ++k) rate = e.step(50.0 * k * 1e-4);
+  EXPECT_NEAR(rate, 50.0, 1e-6);
+  for (int k = 1; k <= 400; ++k) rate = e.step(2.0 - 50.0 * k * 1e-4);
+  EXPECT_NEAR(rate, -50.0, 1e-6);
+  EXPECT_DOUBLE_EQ(e.value(), rate);
+  EXPECT_NEAR(e.peek(2.0 - 50.0 * 401 * 1e-4), rate, 1e-6);
+  EXPECT_EQ(hc::estimate_rates(std::vector<double>{1.0, 0.5}, 1e-3, 0.0, hc::RateLaw::kSigned)[1],
+            -500.0);
+}
+
 TEST(RateEstimator, PeekDoesNotChangeTheStateAndZeroTauIsThePerSampleDifference) {
   hc::RateEstimator e(0.0, 1e-3);
   e.reset(1.0);

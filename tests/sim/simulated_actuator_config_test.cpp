@@ -30,6 +30,7 @@ TEST(SimulatedActuatorConfigJson, RoundTripsEveryField) {
   c.input = {-10.0, 100.0};
   c.hysteresis.play_offset_um = 1.5;
   c.rate_dependence.enabled = true;
+  c.rate_dependence.rate_law = hystbench::compensation::RateLaw::kMagnitude;
   c.creep.time_constants_s = {0.2, 20.0};
   c.creep.gains_um_per_v = {0.001, 0.002};
   c.dynamics.natural_frequency_hz = 4200.0;
@@ -49,6 +50,8 @@ TEST(SimulatedActuatorConfigJson, RoundTripsEveryField) {
   EXPECT_EQ(back.thermal_drift.shape, hs::DriftShape::kRandomWalk);
   EXPECT_EQ(back.creep.gains_um_per_v, c.creep.gains_um_per_v);
   EXPECT_EQ(j["thermal_drift"]["shape"], "random_walk");
+  EXPECT_EQ(j["rate_dependence"]["rate_law"], "magnitude");
+  EXPECT_EQ(back.rate_dependence.rate_law, hystbench::compensation::RateLaw::kMagnitude);
 }
 
 TEST(SimulatedActuatorConfigJson, MissingKeysKeepTheDefaults) {
@@ -82,6 +85,9 @@ TEST(SimulatedActuatorConfigJson, WrongTypesAreNamed) {
                        "sensor_noise.seed"));
   EXPECT_TRUE(mentions(from_json_error(json::parse(R"({"thermal_drift": {"shape": "square"}})")),
                        "thermal_drift.shape"));
+  EXPECT_TRUE(
+      mentions(from_json_error(json::parse(R"({"rate_dependence": {"rate_law": "absolute"}})")),
+               "rate_dependence.rate_law"));
   EXPECT_TRUE(mentions(from_json_error(json::parse(R"({"input": 150})")), "input"));
   EXPECT_TRUE(mentions(from_json_error(json::parse(R"([1, 2])")), "expected an object"));
 }
@@ -91,6 +97,15 @@ TEST(SimulatedActuatorConfigJson, InvalidValuesAreNamed) {
   EXPECT_TRUE(mentions(e, "dynamics.damping_ratio")) << e;
   const auto sizes = from_json_error(json::parse(R"({"creep": {"time_constants_s": [1.0]}})"));
   EXPECT_TRUE(mentions(sizes, "creep.gains_um_per_v")) << sizes;
+  // The signed law lowers the weights on a fall: a coefficient that makes one negative at the
+  // fastest fall is refused, naming it (the default is the paper's signed law).
+  const auto falling = from_json_error(json::parse(
+      R"({"rate_dependence": {"enabled": true, "max_rate_v_per_s": 5000,
+          "rate_coefficients": [1e-4, 0, 0, 0, 0, 0, 0, 0, 0, 0]}})"));
+  EXPECT_TRUE(mentions(falling, "rate_dependence.rate_coefficients[0]")) << falling;
+  EXPECT_NO_THROW(hs::from_json(json::parse(
+      R"({"rate_dependence": {"enabled": true, "rate_law": "magnitude", "max_rate_v_per_s": 5000,
+          "rate_coefficients": [1e-4, 0, 0, 0, 0, 0, 0, 0, 0, 0]}})")));
 }
 
 TEST(SimulatedActuatorConfig, DefaultsAreValid) { EXPECT_NO_THROW(hs::validate({})); }

@@ -66,7 +66,7 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
     if (!(s_.max_rate > 0.0))
       throw std::invalid_argument("rate-dependent design needs max_rate > 0");
     inv_max_rate_ = 1.0 / s_.max_rate;
-    rate_.configure(s_.rate_filter_s, s_.dt);
+    rate_.configure(s_.rate_filter_s, s_.dt, s_.rate_law);
   }
   play_cols_ = s_.kind == ModelKind::kRateDependentPi ? 2 * n_ : n_;
   offset_col_ = play_cols_;
@@ -105,12 +105,14 @@ double Design::row(double u, double y, double* a) noexcept {
   // Cumulative-weight regressors: sum_i w_i (p_i - u_ref) = sum_i W_i (p_i - p_{i+1}).
   const double* z = z_.data();
   if (s_.kind == ModelKind::kRateDependentPi) {
-    // The model's rate: filtered, capped at max_rate (rho in [0, 1]).
-    const double rho = std::min(rate_.step(u) * inv_max_rate_, 1.0);
+    // The model's rate: filtered, capped at max_rate (rho in [0, 1], signed: [-1, 1]).
+    const double rho = std::clamp(rate_.step(u) * inv_max_rate_, -1.0, 1.0);
+    const bool signed_law = s_.rate_law == RateLaw::kSigned;
     for (Eigen::Index i = 0; i < n_; ++i) {
       const double q = z[i] - (i + 1 < n_ ? z[i + 1] : 0.0);
       a[i] = q;
-      a[n_ + i] = q * rho;
+      // Signed: sum_i (1 - rho) C_i q_i = (1 - rho) sum_j e_j p_j (C_i = sum_{j<=i} e_j).
+      a[n_ + i] = signed_law ? (1.0 - rho) * z[i] : q * rho;
     }
   } else if (increments_) {
     for (Eigen::Index i = 0; i < n_; ++i) a[i] = z[i] - s_.input_reference;
@@ -156,7 +158,10 @@ Eigen::VectorXd Design::lower_bounds() const {
   // Jumping coupled plays: w_0 >= eps and w_i >= 0, so every cumulative weight is >= eps too.
   if (increments_) lo.segment(1, n_ - 1).setConstant(0.0);
   // RPI: the rate parts D_i = W_i(max_rate) - W_i(0) >= 0: the loop widens with rate (the
-  // rate-dependent paper's Fig. 8), and W_i >= eps holds on all of [0, max_rate].
+  // rate-dependent paper's Fig. 8), and W_i >= eps holds on all of [0, max_rate]. Signed law:
+  // the head is W_i(+max_rate) >= eps and every play's rate slope -e_j <= 0: the loading slope
+  // falls with the rate and the unloading one rises, so the loop widens with frequency (the
+  // paper's Fig. 1, as a lag widens it), and W_i >= eps on all of [-max_rate, max_rate].
   if (play_cols_ > n_) lo.segment(n_, play_cols_ - n_).setConstant(0.0);
   lo.segment(dz_col_, m_pos_ + m_neg_).setConstant(s_.min_dead_zone_slope);
   return lo;
@@ -166,11 +171,24 @@ Eigen::VectorXd Design::upper_bounds() const { return Eigen::VectorXd::Constant(
 
 std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd& x) const {
   const auto n = static_cast<std::size_t>(n_);
+  // Signed rate law: W_i(rho) = U_i + (1 - rho) C_i, C_i = sum_{j<=i} e_j, so at rest U_i + C_i
+  // and the rate coefficients -C_i per max_rate.
+  const bool signed_law = s_.kind == ModelKind::kRateDependentPi && s_.rate_law == RateLaw::kSigned;
+  Eigen::VectorXd rest = x.head(n_);
+  Eigen::VectorXd rate_part = Eigen::VectorXd::Zero(n_);
+  if (s_.kind == ModelKind::kRateDependentPi) {
+    rate_part = x.segment(n_, n_);
+    if (signed_law) {
+      for (Eigen::Index i = 1; i < n_; ++i) rate_part[i] += rate_part[i - 1];
+      rest += rate_part;
+      rate_part = -rate_part;
+    }
+  }
   PiParameters play;
   play.thresholds = s_.play_thresholds;
   play.weights = increments_ ? std::vector<double>(x.data(), x.data() + n)
-                             : cumulative_to_increments(x.data(), n);
-  const double total = increments_ ? x.head(n_).sum() : x[n_ - 1];
+                             : cumulative_to_increments(rest.data(), n);
+  const double total = increments_ ? x.head(n_).sum() : rest[n_ - 1];
   play.offset = x[offset_col_] - s_.input_reference * total;
   if (!s_.has_dead_zones()) {
     if (s_.kind == ModelKind::kCoupledPlayPi) {
@@ -203,8 +221,10 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
   rpi.base = std::move(mpi);
   rpi.rate_coefficients.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    rpi.rate_coefficients[i] = x[n_ + static_cast<Eigen::Index>(i)] * inv_max_rate_;
+    const auto k = static_cast<Eigen::Index>(i);
+    rpi.rate_coefficients[i] = rate_part[k] * inv_max_rate_;
   }
+  rpi.rate_law = s_.rate_law;
   rpi.max_rate = s_.max_rate;
   rpi.record_max_rate = s_.record_max_rate;
   rpi.rate_filter_s = s_.rate_filter_s;

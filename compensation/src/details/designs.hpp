@@ -10,8 +10,12 @@
 //   MPI      : S'[y - ctr]  = sum_i W_i (p_i - p_{i+1}) + c0   (Kuhnen's error model;
 //              CPI with dead zones likewise, its coupled plays as the p_i)
 //              with S' = inverse dead zone, w'_0 = 1, cumulative V_j >= eps outward from 0
-//   RPI      : as MPI with W_i(rho) = A_i + D_i rho, rho = min(rate, max_rate) / max_rate,
-//              A_i >= eps and D_i >= 0 (weights grow with rate; invertible on [0, max_rate]).
+//   RPI      : as MPI with W_i(rho) = A_i + D_i rho, rho = min(|rate|, max_rate) / max_rate,
+//              A_i >= eps and D_i >= 0 (weights grow with rate; invertible on [0, max_rate]);
+//              signed law: rho = clamp(rate / max_rate, -1, 1), W_i(rho) = U_i + (1 - rho) C_i
+//              with U_i = W_i(+max_rate) >= eps and C_i = sum_{j<=i} e_j, each play's rate
+//              slope -e_j <= 0 (the loop widens with rate, as with |du/dt|; invertible on
+//              [-max_rate, max_rate]).
 // Creep lags, when present, are extra unconstrained columns; so is the drift column (time from
 // drift_t0_s), which estimates a record's slow drift and is no part of the built model.
 #include <Eigen/Dense>
@@ -38,11 +42,12 @@ struct ModelStructure {
   double input_reference = 0.0;  ///< subtracted from the last play for conditioning (not RPI)
   std::array<double, 3> cp_scale{1.0, 1.0, 1.0};  ///< CPI: ra, rb, rc as multiples of r_i
   double max_rate = 0.0;                          ///< RPI: the rate law's cap [input unit / s]
-  double record_max_rate = 0.0;      ///< RPI: the record's largest smooth rate [input unit / s]
-  double rate_filter_s = 0.0;        ///< RPI: the rate's low-pass time constant (RateEstimator) [s]
-  double dt = 1e-3;                  ///< sample period [s]
-  double min_play_slope = 0.0;       ///< lower bound on cumulative play weights
-  double min_dead_zone_slope = 0.0;  ///< lower bound on cumulative inverse dead-zone weights
+  double record_max_rate = 0.0;  ///< RPI: the record's largest smooth rate [input unit / s]
+  double rate_filter_s = 0.0;    ///< RPI: the rate's low-pass time constant (RateEstimator) [s]
+  RateLaw rate_law = RateLaw::kMagnitude;  ///< RPI: du/dt or |du/dt|
+  double dt = 1e-3;                        ///< sample period [s]
+  double min_play_slope = 0.0;             ///< lower bound on cumulative play weights
+  double min_dead_zone_slope = 0.0;        ///< lower bound on cumulative inverse dead-zone weights
   std::vector<double> creep_time_constants;  ///< creep lag columns [s] (empty = none)
   bool drift = false;       ///< a drift column: time since sample 0 less drift_t0_s [s]
   double drift_t0_s = 0.0;  ///< the time the drift column is zero at [s]

@@ -86,6 +86,7 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
         set_dead_zones(p.base);
         s.max_rate = p.max_rate;
         s.rate_filter_s = p.rate_filter_s;
+        s.rate_law = p.rate_law;
         if (!(s.max_rate > 0.0)) return std::nullopt;
         break;
       }

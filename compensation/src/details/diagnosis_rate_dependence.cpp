@@ -2,8 +2,8 @@
 // not ring). Statistic: share of the baseline residual variance explained by the signed input
 // rate (holds and steps left out). It can only be told from the loop shape when the record
 // crosses the same levels at clearly different rates. Extension: the rate-dependent PI on the
-// baseline's plays (and dead zones), cumulative weights linear in |du/dt| up to the 99.9th
-// percentile of the record's rates.
+// baseline's plays (and dead zones), cumulative weights linear in du/dt or |du/dt| (the better
+// fit) up to the 99.9th percentile of the record's rates.
 #include <algorithm>
 #include <cmath>
 
@@ -52,10 +52,17 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     s.center = 0.5 * (r.y_lo + r.y_hi);
   }
   s.max_rate = *q > 0.0 ? *q : 1.0 / r.dt;
-  out.fit = fit_extension(r, spec);
+  // Both laws, as the identification: the signed rate (the paper's eq. 16) and its magnitude,
+  // the one that fits the record better (the same unknowns, so on the fit error).
+  for (const RateLaw law : {RateLaw::kSigned, RateLaw::kMagnitude}) {
+    s.rate_law = law;
+    ExtensionFit f = fit_extension(r, spec);
+    if (law == RateLaw::kSigned || f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
+  }
   out.extension = "rate-dependent PI on " + std::to_string(s.plays()) +
-                  " plays, weights linear in |du/dt| up to " + num(s.max_rate) + " " +
-                  r.units.input + "/s";
+                  " plays, weights linear in " +
+                  (out.fit.spec.structure.rate_law == RateLaw::kSigned ? "du/dt" : "|du/dt|") +
+                  " up to " + num(s.max_rate) + " " + r.units.input + "/s";
   return out;
 }
 

@@ -63,9 +63,9 @@ class ModifiedPiInverse final : public InverseModel {
 /// u in [input_min, input_max] with model.peek_static(u) = y_ref and refines it (regula falsi
 /// with bisection safeguard, at most `max_iterations`), then steps the internal model copy.
 /// Beyond the reachable range the input saturates at the bound.
-/// A rate-dependent model is solved at an input rate predicted from the reference, never from
-/// the drive being solved for (that feedback made the drive chatter, and on a falling branch the
-/// exact own-rate inverse is unstable): the rate-free modified PI's inverse follows the
+/// A rate-dependent model with |du/dt| is solved at an input rate predicted from the reference,
+/// never from the drive being solved for (that feedback made the drive chatter, and on a falling
+/// branch the exact own-rate inverse is unstable): the rate-free modified PI's inverse follows the
 /// reference, its drive's rate r_0 (the model's rate filter) is scaled to the rate-dependent
 /// map's larger slope, r = r_0 W_n(0) / W_n(r) (W_n the total cumulative play weight), and the
 /// drive is solved at r. Every step is a function of the reference alone.
@@ -78,6 +78,9 @@ class ModifiedPiInverse final : public InverseModel {
 /// converges within a few time constants F_r / s of the rate law. Where a falling run starts,
 /// the drive joins that solution over kFallingBlendS instead of jumping (a jump is a one-tick
 /// rate spike to the per-sample law).
+/// The signed rate law (the paper's eq. 16) with weights that grow with the rate has no such
+/// asymmetry: step() solves the drive at its own filtered rate on both branches, exact and
+/// stable forward in time, and needs no targets ahead.
 class NumericInverse final : public InverseModel {
  public:
   struct Options {
@@ -120,6 +123,9 @@ class NumericInverse final : public InverseModel {
   std::unique_ptr<InverseModel> rate_free_;
   RateEstimator rate_free_rate_;
   double total_ = 0.0, total_slope_ = 0.0, max_rate_ = 0.0;
+  bool signed_ = false;       // the signed rate law
+  double u_free_prev_ = 0.0;  // signed law: the rate-free inverse's last drive
+  bool own_rate_ = false;     // signed, weights growing with rate: step() at its own rate
   // step_previewed(): look-ahead in samples (0 = not available), and the falling run's state.
   std::size_t window_ = 0;
   double blend_ = 1.0;    // per-tick share of the gap to the backward solution closed

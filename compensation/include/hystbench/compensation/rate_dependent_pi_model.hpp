@@ -1,9 +1,10 @@
 #pragma once
 // Rate-dependent modified PI (rate-dependent paper, eq. 15-21): the cumulative play weights are
-// linear in the input rate, W_i(rate) = W^_i + c_i * rate [input unit / s], capped at max_rate
+// linear in the input rate, W_i(rate) = W^_i + c_i * rate [input unit / s], capped at +-max_rate
 // (when > 0); w_i(rate) = W_i(rate) - W_{i-1}(rate). Dead zones are rate-independent.
-// The rate is |du/dt| through a first-order low-pass of time constant rate_filter_s
-// (RateEstimator; 0 = the per-sample difference |u(k) - u(k-1)| / dt, the paper's form).
+// The rate is du/dt (RateLaw::kSigned, eq. 16) or |du/dt| (kMagnitude) through a first-order
+// low-pass of time constant rate_filter_s (RateEstimator; 0 = the per-sample difference
+// (u(k) - u(k-1)) / dt, the paper's form).
 // Needs set_sample_period(). Real-time safe step()/peek()/peek_at_rate().
 #include <optional>
 #include <span>
@@ -26,6 +27,8 @@ struct RateDependentPiParameters {
   /// max_rate (a saturation); equal: max_rate is only where the record ended (an extrapolation
   /// guard).
   double record_max_rate = 0.0;
+  /// du/dt or |du/dt|. Model files without the key are kMagnitude (the only law before).
+  RateLaw rate_law = RateLaw::kMagnitude;
 };
 
 class RateDependentPiModel final : public HysteresisModel {
@@ -36,7 +39,8 @@ class RateDependentPiModel final : public HysteresisModel {
   double step(double u) noexcept override;
   double peek(double u) const noexcept override;
   double peek_at_rate(double u, double rate) const noexcept override;
-  /// Exact: the output is S[a(u) + b(u) rate], so rate = (S^-1[y] - a) / b (before the cap).
+  /// Exact: the output is S[a(u) + b(u) rate], so rate = (S^-1[y] - a) / b (before the cap;
+  /// kMagnitude: 0 where that is negative).
   double rate_for_output(double u, double y) const noexcept override;
   void reset(double u0) noexcept override;
   void set_sample_period(double dt_s) override;

@@ -11,6 +11,8 @@
 #include <string_view>
 #include <vector>
 
+#include "hystbench/compensation/rate_estimator.hpp"
+
 namespace hystbench::sim {
 
 /// Shape of the slow output-offset drift.
@@ -56,14 +58,24 @@ struct SimulatedActuatorConfig {
   } hysteresis;
 
   /// Rate-dependent modified PI (rate-dependent paper, eq. 15-21): the cumulative play weights
-  /// become W_i + c_i * |du/dt|. Needs hysteresis.enabled. The rate is the per-sample input
-  /// rate, so an input step gives a one-sample weight spike: drive it with smooth inputs.
+  /// become W_i + c_i * du/dt (rate_law "signed", eq. 16 as written) or W_i + c_i * |du/dt|
+  /// ("magnitude"). The default is signed with c_i <= 0: the loading slope falls with the rate
+  /// and the unloading one rises, so the loop widens with frequency (the paper's Fig. 1) the way
+  /// a lag widens it, and the output stays smooth through a reversal. |du/dt| with c_i >= 0
+  /// widens it too, but the weights jump back as the rate's magnitude turns: a corner in the
+  /// output at every reversal, which no stage with mass shows. Needs hysteresis.enabled. The
+  /// rate is the per-sample input rate, so an input step gives a one-sample weight spike: drive
+  /// it with smooth inputs.
   struct RateDependence {
     bool enabled = false;
-    /// c_i, one per play [µm/V per V/s]; the default widens the loop by about 10 % per kV/s.
-    std::vector<double> rate_coefficients = {0.0,  2e-6,   4e-6,   6e-6,   8e-6,
-                                             1e-5, 1.2e-5, 1.4e-5, 1.6e-5, 1.8e-5};
-    double max_rate_v_per_s = 5000.0;  ///< rate the truth is meant for (>= 0) [V/s]
+    compensation::RateLaw rate_law = compensation::RateLaw::kSigned;
+    /// c_i, one per play [µm/V per V/s]; the default changes the wide plays' share of the slope
+    /// by about 10 % per kV/s (every W_i + c_i rate must stay > 0 over the law's rates).
+    std::vector<double> rate_coefficients = {0.0,   -2e-6,   -4e-6,   -6e-6,   -8e-6,
+                                             -1e-5, -1.2e-5, -1.4e-5, -1.6e-5, -1.8e-5};
+    /// Rate the truth's law holds to, capped beyond (>= 0) [V/s]: the rates of a 19 Hz sine
+    /// over 80 % of the range (7.2 kV/s) are inside.
+    double max_rate_v_per_s = 10000.0;
   } rate_dependence;
 
   /// Creep: a bank of first-order lags of the (delayed) input added to the hysteresis output.
