@@ -218,6 +218,10 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     // Less the tare: the output offset the model did not predict on the open-loop prefix.
     const double tare = p.tare_um();
     auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
+    // inverse+pid: the reading is held to the feedforward's predicted output (RunProgram).
+    const double fb_ref = p.feedforward_model && std::isfinite(p.y_feedforward_model)
+                              ? p.y_feedforward_model + tare
+                              : y_ref;
     compensation::CompensatorOutput out;
     if (const std::size_t ahead = p.targets.capacity(); ahead > 1) {
       if (p.targets.view().empty()) {
@@ -225,9 +229,9 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
           p.targets.push(target_at(t + static_cast<double>(j) * dt_));
       }
       p.targets.push(target_at(t + static_cast<double>(ahead - 1) * dt_));
-      out = p.compensator->step(y_ref, y_prev_, p.targets.view());
+      out = p.compensator->step(fb_ref, y_prev_, p.targets.view());
     } else {
-      out = p.compensator->step(y_ref, y_prev_, target_at(t));
+      out = p.compensator->step(fb_ref, y_prev_, target_at(t));
     }
     rec.u_ff = out.u_ff;
     rec.u_fb = out.u_fb;
@@ -250,6 +254,9 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   if (p.model) {
     rec.y_model = p.model->step(lim.u);
     p.y_model_history[k % RunProgram::kModelHistory] = rec.y_model;
+  }
+  if (p.feedforward_model) {
+    p.y_feedforward_model = p.feedforward_model->step(std::isfinite(y_ref) ? rec.u_ff : lim.u);
   }
 
   const char* failure = nullptr;

@@ -147,10 +147,18 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
   if (model.dynamics()) inverted.push_back("dynamics");
   if (inversion.active()) p.preview = inversion;
   arm_tare(p, model_exchange_ticks(ctx));
-  return {{"inverted", inverted},
-          {"preview_samples", inversion.preview_samples()},
-          {"bandwidth_hz", inversion.bandwidth_hz()},
-          {"how", inversion.describe()}};
+  json out = {{"inverted", inverted},
+              {"preview_samples", inversion.preview_samples()},
+              {"bandwidth_hz", inversion.bandwidth_hz()},
+              {"how", inversion.describe()}};
+  if (model.hysteresis().kind() == hc::ModelKind::kRateDependentPi) {
+    out["rate"] = hc::can_plan_drive(model)
+                      ? "planned over the known reference where it is fast (the |du/dt| law, or "
+                        "weights that fall with the rate)"
+                      : "solved each tick at the drive's own rate (the signed law, weights growing "
+                        "with it: exact)";
+  }
+  return out;
 }
 
 // The feedforward planned over the whole known reference for a rate-dependent model
@@ -280,6 +288,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   const double u_start = p->excitation.empty() ? ctx.u_now : p->excitation.back();
   if (kind == hc::CompensatorKind::kPid) p->compensator->reset(u_start);
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
+  if (kind == hc::CompensatorKind::kInversePid && p->model) p->feedforward_model = p->model;
   p->summary = {{"compensator", comp_name}, {"y_model", predictor_name(ctx)}};
   if (!feedforward.is_null()) p->summary["feedforward"] = feedforward;
   if (!feedback.is_null()) p->summary["feedback"] = feedback;

@@ -64,9 +64,10 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
     const json pid = track("inverse+pid", f, f < 2 ? 3 : 6);
     ASSERT_EQ(pid["end"], "completed") << pid.dump(2);
     EXPECT_EQ(pid["feedback"]["gains"], "derived") << pid.dump(2);
-    // Feedback never makes tracking worse (a 5 % margin for the sensitivity just above 1 that
-    // a loop delay gives at high frequency, and run-to-run noise).
-    EXPECT_LE(rms(pid), 1.05 * mpi_rms[f] + 0.02) << f << " Hz: " << pid.dump(2);
+    // With the wrong model the feedback cannot know the actuator's lag (the signed rate law's
+    // zero): its integral loop, crossing over at 2 Hz, amplifies the 5-19 Hz mismatch by 13-14 %
+    // (measured; 1 Hz: no worse). Bounded here; the rpi model's loop below is held to 5 %.
+    EXPECT_LE(rms(pid), (f < 2 ? 1.05 : 1.2) * mpi_rms[f] + 0.02) << f << " Hz: " << pid.dump(2);
   }
 
   const json id_rpi = run_and_wait("identify", {{"model", "rpi"}});
@@ -75,10 +76,13 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
   // Nesting on the bench: the MPI is an RPI with zero rate coefficients. The two identify runs
   // are separate records, so allow their noise to differ a little.
   EXPECT_LE(id_rpi["model"]["heldout"]["rmse"].get<double>(), 1.1 * mpi_heldout) << id_rpi.dump(2);
-  // identify saw the rate law level off inside its record (the loopback's cap), and kept it.
+  // identify found the law the loopback follows (the signed rate of the paper's eq. 16, weights
+  // falling with it: the loop widens with frequency) and kept it up to its record's rates.
   std::ifstream model_file(id_rpi["model"]["path"].get<std::string>());
   const json rate = json::parse(model_file).at("rate");
-  EXPECT_GT(rate["record_max_rate"].get<double>(), rate["max_rate"].get<double>()) << rate;
+  EXPECT_EQ(rate["law"], "signed") << rate;
+  EXPECT_GE(rate["record_max_rate"].get<double>(), rate["max_rate"].get<double>()) << rate;
+  for (const auto& c : rate["coefficients"]) EXPECT_LE(c.get<double>(), 0.0) << rate;
   double reduction_sum = 0.0;
   for (const double f : freqs) {
     const json inv = track("inverse", f, f < 2 ? 3 : 6);
@@ -88,9 +92,12 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
     ASSERT_TRUE(inv.contains("model_rms_error_percent")) << inv.dump(2);
     EXPECT_TRUE(std::isfinite(inv["model_rms_error_percent"].get<double>()));
     EXPECT_EQ(inv["feedforward"]["inverted"][1], "rate") << inv.dump(2);
-    // The drive was planned over the whole reference; from 5 Hz the plan plays, better than
-    // the previewed inverse on the model (at 1 Hz the two are within 0.05 % of range, and the
-    // previewed inverse plays when the plan's smoother start leaves it behind).
+    // Weights falling with the rate lag the drive (a right-half-plane zero): the drive that
+    // follows the reference leads it, which only the known future gives. It was planned over
+    // the whole reference; from 5 Hz the plan plays, better than the previewed inverse on the
+    // model (at 1 Hz the previewed inverse may already meet the targets).
+    EXPECT_NE(inv["feedforward"].value("rate", "").find("planned"), std::string::npos)
+        << inv.dump(2);
     const json& plan = inv["feedforward"]["planned"];
     ASSERT_TRUE(plan.is_object()) << inv.dump(2);
     if (f > 2) {
@@ -99,7 +106,9 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
                 0.8 * plan["previewed_model_rms_um"].get<double>())
           << inv.dump(2);
     }
-    EXPECT_LE(rpi_rms[f], f < 15 ? 2.0 : 3.0) << f << " Hz: " << inv.dump(2);
+    // The target: 1 % at every frequency (measured 0.17-0.25 / 0.38-0.43 / 0.52-0.57 /
+    // 0.69-0.72 % with `sweep`).
+    EXPECT_LE(rpi_rms[f], 1.0) << f << " Hz: " << inv.dump(2);
     EXPECT_LE(rpi_rms[f], none_rms[f]) << f << " Hz: " << inv.dump(2);
     const json pid = track("inverse+pid", f, f < 2 ? 3 : 6);
     ASSERT_EQ(pid["end"], "completed") << pid.dump(2);
@@ -112,7 +121,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
   const double mean_reduction = reduction_sum / 4.0;
   std::cout << "mean reduction of the rpi inverse against the mpi inverse: "
             << 100.0 * mean_reduction << " %\n";
-  EXPECT_GE(mean_reduction, 0.80);
+  EXPECT_GE(mean_reduction, 0.85);
 }
 
 TEST_F(BenchRateDependenceTest, WithoutRateDependenceTodaysFiguresHoldAndEverySampleHasYModel) {
