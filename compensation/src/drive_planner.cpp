@@ -371,9 +371,7 @@ bool can_plan_drive(const ActuatorModel& model) noexcept {
   if (h == nullptr) return false;
   // A signed rate law whose weights grow with the rate is inverted exactly, forward in time, by
   // the previewed inverse (its drive at its own rate): nothing is left to plan.
-  const auto slopes = h->rate_slopes();
-  return h->parameters().rate_law != RateLaw::kSigned ||
-         std::any_of(slopes.begin(), slopes.end(), [](double d) { return d < 0.0; });
+  return !h->grows_with_signed_rate();
 }
 
 double plan_drive_work(const ActuatorModel& model, std::size_t samples) noexcept {

@@ -101,9 +101,7 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
     if (signed_) {
       // Weights that grow with the signed rate: the output grows with u and with its own rate
       // on both branches, so the own-rate solution is exact and stable forward in time.
-      const auto slopes = rpi.rate_slopes();
-      own_rate_ = p.max_rate > 0.0 &&
-                  std::all_of(slopes.begin(), slopes.end(), [](double d) { return d >= 0.0; });
+      own_rate_ = p.max_rate > 0.0 && rpi.grows_with_signed_rate();
     } else if (p.rate_filter_s == 0.0 && p.max_rate > 0.0) {
       const double dt = rpi.sample_period();
       window_ = static_cast<std::size_t>(std::clamp(std::ceil(kPreviewS / dt), 4.0, 1024.0));

@@ -52,6 +52,10 @@ class RateDependentPiModel final : public HysteresisModel {
   double sample_period() const noexcept { return dt_; }
   /// Per play, how its weight grows with the rate: c_i - c_{i-1} [output/input per (input/s)].
   std::span<const double> rate_slopes() const noexcept { return dw_; }
+  /// The signed law with every play's weight growing with the rate: the output grows with the
+  /// input and with its own rate on both branches, so each tick inverts exactly at the drive's
+  /// own rate (no right-half-plane zero, nothing to plan).
+  bool grows_with_signed_rate() const noexcept;
 
  private:
   /// Output for input u at the given rate; writes the new play outputs to state_out when it is
