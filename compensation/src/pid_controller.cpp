@@ -21,6 +21,9 @@ PidController::PidController(PidParameters p, double dt_s) : p_(p), dt_(dt_s) {
   details::require(std::isfinite(p_.output_filter_hz) && p_.output_filter_hz >= 0.0 &&
                        p_.output_filter_hz < 0.5 / dt_s,
                    "pid.output_filter_hz must be >= 0 and below the Nyquist frequency");
+  details::require(std::isfinite(p_.error_period_s) && p_.error_period_s >= 0.0,
+                   "pid.error_period_s must be >= 0");
+  error_average_ = PeriodAverage(p_.error_period_s / dt_);
   if (p_.output_filter_hz > 0.0) {
     beta_ = 1.0 - std::exp(-2.0 * std::numbers::pi * p_.output_filter_hz * dt_);
   }
@@ -30,8 +33,10 @@ PidController::PidController(PidParameters p, double dt_s) : p_(p), dt_(dt_s) {
   }
 }
 
-double PidController::step(double error) noexcept {
-  if (!std::isfinite(error)) return out_;  // hold on a bad measurement; the loop faults on it
+double PidController::step(double measured_error) noexcept {
+  // hold on a bad measurement; the loop faults on it
+  if (!std::isfinite(measured_error)) return out_;
+  const double error = error_average_.step(measured_error);
   ef_ = samples_ == 0 ? error : ef_ + alpha_ * (error - ef_);
   if (samples_ == 0) {
     e1_ = error;
@@ -58,6 +63,7 @@ void PidController::reset(double initial_output) noexcept {
   e1_ = ef_ = ef1_ = ef2_ = 0.0;
   external_saturation_ = 0;
   samples_ = 0;
+  error_average_.reset();
 }
 
 }  // namespace hystbench::compensation

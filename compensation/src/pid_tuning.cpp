@@ -19,6 +19,7 @@ constexpr double kRateOutputFilterFactor = 4.0;  // f_lp = 4 f_c (rate-dependent
 constexpr double kLoopDelayPeriods = 1.5;        // write-to-read delay plus the zero-order hold
 constexpr double kRateLoopFraction = 0.25;       // of 1 / delay
 constexpr double kRateZeroMargin = 14.0;         // 2 pi f_c at most (g / K_r) / 14
+constexpr double kPeriodAverageMargin = 10.0;    // f_c at most f_0 / 10 behind the period average
 
 // Largest change of output per unit of input rate [µm per V/s] of a rate-dependent model; with
 // `lowering` only the part that lowers the output as the drive rises (a right-half-plane zero):
@@ -45,7 +46,7 @@ bool signed_law(const ActuatorModel& model) {
 }  // namespace
 
 PidTuning tune_pid(double gain_um_per_v, double loop_rate_hz, double bandwidth_hz,
-                   const ActuatorModel* model) {
+                   const ActuatorModel* model, double reference_hz) {
   details::require(std::isfinite(gain_um_per_v) && gain_um_per_v > 0.0,
                    "PID tuning needs the actuator's gain > 0 [um/V]");
   details::require(std::isfinite(loop_rate_hz) && loop_rate_hz > 0.0,
@@ -98,6 +99,15 @@ PidTuning tune_pid(double gain_um_per_v, double loop_rate_hz, double bandwidth_h
   if (kr > 0.0 && hf_gain(fc) > hf_limit) {
     fc = std::sqrt(hf_limit / hf_gain(1.0));
     t.basis += ", lowered to " + details::fmt(fc) + " Hz for the model's rate loop gain";
+  }
+  if (std::isfinite(reference_hz) && reference_hz > fc) {
+    t.error_period_s = 1.0 / reference_hz;
+    t.basis += "; the error averaged over the reference's period (" + details::fmt(reference_hz) +
+               " Hz is above the crossover: what repeats with it the integrator could only raise)";
+    if (fc > reference_hz / kPeriodAverageMargin) {
+      fc = reference_hz / kPeriodAverageMargin;
+      t.basis += ", crossover lowered to " + details::fmt(fc) + " Hz for the average's delay";
+    }
   }
   t.bandwidth_hz = fc;
   t.ki = two_pi * fc / gain_um_per_v;

@@ -219,7 +219,9 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     const double tare = p.tare_um();
     auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
     // inverse+pid: the reading is held to the feedforward's predicted output (RunProgram).
-    const double fb_ref = p.feedforward_model && std::isfinite(p.y_feedforward_model)
+    // Before feedback_from, NaN: the PID holds.
+    const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN()
+                          : p.feedforward_model && std::isfinite(p.y_feedforward_model)
                               ? p.y_feedforward_model + tare
                               : y_ref;
     compensation::CompensatorOutput out;
@@ -320,7 +322,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     p.error_max = std::max(p.error_max, std::abs(e));
     ++p.error_samples;
   }
-  if (failure == nullptr && k >= p.metrics_from && p.model) {
+  if (failure == nullptr && k >= p.metrics_from && k >= p.model_metrics_from && p.model) {
     const double e = rec.y_measured - rec.y_model;
     p.model_error_sum2 += e * e;
     p.model_error_max = std::max(p.model_error_max, std::abs(e));

@@ -85,6 +85,9 @@ BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext&
   // Recorded from the first sample: the fit simulates the ramp, settle and sweep from
   // where the output was, so its model enters the scored part in the actuator's state.
   p->metrics_from = 0;
+  const sim::ExcitationSegment* first_scored = exc.find("major_loop");
+  const std::size_t skip = offset + (first_scored != nullptr ? first_scored->begin : 0);
+  p->model_metrics_from = skip;
   allocate_records(*p, true);
 
   json segments = json::array();
@@ -105,11 +108,10 @@ BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext&
                   {"segments", segments}}},
                 {"driver", s.driver_type},
                 {"y_model", predictor_name(ctx)}};
-  const sim::ExcitationSegment* first_scored = exc.find("major_loop");
   run.fit = {{"model", request.model},
              {"operators", request.operators},
              {"dead_zones", request.dead_zones},
-             {"skip_samples", offset + (first_scored != nullptr ? first_scored->begin : 0)},
+             {"skip_samples", skip},
              {"precondition_s", s.identify.precondition_s},
              {"settle_s", s.identify.settle_s}};
   return run;

@@ -84,11 +84,13 @@ std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
 }
 
 // The PID's gains (derived, the request's or the configuration's) and clamp; `summary` says
-// which. nullopt for a compensator without feedback.
+// which. Derived gains behind a feedforward average the error over the period of a periodic
+// reference of reference_hz (0: none) above their crossover. nullopt for a compensator without
+// feedback.
 std::optional<hc::PidController> feedback_controller(const Request& request,
                                                      hc::CompensatorKind kind,
                                                      const RunContext& ctx, double gain,
-                                                     json& summary) {
+                                                     double reference_hz, json& summary) {
   if (!hc::uses_feedback(kind)) return std::nullopt;
   const BenchSettings& s = ctx.settings;
   const PidSection& c = s.pid;
@@ -103,11 +105,14 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
   const bool given = request.has("kp") || request.has("ki") || request.has("kd");
   if (derived && !given) {
     const hc::ActuatorModel* m = ctx.model != nullptr ? &ctx.model->model : nullptr;
-    const hc::PidTuning t = hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m);
+    const hc::PidTuning t =
+        hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m,
+                     kind == hc::CompensatorKind::kInversePid ? reference_hz : 0.0);
     pp.kp = t.kp;
     pp.ki = t.ki;
     pp.kd = t.kd;
     pp.output_filter_hz = c.output_filter_hz.value_or(t.output_filter_hz);
+    pp.error_period_s = t.error_period_s;
     summary = {{"gains", "derived"}, {"basis", t.basis}};
   } else {
     pp.kp = request.number("kp", pp.kp);
@@ -129,6 +134,7 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
                   {"ki", pp.ki},
                   {"kd", pp.kd},
                   {"output_filter_hz", pp.output_filter_hz},
+                  {"error_period_s", pp.error_period_s},
                   {"u_fb_min", pp.output_min},
                   {"u_fb_max", pp.output_max}});
   return pid;
@@ -277,7 +283,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
   json feedback = nullptr;
   const std::optional<hc::PidController> pid =
-      feedback_controller(request, kind, ctx, linear.gain, feedback);
+      feedback_controller(request, kind, ctx, linear.gain, ref.frequency_hz, feedback);
   RunPreparation preparation;
   if (inverse) preparation = feedforward_plan(*p, ctx, kind, ref.samples, feedforward, pid, linear);
   try {
@@ -288,7 +294,13 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   const double u_start = p->excitation.empty() ? ctx.u_now : p->excitation.back();
   if (kind == hc::CompensatorKind::kPid) p->compensator->reset(u_start);
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
-  if (kind == hc::CompensatorKind::kInversePid && p->model) p->feedforward_model = p->model;
+  // A PID that averages the error over the reference's period answers the run's mean tracking
+  // error, and only from the scored part on: the first period's transient is no part of what
+  // repeats. Otherwise inverse+pid holds the reading to the feedforward's predicted output.
+  const bool period_averaged = pid && pid->parameters().error_period_s > 0.0;
+  if (kind == hc::CompensatorKind::kInversePid && p->model && !period_averaged) {
+    p->feedforward_model = p->model;
+  }
   p->summary = {{"compensator", comp_name}, {"y_model", predictor_name(ctx)}};
   if (!feedforward.is_null()) p->summary["feedforward"] = feedforward;
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
@@ -296,6 +308,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   const std::uint64_t prefix = p->excitation.size();
   p->total_samples = prefix + ref.samples;
   p->metrics_from = prefix + ref.unscored;
+  if (period_averaged) p->feedback_from = p->metrics_from;
   allocate_records(*p);
 
   BuiltRun run;

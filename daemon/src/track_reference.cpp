@@ -112,6 +112,10 @@ TrackReference builtin_reference(const Request& request, const ReferenceLimits& 
   r.unscored = r.samples >= 2 * one_period ? one_period : 0;
   r.min_um = y_lo;
   r.max_um = y_hi;
+  if (spec.kind == sim::SignalKind::kSine || spec.kind == sim::SignalKind::kTriangle ||
+      spec.kind == sim::SignalKind::kSawtooth) {
+    r.frequency_hz = spec.frequency_hz;
+  }
   r.header = {{"reference", ref_name},
               {"frequency_hz", spec.frequency_hz},
               {"duration_s", duration},

@@ -18,8 +18,9 @@ struct TrackReference {
   std::uint64_t samples = 0;                     ///< ticks of the reference part of the run
   std::uint64_t unscored = 0;  ///< its leading ticks left out of the error figures
   double min_um = 0.0, max_um = 0.0;
-  nlohmann::json header;  ///< keys of the run log header's "run" object
-  nlohmann::json reply;   ///< the start reply's "reference" object
+  double frequency_hz = 0.0;  ///< fundamental of a periodic one (sine, triangle, sawtooth), else 0
+  nlohmann::json header;      ///< keys of the run log header's "run" object
+  nlohmann::json reply;       ///< the start reply's "reference" object
 };
 
 /// The actuator's output range and how fast the reference may move [µm, µm/s].

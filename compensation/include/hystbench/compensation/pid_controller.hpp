@@ -6,9 +6,14 @@
 // (or the stage after it, see set_saturation()) is saturated in the direction it would push.
 // The output may pass a first-order low-pass (output_filter_hz): it keeps the feedback's per-tick
 // changes small, so an actuator whose gain grows with |du/dt| does not see them as rate.
+// The error may first pass a moving average over one period of a periodic reference
+// (error_period_s, PeriodAverage): the loop then answers the error's slow part only, not the part
+// that repeats with the reference.
 // Units: error in output unit (µm), u_fb in input unit (V); Ki in 1/s, Kd in s.
 // step() is real-time safe.
 #include <cstdint>
+
+#include "hystbench/compensation/period_average.hpp"
 
 namespace hystbench::compensation {
 
@@ -20,11 +25,13 @@ struct PidParameters {
   double output_min = -1e300;         ///< clamp of u_fb [V]
   double output_max = 1e300;
   double output_filter_hz = 0.0;  ///< low-pass of u_fb; 0 = none; below the Nyquist frequency
+  double error_period_s = 0.0;    ///< average the error over this period first [s]; 0 = none
 };
 
 class PidController {
  public:
-  /// Throws std::invalid_argument for NaN gains, dt <= 0 or output_min > output_max.
+  /// Throws std::invalid_argument for NaN gains, dt <= 0, output_min > output_max or a negative
+  /// error_period_s. Allocates the averaging window (error_period_s / dt_s samples).
   PidController(PidParameters p, double dt_s);
 
   /// Advances one sample with error e = y_ref - y; returns u_fb.
@@ -49,6 +56,7 @@ class PidController {
   double e1_ = 0.0;
   double ef_ = 0.0, ef1_ = 0.0, ef2_ = 0.0;
   int external_saturation_ = 0;
+  PeriodAverage error_average_;
   std::uint64_t samples_ = 0;
 };
 

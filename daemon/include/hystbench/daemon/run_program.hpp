@@ -55,12 +55,20 @@ struct RunProgram {
   /// own predicted transients (a run's start from rest, a rate law's lag) alone instead of
   /// winding up on them and paying them back over the next periods.
   std::optional<compensation::ActuatorModel> feedforward_model;
+  /// The feedback sees no error before this tick (its PID holds): a PID that averages the error
+  /// over the reference's period starts with the scored part, after the start's transient.
+  std::uint64_t feedback_from = 0;
   double y_feedforward_model = std::numeric_limits<double>::quiet_NaN();  ///< its last output
   /// track: references outside [y_ref_min, y_ref_max] are clipped and flagged [µm].
   double y_ref_min = -std::numeric_limits<double>::infinity();
   double y_ref_max = std::numeric_limits<double>::infinity();
   /// Samples before this index are left out of the error figures (start-up transient).
   std::uint64_t metrics_from = 0;
+  /// y - y_model is scored from max(metrics_from, this): where the drive has swept the range
+  /// since the run began, so the model's state no longer depends on the one it started in (an
+  /// identify run's major loop: its settle and precondition start from wherever the last run
+  /// left the actuator, which the model, relaxed at the run's first output, does not know).
+  std::uint64_t model_metrics_from = 0;
   /// Keys merged into the run's result: what the run was built with (compensator, feedback),
   /// set by the control thread, never touched by the loop.
   nlohmann::json summary = nlohmann::json::object();
@@ -95,7 +103,7 @@ struct RunProgram {
   std::uint64_t stale_reads = 0, log_drops = 0;
   double error_sum2 = 0.0, error_max = 0.0;  ///< tracking error from metrics_from on [µm]
   std::uint64_t error_samples = 0;
-  double model_error_sum2 = 0.0, model_error_max = 0.0;  ///< y - y_model from metrics_from [µm]
+  double model_error_sum2 = 0.0, model_error_max = 0.0;  ///< y - y_model, see model_metrics_from
   std::uint64_t model_error_samples = 0;
   static constexpr std::size_t kModelHistory = 64;      ///< y_model ticks kept for the tare
   std::array<double, kModelHistory> y_model_history{};  ///< y_model of tick k at k % size
