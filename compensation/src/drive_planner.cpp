@@ -450,4 +450,29 @@ DrivePlan plan_drive(const ActuatorModel& model, double u_start, std::span<const
   return plan;
 }
 
+DrivePlan continue_periodic_plan(DrivePlan plan, double period_samples, std::size_t samples) {
+  const std::size_t n = plan.u.size();
+  details::require(std::isfinite(period_samples) && period_samples > 1.0 && n >= 2 &&
+                       2.0 * period_samples <= static_cast<double>(n - 1),
+                   "continue_periodic_plan: the period must be longer than a sample and the "
+                   "plan at least two periods long");
+  details::require(plan.gain.size() == n, "continue_periodic_plan: drive and gain differ");
+  details::require(samples >= n, "continue_periodic_plan: fewer samples than the plan holds");
+  // The plan's last period had no future to balance against: the one before it repeats.
+  const double end = static_cast<double>(n - 1) - period_samples;
+  const auto first = static_cast<std::size_t>(std::floor(end)) + 1;
+  plan.u.resize(samples);
+  plan.gain.resize(samples);
+  for (std::size_t k = first; k < samples; ++k) {
+    // The same phase in the repeated period, [end - P, end].
+    const double back = std::ceil((static_cast<double>(k) - end) / period_samples);
+    const double t = std::max(static_cast<double>(k) - back * period_samples, 0.0);
+    const auto i = std::min(static_cast<std::size_t>(t), first - 2);
+    const double a = t - static_cast<double>(i);
+    plan.u[k] = (1.0 - a) * plan.u[i] + a * plan.u[i + 1];
+    plan.gain[k] = (1.0 - a) * plan.gain[i] + a * plan.gain[i + 1];
+  }
+  return plan;
+}
+
 }  // namespace hystbench::compensation

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "hystbench/compensation/compensator.hpp"
@@ -173,18 +174,33 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
 // supervisor thread, with progress, and the plan replaces the previewed inverse the program was
 // built with. No preparation, with the reason in `feedforward`, where the previewed inverse
 // stays: another model kind, the multiplicative structure, a reference too long to plan in
-// kMaxPlanWork; a plan that is not better on the model, or that fails, also leaves it and says
-// why in the run's result. The targets are the loop's (RunProgram::feedforward_target) without
-// the tare, which the planned inverse meets through the plan's gain once the prefix measured it.
+// kMaxPlanWork (a periodic one: its first four periods are planned and the third repeats); a plan
+// that is not better on the model, or that fails, also leaves it and says why in the run's result.
+// The targets are the loop's (RunProgram::feedforward_target) without the tare, which the planned
+// inverse meets through the plan's gain once the prefix measured it.
 RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
-                                hc::CompensatorKind kind, std::uint64_t samples, json& feedforward,
+                                hc::CompensatorKind kind, std::uint64_t samples,
+                                double reference_hz, json& feedforward,
                                 const std::optional<hc::PidController>& pid,
                                 const hc::LinearMap& linear) {
   if (kind == hc::CompensatorKind::kInverseMultiplicative ||
       !hc::can_plan_drive(ctx.model->model) || samples == 0) {
     return {};
   }
-  if (hc::plan_drive_work(ctx.model->model, samples) > kMaxPlanWork) {
+  const auto& lim = ctx.settings.loop.limits;
+  const double dt = ctx.dt();
+  // A periodic reference too long to plan whole: its first four periods are planned and the
+  // third repeats (the model's state repeats with the reference after one period; not with
+  // creep, whose state drifts over the run).
+  std::uint64_t planned_samples = samples;
+  double period_samples = 0.0;
+  if (hc::plan_drive_work(ctx.model->model, samples) > kMaxPlanWork && reference_hz > 0.0 &&
+      !ctx.model->model.creep()) {
+    period_samples = 1.0 / (reference_hz * dt);
+    planned_samples = std::min<std::uint64_t>(
+        samples, static_cast<std::uint64_t>(std::ceil(4.0 * period_samples)) + 1);
+  }
+  if (hc::plan_drive_work(ctx.model->model, planned_samples) > kMaxPlanWork) {
     const auto longest =
         static_cast<std::uint64_t>(kMaxPlanWork / hc::plan_drive_work(ctx.model->model, 1));
     feedforward["planned"] = {
@@ -194,8 +210,6 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
                         std::to_string(longest) + "): the previewed inverse follows it"}};
     return {};
   }
-  const auto& lim = ctx.settings.loop.limits;
-  const double dt = ctx.dt();
   std::vector<double> targets(samples);
   for (std::uint64_t k = 0; k < samples; ++k) {
     targets[k] = p.feedforward_target(static_cast<double>(k) * dt, 0.0);
@@ -204,7 +218,7 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
   return {
       "planning the feedforward",
       [relaxed = model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt),
-       u_now = ctx.u_now, targets = std::move(targets), kind, pid,
+       u_now = ctx.u_now, targets = std::move(targets), planned_samples, period_samples, kind, pid,
        linear](RunProgram& program, const std::function<void(double)>& progress) mutable {
         hc::DrivePlanOptions options;
         options.progress = progress;
@@ -216,7 +230,11 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
         json planned = {{"samples", 0}};
         std::optional<hc::DrivePlan> plan;
         try {
-          plan = hc::plan_drive(relaxed, u_now, program.excitation, targets, options);
+          plan = hc::plan_drive(relaxed, u_now, program.excitation,
+                                std::span<const double>(targets).first(planned_samples), options);
+          if (planned_samples < targets.size()) {
+            plan = hc::continue_periodic_plan(std::move(*plan), period_samples, targets.size());
+          }
         } catch (const PreparationCancelled&) {
           program.summary["feedforward"]["planned"] = {
               {"samples", 0}, {"why_not", "cancelled before the plan was done"}};
@@ -235,6 +253,7 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
           const double seconds =
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
           planned = {{"samples", targets.size()},
+                     {"optimised_samples", planned_samples},
                      {"seconds", seconds},
                      {"model_rms_um", plan->rms},
                      {"previewed_model_rms_um", plan->start_rms}};
@@ -285,7 +304,10 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   const std::optional<hc::PidController> pid =
       feedback_controller(request, kind, ctx, linear.gain, ref.frequency_hz, feedback);
   RunPreparation preparation;
-  if (inverse) preparation = feedforward_plan(*p, ctx, kind, ref.samples, feedforward, pid, linear);
+  if (inverse) {
+    preparation =
+        feedforward_plan(*p, ctx, kind, ref.samples, ref.frequency_hz, feedforward, pid, linear);
+  }
   try {
     p->compensator.emplace(kind, std::move(inverse), pid, linear);
   } catch (const std::exception& e) {

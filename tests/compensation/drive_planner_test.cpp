@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iostream>
 #include <numbers>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
@@ -257,6 +258,38 @@ TEST(DrivePlanner, PlansTheSignedLawThatLagsTheDrive) {
     EXPECT_LT(planned.rms, 0.5 * previewed.rms) << f << " Hz";
     EXPECT_LE(planned.max_step, 2.5 * free.max_step) << f << " Hz";
   }
+}
+
+// A long periodic reference: its first four periods are planned and the third repeats, at a
+// fractional period (19 Hz at 10 kHz: 526.3 samples). Over the last of twenty periods the
+// continued drive tracks the model as well as a plan of all twenty.
+TEST(DrivePlanner, APlanOfFourPeriodsContinuesAPeriodicReference) {
+  // Without creep: the model's state repeats with the reference (the daemon plans a model with
+  // creep whole or not at all).
+  const hc::ActuatorModel falling = loopback_rpi(false, 1e4, 0.0, hc::RateLaw::kSigned, -1.0);
+  const double f = 19.0, period = 1.0 / f / kDt;
+  const std::vector<double> targets = sine(f, 20.0);
+  const auto four = static_cast<std::size_t>(std::ceil(4.0 * period)) + 1;
+  const hc::DrivePlan start =
+      hc::plan_drive(falling, 0.0, {}, std::span<const double>(targets).first(four));
+  const hc::DrivePlan continued = hc::continue_periodic_plan(start, period, targets.size());
+  ASSERT_EQ(continued.u.size(), targets.size());
+  ASSERT_EQ(continued.gain.size(), targets.size());
+  for (std::size_t k = 0; k + static_cast<std::size_t>(period) + 2 < four; ++k) {
+    ASSERT_EQ(continued.u[k], start.u[k]) << k;  // the planned part before the last period
+  }
+  const hc::DrivePlan whole = hc::plan_drive(falling, 0.0, {}, targets);
+  const auto last = static_cast<std::size_t>(std::lround(period));
+  const Tracking repeated = track(falling, continued.u, targets, last);
+  const Tracking planned = track(falling, whole.u, targets, last - 10);  // not the plan's end
+  std::cout << "19 Hz, period 20: continued " << 100.0 * repeated.rms / 36.0 << " %, planned "
+            << 100.0 * planned.rms / 36.0 << " % of range\n";
+  EXPECT_LT(repeated.rms, 0.001 * 36.0);
+  EXPECT_LT(repeated.rms, 2.0 * planned.rms + 0.0002 * 36.0);
+  // Repeating the plan's own last period (which had no future) is what this avoids.
+  EXPECT_THROW(hc::continue_periodic_plan(start, 0.6 * static_cast<double>(four), targets.size()),
+               std::invalid_argument);
+  EXPECT_THROW(hc::continue_periodic_plan(start, period, four - 1), std::invalid_argument);
 }
 
 // The planned inverse plays the plan, and meets a target moved by an offset to first order.

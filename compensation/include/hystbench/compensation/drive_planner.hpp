@@ -79,4 +79,13 @@ double plan_drive_work(const ActuatorModel& model, std::size_t samples) noexcept
 DrivePlan plan_drive(const ActuatorModel& model, double u_start, std::span<const double> prefix,
                      std::span<const double> targets, const DrivePlanOptions& options = {});
 
+/// A plan for the start of a periodic reference continued to `samples`: from its last period
+/// on (planned without the future to balance against) each sample repeats the period before,
+/// a whole number of periods earlier, linearly interpolated where the period is a fractional
+/// number of samples. Right where the model's state repeats with the reference once it has
+/// passed through one period (a rate-dependent PI without creep): plan the first period and
+/// two more. Throws std::invalid_argument unless 1 < period_samples <= (plan.u.size() - 1) / 2
+/// and samples >= its size. rms and start_rms stay those of the part planned.
+DrivePlan continue_periodic_plan(DrivePlan plan, double period_samples, std::size_t samples);
+
 }  // namespace hystbench::compensation
