@@ -187,13 +187,26 @@ TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
   EXPECT_EQ(kept["samples"], 0) << kept.dump();
   EXPECT_THAT(kept["why_not"].get<std::string>(), HasSubstr("already meets the targets"));
 
-  const hdd::BuiltRun slow =
-      track({{"reference", "sine"}, {"frequency_hz", 1.0}, {"periods", 10}}, ctx);
-  const json& not_planned = slow.reply["feedforward"]["planned"];
-  EXPECT_FALSE(slow.preparation.work);
-  EXPECT_EQ(not_planned["samples"], 0);
-  EXPECT_THAT(not_planned["why_not"].get<std::string>(),
-              HasSubstr("is longer than the planner takes for this model"));
+  // Longer than the planner takes (10 s): a periodic reference is planned over its first four
+  // periods, which repeat from the third on; one whose four periods are too long, or one that
+  // does not repeat, keeps the previewed inverse.
+  hdd::BuiltRun ten_periods =
+      track({{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 100}}, ctx);
+  ASSERT_TRUE(ten_periods.preparation.work);
+  ten_periods.preparation.work(*ten_periods.program, {});
+  const json& in_part = ten_periods.program->summary["feedforward"]["planned"];
+  EXPECT_EQ(in_part["samples"], 100000) << in_part.dump();
+  EXPECT_EQ(in_part["optimised_samples"], 4001) << in_part.dump();
+  for (const json& request :
+       {json{{"reference", "sine"}, {"frequency_hz", 0.2}, {"periods", 2}},
+        json{{"reference", "chirp"}, {"frequency_hz", 1.0}, {"duration_s", 10.0}}}) {
+    const hdd::BuiltRun slow = track(request, ctx);
+    const json& not_planned = slow.reply["feedforward"]["planned"];
+    EXPECT_FALSE(slow.preparation.work) << request;
+    EXPECT_EQ(not_planned["samples"], 0) << request;
+    EXPECT_THAT(not_planned["why_not"].get<std::string>(),
+                HasSubstr("is longer than the planner takes for this model"));
+  }
 }
 
 TEST(TrackProgram, FeedbackGainsAreDerivedUnlessTheRequestGivesThem) {
