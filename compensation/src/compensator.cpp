@@ -59,15 +59,14 @@ CompensatorOutput Compensator::step(double y_ref, double y_measured,
   CompensatorOutput out;
   switch (kind_) {
     case CompensatorKind::kNone:
-      out.u_ff = (y_ref - linear_.offset) / linear_.gain;
+    case CompensatorKind::kPid:
+      out.u_ff = (ff_targets.front() - linear_.offset) / linear_.gain;
       break;
     case CompensatorKind::kInverse:
     case CompensatorKind::kInverseMultiplicative:
     case CompensatorKind::kInversePid:
       out.u_ff = ff_targets.size() > 1 ? inverse_->step_previewed(ff_targets)
                                        : inverse_->step(ff_targets.front());
-      break;
-    case CompensatorKind::kPid:
       break;
   }
   if (pid_ && uses_feedback(kind_)) {
@@ -87,8 +86,7 @@ void Compensator::notify_saturation(int direction) noexcept {
 
 void Compensator::reset(double u0) noexcept {
   if (inverse_) inverse_->reset(u0);
-  // Feedback alone must hold the actuator where it is; added to a feedforward it starts at 0.
-  if (pid_) pid_->reset(kind_ == CompensatorKind::kPid ? u0 : 0.0);
+  if (pid_) pid_->reset(0.0);  // added to a feedforward: it starts at 0
   have_prev_ = false;
 }
 

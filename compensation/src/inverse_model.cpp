@@ -338,12 +338,27 @@ InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const Actuato
   }
   details::require(std::isfinite(gain_) && gain_ > 0.0,
                    "inverse multiplicative compensator needs a positive gain");
+  iterate_ = model_.hysteresis().kind() != ModelKind::kRateDependentPi;
+  tolerance_ = 1e-9 * std::max(std::abs(model_.input_max - model_.input_min), 1.0);
   u_prev_ = model_.last_input();
   y_prev_ = model_.peek_static(u_prev_);
 }
 
 double InverseMultiplicativeCompensator::step(double y_ref) noexcept {
-  const double u = u_prev_ + (y_ref - y_prev_) / gain_;
+  double u = u_prev_ + (y_ref - y_prev_) / gain_;
+  // The structure's equation u = u + (y_ref - H[u]) / g is implicit; one pass a tick, as the
+  // delayed loop, leaves a lag of (g / s) ticks where the local slope s is low (on the loopback
+  // worse than no compensation at 200 Hz). A rate-independent model is peeked without advancing
+  // it, so the same equation is iterated to its fixed point within the tick (each pass shrinks
+  // the error by 1 - s/g in [0, 1)). A rate-dependent one keeps one pass: its output moves with
+  // u's own rate, and an iteration through that rate does not contract.
+  if (iterate_) {
+    for (int i = 0; i < kMaxIterations; ++i) {
+      const double du = (y_ref - model_.peek_static(u)) / gain_;
+      u += du;
+      if (std::abs(du) <= tolerance_) break;
+    }
+  }
   y_prev_ = model_.step(u);
   u_prev_ = u;
   return u;

@@ -85,9 +85,9 @@ std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
 }
 
 // The PID's gains (derived, the request's or the configuration's) and clamp; `summary` says
-// which. Derived gains behind a feedforward average the error over the period of a periodic
-// reference of reference_hz (0: none) above their crossover. nullopt for a compensator without
-// feedback.
+// which. Derived gains (always behind a feedforward: the inverse, or the linear map for `pid`)
+// average the error over the period of a periodic reference of reference_hz (0: none) above
+// their crossover. nullopt for a compensator without feedback.
 std::optional<hc::PidController> feedback_controller(const Request& request,
                                                      hc::CompensatorKind kind,
                                                      const RunContext& ctx, double gain,
@@ -107,8 +107,7 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
   if (derived && !given) {
     const hc::ActuatorModel* m = ctx.model != nullptr ? &ctx.model->model : nullptr;
     const hc::PidTuning t =
-        hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m,
-                     kind == hc::CompensatorKind::kInversePid ? reference_hz : 0.0);
+        hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m, reference_hz);
     pp.kp = t.kp;
     pp.ki = t.ki;
     pp.kd = t.kd;
@@ -120,10 +119,6 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
     pp.ki = request.number("ki", pp.ki);
     pp.kd = request.number("kd", pp.kd);
     summary = {{"gains", given ? "request" : "config"}};
-  }
-  if (kind == hc::CompensatorKind::kPid) {
-    pp.output_min = s.loop.limits.u_min;
-    pp.output_max = s.loop.limits.u_max;
   }
   std::optional<hc::PidController> pid;
   try {
@@ -183,10 +178,7 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
                                 double reference_hz, json& feedforward,
                                 const std::optional<hc::PidController>& pid,
                                 const hc::LinearMap& linear) {
-  if (kind == hc::CompensatorKind::kInverseMultiplicative ||
-      !hc::can_plan_drive(ctx.model->model) || samples == 0) {
-    return {};
-  }
+  if (!hc::can_plan_drive(ctx.model->model) || samples == 0) return {};
   const auto& lim = ctx.settings.loop.limits;
   const double dt = ctx.dt();
   // A periodic reference too long to plan whole: its first four periods are planned and the
@@ -313,8 +305,6 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   } catch (const std::exception& e) {
     throw CommandError("bad_params", e.what());
   }
-  const double u_start = p->excitation.empty() ? ctx.u_now : p->excitation.back();
-  if (kind == hc::CompensatorKind::kPid) p->compensator->reset(u_start);
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
   // A PID that averages the error over the reference's period answers the run's mean tracking
   // error, and only from the scored part on: the first period's transient is no part of what

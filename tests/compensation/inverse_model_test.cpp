@@ -213,6 +213,28 @@ TEST(InverseMultiplicativeCompensator, TracksASlowReferenceClosely) {
   EXPECT_LT(worst, 0.2 * worst_open_loop);
 }
 
+// The structure's equation is solved within each tick for a rate-independent model: a 200 Hz
+// sine (50 samples a period) on the exact model is followed to the solver's tolerance. The
+// one-pass, one-tick-delayed loop trailed it (on the loopback: 8.5 % of range at 200 Hz, worse
+// than no compensation).
+TEST(InverseMultiplicativeCompensator, SolvesItsEquationWithinTheTickAtAFastReference) {
+  std::mt19937_64 rng(32);
+  hc::ActuatorModel model(std::make_unique<hc::PiModel>(random_pi(rng, 15, 150.0)));
+  model.input_min = 0.0;
+  model.input_max = 150.0;
+  hc::InverseMultiplicativeCompensator comp(model);
+  model.reset(0.0);
+  comp.reset(0.0);
+  const double y_lo = model.peek_static(15.0), y_hi = model.peek_static(135.0);
+  double worst = 0.0;
+  for (int k = 0; k < 500; ++k) {
+    const double yr = y_lo + (y_hi - y_lo) * (0.5 - 0.5 * std::cos(2.0 * M_PI * k / 50.0));
+    const double y = model.step(comp.step(yr));
+    if (k >= 50) worst = std::max(worst, std::abs(y - yr));
+  }
+  EXPECT_LT(worst, 1e-6 * (y_hi - y_lo));
+}
+
 // Table 2 of the multilayer-actuator paper, shipped as model files, is invertible and its
 // inverse composes to identity.
 TEST(SeedTable, MultilayerPaperTable2LoadsAndInverts) {

@@ -360,10 +360,11 @@ TEST_F(DiagnoseCommandTest, SeveralRecordsAndAValidationRecord) {
   const json& v = j.at("validation")[0];
   EXPECT_EQ(v.at("data"), cmd.validate_paths[0]);
   EXPECT_GT(v.at("gain").get<double>(), 1.5) << v.dump();
-  std::printf("3 sine runs (1, 3, 8 Hz): named %s; 5 Hz run never fitted: baseline %.4f um, "
-              "extended %.4f um, gain %.2f\n",
-              j.at("cause").get<std::string>().c_str(), v.at("baseline_rms").get<double>(),
-              v.at("extended_rms").get<double>(), v.at("gain").get<double>());
+  std::printf(
+      "3 sine runs (1, 3, 8 Hz): named %s; 5 Hz run never fitted: baseline %.4f um, "
+      "extended %.4f um, gain %.2f\n",
+      j.at("cause").get<std::string>().c_str(), v.at("baseline_rms").get<double>(),
+      v.at("extended_rms").get<double>(), v.at("gain").get<double>());
 
   cmd.json_output = false;
   ASSERT_EQ(run(cmd), 0) << err_;

@@ -214,8 +214,9 @@ TEST(TrackProgram, FeedbackGainsAreDerivedUnlessTheRequestGivesThem) {
   const hdd::RunContext ctx{s, nullptr, 0.0};
   const hdd::BuiltRun derived = track({{"compensator", "pid"}}, ctx);
   EXPECT_EQ(derived.reply["feedback"]["gains"], "derived");
-  EXPECT_EQ(derived.reply["feedback"]["u_fb_min"], 0.0);
-  EXPECT_EQ(derived.reply["feedback"]["u_fb_max"], 150.0);
+  // `pid` adds the feedback to the linear map's drive: clamped as behind any feedforward.
+  EXPECT_EQ(derived.reply["feedback"]["u_fb_min"], s.pid.u_fb_min);
+  EXPECT_EQ(derived.reply["feedback"]["u_fb_max"], s.pid.u_fb_max);
   const hdd::BuiltRun given = track({{"compensator", "pid"}, {"ki", 100.0}}, ctx);
   EXPECT_EQ(given.reply["feedback"]["gains"], "request");
   EXPECT_EQ(given.reply["feedback"]["ki"], 100.0);

@@ -4,9 +4,12 @@
 //   inverse               u = inverse(y_ref)
 //   inverse_multiplicative u = inverse-multiplicative structure(y_ref)
 //   inverse_pid           u = inverse(y_ref) + pid(e)
-//   pid                   u = pid(e)                               (feedback only)
+//   pid                   u = (y_ref - offset) / gain + pid(e)     (the linear map and feedback)
 // e is the error of the last completed tick, y_ref(k-1) - y(k-1), so a reference that moves
-// does not show up as error. step() is real-time safe.
+// does not show up as error. `pid` starts from the linear map's drive, as `none`: an integral
+// loop alone, slow enough for the actuator's lags, would trail a 1 Hz reference by more than
+// the hysteresis it removes. The linear map acts on the feedforward target (the reference less
+// the tare). step() is real-time safe.
 #include <memory>
 #include <optional>
 #include <span>

@@ -135,8 +135,11 @@ class NumericInverse final : public InverseModel {
 
 /// Inverse multiplicative structure (classical-PI paper, Theorem 3.1), generalised with a
 /// nominal gain g so that y and u may have different units:
-///   u(k) = u(k-1) + (y_ref(k) - y_model(k-1)) / g,   y_model(k-1) = H[u](k-1).
-/// Needs no inverse parameters: it runs the model itself in a delayed feedback.
+///   u(k) = u(k-1) + (y_ref(k) - y_model(k-1)) / g,   y_model(k-1) = H[u](k-1),
+/// then, for a rate-independent model, u <- u + (y_ref(k) - H[u]) / g repeated within the tick
+/// (at most kMaxIterations passes, 0.4 us each for 12 plays) until it settles: the implicit
+/// equation solved, not its one-tick-delayed form. Needs no inverse parameters: it runs the model
+/// itself in feedback. step() is real-time safe.
 class InverseMultiplicativeCompensator final : public InverseModel {
  public:
   /// gain <= 0 selects the steepest local slope of the model's major loop over its
@@ -148,10 +151,13 @@ class InverseMultiplicativeCompensator final : public InverseModel {
   double gain() const noexcept { return gain_; }
 
  private:
+  static constexpr int kMaxIterations = 256;
   ActuatorModel model_;
   double gain_;
   double u_prev_ = 0.0;
   double y_prev_ = 0.0;
+  bool iterate_ = true;     // the model is rate-independent
+  double tolerance_ = 0.0;  // [input unit]
 };
 
 enum class InverseKind { kAnalytic, kNumeric, kMultiplicative, kAuto };
