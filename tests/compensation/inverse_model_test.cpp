@@ -186,13 +186,21 @@ TEST(NumericInverse, SaturatesAtTheInputBoundForUnreachableTargets) {
   EXPECT_DOUBLE_EQ(inverse.step(-1e6), 0.0);
 }
 
-TEST(InverseMultiplicativeCompensator, TracksASlowReferenceClosely) {
-  std::mt19937_64 rng(31);
+namespace {
+// A random 15-play PI over 0-150 V, relaxed at 0.
+hc::ActuatorModel relaxed_random_pi(std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
   hc::ActuatorModel model(std::make_unique<hc::PiModel>(random_pi(rng, 15, 150.0)));
   model.input_min = 0.0;
   model.input_max = 150.0;
-  hc::InverseMultiplicativeCompensator comp(model);
   model.reset(0.0);
+  return model;
+}
+}  // namespace
+
+TEST(InverseMultiplicativeCompensator, TracksASlowReferenceClosely) {
+  hc::ActuatorModel model = relaxed_random_pi(31);
+  hc::InverseMultiplicativeCompensator comp(model);
   comp.reset(0.0);
   // 1 Hz sine over most of the range at 10 kHz.
   const double y_lo = model.peek_static(15.0), y_hi = model.peek_static(135.0);
@@ -218,12 +226,8 @@ TEST(InverseMultiplicativeCompensator, TracksASlowReferenceClosely) {
 // one-pass, one-tick-delayed loop trailed it (on the loopback: 8.5 % of range at 200 Hz, worse
 // than no compensation).
 TEST(InverseMultiplicativeCompensator, SolvesItsEquationWithinTheTickAtAFastReference) {
-  std::mt19937_64 rng(32);
-  hc::ActuatorModel model(std::make_unique<hc::PiModel>(random_pi(rng, 15, 150.0)));
-  model.input_min = 0.0;
-  model.input_max = 150.0;
+  hc::ActuatorModel model = relaxed_random_pi(32);
   hc::InverseMultiplicativeCompensator comp(model);
-  model.reset(0.0);
   comp.reset(0.0);
   const double y_lo = model.peek_static(15.0), y_hi = model.peek_static(135.0);
   double worst = 0.0;
