@@ -46,7 +46,7 @@ bool signed_law(const ActuatorModel& model) {
 }  // namespace
 
 PidTuning tune_pid(double gain_um_per_v, double loop_rate_hz, double bandwidth_hz,
-                   const ActuatorModel* model, double reference_hz) {
+                   const ActuatorModel* model, double reference_hz, FeedforwardKind feedforward) {
   details::require(std::isfinite(gain_um_per_v) && gain_um_per_v > 0.0,
                    "PID tuning needs the actuator's gain > 0 [um/V]");
   details::require(std::isfinite(loop_rate_hz) && loop_rate_hz > 0.0,
@@ -100,10 +100,12 @@ PidTuning tune_pid(double gain_um_per_v, double loop_rate_hz, double bandwidth_h
     fc = std::sqrt(hf_limit / hf_gain(1.0));
     t.basis += ", lowered to " + details::fmt(fc) + " Hz for the model's rate loop gain";
   }
-  if (std::isfinite(reference_hz) && reference_hz > fc) {
+  const bool behind_inverse = feedforward == FeedforwardKind::kModelInverse;
+  if (std::isfinite(reference_hz) && reference_hz > (behind_inverse ? fc / 2.0 : fc)) {
     t.error_period_s = 1.0 / reference_hz;
     t.basis += "; the error averaged over the reference's period (" + details::fmt(reference_hz) +
-               " Hz is above the crossover: what repeats with it the integrator could only raise)";
+               (behind_inverse ? " Hz is above half the crossover" : " Hz is above the crossover") +
+               ": what repeats with it the integrator could only raise)";
     if (fc > reference_hz / kPeriodAverageMargin) {
       fc = reference_hz / kPeriodAverageMargin;
       t.basis += ", crossover lowered to " + details::fmt(fc) + " Hz for the average's delay";

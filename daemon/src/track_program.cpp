@@ -107,7 +107,9 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
   if (derived && !given) {
     const hc::ActuatorModel* m = ctx.model != nullptr ? &ctx.model->model : nullptr;
     const hc::PidTuning t =
-        hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m, reference_hz);
+        hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m, reference_hz,
+                     kind == hc::CompensatorKind::kPid ? hc::FeedforwardKind::kLinearMap
+                                                       : hc::FeedforwardKind::kModelInverse);
     pp.kp = t.kp;
     pp.ki = t.ki;
     pp.kd = t.kd;

@@ -63,9 +63,20 @@ TEST(PidTuning, IntegralOnlyAtTheLoopRateOver500AtMost2Hz) {
 }
 
 TEST(PidTuning, APeriodicReferenceAboveTheCrossoverIsAveragedOverItsPeriod) {
-  // At or below the crossover the loop lowers the periodic error itself: no average.
+  // Up to half the crossover the loop lowers the periodic error itself: no average.
+  EXPECT_EQ(hc::tune_pid(0.3, 10000.0, 0.0, nullptr, 0.5).error_period_s, 0.0);
   EXPECT_EQ(hc::tune_pid(0.3, 10000.0, 0.0, nullptr, 1.0).error_period_s, 0.0);
-  EXPECT_EQ(hc::tune_pid(0.3, 10000.0, 0.0, nullptr, 2.0).error_period_s, 0.0);
+  const hc::PidTuning t2 = hc::tune_pid(0.3, 10000.0, 0.0, nullptr, 1.5);
+  EXPECT_DOUBLE_EQ(t2.error_period_s, 1.0 / 1.5);
+  EXPECT_DOUBLE_EQ(t2.bandwidth_hz, 0.15);
+  // Behind the linear map (`pid`) up to the crossover: the hysteresis it removes is carried by
+  // the fundamental.
+  EXPECT_EQ(
+      hc::tune_pid(0.3, 10000.0, 0.0, nullptr, 1.5, hc::FeedforwardKind::kLinearMap).error_period_s,
+      0.0);
+  EXPECT_DOUBLE_EQ(
+      hc::tune_pid(0.3, 10000.0, 0.0, nullptr, 2.5, hc::FeedforwardKind::kLinearMap).error_period_s,
+      0.4);
   const hc::PidTuning t19 = hc::tune_pid(0.3, 10000.0, 0.0, nullptr, 19.0);
   EXPECT_DOUBLE_EQ(t19.error_period_s, 1.0 / 19.0);
   EXPECT_DOUBLE_EQ(t19.bandwidth_hz, 1.9);  // a tenth of the reference: the average's delay

@@ -68,7 +68,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
     // zero): a plain integral loop crossing over at 2 Hz amplified the 5-19 Hz mismatch by
     // 13-14 %. Above its crossover it averages the error over the reference's period and
     // answers the mean alone. 5 % covers the spread between two runs of one compensator.
-    EXPECT_DOUBLE_EQ(pid["feedback"]["error_period_s"].get<double>(), f > 2 ? 1.0 / f : 0.0)
+    EXPECT_DOUBLE_EQ(pid["feedback"]["error_period_s"].get<double>(), f > 1 ? 1.0 / f : 0.0)
         << pid.dump(2);
     EXPECT_LE(rms(pid), 1.05 * mpi_rms[f] + 0.02) << f << " Hz: " << pid.dump(2);
   }
@@ -121,10 +121,13 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
       // No compensator is worse than none. `pid` adds its feedback to the linear map's drive
       // (an integral loop alone trailed 1 Hz by 26 % of range); `inverse_multiplicative` plays
       // the plan too (its one-tick loop through a law that lags the drive trailed by 21-44 %).
+      // Against none run just before (at 19 Hz none differs by 5 % between the two phases).
+      const json none = track("none", f, 6);
+      ASSERT_EQ(none["end"], "completed") << none.dump(2);
       for (const char* other : {"pid", "inverse_multiplicative"}) {
         const json r = track(other, f, 6);
         ASSERT_EQ(r["end"], "completed") << r.dump(2);
-        EXPECT_LE(rms(r), 1.05 * none_rms[f] + 0.02) << other << ", " << f << " Hz: " << r.dump(2);
+        EXPECT_LE(rms(r), 1.05 * rms(none) + 0.02) << other << ", " << f << " Hz: " << r.dump(2);
       }
     }
     reduction_sum += 1.0 - rpi_rms[f] / mpi_rms[f];
