@@ -218,12 +218,8 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     // Less the tare: the output offset the model did not predict on the open-loop prefix.
     const double tare = p.tare_um();
     auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
-    // inverse+pid: the reading is held to the feedforward's predicted output (RunProgram).
-    // Before feedback_from, NaN: the PID holds.
-    const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN()
-                          : p.feedforward_model && std::isfinite(p.y_feedforward_model)
-                              ? p.y_feedforward_model + tare
-                              : y_ref;
+    // The feedback's reference; before feedback_from NaN: the PID holds (RunProgram).
+    const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : y_ref;
     compensation::CompensatorOutput out;
     if (const std::size_t ahead = p.targets.capacity(); ahead > 1) {
       if (p.targets.view().empty()) {
@@ -256,9 +252,6 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   if (p.model) {
     rec.y_model = p.model->step(lim.u);
     p.y_model_history[k % RunProgram::kModelHistory] = rec.y_model;
-  }
-  if (p.feedforward_model) {
-    p.y_feedforward_model = p.feedforward_model->step(std::isfinite(y_ref) ? rec.u_ff : lim.u);
   }
 
   const char* failure = nullptr;

@@ -308,13 +308,6 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
     throw CommandError("bad_params", e.what());
   }
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
-  // A PID that averages the error over the reference's period answers the run's mean tracking
-  // error, and only from the scored part on: the first period's transient is no part of what
-  // repeats. Otherwise inverse+pid holds the reading to the feedforward's predicted output.
-  const bool period_averaged = pid && pid->parameters().error_period_s > 0.0;
-  if (kind == hc::CompensatorKind::kInversePid && p->model && !period_averaged) {
-    p->feedforward_model = p->model;
-  }
   p->summary = {{"compensator", comp_name}, {"y_model", predictor_name(ctx)}};
   if (!feedforward.is_null()) p->summary["feedforward"] = feedforward;
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
@@ -322,7 +315,10 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   const std::uint64_t prefix = p->excitation.size();
   p->total_samples = prefix + ref.samples;
   p->metrics_from = prefix + ref.unscored;
-  if (period_averaged) p->feedback_from = p->metrics_from;
+  // The feedback holds the reading to the reference from the scored part on: the run's start
+  // from rest (the first period of a periodic reference, an upload's approach) is a transient
+  // the feedforward predicts, which an integral loop would wind up on and pay back later.
+  if (pid) p->feedback_from = p->metrics_from;
   allocate_records(*p);
 
   BuiltRun run;

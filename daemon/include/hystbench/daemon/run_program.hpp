@@ -49,16 +49,10 @@ struct RunProgram {
   /// The active model, configured at the loop's period and relaxed at the run's first output:
   /// stepped every tick with the drive actually applied, its output is y_model (absent = NaN).
   std::optional<compensation::ActuatorModel> model;
-  /// inverse+pid: a copy of `model` stepped with the feedforward's drive alone (the applied
-  /// drive in the prefix). The feedback holds the reading to its output plus the tare, not to
-  /// the reference: it answers what the model does not predict, and leaves the feedforward's
-  /// own predicted transients (a run's start from rest, a rate law's lag) alone instead of
-  /// winding up on them and paying them back over the next periods.
-  std::optional<compensation::ActuatorModel> feedforward_model;
-  /// The feedback sees no error before this tick (its PID holds): a PID that averages the error
-  /// over the reference's period starts with the scored part, after the start's transient.
+  /// The feedback sees no error before this tick (its PID holds): it starts with the scored
+  /// part, after the run's start from rest, a transient the feedforward predicts and an
+  /// integral loop would wind up on and pay back over the next periods.
   std::uint64_t feedback_from = 0;
-  double y_feedforward_model = std::numeric_limits<double>::quiet_NaN();  ///< its last output
   /// track: references outside [y_ref_min, y_ref_max] are clipped and flagged [µm].
   double y_ref_min = -std::numeric_limits<double>::infinity();
   double y_ref_max = std::numeric_limits<double>::infinity();
