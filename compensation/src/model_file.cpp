@@ -44,9 +44,7 @@ RateLaw rate_law_from_json(const json& rate) {
   const auto it = rate.find("law");
   if (it == rate.end()) return RateLaw::kMagnitude;
   if (it->is_string()) {
-    for (const RateLaw law : {RateLaw::kSigned, RateLaw::kMagnitude}) {
-      if (it->get<std::string>() == to_string(law)) return law;
-    }
+    if (const auto law = rate_law_from_string(it->get<std::string>())) return *law;
   }
   fail("rate.law", "must be \"signed\" or \"magnitude\", got " + it->dump());
 }

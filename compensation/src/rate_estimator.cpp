@@ -8,6 +8,13 @@ const char* to_string(RateLaw law) noexcept {
   return law == RateLaw::kSigned ? "signed" : "magnitude";
 }
 
+std::optional<RateLaw> rate_law_from_string(std::string_view name) noexcept {
+  for (const RateLaw law : {RateLaw::kSigned, RateLaw::kMagnitude}) {
+    if (name == to_string(law)) return law;
+  }
+  return std::nullopt;
+}
+
 std::vector<double> estimate_rates(std::span<const double> u, double dt_s, double tau_s,
                                    RateLaw law) {
   std::vector<double> rate(u.size(), 0.0);

@@ -86,8 +86,8 @@ std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
 
 // The PID's gains (derived, the request's or the configuration's) and clamp; `summary` says
 // which. Derived gains (always behind a feedforward: the inverse, or the linear map for `pid`)
-// average the error over the period of a periodic reference of reference_hz (0: none) above
-// their crossover. nullopt for a compensator without feedback.
+// average the error over the period of a periodic reference of reference_hz (0: none) where
+// tune_pid says so. nullopt for a compensator without feedback.
 std::optional<hc::PidController> feedback_controller(const Request& request,
                                                      hc::CompensatorKind kind,
                                                      const RunContext& ctx, double gain,
@@ -169,8 +169,9 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
 // (compensation::plan_drive: the per-sample rate law leaves a tick-by-tick inverse no good
 // choice at a fast reference's tops), as the run's preparation: the bench plans on its
 // supervisor thread, with progress, and the plan replaces the previewed inverse the program was
-// built with. No preparation, with the reason in `feedforward`, where the previewed inverse
-// stays: another model kind, the multiplicative structure, a reference too long to plan in
+// built with (for `inverse_multiplicative` too: its one-tick loop through the model trails a law
+// that lags the drive). No preparation, with the reason in `feedforward`, where the previewed
+// inverse stays: another model kind, a reference too long to plan in
 // kMaxPlanWork (a periodic one: its first four periods are planned and the third repeats); a plan
 // that is not better on the model, or that fails, also leaves it and says why in the run's result.
 // The targets are the loop's (RunProgram::feedforward_target) without the tare, which the planned

@@ -183,9 +183,9 @@ void decode(const json& j, const std::string& path, DriftShape& out) {
 }
 
 void decode(const json& j, const std::string& path, compensation::RateLaw& out) {
-  for (const auto law : {compensation::RateLaw::kSigned, compensation::RateLaw::kMagnitude}) {
-    if (j.is_string() && j.get<std::string>() == compensation::to_string(law)) {
-      out = law;
+  if (j.is_string()) {
+    if (const auto law = compensation::rate_law_from_string(j.get<std::string>())) {
+      out = *law;
       return;
     }
   }

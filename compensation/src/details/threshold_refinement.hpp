@@ -1,9 +1,9 @@
 #pragma once
-#include <limits>
 // Levenberg-Marquardt refinement of a structure's thresholds by variable projection: for given
 // thresholds the weights are the constrained least-squares solution (fit_design), and LM
 // minimises the simulated output error over the thresholds alone. Thresholds are packed as
 // logarithms of their increments, so they stay ordered and positive for any step.
+#include <limits>
 #include <span>
 
 #include "details/designs.hpp"

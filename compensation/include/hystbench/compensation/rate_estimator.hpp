@@ -8,7 +8,9 @@
 // Units: u in the input unit, rate in input unit / s, tau and dt in s.
 // step()/peek()/reset() are real-time safe.
 #include <cmath>
+#include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 namespace hystbench::compensation {
@@ -21,6 +23,8 @@ enum class RateLaw { kMagnitude, kSigned };
 
 /// "signed" / "magnitude".
 const char* to_string(RateLaw law) noexcept;
+/// The law named "signed" or "magnitude"; nullopt for any other name.
+std::optional<RateLaw> rate_law_from_string(std::string_view name) noexcept;
 
 class RateEstimator {
  public:
