@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 #include <string>
+
+#include "hystbench/sim/preisach_hysteresis.hpp"
 
 namespace hystbench::sim {
 
@@ -55,7 +58,7 @@ void require_range(double min, double max, const std::string& min_field,
   require(max > min, max_field, "must be greater than " + min_field);
 }
 
-void validate_hysteresis(const SimulatedActuatorConfig::Hysteresis& h) {
+void validate_modified_pi(const SimulatedActuatorConfig::Hysteresis& h) {
   const std::string thresholds = "hysteresis.play_thresholds_v";
   const std::string weights = "hysteresis.play_weights_um_per_v";
   require(!h.play_thresholds_v.empty(), thresholds, "must not be empty");
@@ -79,12 +82,121 @@ void validate_hysteresis(const SimulatedActuatorConfig::Hysteresis& h) {
   require_finite(h.dead_zone_center_um, "hysteresis.dead_zone_center_um");
 }
 
+void validate_hysteresis(const SimulatedActuatorConfig& c) {
+  const auto& h = c.hysteresis;
+  if (h.kind == HysteresisKind::kModifiedPi) {
+    validate_modified_pi(h);
+    return;
+  }
+  validate(preisach_parameters(c), "hysteresis.");
+  require_non_negative(h.reversible_um_per_v, "hysteresis.reversible_um_per_v");
+  require_finite(h.offset_um, "hysteresis.offset_um");
+}
+
+void validate_rate_dependence(const SimulatedActuatorConfig& c) {
+  const auto& r = c.rate_dependence;
+  require(c.hysteresis.enabled, "rate_dependence.enabled", "needs hysteresis.enabled");
+  if (r.mechanism == RateMechanism::kSwitchingFront) {
+    require(c.hysteresis.kind == HysteresisKind::kPreisach, "rate_dependence.mechanism",
+            "\"switching_front\" needs hysteresis.kind = \"preisach\" (\"play_weights\" is the "
+            "modified PI's law)");
+    require_positive(r.switching_lag_v, "rate_dependence.switching_lag_v");
+    require(std::isfinite(r.switching_exponent) && r.switching_exponent >= 1.0 &&
+                r.switching_exponent <= 4.0,
+            "rate_dependence.switching_exponent", "must be in [1, 4]");
+    return;
+  }
+  require(c.hysteresis.kind == HysteresisKind::kModifiedPi, "rate_dependence.mechanism",
+          "\"play_weights\" needs hysteresis.kind = \"modified_pi\" (\"switching_front\" is the "
+          "Preisach model's)");
+  require_same_length(r.rate_coefficients, "rate_dependence.rate_coefficients",
+                      c.hysteresis.play_thresholds_v.size(), "hysteresis.play_thresholds_v");
+  require_finite(r.rate_coefficients, "rate_dependence.rate_coefficients");
+  require_non_negative(r.max_rate_v_per_s, "rate_dependence.max_rate_v_per_s");
+  // The loading curve keeps rising at every rate the law sees: W_i + c_i rate > 0 on
+  // [-max_rate, max_rate] (signed) or [0, max_rate] (magnitude), checked at both ends.
+  const double lowest = r.rate_law == compensation::RateLaw::kSigned ? -r.max_rate_v_per_s : 0.0;
+  for (const double rate : {lowest, r.max_rate_v_per_s}) {
+    double w = 0.0;
+    for (std::size_t i = 0; i < r.rate_coefficients.size(); ++i) {
+      w += c.hysteresis.play_weights_um_per_v[i];
+      require(w + r.rate_coefficients[i] * rate > 0.0,
+              element("rate_dependence.rate_coefficients", i),
+              "makes the cumulative play weight " + std::to_string(w) + " + c * " +
+                  std::to_string(rate) + " V/s not positive (the loading curve would fall)");
+    }
+  }
+}
+
+void validate_creep(const SimulatedActuatorConfig::Creep& c) {
+  if (c.law == CreepLaw::kLogarithmic) {
+    require(std::isfinite(c.fraction_per_decade) && c.fraction_per_decade >= 0.0 &&
+                c.fraction_per_decade <= 0.1,
+            "creep.fraction_per_decade", "must be in [0, 0.1]");
+    require(std::isfinite(c.longest_s) && c.longest_s >= 10.0 && c.longest_s <= 1e7,
+            "creep.longest_s", "must be in [10, 1e7] s");
+    return;
+  }
+  require_same_length(c.gains_um_per_v, "creep.gains_um_per_v", c.time_constants_s.size(),
+                      "creep.time_constants_s");
+  for (std::size_t k = 0; k < c.time_constants_s.size(); ++k) {
+    require_positive(c.time_constants_s[k], element("creep.time_constants_s", k));
+  }
+  require_finite(c.gains_um_per_v, "creep.gains_um_per_v");
+}
+
+void validate_dynamics(const SimulatedActuatorConfig::Dynamics& d) {
+  const std::string f = "dynamics.natural_frequencies_hz";
+  require(!d.natural_frequencies_hz.empty(), f, "must not be empty");
+  require_same_length(d.damping_ratios, "dynamics.damping_ratios", d.natural_frequencies_hz.size(),
+                      f);
+  require_same_length(d.mode_gains, "dynamics.mode_gains", d.natural_frequencies_hz.size(), f);
+  for (std::size_t i = 0; i < d.natural_frequencies_hz.size(); ++i) {
+    require_positive(d.natural_frequencies_hz[i], element(f, i));
+    require_positive(d.damping_ratios[i], element("dynamics.damping_ratios", i));
+  }
+  require_finite(d.mode_gains, "dynamics.mode_gains");
+  const double sum = std::accumulate(d.mode_gains.begin(), d.mode_gains.end(), 0.0);
+  require(std::abs(sum - 1.0) <= 1e-6, "dynamics.mode_gains",
+          "must sum to 1 (unit DC gain), they sum to " + std::to_string(sum));
+}
+
 void validate_quantization(const QuantizationConfig& q, const std::string& name) {
   require(q.bits >= 1 && q.bits <= 32, name + ".bits", "must be in [1, 32]");
   require_range(q.range_min, q.range_max, name + ".range_min", name + ".range_max");
 }
 
 }  // namespace
+
+PreisachParameters preisach_parameters(const SimulatedActuatorConfig& c) {
+  const auto& h = c.hysteresis;
+  return PreisachParameters{c.input.min_v, c.input.max_v, h.coercive_median_v, h.coercive_spread,
+                            h.bias_mean_v, h.bias_std_v,  h.switching_um,      h.grid_points};
+}
+
+SimulatedActuatorConfig SimulatedActuatorConfig::modified_pi_truth() {
+  SimulatedActuatorConfig c;
+  c.hysteresis.kind = HysteresisKind::kModifiedPi;
+  c.rate_dependence.mechanism = RateMechanism::kPlayWeights;
+  c.creep.law = CreepLaw::kInputLags;
+  c.dynamics.natural_frequencies_hz = {3000.0};
+  c.dynamics.damping_ratios = {0.08};
+  c.dynamics.mode_gains = {1.0};
+  c.sensor_filter.enabled = false;
+  return c;
+}
+
+std::string_view to_string(HysteresisKind kind) noexcept {
+  return kind == HysteresisKind::kPreisach ? "preisach" : "modified_pi";
+}
+
+std::string_view to_string(RateMechanism mechanism) noexcept {
+  return mechanism == RateMechanism::kSwitchingFront ? "switching_front" : "play_weights";
+}
+
+std::string_view to_string(CreepLaw law) noexcept {
+  return law == CreepLaw::kLogarithmic ? "logarithmic" : "input_lags";
+}
 
 std::string_view to_string(DriftShape shape) noexcept {
   switch (shape) {
@@ -98,41 +210,13 @@ std::string_view to_string(DriftShape shape) noexcept {
 
 void validate(const SimulatedActuatorConfig& c) {
   require_range(c.input.min_v, c.input.max_v, "input.min_v", "input.max_v");
-  validate_hysteresis(c.hysteresis);
-
-  if (c.rate_dependence.enabled) {
-    require(c.hysteresis.enabled, "rate_dependence.enabled", "needs hysteresis.enabled");
-    require_same_length(c.rate_dependence.rate_coefficients, "rate_dependence.rate_coefficients",
-                        c.hysteresis.play_thresholds_v.size(), "hysteresis.play_thresholds_v");
-    require_finite(c.rate_dependence.rate_coefficients, "rate_dependence.rate_coefficients");
-    require_non_negative(c.rate_dependence.max_rate_v_per_s, "rate_dependence.max_rate_v_per_s");
-    // The loading curve keeps rising at every rate the law sees: W_i + c_i rate > 0 on
-    // [-max_rate, max_rate] (signed) or [0, max_rate] (magnitude), checked at both ends.
-    const double lowest = c.rate_dependence.rate_law == compensation::RateLaw::kSigned
-                              ? -c.rate_dependence.max_rate_v_per_s
-                              : 0.0;
-    for (const double rate : {lowest, c.rate_dependence.max_rate_v_per_s}) {
-      double w = 0.0;
-      for (std::size_t i = 0; i < c.rate_dependence.rate_coefficients.size(); ++i) {
-        w += c.hysteresis.play_weights_um_per_v[i];
-        require(w + c.rate_dependence.rate_coefficients[i] * rate > 0.0,
-                element("rate_dependence.rate_coefficients", i),
-                "makes the cumulative play weight " + std::to_string(w) + " + c * " +
-                    std::to_string(rate) + " V/s not positive (the loading curve would fall)");
-      }
-    }
-  }
-  if (c.creep.enabled) {
-    require_same_length(c.creep.gains_um_per_v, "creep.gains_um_per_v",
-                        c.creep.time_constants_s.size(), "creep.time_constants_s");
-    for (std::size_t k = 0; k < c.creep.time_constants_s.size(); ++k) {
-      require_positive(c.creep.time_constants_s[k], element("creep.time_constants_s", k));
-    }
-    require_finite(c.creep.gains_um_per_v, "creep.gains_um_per_v");
-  }
-  if (c.dynamics.enabled) {
-    require_positive(c.dynamics.natural_frequency_hz, "dynamics.natural_frequency_hz");
-    require_positive(c.dynamics.damping_ratio, "dynamics.damping_ratio");
+  validate_hysteresis(c);
+  if (c.rate_dependence.enabled) validate_rate_dependence(c);
+  if (c.creep.enabled) validate_creep(c.creep);
+  if (c.dynamics.enabled) validate_dynamics(c.dynamics);
+  if (c.sensor_filter.enabled) {
+    require_positive(c.sensor_filter.cutoff_hz, "sensor_filter.cutoff_hz");
+    require_positive(c.sensor_filter.damping_ratio, "sensor_filter.damping_ratio");
   }
   if (c.delay.enabled) {
     require(std::isfinite(c.delay.delay_s) && c.delay.delay_s >= 0.0 && c.delay.delay_s <= 1.0,

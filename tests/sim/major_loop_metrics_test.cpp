@@ -10,7 +10,7 @@ namespace {
 
 /// Only a classical PI: every other effect off, identity dead zone.
 hs::SimulatedActuatorConfig pi_only(std::vector<double> thresholds, std::vector<double> weights) {
-  hs::SimulatedActuatorConfig c;
+  hs::SimulatedActuatorConfig c = hs::SimulatedActuatorConfig::modified_pi_truth();
   c.hysteresis.play_thresholds_v = std::move(thresholds);
   c.hysteresis.play_weights_um_per_v = std::move(weights);
   c.hysteresis.play_offset_um = 0.0;
