@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -302,6 +303,56 @@ std::vector<double> align_offsets(std::span<const double> t, std::span<const dou
   return total;
 }
 
+/// A cause tested again on top of the loop's shape (the asymmetry extension).
+struct OnTopOfShape {
+  Cause cause = Cause::kNone;
+  details::CandidateOutcome outcome;  ///< its fit holds the shape and the cause
+  double gain = 0.0;                  ///< shape's held-out rms / this held-out rms
+};
+
+/// Every other candidate that carries over, tested again with the asymmetry extension's fit as
+/// its baseline (its statistic read from that fit's residual); the one with the largest gain
+/// among those significant and gaining at least min_gain, or nothing.
+std::optional<OnTopOfShape> best_beyond_shape(const Diagnosis& d, const details::DiagnosisRecord& r,
+                                              const std::vector<details::ExtensionFit>& fits,
+                                              const details::InputEvents& ev,
+                                              const DiagnosisOptions& options,
+                                              std::vector<std::string>& notes) {
+  std::size_t shape = 0;
+  while (d.candidates[shape].cause != Cause::kAsymmetry) ++shape;
+  const details::ExtensionFit& base = fits[shape];
+  std::vector<double> residual(r.n);
+  for (std::size_t k = 0; k < r.n; ++k) residual[k] = r.y[k] - base.prediction[k];
+  const std::vector<ResidualProfile> profiles = residual_profiles(r, residual, ev);
+  const FrequencyResponse response =
+      details::frequency_response(base.prediction, r.y, r.dt, d.noise_rms);
+  const details::CandidateContext ctx{r,  base.spec, base,     base.prediction, residual,
+                                      ev, profiles,  response, d.noise_rms};
+  std::optional<OnTopOfShape> best;
+  std::string tried;
+  for (const CandidateReport& c : d.candidates) {
+    if (c.cause == Cause::kAsymmetry || !c.carries_over) continue;
+    try {
+      details::CandidateOutcome o = test_of(c.cause)(ctx);
+      if (!(o.fit.heldout.rmse > 0.0)) continue;
+      const double gain = base.heldout.rmse / o.fit.heldout.rmse;
+      const bool significant = o.statistic >= o.threshold;
+      tried += std::string(tried.empty() ? "" : ", ") + std::string(to_string(c.cause)) + " " +
+               num(gain) + (significant ? "" : " (not significant)");
+      if (!significant) continue;
+      if (gain >= options.min_gain && (!best || gain > best->gain)) {
+        best = OnTopOfShape{c.cause, std::move(o), gain};
+      }
+    } catch (const std::exception&) {
+      // A combination the designs cannot fit is left out.
+    }
+  }
+  if (!tried.empty()) {
+    notes.push_back("on top of the loop's shape (asymmetry), the other causes gain: " + tried);
+  }
+  return best;
+}
+
 Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                         std::span<const double> y, const DiagnosisOptions& options,
                         std::vector<details::RecordPart> parts) {
@@ -439,6 +490,18 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
   std::sort(eligible.begin(), eligible.end(),
             [](const CandidateReport* a, const CandidateReport* b) { return a->gain > b->gain; });
   const std::string unit = r.units.output;
+  // ---- the loop's shape first. A classical PI follows neither a bent loop (a Preisach density,
+  // a saturating top) nor an asymmetric one, and what it misses there inflates every other
+  // candidate's gain: when the shape (asymmetry) is eligible, the other causes are tested again
+  // on top of it and named for what they gain beyond it.
+  std::optional<OnTopOfShape> beyond;
+  const bool shape = std::any_of(eligible.begin(), eligible.end(), [](const CandidateReport* c) {
+    return c->cause == Cause::kAsymmetry;
+  });
+  if (shape && !at_floor) {
+    progress(0.955, "testing the other causes on top of the loop's shape");
+    beyond = best_beyond_shape(d, r, fits, ev, options, d.notes);
+  }
   const CandidateReport* best_any = &*std::max_element(
       d.candidates.begin(), d.candidates.end(),
       [](const CandidateReport& a, const CandidateReport& b) { return a.gain < b.gain; });
@@ -454,6 +517,16 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                 ", gain " + num(best_any->gain) +
                 (best_any->significant ? "" : ", not significant") +
                 "); the baseline explains the data as far as these effects go";
+  } else if (beyond) {
+    const CandidateReport& shape_report = *d.candidate(Cause::kAsymmetry);
+    d.cause = beyond->cause;
+    d.verdict = std::string(to_string(beyond->cause)) + ": " + beyond->outcome.evidence + ". " +
+                beyond->outcome.extension + ", on top of the loop's shape (" +
+                shape_report.extension + ", gain " + num(shape_report.gain) +
+                "), lowers the held-out rms error from " + num(shape_report.heldout.rmse) + " to " +
+                num(beyond->outcome.fit.heldout.rmse) + " " + unit + " (gain " + num(beyond->gain) +
+                "; " + num(d.baseline_heldout.rmse / beyond->outcome.fit.heldout.rmse) +
+                " over the baseline)";
   } else {
     const CandidateReport& w = *eligible.front();
     d.cause = w.cause;
@@ -465,7 +538,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
           ", and carries over to every record left out whole (gain " + left_out_summary(w) + ")";
     }
   }
-  if (!eligible.empty() && d.cause != Cause::kNone) {
+  if (!eligible.empty() && d.cause != Cause::kNone && !beyond) {
     for (std::size_t i = 1; i < eligible.size(); ++i) {
       if (eligible[i]->gain >= kAmbiguity * eligible.front()->gain) {
         d.notes.push_back("not clean: " + std::string(to_string(eligible[i]->cause)) +
@@ -485,7 +558,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                         "x the noise; " + others + " also gain on their own");
     }
   }
-  if (d.cause != Cause::kNone) {
+  if (d.cause != Cause::kNone && !beyond) {
     const CandidateReport& named = *d.candidate(d.cause);
     for (const CandidateReport& c : d.candidates) {
       if (!c.significant && c.gain > named.gain * 1.05 && c.gain >= options.min_gain) {
@@ -564,22 +637,35 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     d.extended_prediction = d.baseline_prediction;
   } else {
     const CandidateReport& w = *d.candidate(d.cause);
-    d.extended = w.model;
-    d.extended_description = details::describe_model(w.model) + " (" + w.extension + ")";
-    d.extended_fit = w.fit;
-    d.extended_heldout = w.heldout;
-    d.extended_prediction = w.prediction;
-    d.extended_parts = {std::string(to_string(d.cause))};
+    std::string named_extension = w.extension;
+    details::ExtensionFit joint;
+    if (beyond) {
+      // The named cause on top of the shape: both are parts of the extended model.
+      joint = beyond->outcome.fit;
+      named_extension =
+          beyond->outcome.extension + "; " + d.candidate(Cause::kAsymmetry)->extension;
+      d.extended_parts = {std::string(to_string(d.cause)),
+                          std::string(to_string(Cause::kAsymmetry))};
+    } else {
+      std::size_t named = 0;
+      while (d.candidates[named].cause != d.cause) ++named;
+      joint = fits[named];
+      d.extended_parts = {std::string(to_string(d.cause))};
+    }
+    d.extended = joint.model;
+    d.extended_description = details::describe_model(joint.model) + " (" + named_extension + ")";
+    d.extended_fit = joint.fit;
+    d.extended_heldout = joint.heldout;
+    d.extended_prediction = joint.prediction;
     // Every other significant extension joins the named one when, tested again on top of it,
     // the joint model gains on the held-out blocks (delay and dynamics together, for example).
     progress(0.97, "joining the significant extensions");
-    std::size_t named = 0;
-    while (d.candidates[named].cause != d.cause) ++named;
-    details::ExtensionFit joint = fits[named];
     std::vector<std::size_t> order;
     for (std::size_t i = 0; i < d.candidates.size(); ++i) {
       const CandidateReport& c = d.candidates[i];
-      if (i != named && c.significant && c.carries_over && c.cause != Cause::kDrift) {
+      const bool in = std::find(d.extended_parts.begin(), d.extended_parts.end(),
+                                to_string(c.cause)) != d.extended_parts.end();
+      if (!in && c.significant && c.carries_over && c.cause != Cause::kDrift) {
         order.push_back(i);
       }
     }
@@ -611,7 +697,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
       d.extended_fit = joint.fit;
       d.extended_heldout = joint.heldout;
       d.extended_prediction = joint.prediction;
-      d.extended_description = details::describe_model(joint.model) + " (" + w.extension;
+      d.extended_description = details::describe_model(joint.model) + " (" + named_extension;
       for (const std::string& a : added) d.extended_description += "; " + a;
       d.extended_description += ", refitted jointly)";
     }
