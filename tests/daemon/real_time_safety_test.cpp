@@ -32,14 +32,20 @@ struct Case {
 };
 
 /// Ticks of a whole track run (precondition sweep, then the reference through the compensator)
-/// on the loopback actuator with its truth as the model, logged to a file.
+/// on the loopback actuator (the default truth with the case's effects) with a model of the same
+/// effects (the modified-PI truth's: a model the inverse, the plan and the preview can take),
+/// logged to a file.
 long run_allocations(const Case& c, const std::filesystem::path& dir) {
-  hs::SimulatedActuatorConfig truth_config;
+  hs::SimulatedActuatorConfig plant;
+  plant.rate_dependence.enabled = c.rate_dependence;
+  plant.creep.enabled = c.dynamics;
+  plant.dynamics.enabled = c.dynamics;
+  hs::SimulatedActuatorConfig truth_config = hs::SimulatedActuatorConfig::modified_pi_truth();
   truth_config.rate_dependence.enabled = c.rate_dependence;
   truth_config.creep.enabled = c.dynamics;
   truth_config.dynamics.enabled = c.dynamics;
   auto driver = hystbench::drivers::make_driver("loopback");
-  EXPECT_TRUE(driver->configure({{"actuator", hs::to_json(truth_config)}}, kRate).ok);
+  EXPECT_TRUE(driver->configure({{"actuator", hs::to_json(plant)}}, kRate).ok);
   EXPECT_TRUE(driver->activate().ok);
   hd::BenchLoopOptions o;
   o.rate_hz = kRate;
