@@ -144,14 +144,18 @@ std::string Bench::new_run_id(const char* kind) {
   return std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
 }
 
-std::unique_ptr<SampleLogWriter> Bench::open_log(const std::string& run_id, json header) {
+void Bench::open_log(RunProgram& p, json header) {
+  // The clock the samples are timed by, in the log's header and the run's result.
+  const char* clock = to_string(settings_.loop.clock);
+  if (header.contains("run") && header["run"].is_object()) header["run"]["clock"] = clock;
+  p.summary["clock"] = clock;
   SampleLogOptions opt;
   opt.log_dir = settings_.log_dir;
-  opt.run_id = run_id;
+  opt.run_id = p.run_id;
   opt.header = std::move(header);
   opt.ring_capacity = settings_.log_ring_capacity;
   try {
-    return std::make_unique<SampleLogWriter>(std::move(opt));
+    p.log = std::make_unique<SampleLogWriter>(std::move(opt));
   } catch (const std::exception& e) {
     throw CommandError("log_error", std::string("cannot open the run log: ") + e.what());
   }
@@ -227,6 +231,7 @@ json Bench::status() const {
     s["model"] = nullptr;
   }
   s["loop"] = {{"rate_hz", settings_.loop.rate_hz},
+               {"clock", to_string(settings_.loop.clock)},
                {"realtime", realtime_.summary(settings_.loop.realtime)},
                {"degraded", realtime_.degraded()},
                {"statistics", to_json(loop_->statistics())}};
@@ -279,7 +284,7 @@ void Bench::require_idle() const {
 }
 
 Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json& header) {
-  p->log = open_log(p->run_id, header);
+  open_log(*p, header);
   SubmittedRun s{p->run_id, p->log->path().string(), p->total_samples};
   if (auto refused = loop_->submit(std::move(p))) {
     refused->log->close();
@@ -299,7 +304,7 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
   if (run.preparation.work) {
     // Prepared on the supervisor thread, then submitted: the reply does not wait for it.
     RunProgram& p = *run.program;
-    p.log = open_log(p.run_id, run.header);
+    open_log(p, run.header);
     run_id = p.run_id;
     log_path = p.log->path().string();
     total = p.total_samples;

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <filesystem>
 
+#include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/daemon/fit_families.hpp"
 #include "hystbench/daemon/identification_fit.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
-#include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/daemon/model_file_io.hpp"
 #include "identify_session.hpp"
 #include "run_result.hpp"
@@ -244,7 +244,7 @@ bool Bench::verify_next_candidate() {
                    {"driver", settings_.driver_type},
                    {"model", hc::to_json(hc::ModelFile{c.fit.model, json::object()})}};
     try {
-      p->log = open_log(p->run_id, header);
+      open_log(*p, header);
     } catch (const CommandError& e) {
       c.verification = {{"end", "not_run"}, {"reason", e.what()}};
       return false;

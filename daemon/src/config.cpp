@@ -226,6 +226,7 @@ void visit_daemon(S& d, Visit&& visit) {
 template <class S, class Visit>
 void visit_loop(S& l, Visit&& visit) {
   visit("rate_hz", l.rate_hz, Bounds{1.0, 20000.0});
+  visit("clock", l.clock, std::vector<std::string>{"wall", "simulated"});
   visit("realtime", l.realtime);
   visit("priority", l.priority, 1, 99);
   visit("cpu", l.cpu, -1, 1023);
@@ -380,6 +381,13 @@ void read_driver(const Context& ctx, const toml::table* table, DriverSection& d)
 
 }  // namespace
 
+std::string clock_conflict(std::string_view clock, std::string_view driver_type) {
+  if (clock != "simulated" || driver_type == "loopback") return {};
+  return "\"simulated\" needs driver.type = \"loopback\" (the simulated actuator is the only "
+         "plant that can follow a virtual clock), got driver.type = \"" +
+         std::string(driver_type) + "\"";
+}
+
 nlohmann::json DriverSection::params() const {
   const auto it = tables.find(type);
   return it != tables.end() ? *it : nlohmann::json::object();
@@ -417,6 +425,9 @@ DaemonConfig parse_config(std::string_view toml_text, std::string_view origin) {
     s.finish();
   }
   read_driver(ctx, section_table(ctx, root, "driver"), c.driver);
+  if (const std::string why = clock_conflict(c.loop.clock, c.driver.type); !why.empty()) {
+    Section(ctx, "loop", section_table(ctx, root, "loop")).fail("clock", why);
+  }
   if (const toml::table* actuator = section_table(ctx, root, "actuator")) {
     c.actuator = details::toml_node_to_json(*actuator);
   }

@@ -5,6 +5,8 @@
 
 #include <fstream>
 
+#include "hystbench/daemon/daemon_settings.hpp"
+
 namespace hd = hystbench::daemon;
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -21,6 +23,7 @@ log_level = "debug"
 
 [loop]
 rate_hz = 5000
+clock = "wall"
 realtime = true
 priority = 70
 cpu = 1
@@ -94,6 +97,7 @@ TEST(Config, EmptyTextGivesTheDocumentedDefaults) {
   EXPECT_EQ(c.daemon.model_dir, "/var/lib/hystbench/models");
   EXPECT_EQ(c.daemon.log_level, "info");
   EXPECT_EQ(c.loop.rate_hz, 10000.0);
+  EXPECT_EQ(c.loop.clock, "wall");
   EXPECT_TRUE(c.loop.realtime);
   EXPECT_EQ(c.loop.priority, 80);
   EXPECT_EQ(c.loop.cpu, -1);
@@ -172,6 +176,7 @@ TEST(Config, ExampleFileParsesWithEveryValue) {
   EXPECT_EQ(j["limits"]["y_min"], 0.0);
   EXPECT_EQ(j["driver"]["type"], "modbus");
   EXPECT_EQ(j["driver"]["modbus"]["baud"], 115200);
+  EXPECT_EQ(j["loop"]["clock"], "wall");
   EXPECT_EQ(j["actuator"]["model_file"], "multilayer-table2-mpi.json");
   EXPECT_EQ(j["pid"]["u_fb_max"], 20.0);
   EXPECT_TRUE(hd::to_json(hd::parse_config(""))["limits"]["y_min"].is_null());
@@ -198,6 +203,9 @@ TEST(Config, EveryErrorNamesItsKey) {
       {"[loop]\nring_capacity = 10", "loop.ring_capacity",
        "loop.ring_capacity: must be in [1024, 16777216], got 10"},
       {"[loop]\nrat_hz = 100", "loop.rat_hz", "loop.rat_hz: unknown key (known: rate_hz, "},
+      {"[loop]\nclock = \"virtual\"", "loop.clock",
+       "loop.clock: must be one of wall, simulated, got \"virtual\""},
+      {"[loop]\nclock = true", "loop.clock", "loop.clock: must be a string, got boolean"},
       {"[loop.extra]\na = 1", "loop.extra", "loop.extra: unknown key"},
       {"[lop]\nrate_hz = 100", "lop", "lop: unknown section (known: daemon, loop, "},
       {"rate_hz = 100", "rate_hz", "rate_hz: unknown section"},
@@ -330,4 +338,28 @@ TEST(Config, EveryShippedConfigFileLoads) {
     }
   }
   if (files == 0) GTEST_SKIP() << "no config/*.toml in " << dir;
+}
+
+// The simulated clock is for the loopback only: the simulated actuator is the one plant that can
+// follow a virtual clock. With another driver the key is refused where it stands, saying why.
+TEST(Config, TheSimulatedClockIsForTheLoopbackDriverOnly) {
+  const hd::DaemonConfig c = hd::parse_config("[loop]\nclock = \"simulated\"\n");
+  EXPECT_EQ(c.loop.clock, "simulated");
+  EXPECT_EQ(hd::to_json(c)["loop"]["clock"], "simulated");
+  EXPECT_EQ(hd::bench_settings_from(c).loop.clock, hd::LoopClock::kSimulated);
+  EXPECT_EQ(hd::bench_settings_from(hd::parse_config("")).loop.clock, hd::LoopClock::kWall);
+
+  const hd::ConfigError e = error_of(
+      "[loop]\nrate_hz = 5000\nclock = \"simulated\"\n\n[driver]\ntype = \"modbus\"\n", "b.toml");
+  EXPECT_EQ(e.key(), "loop.clock");
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_STREQ(
+      e.what(),
+      "b.toml:3: loop.clock: \"simulated\" needs driver.type = \"loopback\" (the simulated "
+      "actuator is the only plant that can follow a virtual clock), got driver.type = "
+      "\"modbus\"");
+  EXPECT_EQ(hd::clock_conflict("simulated", "can"), hd::clock_conflict("simulated", "can"));
+  EXPECT_NE(hd::clock_conflict("simulated", "can").find("\"can\""), std::string::npos);
+  EXPECT_EQ(hd::clock_conflict("wall", "can"), "");
+  EXPECT_EQ(hd::clock_conflict("simulated", "loopback"), "");
 }

@@ -44,12 +44,19 @@ class BenchFixture : public TempDirTest {
     return s;
   }
 
-  /// A loopback config at 10 kHz with the 0..44 um range, then `tables` (e.g. "[actuator.delay]
-  /// enabled = true"): the loopback of config/loopback.toml with one effect switched on.
-  static std::string loopback_toml(const std::string& tables = {}) {
-    return "[loop]\nrate_hz = 10000\n[limits]\ny_min = 0.0\ny_max = 44.0\n[driver]\n"
-           "type = \"loopback\"\n" +
-           tables;
+  /// The [loop] keys of a bench test whose figures are under test: the simulated clock, so a run
+  /// takes a fraction of its duration in wall time while the plant sees the same samples.
+  static constexpr const char* kSimulatedClock = "clock = \"simulated\"\n";
+
+  /// A loopback config at `rate_hz` [Hz] with the 0..`y_max` um range, `loop_keys` in its [loop]
+  /// table, then `tables` (e.g. "[actuator.delay]\nenabled = true\n"): by default the loopback
+  /// of config/loopback.toml on the simulated clock, with one effect switched on.
+  static std::string loopback_toml(const std::string& tables = {},
+                                   const std::string& loop_keys = kSimulatedClock,
+                                   double rate_hz = 10000.0, double y_max = 44.0) {
+    return "[loop]\nrate_hz = " + std::to_string(rate_hz) + "\n" + loop_keys +
+           "[limits]\ny_min = 0.0\ny_max = " + std::to_string(y_max) +
+           "\n[driver]\ntype = \"loopback\"\n" + tables;
   }
 
   /// The daemon's settings for a TOML config (the user's path: bench_settings_from), with the

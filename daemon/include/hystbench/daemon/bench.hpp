@@ -167,7 +167,9 @@ class Bench {
                                                   const nlohmann::json& fit_request);
   /// Adopts the chosen candidate and delivers the identify result.
   void finish_identify();
-  std::unique_ptr<SampleLogWriter> open_log(const std::string& run_id, nlohmann::json header);
+  /// Opens p's log (p.log) with `header`; the header's run and p's result name the loop's clock.
+  /// Throws CommandError log_error.
+  void open_log(RunProgram& p, nlohmann::json header);
   std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
 
