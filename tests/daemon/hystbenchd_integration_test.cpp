@@ -300,7 +300,7 @@ std::pair<int, std::string> hystbenchd(const std::string& args) {
 }  // namespace
 
 // --check-config shows the clock; --clock overrides it and is refused, saying why, with a driver
-// that cannot follow a virtual clock.
+// that cannot follow a virtual clock; a bad [actuator] table is refused at check time, by line.
 TEST(HystbenchdCheckConfig, ShowsTheClockAndRefusesWhatCannotRun) {
   const fs::path dir = fs::temp_directory_path() / ("hbd-check-" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -308,6 +308,9 @@ TEST(HystbenchdCheckConfig, ShowsTheClockAndRefusesWhatCannotRun) {
   std::ofstream(loopback) << "[loop]\nrate_hz = 10000\n";
   const fs::path modbus = dir / "modbus.toml";
   std::ofstream(modbus) << "[driver]\ntype = \"modbus\"\n";
+  const fs::path bad = dir / "bad.toml";
+  std::ofstream(bad) << "[loop]\nclock = \"simulated\"\n\n[actuator.creep]\nenabled = true\n"
+                        "gains_um_per_v = [0.1, 0.2]\n";
 
   auto [status, out] = hystbenchd("--check-config -c " + loopback.string());
   ASSERT_EQ(status, 0) << out;
@@ -322,5 +325,11 @@ TEST(HystbenchdCheckConfig, ShowsTheClockAndRefusesWhatCannotRun) {
       << out;
   std::tie(status, out) = hystbenchd("--clock virtual --check-config");
   EXPECT_NE(status, 0) << out;
+
+  std::tie(status, out) = hystbenchd("--check-config -c " + bad.string());
+  EXPECT_EQ(status, 2) << out;
+  EXPECT_NE(out.find(bad.string() + ":6: actuator.creep.gains_um_per_v: has 2 entries"),
+            std::string::npos)
+      << out;
   fs::remove_all(dir);
 }

@@ -11,7 +11,11 @@
 //   [limits]   u_min, u_max, slew_v_per_s, fatal_on_limit, y_min, y_max
 //   [driver]   type, plus one sub-table per driver ([driver.loopback], [driver.modbus], ...)
 //              kept as JSON and validated by the driver itself
-//   [actuator] the simulated actuator's truth, kept as JSON for the simulator to validate
+//   [actuator] the simulated actuator's truth (loopback driver only; also
+//              [driver.loopback.actuator]), checked with sim::from_json: its errors name
+//              "actuator.<key path>" and the line of the offending node (of its table when the
+//              key is missing). A non-empty [actuator] with another driver is an error (it would
+//              do nothing).
 //   [identify] model, operators, dead_zones, amplitude_v, offset_v, frequency_hz, cycles,
 //              precondition_s, settle_s, heldout_fraction, fit_rate_hz
 //   [pid]      kp, ki, kd, bandwidth_hz, output_filter_hz, derivative_filter_hz, u_fb_min,
@@ -159,8 +163,9 @@ DaemonConfig load_config(const std::filesystem::path& path);
 /// (for config.get); unset optionals are null.
 nlohmann::json to_json(const DaemonConfig& config);
 
-/// A whole TOML document as JSON: tables -> objects, arrays -> arrays, integers -> int64,
-/// floats -> double, dates and times -> ISO 8601 strings. Throws ConfigError on bad syntax.
+/// A whole TOML document as JSON: tables -> objects, arrays -> arrays, integers -> uint64 (>= 0)
+/// or int64, floats -> double, dates and times -> ISO 8601 strings. Throws ConfigError on bad
+/// syntax.
 nlohmann::json toml_to_json(std::string_view toml_text);
 
 }  // namespace hystbench::daemon
