@@ -319,6 +319,7 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
     log_path = std::move(r.log_path);
     total = r.total;
     phase_ = RunPhase::kRunning;
+    loop_->wake_control();  // the supervisor announces the run
   }
   active_run_ = {{"run_id", run_id}, {"kind", kind}, {"total", total}, {"log", log_path}};
   active_run_.update(run.status);
@@ -379,6 +380,9 @@ void Bench::supervise() {
       prepare();
       continue;
     }
+    // Before a finished run is taken: on the simulated clock a run can end before the first
+    // periodic event, and a client still sees it (and each verification stage) start.
+    announce_run();
     if (auto finished = loop_->take_finished()) {
       finalize(std::move(finished));
       continue;
@@ -392,15 +396,28 @@ void Bench::supervise() {
   }
 }
 
-void Bench::emit_progress() {
+void Bench::announce_run() {
+  std::string key;
+  {
+    std::lock_guard lock(mutex_);
+    if (active_run_.is_null() || phase_ != RunPhase::kRunning) return;
+    key = active_run_["run_id"].get<std::string>() + "/" + active_run_.value("stage", "");
+  }
+  if (key == announced_run_) return;
+  announced_run_ = key;
+  emit_progress(true);
+}
+
+void Bench::emit_progress(bool started) {
   json run;
   {
     std::lock_guard lock(mutex_);
     run = active_run_;
   }
   const RunProgram* p = loop_->active();
-  if (run.is_null() || p == nullptr) return;
-  const auto done = p->done.load(std::memory_order_acquire);
+  if (run.is_null() || (p == nullptr && !started)) return;
+  // A run that already ended (or is not picked up yet) is announced at its start.
+  const std::uint64_t done = p != nullptr ? p->done.load(std::memory_order_acquire) : 0;
   const auto total = run["total"].get<std::uint64_t>();
   json event = {
       {"event", "run.progress"}, {"run_id", run["run_id"]},

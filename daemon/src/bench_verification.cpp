@@ -288,6 +288,7 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   c.verification["log"] = run->log ? run->log->path().string() : "";
   c.verification["dropped"] = counts.dropped + run->log_drops;
   c.verification["clamps"] = run->clamps;
+  c.verification["clock"] = run->summary.value("clock", "wall");
   ++s.next;
   s.interrupted = s.interrupted || run->end != RunEnd::kCompleted;
   if (s.interrupted || quit_.load() || !verify_next_candidate()) finish_identify();

@@ -140,9 +140,14 @@ class Bench {
   enum class RunPhase { kIdle, kPreparing, kRunning, kFinalizing };
   void set_phase(RunPhase phase);
   /// The supervisor thread: finalises each run the loop hands back (woken by the loop's
-  /// events), and emits run.progress every 0.5 s while one runs.
+  /// events), and emits run.progress when a run (or a verification stage) starts and every
+  /// 0.5 s while one runs.
   void supervise();
-  void emit_progress();
+  /// Emits run.progress once for a run or stage not announced yet (supervisor thread).
+  void announce_run();
+  /// run.progress of the active run; `started`: also when the loop no longer (or not yet)
+  /// plays it, with done = 0.
+  void emit_progress(bool started = false);
   bool preparation_queued() const;
   /// Runs the queued preparation (supervisor thread), then hands the run to the loop; a
   /// cancelled one ends unplayed.
@@ -194,6 +199,7 @@ class Bench {
   std::unique_ptr<details::RunPreparation> preparation_;
   RunEnd cancel_preparation_ = RunEnd::kCompleted;
   std::unique_ptr<IdentifySession> session_;  // supervisor thread only
+  std::string announced_run_;                 // run_id/stage last announced; supervisor only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;
   UploadStore uploads_;  // its own lock
