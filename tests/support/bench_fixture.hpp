@@ -71,6 +71,19 @@ class BenchFixture : public TempDirTest {
     return s;
   }
 
+  /// The standard excitation's segments shortened so an identification at 5 kHz plays about
+  /// 18 s (from 34 s): 2 major loops, 4 minor loops, 2 and 10 Hz rate segments, 1 s holds at the
+  /// range's ends; the settle hold, the preconditioning and the segment order stay the daemon's.
+  static void shorten_identify(daemon::BenchSettings& s) {
+    s.identify.cycles = 2;
+    auto& e = s.identify_excitation;
+    e.minor_loops = 4;
+    e.rate_frequencies_hz = {2.0, 10.0};
+    e.rate_cycles = {2, 5};
+    e.hold_levels = {1.0, 0.0};
+    e.hold_s = 1.0;
+  }
+
   void start(daemon::BenchSettings s) {
     bench_ = std::make_unique<daemon::Bench>(std::move(s));
     bench_->set_event_sink([this](const nlohmann::json& e) {
