@@ -1,4 +1,4 @@
-"""examples/identify_sweep_track.py --quick against its own hystbenchd (about 40 s)."""
+"""examples/identify_sweep_track.py --quick against its own hystbenchd on the simulated clock."""
 
 from __future__ import annotations
 
