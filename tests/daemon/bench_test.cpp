@@ -303,13 +303,11 @@ TEST_F(BenchTest, AnOffsetTheModelDoesNotPredictIsTaredOffTheFeedforward) {
 
 // identify's verification is a run like any other: status names the stage, progress events
 // carry it, stop ends it; the fitted model is still adopted and the result says what happened.
-// On the wall clock, so the verification still runs when stop comes; no settle hold and one 2 Hz
-// major loop (the model's figures are not under test here).
+// On the wall clock, so the verification still runs when stop comes; the cut identification
+// (cut_identify: the model's figures are not under test here).
 TEST_F(BenchTest, StopDuringIdentifyVerificationAdoptsTheModelAndSaysSo) {
-  hd::BenchSettings s = short_identify_settings("clock = \"wall\"\n");
-  s.identify.settle_s = 0.0;
-  s.identify.cycles = 1;
-  s.identify.frequency_hz = 2.0;
+  hd::BenchSettings s = settings(5000.0, "clock = \"wall\"\n");
+  cut_identify(s);
   start(s);
   std::vector<json> progress;
   bench_->set_event_sink([&](const json& e) {

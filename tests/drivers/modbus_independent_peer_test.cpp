@@ -163,13 +163,12 @@ json plant_driver_params(int port, const std::string& io = "thread") {
 TEST_F(IndependentPeerTest, IdentifyAndTrackANoiseFreePiPlantWithoutAFault) {
   REQUIRE_PYMODBUS();
   start_peer();
-  // On the wall clock (the peer is a process of its own), the short identification without its
-  // settle hold. Its excitation still holds the output (1 s at each end of the range, 50 times the
+  // On the wall clock (the peer is a process of its own), the cut identification (cut_identify).
+  // Its excitation still holds the output (0.25 s at each end of the range, 12 times the
   // stuck-sensor window) and steps between holds: the noise-free reading repeats bit for bit in
   // every hold, and the answer to a step comes a tick later.
   hdm::BenchSettings s = settings();
-  shorten_identify(s);
-  s.identify.settle_s = 0.0;
+  cut_identify(s);
   start(s);
   const json id = run_and_wait("identify", {{"model", "pi"}, {"operators", 10}});
   ASSERT_EQ(id["end"], "completed") << id.dump(2);

@@ -84,6 +84,21 @@ class BenchFixture : public TempDirTest {
     e.hold_s = 1.0;
   }
 
+  /// shorten_identify() cut further to what a fit needs, about 5 s of excitation, for a test
+  /// whose model only has to exist and take most of the hysteresis out: no settle hold, a 0.2 s
+  /// sweep, one 2 Hz major loop, no minor loops, one 10 Hz rate segment, 0.25 s holds.
+  static void cut_identify(daemon::BenchSettings& s) {
+    shorten_identify(s);
+    s.identify.settle_s = 0.0;
+    s.identify.precondition_s = 0.2;
+    s.identify.cycles = 1;
+    s.identify.frequency_hz = 2.0;
+    s.identify_excitation.minor_loops = 0;
+    s.identify_excitation.rate_frequencies_hz = {10.0};
+    s.identify_excitation.rate_cycles = {5};
+    s.identify_excitation.hold_s = 0.25;
+  }
+
   void start(daemon::BenchSettings s) {
     bench_ = std::make_unique<daemon::Bench>(std::move(s));
     bench_->set_event_sink([this](const nlohmann::json& e) {
