@@ -38,7 +38,8 @@ const char* state_name(BenchLoop::State s) {
 
 }  // namespace
 
-Bench::Bench(BenchSettings settings) : settings_(std::move(settings)) {
+Bench::Bench(BenchSettings settings)
+    : settings_(std::move(settings)), plans_(std::make_shared<details::PlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;
   try {
     driver_ = drivers::make_driver(settings_.driver_type);
@@ -263,6 +264,7 @@ nlohmann::json Bench::load_model(const details::Request& request) {
   const auto inv = m.file.model.hysteresis().invertibility();
   model_ = std::move(m.file);
   model_path_ = m.path;
+  ++model_generation_;
   return {{"path", model_path_},
           {"name", std::filesystem::path(m.path).filename().string()},
           {"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
@@ -294,7 +296,7 @@ Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json&
 }
 
 details::RunContext Bench::run_context() const {
-  return {settings_, model_ ? &*model_ : nullptr, loop_->last_output()};
+  return {settings_, model_ ? &*model_ : nullptr, loop_->last_output(), model_generation_, plans_};
 }
 
 json Bench::launch(const char* kind, details::BuiltRun run) {

@@ -352,6 +352,7 @@ void Bench::finish_identify() {
     std::lock_guard lock(mutex_);
     model_ = std::move(file);
     model_path_ = path;
+    ++model_generation_;
   } catch (const std::exception& e) {
     result["fit_error"] = e.what();
   }

@@ -35,6 +35,7 @@ struct RunContext;
 struct BuiltRun;
 struct RunPreparation;
 struct RunResult;
+struct PlanCache;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -187,6 +188,8 @@ class Bench {
   mutable std::mutex mutex_;  // guards everything below
   std::optional<compensation::ModelFile> model_;
   std::string model_path_;
+  std::uint64_t model_generation_ = 0;         // bumped with every change of model_
+  std::shared_ptr<details::PlanCache> plans_;  // track's last plan (its own lock)
   nlohmann::json last_result_;
   nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
   RunPhase phase_ = RunPhase::kIdle;
