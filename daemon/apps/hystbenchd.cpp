@@ -23,13 +23,17 @@ int main(int argc, char** argv) {
       "Without --config it runs on the built-in defaults: the loopback driver (a simulated\n"
       "150 V / 45 um piezo stack) at 10 kHz. Script it with `hystbench` (see `hystbench --help`).\n"
       "SIGTERM or SIGINT: safe output, the active run ends, its log is closed, exit 0."};
-  std::string config_path, socket_path, log_dir, model_dir;
+  std::string config_path, socket_path, log_dir, model_dir, clock;
   bool check_only = false;
   app.add_option("-c,--config", config_path, "TOML configuration file (see config/*.toml)")
       ->check(CLI::ExistingFile);
   app.add_option("--socket", socket_path, "Command socket path (overrides daemon.socket_path)");
   app.add_option("--log-dir", log_dir, "Run log folder (overrides daemon.log_dir)");
   app.add_option("--model-dir", model_dir, "Model folder (overrides daemon.model_dir)");
+  app.add_option("--clock", clock,
+                 "Loop clock (overrides loop.clock): wall, or simulated (loopback driver only:\n"
+                 "virtual time, runs tick as fast as they compute, idle ticks stay paced)")
+      ->check(CLI::IsMember({"wall", "simulated"}));
   app.add_flag("--check-config", check_only, "Validate the configuration, print it and exit");
   app.set_version_flag("--version", std::string(HYSTBENCH_VERSION));
   CLI11_PARSE(app, argc, argv);
@@ -44,6 +48,13 @@ int main(int argc, char** argv) {
   if (!socket_path.empty()) config.daemon.socket_path = socket_path;
   if (!log_dir.empty()) config.daemon.log_dir = log_dir;
   if (!model_dir.empty()) config.daemon.model_dir = model_dir;
+  if (!clock.empty()) {
+    if (const std::string why = hd::clock_conflict(clock, config.driver.type); !why.empty()) {
+      std::cerr << "hystbenchd: configuration error: --clock: " << why << "\n";
+      return 2;
+    }
+    config.loop.clock = clock;
+  }
   spdlog::set_level(spdlog::level::from_str(config.daemon.log_level));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ %v");
 
@@ -117,9 +128,9 @@ int main(int argc, char** argv) {
     }
     server.broadcast_event(event);
   });
-  spdlog::info("hystbenchd {} ready: driver {}, {} Hz, socket {}, logs {}", HYSTBENCH_VERSION,
-               config.driver.type, config.loop.rate_hz, config.daemon.socket_path,
-               config.daemon.log_dir);
+  spdlog::info("hystbenchd {} ready: driver {}, {} Hz, {} clock, socket {}, logs {}",
+               HYSTBENCH_VERSION, config.driver.type, config.loop.rate_hz, config.loop.clock,
+               config.daemon.socket_path, config.daemon.log_dir);
   sd_notifyf(0, "READY=1\nSTATUS=driver %s, %.0f Hz", config.driver.type.c_str(),
              config.loop.rate_hz);
 

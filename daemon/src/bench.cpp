@@ -38,7 +38,8 @@ const char* state_name(BenchLoop::State s) {
 
 }  // namespace
 
-Bench::Bench(BenchSettings settings) : settings_(std::move(settings)) {
+Bench::Bench(BenchSettings settings)
+    : settings_(std::move(settings)), plans_(std::make_shared<details::PlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;
   try {
     driver_ = drivers::make_driver(settings_.driver_type);
@@ -144,14 +145,18 @@ std::string Bench::new_run_id(const char* kind) {
   return std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
 }
 
-std::unique_ptr<SampleLogWriter> Bench::open_log(const std::string& run_id, json header) {
+void Bench::open_log(RunProgram& p, json header) {
+  // The clock the samples are timed by, in the log's header and the run's result.
+  const char* clock = to_string(settings_.loop.clock);
+  if (header.contains("run") && header["run"].is_object()) header["run"]["clock"] = clock;
+  p.summary["clock"] = clock;
   SampleLogOptions opt;
   opt.log_dir = settings_.log_dir;
-  opt.run_id = run_id;
+  opt.run_id = p.run_id;
   opt.header = std::move(header);
   opt.ring_capacity = settings_.log_ring_capacity;
   try {
-    return std::make_unique<SampleLogWriter>(std::move(opt));
+    p.log = std::make_unique<SampleLogWriter>(std::move(opt));
   } catch (const std::exception& e) {
     throw CommandError("log_error", std::string("cannot open the run log: ") + e.what());
   }
@@ -227,6 +232,7 @@ json Bench::status() const {
     s["model"] = nullptr;
   }
   s["loop"] = {{"rate_hz", settings_.loop.rate_hz},
+               {"clock", to_string(settings_.loop.clock)},
                {"realtime", realtime_.summary(settings_.loop.realtime)},
                {"degraded", realtime_.degraded()},
                {"statistics", to_json(loop_->statistics())}};
@@ -258,6 +264,7 @@ nlohmann::json Bench::load_model(const details::Request& request) {
   const auto inv = m.file.model.hysteresis().invertibility();
   model_ = std::move(m.file);
   model_path_ = m.path;
+  ++model_generation_;
   return {{"path", model_path_},
           {"name", std::filesystem::path(m.path).filename().string()},
           {"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
@@ -279,7 +286,7 @@ void Bench::require_idle() const {
 }
 
 Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json& header) {
-  p->log = open_log(p->run_id, header);
+  open_log(*p, header);
   SubmittedRun s{p->run_id, p->log->path().string(), p->total_samples};
   if (auto refused = loop_->submit(std::move(p))) {
     refused->log->close();
@@ -289,7 +296,7 @@ Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json&
 }
 
 details::RunContext Bench::run_context() const {
-  return {settings_, model_ ? &*model_ : nullptr, loop_->last_output()};
+  return {settings_, model_ ? &*model_ : nullptr, loop_->last_output(), model_generation_, plans_};
 }
 
 json Bench::launch(const char* kind, details::BuiltRun run) {
@@ -299,7 +306,7 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
   if (run.preparation.work) {
     // Prepared on the supervisor thread, then submitted: the reply does not wait for it.
     RunProgram& p = *run.program;
-    p.log = open_log(p.run_id, run.header);
+    open_log(p, run.header);
     run_id = p.run_id;
     log_path = p.log->path().string();
     total = p.total_samples;
@@ -314,6 +321,7 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
     log_path = std::move(r.log_path);
     total = r.total;
     phase_ = RunPhase::kRunning;
+    loop_->wake_control();  // the supervisor announces the run
   }
   active_run_ = {{"run_id", run_id}, {"kind", kind}, {"total", total}, {"log", log_path}};
   active_run_.update(run.status);
@@ -374,6 +382,9 @@ void Bench::supervise() {
       prepare();
       continue;
     }
+    // Before a finished run is taken: on the simulated clock a run can end before the first
+    // periodic event, and a client still sees it (and each verification stage) start.
+    announce_run();
     if (auto finished = loop_->take_finished()) {
       finalize(std::move(finished));
       continue;
@@ -387,15 +398,28 @@ void Bench::supervise() {
   }
 }
 
-void Bench::emit_progress() {
+void Bench::announce_run() {
+  std::string key;
+  {
+    std::lock_guard lock(mutex_);
+    if (active_run_.is_null() || phase_ != RunPhase::kRunning) return;
+    key = active_run_["run_id"].get<std::string>() + "/" + active_run_.value("stage", "");
+  }
+  if (key == announced_run_) return;
+  announced_run_ = key;
+  emit_progress(true);
+}
+
+void Bench::emit_progress(bool started) {
   json run;
   {
     std::lock_guard lock(mutex_);
     run = active_run_;
   }
   const RunProgram* p = loop_->active();
-  if (run.is_null() || p == nullptr) return;
-  const auto done = p->done.load(std::memory_order_acquire);
+  if (run.is_null() || (p == nullptr && !started)) return;
+  // A run that already ended (or is not picked up yet) is announced at its start.
+  const std::uint64_t done = p != nullptr ? p->done.load(std::memory_order_acquire) : 0;
   const auto total = run["total"].get<std::uint64_t>();
   json event = {
       {"event", "run.progress"}, {"run_id", run["run_id"]},

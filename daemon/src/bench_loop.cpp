@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <future>
+#include <thread>
 
 #include "details/futex.hpp"
 #include "hystbench/daemon/loop_timer.hpp"
@@ -17,13 +18,18 @@ StuckSensorOptions stuck_options(StuckSensorOptions o, const drivers::Driver& dr
 }
 }  // namespace
 
+const char* to_string(LoopClock clock) noexcept {
+  return clock == LoopClock::kSimulated ? "simulated" : "wall";
+}
+
 BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
     : driver_(driver),
       options_(options),
       limiter_(options.limits, 1.0 / options.rate_hz),
       stuck_(stuck_options(options.stuck_sensor, driver)),
       dt_(1.0 / options.rate_hz),
-      period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))) {
+      period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))),
+      simulated_(options.clock == LoopClock::kSimulated) {
   limiter_.reset(driver_.safe_output_v());
   last_u_.store(driver_.safe_output_v());
 }
@@ -39,10 +45,23 @@ RealtimeReport BenchLoop::start() {
   auto report = ready.get_future();
   state_.store(State::kIdle, std::memory_order_release);
   thread_ = std::thread([this, &ready] {
-    realtime_report_ = apply_realtime(options_.realtime);
+    RealtimeOptions rt = options_.realtime;
+    if (simulated_) {
+      // A free-running SCHED_FIFO thread would starve the process's other threads on its CPU.
+      rt.fifo = false;
+      rt.lock_memory = false;
+    }
+    realtime_report_ = apply_realtime(rt);
+    realtime_report_.simulated_clock = simulated_;
     prefault_stack();
     ready.set_value(realtime_report_);
-    run();
+    if (simulated_) {
+      run_simulated();
+    } else {
+      run_wall();
+    }
+    if (active_ != nullptr) end_run(RunEnd::kAborted, "daemon shutting down");
+    driver_.safe_state();
   });
   return report.get();
 }
@@ -112,11 +131,12 @@ void BenchLoop::step() noexcept {
   if (state() == State::kStopped) state_.store(State::kIdle, std::memory_order_release);
   const std::int64_t t = now_ns();
   overran_ = false;
+  exec_start_ns_ = t;
   tick(t, t);
   stats_.record(0, now_ns() - t, false, 0);
 }
 
-void BenchLoop::run() {
+void BenchLoop::run_wall() {
   LoopTimer timer{std::chrono::nanoseconds(period_ns_)};
   timer.start();
   while (!quit_.load(std::memory_order_acquire)) {
@@ -124,12 +144,49 @@ void BenchLoop::run() {
     // A tick that wakes after its successor's deadline (the previous work or the scheduler
     // made it late by a period or more, so deadlines were skipped) counts as an overrun.
     overran_ = t.skipped > 0;
+    exec_start_ns_ = t.wake_ns;
     tick(t.scheduled_ns, t.wake_ns);
     const std::int64_t done = LoopTimer::now_ns();
     stats_.record(t.latency_ns(), done - t.wake_ns, overran_ || timer.overran(t, done), t.skipped);
   }
-  if (active_ != nullptr) end_run(RunEnd::kAborted, "daemon shutting down");
-  driver_.safe_state();
+}
+
+void BenchLoop::run_simulated() {
+  LoopTimer timer{std::chrono::nanoseconds(period_ns_)};
+  bool paced = false;
+  std::int64_t virtual_ns = 0;  // tick count x period
+  overran_ = false;
+  while (!quit_.load(std::memory_order_acquire)) {
+    if (run_in_play() && state() != State::kFault) {
+      paced = false;  // a run: the next tick as soon as this one is computed
+    } else {
+      if (!paced) timer.start();  // idle again: paced from now on, whatever the run took
+      paced = true;
+      (void)timer.wait();
+    }
+    exec_start_ns_ = LoopTimer::now_ns();
+    tick(virtual_ns, virtual_ns);
+    stats_.record(0, LoopTimer::now_ns() - exec_start_ns_, false, 0);
+    virtual_ns += period_ns_;
+  }
+}
+
+void BenchLoop::log_sample(RunProgram& p, const SampleRecord& rec) noexcept {
+  if (!p.log) return;
+  if (!simulated_) {
+    if (!p.log->push(rec)) ++p.log_drops;
+    return;
+  }
+  // Back-pressure: virtual time waits for the writer, nothing is dropped. Only a closed log or
+  // a shutting-down daemon gives up (push() then counts the drop).
+  while (!p.log->try_push(rec)) {
+    if (p.log->closed() || quit_.load(std::memory_order_acquire)) {
+      (void)p.log->push(rec);
+      ++p.log_drops;
+      return;
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
 }
 
 void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
@@ -321,8 +378,8 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     p.model_error_max = std::max(p.model_error_max, std::abs(e));
     ++p.model_error_samples;
   }
-  rec.exec_ns = now_ns() - wake_ns;
-  if (p.log && !p.log->push(rec)) ++p.log_drops;
+  rec.exec_ns = now_ns() - exec_start_ns_;
+  log_sample(p, rec);
   p.stats.record(wake_ns - scheduled_ns, rec.exec_ns, overran_);
   p.done.store(k + 1, std::memory_order_release);
 

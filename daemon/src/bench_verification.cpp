@@ -5,10 +5,10 @@
 #include <cmath>
 #include <filesystem>
 
+#include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/daemon/fit_families.hpp"
 #include "hystbench/daemon/identification_fit.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
-#include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/daemon/model_file_io.hpp"
 #include "identify_session.hpp"
 #include "run_result.hpp"
@@ -244,7 +244,7 @@ bool Bench::verify_next_candidate() {
                    {"driver", settings_.driver_type},
                    {"model", hc::to_json(hc::ModelFile{c.fit.model, json::object()})}};
     try {
-      p->log = open_log(p->run_id, header);
+      open_log(*p, header);
     } catch (const CommandError& e) {
       c.verification = {{"end", "not_run"}, {"reason", e.what()}};
       return false;
@@ -288,6 +288,7 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   c.verification["log"] = run->log ? run->log->path().string() : "";
   c.verification["dropped"] = counts.dropped + run->log_drops;
   c.verification["clamps"] = run->clamps;
+  c.verification["clock"] = run->summary.value("clock", "wall");
   ++s.next;
   s.interrupted = s.interrupted || run->end != RunEnd::kCompleted;
   if (s.interrupted || quit_.load() || !verify_next_candidate()) finish_identify();
@@ -351,6 +352,7 @@ void Bench::finish_identify() {
     std::lock_guard lock(mutex_);
     model_ = std::move(file);
     model_path_ = path;
+    ++model_generation_;
   } catch (const std::exception& e) {
     result["fit_error"] = e.what();
   }

@@ -16,6 +16,7 @@
 
 #include "details/toml_json.hpp"
 #include "hystbench/daemon/fit_families.hpp"
+#include "hystbench/sim/simulated_actuator_config.hpp"
 
 namespace hystbench::daemon {
 
@@ -226,6 +227,7 @@ void visit_daemon(S& d, Visit&& visit) {
 template <class S, class Visit>
 void visit_loop(S& l, Visit&& visit) {
   visit("rate_hz", l.rate_hz, Bounds{1.0, 20000.0});
+  visit("clock", l.clock, std::vector<std::string>{"wall", "simulated"});
   visit("realtime", l.realtime);
   visit("priority", l.priority, 1, 99);
   visit("cpu", l.cpu, -1, 1023);
@@ -378,7 +380,80 @@ void read_driver(const Context& ctx, const toml::table* table, DriverSection& d)
   }
 }
 
+/// The TOML node a key path of sim's messages names ("creep.gains_um_per_v[2]", "dynamcs"),
+/// under `table`: the deepest node of the path that exists (a missing key: its table).
+const toml::node* node_at(const toml::table& table, std::string_view path) {
+  const toml::node* node = &table;
+  std::size_t pos = 0;
+  while (pos < path.size()) {
+    const std::size_t end = std::min(path.find_first_of(".[", pos), path.size());
+    if (end > pos) {  // a key
+      const toml::table* t = node->as_table();
+      const toml::node* child = t ? t->get(path.substr(pos, end - pos)) : nullptr;
+      if (!child) return node;
+      node = child;
+    }
+    pos = end;
+    if (pos < path.size() && path[pos] == '[') {  // an array element
+      const std::size_t close = path.find(']', pos);
+      if (close == std::string_view::npos) return node;
+      std::size_t index = 0;
+      const auto [p, ec] = std::from_chars(path.data() + pos + 1, path.data() + close, index);
+      const toml::array* a = node->as_array();
+      if (ec != std::errc() || p != path.data() + close || !a || index >= a->size()) return node;
+      node = a->get(index);
+      pos = close + 1;
+    }
+    if (pos < path.size() && path[pos] == '.') ++pos;
+  }
+  return node;
+}
+
+/// Checks a simulated actuator table (`key` = its dotted path) with sim::from_json; its errors
+/// ("<key path>: <what>") become "<key>.<key path>: <what>" at the offending node's line.
+void check_actuator(const Context& ctx, const std::string& key, const toml::table& table) {
+  try {
+    (void)sim::from_json(details::toml_node_to_json(table));
+  } catch (const std::invalid_argument& e) {
+    const std::string message = e.what();
+    const std::size_t colon = message.find(": ");
+    if (colon == std::string::npos) ctx.fail(key, message, line_of(&table));
+    const std::string path = message.substr(0, colon);
+    const toml::node* node = node_at(table, path);
+    int line = line_of(node);
+    if (line == 0) line = line_of(&table);
+    ctx.fail(key + "." + path, message.substr(colon + 2), line);
+  }
+}
+
+/// The simulated actuator's tables, for the loopback driver; refused with another one.
+void check_actuators(const Context& ctx, const toml::table& root, const DaemonConfig& c) {
+  const toml::table* actuator = section_table(ctx, root, "actuator");
+  if (c.driver.type != "loopback") {
+    if (actuator && !actuator->empty()) {
+      // A table made only by its sub-tables ([actuator.creep]) has no line of its own.
+      int line = line_of(actuator);
+      if (line == 0) line = line_of(&actuator->cbegin()->second);
+      ctx.fail("actuator",
+               "only the loopback driver simulates an actuator, driver.type is \"" + c.driver.type +
+                   "\" (remove the table or leave it empty)",
+               line);
+    }
+    return;
+  }
+  if (actuator) check_actuator(ctx, "actuator", *actuator);
+  const toml::node* own = root.at_path("driver.loopback.actuator").node();
+  if (own && own->is_table()) check_actuator(ctx, "driver.loopback.actuator", *own->as_table());
+}
+
 }  // namespace
+
+std::string clock_conflict(std::string_view clock, std::string_view driver_type) {
+  if (clock != "simulated" || driver_type == "loopback") return {};
+  return "\"simulated\" needs driver.type = \"loopback\" (the simulated actuator is the only "
+         "plant that can follow a virtual clock), got driver.type = \"" +
+         std::string(driver_type) + "\"";
+}
 
 nlohmann::json DriverSection::params() const {
   const auto it = tables.find(type);
@@ -417,9 +492,13 @@ DaemonConfig parse_config(std::string_view toml_text, std::string_view origin) {
     s.finish();
   }
   read_driver(ctx, section_table(ctx, root, "driver"), c.driver);
+  if (const std::string why = clock_conflict(c.loop.clock, c.driver.type); !why.empty()) {
+    Section(ctx, "loop", section_table(ctx, root, "loop")).fail("clock", why);
+  }
   if (const toml::table* actuator = section_table(ctx, root, "actuator")) {
     c.actuator = details::toml_node_to_json(*actuator);
   }
+  check_actuators(ctx, root, c);
   {
     Section s = section("identify");
     visit_identify(c.identify, Reader(s), c.loop, c.limits);

@@ -8,6 +8,7 @@ namespace hystbench::daemon {
 BenchSettings bench_settings_from(const DaemonConfig& c) {
   BenchSettings s;
   s.loop.rate_hz = c.loop.rate_hz;
+  s.loop.clock = c.loop.clock == "simulated" ? LoopClock::kSimulated : LoopClock::kWall;
   s.loop.realtime.fifo = c.loop.realtime;
   s.loop.realtime.priority = c.loop.priority;
   s.loop.realtime.cpu = c.loop.cpu;

@@ -105,6 +105,14 @@ RealtimeReport apply_realtime(const RealtimeOptions& options) noexcept {
 
 std::string RealtimeReport::summary(const RealtimeOptions& requested) const {
   std::string s = "real-time: ";
+  if (simulated_clock) {
+    s += "simulated clock: SCHED_FIFO and memory lock not taken (the loop runs free during runs)";
+    if (requested.cpu >= 0) {
+      s += ", cpu " + std::to_string(requested.cpu) + " " + affinity.describe();
+    }
+    if (degraded()) s += " (running degraded)";
+    return s;
+  }
   if (requested.fifo) {
     s += "SCHED_FIFO " + std::to_string(requested.priority) + " " + scheduling.describe();
   } else {

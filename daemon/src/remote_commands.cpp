@@ -140,7 +140,10 @@ void print_run_result(const json& r, std::ostream& out) {
     out << "  loop            wake latency p50 " << us(w.value("p50", json())) << " us, p99 "
         << us(w.value("p99", json())) << " us, max " << us(w.value("max", json()))
         << " us; execution p99 " << us(e.value("p99", json())) << " us; " << l.value("overruns", 0)
-        << " overruns\n";
+        << " overruns";
+    // Virtual time: no wake-up to be late, no overrun; the execution time is measured.
+    if (r.value("clock", "") == "simulated") out << " (simulated clock)";
+    out << "\n";
   }
   if (r.contains("clamps")) {
     out << "  limits          " << r.value("clamps", 0) << " clamped, " << r.value("slew_limits", 0)

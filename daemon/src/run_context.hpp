@@ -6,22 +6,43 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/daemon/bench.hpp"
 #include "hystbench/daemon/run_program.hpp"
 
 namespace hystbench::daemon::details {
 
+/// The last feedforward plan and what it was planned from: a track run with the same model, the
+/// same start (output, open-loop prefix) and the same targets (another compensator over the same
+/// reference, as a sweep runs them) plays it again instead of planning it anew. The plan is a
+/// deterministic function of these, so the drive is the one a new plan would give. Any thread.
+struct PlanCache {
+  std::mutex mutex;
+  std::uint64_t model_generation = 0;
+  double u_now = 0.0;
+  std::vector<double> excitation, targets;
+  std::uint64_t planned_samples = 0;
+  double period_samples = 0.0;
+  std::optional<compensation::DrivePlan> plan;  ///< empty: nothing kept
+};
+
 struct RunContext {
   const BenchSettings& settings;
   const compensation::ModelFile* model = nullptr;            ///< the active model, or null
   double u_now = 0.0;                                        ///< the loop's present output [V]
   double dt() const { return 1.0 / settings.loop.rate_hz; }  ///< loop period [s]
+  /// Counts the bench's model changes: a plan kept for one generation is not another's.
+  std::uint64_t model_generation = 0;
+  /// Where track keeps its last plan; null = every plan is made anew.
+  std::shared_ptr<PlanCache> plans = nullptr;
 };
 
 /// Thrown by a preparation's progress callback to cancel it (stop, abort, shutdown); not a

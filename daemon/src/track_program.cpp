@@ -24,6 +24,35 @@ using nlohmann::json;
 
 namespace {
 
+/// Takes the kept plan into `plan` when it was made from the same inputs; true then.
+bool reuse_plan(PlanCache& cache, std::uint64_t generation, double u_now,
+                const std::vector<double>& excitation, const std::vector<double>& targets,
+                std::uint64_t planned_samples, double period_samples,
+                std::optional<hc::DrivePlan>& plan) {
+  std::lock_guard lock(cache.mutex);
+  if (!cache.plan || cache.model_generation != generation || cache.u_now != u_now ||
+      cache.planned_samples != planned_samples || cache.period_samples != period_samples ||
+      cache.excitation != excitation || cache.targets != targets) {
+    return false;
+  }
+  plan = cache.plan;
+  return true;
+}
+
+/// Keeps `plan` and what it was made from, in place of the plan kept before.
+void keep_plan(PlanCache& cache, std::uint64_t generation, double u_now,
+               const std::vector<double>& excitation, const std::vector<double>& targets,
+               std::uint64_t planned_samples, double period_samples, const hc::DrivePlan& plan) {
+  std::lock_guard lock(cache.mutex);
+  cache.model_generation = generation;
+  cache.u_now = u_now;
+  cache.excitation = excitation;
+  cache.targets = targets;
+  cache.planned_samples = planned_samples;
+  cache.period_samples = period_samples;
+  cache.plan = plan;
+}
+
 // The most planning a track run waits for before it starts (compensation::plan_drive_work:
 // about 10 s on one core; 120 000 samples, 12 s at 10 kHz, for a model of 6 plays).
 constexpr double kMaxPlanWork = 1.0e6;
@@ -214,7 +243,8 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
       "planning the feedforward",
       [relaxed = model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt),
        u_now = ctx.u_now, targets = std::move(targets), planned_samples, period_samples, kind, pid,
-       linear](RunProgram& program, const std::function<void(double)>& progress) mutable {
+       linear, cache = ctx.plans, generation = ctx.model_generation](
+          RunProgram& program, const std::function<void(double)>& progress) mutable {
         hc::DrivePlanOptions options;
         options.progress = progress;
         // Below 0.1 % of the reference's span on the model the previewed inverse is kept:
@@ -224,11 +254,21 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
         const auto start = std::chrono::steady_clock::now();
         json planned = {{"samples", 0}};
         std::optional<hc::DrivePlan> plan;
+        const bool reused = cache && reuse_plan(*cache, generation, u_now, program.excitation,
+                                                targets, planned_samples, period_samples, plan);
         try {
-          plan = hc::plan_drive(relaxed, u_now, program.excitation,
-                                std::span<const double>(targets).first(planned_samples), options);
-          if (planned_samples < targets.size()) {
-            plan = hc::continue_periodic_plan(std::move(*plan), period_samples, targets.size());
+          if (reused) {
+            progress(1.0);  // a stop or abort meanwhile still cancels the run
+          } else {
+            plan = hc::plan_drive(relaxed, u_now, program.excitation,
+                                  std::span<const double>(targets).first(planned_samples), options);
+            if (planned_samples < targets.size()) {
+              plan = hc::continue_periodic_plan(std::move(*plan), period_samples, targets.size());
+            }
+            if (cache) {
+              keep_plan(*cache, generation, u_now, program.excitation, targets, planned_samples,
+                        period_samples, *plan);
+            }
           }
         } catch (const PreparationCancelled&) {
           program.summary["feedforward"]["planned"] = {
@@ -247,11 +287,9 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
         if (plan) {
           const double seconds =
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-          planned = {{"samples", targets.size()},
-                     {"optimised_samples", planned_samples},
-                     {"seconds", seconds},
-                     {"model_rms_um", plan->rms},
-                     {"previewed_model_rms_um", plan->start_rms}};
+          planned = {{"samples", targets.size()}, {"optimised_samples", planned_samples},
+                     {"seconds", seconds},        {"reused", reused},
+                     {"model_rms_um", plan->rms}, {"previewed_model_rms_um", plan->start_rms}};
           // The plan pays for its smoothness, and beyond the rates its model was identified
           // at it plans on the continued law: where that leaves it worse on the model as it
           // is, the previewed inverse plays.

@@ -31,23 +31,18 @@ namespace {
 class BenchTest : public hystbench::test::BenchFixture {
  protected:
   BenchTest() : BenchFixture("hystbench_bench_test") {}
-  hd::BenchSettings settings(double rate_hz = 5000.0) const {
-    hd::BenchSettings s = base_settings(rate_hz);
-    s.y_min = 0.0;
-    s.y_max = 45.0;
+  // The loopback at `rate_hz` with the 0..45 um range from a config file (the user's path), on
+  // the simulated clock unless `loop_keys` says otherwise; precondition 0.4 s.
+  hd::BenchSettings settings(double rate_hz = 5000.0,
+                             const std::string& loop_keys = kSimulatedClock) const {
+    hd::BenchSettings s = settings_from_toml(loopback_toml({}, loop_keys, rate_hz, 45.0));
+    s.precondition_s = 0.4;
     return s;
   }
-  // The standard excitation's segments shortened so an identification takes about 18 s; the
-  // preconditioning, the major loops and the segment order stay the daemon's.
-  hd::BenchSettings short_identify_settings() const {
-    hd::BenchSettings s = settings();
-    s.identify.cycles = 2;
-    auto& e = s.identify_excitation;
-    e.minor_loops = 4;
-    e.rate_frequencies_hz = {2.0, 10.0};
-    e.rate_cycles = {2, 5};
-    e.hold_levels = {1.0, 0.0};
-    e.hold_s = 1.0;
+  // The short identification (shorten_identify).
+  hd::BenchSettings short_identify_settings(const std::string& loop_keys = kSimulatedClock) const {
+    hd::BenchSettings s = settings(5000.0, loop_keys);
+    shorten_identify(s);
     return s;
   }
   // The loopback with its rate dependence on (the user's config), and its truth as the model.
@@ -134,8 +129,9 @@ TEST_F(BenchTest, ModelsTravelAsDocumentsAndLoadByNameFromTheModelFolder) {
   EXPECT_EQ(bench_->handle("model.list", json::object())["models"].size(), 2u);
 }
 
+// On the wall clock: the run must still be going when the second request comes.
 TEST_F(BenchTest, BadRequestsChangeNothing) {
-  start(settings());
+  start(settings(5000.0, "clock = \"wall\"\n"));
   EXPECT_EQ(error_code("track", {{"compensator", "inverse"}}), "no_model");
   EXPECT_EQ(error_code("track", {{"frequency_hz", "fast"}}), "bad_params");
   EXPECT_EQ(error_code("track", {{"min_um", -100.0}, {"max_um", 10.0}}), "out_of_range");
@@ -209,7 +205,7 @@ TEST_F(BenchTest, SixtySecondsAtTenKilohertzLogEverySample) {
   if (std::getenv("HYSTBENCH_LONG_TESTS") == nullptr) {
     GTEST_SKIP() << "set HYSTBENCH_LONG_TESTS=1 to run the 60 s / 10 kHz logging test";
   }
-  auto s = settings(10000.0);
+  auto s = settings(10000.0, "clock = \"wall\"\n");
   s.loop.realtime.fifo = true;  // used when permitted, degraded otherwise
   start(s);
   const json r = run_and_wait(
@@ -307,8 +303,12 @@ TEST_F(BenchTest, AnOffsetTheModelDoesNotPredictIsTaredOffTheFeedforward) {
 
 // identify's verification is a run like any other: status names the stage, progress events
 // carry it, stop ends it; the fitted model is still adopted and the result says what happened.
+// On the wall clock, so the verification still runs when stop comes; the cut identification
+// (cut_identify: the model's figures are not under test here).
 TEST_F(BenchTest, StopDuringIdentifyVerificationAdoptsTheModelAndSaysSo) {
-  start(short_identify_settings());
+  hd::BenchSettings s = settings(5000.0, "clock = \"wall\"\n");
+  cut_identify(s);
+  start(s);
   std::vector<json> progress;
   bench_->set_event_sink([&](const json& e) {
     std::lock_guard lock(m_);
@@ -397,9 +397,26 @@ TEST_F(BenchTest, ARateDependentTrackIsPlannedBeforeItStartsAndStopCancelsThePla
       run_and_wait("track", {{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 3}});
   EXPECT_EQ(r["end"], "completed") << r.dump(2);
   EXPECT_GT(r["feedforward"]["planned"]["samples"].get<double>(), 0.0) << r.dump(2);
+  EXPECT_EQ(r["feedforward"]["planned"]["reused"], false) << r.dump(2);
   EXPECT_LT(r["rms_error_percent"].get<double>(), 3.0) << r.dump(2);
-  std::lock_guard lock(m_);
-  EXPECT_DOUBLE_EQ(planning.back()["fraction"].get<double>(), 1.0);
+  {
+    std::lock_guard lock(m_);
+    EXPECT_DOUBLE_EQ(planning.back()["fraction"].get<double>(), 1.0);
+  }
+  // The same reference through another compensator (as a sweep runs them) plays the same plan,
+  // kept from the run before; another reference is planned anew.
+  const json again = run_and_wait("track", {{"reference", "sine"},
+                                            {"frequency_hz", 10.0},
+                                            {"periods", 3},
+                                            {"compensator", "inverse+pid"}});
+  ASSERT_EQ(again["end"], "completed") << again.dump(2);
+  EXPECT_EQ(again["feedforward"]["planned"]["reused"], true) << again.dump(2);
+  EXPECT_EQ(again["feedforward"]["planned"]["model_rms_um"],
+            r["feedforward"]["planned"]["model_rms_um"]);
+  const json other =
+      run_and_wait("track", {{"reference", "sine"}, {"frequency_hz", 11.0}, {"periods", 3}});
+  ASSERT_EQ(other["end"], "completed") << other.dump(2);
+  EXPECT_EQ(other["feedforward"]["planned"]["reused"], false) << other.dump(2);
 }
 
 // A run still being prepared when the daemon shuts down ends aborted, with its result delivered.

@@ -25,10 +25,11 @@ namespace {
 class BenchUploadTest : public hystbench::test::BenchFixture {
  protected:
   BenchUploadTest() : BenchFixture("hystbench_bench_upload_test") {}
+  // The loopback at 5 kHz with the 0..45 um range from a config file, on the simulated clock;
+  // precondition 0.4 s.
   hd::BenchSettings settings() const {
-    hd::BenchSettings s = base_settings(5000.0);
-    s.y_min = 0.0;
-    s.y_max = 45.0;
+    hd::BenchSettings s = settings_from_toml(loopback_toml({}, kSimulatedClock, 5000.0, 45.0));
+    s.precondition_s = 0.4;
     return s;
   }
   /// Uploads (t, values) in chunks of 1000 as `client` (0: the connection run_and_wait uses);
@@ -183,13 +184,7 @@ TEST_F(BenchUploadTest, AMillionSampleTrajectoryIsTrackedWithItsErrorReported) {
 // a model as good as the identification run's own record does.
 TEST_F(BenchUploadTest, AnUploadedTrajectoryAndExcitationWorkAsTheBuiltInOnes) {
   hd::BenchSettings s = settings();
-  s.identify.cycles = 2;  // the short identification of BenchTest (about 18 s)
-  auto& e = s.identify_excitation;
-  e.minor_loops = 4;
-  e.rate_frequencies_hz = {2.0, 10.0};
-  e.rate_cycles = {2, 5};
-  e.hold_levels = {1.0, 0.0};
-  e.hold_s = 1.0;
+  shorten_identify(s);
   start(s);
   const json id = run_and_wait("identify", json::object(), 180);
   ASSERT_EQ(id["end"], "completed") << id.dump();

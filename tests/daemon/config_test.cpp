@@ -5,6 +5,8 @@
 
 #include <fstream>
 
+#include "hystbench/daemon/daemon_settings.hpp"
+
 namespace hd = hystbench::daemon;
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -21,6 +23,7 @@ log_level = "debug"
 
 [loop]
 rate_hz = 5000
+clock = "wall"
 realtime = true
 priority = 70
 cpu = 1
@@ -50,11 +53,6 @@ calibration = [[0.0, 0.0], [10.0, 1.5]]
 installed = 2024-03-01
 
 [actuator]
-model_file = "multilayer-table2-mpi.json"
-noise_um = 0.002
-
-[actuator.creep]
-time_constants_s = [0.1, 10.0]
 
 [identify]
 model = "rpi"
@@ -94,6 +92,7 @@ TEST(Config, EmptyTextGivesTheDocumentedDefaults) {
   EXPECT_EQ(c.daemon.model_dir, "/var/lib/hystbench/models");
   EXPECT_EQ(c.daemon.log_level, "info");
   EXPECT_EQ(c.loop.rate_hz, 10000.0);
+  EXPECT_EQ(c.loop.clock, "wall");
   EXPECT_TRUE(c.loop.realtime);
   EXPECT_EQ(c.loop.priority, 80);
   EXPECT_EQ(c.loop.cpu, -1);
@@ -150,8 +149,7 @@ TEST(Config, ExampleFileParsesWithEveryValue) {
   EXPECT_EQ(modbus["calibration"][1][1], 1.5);
   EXPECT_EQ(modbus["installed"], "2024-03-01");
   EXPECT_EQ(c.driver.tables["loopback"]["delay_samples"], 2);
-  EXPECT_EQ(c.actuator["noise_um"], 0.002);
-  EXPECT_EQ(c.actuator["creep"]["time_constants_s"][1], 10.0);
+  EXPECT_EQ(c.actuator, json::object());  // only the loopback driver has one
   EXPECT_EQ(c.identify.model, "rpi");
   EXPECT_EQ(c.identify.operators, 12);
   EXPECT_EQ(c.identify.dead_zones, 3);
@@ -172,7 +170,7 @@ TEST(Config, ExampleFileParsesWithEveryValue) {
   EXPECT_EQ(j["limits"]["y_min"], 0.0);
   EXPECT_EQ(j["driver"]["type"], "modbus");
   EXPECT_EQ(j["driver"]["modbus"]["baud"], 115200);
-  EXPECT_EQ(j["actuator"]["model_file"], "multilayer-table2-mpi.json");
+  EXPECT_EQ(j["loop"]["clock"], "wall");
   EXPECT_EQ(j["pid"]["u_fb_max"], 20.0);
   EXPECT_TRUE(hd::to_json(hd::parse_config(""))["limits"]["y_min"].is_null());
 }
@@ -198,6 +196,9 @@ TEST(Config, EveryErrorNamesItsKey) {
       {"[loop]\nring_capacity = 10", "loop.ring_capacity",
        "loop.ring_capacity: must be in [1024, 16777216], got 10"},
       {"[loop]\nrat_hz = 100", "loop.rat_hz", "loop.rat_hz: unknown key (known: rate_hz, "},
+      {"[loop]\nclock = \"virtual\"", "loop.clock",
+       "loop.clock: must be one of wall, simulated, got \"virtual\""},
+      {"[loop]\nclock = true", "loop.clock", "loop.clock: must be a string, got boolean"},
       {"[loop.extra]\na = 1", "loop.extra", "loop.extra: unknown key"},
       {"[lop]\nrate_hz = 100", "lop", "lop: unknown section (known: daemon, loop, "},
       {"rate_hz = 100", "rate_hz", "rate_hz: unknown section"},
@@ -330,4 +331,87 @@ TEST(Config, EveryShippedConfigFileLoads) {
     }
   }
   if (files == 0) GTEST_SKIP() << "no config/*.toml in " << dir;
+}
+
+// The simulated clock is for the loopback only: the simulated actuator is the one plant that can
+// follow a virtual clock. With another driver the key is refused where it stands, saying why.
+TEST(Config, TheSimulatedClockIsForTheLoopbackDriverOnly) {
+  const hd::DaemonConfig c = hd::parse_config("[loop]\nclock = \"simulated\"\n");
+  EXPECT_EQ(c.loop.clock, "simulated");
+  EXPECT_EQ(hd::to_json(c)["loop"]["clock"], "simulated");
+  EXPECT_EQ(hd::bench_settings_from(c).loop.clock, hd::LoopClock::kSimulated);
+  EXPECT_EQ(hd::bench_settings_from(hd::parse_config("")).loop.clock, hd::LoopClock::kWall);
+
+  const hd::ConfigError e = error_of(
+      "[loop]\nrate_hz = 5000\nclock = \"simulated\"\n\n[driver]\ntype = \"modbus\"\n", "b.toml");
+  EXPECT_EQ(e.key(), "loop.clock");
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_STREQ(
+      e.what(),
+      "b.toml:3: loop.clock: \"simulated\" needs driver.type = \"loopback\" (the simulated "
+      "actuator is the only plant that can follow a virtual clock), got driver.type = "
+      "\"modbus\"");
+  EXPECT_EQ(hd::clock_conflict("simulated", "can"), hd::clock_conflict("simulated", "can"));
+  EXPECT_NE(hd::clock_conflict("simulated", "can").find("\"can\""), std::string::npos);
+  EXPECT_EQ(hd::clock_conflict("wall", "can"), "");
+  EXPECT_EQ(hd::clock_conflict("simulated", "loopback"), "");
+}
+
+// The [actuator] table is the loopback's simulated actuator: checked with the rest of the file
+// by the simulator's own reader, its errors named by file, line and key path: the offending
+// node's line (an array element's own line), its table's for a key that is missing.
+TEST(Config, TheActuatorTableIsCheckedWithFileLineAndKey) {
+  struct Case {
+    const char* toml;
+    const char* key;
+    int line;
+    const char* message;  // the start of what()
+  };
+  const Case cases[] = {
+      {"[loop]\nrate_hz = 10000\n\n[actuator.dynamcs]\nenabled = true\n", "actuator.dynamcs", 4,
+       "a.toml:4: actuator.dynamcs: unknown key (valid: input, hysteresis, "},
+      {"[actuator.creep]\nenabled = \"yes\"\n", "actuator.creep.enabled", 2,
+       "a.toml:2: actuator.creep.enabled: expected true or false, got \"yes\""},
+      {"[actuator.creep]\nenable = true\n", "actuator.creep.enable", 2,
+       "a.toml:2: actuator.creep.enable: unknown key (valid: enabled, "},
+      {"[actuator.creep]\nenabled = true\ntime_constants_s = [\n  0.5,\n  5.0,\n  -1.0,\n]\n"
+       "gains_um_per_v = [0.1, 0.1, 0.1]\n",
+       "actuator.creep.time_constants_s[2]", 6,
+       "a.toml:6: actuator.creep.time_constants_s[2]: must be > 0"},
+      {"[actuator.creep]\nenabled = true\ngains_um_per_v = [0.1, 0.2, 0.3, 0.4, 0.5]\n",
+       "actuator.creep.gains_um_per_v", 3,
+       "a.toml:3: actuator.creep.gains_um_per_v: has 5 entries, creep.time_constants_s has 4"},
+      // The key at fault is missing (its default does not fit the others): its table's line.
+      {"[actuator]\n\n[actuator.creep]\nenabled = true\ntime_constants_s = [1.0]\n",
+       "actuator.creep.gains_um_per_v", 3,
+       "a.toml:3: actuator.creep.gains_um_per_v: has 4 entries, creep.time_constants_s has 1"},
+      {"[actuator.input]\nmin_v = 10.0\nmax_v = 5.0\n", "actuator.input.max_v", 3,
+       "a.toml:3: actuator.input.max_v: must be greater than input.min_v"},
+      {"[actuator.delay]\nenabled = true\ndelay_s = 2.0\n", "actuator.delay.delay_s", 3,
+       "a.toml:3: actuator.delay.delay_s: must be in [0, 1] s"},
+      {"[actuator]\ncreep = { enabled = true, gains_um_per_v = [1.0] }\n",
+       "actuator.creep.gains_um_per_v", 2, "a.toml:2: actuator.creep.gains_um_per_v: has 1 "},
+      // The loopback driver's own table, when it names the actuator.
+      {"[driver.loopback.actuator.dynamics]\nenabled = true\ndamping_ratio = 0.0\n",
+       "driver.loopback.actuator.dynamics.damping_ratio", 3,
+       "a.toml:3: driver.loopback.actuator.dynamics.damping_ratio: must be > 0"},
+      // Another driver simulates nothing: a table there would do nothing.
+      {"[driver]\ntype = \"modbus\"\n[actuator.creep]\nenabled = false\n", "actuator", 3,
+       "a.toml:3: actuator: only the loopback driver simulates an actuator, driver.type is "
+       "\"modbus\""},
+  };
+  for (const auto& c : cases) {
+    const hd::ConfigError e = error_of(c.toml, "a.toml");
+    EXPECT_EQ(e.key(), c.key) << c.toml << "\n  got: " << e.what();
+    EXPECT_EQ(e.line(), c.line) << c.toml << "\n  got: " << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind(c.message, 0), 0u)
+        << c.toml << "\n  got: " << e.what() << "\n  expected: " << c.message;
+  }
+  // A valid table is kept as it is, integers and all (a seed is unsigned).
+  const hd::DaemonConfig ok = hd::parse_config(
+      "[actuator.sensor_noise]\nenabled = true\nseed = 7\n[actuator.creep]\nenabled = false\n");
+  EXPECT_EQ(ok.actuator["sensor_noise"]["seed"], 7);
+  EXPECT_EQ(hd::bench_settings_from(ok).driver_params["actuator"], ok.actuator);
+  // An empty [actuator] table goes with any driver (config/hystbenchd.toml has one).
+  EXPECT_NO_THROW(hd::parse_config("[driver]\ntype = \"modbus\"\n[actuator]\n"));
 }

@@ -17,6 +17,8 @@
 #include <fstream>
 #include <sstream>
 #include <thread>
+#include <tuple>
+#include <utility>
 
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pi_model.hpp"
@@ -278,5 +280,56 @@ TEST(HystbenchdService, ModelLoadWorksWhenTheDaemonCannotSeeTheClientsFolder) {
     EXPECT_TRUE(stored["ok"].get<bool>()) << stored.dump();
     EXPECT_EQ(c.request("status")["result"]["model"]["type"], "pi");
   }
+  fs::remove_all(dir);
+}
+
+namespace {
+
+/// Runs `hystbenchd <args>`; its exit status and its output (stdout and stderr).
+std::pair<int, std::string> hystbenchd(const std::string& args) {
+  const std::string command = std::string(HYSTBENCH_BIN_DIR) + "/hystbenchd " + args + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return {-1, ""};
+  std::string out;
+  char buffer[4096];
+  while (const std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+}  // namespace
+
+// --check-config shows the clock; --clock overrides it and is refused, saying why, with a driver
+// that cannot follow a virtual clock; a bad [actuator] table is refused at check time, by line.
+TEST(HystbenchdCheckConfig, ShowsTheClockAndRefusesWhatCannotRun) {
+  const fs::path dir = fs::temp_directory_path() / ("hbd-check-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path loopback = dir / "loopback.toml";
+  std::ofstream(loopback) << "[loop]\nrate_hz = 10000\n";
+  const fs::path modbus = dir / "modbus.toml";
+  std::ofstream(modbus) << "[driver]\ntype = \"modbus\"\n";
+  const fs::path bad = dir / "bad.toml";
+  std::ofstream(bad) << "[loop]\nclock = \"simulated\"\n\n[actuator.creep]\nenabled = true\n"
+                        "gains_um_per_v = [0.1, 0.2]\n";
+
+  auto [status, out] = hystbenchd("--check-config -c " + loopback.string());
+  ASSERT_EQ(status, 0) << out;
+  EXPECT_EQ(json::parse(out)["loop"]["clock"], "wall") << out;
+  std::tie(status, out) = hystbenchd("--clock simulated --check-config -c " + loopback.string());
+  ASSERT_EQ(status, 0) << out;
+  EXPECT_EQ(json::parse(out)["loop"]["clock"], "simulated") << out;
+
+  std::tie(status, out) = hystbenchd("--clock simulated --check-config -c " + modbus.string());
+  EXPECT_EQ(status, 2) << out;
+  EXPECT_NE(out.find("--clock: \"simulated\" needs driver.type = \"loopback\""), std::string::npos)
+      << out;
+  std::tie(status, out) = hystbenchd("--clock virtual --check-config");
+  EXPECT_NE(status, 0) << out;
+
+  std::tie(status, out) = hystbenchd("--check-config -c " + bad.string());
+  EXPECT_EQ(status, 2) << out;
+  EXPECT_NE(out.find(bad.string() + ":6: actuator.creep.gains_um_per_v: has 2 entries"),
+            std::string::npos)
+      << out;
   fs::remove_all(dir);
 }

@@ -44,12 +44,19 @@ class BenchFixture : public TempDirTest {
     return s;
   }
 
-  /// A loopback config at 10 kHz with the 0..44 um range, then `tables` (e.g. "[actuator.delay]
-  /// enabled = true"): the loopback of config/loopback.toml with one effect switched on.
-  static std::string loopback_toml(const std::string& tables = {}) {
-    return "[loop]\nrate_hz = 10000\n[limits]\ny_min = 0.0\ny_max = 44.0\n[driver]\n"
-           "type = \"loopback\"\n" +
-           tables;
+  /// The [loop] keys of a bench test whose figures are under test: the simulated clock, so a run
+  /// takes a fraction of its duration in wall time while the plant sees the same samples.
+  static constexpr const char* kSimulatedClock = "clock = \"simulated\"\n";
+
+  /// A loopback config at `rate_hz` [Hz] with the 0..`y_max` um range, `loop_keys` in its [loop]
+  /// table, then `tables` (e.g. "[actuator.delay]\nenabled = true\n"): by default the loopback
+  /// of config/loopback.toml on the simulated clock, with one effect switched on.
+  static std::string loopback_toml(const std::string& tables = {},
+                                   const std::string& loop_keys = kSimulatedClock,
+                                   double rate_hz = 10000.0, double y_max = 44.0) {
+    return "[loop]\nrate_hz = " + std::to_string(rate_hz) + "\n" + loop_keys +
+           "[limits]\ny_min = 0.0\ny_max = " + std::to_string(y_max) +
+           "\n[driver]\ntype = \"loopback\"\n" + tables;
   }
 
   /// The daemon's settings for a TOML config (the user's path: bench_settings_from), with the
@@ -62,6 +69,34 @@ class BenchFixture : public TempDirTest {
     s.log_dir = base.log_dir;
     s.model_dir = base.model_dir;
     return s;
+  }
+
+  /// The standard excitation's segments shortened so an identification at 5 kHz plays about
+  /// 18 s (from 34 s): 2 major loops, 4 minor loops, 2 and 10 Hz rate segments, 1 s holds at the
+  /// range's ends; the settle hold, the preconditioning and the segment order stay the daemon's.
+  static void shorten_identify(daemon::BenchSettings& s) {
+    s.identify.cycles = 2;
+    auto& e = s.identify_excitation;
+    e.minor_loops = 4;
+    e.rate_frequencies_hz = {2.0, 10.0};
+    e.rate_cycles = {2, 5};
+    e.hold_levels = {1.0, 0.0};
+    e.hold_s = 1.0;
+  }
+
+  /// shorten_identify() cut further to what a fit needs, about 5 s of excitation, for a test
+  /// whose model only has to exist and take most of the hysteresis out: no settle hold, a 0.2 s
+  /// sweep, one 2 Hz major loop, no minor loops, one 10 Hz rate segment, 0.25 s holds.
+  static void cut_identify(daemon::BenchSettings& s) {
+    shorten_identify(s);
+    s.identify.settle_s = 0.0;
+    s.identify.precondition_s = 0.2;
+    s.identify.cycles = 1;
+    s.identify.frequency_hz = 2.0;
+    s.identify_excitation.minor_loops = 0;
+    s.identify_excitation.rate_frequencies_hz = {10.0};
+    s.identify_excitation.rate_cycles = {5};
+    s.identify_excitation.hold_s = 0.25;
   }
 
   void start(daemon::BenchSettings s) {

@@ -5,7 +5,9 @@ under the repository root. It runs with ``config/loopback.toml`` (the simulated 
 stack the README's demo uses) and its socket, logs and models in a temporary folder. The
 identification is shortened through the config, since hystbenchd has no flag for it: no settle
 hold and one 2 Hz major loop instead of three 1 Hz ones (about 30 s instead of 45 s; the
-excitation's other segments are the daemon's).
+excitation's other segments are the daemon's). ``clock="simulated"`` (``hystbenchd --clock``)
+runs it on virtual time: runs tick as fast as they compute, for tests whose figures, not timing,
+are under test.
 """
 
 from __future__ import annotations
@@ -63,7 +65,9 @@ def loopback_config(extra: str = SHORT_IDENTIFY) -> str:
 class Daemon:
     """hystbenchd as a child process in a temporary folder; ``stop()`` ends it (SIGTERM)."""
 
-    def __init__(self, name: str = "hb", config_extra: str = SHORT_IDENTIFY) -> None:
+    def __init__(
+        self, name: str = "hb", config_extra: str = SHORT_IDENTIFY, clock: Optional[str] = None
+    ) -> None:
         binary = hystbenchd_path()
         if not binary.is_file():
             raise unittest.SkipTest(
@@ -89,7 +93,8 @@ class Daemon:
                 str(self.log_dir),
                 "--model-dir",
                 str(self.model_dir),
-            ],
+            ]
+            + (["--clock", clock] if clock else []),
             stdout=self.output,
             stderr=subprocess.STDOUT,
         )

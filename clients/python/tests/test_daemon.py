@@ -1,7 +1,8 @@
 """Every Bench command against a real hystbenchd on the loopback actuator.
 
-Two daemons: one that never gets a model (errors that need its absence, runs without a model,
-uploads), and one that identifies once in setUpClass (about 35 s) for what needs a model.
+Two daemons: one on the wall clock that never gets a model (errors that need its absence, runs
+without a model, uploads, stop and abort of a running run), and one on the simulated clock that
+identifies once in setUpClass for what needs a model (figures, not timing, are under test there).
 """
 
 from __future__ import annotations
@@ -58,6 +59,8 @@ class WithoutModelTest(unittest.TestCase):
         self.assertEqual(config["loop"]["rate_hz"], RATE_HZ)
         self.assertEqual(config["daemon"]["socket_path"], self.daemon.socket)
         self.assertEqual(config["identify"]["settle_s"], 0.0)
+        self.assertEqual(config["loop"]["clock"], "wall")
+        self.assertEqual(status["loop"]["clock"], "wall")
         models = self.bench.model_list()
         self.assertEqual(models["models"], [])
         self.assertEqual(models["folder"], str(self.daemon.model_dir))
@@ -218,7 +221,7 @@ class WithModelTest(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls) -> None:
-        cls.daemon = _support.Daemon("hbpy-b")
+        cls.daemon = _support.Daemon("hbpy-b", clock="simulated")
         cls.progress = []
         try:
             with cls.daemon.bench() as bench:
@@ -243,6 +246,11 @@ class WithModelTest(unittest.TestCase):
         self.assertEqual(r["kind"], "identify")
         self.assertEqual(r["model"]["type"], "mpi")
         self.assertEqual(r["verification"]["end"], "completed")
+        # Virtual time: every sample logged, no lateness.
+        self.assertEqual((r["clock"], r.clock), ("simulated", "simulated"))
+        self.assertEqual(r["verification"]["clock"], "simulated")
+        self.assertEqual((r["dropped"], r["overruns"]), (0, 0))
+        self.assertEqual(self.bench.status()["loop"]["clock"], "simulated")
         labels = {what for _, what in self.progress}
         self.assertIn("identify", labels)
         self.assertTrue(any(w.startswith("fitting: ") for w in labels), labels)

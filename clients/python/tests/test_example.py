@@ -1,4 +1,4 @@
-"""examples/identify_sweep_track.py --quick against its own hystbenchd (about 40 s)."""
+"""examples/identify_sweep_track.py --quick against its own hystbenchd on the simulated clock."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ EXAMPLE = _support.REPO_ROOT / "examples" / "identify_sweep_track.py"
 
 class ExampleTest(unittest.TestCase):
     def test_identify_sweep_track_quick(self) -> None:
-        daemon = _support.Daemon("hbpy-ex")
+        daemon = _support.Daemon("hbpy-ex", clock="simulated")
         self.addCleanup(daemon.stop)
         env = dict(os.environ, PYTHONPATH=str(_support.SRC_DIR))
         env.pop("HYSTBENCH_SOCKET", None)

@@ -1,5 +1,6 @@
 #include "details/toml_json.hpp"
 
+#include <cstdint>
 #include <sstream>
 
 namespace hystbench::daemon::details {
@@ -31,8 +32,12 @@ nlohmann::json toml_node_to_json(const toml::node& node) {
     }
     case toml::node_type::string:
       return node.as_string()->get();
-    case toml::node_type::integer:
-      return node.as_integer()->get();
+    case toml::node_type::integer: {
+      // A non-negative integer as unsigned, so a reader that wants one (a seed) takes it.
+      const std::int64_t v = node.as_integer()->get();
+      if (v >= 0) return static_cast<std::uint64_t>(v);
+      return v;
+    }
     case toml::node_type::floating_point:
       return node.as_floating_point()->get();
     case toml::node_type::boolean:

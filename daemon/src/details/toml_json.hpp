@@ -7,8 +7,8 @@
 
 namespace hystbench::daemon::details {
 
-/// Tables -> objects, arrays -> arrays, integers -> int64, floats -> double, booleans, and
-/// dates / times / date-times -> their TOML (ISO 8601) text.
+/// Tables -> objects, arrays -> arrays, integers -> uint64 (>= 0) or int64, floats -> double,
+/// booleans, and dates / times / date-times -> their TOML (ISO 8601) text.
 nlohmann::json toml_node_to_json(const toml::node& node);
 
 /// "table", "array", "string", "integer", "float", "boolean", "date", "time", "date-time".

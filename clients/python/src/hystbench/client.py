@@ -60,8 +60,14 @@ class RunResult(dict):
     run without a fit error; ``check()`` raises ``RunEndedError`` otherwise. Common keys:
     ``run_id``, ``kind``, ``samples``, ``log`` (the run log's path on the daemon's machine),
     ``rms_error_um`` / ``max_error_um`` / ``*_percent`` (tracking error; % of ``range_um``),
-    ``model`` and ``verification`` (identify).
+    ``model`` and ``verification`` (identify), ``loop`` (timing) and ``clock``.
     """
+
+    @property
+    def clock(self) -> str:
+        """The loop's clock the run was timed by: ``wall``, or ``simulated`` (virtual time: no
+        wake latency, no overruns, every sample logged; ``[loop] clock`` in the daemon's config)."""
+        return str(self.get("clock", "wall"))
 
     @property
     def end(self) -> str:
@@ -377,8 +383,9 @@ class Bench:
 
     def status(self) -> Dict[str, Any]:
         """State (``idle``, ``preparing``, ``running``, ``finalizing``, ``fault``, ...), active run,
-        model, loop timing, output (``output_v`` [V], ``position_um`` [µm]) and the last run's
-        result (``last_result``)."""
+        model, loop (``rate_hz``, ``clock``: ``wall`` or ``simulated``, real-time setup, timing),
+        output (``output_v`` [V], ``position_um`` [µm]) and the last run's result
+        (``last_result``)."""
         return self.request("status")
 
     def config_get(self) -> Dict[str, Any]:

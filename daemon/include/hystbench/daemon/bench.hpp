@@ -35,6 +35,7 @@ struct RunContext;
 struct BuiltRun;
 struct RunPreparation;
 struct RunResult;
+struct PlanCache;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -140,9 +141,14 @@ class Bench {
   enum class RunPhase { kIdle, kPreparing, kRunning, kFinalizing };
   void set_phase(RunPhase phase);
   /// The supervisor thread: finalises each run the loop hands back (woken by the loop's
-  /// events), and emits run.progress every 0.5 s while one runs.
+  /// events), and emits run.progress when a run (or a verification stage) starts and every
+  /// 0.5 s while one runs.
   void supervise();
-  void emit_progress();
+  /// Emits run.progress once for a run or stage not announced yet (supervisor thread).
+  void announce_run();
+  /// run.progress of the active run; `started`: also when the loop no longer (or not yet)
+  /// plays it, with done = 0.
+  void emit_progress(bool started = false);
   bool preparation_queued() const;
   /// Runs the queued preparation (supervisor thread), then hands the run to the loop; a
   /// cancelled one ends unplayed.
@@ -167,7 +173,9 @@ class Bench {
                                                   const nlohmann::json& fit_request);
   /// Adopts the chosen candidate and delivers the identify result.
   void finish_identify();
-  std::unique_ptr<SampleLogWriter> open_log(const std::string& run_id, nlohmann::json header);
+  /// Opens p's log (p.log) with `header`; the header's run and p's result name the loop's clock.
+  /// Throws CommandError log_error.
+  void open_log(RunProgram& p, nlohmann::json header);
   std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
 
@@ -180,6 +188,8 @@ class Bench {
   mutable std::mutex mutex_;  // guards everything below
   std::optional<compensation::ModelFile> model_;
   std::string model_path_;
+  std::uint64_t model_generation_ = 0;         // bumped with every change of model_
+  std::shared_ptr<details::PlanCache> plans_;  // track's last plan (its own lock)
   nlohmann::json last_result_;
   nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
   RunPhase phase_ = RunPhase::kIdle;
@@ -192,6 +202,7 @@ class Bench {
   std::unique_ptr<details::RunPreparation> preparation_;
   RunEnd cancel_preparation_ = RunEnd::kCompleted;
   std::unique_ptr<IdentifySession> session_;  // supervisor thread only
+  std::string announced_run_;                 // run_id/stage last announced; supervisor only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;
   UploadStore uploads_;  // its own lock

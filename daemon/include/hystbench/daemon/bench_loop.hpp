@@ -13,6 +13,19 @@
 // Faults (driver error, non-finite or stuck measurement, overrun budget, a limit hit with fatal
 // limits): the driver goes to its safe state in the same tick, the run ends with the reason and the
 // loop stays in kFault, writing the safe output, until reset_fault().
+//
+// Clocks (BenchLoopOptions::clock). kWall: every tick waits for its deadline on CLOCK_MONOTONIC,
+// sample times are the deadlines and wake-ups, late ticks count as overruns. kSimulated, for a
+// plant that follows a virtual clock (the loopback's simulated actuator): time is the tick count
+// times the period, and a sample's scheduled and wake-up times are both that virtual time, so logs
+// have the same columns and time grid as on the wall clock. During a run the loop ticks without
+// sleeping, each tick as soon as the previous one is computed; while idle (no run, or in kFault)
+// ticks stay paced on the wall clock, so an idle daemon does not burn a core and the idle plant
+// evolves at a real one's pace while the bench fits or plans. Wake latency is 0 and there are no
+// overruns and no overrun faults (lateness means nothing there); execution time per tick is still
+// measured on CLOCK_MONOTONIC. No SCHED_FIFO (a free-running FIFO thread would starve the rest of
+// the process on its CPU) and no memory lock. A full sample-log ring makes the loop wait for room
+// (a short sleep, not real time) instead of dropping the record: every sample is logged.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -28,8 +41,14 @@
 
 namespace hystbench::daemon {
 
+/// What the loop's time is (see the header comment).
+enum class LoopClock { kWall, kSimulated };
+/// "wall" | "simulated".
+const char* to_string(LoopClock clock) noexcept;
+
 struct BenchLoopOptions {
   double rate_hz = 10000.0;  ///< [1, 20000]
+  LoopClock clock = LoopClock::kWall;
   RealtimeOptions realtime;
   /// Overruns tolerated in one run: overrun number overrun_budget + 1 faults it (0 = the first).
   std::uint64_t overrun_budget = 100;
@@ -55,7 +74,8 @@ class BenchLoop {
   BenchLoop(const BenchLoop&) = delete;
   BenchLoop& operator=(const BenchLoop&) = delete;
 
-  /// Starts the loop thread and returns what its real-time setup achieved.
+  /// Starts the loop thread and returns what its real-time setup achieved (with the simulated
+  /// clock: no SCHED_FIFO and no memory lock, whatever options.realtime asks).
   RealtimeReport start();
   /// Ends any run (aborted), drives the safe output, joins the thread. Idempotent.
   void shutdown();
@@ -114,11 +134,21 @@ class BenchLoop {
   const BenchLoopOptions& options() const noexcept { return options_; }
 
  private:
-  void run();
   std::int64_t now_ns() const noexcept;
+  /// The wall-clock loop: sleeps to each deadline.
+  void run_wall();
+  /// The simulated-clock loop: free-running ticks during a run, paced ones while idle.
+  void run_simulated();
+  /// A run is active or waiting to be picked up by the next tick (loop thread).
+  bool run_in_play() const noexcept {
+    return active_ != nullptr || pending_.load(std::memory_order_acquire) != nullptr;
+  }
   void tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
   void run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
   void idle_tick() noexcept;
+  /// Pushes the record to the run's log: a full ring drops it on the wall clock and waits for
+  /// room on the simulated clock.
+  void log_sample(RunProgram& p, const SampleRecord& rec) noexcept;
   void end_run(RunEnd end, const char* reason) noexcept;
   void fault(const char* reason) noexcept;
   /// Bumps events() and wakes wait_event(): one non-blocking system call.
@@ -153,6 +183,8 @@ class BenchLoop {
   std::int64_t period_ns_ = 100000;
   bool overran_ = false;
   bool stepped_ = false;  // driven by step(): the injected clock applies
+  bool simulated_ = false;
+  std::int64_t exec_start_ns_ = 0;  // CLOCK_MONOTONIC (or step()'s clock) when this tick began
 };
 
 }  // namespace hystbench::daemon

@@ -6,11 +6,16 @@
 // (prefixed with "<file>:<line>: " when it comes from load_config()).
 //
 //   [daemon]   socket_path, log_dir, model_dir, log_level
-//   [loop]     rate_hz, realtime, priority, cpu, lock_memory, overrun_budget, ring_capacity
+//   [loop]     rate_hz, clock, realtime, priority, cpu, lock_memory, overrun_budget, ring_capacity,
+//              stuck_sensor_ms, stuck_sensor_span, feedforward_bandwidth_hz
 //   [limits]   u_min, u_max, slew_v_per_s, fatal_on_limit, y_min, y_max
 //   [driver]   type, plus one sub-table per driver ([driver.loopback], [driver.modbus], ...)
 //              kept as JSON and validated by the driver itself
-//   [actuator] the simulated actuator's truth, kept as JSON for the simulator to validate
+//   [actuator] the simulated actuator's truth (loopback driver only; also
+//              [driver.loopback.actuator]), checked with sim::from_json: its errors name
+//              "actuator.<key path>" and the line of the offending node (of its table when the
+//              key is missing). A non-empty [actuator] with another driver is an error (it would
+//              do nothing).
 //   [identify] model, operators, dead_zones, amplitude_v, offset_v, frequency_hz, cycles,
 //              precondition_s, settle_s, heldout_fraction, fit_rate_hz
 //   [pid]      kp, ki, kd, bandwidth_hz, output_filter_hz, derivative_filter_hz, u_fb_min,
@@ -52,10 +57,13 @@ struct DaemonSection {
 
 struct LoopSection {
   double rate_hz = 10000.0;  ///< [1, 20000] Hz
-  bool realtime = true;      ///< try SCHED_FIFO (degraded, not fatal, when not permitted)
-  int priority = 80;         ///< SCHED_FIFO priority [1, 99]
-  int cpu = -1;              ///< CPU to pin the loop thread to; -1 = none; [0, 1023]
-  bool lock_memory = true;   ///< mlockall(MCL_CURRENT | MCL_FUTURE)
+  /// "wall": ticks on CLOCK_MONOTONIC deadlines. "simulated" (loopback driver only): virtual time,
+  /// one period per tick, runs tick as fast as they compute (bench_loop.hpp).
+  std::string clock = "wall";
+  bool realtime = true;     ///< try SCHED_FIFO (degraded, not fatal, when not permitted)
+  int priority = 80;        ///< SCHED_FIFO priority [1, 99]
+  int cpu = -1;             ///< CPU to pin the loop thread to; -1 = none; [0, 1023]
+  bool lock_memory = true;  ///< mlockall(MCL_CURRENT | MCL_FUTURE)
   /// Overruns tolerated per run, counted in total (not consecutively): the run ends with a
   /// fault at overrun number overrun_budget + 1. 0 = the first overrun ends it. [0, 1e9]
   std::uint64_t overrun_budget = 100;
@@ -142,6 +150,10 @@ struct DaemonConfig {
   PidSection pid;
 };
 
+/// Why `clock` cannot run with `driver_type` (empty when it can): the simulated clock needs the
+/// loopback driver, the only plant that follows a virtual clock.
+std::string clock_conflict(std::string_view clock, std::string_view driver_type);
+
 /// Parses TOML text. `origin` (a file name) prefixes messages as "origin:line: ".
 DaemonConfig parse_config(std::string_view toml_text, std::string_view origin = {});
 /// Reads and parses a file; a file that cannot be read is a ConfigError too.
@@ -151,8 +163,9 @@ DaemonConfig load_config(const std::filesystem::path& path);
 /// (for config.get); unset optionals are null.
 nlohmann::json to_json(const DaemonConfig& config);
 
-/// A whole TOML document as JSON: tables -> objects, arrays -> arrays, integers -> int64,
-/// floats -> double, dates and times -> ISO 8601 strings. Throws ConfigError on bad syntax.
+/// A whole TOML document as JSON: tables -> objects, arrays -> arrays, integers -> uint64 (>= 0)
+/// or int64, floats -> double, dates and times -> ISO 8601 strings. Throws ConfigError on bad
+/// syntax.
 nlohmann::json toml_to_json(std::string_view toml_text);
 
 }  // namespace hystbench::daemon

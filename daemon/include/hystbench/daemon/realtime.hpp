@@ -49,9 +49,12 @@ struct RealtimeReport {
   RealtimeStatus scheduling;  ///< ok also when not requested
   RealtimeStatus affinity;
   RealtimeStatus memory;
+  /// The loop runs on the simulated clock: SCHED_FIFO and the memory lock were not taken.
+  bool simulated_clock = false;
   bool degraded() const noexcept { return !scheduling.ok() || !affinity.ok() || !memory.ok(); }
   /// One line for the log, e.g. "real-time: SCHED_FIFO 80 ok, cpu 3 ok, mlockall: Operation
-  /// not permitted (running degraded)". Allocates.
+  /// not permitted (running degraded)", or with the simulated clock "real-time: simulated clock:
+  /// SCHED_FIFO and memory lock not taken (the loop runs free during runs)". Allocates.
   std::string summary(const RealtimeOptions& requested) const;
 };
 

@@ -77,6 +77,13 @@ class SampleLogWriter {
   /// Loop thread. Real-time safe (copies into the ring: no allocation, lock or system call).
   /// Returns false and counts a drop when the ring is full or the log is closed.
   bool push(const SampleRecord& record) noexcept;
+  /// As push(), but a full ring or a closed log is not counted as a drop: the caller tries again
+  /// (the simulated clock's back-pressure) or gives up with push(). Real-time safe.
+  bool try_push(const SampleRecord& record) noexcept {
+    return !closed_.load(std::memory_order_relaxed) && ring_.try_push(record);
+  }
+  /// True once close() has begun: nothing pushed from then on reaches the file.
+  bool closed() const noexcept { return closed_.load(std::memory_order_relaxed); }
 
   /// Stops the writer thread after it has written everything pushed before the call, flushes
   /// and syncs the file. Call after the loop has stopped pushing. Idempotent.
