@@ -374,27 +374,32 @@ TEST(Config, TheActuatorTableIsCheckedWithFileLineAndKey) {
        "a.toml:2: actuator.creep.enabled: expected true or false, got \"yes\""},
       {"[actuator.creep]\nenable = true\n", "actuator.creep.enable", 2,
        "a.toml:2: actuator.creep.enable: unknown key (valid: enabled, "},
-      {"[actuator.creep]\nenabled = true\ntime_constants_s = [\n  0.5,\n  5.0,\n  -1.0,\n]\n"
-       "gains_um_per_v = [0.1, 0.1, 0.1]\n",
-       "actuator.creep.time_constants_s[2]", 6,
-       "a.toml:6: actuator.creep.time_constants_s[2]: must be > 0"},
-      {"[actuator.creep]\nenabled = true\ngains_um_per_v = [0.1, 0.2, 0.3, 0.4, 0.5]\n",
-       "actuator.creep.gains_um_per_v", 3,
-       "a.toml:3: actuator.creep.gains_um_per_v: has 5 entries, creep.time_constants_s has 4"},
+      {"[actuator.dynamics]\nenabled = true\nnatural_frequencies_hz = [\n  3000.0,\n  -1.0,\n]\n",
+       "actuator.dynamics.natural_frequencies_hz[1]", 5,
+       "a.toml:5: actuator.dynamics.natural_frequencies_hz[1]: must be > 0"},
+      {"[actuator.dynamics]\nenabled = true\nmode_gains = [0.5, 0.3, 0.2]\n",
+       "actuator.dynamics.mode_gains", 3,
+       "a.toml:3: actuator.dynamics.mode_gains: has 3 entries, dynamics.natural_frequencies_hz "
+       "has 2"},
       // The key at fault is missing (its default does not fit the others): its table's line.
-      {"[actuator]\n\n[actuator.creep]\nenabled = true\ntime_constants_s = [1.0]\n",
-       "actuator.creep.gains_um_per_v", 3,
-       "a.toml:3: actuator.creep.gains_um_per_v: has 4 entries, creep.time_constants_s has 1"},
+      {"[actuator]\n\n[actuator.dynamics]\nenabled = true\nnatural_frequencies_hz = [1000.0]\n",
+       "actuator.dynamics.damping_ratios", 3,
+       "a.toml:3: actuator.dynamics.damping_ratios: has 2 entries, "
+       "dynamics.natural_frequencies_hz has 1"},
+      // A key of another form of its effect: named, not ignored.
+      {"[actuator.creep]\nenabled = true\n\ngains_um_per_v = [0.1]\n",
+       "actuator.creep.gains_um_per_v", 4,
+       "a.toml:4: actuator.creep.gains_um_per_v: applies to creep.law = \"input_lags\""},
       {"[actuator.input]\nmin_v = 10.0\nmax_v = 5.0\n", "actuator.input.max_v", 3,
        "a.toml:3: actuator.input.max_v: must be greater than input.min_v"},
       {"[actuator.delay]\nenabled = true\ndelay_s = 2.0\n", "actuator.delay.delay_s", 3,
        "a.toml:3: actuator.delay.delay_s: must be in [0, 1] s"},
-      {"[actuator]\ncreep = { enabled = true, gains_um_per_v = [1.0] }\n",
-       "actuator.creep.gains_um_per_v", 2, "a.toml:2: actuator.creep.gains_um_per_v: has 1 "},
+      {"[actuator]\ndynamics = { enabled = true, mode_gains = [1.0] }\n",
+       "actuator.dynamics.mode_gains", 2, "a.toml:2: actuator.dynamics.mode_gains: has 1 "},
       // The loopback driver's own table, when it names the actuator.
-      {"[driver.loopback.actuator.dynamics]\nenabled = true\ndamping_ratio = 0.0\n",
-       "driver.loopback.actuator.dynamics.damping_ratio", 3,
-       "a.toml:3: driver.loopback.actuator.dynamics.damping_ratio: must be > 0"},
+      {"[driver.loopback.actuator.sensor_filter]\nenabled = true\ndamping_ratio = 0.0\n",
+       "driver.loopback.actuator.sensor_filter.damping_ratio", 3,
+       "a.toml:3: driver.loopback.actuator.sensor_filter.damping_ratio: must be > 0"},
       // Another driver simulates nothing: a table there would do nothing.
       {"[driver]\ntype = \"modbus\"\n[actuator.creep]\nenabled = false\n", "actuator", 3,
        "a.toml:3: actuator: only the loopback driver simulates an actuator, driver.type is "

@@ -309,8 +309,8 @@ TEST(HystbenchdCheckConfig, ShowsTheClockAndRefusesWhatCannotRun) {
   const fs::path modbus = dir / "modbus.toml";
   std::ofstream(modbus) << "[driver]\ntype = \"modbus\"\n";
   const fs::path bad = dir / "bad.toml";
-  std::ofstream(bad) << "[loop]\nclock = \"simulated\"\n\n[actuator.creep]\nenabled = true\n"
-                        "gains_um_per_v = [0.1, 0.2]\n";
+  std::ofstream(bad) << "[loop]\nclock = \"simulated\"\n\n[actuator.dynamics]\nenabled = true\n"
+                        "mode_gains = [0.1, 0.2]\n";
 
   auto [status, out] = hystbenchd("--check-config -c " + loopback.string());
   ASSERT_EQ(status, 0) << out;
@@ -328,7 +328,7 @@ TEST(HystbenchdCheckConfig, ShowsTheClockAndRefusesWhatCannotRun) {
 
   std::tie(status, out) = hystbenchd("--check-config -c " + bad.string());
   EXPECT_EQ(status, 2) << out;
-  EXPECT_NE(out.find(bad.string() + ":6: actuator.creep.gains_um_per_v: has 2 entries"),
+  EXPECT_NE(out.find(bad.string() + ":6: actuator.dynamics.mode_gains: must sum to 1"),
             std::string::npos)
       << out;
   fs::remove_all(dir);

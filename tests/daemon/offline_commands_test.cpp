@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -295,8 +296,12 @@ TEST_F(OfflineCommandsTest, RateDependentFitIsNeverWorseThanTheModifiedPiItConta
 // switching front whose lag grows with the square root of the rate: neither of the rate-dependent
 // PI's laws (weights linear in du/dt or in |du/dt|) gains on it, and the fit returns the modified
 // PI it contains, rate-free, no worse than `fit --model mpi` (docs/measurements.md has the
-// figures). Seconds: a 374 000-sample record.
+// figures). Opt-in (HYSTBENCH_LONG_TESTS=1): 45 s for the 374 000-sample record; by default
+// RateDependentFitIsNeverWorseThanTheModifiedPiItContains checks the nesting on a 1 kHz record.
 TEST_F(OfflineCommandsTest, TheDaemonsRateDependentIdentifyRecordFitsWithTheDefaults) {
+  if (std::getenv("HYSTBENCH_LONG_TESTS") == nullptr) {
+    GTEST_SKIP() << "set HYSTBENCH_LONG_TESTS=1 for the fit of the daemon's 374 000-sample record";
+  }
   hs::SimulatedActuatorConfig truth;
   truth.rate_dependence.enabled = true;
   hs::IdentificationExcitationOptions o;
