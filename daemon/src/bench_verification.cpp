@@ -6,6 +6,8 @@
 #include <filesystem>
 
 #include "hystbench/compensation/error_metrics.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/fit_families.hpp"
 #include "hystbench/daemon/identification_fit.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
@@ -141,6 +143,51 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
   }
 }
 
+void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
+                             std::span<const double> u, std::span<const double> y,
+                             const hc::FitOptions& options) {
+  if (candidates.empty()) return;
+  const hc::FitResult& chosen = candidates.front().fit;
+  const auto* rpi = dynamic_cast<const hc::RateDependentPiModel*>(&chosen.model.hysteresis());
+  if (rpi == nullptr) return;
+  const hc::RateDependentPiParameters& law = rpi->parameters();
+  if (std::all_of(law.rate_coefficients.begin(), law.rate_coefficients.end(),
+                  [](double c) { return c == 0.0; })) {
+    return;
+  }
+  hc::FitOptions o = options;
+  o.kind = hc::ModelKind::kModifiedPi;
+  o.play_thresholds = law.base.play.thresholds;
+  o.dead_zones = chosen.dead_zones;
+  o.delay_samples = 0;  // the record is already shifted by the delay chosen in ticks
+  if (options.progress) {
+    o.progress = [&options](double f, const std::string& what) {
+      options.progress(f, "without the rate law: " + what);
+    };
+  }
+  try {
+    hc::FitResult fit = hc::fit_model(t, u, y, o);
+    const auto* mpi = dynamic_cast<const hc::ModifiedPiModel*>(&fit.model.hysteresis());
+    if (mpi == nullptr) return;  // e.g. a fall-back to the classical PI
+    hc::RateDependentPiParameters free = law;
+    free.base = mpi->parameters();
+    free.rate_coefficients.assign(free.base.play.thresholds.size(), 0.0);
+    hc::ActuatorModel model(
+        std::make_unique<hc::RateDependentPiModel>(std::move(free), fit.model.sample_period()));
+    model.set_creep(fit.model.creep());
+    model.set_dynamics(fit.model.dynamics());
+    model.configure(fit.model.sample_period());
+    model.units = fit.model.units;
+    model.input_min = fit.model.input_min;
+    model.input_max = fit.model.input_max;
+    fit.model = std::move(model);
+    fit.notes.push_back("the rate law left out: the modified PI it contains, refitted");
+    candidates.push_back({std::move(fit), json(), "rpi-rate-free"});
+  } catch (const std::exception&) {
+    // The rate law stands alone; its own fit succeeded.
+  }
+}
+
 void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
   json fit_request;
   {
@@ -195,6 +242,7 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
     // One family: the delay search's fit at the chosen delay is that family's fit.
     session->candidates.push_back(family_candidate(id.fit));
     add_dead_zone_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
+    add_rate_free_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
   } else {
     session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
   }

@@ -2,11 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <vector>
 
 #include "../../daemon/src/identify_session.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 
 namespace hc = hystbench::compensation;
@@ -201,4 +203,59 @@ TEST(IdentificationFit, TheDeadZoneOrderIsVerifiedAgainstItsNeighbour) {
   std::vector<hd::IdentifyCandidate> two(2, candidates[0]);
   hd::add_dead_zone_neighbour(two, r.t, r.u, r.y, o);
   EXPECT_EQ(two.size(), 2u);
+}
+
+// identify --model rpi whose fit kept a rate law: the same plays and dead zones without the law
+// (the nested modified PI refitted, an rpi with zero rate coefficients) joins the candidates, so
+// that the verification, not the held-out error alone, decides whether the law tracks better.
+TEST(IdentificationFit, AKeptRateLawIsVerifiedAgainstTheModelWithoutIt) {
+  const Record pi = delayed_pi_record(0);
+  hc::RateDependentPiParameters p;
+  p.base.play.thresholds = hc::uniform_thresholds(8, 75.0);
+  for (std::size_t i = 0; i < 8; ++i) p.base.play.weights.push_back(i == 0 ? 0.16 : 0.02);
+  p.base.dead_zone.thresholds = {0.0};
+  p.base.dead_zone.weights = {1.0};
+  p.rate_coefficients.assign(8, 0.0);
+  for (std::size_t i = 1; i < 8; ++i) p.rate_coefficients[i] = 2e-6 * static_cast<double>(i);
+  p.max_rate = 5000.0;
+  p.rate_law = hc::RateLaw::kMagnitude;
+  hc::RateDependentPiModel plant(p, kDt);
+  plant.reset(pi.u.front());
+  std::vector<double> y;
+  for (const double u : pi.u) y.push_back(plant.step(u));
+  const hd::AveragedRecord r = hd::block_average(pi.u, y, kDt, kBlock, 0);
+  hc::FitOptions o;
+  o.kind = hc::ModelKind::kRateDependentPi;
+  o.operators = 8;
+  o.dead_zones = 0;
+  o.heldout_fraction = 0.1;
+  auto candidates = hd::fit_identify_candidates(r.t, r.u, r.y, o);
+  ASSERT_EQ(candidates.size(), 1u);
+  const auto* law =
+      dynamic_cast<const hc::RateDependentPiModel*>(&candidates[0].fit.model.hysteresis());
+  ASSERT_NE(law, nullptr);
+  const auto& c = law->parameters().rate_coefficients;
+  ASSERT_TRUE(std::any_of(c.begin(), c.end(), [](double v) { return v != 0.0; }))
+      << "the fit kept no rate law on a record of one";
+  hd::add_rate_free_neighbour(candidates, r.t, r.u, r.y, o);
+  ASSERT_EQ(candidates.size(), 2u);
+  EXPECT_EQ(candidates[1].label, "rpi-rate-free");
+  EXPECT_TRUE(candidates[1].verification.is_null());
+  const auto* free =
+      dynamic_cast<const hc::RateDependentPiModel*>(&candidates[1].fit.model.hysteresis());
+  ASSERT_NE(free, nullptr);
+  EXPECT_EQ(free->parameters().base.play.thresholds, law->parameters().base.play.thresholds);
+  for (const double v : free->parameters().rate_coefficients) EXPECT_EQ(v, 0.0);
+  EXPECT_EQ(free->parameters().rate_law, law->parameters().rate_law);
+  // The law's fit predicts its own record better than the model without it.
+  EXPECT_LT(candidates[0].fit.heldout.rmse, candidates[1].fit.heldout.rmse);
+
+  // A rate-free fit, or another family, gets no neighbour.
+  std::vector<hd::IdentifyCandidate> again(1, candidates[1]);
+  hd::add_rate_free_neighbour(again, r.t, r.u, r.y, o);
+  EXPECT_EQ(again.size(), 1u);
+  o.kind = hc::ModelKind::kModifiedPi;
+  auto mpi = hd::fit_identify_candidates(r.t, r.u, r.y, o);
+  hd::add_rate_free_neighbour(mpi, r.t, r.u, r.y, o);
+  EXPECT_EQ(mpi.size(), 1u);
 }
