@@ -7,6 +7,7 @@
 # HYSTBENCH_REPEAT_CONFIG=FILE runs another daemon config (default config/loopback.toml).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+scripts/deps.sh measure
 models=("$@")
 [ ${#models[@]} -gt 0 ] || models=(mpi mpi cpi mpi)
 bin="${HYSTBENCH_BIN:-build/bin}"

@@ -1,0 +1,143 @@
+#!/usr/bin/env bash
+# The loopback figures of docs/measurements.md, through the commands a user types with their
+# defaults, on the simulated clock (the actuator sees the same samples as on the wall clock):
+#   default    identify (held-out, verified), then a 1 Hz triangle over 80 % of the range with
+#              none / inverse / inverse+pid (5 periods, the first unscored)
+#   repeat     identify three times in one daemon, each followed by the 1 Hz triangle (inverse)
+#   rate       rate dependence on (config/loopback-rate-dependent.toml): identify --model mpi,
+#              rpi and auto, each followed by a sweep 1-200 Hz with inverse and inverse+pid
+#   delay      the delay on: identify, diagnose its log with its model, load the extended model,
+#              sines at 100 / 200 / 500 Hz (20 periods) with inverse and inverse+pid
+#   campaign   wall time of identify + a 7-frequency sweep (inverse)
+# Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
+# Prints markdown tables; logs and models stay in the folder it names at the end.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin="${HYSTBENCH_BIN:-build/bin}"
+sections=("$@")
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate delay campaign)
+work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
+mkdir -p "$work"
+scripts/deps.sh measure
+
+daemon_pid=
+stop_daemon() {
+  if [ -n "$daemon_pid" ]; then
+    kill "$daemon_pid" 2>/dev/null || true
+    wait "$daemon_pid" 2>/dev/null || true
+  fi
+  daemon_pid=
+}
+trap stop_daemon EXIT
+# start_daemon NAME CONFIG [EXTRA_TOML]: a daemon of its own folder on the simulated clock.
+start_daemon() {
+  local dir="$work/$1"
+  mkdir -p "$dir"
+  cp "$2" "$dir/config.toml"
+  [ -z "${3:-}" ] || printf '%s\n' "$3" >>"$dir/config.toml"
+  sock="$dir/s.sock"
+  "$bin/hystbenchd" --config "$dir/config.toml" --clock simulated --socket "$sock" \
+    --log-dir "$dir/logs" --model-dir "$dir/models" >"$dir/daemon.log" 2>&1 &
+  daemon_pid=$!
+  for _ in $(seq 200); do
+    [ -S "$sock" ] && "$bin/hystbench" --socket "$sock" status >/dev/null 2>&1 && return 0
+    sleep 0.05
+  done
+  cat "$dir/daemon.log" >&2
+  exit 1
+}
+hb() { "$bin/hystbench" --socket "$sock" "$@"; }
+f3='def f: if . == null then "-" else (. * 1000 | round / 1000 | tostring) end;'
+
+identify_row() {  # identify_row LABEL JSON
+  jq -rn --argjson id "$2" --arg l "$1" "$f3"'
+    "| \($l) | \($id.model.type // "?") \($id.model.operators // "?")/\($id.model.dead_zones // "?") | \($id.model.heldout.rmse_percent | f) | \(if $id.verification then "\($id.verification.rms_error_percent | f) / \($id.verification.max_error_percent | f)" else "-" end) |"'
+}
+track_row() {  # track_row LABEL JSON
+  jq -rn --argjson t "$2" --arg l "$1" "$f3"'
+    "| \($l) | \($t.rms_error_percent | f) | \($t.max_error_percent | f) | \($t.end) |"'
+}
+triangle() { hb track --reference triangle --frequency 1 --periods 5 --compensator "$1" --wait --json; }
+
+for section in "${sections[@]}"; do
+  case "$section" in
+    default)
+      start_daemon default config/loopback.toml
+      echo "### Default loopback: identify, then a 1 Hz triangle over 80 % of the range"
+      echo "| identify | model | held-out rms % | verified rms / max % |"
+      echo "| --- | --- | --- | --- |"
+      identify_row mpi "$(hb identify --wait --json || true)"
+      echo
+      echo "| compensator | rms % | max % | end |"
+      echo "| --- | --- | --- | --- |"
+      for c in none inverse inverse+pid; do track_row "$c" "$(triangle "$c" || true)"; done
+      echo
+      stop_daemon
+      ;;
+    repeat)
+      start_daemon repeat config/loopback.toml
+      echo "### Identify three times in one daemon, each followed by the 1 Hz triangle (inverse)"
+      echo "| identify | model | held-out rms % | verified rms / max % | tracking rms % | tracking max % |"
+      echo "| --- | --- | --- | --- | --- | --- |"
+      for i in 1 2 3; do
+        id=$(hb identify --wait --json || true)
+        tr=$(triangle inverse || true)
+        echo "$(identify_row "$i" "$id" | sed 's/ |$//') | $(jq -rn --argjson t "$tr" "$f3"'"\($t.rms_error_percent | f) | \($t.max_error_percent | f) |"')"
+      done
+      echo
+      stop_daemon
+      ;;
+    rate)
+      start_daemon rate config/loopback-rate-dependent.toml
+      echo "### Rate dependence on: identify --model M, then a sweep (rms % of range)"
+      for m in mpi rpi auto; do
+        id=$(hb identify --model "$m" --wait --json || true)
+        echo
+        echo "identify --model $m: $(identify_row "$m" "$id")"
+        echo
+        hb sweep --frequencies 1,5,10,19,50,100,200 --compensators inverse,inverse+pid || true
+      done
+      echo
+      stop_daemon
+      ;;
+    delay)
+      start_daemon delay config/loopback.toml $'[actuator.delay]\nenabled = true'
+      echo "### Delay on: identify, diagnose its log, load the extended model, sines"
+      id=$(hb identify --wait --json || true)
+      identify_row identify "$id"
+      log=$(jq -r '.log' <<<"$id")
+      model="$work/delay/models/$(jq -r '.model.file // empty' <<<"$id")"
+      [ -f "$model" ] || model=$(ls -t "$work"/delay/models/*.json | head -1)
+      hb diagnose "$log" --model "$model" --save-extended "$work/delay/extended.json" |
+        grep -E "^(cause|named|verdict|extended)" | head -5 || true
+      hb model load "$work/delay/extended.json" >/dev/null
+      echo
+      echo "| sine | compensator | rms % | max % | end |"
+      echo "| --- | --- | --- | --- | --- |"
+      for f in 100 200 500; do
+        for c in inverse inverse+pid; do
+          t=$(hb track --reference sine --frequency "$f" --periods 20 --compensator "$c" --wait \
+            --json || true)
+          track_row "$f Hz | $c" "$t"
+        done
+      done
+      echo
+      stop_daemon
+      ;;
+    campaign)
+      start_daemon campaign config/loopback.toml
+      echo "### Wall time of identify + a 7-frequency sweep on the simulated clock"
+      start=$(date +%s.%N)
+      hb identify --wait --json >/dev/null || true
+      hb sweep --frequencies 1,5,10,19,50,100,200 --compensators inverse >/dev/null || true
+      end=$(date +%s.%N)
+      printf 'identify + sweep: %.1f s of wall time\n\n' "$(echo "$end - $start" | bc -l)"
+      stop_daemon
+      ;;
+    *)
+      echo "measure-loopback: unknown section '$section' (default repeat rate delay campaign)" >&2
+      exit 2
+      ;;
+  esac
+done
+echo "(logs and models in $work)"
