@@ -7,21 +7,12 @@
 #include <random>
 
 #include "hystbench/sim/simulated_actuator.hpp"
+#include "support/every_effect_on.hpp"
 #include "support/random_models.hpp"
 
 namespace hs = hystbench::sim;
 
 namespace {
-
-hs::SimulatedActuatorConfig every_effect_on() {
-  hs::SimulatedActuatorConfig c;
-  c.rate_dependence.enabled = true;
-  c.delay.enabled = true;
-  c.thermal_drift.enabled = true;
-  c.thermal_drift.shape = hs::DriftShape::kRandomWalk;
-  c.displacement_saturation.enabled = true;
-  return c;
-}
 
 void actuator_step(benchmark::State& state, const hs::SimulatedActuatorConfig& config) {
   hs::SimulatedActuator a(config, 1e-4);
@@ -39,6 +30,6 @@ void actuator_step(benchmark::State& state, const hs::SimulatedActuatorConfig& c
 }  // namespace
 
 BENCHMARK_CAPTURE(actuator_step, default_truth, hs::SimulatedActuatorConfig{});
-BENCHMARK_CAPTURE(actuator_step, every_effect_on, every_effect_on());
+BENCHMARK_CAPTURE(actuator_step, every_effect_on, hystbench::testing::every_effect_on());
 BENCHMARK_CAPTURE(actuator_step, modified_pi_truth,
                   hs::SimulatedActuatorConfig::modified_pi_truth());

@@ -5,19 +5,14 @@
 #include "hystbench/sim/signal_generator.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 #include "support/allocation_counter.hpp"
+#include "support/every_effect_on.hpp"
 
 using hystbench::test::allocations_during;
 
 namespace hs = hystbench::sim;
 
 TEST(RealTimeSafety, ActuatorStepAndResetDoNotAllocateWithEveryEffectOn) {
-  hs::SimulatedActuatorConfig c;
-  c.rate_dependence.enabled = true;
-  c.delay.enabled = true;
-  c.thermal_drift.enabled = true;
-  c.thermal_drift.shape = hs::DriftShape::kRandomWalk;
-  c.displacement_saturation.enabled = true;
-  hs::SimulatedActuator a(c, 1e-4);
+  hs::SimulatedActuator a(hystbench::testing::every_effect_on(), 1e-4);
   double sink = 0.0;
   const long n = allocations_during([&] {
     for (int k = 0; k < 20000; ++k) sink += a.step(75.0 + 70.0 * std::sin(k * 1e-3));
