@@ -43,6 +43,12 @@ namespace {
 
 constexpr double kMaxRatio = 0.8;  // extended / baseline rms on the second record
 
+// The bound on the second record's ratio for a named cause. A drift is fitted and removed, not
+// carried into the extended model (a drift does not repeat), so on another record the extended
+// model gains only what the drift-free refit gains, little where the drift was small: it must
+// not be worse.
+double max_ratio(hc::Cause named) { return named == hc::Cause::kDrift ? 1.0 : kMaxRatio; }
+
 double uniform(std::mt19937_64& rng, double lo, double hi) {
   return std::uniform_real_distribution<double>(lo, hi)(rng);
 }
@@ -314,7 +320,7 @@ void expect_named(const HiddenCase& c) {
   SCOPED_TRACE(name_of(c) + " (" + d.truth + ")\n" + summary(o));
   if (c.cause != hc::Cause::kNone) {
     EXPECT_EQ(o.named, c.cause);
-    EXPECT_LE(o.ratio, kMaxRatio) << "extended / baseline rms on the second record";
+    EXPECT_LE(o.ratio, max_ratio(c.cause)) << "extended / baseline rms on the second record";
     EXPECT_GE(o.gain, 1.2);
   } else if (o.named == hc::Cause::kAsymmetry) {
     // Only the base's shape: what it gains carries over.
@@ -722,7 +728,8 @@ TEST(DiagnosisHiddenEffect, RandomisedSweepConfusionTable) {
       if (ratio_checked) ratios[static_cast<int>(cause)].push_back(o.ratio);
       if (ratio_checked) raw_ratios[static_cast<int>(cause)].push_back(o.raw_ratio);
       if (c.random_walk) walk_ratios.push_back(o.ratio);
-      const bool ok = (o.named == cause || shape_only) && (!ratio_checked || o.ratio <= kMaxRatio);
+      const bool ok =
+          (o.named == cause || shape_only) && (!ratio_checked || o.ratio <= max_ratio(cause));
       // Reported in their own rows, not asserted: random walks, the harder class beyond the
       // causes (a walk's fast part is not a slow drift); and the effects of the simulator's own
       // physics that the diagnosis does not follow yet: a switching front's rate dependence (its
@@ -731,7 +738,7 @@ TEST(DiagnosisHiddenEffect, RandomisedSweepConfusionTable) {
       const bool reported =
           c.random_walk || cause == hc::Cause::kRateDependence || cause == hc::Cause::kCreep;
       if (!ok && !reported) ++wrong;
-      if (ratio_checked && !reported && o.ratio > kMaxRatio) ++bad_ratio;
+      if (ratio_checked && !reported && o.ratio > max_ratio(cause)) ++bad_ratio;
       if (o.seconds > slowest) slowest = o.seconds, slowest_samples = o.samples;
       std::printf(
           "%-40s %-18s named %-16s ratio %.3f (raw %.3f) gain %7.2f  %.2f s / %zu samples\n",
@@ -764,10 +771,15 @@ TEST(DiagnosisHiddenEffect, RandomisedSweepConfusionTable) {
                 v.back(), raw[raw.size() / 2], raw.back());
   }
   // A fitted resonance carries over to another record of the same actuator.
-  EXPECT_LE(ratios[static_cast<int>(hc::Cause::kDynamics)].back(), 0.6);
+  if (const auto& dyn = ratios[static_cast<int>(hc::Cause::kDynamics)]; !dyn.empty()) {
+    EXPECT_LE(dyn.back(), 0.6);
+  }
   std::sort(walk_ratios.begin(), walk_ratios.end());
-  std::printf("  %-16s %.3f  %.3f  (random-walk drift: naming and ratio reported, not asserted)\n",
-              "drift (walk)", walk_ratios[walk_ratios.size() / 2], walk_ratios.back());
+  if (!walk_ratios.empty()) {
+    std::printf(
+        "  %-16s %.3f  %.3f  (random-walk drift: naming and ratio reported, not asserted)\n",
+        "drift (walk)", walk_ratios[walk_ratios.size() / 2], walk_ratios.back());
+  }
   std::printf("slowest diagnosis: %.2f s for %zu samples\n", slowest, slowest_samples);
   EXPECT_EQ(wrong, 0);
   EXPECT_EQ(bad_ratio, 0);
