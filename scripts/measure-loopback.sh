@@ -108,7 +108,7 @@ for section in "${sections[@]}"; do
       log=$(jq -r '.log' <<<"$id")
       model="$work/delay/models/$(jq -r '.model.file // empty' <<<"$id")"
       [ -f "$model" ] || model=$(ls -t "$work"/delay/models/*.json | head -1)
-      hb diagnose "$log" --model "$model" --save-extended "$work/delay/extended.json" |
+      hb diagnose "$log" --model "$model" --save-extended "$work/delay/extended.json" 2>/dev/null |
         grep -E "^(cause|named|verdict|extended)" | head -5 || true
       hb model load "$work/delay/extended.json" >/dev/null
       echo
