@@ -55,6 +55,15 @@ hc::FitOptions pi_options() {
 
 double heldout_percent(const hc::FitResult& f) { return f.heldout.rmse_percent(); }
 
+// `plant` played from rest at u[0] over u, block-averaged as identify averages its record.
+template <class Plant>
+hd::AveragedRecord averaged_response(Plant& plant, const std::vector<double>& u) {
+  plant.reset(u.front());
+  std::vector<double> y;
+  for (const double v : u) y.push_back(plant.step(v));
+  return hd::block_average(u, y, kDt, kBlock, 0);
+}
+
 }  // namespace
 
 TEST(IdentificationFit, BlockAverageAdvancesTheMeasurementBeforeAveraging) {
@@ -174,10 +183,7 @@ TEST(IdentificationFit, TheDeadZoneOrderIsVerifiedAgainstItsNeighbour) {
   p.dead_zone.thresholds = {-12.0, -6.0, 0.0, 6.0, 12.0};
   p.dead_zone.weights = {0.3, -0.2, 1.0, -0.2, 0.3};  // cumulative 1.0 | 0.8, 1.1 per side
   hc::ModifiedPiModel plant(p);
-  plant.reset(pi.u.front());
-  std::vector<double> y;
-  for (const double u : pi.u) y.push_back(plant.step(u));
-  const hd::AveragedRecord r = hd::block_average(pi.u, y, kDt, kBlock, 0);
+  const hd::AveragedRecord r = averaged_response(plant, pi.u);
   hc::FitOptions o;
   o.kind = hc::ModelKind::kModifiedPi;
   o.operators = 10;
@@ -220,10 +226,7 @@ TEST(IdentificationFit, AKeptRateLawIsVerifiedAgainstTheModelWithoutIt) {
   p.max_rate = 5000.0;
   p.rate_law = hc::RateLaw::kMagnitude;
   hc::RateDependentPiModel plant(p, kDt);
-  plant.reset(pi.u.front());
-  std::vector<double> y;
-  for (const double u : pi.u) y.push_back(plant.step(u));
-  const hd::AveragedRecord r = hd::block_average(pi.u, y, kDt, kBlock, 0);
+  const hd::AveragedRecord r = averaged_response(plant, pi.u);
   hc::FitOptions o;
   o.kind = hc::ModelKind::kRateDependentPi;
   o.operators = 8;
