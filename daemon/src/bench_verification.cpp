@@ -75,6 +75,20 @@ hc::FitOptions identify_fit_options(const json& fit_request, const BenchSettings
   return opt;
 }
 
+// The options of a neighbour's fit on the identify record: that record is already shifted by the
+// delay chosen in ticks, and the neighbour's progress is prefixed with what it leaves out.
+// `options` must outlive the result (its progress callback is called through it).
+hc::FitOptions neighbour_options(const hc::FitOptions& options, std::string prefix) {
+  hc::FitOptions o = options;
+  o.delay_samples = 0;
+  if (options.progress) {
+    o.progress = [&options, prefix = std::move(prefix)](double f, const std::string& what) {
+      options.progress(f, prefix + what);
+    };
+  }
+  return o;
+}
+
 }  // namespace
 
 IdentifyCandidate family_candidate(hc::FitResult fit) {
@@ -125,14 +139,9 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
   if (!options.kind || options.dead_zones >= 0 || candidates.size() != 1) return;
   const hc::FitResult& chosen = candidates.front().fit;
   if (chosen.dead_zones < 1) return;
-  hc::FitOptions o = options;
+  hc::FitOptions o =
+      neighbour_options(options, std::to_string(chosen.dead_zones - 1) + " dead zones: ");
   o.dead_zones = chosen.dead_zones - 1;
-  o.delay_samples = 0;  // the record is already shifted by the delay chosen in ticks
-  if (options.progress) {
-    o.progress = [&options, m = o.dead_zones](double f, const std::string& what) {
-      options.progress(f, std::to_string(m) + " dead zones: " + what);
-    };
-  }
   try {
     hc::FitResult fit = hc::fit_model(t, u, y, o);
     if (fit.dead_zones != o.dead_zones) return;  // e.g. a fall-back to the classical PI
@@ -155,16 +164,10 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
                   [](double c) { return c == 0.0; })) {
     return;
   }
-  hc::FitOptions o = options;
+  hc::FitOptions o = neighbour_options(options, "without the rate law: ");
   o.kind = hc::ModelKind::kModifiedPi;
   o.play_thresholds = law.base.play.thresholds;
   o.dead_zones = chosen.dead_zones;
-  o.delay_samples = 0;  // the record is already shifted by the delay chosen in ticks
-  if (options.progress) {
-    o.progress = [&options](double f, const std::string& what) {
-      options.progress(f, "without the rate law: " + what);
-    };
-  }
   try {
     hc::FitResult fit = hc::fit_model(t, u, y, o);
     const auto* mpi = dynamic_cast<const hc::ModifiedPiModel*>(&fit.model.hysteresis());
