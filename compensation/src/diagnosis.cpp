@@ -308,16 +308,20 @@ struct OnTopOfShape {
   Cause cause = Cause::kNone;
   details::CandidateOutcome outcome;  ///< its fit holds the shape and the cause
   double gain = 0.0;                  ///< shape's held-out rms / this held-out rms
+  bool significant = false;           ///< its statistic, read from the shape's residual
+
+  bool counts(const DiagnosisOptions& options) const {
+    return significant && gain >= options.min_gain;
+  }
 };
 
 /// Every other candidate that carries over, tested again with the asymmetry extension's fit as
-/// its baseline (its statistic read from that fit's residual); the one with the largest gain
-/// among those significant and gaining at least min_gain, or nothing.
-std::optional<OnTopOfShape> best_beyond_shape(const Diagnosis& d, const details::DiagnosisRecord& r,
-                                              const std::vector<details::ExtensionFit>& fits,
-                                              const details::InputEvents& ev,
-                                              const DiagnosisOptions& options,
-                                              std::vector<std::string>& notes) {
+/// its baseline (its statistic read from that fit's residual), in candidate order; a candidate
+/// the designs cannot fit together with the shape is left out.
+std::vector<OnTopOfShape> beyond_shape(const Diagnosis& d, const details::DiagnosisRecord& r,
+                                       const std::vector<details::ExtensionFit>& fits,
+                                       const details::InputEvents& ev,
+                                       std::vector<std::string>& notes) {
   std::size_t shape = 0;
   while (d.candidates[shape].cause != Cause::kAsymmetry) ++shape;
   const details::ExtensionFit& base = fits[shape];
@@ -328,7 +332,7 @@ std::optional<OnTopOfShape> best_beyond_shape(const Diagnosis& d, const details:
       details::frequency_response(base.prediction, r.y, r.dt, d.noise_rms);
   const details::CandidateContext ctx{r,  base.spec, base,     base.prediction, residual,
                                       ev, profiles,  response, d.noise_rms};
-  std::optional<OnTopOfShape> best;
+  std::vector<OnTopOfShape> out;
   std::string tried;
   for (const CandidateReport& c : d.candidates) {
     if (c.cause == Cause::kAsymmetry || !c.carries_over) continue;
@@ -339,10 +343,7 @@ std::optional<OnTopOfShape> best_beyond_shape(const Diagnosis& d, const details:
       const bool significant = o.statistic >= o.threshold;
       tried += std::string(tried.empty() ? "" : ", ") + std::string(to_string(c.cause)) + " " +
                num(gain) + (significant ? "" : " (not significant)");
-      if (!significant) continue;
-      if (gain >= options.min_gain && (!best || gain > best->gain)) {
-        best = OnTopOfShape{c.cause, std::move(o), gain};
-      }
+      out.push_back(OnTopOfShape{c.cause, std::move(o), gain, significant});
     } catch (const std::exception&) {
       // A combination the designs cannot fit is left out.
     }
@@ -350,7 +351,190 @@ std::optional<OnTopOfShape> best_beyond_shape(const Diagnosis& d, const details:
   if (!tried.empty()) {
     notes.push_back("on top of the loop's shape (asymmetry), the other causes gain: " + tried);
   }
-  return best;
+  return out;
+}
+
+/// What naming the causes beyond the first and joining their extensions need.
+struct Naming {
+  const details::DiagnosisRecord& r;
+  const std::vector<details::ExtensionFit>& fits;  ///< each candidate's, in candidate order
+  const details::InputEvents& ev;
+  const std::vector<ResidualProfile>& profiles;  ///< of the reference residual
+  const FrequencyResponse& response;             ///< of the reference prediction
+  const DiagnosisOptions& options;
+  double reference = 0.0;  ///< held-out rms the candidates' gains are judged against
+  const std::vector<OnTopOfShape>& on_shape;
+  const OnTopOfShape* beyond = nullptr;  ///< the first cause, named beyond the shape
+};
+
+double quadrature_difference(double before, double after) {
+  return std::sqrt(std::max(0.0, before * before - after * after));
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    s += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+  }
+  return s;
+}
+
+/// d.cause (not none) and the candidates' not_named set for the candidates that cannot be named:
+/// names every other cause (Diagnosis::causes) and builds the extended model, the named cause's
+/// extension joined by every other significant one that lowers the held-out error on top of it
+/// (Diagnosis::extended_parts).
+void name_causes_and_extend(Diagnosis& d, const Naming& x,
+                            const std::function<void(double, const std::string&)>& progress) {
+  const DiagnosisOptions& options = x.options;
+  const std::string unit = x.r.units.output;
+  const std::string shape_name = "the loop's shape (asymmetry)";
+  auto index_of = [&](Cause c) {
+    std::size_t i = 0;
+    while (d.candidates[i].cause != c) ++i;
+    return i;
+  };
+  auto on_shape_of = [&](Cause c) -> const OnTopOfShape* {
+    for (const OnTopOfShape& o : x.on_shape) {
+      if (o.cause == c) return &o;
+    }
+    return nullptr;
+  };
+  CandidateReport& w = d.candidates[index_of(d.cause)];
+  w.named = true;
+  w.not_named.clear();
+  std::string named_extension = w.extension;
+  details::ExtensionFit joint;
+  if (x.beyond) {
+    // The named cause on top of the shape: both are parts of the extended model.
+    joint = x.beyond->outcome.fit;
+    named_extension =
+        x.beyond->outcome.extension + "; " + d.candidate(Cause::kAsymmetry)->extension;
+    d.extended_parts = {std::string(to_string(d.cause)), std::string(to_string(Cause::kAsymmetry))};
+    const double shape_rms = d.candidate(Cause::kAsymmetry)->heldout.rmse;
+    d.causes = {{d.cause, x.beyond->gain, joint.heldout.rmse, shape_name,
+                 quadrature_difference(shape_rms, joint.heldout.rmse), x.beyond->outcome.evidence,
+                 x.beyond->outcome.extension}};
+  } else {
+    joint = x.fits[index_of(d.cause)];
+    d.extended_parts = {std::string(to_string(d.cause))};
+    d.causes = {{d.cause, w.gain, w.heldout.rmse, "the baseline",
+                 quadrature_difference(x.reference, w.heldout.rmse), w.evidence, w.extension}};
+  }
+  d.extended = joint.model;
+  d.extended_description = details::describe_model(joint.model) + " (" + named_extension + ")";
+  d.extended_fit = joint.fit;
+  d.extended_heldout = joint.heldout;
+  d.extended_prediction = joint.prediction;
+
+  // The others, strongest first. A contender may be named: eligible on its own or, when the
+  // first is named beyond the shape, significant and gaining min_gain on top of the shape. Every
+  // significant extension that carries over (drift aside: never extrapolated) may join the
+  // extended model.
+  struct Next {
+    std::size_t index;
+    double gain;  ///< the gain it is ranked by
+    bool contender;
+  };
+  std::vector<Next> order;
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    CandidateReport& c = d.candidates[i];
+    const std::string name(to_string(c.cause));
+    if (std::find(d.extended_parts.begin(), d.extended_parts.end(), name) !=
+        d.extended_parts.end()) {
+      continue;
+    }
+    const OnTopOfShape* s = x.beyond ? on_shape_of(c.cause) : nullptr;
+    if (x.beyond && c.carries_over) {
+      c.not_named = !s ? "it could not be fitted on top of " + shape_name
+                    : !s->significant
+                        ? "on top of " + shape_name + " its statistic is not significant (gain " +
+                              num(s->gain) + ")"
+                    : !s->counts(options) ? "on top of " + shape_name + " its gain " +
+                                                num(s->gain) + " is below " + num(options.min_gain)
+                                          : "";
+    }
+    const bool contender = c.not_named.empty();
+    const bool joins = c.significant && c.carries_over && c.cause != Cause::kDrift;
+    if (contender || joins) order.push_back({i, s ? s->gain : c.gain, contender});
+  }
+  std::sort(order.begin(), order.end(),
+            [](const Next& a, const Next& b) { return a.gain > b.gain; });
+  progress(0.97, "naming the other causes and joining the significant extensions");
+  std::vector<std::string> added;
+  for (const Next& next : order) {
+    CandidateReport& c = d.candidates[next.index];
+    const std::string before = joined(d.extended_parts);
+    // The candidate's test again, its baseline the joint model so far: its parameters (a
+    // resonance, a delay) are found on what the joint model leaves.
+    std::vector<double> joint_residual(x.r.n);
+    for (std::size_t k = 0; k < x.r.n; ++k) joint_residual[k] = x.r.y[k] - joint.prediction[k];
+    const details::CandidateContext jc{
+        x.r,  joint.spec, joint,      joint.prediction, joint_residual,
+        x.ev, x.profiles, x.response, d.noise_rms};
+    try {
+      details::CandidateOutcome o = test_of(c.cause)(jc);
+      if (next.contender) {
+        const double added_rms = quadrature_difference(joint.heldout.rmse, o.fit.heldout.rmse);
+        if (added_rms >= d.noise_allowance_rms) {
+          const OnTopOfShape* s = x.beyond ? on_shape_of(c.cause) : nullptr;
+          d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
+                              s ? shape_name : "the baseline", added_rms,
+                              s ? s->outcome.evidence : c.evidence,
+                              s ? s->outcome.extension : c.extension});
+          c.named = true;
+        } else {
+          c.not_named = "within the noise of " + before + ": added to the model holding " + before +
+                        ", it explains " + num(added_rms) + " " + unit +
+                        " rms more of the held-out error, less than the " +
+                        num(d.noise_allowance_rms) + " " + unit + " the noise allows";
+        }
+      }
+      if (c.cause != Cause::kDrift && o.fit.heldout.rmse < joint.heldout.rmse) {
+        joint = std::move(o.fit);
+        added.push_back(o.extension);
+        d.extended_parts.push_back(std::string(to_string(c.cause)));
+      }
+    } catch (const std::exception&) {
+      // A combination the designs cannot fit is left out.
+      if (next.contender) c.not_named = "it could not be fitted on top of " + before;
+    }
+  }
+  if (!added.empty()) {
+    d.extended = joint.model;
+    d.extended_fit = joint.fit;
+    d.extended_heldout = joint.heldout;
+    d.extended_prediction = joint.prediction;
+    d.extended_description = details::describe_model(joint.model) + " (" + named_extension;
+    for (const std::string& a : added) d.extended_description += "; " + a;
+    d.extended_description += ", refitted jointly)";
+  }
+  if (x.beyond) {
+    // The shape, judged on top of the first cause: the first alone against both together.
+    CandidateReport& shape = d.candidates[index_of(Cause::kAsymmetry)];
+    const double added_rms = quadrature_difference(d.candidate(d.cause)->heldout.rmse,
+                                                   x.beyond->outcome.fit.heldout.rmse);
+    if (added_rms >= d.noise_allowance_rms) {
+      d.causes.push_back({Cause::kAsymmetry, shape.gain, shape.heldout.rmse, "the baseline",
+                          added_rms, shape.evidence, shape.extension});
+      shape.named = true;
+    } else {
+      const std::string first(to_string(d.cause));
+      shape.not_named = "within the noise of " + first + ": added to the model holding " + first +
+                        ", it explains " + num(added_rms) + " " + unit +
+                        " rms more of the held-out error, less than the " +
+                        num(d.noise_allowance_rms) + " " + unit + " the noise allows";
+    }
+  }
+  if (d.causes.size() > 1) {
+    d.verdict += ". Also named, each explaining more than the noise allows (" +
+                 num(d.noise_allowance_rms) + " " + unit + " rms) beyond the causes before it: ";
+    for (std::size_t i = 1; i < d.causes.size(); ++i) {
+      const NamedCause& n = d.causes[i];
+      d.verdict += (i > 1 ? ", " : "") + std::string(to_string(n.cause)) + " (gain " + num(n.gain) +
+                   (n.against == shape_name ? " over the shape" : "") + ", " + num(n.added_rms) +
+                   " " + unit + " rms)";
+    }
+  }
 }
 
 Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
@@ -473,19 +657,28 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
   if (d.refit_heldout) reference = std::min(reference, d.refit_heldout->rmse);
   const double floor = options.noise_floor_factor * d.noise_rms;
   const bool at_floor = d.baseline_heldout.rmse <= floor;
+  d.noise_allowance_rms =
+      std::sqrt(options.noise_floor_factor * options.noise_floor_factor - 1.0) * d.noise_rms;
   std::vector<const CandidateReport*> eligible;
-  for (const CandidateReport& c : d.candidates) {
-    if (c.significant && c.heldout.rmse > 0.0 && reference / c.heldout.rmse >= options.min_gain) {
-      if (c.carries_over) {
-        eligible.push_back(&c);
-      } else {
-        d.notes.push_back(std::string(to_string(c.cause)) + " does not carry over: it gains " +
-                          num(c.gain) +
-                          "x on the held-out blocks, but fitted on the other records it "
-                          "predicts each record left out whole at gain " +
-                          left_out_summary(c) + "; not named");
-      }
+  for (CandidateReport& c : d.candidates) {
+    const double gain = c.heldout.rmse > 0.0 ? reference / c.heldout.rmse : 0.0;
+    if (!c.significant) {
+      c.not_named =
+          "its statistic " + num(c.statistic) + " is below its threshold " + num(c.threshold);
+    } else if (gain < options.min_gain) {
+      c.not_named = "its held-out gain " + num(gain) + " is below " + num(options.min_gain);
+    } else if (c.carries_over) {
+      eligible.push_back(&c);
+    } else {
+      c.not_named =
+          "it does not carry over to the records left out whole (gain " + left_out_summary(c) + ")";
+      d.notes.push_back(std::string(to_string(c.cause)) + " does not carry over: it gains " +
+                        num(c.gain) +
+                        "x on the held-out blocks, but fitted on the other records it "
+                        "predicts each record left out whole at gain " +
+                        left_out_summary(c) + "; not named");
     }
+    if (at_floor) c.not_named = "the baseline's held-out error is at the noise floor";
   }
   std::sort(eligible.begin(), eligible.end(),
             [](const CandidateReport* a, const CandidateReport* b) { return a->gain > b->gain; });
@@ -494,13 +687,17 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
   // a saturating top) nor an asymmetric one, and what it misses there inflates every other
   // candidate's gain: when the shape (asymmetry) is eligible, the other causes are tested again
   // on top of it and named for what they gain beyond it.
-  std::optional<OnTopOfShape> beyond;
+  std::vector<OnTopOfShape> on_shape;
+  const OnTopOfShape* beyond = nullptr;
   const bool shape = std::any_of(eligible.begin(), eligible.end(), [](const CandidateReport* c) {
     return c->cause == Cause::kAsymmetry;
   });
   if (shape && !at_floor) {
     progress(0.955, "testing the other causes on top of the loop's shape");
-    beyond = best_beyond_shape(d, r, fits, ev, options, d.notes);
+    on_shape = beyond_shape(d, r, fits, ev, d.notes);
+    for (const OnTopOfShape& o : on_shape) {
+      if (o.counts(options) && (!beyond || o.gain > beyond->gain)) beyond = &o;
+    }
   }
   const CandidateReport* best_any = &*std::max_element(
       d.candidates.begin(), d.candidates.end(),
@@ -536,26 +733,6 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     if (!w.left_out.empty()) {
       d.verdict +=
           ", and carries over to every record left out whole (gain " + left_out_summary(w) + ")";
-    }
-  }
-  if (!eligible.empty() && d.cause != Cause::kNone && !beyond) {
-    for (std::size_t i = 1; i < eligible.size(); ++i) {
-      if (eligible[i]->gain >= kAmbiguity * eligible.front()->gain) {
-        d.notes.push_back("not clean: " + std::string(to_string(eligible[i]->cause)) +
-                          " explains the data almost as well (gain " + num(eligible[i]->gain) +
-                          " against " + num(eligible.front()->gain) + ")");
-      }
-    }
-    const CandidateReport& w = *eligible.front();
-    if (w.heldout.rmse > 2.0 * floor && eligible.size() > 1) {
-      std::string others;
-      for (std::size_t i = 1; i < eligible.size(); ++i) {
-        others += (i > 1 ? ", " : "") + std::string(to_string(eligible[i]->cause)) + " (gain " +
-                  num(eligible[i]->gain) + ")";
-      }
-      d.notes.push_back("more than one effect: with " + std::string(to_string(w.cause)) +
-                        " the held-out error is still " + num(w.heldout.rmse / d.noise_rms) +
-                        "x the noise; " + others + " also gain on their own");
     }
   }
   if (d.cause != Cause::kNone && !beyond) {
@@ -636,70 +813,17 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     d.extended_heldout = d.baseline_heldout;
     d.extended_prediction = d.baseline_prediction;
   } else {
-    const CandidateReport& w = *d.candidate(d.cause);
-    std::string named_extension = w.extension;
-    details::ExtensionFit joint;
-    if (beyond) {
-      // The named cause on top of the shape: both are parts of the extended model.
-      joint = beyond->outcome.fit;
-      named_extension =
-          beyond->outcome.extension + "; " + d.candidate(Cause::kAsymmetry)->extension;
-      d.extended_parts = {std::string(to_string(d.cause)),
-                          std::string(to_string(Cause::kAsymmetry))};
-    } else {
-      std::size_t named = 0;
-      while (d.candidates[named].cause != d.cause) ++named;
-      joint = fits[named];
-      d.extended_parts = {std::string(to_string(d.cause))};
-    }
-    d.extended = joint.model;
-    d.extended_description = details::describe_model(joint.model) + " (" + named_extension + ")";
-    d.extended_fit = joint.fit;
-    d.extended_heldout = joint.heldout;
-    d.extended_prediction = joint.prediction;
-    // Every other significant extension joins the named one when, tested again on top of it,
-    // the joint model gains on the held-out blocks (delay and dynamics together, for example).
-    progress(0.97, "joining the significant extensions");
-    std::vector<std::size_t> order;
-    for (std::size_t i = 0; i < d.candidates.size(); ++i) {
-      const CandidateReport& c = d.candidates[i];
-      const bool in = std::find(d.extended_parts.begin(), d.extended_parts.end(),
-                                to_string(c.cause)) != d.extended_parts.end();
-      if (!in && c.significant && c.carries_over && c.cause != Cause::kDrift) {
-        order.push_back(i);
+    name_causes_and_extend(
+        d, {r, fits, ev, ref_profiles, ref_response, options, reference, on_shape, beyond},
+        progress);
+    // A runner-up that explains the same as the named cause (within the noise of it) and about
+    // as well leaves the choice between them open.
+    for (std::size_t i = 1; i < eligible.size() && !beyond; ++i) {
+      if (!eligible[i]->named && eligible[i]->gain >= kAmbiguity * eligible.front()->gain) {
+        d.notes.push_back("not clean: " + std::string(to_string(eligible[i]->cause)) +
+                          " explains the data almost as well (gain " + num(eligible[i]->gain) +
+                          " against " + num(eligible.front()->gain) + ")");
       }
-    }
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return d.candidates[a].gain > d.candidates[b].gain;
-    });
-    std::vector<std::string> added;
-    for (const std::size_t i : order) {
-      // The candidate's test again, its baseline the joint model so far: its parameters (a
-      // resonance, a delay) are found on what the joint model leaves.
-      std::vector<double> joint_residual(r.n);
-      for (std::size_t k = 0; k < r.n; ++k) joint_residual[k] = r.y[k] - joint.prediction[k];
-      const details::CandidateContext jc{
-          r,  joint.spec,   joint,        joint.prediction, joint_residual,
-          ev, ref_profiles, ref_response, d.noise_rms};
-      try {
-        details::CandidateOutcome o = test_of(d.candidates[i].cause)(jc);
-        if (o.fit.heldout.rmse < joint.heldout.rmse) {
-          joint = std::move(o.fit);
-          added.push_back(o.extension);
-          d.extended_parts.push_back(std::string(to_string(d.candidates[i].cause)));
-        }
-      } catch (const std::exception&) {
-        // A combination the designs cannot fit is left out.
-      }
-    }
-    if (!added.empty()) {
-      d.extended = joint.model;
-      d.extended_fit = joint.fit;
-      d.extended_heldout = joint.heldout;
-      d.extended_prediction = joint.prediction;
-      d.extended_description = details::describe_model(joint.model) + " (" + named_extension;
-      for (const std::string& a : added) d.extended_description += "; " + a;
-      d.extended_description += ", refitted jointly)";
     }
   }
   progress(1.0, "done");

@@ -17,7 +17,9 @@
 //   gain = baseline held-out rms / extended held-out rms.
 // The named cause is the significant candidate with the largest gain above `min_gain`;
 // `none` when there is none, or when the baseline's held-out error is at the noise floor
-// (estimated from the second differences of the residual).
+// (estimated from the second differences of the residual). Every other significant candidate
+// that carries over and reaches `min_gain` is named too unless it is within the noise of a
+// stronger named cause (see Diagnosis::causes).
 //
 // Candidates and their extensions:
 //   asymmetry        modified PI (dead zones) or coupled-play PI
@@ -147,10 +149,46 @@ struct CandidateReport {
   /// fits something of the records that is not a property of the device. Such a candidate is
   /// never named.
   bool carries_over = true;
+  /// True when it is one of Diagnosis::causes.
+  bool named = false;
+  /// Why it is not named, one phrase (empty when named): its statistic is not significant, its
+  /// gain is below min_gain, it does not carry over, it is within the noise of a stronger named
+  /// cause, or the baseline is at the noise floor.
+  std::string not_named;
+};
+
+/// One of the causes the record shows (Diagnosis::causes).
+struct NamedCause {
+  Cause cause = Cause::kNone;
+  /// Held-out gain of its extension over `against` (rms of that / rms of this), >= min_gain.
+  double gain = 0.0;
+  double heldout_rms = 0.0;  ///< its extension's held-out rms [output unit]
+  /// What the gain is measured against: "the baseline", or "the loop's shape (asymmetry)" for
+  /// the other causes when the shape is named (see below).
+  std::string against;
+  /// The held-out rms it explains beyond the causes named before it, in quadrature:
+  /// sqrt(rms before^2 - rms with it^2) [output unit]; for the first, beyond `against`.
+  double added_rms = 0.0;
+  std::string evidence;   ///< what the residual shows for it
+  std::string extension;  ///< what its extension adds, with the fitted parameters
 };
 
 struct Diagnosis {
+  /// The largest named cause (causes.front()), or none.
   Cause cause = Cause::kNone;
+  /// Every named cause, largest held-out gain first. A candidate is named when it is
+  /// significant, carries over, reaches min_gain and is not within the noise of a stronger
+  /// named cause: tested again on top of the joint model of the causes before it, it must
+  /// explain at least `noise_allowance_rms` of held-out rms (added_rms). When the loop's shape
+  /// (asymmetry) is what the classical PI misses, the other causes are judged on top of it
+  /// (against the shape's extension, significant there and gaining min_gain there); they come
+  /// first, ranked by that gain, and the shape last, itself judged on top of the first.
+  /// Empty when the cause is none.
+  std::vector<NamedCause> causes;
+  /// The held-out rms [output unit] an effect must explain beyond the stronger named causes to
+  /// be told apart from them: sqrt(noise_floor_factor^2 - 1) x noise_rms, what a model at the
+  /// noise floor may still leave above the noise.
+  double noise_allowance_rms = 0.0;
   /// The records diagnosed together (one name for a single record), and where each starts in
   /// the concatenation every sample index and prediction here refers to.
   std::vector<std::string> records;
