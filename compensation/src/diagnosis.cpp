@@ -363,6 +363,7 @@ struct Naming {
   const FrequencyResponse& response;             ///< of the reference prediction
   const DiagnosisOptions& options;
   double reference = 0.0;  ///< held-out rms the candidates' gains are judged against
+  std::string reference_name;  ///< what that is: the baseline, or the given model refitted
   const std::vector<OnTopOfShape>& on_shape;
   const OnTopOfShape* beyond = nullptr;  ///< the first cause, named beyond the shape
 };
@@ -377,6 +378,15 @@ std::string joined(const std::vector<std::string>& names) {
     s += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
   }
   return s;
+}
+
+/// Why a candidate is not named: what it adds to the model holding `before` is within the noise.
+std::string within_noise(const std::string& before, double added_rms, double allowance,
+                         const std::string& unit) {
+  return "within the noise of " + before + ": added to the model holding " + before +
+         ", it explains " + num(added_rms) + " " + unit +
+         " rms more of the held-out error, less than the " + num(allowance) + " " + unit +
+         " the noise allows";
 }
 
 /// d.cause (not none) and the candidates' not_named set for the candidates that cannot be named:
@@ -411,13 +421,14 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
         x.beyond->outcome.extension + "; " + d.candidate(Cause::kAsymmetry)->extension;
     d.extended_parts = {std::string(to_string(d.cause)), std::string(to_string(Cause::kAsymmetry))};
     const double shape_rms = d.candidate(Cause::kAsymmetry)->heldout.rmse;
-    d.causes = {{d.cause, x.beyond->gain, joint.heldout.rmse, shape_name,
+    d.causes = {{d.cause, x.beyond->gain, joint.heldout.rmse, shape_name, x.beyond->gain,
                  quadrature_difference(shape_rms, joint.heldout.rmse), x.beyond->outcome.evidence,
                  x.beyond->outcome.extension}};
   } else {
     joint = x.fits[index_of(d.cause)];
     d.extended_parts = {std::string(to_string(d.cause))};
-    d.causes = {{d.cause, w.gain, w.heldout.rmse, "the baseline",
+    const double gain = x.reference / w.heldout.rmse;
+    d.causes = {{d.cause, gain, w.heldout.rmse, x.reference_name, gain,
                  quadrature_difference(x.reference, w.heldout.rmse), w.evidence, w.extension}};
   }
   d.extended = joint.model;
@@ -426,13 +437,12 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
   d.extended_heldout = joint.heldout;
   d.extended_prediction = joint.prediction;
 
-  // The others, strongest first. A contender may be named: eligible on its own or, when the
-  // first is named beyond the shape, significant and gaining min_gain on top of the shape. Every
-  // significant extension that carries over (drift aside: never extrapolated) may join the
-  // extended model.
+  // The others, strongest first. A contender may be named: significant and carrying over (when
+  // the first is named beyond the shape, significant on top of the shape). Every significant
+  // extension that carries over (drift aside: never extrapolated) may join the extended model.
   struct Next {
     std::size_t index;
-    double gain;  ///< the gain it is ranked by
+    double gain;  ///< over the reference (or the shape): the gain it is ranked by
     bool contender;
   };
   std::vector<Next> order;
@@ -444,18 +454,15 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
       continue;
     }
     const OnTopOfShape* s = x.beyond ? on_shape_of(c.cause) : nullptr;
-    if (x.beyond && c.carries_over) {
+    const bool contender = c.carries_over && (x.beyond ? s && s->significant : c.significant);
+    if (x.beyond && c.carries_over && !contender) {
       c.not_named = !s ? "it could not be fitted on top of " + shape_name
-                    : !s->significant
-                        ? "on top of " + shape_name + " its statistic is not significant (gain " +
-                              num(s->gain) + ")"
-                    : !s->counts(options) ? "on top of " + shape_name + " its gain " +
-                                                num(s->gain) + " is below " + num(options.min_gain)
-                                          : "";
+                       : "on top of " + shape_name + " its statistic is not significant (gain " +
+                             num(s->gain) + ")";
     }
-    const bool contender = c.not_named.empty();
     const bool joins = c.significant && c.carries_over && c.cause != Cause::kDrift;
-    if (contender || joins) order.push_back({i, s ? s->gain : c.gain, contender});
+    const double gain = s ? s->gain : c.heldout.rmse > 0.0 ? x.reference / c.heldout.rmse : 0.0;
+    if (contender || joins) order.push_back({i, gain, contender});
   }
   std::sort(order.begin(), order.end(),
             [](const Next& a, const Next& b) { return a.gain > b.gain; });
@@ -474,19 +481,25 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
     try {
       details::CandidateOutcome o = test_of(c.cause)(jc);
       if (next.contender) {
-        const double added_rms = quadrature_difference(joint.heldout.rmse, o.fit.heldout.rmse);
-        if (added_rms >= d.noise_allowance_rms) {
-          const OnTopOfShape* s = x.beyond ? on_shape_of(c.cause) : nullptr;
+        // Named when it reaches min_gain on its own or added to the stronger causes (an effect
+        // beside a larger one gains little over the baseline), and is not within their noise.
+        const double rms = o.fit.heldout.rmse;
+        const double added_rms = quadrature_difference(joint.heldout.rmse, rms);
+        const double added_gain = rms > 0.0 ? joint.heldout.rmse / rms : 0.0;
+        const OnTopOfShape* s = x.beyond ? on_shape_of(c.cause) : nullptr;
+        if (added_rms < d.noise_allowance_rms) {
+          c.not_named = within_noise(before, added_rms, d.noise_allowance_rms, unit);
+        } else if (next.gain < options.min_gain && added_gain < options.min_gain) {
+          c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
+                        ", and " + num(added_gain) + " added to the model holding " + before +
+                        ", are below " + num(options.min_gain);
+        } else {
           d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
-                              s ? shape_name : "the baseline", added_rms,
+                              s ? shape_name : x.reference_name, added_gain, added_rms,
                               s ? s->outcome.evidence : c.evidence,
                               s ? s->outcome.extension : c.extension});
           c.named = true;
-        } else {
-          c.not_named = "within the noise of " + before + ": added to the model holding " + before +
-                        ", it explains " + num(added_rms) + " " + unit +
-                        " rms more of the held-out error, less than the " +
-                        num(d.noise_allowance_rms) + " " + unit + " the noise allows";
+          c.not_named.clear();
         }
       }
       if (c.cause != Cause::kDrift && o.fit.heldout.rmse < joint.heldout.rmse) {
@@ -511,28 +524,27 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
   if (x.beyond) {
     // The shape, judged on top of the first cause: the first alone against both together.
     CandidateReport& shape = d.candidates[index_of(Cause::kAsymmetry)];
-    const double added_rms = quadrature_difference(d.candidate(d.cause)->heldout.rmse,
-                                                   x.beyond->outcome.fit.heldout.rmse);
+    const double alone = d.candidate(d.cause)->heldout.rmse;
+    const double both = x.beyond->outcome.fit.heldout.rmse;
+    const double added_rms = quadrature_difference(alone, both);
     if (added_rms >= d.noise_allowance_rms) {
-      d.causes.push_back({Cause::kAsymmetry, shape.gain, shape.heldout.rmse, "the baseline",
-                          added_rms, shape.evidence, shape.extension});
+      d.causes.push_back({Cause::kAsymmetry, x.reference / shape.heldout.rmse, shape.heldout.rmse,
+                          x.reference_name, alone / both, added_rms, shape.evidence,
+                          shape.extension});
       shape.named = true;
     } else {
-      const std::string first(to_string(d.cause));
-      shape.not_named = "within the noise of " + first + ": added to the model holding " + first +
-                        ", it explains " + num(added_rms) + " " + unit +
-                        " rms more of the held-out error, less than the " +
-                        num(d.noise_allowance_rms) + " " + unit + " the noise allows";
+      shape.not_named =
+          within_noise(std::string(to_string(d.cause)), added_rms, d.noise_allowance_rms, unit);
     }
   }
   if (d.causes.size() > 1) {
-    d.verdict += ". Also named, each explaining more than the noise allows (" +
-                 num(d.noise_allowance_rms) + " " + unit + " rms) beyond the causes before it: ";
+    d.verdict += ". Also named, each adding more than the noise allows (" +
+                 num(d.noise_allowance_rms) + " " + unit + " rms) to the causes before it: ";
     for (std::size_t i = 1; i < d.causes.size(); ++i) {
       const NamedCause& n = d.causes[i];
       d.verdict += (i > 1 ? ", " : "") + std::string(to_string(n.cause)) + " (gain " + num(n.gain) +
-                   (n.against == shape_name ? " over the shape" : "") + ", " + num(n.added_rms) +
-                   " " + unit + " rms)";
+                   (n.against == shape_name ? " over the shape" : "") + ", " + num(n.added_gain) +
+                   " added to those, " + num(n.added_rms) + " " + unit + " rms)";
     }
   }
 }
@@ -813,9 +825,12 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     d.extended_heldout = d.baseline_heldout;
     d.extended_prediction = d.baseline_prediction;
   } else {
-    name_causes_and_extend(
-        d, {r, fits, ev, ref_profiles, ref_response, options, reference, on_shape, beyond},
-        progress);
+    const std::string reference_name =
+        reference < d.baseline_heldout.rmse ? "the given model refitted here" : "the baseline";
+    name_causes_and_extend(d,
+                           {r, fits, ev, ref_profiles, ref_response, options, reference,
+                            reference_name, on_shape, beyond},
+                           progress);
     // A runner-up that explains the same as the named cause (within the noise of it) and about
     // as well leaves the choice between them open.
     for (std::size_t i = 1; i < eligible.size() && !beyond; ++i) {

@@ -18,8 +18,8 @@
 // The named cause is the significant candidate with the largest gain above `min_gain`;
 // `none` when there is none, or when the baseline's held-out error is at the noise floor
 // (estimated from the second differences of the residual). Every other significant candidate
-// that carries over and reaches `min_gain` is named too unless it is within the noise of a
-// stronger named cause (see Diagnosis::causes).
+// that carries over and reaches `min_gain` is named too, unless it is within the noise of the
+// stronger named causes (see Diagnosis::causes).
 //
 // Candidates and their extensions:
 //   asymmetry        modified PI (dead zones) or coupled-play PI
@@ -152,21 +152,25 @@ struct CandidateReport {
   /// True when it is one of Diagnosis::causes.
   bool named = false;
   /// Why it is not named, one phrase (empty when named): its statistic is not significant, its
-  /// gain is below min_gain, it does not carry over, it is within the noise of a stronger named
-  /// cause, or the baseline is at the noise floor.
+  /// gain is below min_gain, it does not carry over, it is within the noise of the stronger
+  /// causes, or the baseline is at the noise floor.
   std::string not_named;
 };
 
 /// One of the causes the record shows (Diagnosis::causes).
 struct NamedCause {
   Cause cause = Cause::kNone;
-  /// Held-out gain of its extension over `against` (rms of that / rms of this), >= min_gain.
+  /// Held-out gain of its extension over `against` (rms of that / rms of this): the rank.
   double gain = 0.0;
   double heldout_rms = 0.0;  ///< its extension's held-out rms [output unit]
-  /// What the gain is measured against: "the baseline", or "the loop's shape (asymmetry)" for
-  /// the other causes when the shape is named (see below).
+  /// What the gain is measured against: "the baseline" ("the given model refitted here" when a
+  /// given model does not match the record), or "the loop's shape (asymmetry)" for the other
+  /// causes when the shape is named (see Diagnosis::causes).
   std::string against;
-  /// The held-out rms it explains beyond the causes named before it, in quadrature:
+  /// Held-out gain of the joint model with it over the joint model of the causes before it
+  /// (for the first, `gain`).
+  double added_gain = 0.0;
+  /// The held-out rms it explains beyond the causes before it, in quadrature:
   /// sqrt(rms before^2 - rms with it^2) [output unit]; for the first, beyond `against`.
   double added_rms = 0.0;
   std::string evidence;   ///< what the residual shows for it
@@ -176,14 +180,15 @@ struct NamedCause {
 struct Diagnosis {
   /// The largest named cause (causes.front()), or none.
   Cause cause = Cause::kNone;
-  /// Every named cause, largest held-out gain first. A candidate is named when it is
-  /// significant, carries over, reaches min_gain and is not within the noise of a stronger
-  /// named cause: tested again on top of the joint model of the causes before it, it must
-  /// explain at least `noise_allowance_rms` of held-out rms (added_rms). When the loop's shape
-  /// (asymmetry) is what the classical PI misses, the other causes are judged on top of it
-  /// (against the shape's extension, significant there and gaining min_gain there); they come
-  /// first, ranked by that gain, and the shape last, itself judged on top of the first.
-  /// Empty when the cause is none.
+  /// Every named cause, largest held-out gain first; empty when the cause is none. After the
+  /// first (`cause`, chosen as the verdict says), the candidates that are significant and carry
+  /// over are tested again, strongest first, on top of the joint model of the causes before
+  /// them; one is named when it reaches min_gain (its gain, or its added_gain: an effect beside
+  /// a larger one gains little over the baseline) and is not within the noise of the causes
+  /// before it: it must explain at least `noise_allowance_rms` of held-out rms beyond them
+  /// (added_rms). When the first is named beyond the loop's shape (asymmetry), the other causes
+  /// are judged on top of the shape (significant there, gain over the shape's extension); they
+  /// come first, ranked by that gain, and the shape last, itself judged on top of the first.
   std::vector<NamedCause> causes;
   /// The held-out rms [output unit] an effect must explain beyond the stronger named causes to
   /// be told apart from them: sqrt(noise_floor_factor^2 - 1) x noise_rms, what a model at the
