@@ -134,7 +134,20 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
                           {"extension", c.extension},
                           {"carries_over", c.carries_over},
                           {"left_out_gain", c.left_out_gain},
-                          {"left_out", left_out}});
+                          {"left_out", left_out},
+                          {"named", c.named},
+                          {"not_named", c.not_named}});
+  }
+  json causes = json::array();
+  for (const hc::NamedCause& n : d.causes) {
+    causes.push_back({{"cause", std::string(hc::to_string(n.cause))},
+                      {"gain", n.gain},
+                      {"against", n.against},
+                      {"heldout_rms", n.heldout_rms},
+                      {"added_gain", n.added_gain},
+                      {"added_rms", n.added_rms},
+                      {"evidence", n.evidence},
+                      {"extension", n.extension}});
   }
   json records = json::array();
   for (std::size_t i = 0; i < d.records.size(); ++i) {
@@ -159,6 +172,7 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
       d.extended_heldout.rmse > 0.0 ? d.baseline_heldout.rmse / d.extended_heldout.rmse : 1.0;
   return {{"data", data_path},
           {"cause", std::string(hc::to_string(d.cause))},
+          {"causes", causes},
           {"verdict", d.verdict},
           {"notes", d.notes},
           {"records", records},
@@ -167,6 +181,7 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
           {"heldout", d.split.describe(d.sample_period_s)},
           {"noise_rms", d.noise_rms},
           {"noise_source", d.noise_source},
+          {"noise_allowance_rms", d.noise_allowance_rms},
           {"coherent_share", d.coherent_share},
           {"input_period_samples", d.input_period},
           {"baseline", baseline},
@@ -228,8 +243,25 @@ void print_diagnosis(std::ostream& out, const hc::Diagnosis& d, const std::strin
       out << " (geometric mean " << fmt(c.left_out_gain, 3) << ", "
           << (c.carries_over ? "carries over" : "does not carry over") << ")\n";
     }
+    if (c.significant && !c.named) {
+      out << "  " << std::string(16, ' ') << " not named: " << c.not_named << "\n";
+    }
   }
   out << "cause     " << hc::to_string(d.cause) << "\n          " << d.verdict << "\n";
+  // The named causes, largest gain first; each adds to those before it more than the noise
+  // allows.
+  for (std::size_t i = 0; i < d.causes.size(); ++i) {
+    const hc::NamedCause& n = d.causes[i];
+    out << "named     " << i + 1 << ". " << std::left << std::setw(16) << hc::to_string(n.cause)
+        << std::right << " gain " << fmt(n.gain, 3) << " over " << n.against << ", held-out rms "
+        << fmt(n.heldout_rms) << " " << unit;
+    if (i > 0) {
+      out << "; added to the causes before it: gain " << fmt(n.added_gain, 3) << ", "
+          << fmt(n.added_rms, 3) << " " << unit << " rms (the noise allows "
+          << fmt(d.noise_allowance_rms, 3) << " " << unit << ")";
+    }
+    out << "\n          " << n.extension << "\n          " << n.evidence << "\n";
+  }
   for (const std::string& n : d.notes) out << "note      " << n << "\n";
   out << "extended  " << d.extended_description << ": held-out rms " << fmt(d.extended_heldout.rmse)
       << " " << unit << "\n";

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -22,6 +23,7 @@
 #include "support/simulated_record.hpp"
 #include "support/temp_dir_test.hpp"
 
+namespace hc = hystbench::compensation;
 namespace hd = hystbench::daemon;
 namespace hs = hystbench::sim;
 namespace fs = std::filesystem;
@@ -133,6 +135,50 @@ TEST_F(DiagnoseCommandTest, JsonNamesTheHiddenEffectAndSavedModelsPredictAnother
   hd::InvertCommand inv{cmd.save_extended, path("reference.csv"), path("drive.csv"), "auto", true};
   std::ostringstream out, err;
   EXPECT_EQ(hd::run_invert(inv, out, err), 0) << err.str();
+}
+
+// Creep and an input delay hidden at once on the symmetric PI: both are named, ranked by their
+// held-out gain, in the JSON's causes[] (the first is `cause`) and one report line each; with the
+// creep alone, one cause is named and every other candidate says why it is not.
+TEST(DiagnoseCommandCauses, NamesEveryCauseRankedByGain) {
+  hs::SimulatedActuatorConfig both = creep_actuator();
+  both.delay.enabled = true;
+  both.delay.delay_s = 3e-3;
+  const Record r = simulate(both, 1e-3, {}, 41);
+  const hc::Diagnosis d = hc::diagnose(r.t, r.u, r.y);
+  const json j = hd::diagnosis_to_json(d, "both.csv");
+  SCOPED_TRACE(j.at("verdict").dump() + "\n" + j.at("candidates").dump());
+  const json& causes = j.at("causes");
+  ASSERT_EQ(causes.size(), 2u);
+  EXPECT_EQ(causes[0].at("cause"), j.at("cause"));
+  std::vector<std::string> named;
+  for (const json& c : causes) named.push_back(c.at("cause"));
+  std::sort(named.begin(), named.end());
+  EXPECT_EQ(named, (std::vector<std::string>{"creep", "delay"}));
+  EXPECT_GE(causes[0].at("gain").get<double>(), causes[1].at("gain").get<double>());
+  for (const json& c : causes) {
+    EXPECT_GE(std::max(c.at("gain").get<double>(), c.at("added_gain").get<double>()), 1.2);
+    EXPECT_GE(c.at("added_rms").get<double>(), j.at("noise_allowance_rms").get<double>());
+    EXPECT_FALSE(c.at("extension").get<std::string>().empty());
+  }
+  for (const json& c : j.at("candidates")) {
+    const bool listed = std::find(named.begin(), named.end(), c.at("cause")) != named.end();
+    EXPECT_EQ(c.at("named").get<bool>(), listed) << c.dump();
+    EXPECT_EQ(c.at("not_named").get<std::string>().empty(), listed) << c.dump();
+  }
+  std::ostringstream text;
+  hd::print_diagnosis(text, d, "both.csv");
+  const std::string first = "named     1. " + causes[0].at("cause").get<std::string>();
+  const std::string second = "named     2. " + causes[1].at("cause").get<std::string>();
+  ASSERT_NE(text.str().find(first), std::string::npos) << text.str();
+  EXPECT_GT(text.str().find(second), text.str().find(first)) << text.str();
+  EXPECT_EQ(text.str().find("named     3."), std::string::npos) << text.str();
+
+  const Record creep = simulate(creep_actuator(), 1e-3, {}, 41);
+  const hc::Diagnosis one = hc::diagnose(creep.t, creep.u, creep.y);
+  ASSERT_EQ(one.causes.size(), 1u) << hd::diagnosis_to_json(one, "creep.csv").at("candidates");
+  EXPECT_EQ(one.causes[0].cause, hc::Cause::kCreep);
+  EXPECT_EQ(one.cause, hc::Cause::kCreep);
 }
 
 TEST_F(DiagnoseCommandTest, ReadsABenchRunLogAndTakesAGivenModelAsBaseline) {

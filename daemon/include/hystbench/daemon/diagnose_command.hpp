@@ -4,17 +4,23 @@
 // Reads one or more records of one device (columns t, u, y; bench run logs work too), runs
 // compensation::diagnose() and prints a short readable report, or one JSON object with --json:
 //   {"cause": "<name>", "verdict": "..", "heldout": "<how the record was split>",
+//    "causes": [{"cause": .., "gain": .., "against": "the baseline" | "the loop's shape ..",
+//                "heldout_rms": .., "added_gain": .., "added_rms": .., "evidence": "..",
+//                "extension": ".."}, ...],
+//    "noise_allowance_rms": ..,
 //    "records": [{"data": path, "start": sample, "samples": n}, ...],
 //    "baseline": {"model": {model file}, "description": "..", "rmse": .., "max_abs": .., ...},
 //    "extended": {"model": {model file}, "description": "..", "rmse": .., "gain": .., ...},
 //    "candidates": [{"cause": .., "statistic": .., "threshold": .., "significant": ..,
 //                    "rmse_heldout": .., "gain": .., "evidence": "..", "extension": "..",
 //                    "carries_over": .., "left_out_gain": ..,
-//                    "left_out": [{"record", "baseline_rms", "rms", "gain"}, ...]}, ...],
+//                    "left_out": [{"record", "baseline_rms", "rms", "gain"}, ...],
+//                    "named": .., "not_named": "why not, or empty"}, ...],
 //    "validation": [{"data": path, "baseline_rms": .., "extended_rms": .., "gain": ..,
 //                    "baseline_offset": .., "extended_offset": .., "samples": ..}, ...],
 //    "residual_structure": {"time": share, "input": .., ...}, "noise_rms": .., "notes": [..]}
-// (rmse on the held-out part; gain = baseline rmse / candidate rmse). Several records are
+// (rmse on the held-out part; gain = baseline rmse / candidate rmse; causes: every named cause,
+// largest gain first, `cause` the first). Several records are
 // diagnosed together: fitted on every record's fit blocks, and every candidate also scored on
 // each record left out whole (left_out; empty for one record). --validate scores the baseline
 // and extended models on records that are never fitted (mean error removed, reported apart).
