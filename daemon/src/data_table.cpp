@@ -7,7 +7,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <sstream>
+#include <string_view>
+#include <utility>
 
 namespace hystbench::daemon {
 
@@ -39,6 +42,68 @@ bool is_number(const std::string& c) {
   char* end = nullptr;
   std::strtod(c.c_str(), &end);
   return end == c.c_str() + c.size();
+}
+
+// A header name's bracket form `name [unit]`: the name and the unit (empty for `[]`).
+std::optional<std::pair<std::string, std::string>> bracket_form(const std::string& header) {
+  const auto open = header.rfind('[');
+  if (header.empty() || header.back() != ']' || open == std::string::npos) return std::nullopt;
+  std::string name = trim(header.substr(0, open));
+  if (name.empty()) return std::nullopt;
+  return std::pair{name, trim(header.substr(open + 1, header.size() - open - 2))};
+}
+
+// Powers of ten of the SI prefixes a unit may carry (µ in both spellings; u is written).
+constexpr std::pair<std::string_view, int> kPrefixes[] = {
+    {"G", 9},  {"M", 6},       {"k", 3},       {"c", -2}, {"m", -3},
+    {"u", -6}, {"\u00b5", -6}, {"\u03bc", -6}, {"n", -9}, {"p", -12}};
+constexpr std::string_view kPrefixed[] = {"m", "V", "N", "A", "Pa", "W", "s", "rad", "T", "Hz"};
+constexpr std::string_view kUnprefixed[] = {"deg", "bar"};
+
+bool prefixable(std::string_view unit) {
+  return std::find(std::begin(kPrefixed), std::end(kPrefixed), unit) != std::end(kPrefixed);
+}
+
+// A known unit as (power of ten of its prefix, unit without prefix); unset for another string.
+std::optional<std::pair<int, std::string>> known_unit(const std::string& unit) {
+  for (const auto& [prefix, power] : kPrefixes) {
+    if (unit.size() > prefix.size() && unit.starts_with(prefix) &&
+        prefixable(std::string_view(unit).substr(prefix.size()))) {
+      return std::pair{power, unit.substr(prefix.size())};
+    }
+  }
+  if (prefixable(unit) ||
+      std::find(std::begin(kUnprefixed), std::end(kUnprefixed), unit) != std::end(kUnprefixed)) {
+    return std::pair{0, unit};
+  }
+  return std::nullopt;
+}
+
+// The unit of values in `unit` multiplied by `scale`: m with 1e6 is um, mV with 1e-3 is V.
+// Unset when the scale is not a power of ten that moves a known unit onto a prefix.
+std::optional<std::string> scaled_unit(const std::string& unit, double scale) {
+  if (scale == 1.0) return unit;
+  const auto known = known_unit(unit);
+  if (!known || !(scale > 0.0)) return std::nullopt;
+  const double decades = std::log10(scale);
+  const auto power = static_cast<int>(std::lround(decades));
+  if (std::abs(decades - power) > 1e-9) return std::nullopt;
+  const int target = known->first - power;
+  if (target == 0) return known->second;
+  if (!prefixable(known->second)) return std::nullopt;
+  for (const auto& [prefix, p] : kPrefixes) {
+    if (p == target) return std::string(prefix) + known->second;
+  }
+  return std::nullopt;
+}
+
+// Units compared with µ (either spelling) read as u.
+bool same_unit(const std::string& a, const std::string& b) {
+  const auto plain = [](const std::string& unit) {
+    const auto known = known_unit(unit);
+    return known && known->first == -6 ? "u" + known->second : unit;
+  };
+  return plain(a) == plain(b);
 }
 
 }  // namespace
@@ -80,6 +145,15 @@ DataTable DataTable::parse_csv(const std::string& text, const std::string& origi
           throw DataFileError(origin + ":" + std::to_string(line_no) + ": duplicate column name '" +
                               cells[i] + "'");
         }
+      }
+      // `F [N]` is found as `F` too, unless a column is named `F` or two are `F [...]`.
+      std::map<std::string, int> bare;
+      for (const auto& c : cells) {
+        if (const auto b = bracket_form(c)) ++bare[b->first];
+      }
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        const auto b = bracket_form(cells[i]);
+        if (b && bare[b->first] == 1) t.index_.emplace(b->first, i);
       }
       t.names_ = cells;
       t.columns_.resize(cells.size());
@@ -127,6 +201,18 @@ const std::vector<double>& DataTable::column(const std::string& name) const {
   return columns_[it->second];
 }
 
+std::optional<std::string> DataTable::unit(const std::string& column) const {
+  const auto it = index_.find(column);
+  if (it == index_.end()) return std::nullopt;
+  const std::string& header = names_[it->second];
+  if (const auto b = bracket_form(header)) return b->second;
+  const auto underscore = header.rfind('_');
+  if (underscore == std::string::npos || underscore == 0) return std::nullopt;
+  std::string suffix = header.substr(underscore + 1);
+  if (!known_unit(suffix)) return std::nullopt;
+  return suffix;
+}
+
 void DataTable::require_increasing(const std::string& name) const {
   const auto& c = column(name);
   for (std::size_t k = 0; k < c.size(); ++k) {
@@ -157,11 +243,25 @@ double DataTable::sample_period() const {
   return median_step(t);
 }
 
+compensation::Units Record::units() const {
+  compensation::Units units;
+  if (u_unit) units.input = *u_unit;
+  if (y_unit) units.output = *y_unit;
+  return units;
+}
+
 Record read_record(const std::string& path, const RecordColumns& columns, bool y_required) {
   for (const auto& [name, value] :
        {std::pair{"u scale", columns.u_scale}, std::pair{"y scale", columns.y_scale}}) {
     if (!std::isfinite(value) || value == 0.0) {
       throw DataFileError(std::string(name) + " must be a finite, non-zero number");
+    }
+  }
+  for (const auto& [option, unit] :
+       {std::pair{"--u-unit", &columns.u_unit}, std::pair{"--y-unit", &columns.y_unit}}) {
+    if (*unit && trim(**unit).empty()) {
+      throw DataFileError(std::string(option) +
+                          ": the unit is empty; name one (e.g. N, mm) or leave the option out");
     }
   }
   if (!std::isfinite(columns.rate_hz) || columns.rate_hz < 0.0) {
@@ -191,12 +291,41 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
     }
     return v;
   };
+  // The unit after scaling: the option's, else the header's moved by the scale.
+  auto unit_of = [&](const std::string& name, double scale, const std::optional<std::string>& given,
+                     const char* unit_option,
+                     const char* scale_option) -> std::optional<std::string> {
+    if (!columns.read_units) return std::nullopt;
+    if (given) return trim(*given);
+    const auto header = data.unit(name);
+    if (!header) return std::nullopt;
+    if (header->empty()) {
+      throw DataFileError(path + ": the header of column '" + name +
+                          "' names an empty unit; name it with " + unit_option);
+    }
+    auto scaled = scaled_unit(*header, scale);
+    if (!scaled) {
+      char factor[32];
+      std::snprintf(factor, sizeof factor, "%g", scale);
+      throw DataFileError(path + ": column '" + name + "' is in " + *header + ", and " +
+                          scale_option + " " + factor +
+                          " turns it into a unit that cannot be named from it; name it with " +
+                          unit_option);
+    }
+    return scaled;
+  };
   if (columns.rate_hz > 0.0) {
     r.t.resize(data.rows());
     for (std::size_t k = 0; k < r.t.size(); ++k) r.t[k] = static_cast<double>(k) / columns.rate_hz;
     r.sample_period_s = 1.0 / columns.rate_hz;
   } else {
     require_column(columns.t, "time", "--t-column, or give the sample rate with --rate");
+    if (const auto unit = data.unit(columns.t); unit && *unit != "s") {
+      throw DataFileError(path + ": the header of time column '" + columns.t +
+                          "' names the unit '" + *unit +
+                          "'; the time column must be in s (or give the sample rate with "
+                          "--rate)");
+    }
     data.require_increasing(columns.t);
     r.t = data.column(columns.t);
     if (r.t.size() < 2) throw DataFileError(path + ": need at least 2 rows");
@@ -204,9 +333,39 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
   }
   require_column(columns.u, "input", "--u-column");
   r.u = scaled(columns.u, columns.u_scale);
+  r.u_unit = unit_of(columns.u, columns.u_scale, columns.u_unit, "--u-unit", "--u-scale");
   if (y_required) require_column(columns.y, "output", "--y-column");
-  if (y_required || data.has(columns.y)) r.y = scaled(columns.y, columns.y_scale);
+  if (y_required || data.has(columns.y)) {
+    r.y = scaled(columns.y, columns.y_scale);
+    r.y_unit = unit_of(columns.y, columns.y_scale, columns.y_unit, "--y-unit", "--y-scale");
+  }
   return r;
+}
+
+compensation::Units common_units(std::span<const Record> records,
+                                 std::span<const std::string> paths,
+                                 const std::optional<compensation::Units>& given) {
+  compensation::Units units = given.value_or(compensation::Units{});
+  auto agree = [&](std::optional<std::string> Record::*unit, std::string compensation::Units::*out,
+                   const char* what) {
+    std::optional<std::string> named;
+    std::string by;
+    if (given) named = (*given).*out, by = "the model's";
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      const std::optional<std::string>& u = records[i].*unit;
+      if (!u) continue;
+      if (!named) {
+        named = *u, by = paths[i] + "'s";
+      } else if (!same_unit(*u, *named)) {
+        throw DataFileError(paths[i] + ": the " + what + " is in " + *u + ", " + by + " in " +
+                            *named);
+      }
+    }
+    if (named) units.*out = *named;
+  };
+  agree(&Record::u_unit, &compensation::Units::input, "input");
+  agree(&Record::y_unit, &compensation::Units::output, "output");
+  return units;
 }
 
 void write_csv(const std::string& path, const std::vector<std::string>& names,

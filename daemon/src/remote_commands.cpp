@@ -162,6 +162,7 @@ RemoteUpload read_upload(const std::string& path, const std::string& kind,
   columns.y.clear();  // no output column to read
   columns.u_scale = scale;
   columns.rate_hz = rate_hz;
+  columns.read_units = false;  // a drive in V, a reference in um: what the daemon takes
   Record r = read_record(path, columns, false);
   RemoteUpload u;
   u.kind = kind;

@@ -98,6 +98,8 @@ TEST(DataTable, ReadRecordMapsNamesScalesAndARateForFilesWithoutTime) {
   EXPECT_DOUBLE_EQ(r.sample_period_s, 1.0 / 6400.0);
   EXPECT_DOUBLE_EQ(r.u[1], 0.2);
   EXPECT_DOUBLE_EQ(r.y[2], 4.0);
+  EXPECT_EQ(r.units().input, "V");    // mV x 1e-3
+  EXPECT_EQ(r.units().output, "um");  // m x 1e6
 
   auto error_of_record = [&](const hd::RecordColumns& cols) -> std::string {
     try {
@@ -128,4 +130,114 @@ TEST(DataTable, ReadRecordMapsNamesScalesAndARateForFilesWithoutTime) {
                                        "other); name it with --y-column"),
             std::string::npos);
   std::filesystem::remove(path);
+}
+
+// Units come from the header (`name [unit]`, found as `name` too, or `name_unit` for a known
+// unit), moved by the scale's power of 1000, and an option names them outright; V and um where
+// nothing does. An empty unit, a time column not in s and a scale that leaves the unit unnamed
+// are refused with a message naming the option.
+TEST(DataTable, ReadRecordTakesTheUnitsFromTheHeaderOrTheOptions) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const auto write = [&](const std::string& name, const std::string& header) {
+    const auto p = (dir / name).string();
+    std::ofstream(p) << header << "\n0,1,2\n0.001,2,3\n0.002,4,5\n";
+    return p;
+  };
+  const std::string bracket = write("hystbench_units_bracket.csv", "t [s],F [N],x [mm]");
+  hd::RecordColumns c;
+  c.u = "F";
+  c.y = "x";
+  hd::Record r = hd::read_record(bracket, c, true);
+  EXPECT_EQ(r.u_unit, "N");
+  EXPECT_EQ(r.y_unit, "mm");
+  EXPECT_EQ(r.units().input, "N");
+  EXPECT_EQ(r.units().output, "mm");
+  EXPECT_DOUBLE_EQ(r.y[2], 5.0);
+  c.u = "F [N]";  // the whole header name finds the column too
+  EXPECT_EQ(hd::read_record(bracket, c, true).u_unit, "N");
+
+  // The scale moves the unit: m x 1e3 is mm; the option wins over the header.
+  const std::string suffix = write("hystbench_units_suffix.csv", "t,u_N,y_m");
+  c = {};
+  c.u = "u_N";
+  c.y = "y_m";
+  c.y_scale = 1e3;
+  r = hd::read_record(suffix, c, true);
+  EXPECT_EQ(r.u_unit, "N");
+  EXPECT_EQ(r.y_unit, "mm");
+  EXPECT_DOUBLE_EQ(r.y[1], 3e3);
+  c.y_unit = "um";
+  c.u_unit = "kN";
+  r = hd::read_record(suffix, c, true);
+  EXPECT_EQ(r.y_unit, "um");
+  EXPECT_EQ(r.u_unit, "kN");
+
+  // Nothing names them: V and um.
+  const std::string plain = write("hystbench_units_plain.csv", "t,u,y_model");
+  c = {};
+  c.y = "y_model";  // "model" is no unit
+  r = hd::read_record(plain, c, true);
+  EXPECT_FALSE(r.u_unit.has_value());
+  EXPECT_FALSE(r.y_unit.has_value());
+  EXPECT_EQ(r.units().input, "V");
+  EXPECT_EQ(r.units().output, "um");
+
+  auto error_of_record = [](const std::string& path, const hd::RecordColumns& cols) {
+    try {
+      (void)hd::read_record(path, cols, true);
+    } catch (const hd::DataFileError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  c = {};
+  c.y_unit = " ";
+  EXPECT_NE(error_of_record(plain, c).find("--y-unit: the unit is empty"), std::string::npos);
+  c = {};
+  c.u = "F";
+  c.y = "x";
+  const std::string empty = write("hystbench_units_empty.csv", "t,F [],x [mm]");
+  EXPECT_NE(error_of_record(empty, c).find("the header of column 'F' names an empty unit; name it "
+                                           "with --u-unit"),
+            std::string::npos);
+  c.y_scale = 2.5;
+  EXPECT_NE(
+      error_of_record(bracket, c).find("column 'x' is in mm, and --y-scale 2.5 turns it into"),
+      std::string::npos);
+  hd::RecordColumns values_only = c;
+  values_only.read_units = false;  // invert's reference, an upload: values only
+  EXPECT_FALSE(hd::read_record(bracket, values_only, true).y_unit.has_value());
+  c.y_unit = "mm";  // named: any scale goes
+  EXPECT_EQ(error_of_record(bracket, c), "no error");
+  const std::string ms = write("hystbench_units_ms.csv", "t [ms],F [N],x [mm]");
+  c = {};
+  c.u = "F";
+  c.y = "x";
+  EXPECT_NE(error_of_record(ms, c).find("time column 't' names the unit 'ms'"), std::string::npos);
+  for (const auto& p : {bracket, suffix, plain, empty, ms}) std::filesystem::remove(p);
+}
+
+// Records read together must agree on the units they name, and with a model's.
+TEST(DataTable, CommonUnitsOfRecordsAgreeOrNameTheOneThatDiffers) {
+  hd::Record a, b, none;
+  a.y_unit = "mm";
+  b.y_unit = "um";
+  const std::vector<std::string> paths{"a.csv", "b.csv"};
+  EXPECT_EQ(hd::common_units(std::vector{a, none}, paths).output, "mm");
+  EXPECT_EQ(hd::common_units(std::vector{none, none}, paths).output, "um");
+  try {
+    (void)hd::common_units(std::vector{a, b}, paths);
+    ADD_FAILURE() << "mm and um agreed";
+  } catch (const hd::DataFileError& e) {
+    EXPECT_STREQ(e.what(), "b.csv: the output is in um, a.csv's in mm");
+  }
+  hystbench::compensation::Units model;
+  model.output = "\u00b5m";  // the same unit as um
+  EXPECT_EQ(hd::common_units(std::vector{b, none}, paths, model).output, "\u00b5m");
+  try {
+    (void)hd::common_units(std::vector{none, a}, paths, model);
+    ADD_FAILURE() << "mm and the model's um agreed";
+  } catch (const hd::DataFileError& e) {
+    EXPECT_STREQ(e.what(), "b.csv: the output is in mm, the model's in \u00b5m");
+  }
 }
