@@ -104,13 +104,15 @@ json dead_zone_to_json(const DeadZoneParameters& d, double center) {
 
 }  // namespace
 
+json to_json(const Units& units) { return {{"input", units.input}, {"output", units.output}}; }
+
 json to_json(const ModelFile& file) {
   const ActuatorModel& m = file.model;
   if (!m.valid()) throw ModelFileError("model: empty model cannot be saved");
   json j;
   j["schema"] = kModelSchema;
   j["type"] = std::string(to_string(m.hysteresis().kind()));
-  j["units"] = {{"input", m.units.input}, {"output", m.units.output}};
+  j["units"] = to_json(m.units);
   if (m.input_min < m.input_max) j["input_range"] = {m.input_min, m.input_max};
   switch (m.hysteresis().kind()) {
     case ModelKind::kPi:

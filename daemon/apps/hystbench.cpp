@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
       "Data files are CSV: '#' lines are comments, a header row names the columns; 't' (s) and\n"
       "'u' (input, e.g. V) are required, 'y' (output, e.g. um) where the command needs it.\n"
       "Other names, scales or no time column: --t-column, --u-column, --y-column, --u-scale,\n"
-      "--y-scale, --rate (fit, simulate, diagnose).\n"
+      "--y-scale, --rate (fit, simulate, diagnose). Units come from a header such as\n"
+      "'F [N]' or 'x_mm', or --u-unit / --y-unit; V and um where nothing names them.\n"
       "\n"
       "Examples:\n"
       "  hystbench fit run.csv --model mpi -o actuator.json\n"
@@ -55,6 +56,12 @@ int main(int argc, char** argv) {
     c->add_option("--rate", columns.rate_hz,
                   "Sample rate [Hz] of a file without a time column (t = row / rate)")
         ->check(CLI::PositiveNumber);
+    c->add_option("--u-unit", columns.u_unit,
+                  "Unit of the input after --u-scale (e.g. N); default: the column header's "
+                  "('F [N]', 'F_N'), else V");
+    c->add_option("--y-unit", columns.y_unit,
+                  "Unit of the output after --y-scale (e.g. mm); default: the column header's "
+                  "('x [mm]', 'x_mm'), else um");
   };
 
   hd::FitCommand fit;

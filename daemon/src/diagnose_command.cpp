@@ -173,6 +173,7 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
   return {{"data", data_path},
           {"cause", std::string(hc::to_string(d.cause))},
           {"causes", causes},
+          {"units", hc::to_json(d.baseline.units)},
           {"verdict", d.verdict},
           {"notes", d.notes},
           {"records", records},
@@ -202,7 +203,8 @@ void print_diagnosis(std::ostream& out, const hc::Diagnosis& d, const std::strin
   const double seconds = d.sample_period_s * static_cast<double>(d.samples - 1);
   out << "data      " << data_path << ": " << d.samples << " samples"
       << (d.records.size() > 1 ? " in " + std::to_string(d.records.size()) + " records" : "")
-      << ", " << fmt(1.0 / d.sample_period_s) << " Hz, " << fmt(seconds) << " s\n";
+      << ", " << fmt(1.0 / d.sample_period_s) << " Hz, " << fmt(seconds) << " s; u in "
+      << d.baseline.units.input << ", y in " << unit << "\n";
   out << "held out  " << d.split.describe(d.sample_period_s) << "\n";
   out << "baseline  " << d.baseline_description << "\n"
       << "          held-out rms " << fmt(d.baseline_heldout.rmse) << " " << unit << " ("
@@ -386,17 +388,17 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
 int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
     if (cmd.data_paths.empty()) throw std::invalid_argument("no record to diagnose");
+    // The records diagnosed, then those only validated: every unit they name must agree.
     std::vector<Record> records;
-    for (const std::string& path : cmd.data_paths) {
-      records.push_back(read_record(path, cmd.columns, true));
-    }
+    std::vector<std::string> paths = cmd.data_paths;
+    paths.insert(paths.end(), cmd.validate_paths.begin(), cmd.validate_paths.end());
+    for (const std::string& path : paths) records.push_back(read_record(path, cmd.columns, true));
     std::string label;
     for (const std::string& path : cmd.data_paths) label += (label.empty() ? "" : " + ") + path;
     hc::DiagnosisOptions opt;
-    if (!cmd.model_path.empty()) {
-      opt.baseline = load_model_file(cmd.model_path).model;
-      opt.units = opt.baseline->units;
-    }
+    if (!cmd.model_path.empty()) opt.baseline = load_model_file(cmd.model_path).model;
+    opt.units = common_units(records, paths,
+                             opt.baseline ? std::optional(opt.baseline->units) : std::nullopt);
     if (!cmd.json_output) {
       opt.progress = [&err](double fraction, const std::string& what) {
         err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction) << " %] " << what
@@ -404,19 +406,20 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
       };
     }
     std::vector<hc::RecordView> views;
-    for (std::size_t i = 0; i < records.size(); ++i) {
+    for (std::size_t i = 0; i < cmd.data_paths.size(); ++i) {
       views.push_back({records[i].t, records[i].u, records[i].y, cmd.data_paths[i]});
     }
     const hc::Diagnosis d = hc::diagnose(views, opt);  // errors name the record
     if (!cmd.json_output) err << "\n";
     std::vector<Validation> validations;
-    for (const std::string& path : cmd.validate_paths) {
-      const Record v = read_record(path, cmd.columns, true);
+    for (std::size_t i = cmd.data_paths.size(); i < records.size(); ++i) {
+      const Record& v = records[i];
       try {
-        validations.push_back({path, hc::validate_model(d.baseline, v.u, v.y, v.sample_period_s),
+        validations.push_back({paths[i],
+                               hc::validate_model(d.baseline, v.u, v.y, v.sample_period_s),
                                hc::validate_model(d.extended, v.u, v.y, v.sample_period_s)});
       } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument(path + ": " + e.what());
+        throw std::invalid_argument(paths[i] + ": " + e.what());
       }
     }
     if (!cmd.save_baseline.empty()) {
@@ -430,15 +433,15 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
     if (!cmd.report_dir.empty()) {
       // The records end to end, as the diagnosis saw them.
       std::vector<double> t, u, y;
-      for (std::size_t i = 0; i < records.size(); ++i) {
+      for (std::size_t i = 0; i < cmd.data_paths.size(); ++i) {
         const Record& r = records[i];
         const double offset = i < d.record_offsets.size() ? d.record_offsets[i] : 0.0;
         u.insert(u.end(), r.u.begin(), r.u.end());
         for (const double v : r.y) y.push_back(v - offset);
       }
       for (std::size_t k = 0; k < u.size(); ++k) {
-        t.push_back(records.size() == 1 ? records[0].t[k]
-                                        : static_cast<double>(k) * d.sample_period_s);
+        t.push_back(cmd.data_paths.size() == 1 ? records[0].t[k]
+                                               : static_cast<double>(k) * d.sample_period_s);
       }
       write_diagnosis_report(cmd.report_dir, d, label, t, u, y);
     }

@@ -63,6 +63,7 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     opt.creep = cmd.creep.value_or(true);  // unset: tried, kept when it lowers held-out error
     opt.creep_always = cmd.creep.value_or(false);
     opt.drift = cmd.drift;
+    opt.units = data.units();
     if (!cmd.json_output) {
       opt.progress = [&err](double fraction, const std::string& what) {
         err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction) << " %] " << what
@@ -92,7 +93,8 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     const std::string type(hc::to_string(r.model.hysteresis().kind()));
     if (cmd.json_output) {
       json result = fitted;
-      result.update({{"model", cmd.output_path}, {"type", type}});
+      result.update(
+          {{"model", cmd.output_path}, {"type", type}, {"units", hc::to_json(r.model.units)}});
       out << result.dump() << "\n";
     } else {
       out << "model     " << type << " with " << r.operators << " plays, " << r.dead_zones
@@ -111,13 +113,17 @@ int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& er
   return guarded(err, [&] {
     hc::ModelFile file = load_model_file(cmd.model_path);
     const Record data = read_record(cmd.data_path, cmd.columns, false);
+    // The record's units, where it names them, must be the model's.
+    const hc::Units units =
+        common_units(std::span(&data, 1), std::span(&cmd.data_path, 1), file.model.units);
     const auto& t = data.t;
     const auto& u = data.u;
     const std::vector<double> y_model = file.model.simulate(u, data.sample_period_s);
     std::vector<std::string> names{"t", "u", "y_model"};
     std::vector<const std::vector<double>*> cols{&t, &u, &y_model};
     std::vector<double> residual;
-    json result = {{"samples", u.size()}, {"output", cmd.output_path}};
+    json result = {
+        {"samples", u.size()}, {"output", cmd.output_path}, {"units", hc::to_json(units)}};
     if (!data.y.empty()) {
       const auto& y = data.y;
       residual.resize(y.size());
@@ -126,10 +132,11 @@ int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& er
       cols.insert(cols.end(), {&y, &residual});
       const hc::ErrorStats s = hc::error_stats(y, y_model);
       result.update(to_json(s));
-      if (!cmd.json_output) print_stats(out, "error", s, file.model.units.output);
+      if (!cmd.json_output) print_stats(out, "error", s, units.output);
     }
     write_csv(cmd.output_path, names, cols,
-              {"hystbench simulate model=" + cmd.model_path + " data=" + cmd.data_path});
+              {"hystbench simulate model=" + cmd.model_path + " data=" + cmd.data_path,
+               "units: t s, u " + units.input + ", y " + units.output});
     if (cmd.json_output) {
       out << result.dump() << "\n";
     } else {
@@ -153,6 +160,7 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
     columns.y.clear();  // no output column to read
     columns.u_scale = cmd.yr_scale;
     columns.rate_hz = cmd.rate_hz;
+    columns.read_units = false;  // the reference is in the model's output unit
     const Record reference = read_record(cmd.reference_path, columns, false);
     const auto& t = reference.t;
     const auto& yr = reference.u;

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -78,6 +79,18 @@ class DiagnoseCommandTest : public hystbench::test::TempDirTest {
 
   std::string out_, err_;
 };
+
+// `diagnose DATA` of a file without a time column (t = row / rate_hz), output scaled by y_scale.
+hd::DiagnoseCommand command_for(const std::string& data, const std::string& u, const std::string& y,
+                                double y_scale, double rate_hz) {
+  hd::DiagnoseCommand cmd;
+  cmd.data_paths = {data};
+  cmd.columns.u = u;
+  cmd.columns.y = y;
+  cmd.columns.y_scale = y_scale;
+  cmd.columns.rate_hz = rate_hz;
+  return cmd;
+}
 
 double rms_of_simulation(const std::string& model, const std::string& data,
                          const std::string& output) {
@@ -238,6 +251,39 @@ TEST_F(DiagnoseCommandTest, ReportFolderHasTheTextTheJsonAndThePlots) {
   EXPECT_EQ(text.str(), out_.substr(0, out_.find("report    ")));
 }
 
+// A record in N and mm (its column headers say so): every figure of the report carries them and
+// no "um" appears in it; the JSON's units and the saved models are in N and mm. --y-unit
+// overrides the header, and a given model in other units than the record's is refused.
+TEST_F(DiagnoseCommandTest, UnitsComeFromTheRecordsHeaderOrTheOptions) {
+  const Record r = simulate(creep_actuator(), 2e-3, {}, 51);
+  hd::write_csv(path("damper.csv"), {"t [s]", "F [N]", "x [mm]"}, {&r.t, &r.u, &r.y});
+  hd::DiagnoseCommand cmd;
+  cmd.data_paths = {path("damper.csv")};
+  cmd.columns.u = "F";
+  cmd.columns.y = "x";
+  cmd.save_extended = path("extended.json");
+  ASSERT_EQ(run(cmd), 0) << err_;
+  EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bum\b)"))) << out_;
+  EXPECT_NE(out_.find("u in N, y in mm"), std::string::npos) << out_;
+  EXPECT_TRUE(std::regex_search(out_, std::regex(R"(held-out rms [0-9.e+-]+ mm)"))) << out_;
+  const hc::ModelFile extended = hd::load_model_file(cmd.save_extended);
+  EXPECT_EQ(extended.model.units.input, "N");
+  EXPECT_EQ(extended.model.units.output, "mm");
+
+  cmd.json_output = true;
+  cmd.columns.y_unit = "cm";
+  cmd.save_extended.clear();
+  ASSERT_EQ(run(cmd), 0) << err_;
+  const json j = json::parse(out_);
+  EXPECT_EQ(j.at("units"), (json{{"input", "N"}, {"output", "cm"}}));
+  EXPECT_EQ(j.at("extended").at("model").at("units"), j.at("units"));
+
+  cmd.model_path = path("extended.json");  // in mm
+  EXPECT_EQ(run(cmd), 1);
+  EXPECT_NE(err_.find("damper.csv: the output is in cm, the model's in mm"), std::string::npos)
+      << err_;
+}
+
 TEST_F(DiagnoseCommandTest, BadInputGivesAClearError) {
   std::string with_nan = "t,u,y\n";
   for (int k = 0; k < 1000; ++k) {
@@ -277,11 +323,7 @@ TEST_F(DiagnoseCommandTest, MeasuredPiezoRecords) {
   // displacement [um]; 200 Hz, no time column.
   const std::string identification = (folder / "Model_Vi_Do.dat").string();
   const std::string tracking = (folder / "Test_Vi_Do_Di.dat").string();
-  hd::DiagnoseCommand cmd;
-  cmd.columns.u = "1";
-  cmd.columns.y = "5";
-  cmd.columns.rate_hz = 200.0;
-  cmd.data_paths = {identification};
+  hd::DiagnoseCommand cmd = command_for(identification, "1", "5", 1.0, 200.0);
   cmd.json_output = true;
   ASSERT_EQ(run(cmd), 0) << err_;
   const json id = json::parse(out_);
@@ -342,12 +384,7 @@ TEST_F(DiagnoseCommandTest, MeasuredFineSteeringMirrorChannelDrivenByThreeInputs
   // README: k (t = k / 6400 s), u1_V..u3_V [V], y1_m..y3_m [m]; a random-phase multisine of
   // 8192 samples played twice on all three actuators at once. Output 1 against input 1, read
   // straight from the file through the column options.
-  hd::DiagnoseCommand cmd;
-  cmd.data_paths = {csv.string()};
-  cmd.columns.u = "u1_V";
-  cmd.columns.y = "y1_m";
-  cmd.columns.y_scale = 1e6;
-  cmd.columns.rate_hz = 6400.0;
+  hd::DiagnoseCommand cmd = command_for(csv.string(), "u1_V", "y1_m", 1e6, 6400.0);
   cmd.json_output = true;
   ASSERT_EQ(run(cmd), 0) << err_;
   const json d = json::parse(out_);
@@ -363,6 +400,29 @@ TEST_F(DiagnoseCommandTest, MeasuredFineSteeringMirrorChannelDrivenByThreeInputs
     said = said || n.get<std::string>().find("not in this record") != std::string::npos;
   }
   EXPECT_TRUE(said) << d.at("notes").dump();
+}
+
+// The Bouc-Wen benchmark of the shared data set, a force-displacement record (README: columns
+// k, u_N [N], y_m [m]; 750 Hz, t = k / 750 s; one period of a multisine), read straight from the
+// file: the units come from the headers, the output scaled from m to mm, and every figure of the
+// report is in N and mm.
+TEST_F(DiagnoseCommandTest, ForceDisplacementRecordInItsOwnUnits) {
+  const fs::path csv =
+      fs::path(HYSTBENCH_SHARED_DATA_DIR) / "boucwen-benchmark" / "boucwen_multisine_test.csv";
+  if (!fs::exists(csv)) {
+    GTEST_SKIP() << "shared data set boucwen-benchmark not found under "
+                 << HYSTBENCH_SHARED_DATA_DIR;
+  }
+  hd::DiagnoseCommand cmd = command_for(csv.string(), "u_N", "y_m", 1e3, 750.0);
+  ASSERT_EQ(run(cmd), 0) << err_;
+  EXPECT_NE(out_.find("u in N, y in mm"), std::string::npos) << out_;
+  EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bum\b)"))) << out_;
+  EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bV\b)"))) << out_;
+  cmd.json_output = true;
+  ASSERT_EQ(run(cmd), 0) << err_;
+  const json j = json::parse(out_);
+  EXPECT_EQ(j.at("units"), (json{{"input", "N"}, {"output", "mm"}}));
+  EXPECT_EQ(j.at("baseline").at("model").at("units"), j.at("units"));
 }
 
 // Several runs of one device through the command: a rate-dependent actuator (symmetric PI, the

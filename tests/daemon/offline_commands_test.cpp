@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -254,6 +255,48 @@ TEST_F(OfflineCommandsTest, BadInputNamesTheCauseAndWritesNothing) {
   EXPECT_EQ(run(hd::run_simulate, sim), 1);
   EXPECT_NE(err_.find("broken.json"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(sim.output_path));
+}
+
+// A record in other units (a damper's force [N] against displacement [mm], read from the column
+// headers): `fit` prints its errors in mm and saves a model in N and mm, `simulate` reports in mm
+// and refuses a record whose header names another unit than the model's; --y-unit overrides
+// the header.
+TEST_F(OfflineCommandsTest, FitAndSimulateCarryTheRecordsUnits) {
+  const SimulatedRecord r = hystbench::test::simulate_record(static_actuator(), 1e-3, {}, 11);
+  hd::write_csv(path("damper.csv"), {"t [s]", "F [N]", "x [mm]"}, {&r.t, &r.u, &r.y});
+  hd::FitCommand fit;
+  fit.data_path = path("damper.csv");
+  fit.columns.u = "F";
+  fit.columns.y = "x";
+  fit.output_path = path("damper.json");
+  ASSERT_EQ(run(hd::run_fit, fit), 0) << err_;
+  EXPECT_NE(out_.find(" mm ("), std::string::npos) << out_;
+  EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bum\b)"))) << out_;
+  const hc::ModelFile model = hd::load_model_file(fit.output_path);
+  EXPECT_EQ(model.model.units.input, "N");
+  EXPECT_EQ(model.model.units.output, "mm");
+
+  hd::SimulateCommand sim;
+  sim.model_path = fit.output_path;
+  sim.data_path = fit.data_path;
+  sim.columns = fit.columns;
+  sim.output_path = path("damper_sim.csv");
+  ASSERT_EQ(run(hd::run_simulate, sim), 0) << err_;
+  EXPECT_NE(out_.find(" mm ("), std::string::npos) << out_;
+  EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bum\b)"))) << out_;
+  sim.json_output = true;
+  ASSERT_EQ(run(hd::run_simulate, sim), 0) << err_;
+  EXPECT_EQ(json::parse(out_).at("units"), (json{{"input", "N"}, {"output", "mm"}}));
+  sim.columns.y_unit = "um";  // the option wins over the header, and disagrees with the model
+  EXPECT_EQ(run(hd::run_simulate, sim), 1);
+  EXPECT_NE(err_.find("damper.csv: the output is in um, the model's in mm"), std::string::npos)
+      << err_;
+
+  fit.columns.y_unit = "cm";
+  fit.json_output = true;
+  ASSERT_EQ(run(hd::run_fit, fit), 0) << err_;
+  EXPECT_EQ(json::parse(out_).at("units").at("output"), "cm");
+  EXPECT_EQ(hd::load_model_file(fit.output_path).model.units.output, "cm");
 }
 
 // `fit --model rpi` on a record of the rate-dependent actuator is never worse on held-out data

@@ -34,6 +34,8 @@ struct ModelFile {
 };
 
 nlohmann::json to_json(const ModelFile& file);
+/// {"input": unit, "output": unit}, as a model file's `units`.
+nlohmann::json to_json(const Units& units);
 /// Validates schema, type, every field (type, NaN, ordering) and builds the model.
 ModelFile model_file_from_json(const nlohmann::json& j);
 /// Parses text (the contents of a model file). Syntax errors become ModelFileError too.

@@ -7,7 +7,7 @@
 //    "causes": [{"cause": .., "gain": .., "against": "the baseline" | "the loop's shape ..",
 //                "heldout_rms": .., "added_gain": .., "added_rms": .., "evidence": "..",
 //                "extension": ".."}, ...],
-//    "noise_allowance_rms": ..,
+//    "units": {"input": "V", "output": "um"}, "noise_allowance_rms": ..,
 //    "records": [{"data": path, "start": sample, "samples": n}, ...],
 //    "baseline": {"model": {model file}, "description": "..", "rmse": .., "max_abs": .., ...},
 //    "extended": {"model": {model file}, "description": "..", "rmse": .., "gain": .., ...},
@@ -20,7 +20,8 @@
 //                    "baseline_offset": .., "extended_offset": .., "samples": ..}, ...],
 //    "residual_structure": {"time": share, "input": .., ...}, "noise_rms": .., "notes": [..]}
 // (rmse on the held-out part; gain = baseline rmse / candidate rmse; causes: every named cause,
-// largest gain first, `cause` the first). Several records are
+// largest gain first, `cause` the first; every figure in the units of `units`: the records'
+// headers or --u-unit / --y-unit, a given model's, else V and um). Several records are
 // diagnosed together: fitted on every record's fit blocks, and every candidate also scored on
 // each record left out whole (left_out; empty for one record). --validate scores the baseline
 // and extended models on records that are never fitted (mean error removed, reported apart).
