@@ -60,8 +60,9 @@ struct DiagnosisOptions {
   /// Split: `blocks` equal blocks, every `heldout_every`-th held out (25 % with 16 and 4).
   int blocks = 32;        ///< 4 .. 64
   int heldout_every = 4;  ///< 2 .. blocks / 2
-  /// A candidate is named only when its held-out gain reaches this (and its statistic is
-  /// significant).
+  /// A candidate is named only when its held-out gain reaches this (after the first named
+  /// cause, its gain added to the causes before it may instead) and its statistic is
+  /// significant.
   double min_gain = 1.2;
   /// The baseline is "at the noise floor" when its held-out rms is below this times the
   /// estimated noise rms.
@@ -182,13 +183,14 @@ struct Diagnosis {
   Cause cause = Cause::kNone;
   /// Every named cause, largest held-out gain first; empty when the cause is none. After the
   /// first (`cause`, chosen as the verdict says), the candidates that are significant and carry
-  /// over are tested again, strongest first, on top of the joint model of the causes before
-  /// them; one is named when it reaches min_gain (its gain, or its added_gain: an effect beside
-  /// a larger one gains little over the baseline) and is not within the noise of the causes
-  /// before it: it must explain at least `noise_allowance_rms` of held-out rms beyond them
-  /// (added_rms). When the first is named beyond the loop's shape (asymmetry), the other causes
-  /// are judged on top of the shape (significant there, gain over the shape's extension); they
-  /// come first, ranked by that gain, and the shape last, itself judged on top of the first.
+  /// over are tested again, strongest first, on top of the extended model built so far (the
+  /// causes before them and any extension that lowered its error); one is named when it reaches
+  /// min_gain (its gain, or its added_gain: an effect beside a larger one gains little over the
+  /// baseline) and is not within the noise of the causes before it: it must explain at least
+  /// `noise_allowance_rms` of held-out rms beyond them (added_rms). When the first is named beyond
+  /// the loop's shape (asymmetry), the other causes are judged on top of the shape (significant
+  /// there, gain over the shape's extension); they come first, ranked by that gain, and the shape
+  /// last, itself judged on top of the first.
   std::vector<NamedCause> causes;
   /// The held-out rms [output unit] an effect must explain beyond the stronger named causes to
   /// be told apart from them: sqrt(noise_floor_factor^2 - 1) x noise_rms, what a model at the
