@@ -151,7 +151,7 @@ ValidationScore validate_model(ActuatorModel model, std::span<const double> u,
   }
   const std::vector<double> yhat = model.simulate(u, dt);
   ValidationScore v;
-  v.skipped = details::startup_samples(u, u.size() / 32);
+  v.skipped = details::startup_samples(u, u.size() / 4);
   v.samples = u.size() - v.skipped;
   const auto n = static_cast<double>(v.samples);
   for (std::size_t k = v.skipped; k < u.size(); ++k) v.offset += (y[k] - yhat[k]) / n;

@@ -6,13 +6,9 @@
 //   default: creep lags, the 3 kHz resonance, noise, converters) the delay and the resonance are
 //   recovered together: a 500 Hz sine within 2 % of range rms, far below identify's model.
 // - On the default truth with its modes replaced by one at 800 Hz (the Preisach loop, its creep,
-//   the 5 kHz sensor) the diagnosis finds the mode on top of the loop's shape in every history of
-//   the bench, but the identify record excites it little: beyond the refit of the given model it
-//   gains about 1.2x, the naming threshold, so whether it is named depends on the noise the run
-//   met. When named, the extended model tracks 500 Hz about twice as well as identify's (measured
-//   17 % against 31 %); the targets (1 % at 200 Hz, 2 % at 500 Hz) are missed: the models hold
-//   whole-tick delays (the sensor lags by half a tick), one mode, and not the loop's shape
-//   (docs/measurements.md).
+//   the 5 kHz sensor) the diagnosis finds the mode on top of the loop's shape, but the identify
+//   record excites it little: it lowers the held-out error about 1.15x, below the 1.2x that names
+//   a cause, and is reported, not named (docs/measurements.md).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -125,12 +121,10 @@ TEST_F(BenchFeedforwardTest, AnEightHundredHertzResonanceIsFoundOnTheDefaultTrut
   ASSERT_NE(at, std::string::npos) << extension;
   const double hz = std::stod(extension.substr(at + std::string("natural frequency ").size()));
   EXPECT_NEAR(hz, 800.0, 80.0) << extension;
-  EXPECT_GT((*dynamics)["gain"].get<double>(), 1.2) << dynamics->dump();
-  if (!names(d, "dynamics")) {
-    std::cout << "the mode is found but not named in this history (below the naming gain "
-                 "beyond the refit): "
-              << d["verdict"] << "\n";
-    return;
+  EXPECT_GT((*dynamics)["gain"].get<double>(), 1.05) << dynamics->dump();
+  // identify's model matches the record it was fitted on: the record's settling and
+  // preconditioning, before the input has reached both its extremes, is not scored.
+  for (const json& note : d["notes"]) {
+    EXPECT_EQ(note.get<std::string>().find("do not match this record"), std::string::npos) << note;
   }
-  extended_model_tracks({9.0, 20.0, 0.7});
 }
