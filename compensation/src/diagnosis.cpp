@@ -34,6 +34,9 @@ constexpr std::size_t kTimeBins = 32, kLevelBins = 24, kRateBins = 24, kSinceBin
 // out whole is at least half the named gain's margin (1.1 with min_gain 1.2) and it loses on no
 // left-out record by more than this.
 constexpr double kMaxLeftOutLoss = 0.95;
+// A significant extension joins the named one when it lowers the joint model's held-out rms by
+// at least 2 %.
+constexpr double kMinJoinGain = 1.02;
 // The baseline family "does not fit the device" when, fitted on the others, it predicts some
 // record this many times worse than it predicts its own held-out blocks.
 constexpr double kFamilyMismatch = 3.0;
@@ -658,7 +661,10 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     d.extended_heldout = joint.heldout;
     d.extended_prediction = joint.prediction;
     // Every other significant extension joins the named one when, tested again on top of it,
-    // the joint model gains on the held-out blocks (delay and dynamics together, for example).
+    // the joint model gains on the held-out blocks by at least kMinJoinGain (delay and dynamics
+    // together, for example): a part that gains less than the spread of the held-out error
+    // between refits only adds parameters, which the inverse extrapolates (a rate law at rates
+    // beyond the record's).
     progress(0.97, "joining the significant extensions");
     std::vector<std::size_t> order;
     for (std::size_t i = 0; i < d.candidates.size(); ++i) {
@@ -683,7 +689,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
           ev, ref_profiles, ref_response, d.noise_rms};
       try {
         details::CandidateOutcome o = test_of(d.candidates[i].cause)(jc);
-        if (o.fit.heldout.rmse < joint.heldout.rmse) {
+        if (o.fit.heldout.rmse * kMinJoinGain < joint.heldout.rmse) {
           joint = std::move(o.fit);
           added.push_back(o.extension);
           d.extended_parts.push_back(std::string(to_string(d.candidates[i].cause)));
