@@ -9,7 +9,7 @@
 // - On the default truth with the delay on (the Preisach loop, its creep, the 3 and 8 kHz
 //   modes, the 5 kHz sensor) the loop's shape hides the delay and the resonance in the record's
 //   held-out error; their tests are significant and the bench's fast sine judges them: kept when
-//   the mode is found near 3.4 kHz (500 Hz at 4.6 % against 10.6 %), refused when it is not (a
+//   the mode is found near 3.4 kHz (500 Hz at 4.5 % against 10.6 %), refused when it is not (a
 //   mode at 0.7 kHz gained nothing at 180 Hz). The target (1 %) is missed: the models hold
 //   whole-tick delays, one mode, and not the sensor's lag (docs/measurements.md).
 // - With the modes replaced by one at 800 Hz the resonance is found (800 +- 80 Hz) and kept:
@@ -19,10 +19,13 @@
 
 #include <algorithm>
 #include <iostream>
+#include <sstream>
 #include <string>
 
+#include "hystbench/daemon/remote_commands.hpp"
 #include "support/bench_fixture.hpp"
 
+namespace hd = hystbench::daemon;
 using nlohmann::json;
 
 namespace {
@@ -56,11 +59,20 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     EXPECT_FALSE(plain["model"]["extension"].value("adopted", true)) << plain["model"].dump(2);
     EXPECT_FALSE(plain["model"]["extension"].contains("parts")) << plain["model"].dump(2);
     f.plain_500 = sine_rms(500.0);
+    std::ostringstream plain_text;
+    hd::print_run_result(plain, plain_text);
+    EXPECT_NE(plain_text.str().find("extension       nothing added: not adopted, not asked"),
+              std::string::npos)
+        << plain_text.str();
 
     const json id = run_and_wait("identify", json::object());
     EXPECT_EQ(id["end"], "completed") << id.dump(2);
     EXPECT_FALSE(id.contains("fit_error")) << id.dump(2);
     f.extension = id["model"]["extension"];
+    // `hystbench identify` prints one line for the parts and one for the bench's check.
+    std::ostringstream text;
+    hd::print_run_result(id, text);
+    EXPECT_NE(text.str().find("extension check triangle max "), std::string::npos) << text.str();
     std::cout << "extension: " << f.extension.dump() << "\n";
     f.extended_200 = sine_rms(200.0);
     f.extended_500 = sine_rms(500.0);
@@ -129,7 +141,7 @@ TEST_F(BenchFeedforwardTest, OnTheDefaultTruthTheBenchJudgesWhatTheRecordHides) 
     EXPECT_TRUE(v["fast_rms_percent"]["extended"].get<double>() >
                     0.95 * v["fast_rms_percent"]["model"].get<double>() ||
                 v["triangle_rms_percent"]["extended"].get<double>() >
-                    1.05 * v["triangle_rms_percent"]["model"].get<double>() + 0.02)
+                    1.1 * v["triangle_rms_percent"]["model"].get<double>() + 0.05)
         << e.dump(2);
   }
 }
