@@ -6,8 +6,8 @@
 #   repeat     identify three times in one daemon, each followed by the 1 Hz triangle (inverse)
 #   rate       rate dependence on (config/loopback-rate-dependent.toml): identify --model mpi,
 #              rpi and auto, each followed by a sweep 1-200 Hz with inverse and inverse+pid
-#   delay      the delay on: identify, diagnose its log with its model, load the extended model,
-#              sines at 100 / 200 / 500 Hz (20 periods) with inverse and inverse+pid
+#   delay      the delay on (default and modified-PI truths) and one mode at 800 Hz:
+#              identify --no-extend and identify, each followed by 200 / 500 Hz sines (inverse)
 #   campaign   wall time of identify + a 7-frequency sweep (inverse)
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
@@ -101,28 +101,33 @@ for section in "${sections[@]}"; do
       stop_daemon
       ;;
     delay)
-      start_daemon delay config/loopback.toml $'[actuator.delay]\nenabled = true'
-      echo "### Delay on: identify, diagnose its log, load the extended model, sines"
-      id=$(hb identify --wait --json || true)
-      identify_row identify "$id"
-      log=$(jq -r '.log' <<<"$id")
-      model="$work/delay/models/$(jq -r '.model.file // empty' <<<"$id")"
-      [ -f "$model" ] || model=$(ls -t "$work"/delay/models/*.json | head -1)
-      hb diagnose "$log" --model "$model" --save-extended "$work/delay/extended.json" 2>/dev/null |
-        grep -E "^(cause|named|verdict|extended)" | head -5 || true
-      hb model load "$work/delay/extended.json" >/dev/null
-      echo
-      echo "| sine | compensator | rms % | max % | end |"
-      echo "| --- | --- | --- | --- | --- |"
-      for f in 100 200 500; do
-        for c in inverse inverse+pid; do
-          t=$(hb track --reference sine --frequency "$f" --periods 20 --compensator "$c" --wait \
-            --json || true)
-          track_row "$f Hz | $c" "$t"
+      # identify extends its model itself; --no-extend is the model without it. Three truths:
+      # the default with the delay on, the modified-PI truth with it, one mode at 800 Hz.
+      for truth in default-delay mpi-delay mode-800; do
+        case "$truth" in
+          default-delay) extra=$'[actuator.delay]\nenabled = true' ;;
+          mpi-delay) extra=$'[actuator.hysteresis]\nkind = "modified_pi"\n[actuator.delay]\nenabled = true' ;;
+          mode-800) extra=$'[actuator.dynamics]\nnatural_frequencies_hz = [800.0]\ndamping_ratios = [0.06]\nmode_gains = [1.0]\nenabled = true' ;;
+        esac
+        start_daemon "delay-$truth" config/loopback.toml "$extra"
+        echo "### $truth: identify --no-extend, then identify (extended), sines of 20 periods"
+        echo "| identify | parts | adopted | diagnosis s | 200 Hz rms % | 500 Hz rms % |"
+        echo "| --- | --- | --- | --- | --- | --- |"
+        for how in --no-extend ""; do
+          start=$(date +%s.%N)
+          id=$(hb identify $how --wait --json || true)
+          end=$(date +%s.%N)
+          r200=$(hb track --reference sine --frequency 200 --periods 20 --compensator inverse \
+            --wait --json | jq -r "$f3"' .rms_error_percent | f' || true)
+          r500=$(hb track --reference sine --frequency 500 --periods 20 --compensator inverse \
+            --wait --json | jq -r "$f3"' .rms_error_percent | f' || true)
+          jq -rn --argjson id "$id" --arg how "${how:-extend}" --arg r200 "$r200" \
+            --arg r500 "$r500" --arg s "$(echo "$end - $start" | bc -l)" "$f3"'
+            "| \($how) (\($s | tonumber | f) s) | \([$id.model.extension.parts[]?.cause] | join("+")) | \($id.model.extension.adopted) | \($id.model.extension.diagnosis_s | f) | \($r200) | \($r500) |"'
         done
+        echo
+        stop_daemon
       done
-      echo
-      stop_daemon
       ;;
     campaign)
       start_daemon campaign config/loopback.toml

@@ -34,6 +34,9 @@ constexpr std::size_t kTimeBins = 32, kLevelBins = 24, kRateBins = 24, kSinceBin
 // out whole is at least half the named gain's margin (1.1 with min_gain 1.2) and it loses on no
 // left-out record by more than this.
 constexpr double kMaxLeftOutLoss = 0.95;
+// A significant extension joins the named one when it lowers the joint model's held-out rms by
+// at least 2 %.
+constexpr double kMinJoinGain = 1.02;
 // The baseline family "does not fit the device" when, fitted on the others, it predicts some
 // record this many times worse than it predicts its own held-out blocks.
 constexpr double kFamilyMismatch = 3.0;
@@ -151,7 +154,7 @@ ValidationScore validate_model(ActuatorModel model, std::span<const double> u,
   }
   const std::vector<double> yhat = model.simulate(u, dt);
   ValidationScore v;
-  v.skipped = details::startup_samples(u, u.size() / 32);
+  v.skipped = details::startup_samples(u, u.size() / 4);
   v.samples = u.size() - v.skipped;
   const auto n = static_cast<double>(v.samples);
   for (std::size_t k = v.skipped; k < u.size(); ++k) v.offset += (y[k] - yhat[k]) / n;
@@ -502,7 +505,9 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
           c.not_named.clear();
         }
       }
-      if (c.cause != Cause::kDrift && o.fit.heldout.rmse < joint.heldout.rmse) {
+      // A part joins when it lowers the joint model's held-out rms by kMinJoinGain: less only
+      // adds parameters, which the inverse extrapolates (a rate law beyond the record's rates).
+      if (c.cause != Cause::kDrift && o.fit.heldout.rmse * kMinJoinGain < joint.heldout.rmse) {
         joint = std::move(o.fit);
         added.push_back(o.extension);
         d.extended_parts.push_back(std::string(to_string(c.cause)));

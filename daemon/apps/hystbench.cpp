@@ -208,10 +208,14 @@ int main(int argc, char** argv) {
 
   std::string id_model = "";
   int id_operators = -2, id_deadzones = -2;
+  bool id_no_extend = false;
   auto* identify_cmd = app.add_subcommand(
       "identify",
       "Precondition, play the identification excitation, fit a model, verify it by tracking "
-      "through its inverse, make it the active model");
+      "through its inverse, make it the active model. Then the record is diagnosed with that "
+      "model: what it misses (delay, dynamics, creep, rate law, asymmetry) is added where it "
+      "lowers the held-out error, and the extended model is kept when it tracks better on the "
+      "bench (the result lists the parts and their gains)");
   identify_cmd
       ->add_option("--model", id_model,
                    "pi, mpi, cpi, rpi or auto (every family, the best verified tracking "
@@ -220,6 +224,9 @@ int main(int argc, char** argv) {
   identify_cmd->add_option("--operators", id_operators, "Number of plays (0 = by held-out error)");
   identify_cmd->add_option("--deadzones", id_deadzones,
                            "Dead zones per side (-1 = by held-out error)");
+  identify_cmd->add_flag("--no-extend", id_no_extend,
+                         "Keep the fitted model as it is: no diagnosis of the record, no "
+                         "extension (default: the config's [identify] extend, true)");
   add_output_flags(identify_cmd, true);
 
   std::string tr_reference = "triangle", tr_compensator;
@@ -398,6 +405,7 @@ int main(int argc, char** argv) {
     if (!id_model.empty()) p["model"] = id_model;
     if (id_operators != -2) p["operators"] = id_operators;
     if (id_deadzones != -2) p["dead_zones"] = id_deadzones;
+    if (id_no_extend) p["extend"] = false;
     return remote_run("identify", p);
   }
   if (*track_cmd) {

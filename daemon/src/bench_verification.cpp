@@ -2,9 +2,12 @@
 // tracking segment through its inverse, the model chosen and reported (Bench members, run on
 // the supervisor thread; see identify_session.hpp).
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 
+#include "hystbench/compensation/diagnosis.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
@@ -36,11 +39,72 @@ double verified_max(const IdentifyCandidate& c) {
 }
 
 json candidate_summary(const IdentifyCandidate& c) {
-  return {{"type", type_name(c.fit)},
-          {"operators", c.fit.operators},
-          {"dead_zones", c.fit.dead_zones},
-          {"heldout", to_json(c.fit.heldout)},
-          {"verification", c.verification}};
+  json j = {{"type", type_name(c.fit)},          {"label", c.label},
+            {"operators", c.fit.operators},      {"dead_zones", c.fit.dead_zones},
+            {"heldout", to_json(c.fit.heldout)}, {"verification", c.verification}};
+  if (!c.fast_verification.is_null()) j["fast_verification"] = c.fast_verification;
+  return j;
+}
+
+// The candidate with the lowest verified max error (the first when none was verified), the
+// extended candidate left out.
+std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
+                          std::optional<std::size_t> extended) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < candidates.size(); ++i) {
+    if (i == extended) continue;
+    if (verified_max(candidates[i]) < verified_max(candidates[best])) best = i;
+  }
+  return best;
+}
+
+// Verified rms error of the fast sine [% of the reference span]; +inf when it did not complete.
+double fast_rms(const IdentifyCandidate& c) {
+  const json& v = c.fast_verification;
+  if (v.is_null() || v.value("end", "") != "completed" || !v.contains("rms_error_percent")) {
+    return INFINITY;
+  }
+  return v["rms_error_percent"].get<double>();
+}
+
+// The fast sine that judges an extension [Hz], 0 for none: a delay or dynamics show at a
+// twentieth of the loop rate (the fastest `track` plays; a quarter of a mode's frequency below
+// it), a rate law at the identify record's fastest rate segment; creep and asymmetry show on the
+// standard triangle.
+double fast_frequency(const std::vector<std::string>& parts, const hc::ActuatorModel& extended,
+                      double loop_rate_hz) {
+  const auto has = [&](const char* p) {
+    return std::find(parts.begin(), parts.end(), p) != parts.end();
+  };
+  double f = 0.0;
+  if (has("delay") || has("dynamics")) {
+    f = loop_rate_hz / 20.0;
+    if (extended.dynamics()) f = std::min(f, extended.dynamics()->natural_frequency_hz / 4.0);
+  }
+  if (has("rate_dependence")) f = std::max(f, std::min(20.0, loop_rate_hz / 20.0));
+  return f;
+}
+
+// Verified rms error of the standard triangle [% of the reference span]; +inf when not verified.
+double triangle_rms(const IdentifyCandidate& c) {
+  return std::isfinite(verified_max(c)) ? c.verification.value("rms_error_percent", INFINITY)
+                                        : INFINITY;
+}
+
+// The extended model is adopted when it tracks better by more than the spread between two runs:
+// on the fast sine (when one ran) by at least 5 % without losing more than 10 % + 0.05 % of range
+// on the triangle's rms (its max moves by a tenth of itself between runs; 0.05 % is a few times
+// the sensor noise, and a delay or a resonance inverted at the triangle's corners costs about
+// that), else on the triangle's max by 10 % without a higher rms.
+bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
+                             bool fast) {
+  if (!std::isfinite(verified_max(ext))) return false;
+  if (!fast) {
+    return verified_max(ext) <= 0.9 * verified_max(base) && triangle_rms(ext) <= triangle_rms(base);
+  }
+  const double bf = fast_rms(base), ef = fast_rms(ext);
+  return std::isfinite(ef) && ef <= 0.95 * bf &&
+         triangle_rms(ext) <= 1.1 * triangle_rms(base) + 0.05;
 }
 
 // Largest measurement delay identify looks for [ticks].
@@ -89,11 +153,88 @@ hc::FitOptions neighbour_options(const hc::FitOptions& options, std::string pref
   return o;
 }
 
+// The model identify tries as the extension of the model the diagnosis was given: the
+// diagnosis's extended model when it names a cause. Otherwise, when the dynamics or the delay
+// test is significant and carries over but the record does not show a held-out gain (its
+// excitation is slow against them: on a loop whose shape the model misses, that error hides
+// theirs), the given model with that resonance and delay grafted on; the fast sine on the
+// bench judges what the record cannot.
+struct ExtensionDraft {
+  hc::ActuatorModel model;
+  std::vector<std::string> parts;
+  bool named = false;  ///< the diagnosis's extended model (else grafted)
+};
+std::optional<ExtensionDraft> extension_draft(const hc::Diagnosis& d) {
+  if (d.cause != hc::Cause::kNone && !d.extended_parts.empty()) {
+    return ExtensionDraft{d.extended, d.extended_parts, true};
+  }
+  const auto usable = [&d](hc::Cause cause) {
+    const hc::CandidateReport* c = d.candidate(cause);
+    return c != nullptr && c->significant && c->carries_over ? c : nullptr;
+  };
+  const hc::CandidateReport* dynamics = usable(hc::Cause::kDynamics);
+  const hc::CandidateReport* delay = usable(hc::Cause::kDelay);
+  if (dynamics == nullptr && delay == nullptr) return std::nullopt;
+  ExtensionDraft draft{d.baseline, {}, false};
+  if (dynamics != nullptr && dynamics->model.dynamics()) {
+    draft.model.set_dynamics(dynamics->model.dynamics());
+    draft.parts.emplace_back("dynamics");
+  }
+  if (delay != nullptr) {
+    draft.model.set_delay(delay->model.delay_s());
+    draft.parts.emplace_back("delay");
+  }
+  if (draft.parts.empty()) return std::nullopt;
+  return draft;
+}
+
+// What the diagnosis of identify's record found: each part added with its held-out gain alone
+// on the diagnosis's blocks (the given model's held-out rms / with the part), and the verdict.
+json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& added) {
+  json parts = json::array();
+  for (const std::string& name : added) {
+    const auto cause = hc::cause_from_string(name);
+    const hc::CandidateReport* c = cause ? d.candidate(*cause) : nullptr;
+    parts.push_back({{"cause", name},
+                     {"heldout_gain", c != nullptr ? c->gain : 1.0},
+                     {"extension", c != nullptr ? c->extension : std::string()}});
+  }
+  return {{"parts", parts}, {"verdict", d.verdict}};
+}
+
+// v[key], or null when v is not an object holding it.
+json field(const json& v, const char* key) {
+  return v.is_object() && v.contains(key) ? v[key] : json();
+}
+
+// The extension's verified gains against the model it extends: the triangle's max error and
+// the fast sine's rms error (base / extended; > 1 is better).
+json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& ext,
+                        double fast_hz) {
+  const auto ratio = [](double b, double e) {
+    return std::isfinite(b) && std::isfinite(e) && e > 0.0 ? json(b / e) : json();
+  };
+  json v = {{"triangle_max_percent",
+             {{"model", field(base.verification, "max_error_percent")},
+              {"extended", field(ext.verification, "max_error_percent")}}},
+            {"triangle_rms_percent",
+             {{"model", field(base.verification, "rms_error_percent")},
+              {"extended", field(ext.verification, "rms_error_percent")}}},
+            {"triangle_gain", ratio(verified_max(base), verified_max(ext))}};
+  if (fast_hz > 0.0) {
+    v["fast_hz"] = fast_hz;
+    v["fast_rms_percent"] = {{"model", field(base.fast_verification, "rms_error_percent")},
+                             {"extended", field(ext.fast_verification, "rms_error_percent")}};
+    v["fast_gain"] = ratio(fast_rms(base), fast_rms(ext));
+  }
+  return v;
+}
+
 }  // namespace
 
 IdentifyCandidate family_candidate(hc::FitResult fit) {
   std::string label = type_name(fit);
-  return {std::move(fit), json(), std::move(label)};
+  return {std::move(fit), json(), std::move(label), json()};
 }
 
 std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t,
@@ -146,7 +287,7 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     hc::FitResult fit = hc::fit_model(t, u, y, o);
     if (fit.dead_zones != o.dead_zones) return;  // e.g. a fall-back to the classical PI
     const std::string label = type_name(fit) + "-" + std::to_string(fit.dead_zones) + "dz";
-    candidates.push_back({std::move(fit), json(), label});
+    candidates.push_back({std::move(fit), json(), label, json()});
   } catch (const std::exception&) {
     // The chosen order stands alone; its own fit succeeded.
   }
@@ -185,7 +326,7 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     model.input_max = fit.model.input_max;
     fit.model = std::move(model);
     fit.notes.push_back("the rate law left out: the modified PI it contains, refitted");
-    candidates.push_back({std::move(fit), json(), "rpi-rate-free"});
+    candidates.push_back({std::move(fit), json(), "rpi-rate-free", json()});
   } catch (const std::exception&) {
     // The rate law stands alone; its own fit succeeded.
   }
@@ -199,7 +340,7 @@ void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
   }
   try {
     session_ = fit_candidates(run, result, fit_request);
-    if (!verify_next_candidate()) finish_identify();
+    continue_identify();
     return;
   } catch (const std::exception& e) {
     result.report["fit_error"] = e.what();
@@ -249,10 +390,16 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
   } else {
     session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
   }
-  for (IdentifyCandidate& c : session->candidates) {
+  for (std::size_t i = 0; i < session->candidates.size(); ++i) {
+    IdentifyCandidate& c = session->candidates[i];
     c.fit.delay_samples = id.delay_ticks;
     c.fit.model.set_delay(static_cast<double>(id.delay_ticks) * dt_);
+    session->jobs.push_back({i, false});
   }
+  session->u.assign(u_rec.begin(), u_rec.end());
+  session->y = aligned;
+  session->unscored = fit_request.value("skip_samples", std::size_t{0});
+  session->extend = fit_request.value("extend", true);
   session->log_path = result.log_path;
   session->samples = n;
   session->fit_sample_period_s = static_cast<double>(block) * dt_;
@@ -267,27 +414,35 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
 bool Bench::verify_next_candidate() {
   IdentifySession& s = *session_;
   const auto& lim = settings_.loop.limits;
-  while (s.next < s.candidates.size()) {
-    IdentifyCandidate& c = s.candidates[s.next];
+  while (s.next < s.jobs.size()) {
+    const VerificationJob job = s.jobs[s.next];
+    IdentifyCandidate& c = s.candidates[job.candidate];
+    json& slot = job.fast ? c.fast_verification : c.verification;
     std::unique_ptr<RunProgram> p;
+    VerificationSpec spec;
+    if (job.fast) {
+      spec.reference = VerificationSpec::Reference::kSine;
+      spec.frequency_hz = s.fast_hz;
+      spec.periods = 20.0;
+    }
     try {
-      VerificationSpec spec;
       spec.precondition_s = settings_.precondition_s;
       spec.feedforward_bandwidth_hz = settings_.feedforward_bandwidth_hz;
       spec.model_exchange_ticks =
           static_cast<std::uint64_t>(std::max(0, s.history.value("exchange_ticks", 0)));
       p = make_verification_program(c.fit.model, spec, loop_->last_output(), lim, dt_);
     } catch (const std::exception& e) {
-      c.verification = {{"end", "not_run"}, {"reason", e.what()}};
+      slot = {{"end", "not_run"}, {"reason", e.what()}};
       ++s.next;
       continue;
     }
-    p->run_id = s.result["run_id"].get<std::string>() + "-verify-" + c.label;
+    p->run_id =
+        s.result["run_id"].get<std::string>() + "-verify-" + c.label + (job.fast ? "-fast" : "");
     json header = {{"run",
                     {{"kind", "verify"},
                      {"identify_run", s.result["run_id"]},
-                     {"reference", "triangle"},
-                     {"frequency_hz", 1.0},
+                     {"reference", job.fast ? "sine" : "triangle"},
+                     {"frequency_hz", spec.frequency_hz},
                      {"compensator", "inverse"},
                      {"precondition_samples", p->excitation.size()},
                      {"metrics_from", p->metrics_from},
@@ -297,7 +452,8 @@ bool Bench::verify_next_candidate() {
     try {
       open_log(*p, header);
     } catch (const CommandError& e) {
-      c.verification = {{"end", "not_run"}, {"reason", e.what()}};
+      slot = {{"end", "not_run"}, {"reason", e.what()}};
+      s.interrupted = true;
       return false;
     }
     const std::string log = p->log->path().string();
@@ -306,16 +462,18 @@ bool Bench::verify_next_candidate() {
     std::lock_guard lock(mutex_);
     if (quit_.load()) {
       p->log->close();
-      c.verification = {{"end", "not_run"}, {"reason", "daemon shutting down"}};
+      slot = {{"end", "not_run"}, {"reason", "daemon shutting down"}};
+      s.interrupted = true;
       return false;
     }
     if (auto refused = loop_->submit(std::move(p))) {
       refused->log->close();
-      c.verification = {{"end", "not_run"}, {"reason", "the loop did not accept the segment"}};
+      slot = {{"end", "not_run"}, {"reason", "the loop did not accept the segment"}};
+      s.interrupted = true;
       return false;
     }
     s.program_id = program_id;
-    active_run_["stage"] = "verify " + c.label;
+    active_run_["stage"] = "verify " + c.label + (job.fast ? " (fast sine)" : "");
     active_run_["total"] = total;
     active_run_["verification_log"] = log;
     phase_ = RunPhase::kRunning;  // stop and abort now act on the verification
@@ -331,18 +489,131 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
     phase_ = RunPhase::kFinalizing;
     active_run_["stage"] = "choosing the model";
   }
-  IdentifyCandidate& c = s.candidates[s.next];
+  const VerificationJob job = s.jobs[s.next];
+  IdentifyCandidate& c = s.candidates[job.candidate];
   const SampleLogCounts counts = run->log ? run->log->close() : SampleLogCounts{};
-  c.verification = tracking_error_json(*run);
-  c.verification["end"] = to_string(run->end);
-  c.verification["reason"] = run->end_reason;
-  c.verification["log"] = run->log ? run->log->path().string() : "";
-  c.verification["dropped"] = counts.dropped + run->log_drops;
-  c.verification["clamps"] = run->clamps;
-  c.verification["clock"] = run->summary.value("clock", "wall");
+  json v = tracking_error_json(*run);
+  v["end"] = to_string(run->end);
+  v["reason"] = run->end_reason;
+  v["log"] = run->log ? run->log->path().string() : "";
+  v["dropped"] = counts.dropped + run->log_drops;
+  v["clamps"] = run->clamps;
+  v["clock"] = run->summary.value("clock", "wall");
+  if (job.fast) {
+    v["reference"] = "sine";
+    v["frequency_hz"] = s.fast_hz;
+    c.fast_verification = std::move(v);
+  } else {
+    c.verification = std::move(v);
+  }
   ++s.next;
   s.interrupted = s.interrupted || run->end != RunEnd::kCompleted;
-  if (s.interrupted || quit_.load() || !verify_next_candidate()) finish_identify();
+  if (s.interrupted || quit_.load()) {
+    finish_identify();
+  } else {
+    continue_identify();
+  }
+}
+
+void Bench::continue_identify() {
+  if (verify_next_candidate()) return;
+  IdentifySession& s = *session_;
+  if (s.extend && !s.extension_tried && !s.interrupted && !quit_.load() &&
+      extend_identified_model() && verify_next_candidate()) {
+    return;
+  }
+  finish_identify();
+}
+
+bool Bench::extend_identified_model() {
+  IdentifySession& s = *session_;
+  s.extension_tried = true;
+  s.base = best_verified(s.candidates, std::nullopt);
+  const IdentifyCandidate& base = s.candidates[s.base];
+  const std::string run_id = s.result["run_id"].get<std::string>();
+  {
+    std::lock_guard lock(mutex_);
+    active_run_["stage"] = "diagnosing the record with " + base.label;
+  }
+  const auto started = std::chrono::steady_clock::now();
+  const auto seconds = [&started] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
+  // The record holds the outputs matched to the inputs they answer: the model's delay there is
+  // its delay less the driver's exchange latency, which the extended model gets back.
+  const double exchange_s = s.history.value("exchange_ticks", 0) * dt_;
+  try {
+    std::vector<double> t(s.u.size());
+    for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) * dt_;
+    hc::DiagnosisOptions options;
+    hc::ActuatorModel baseline = base.fit.model;
+    baseline.set_delay(std::max(0.0, baseline.delay_s() - exchange_s));
+    options.baseline = std::move(baseline);
+    options.units = {"V", "um"};
+    options.progress = [this, &run_id](double f, const std::string& what) {
+      emit({{"event", "fit.progress"},
+            {"run_id", run_id},
+            {"fraction", f},
+            {"stage", "extension: " + what}});
+    };
+    const hc::Diagnosis d = hc::diagnose(t, s.u, s.y, options);
+    std::optional<ExtensionDraft> draft = extension_draft(d);
+    s.extension = extension_json(d, draft ? draft->parts : std::vector<std::string>{});
+    if (!draft) {
+      s.extension["adopted"] = false;
+      s.extension["why"] = "the diagnosis finds nothing the model misses";
+      s.extension["diagnosis_s"] = seconds();
+      return false;
+    }
+    s.extension["from"] = draft->named ? "the diagnosis's extended model (named causes)"
+                                       : "significant tests below the naming gain, grafted on the "
+                                         "model for the bench to judge";
+    IdentifyCandidate ext{base.fit, json(), base.label, json()};
+    hc::ActuatorModel model = std::move(draft->model);
+    model.set_delay(model.delay_s() + exchange_s);
+    model.units = base.fit.model.units;
+    model.input_min = base.fit.model.input_min;
+    model.input_max = base.fit.model.input_max;
+    model.configure(dt_);
+    ext.fit.model = std::move(model);
+    ext.fit.delay_samples = static_cast<int>(std::lround(ext.fit.model.delay_s() / dt_));
+    // Scored as the candidates are, at the loop rate (the dynamics need it).
+    const hc::ModelScore score = hc::score_model(ext.fit.model, t, s.u, s.y,
+                                                 settings_.identify.heldout_fraction, s.unscored);
+    ext.fit.fit = score.fit;
+    ext.fit.heldout = score.heldout;
+    hc::ActuatorModel given = base.fit.model;
+    given.configure(dt_);
+    const double before = hc::score_model(std::move(given), t, s.u, s.y,
+                                          settings_.identify.heldout_fraction, s.unscored)
+                              .heldout.rmse;
+    s.extension["heldout_rms_um"] = {{"model", before}, {"extended", score.heldout.rmse}};
+    s.extension["heldout_gain"] = score.heldout.rmse > 0.0 ? before / score.heldout.rmse : 1.0;
+    std::string added = d.extended_description;
+    if (!draft->named) {
+      added = "grafted";
+      for (const json& part : s.extension["parts"])
+        added += "; " + part["extension"].get<std::string>();
+    }
+    ext.fit.notes.push_back("extended by the diagnosis of its record: " + added);
+    s.extension["description"] = added;
+    ext.label += "-extended";
+    s.candidates.push_back(std::move(ext));
+    s.extended = s.candidates.size() - 1;
+    s.fast_hz = fast_frequency(draft->parts, s.candidates.back().fit.model, settings_.loop.rate_hz);
+    s.jobs.push_back({*s.extended, false});
+    if (s.fast_hz > 0.0) {
+      s.jobs.push_back({s.base, true});
+      s.jobs.push_back({*s.extended, true});
+    }
+    s.extension["diagnosis_s"] = seconds();
+    return true;
+  } catch (const std::exception& e) {
+    s.extension = {{"adopted", false},
+                   {"why", std::string("the diagnosis failed: ") + e.what()},
+                   {"diagnosis_s", seconds()}};
+    return false;
+  }
 }
 
 void Bench::finish_identify() {
@@ -350,9 +621,20 @@ void Bench::finish_identify() {
   IdentifySession& s = *session;
   json result = std::move(s.result);
   // The verified figure decides when any candidate was verified; else the held-out error.
-  std::size_t chosen = 0;
-  for (std::size_t i = 1; i < s.candidates.size(); ++i) {
-    if (verified_max(s.candidates[i]) < verified_max(s.candidates[chosen])) chosen = i;
+  std::size_t chosen = best_verified(s.candidates, s.extended);
+  bool extended = false;
+  if (s.extended) {
+    const IdentifyCandidate &base = s.candidates[s.base], &ext = s.candidates[*s.extended];
+    extended = chosen == s.base && extension_tracks_better(base, ext, s.fast_hz > 0.0);
+    s.extension["verified"] = verified_gain_json(base, ext, s.fast_hz);
+    s.extension["adopted"] = extended;
+    s.extension["why"] =
+        extended ? "it tracks better on the bench" : "it does not track better on the bench";
+    if (extended) chosen = *s.extended;
+  } else if (s.extension.is_null()) {
+    s.extension = {{"adopted", false},
+                   {"why", !s.extend ? "not asked (extend = false)"
+                                     : "not tried: the verification did not complete"}};
   }
   try {
     IdentifyCandidate& c = s.candidates[chosen];
@@ -360,8 +642,9 @@ void Bench::finish_identify() {
     fit.model.units = {"V", "um"};
     json candidates = json::array();
     for (const auto& other : s.candidates) candidates.push_back(candidate_summary(other));
-    const std::string chosen_by =
-        std::isfinite(verified_max(c)) ? "verified tracking max error" : "held-out error";
+    const std::string chosen_by = extended ? "the extension's verified tracking"
+                                  : std::isfinite(verified_max(c)) ? "verified tracking max error"
+                                                                   : "held-out error";
     hc::ModelFile file{fit.model, json::object()};
     file.identification = {{"run_id", result["run_id"]},
                            {"log", s.log_path},
@@ -378,7 +661,8 @@ void Bench::finish_identify() {
                            {"verification", c.verification},
                            {"chosen_by", chosen_by},
                            {"delay_ticks", s.history.value("delay_ticks", 0)},
-                           {"exchange_ticks", s.history.value("exchange_ticks", 0)}};
+                           {"exchange_ticks", s.history.value("exchange_ticks", 0)},
+                           {"extension", s.extension}};
     if (s.candidates.size() > 1) file.identification["candidates"] = candidates;
     std::filesystem::create_directories(settings_.model_dir);
     const std::string path = (std::filesystem::path(settings_.model_dir) /
@@ -397,7 +681,8 @@ void Bench::finish_identify() {
                        {"heldout", to_json(fit.heldout)},
                        {"drift_um_per_s", fit.drift_per_s},
                        {"notes", fit.notes},
-                       {"chosen_by", chosen_by}};
+                       {"chosen_by", chosen_by},
+                       {"extension", s.extension}};
     result["verification"] = c.verification;
     if (s.candidates.size() > 1) result["candidates"] = candidates;
     std::lock_guard lock(mutex_);

@@ -19,7 +19,8 @@ constexpr ParamSpec kIdentify[] = {{"model", T::kString},
                                    {"operators", T::kInteger, 0, 500},
                                    {"dead_zones", T::kInteger, -1, 100},
                                    {"u_min", T::kNumber},
-                                   {"u_max", T::kNumber}};
+                                   {"u_max", T::kNumber},
+                                   {"extend", T::kBoolean}};
 constexpr ParamSpec kTrackUploaded[] = {{"reference_upload", T::kString},
                                         {"approach_s", T::kNumber, 0.0, 60.0},
                                         {"compensator", T::kString},

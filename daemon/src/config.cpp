@@ -263,6 +263,7 @@ void visit_identify(S& id, Visit&& visit, const LoopSection& loop, const LimitsS
   visit("settle_s", id.settle_s, Bounds{0.0, 600.0});
   visit("heldout_fraction", id.heldout_fraction, Bounds{0.0, 0.9});
   visit("fit_rate_hz", id.fit_rate_hz, Bounds{1.0, 20000.0});
+  visit("extend", id.extend);
 }
 
 template <class S, class Visit>

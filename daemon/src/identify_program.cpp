@@ -59,6 +59,7 @@ IdentifyRequest parse_identify_request(const Request& request, const BenchSettin
   }
   r.operators = request.integer("operators", settings.identify.operators);
   r.dead_zones = request.integer("dead_zones", settings.identify.dead_zones);
+  r.extend = request.boolean("extend", settings.identify.extend);
   const auto [u_min, u_max] = settings.identify.span_v(lim.u_min, lim.u_max);
   r.u_min = request.number("u_min", u_min, lim.u_min, lim.u_max);
   r.u_max = request.number("u_max", u_max, lim.u_min, lim.u_max);
@@ -111,6 +112,7 @@ BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext&
   run.fit = {{"model", request.model},
              {"operators", request.operators},
              {"dead_zones", request.dead_zones},
+             {"extend", request.extend},
              {"skip_samples", skip},
              {"precondition_s", s.identify.precondition_s},
              {"settle_s", s.identify.settle_s}};

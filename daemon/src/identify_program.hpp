@@ -17,6 +17,8 @@ struct IdentifyRequest {
   int dead_zones = -1;  ///< -1 = chosen by held-out error
   double u_min = 0.0,
          u_max = 0.0;  ///< excitation span [V], within the output limits, u_min < u_max
+  /// Diagnose the record with the fitted model and adopt the extension when it tracks better.
+  bool extend = true;
 };
 
 /// The request's keys over settings' identify defaults; bad_params naming the key when the

@@ -1,9 +1,11 @@
 #pragma once
 // identify after its excitation: the fitted candidates (one per family; several with
-// `--model auto`), each verified on the loop by a short tracking segment through its inverse
-// before the bench adopts one and reports run.finished. Supervisor thread only.
+// `--model auto`), each verified on the loop by a short tracking segment through its inverse;
+// then the record diagnosed with the best one and its extension verified against it, before
+// the bench adopts one and reports run.finished. Supervisor thread only.
 #include <cstddef>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -20,10 +22,18 @@ struct IdentifyCandidate {
   /// Names the candidate in its verification's run id and stage: its family, and for the
   /// dead-zone neighbour its order too (e.g. "mpi-4dz").
   std::string label;
+  /// The same on the fast sine (null when it did not run): the chosen model and its extension.
+  nlohmann::json fast_verification;
 };
 
 /// A family's fit as a candidate not yet verified, labelled with the family.
 IdentifyCandidate family_candidate(compensation::FitResult fit);
+
+/// One verification segment: a candidate's standard triangle, or its fast sine.
+struct VerificationJob {
+  std::size_t candidate = 0;
+  bool fast = false;
+};
 
 struct Bench::IdentifySession {
   nlohmann::json result;  ///< the identify run's result so far (run.finished adds the model)
@@ -32,9 +42,20 @@ struct Bench::IdentifySession {
   double fit_sample_period_s = 0.0;
   nlohmann::json history;                     ///< what identify did against the actuator's history
   std::vector<IdentifyCandidate> candidates;  ///< by held-out error, best first
-  std::size_t next = 0;                       ///< the candidate being (or to be) verified
-  std::string program_id;                     ///< run id of the verification on the loop
-  bool interrupted = false;                   ///< stop, abort or fault during a verification
+  std::vector<VerificationJob> jobs;          ///< the segments to play, in order
+  std::size_t next = 0;                       ///< the job being (or to be) played
+  /// The record at the loop rate (outputs matched to the inputs they answer) and its samples
+  /// that the fit simulates but does not score (ramp, settle, precondition): the diagnosis's.
+  std::vector<double> u, y;
+  std::size_t unscored = 0;
+  bool extend = true;                   ///< diagnose and extend the chosen model
+  bool extension_tried = false;         ///< the diagnosis ran (or failed): no second one
+  std::size_t base = 0;                 ///< the candidate the extension extends
+  std::optional<std::size_t> extended;  ///< the extended candidate, when there is one
+  double fast_hz = 0.0;                 ///< the fast sine's frequency [Hz]; 0 = none
+  nlohmann::json extension;             ///< what the extension found, added and verified
+  std::string program_id;               ///< run id of the verification on the loop
+  bool interrupted = false;             ///< stop, abort or fault during a verification
 };
 
 /// Fits the requested family, or with options.kind unset ("auto") each of pi, mpi, cpi and rpi

@@ -82,7 +82,8 @@ std::unique_ptr<RunProgram> make_verification_program(const hc::ActuatorModel& m
   const ModelOutputRange range = major_loop_range(model, limits.u_min, limits.u_max, dt_s);
   const double span = range.y_top - range.y_bottom;
   sim::SignalSpec ref;
-  ref.kind = sim::SignalKind::kTriangle;
+  ref.kind = spec.reference == VerificationSpec::Reference::kSine ? sim::SignalKind::kSine
+                                                                  : sim::SignalKind::kTriangle;
   ref.frequency_hz = spec.frequency_hz;
   ref.amplitude = 0.5 * spec.range_fraction * span;
   ref.offset = 0.5 * (range.y_bottom + range.y_top);

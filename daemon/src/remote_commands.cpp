@@ -37,6 +37,36 @@ std::string us(const json& ns) {
   return ns.is_number() ? fixed(ns.get<double>() / 1000.0, 1) : "?";
 }
 
+// A number with `digits` decimals, "-" for null.
+std::string fixed_or_dash(const json& v, int digits) {
+  return v.is_number() ? fixed(v.get<double>(), digits) : "-";
+}
+
+// identify's extension: each part with its held-out gain, the verified figures, the decision.
+void print_extension(std::ostream& out, const json& e) {
+  out << "  extension       ";
+  const json parts = e.value("parts", json::array());
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    out << (i ? " + " : "") << parts[i].value("cause", "?") << " (held-out gain "
+        << fixed_or_dash(parts[i].value("heldout_gain", json()), 2) << "x)";
+  }
+  if (parts.empty()) out << "nothing added";
+  out << ": " << (e.value("adopted", false) ? "adopted" : "not adopted") << ", "
+      << e.value("why", std::string()) << "\n";
+  if (e.contains("verified")) {
+    const json& v = e["verified"];
+    out << "  extension check triangle max "
+        << fixed_or_dash(v["triangle_max_percent"].value("model", json()), 3) << " -> "
+        << fixed_or_dash(v["triangle_max_percent"].value("extended", json()), 3) << " %";
+    if (v.contains("fast_hz")) {
+      out << ", " << fixed(v["fast_hz"].get<double>(), 0) << " Hz sine rms "
+          << fixed_or_dash(v["fast_rms_percent"].value("model", json()), 3) << " -> "
+          << fixed_or_dash(v["fast_rms_percent"].value("extended", json()), 3) << " %";
+    }
+    out << "\n";
+  }
+}
+
 }  // namespace
 
 void progress_bar(std::ostream& err, double fraction, const std::string& label) {
@@ -122,6 +152,8 @@ void print_run_result(const json& r, std::ostream& out) {
       out << "not (" << v.value("end", "?") << ": " << v.value("reason", "") << ")\n";
     }
   }
+  if (r.contains("model") && r["model"].contains("extension"))
+    print_extension(out, r["model"]["extension"]);
   for (const json& c : r.value("candidates", json::array())) {
     const json& v = c["verification"];
     out << "  candidate       " << c.value("type", "?") << " " << c.value("operators", 0) << "/"

@@ -780,6 +780,31 @@ TEST(Diagnosis, NotesARecordWithOneLoopOnly) {
   EXPECT_FALSE(one_loop_note(hc::diagnose(d.first.t, d.first.u, d.first.y)));
 }
 
+// A record whose input reaches both its extremes late (its first 30 % wanders between 60 and
+// 90 V): the start is not scored, and the drift fitted on the rest holds its value there instead
+// of swinging where no fitted sample constrains it.
+TEST(Diagnosis, ADriftIsNotFittedIntoALongUnscoredStart) {
+  const HiddenData d = make_hidden({hc::Cause::kDrift, 1000.0, 1052});
+  hs::Excitation x;
+  x.dt_s = 1e-3;
+  const std::size_t rest = d.first.u.size(), start = rest * 3 / 7;  // 30 % of the whole
+  for (std::size_t k = 0; k < start; ++k) {
+    x.samples.push_back(75.0 + 15.0 * std::sin(2.0 * M_PI * static_cast<double>(k) * 1e-3));
+  }
+  x.samples.insert(x.samples.end(), d.first.u.begin(), d.first.u.end());
+  hs::SimulatedActuator actuator(d.config, x.dt_s);
+  const Record r = run(actuator, x);
+  const hc::Diagnosis diagnosis = hc::diagnose(r.t, r.u, r.y);
+  EXPECT_GE(diagnosis.split.skipped, start * 4 / 7) << diagnosis.split.describe(1e-3);
+  const hc::CandidateReport* drift = diagnosis.candidate(hc::Cause::kDrift);
+  ASSERT_NE(drift, nullptr);
+  ASSERT_EQ(drift->drift.size(), r.y.size());
+  const auto [lo, hi] = std::minmax_element(drift->drift.begin(), drift->drift.end());
+  const auto [ylo, yhi] = std::minmax_element(r.y.begin(), r.y.end());
+  EXPECT_TRUE(std::isfinite(*lo) && std::isfinite(*hi));
+  EXPECT_LT(*hi - *lo, 0.1 * (*yhi - *ylo)) << drift->extension;
+}
+
 // A second actuator, driven by an input the record does not have, adds twice its motion to the
 // output (a multi-axis stage seen through one axis): the diagnosis says so instead of forcing a
 // cause.

@@ -60,6 +60,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
   ASSERT_EQ(id_mpi["end"], "completed") << id_mpi.dump(2);
   ASSERT_FALSE(id_mpi.contains("fit_error")) << id_mpi.dump(2);
   const double mpi_heldout = id_mpi["model"]["heldout"]["rmse"].get<double>();
+  std::cout << "mpi extension: " << id_mpi["model"]["extension"].dump() << "\n";
   for (const double f : freqs) {
     const json none = track("none", f, f < 2 ? 3 : 6);
     ASSERT_EQ(none["end"], "completed") << none.dump(2);
@@ -82,6 +83,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
   const json id_rpi = run_and_wait("identify", {{"model", "rpi"}});
   ASSERT_EQ(id_rpi["end"], "completed") << id_rpi.dump(2);
   ASSERT_EQ(id_rpi["model"]["type"], "rpi") << id_rpi.dump(2);
+  std::cout << "rpi extension: " << id_rpi["model"]["extension"].dump() << "\n";
   // Nesting on the bench: the MPI is an RPI with zero rate coefficients. The two identify runs
   // are separate records, so allow their noise to differ a little.
   EXPECT_LE(id_rpi["model"]["heldout"]["rmse"].get<double>(), 1.1 * mpi_heldout) << id_rpi.dump(2);

@@ -50,6 +50,7 @@ TEST(CommandTable, AWrongTypeIsNamedWithTheTypeExpected) {
             "bad_params: frequency_hz: must be a number, got string");
   EXPECT_EQ(refusal("identify", {{"operators", 2.5}}), "bad_params: operators: must be an integer");
   EXPECT_EQ(refusal("identify", {{"model", 3}}), "bad_params: model: must be a string");
+  EXPECT_EQ(refusal("identify", {{"extend", "no"}}), "bad_params: extend: must be true or false");
   EXPECT_EQ(refusal("model.load", {{"model", "text"}}),
             "bad_params: model: must be the model file's JSON object");
   EXPECT_EQ(refusal("upload.chunk", {{"values", 1.0}}), "bad_params: values: must be an array");

@@ -64,6 +64,7 @@ frequency_hz = 2.5
 cycles = 4
 heldout_fraction = 0.3
 fit_rate_hz = 1000
+extend = false
 
 [pid]
 kp = 0.05
@@ -159,6 +160,7 @@ TEST(Config, ExampleFileParsesWithEveryValue) {
   EXPECT_EQ(c.identify.cycles, 4);
   EXPECT_EQ(c.identify.heldout_fraction, 0.3);
   EXPECT_EQ(c.identify.fit_rate_hz, 1000.0);
+  EXPECT_FALSE(c.identify.extend);
   EXPECT_EQ(c.pid.kp, 0.05);
   EXPECT_EQ(c.pid.ki, 1500.0);
   EXPECT_EQ(c.pid.kd, 1e-6);

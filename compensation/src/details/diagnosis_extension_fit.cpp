@@ -16,15 +16,17 @@ namespace {
 constexpr double kMinCumulativeWeight = 1e-3;  // as FitOptions::min_cumulative_weight
 
 // Piecewise-linear drift basis: knots every `spacing` samples, knot 0 left out (the offset
-// column carries the level there). Writes the `knots` values for sample k.
+// column carries the level there). Writes the `knots` values for sample k. Before `origin` (the
+// record's unscored start, which no fitted row constrains) the drift holds its value there.
 class DriftBasis {
  public:
-  DriftBasis(std::size_t block, std::size_t knots)
-      : block_(static_cast<double>(block)), knots_(knots) {}
+  DriftBasis(std::size_t block, std::size_t knots, std::size_t origin)
+      : block_(static_cast<double>(block)), knots_(knots), origin_(origin) {}
   std::size_t size() const noexcept { return knots_; }
   void row(std::size_t k, double* a) const noexcept {
     std::fill(a, a + knots_, 0.0);
-    const double x = std::min(static_cast<double>(k) / block_, static_cast<double>(knots_));
+    const double x =
+        std::min(static_cast<double>(std::max(k, origin_)) / block_, static_cast<double>(knots_));
     const auto i = static_cast<std::size_t>(x);
     const double frac = x - static_cast<double>(i);
     if (i >= 1) a[i - 1] += 1.0 - frac;
@@ -34,6 +36,7 @@ class DriftBasis {
  private:
   double block_;
   std::size_t knots_;
+  std::size_t origin_;
 };
 
 double median(std::vector<double> v) {
@@ -131,7 +134,8 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
                 FitRows rows) {
   Design design(spec.structure);
   const Eigen::Index nd = design.unknowns();
-  const DriftBasis drift(r.drift_knot_samples(), spec.drift ? r.drift_knots() : 0);
+  const DriftBasis drift(r.drift_knot_samples(), spec.drift ? r.drift_knots() : 0,
+                         r.drift_origin());
   const auto nb = static_cast<Eigen::Index>(drift.size());
   const Eigen::Index unknowns = nd + nb;
   const std::vector<double> ud = delayed(r.u, spec.delay_samples);
@@ -209,7 +213,8 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
   hysteresis_only.structure.creep_time_constants.clear();
   hysteresis_only.drift = false;
   const std::vector<double>& taus = spec.structure.creep_time_constants;
-  const DriftBasis drift(r.drift_knot_samples(), spec.drift ? r.drift_knots() : 0);
+  const DriftBasis drift(r.drift_knot_samples(), spec.drift ? r.drift_knots() : 0,
+                         r.drift_origin());
   const std::size_t nc = taus.size(), nb = drift.size(), unknowns = nc + nb;
   // Unit-gain creep lag states of the delayed input, as the model's bank steps them.
   const std::vector<double> ud = delayed(r.u, spec.delay_samples);

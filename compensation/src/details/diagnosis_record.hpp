@@ -41,6 +41,12 @@ struct DiagnosisRecord {
   std::size_t drift_knot_samples() const noexcept { return block_samples() * heldout_every; }
   /// Drift knots after t = 0 (the knot at 0 is the model's offset).
   std::size_t drift_knots() const noexcept { return split.blocks / heldout_every; }
+  /// The first sample a drift is fitted on: the end of the record's unscored start, 0 without.
+  std::size_t drift_origin() const noexcept {
+    return !split.skipped_ranges.empty() && split.skipped_ranges.front().first == 0
+               ? split.skipped_ranges.front().second
+               : 0;
+  }
 };
 
 /// `blocks` equal blocks, block b held out when b % heldout_every == heldout_every / 2; a

@@ -29,8 +29,8 @@ long long integer_bound(double v) {
 }
 
 // What a value of each ParamType is called in errors, in the enum's order.
-constexpr const char* kTypeWords[] = {"a number", "an integer", "a string", "an object",
-                                      "an array"};
+constexpr const char* kTypeWords[] = {"a number",  "an integer", "a string",
+                                      "an object", "an array",   "true or false"};
 
 // The value of params[spec.key] (present) against its spec.
 void check_value(const json& params, const ParamSpec& spec) {
@@ -59,6 +59,9 @@ void check_value(const json& params, const ParamSpec& spec) {
       break;
     case ParamType::kArray:
       if (v.is_array()) return;
+      break;
+    case ParamType::kBoolean:
+      if (v.is_boolean()) return;
       break;
   }
   throw CommandError(
@@ -115,6 +118,11 @@ int Request::integer(const char* key, int fallback) const {
 std::string Request::string(const char* key, const std::string& fallback) const {
   (void)spec(key);
   return string_param(params_, key, fallback);
+}
+
+bool Request::boolean(const char* key, bool fallback) const {
+  (void)spec(key);
+  return has(key) ? params_[key].get<bool>() : fallback;
 }
 
 void check_keys(const json& params, std::initializer_list<const char*> allowed) {

@@ -11,7 +11,7 @@
 namespace hystbench::daemon::details {
 
 /// What a parameter's value must be (request_params.cpp words them in this order).
-enum class ParamType { kNumber, kInteger, kString, kObject, kArray };
+enum class ParamType { kNumber, kInteger, kString, kObject, kArray, kBoolean };
 
 /// One parameter of a command: key, type and the range a number or integer must lie in (a
 /// range known only at run time, such as the loop rate's, is checked by Request::number's
@@ -40,6 +40,7 @@ class Request {
   double number(const char* key, double fallback, double lo, double hi) const;
   int integer(const char* key, int fallback) const;
   std::string string(const char* key, const std::string& fallback) const;
+  bool boolean(const char* key, bool fallback) const;
   const nlohmann::json& params() const { return params_; }
 
  private:

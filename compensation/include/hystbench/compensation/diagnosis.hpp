@@ -258,7 +258,7 @@ Diagnosis diagnose(std::span<const double> t, std::span<const double> u, std::sp
 
 /// A model's error on a record it was not fitted on (`hystbench diagnose --validate`, and each
 /// record left out of a set): simulated from rest at u[0], scored after the start-up (until the
-/// input has reached both its extremes, at most 1/32 of the record), the mean error removed (a
+/// input has reached both its extremes, at most a quarter of the record), the mean error removed (a
 /// sensor offset differs between runs; it is not a property of the device) and reported apart.
 struct ValidationScore {
   double rmse = 0.0;     ///< rms error, mean removed [output unit]

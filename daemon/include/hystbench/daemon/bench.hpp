@@ -161,9 +161,14 @@ class Bench {
   void deliver_result(nlohmann::json result);
   // identify's verification (bench_verification.cpp, identify_session.hpp).
   struct IdentifySession;
-  /// Submits the next candidate's verification segment; false when none is left or it failed.
+  /// Submits the next verification segment; false when none is left or it failed.
   bool verify_next_candidate();
   void verification_finished(std::unique_ptr<RunProgram> run);
+  /// The next segment, else the extension (once), else finish_identify().
+  void continue_identify();
+  /// Diagnoses the record with the best verified candidate and queues its extension's
+  /// verification; false when nothing is added (the reason in the session's extension).
+  bool extend_identified_model();
   /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
   /// when the fit fails).
   void fit_identify(const RunProgram& run, details::RunResult result);

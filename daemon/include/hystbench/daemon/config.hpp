@@ -116,6 +116,9 @@ struct IdentifySection {
   /// the range ends, which the model needs to see; held out they only judge the model order.
   double heldout_fraction = 0.1;
   double fit_rate_hz = 2000.0;  ///< records are block-averaged to this rate for the fit
+  /// After the fit, diagnose the record with the model and adopt the extended model (delay,
+  /// dynamics, creep, rate law, asymmetry) when its verified tracking is better.
+  bool extend = true;
 
   /// The excitation's lowest and highest input within output limits [u_min, u_max] [V].
   std::pair<double, double> span_v(double u_min, double u_max) const {

@@ -46,7 +46,10 @@ compensation::ActuatorModel model_after(const compensation::ActuatorModel& model
 
 /// identify's verification segment: the standard tracking reference, through the inverse.
 struct VerificationSpec {
-  double frequency_hz = 1.0;    ///< triangle frequency [Hz], > 0
+  /// A triangle (the standard segment) or a sine (a fast one, where dynamics and delay show).
+  enum class Reference { kTriangle, kSine };
+  Reference reference = Reference::kTriangle;
+  double frequency_hz = 1.0;    ///< reference frequency [Hz], > 0
   double periods = 2.0;         ///< >= 1; with 2 or more the first is left out of the figures
   double range_fraction = 0.8;  ///< of the model's major-loop range, (0, 1]
   double precondition_s = 1.0;  ///< sweep before the reference [s], >= 0
@@ -56,7 +59,7 @@ struct VerificationSpec {
   std::uint64_t model_exchange_ticks = 0;
 };
 
-/// A kTrack program (no log: the caller opens one) following a triangle over
+/// A kTrack program (no log: the caller opens one) following spec.reference over
 /// spec.range_fraction of the model's range with the model's inverse, preconditioned like
 /// `track`. Throws compensation::NotInvertibleError or std::invalid_argument.
 std::unique_ptr<RunProgram> make_verification_program(const compensation::ActuatorModel& model,
