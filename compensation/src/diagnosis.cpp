@@ -37,6 +37,8 @@ constexpr double kMaxLeftOutLoss = 0.95;
 // A significant extension joins the named one when it lowers the joint model's held-out rms by
 // at least 2 %.
 constexpr double kMinJoinGain = 1.02;
+// A cause named after stronger ones on its own gain must still gain this much added to them.
+constexpr double kMinAddedGain = 1.1;
 // The baseline family "does not fit the device" when, fitted on the others, it predicts some
 // record this many times worse than it predicts its own held-out blocks.
 constexpr double kFamilyMismatch = 3.0;
@@ -365,7 +367,7 @@ struct Naming {
   const std::vector<ResidualProfile>& profiles;  ///< of the reference residual
   const FrequencyResponse& response;             ///< of the reference prediction
   const DiagnosisOptions& options;
-  double reference = 0.0;  ///< held-out rms the candidates' gains are judged against
+  double reference = 0.0;      ///< held-out rms the candidates' gains are judged against
   std::string reference_name;  ///< what that is: the baseline, or the given model refitted
   const std::vector<OnTopOfShape>& on_shape;
   const OnTopOfShape* beyond = nullptr;  ///< the first cause, named beyond the shape
@@ -496,6 +498,12 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
           c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
                         ", and " + num(added_gain) + " added to the model holding " + before +
                         ", are below " + num(options.min_gain);
+        } else if (added_gain < options.min_gain && added_gain < kMinAddedGain) {
+          // Its own gain was mostly the stronger causes' (a rate law widening the loop as a
+          // delay does): added to them it explains little.
+          c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
+                        " is mostly that of " + before + ": added to the model holding it, " +
+                        num(added_gain) + ", below " + num(kMinAddedGain);
         } else {
           d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
                               s ? shape_name : x.reference_name, added_gain, added_rms,

@@ -370,8 +370,9 @@ bool can_plan_drive(const ActuatorModel& model) noexcept {
   const auto* h = dynamic_cast<const RateDependentPiModel*>(&model.hysteresis());
   if (h == nullptr) return false;
   // A signed rate law whose weights grow with the rate is inverted exactly, forward in time, by
-  // the previewed inverse (its drive at its own rate): nothing is left to plan.
-  return !h->grows_with_signed_rate();
+  // the previewed inverse (its drive at its own rate): nothing is left to plan. The plan's
+  // Jacobian is that of the weight laws; the thresholds law is inverted tick by tick.
+  return !h->grows_with_signed_rate() && h->parameters().rate_law != RateLaw::kThresholds;
 }
 
 double plan_drive_work(const ActuatorModel& model, std::size_t samples) noexcept {

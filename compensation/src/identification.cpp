@@ -64,6 +64,14 @@ std::vector<std::pair<RateLaw, double>> rate_laws_and_filters() {
 }
 // Caps of the rate law tried, as fractions of the record's largest smooth rate.
 constexpr double kRateCapFractions[] = {1.0, 0.8, 0.64, 0.51};
+// The thresholds law: how far the thresholds widen at the record's largest smooth rate, as
+// fractions of the input span (a grid, then a golden-section search on the logarithm between
+// the best point's neighbours).
+constexpr double kWideningFractions[] = {0.005, 0.01, 0.02, 0.04, 0.08, 0.16};
+constexpr int kWideningRefinements = 5;
+// Its rate filters, in fit samples: the weight laws' but the longest (its search has the
+// widening as one more dimension).
+constexpr double kWideningFilterSamples[] = {0.0, 2.0, 5.0};
 
 void validate_record(std::span<const double> t, std::span<const double> u,
                      std::span<const double> y) {
@@ -243,6 +251,9 @@ class Identifier {
   Candidate rpi_over(const Candidate& mpi);
   // search_rpi()'s candidate on the modified PI's own order, when another order scored better.
   std::optional<Candidate> rpi_by_mpi_order_;
+  // The thresholds law over one rate-dependent structure: the widening and the rate filter
+  // chosen by the fit's error; empty when the record has no input span or rate.
+  Candidate thresholds_law_over(ModelStructure s);
   Candidate nested_rpi(const Candidate& mpi, const ModelStructure& s);
   Candidate nested_cpi(const Candidate& mpi);
   /// Scores a nested model `m` (base with a zero extension) as c, with base's creep and method +
@@ -525,12 +536,68 @@ Candidate Identifier::rpi_over(const Candidate& mpi) {
                     g.heldout.rmse, g.method});
     consider(std::move(g));
   }
+  // The other mechanism: thresholds that widen with |du/dt|. The two laws' best fits are
+  // judged against each other on held-out data.
+  Candidate widened = thresholds_law_over(s);
+  if (widened.model) {
+    if (!rated_heldout.model || widened.score() < rated_heldout.score()) rated_heldout = widened;
+    if (!rated.model || widened.score() < rated.score()) rated = std::move(widened);
+  }
   if (rated.model && rated.score() < best.score()) {
     best = std::move(rated);
   } else if (rated_heldout.model && rated_heldout.score() < best.score()) {
     // The best fit did not carry over to the held-out part (a record whose fast parts are few);
     // a rate law that does still beats the modified PI it extends.
     best = std::move(rated_heldout);
+  }
+  return best;
+}
+
+Candidate Identifier::thresholds_law_over(ModelStructure s) {
+  s.rate_law = RateLaw::kThresholds;
+  const double span = r_.u_hi - r_.u_lo;
+  if (!(span > 0.0) || !(s.max_rate > 0.0)) return {};
+  Candidate best;
+  double best_fraction = 0.0, best_filter_s = 0.0;
+  // Widening thresholds are not capped inside the record: an input step's rate holds the
+  // switching back until the rate has decayed, which is the law's own response to a step.
+  const double smooth_rate = s.max_rate;
+  auto try_at = [&](double fraction, double filter_s) {
+    s.rate_filter_s = filter_s;
+    const std::vector<double> rates = details::sample_rates(r_.ud, r_.dt, filter_s);
+    s.max_rate = std::max(smooth_rate, *std::max_element(rates.begin(), rates.end()));
+    s.record_max_rate = s.max_rate;
+    s.threshold_rate_s = fraction * span / smooth_rate;
+    Candidate c = evaluate(s, "constrained-lsq-rate-thresholds");
+    const double rmse = c.fit.rmse;
+    if (!best.model || rmse < best.fit.rmse) {
+      best = std::move(c);
+      best_fraction = fraction;
+      best_filter_s = filter_s;
+    }
+    return rmse;
+  };
+  for (const double samples : kWideningFilterSamples) {
+    stage_progress(0.0, "thresholds rate law, rate filter " + fmt(samples * r_.dt * 1e3) + " ms");
+    for (const double fraction : kWideningFractions) try_at(fraction, samples * r_.dt);
+  }
+  // Golden section on log(fraction) between the grid neighbours of the best, at its filter.
+  const double step = 2.0;  // the grid's ratio
+  double lo = std::log(best_fraction / step), hi = std::log(best_fraction * step);
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  const double filter_s = best_filter_s;
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+  double f1 = try_at(std::exp(x1), filter_s), f2 = try_at(std::exp(x2), filter_s);
+  for (int i = 2; i < kWideningRefinements; ++i) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1;
+      x1 = hi - g * (hi - lo);
+      f1 = try_at(std::exp(x1), filter_s);
+    } else {
+      lo = x1, x1 = x2, f1 = f2;
+      x2 = lo + g * (hi - lo);
+      f2 = try_at(std::exp(x2), filter_s);
+    }
   }
   return best;
 }

@@ -17,6 +17,9 @@ constexpr double kMinRatePredictionSamples = 5.0;
 // rate-free inverse's, and at least this fraction of max_rate per tick.
 constexpr double kSignedStepFactor = 2.0;
 constexpr double kSignedSettleRateFraction = 0.01;
+// Thresholds law: inverted at the drive's own rate while beta a / dt stays below this (the
+// output then grows with the drive by at least 1 - this per unit on every branch).
+constexpr double kOwnRateMonotoneMargin = 0.8;
 }  // namespace
 
 // ---------------------------------------------------------------- PiInverse
@@ -98,7 +101,14 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
     total_slope_ = p.rate_coefficients.empty() ? 0.0 : p.rate_coefficients.back();
     max_rate_ = p.max_rate;
     signed_ = p.rate_law == RateLaw::kSigned;
-    if (signed_) {
+    if (p.rate_law == RateLaw::kThresholds) {
+      // Widening thresholds: on a branch the output is u - r_i - beta rate(u) per play, and the
+      // rate moves with the drive by a / dt per unit of it. While beta a / dt < 1 the output
+      // still grows with the drive at its own rate and each tick inverts exactly; beyond, the
+      // drive is solved at the rate the rate-free inverse's drive predicts.
+      const double a = RateEstimator(p.rate_filter_s, rpi.sample_period()).coefficient();
+      own_rate_ = p.threshold_rate_s * a / rpi.sample_period() < kOwnRateMonotoneMargin;
+    } else if (signed_) {
       // Weights that grow with the signed rate: the output grows with u and with its own rate
       // on both branches, so the own-rate solution is exact and stable forward in time.
       own_rate_ = p.max_rate > 0.0 && rpi.grows_with_signed_rate();

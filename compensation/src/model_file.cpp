@@ -39,14 +39,15 @@ double number_member(const json& obj, const std::string& parent, const char* key
   return number(member(obj, parent, key), parent + "." + key);
 }
 
-// rate.law: "signed" or "magnitude"; absent (files written before it was a choice): magnitude.
+// rate.law: "signed", "magnitude" or "thresholds" (with rate.threshold_s); absent (files written
+// before it was a choice): magnitude.
 RateLaw rate_law_from_json(const json& rate) {
   const auto it = rate.find("law");
   if (it == rate.end()) return RateLaw::kMagnitude;
   if (it->is_string()) {
     if (const auto law = rate_law_from_string(it->get<std::string>())) return *law;
   }
-  fail("rate.law", "must be \"signed\" or \"magnitude\", got " + it->dump());
+  fail("rate.law", "must be \"signed\", \"magnitude\" or \"thresholds\", got " + it->dump());
 }
 
 std::vector<double> numbers(const json& obj, const std::string& parent, const char* key) {
@@ -133,6 +134,7 @@ json to_json(const ModelFile& file) {
                    {"filter_s", p.rate_filter_s},
                    {"record_max_rate", p.record_max_rate},
                    {"law", to_string(p.rate_law)}};
+      if (p.rate_law == RateLaw::kThresholds) j["rate"]["threshold_s"] = p.threshold_rate_s;
       break;
     }
     case ModelKind::kCoupledPlayPi: {
@@ -190,6 +192,7 @@ ModelFile model_file_from_json(const json& j) {
             number_member(r, "rate", "max_rate", 0.0), number_member(r, "rate", "filter_s", 0.0),
             number_member(r, "rate", "record_max_rate", 0.0)};
         p.rate_law = rate_law_from_json(r);
+        p.threshold_rate_s = number_member(r, "rate", "threshold_s", 0.0);
         h = std::make_unique<RateDependentPiModel>(std::move(p));
         break;
       }

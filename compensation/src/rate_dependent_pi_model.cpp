@@ -26,6 +26,17 @@ RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double d
   details::require_finite(p_.record_max_rate, "rate.record_max_rate");
   details::require(p_.record_max_rate >= 0.0, "rate.record_max_rate must be >= 0");
   details::require_finite(p_.base.center, "deadzone.center");
+  details::require_finite(p_.threshold_rate_s, "rate.threshold_s");
+  details::require(p_.threshold_rate_s >= 0.0, "rate.threshold_s must be >= 0");
+  if (p_.rate_law == RateLaw::kThresholds) {
+    details::require(std::all_of(p_.rate_coefficients.begin(), p_.rate_coefficients.end(),
+                                 [](double c) { return c == 0.0; }),
+                     "rate.coefficients must be 0 with the thresholds law (its weights are "
+                     "rate-free)");
+  } else {
+    details::require(p_.threshold_rate_s == 0.0,
+                     "rate.threshold_s is only for the thresholds law (rate.law = \"thresholds\")");
+  }
   dw_.resize(p_.rate_coefficients.size());
   double prev = 0.0;
   for (std::size_t i = 0; i < dw_.size(); ++i) {
@@ -52,8 +63,10 @@ double RateDependentPiModel::evaluate(double u, double rate, double* state_out) 
   const auto& w = p_.base.play.weights;
   const double* s = pi_.state().data();
   double y = p_.base.play.offset;
+  const double widen = p_.threshold_rate_s * rate;  // 0 unless the thresholds law
   for (std::size_t i = 0; i < r.size(); ++i) {
-    const double pl = std::max(u - r[i], std::min(u + r[i], s[i]));
+    const double ri = r[i] > 0.0 ? r[i] + widen : 0.0;  // the linear term does not lag
+    const double pl = std::max(u - ri, std::min(u + ri, s[i]));
     if (state_out != nullptr) state_out[i] = pl;
     y += (w[i] + dw_[i] * rate) * pl;
   }
@@ -61,7 +74,9 @@ double RateDependentPiModel::evaluate(double u, double rate, double* state_out) 
 }
 
 double RateDependentPiModel::rate_for_output(double u, double y) const noexcept {
-  if (!dz_inverse_) return std::numeric_limits<double>::quiet_NaN();
+  if (!dz_inverse_ || p_.rate_law == RateLaw::kThresholds) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
   const auto& r = p_.base.play.thresholds;
   const auto& w = p_.base.play.weights;
   const double* s = pi_.state().data();

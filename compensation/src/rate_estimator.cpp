@@ -5,11 +5,19 @@
 namespace hystbench::compensation {
 
 const char* to_string(RateLaw law) noexcept {
-  return law == RateLaw::kSigned ? "signed" : "magnitude";
+  switch (law) {
+    case RateLaw::kSigned:
+      return "signed";
+    case RateLaw::kThresholds:
+      return "thresholds";
+    case RateLaw::kMagnitude:
+      break;
+  }
+  return "magnitude";
 }
 
 std::optional<RateLaw> rate_law_from_string(std::string_view name) noexcept {
-  for (const RateLaw law : {RateLaw::kSigned, RateLaw::kMagnitude}) {
+  for (const RateLaw law : {RateLaw::kSigned, RateLaw::kMagnitude, RateLaw::kThresholds}) {
     if (name == to_string(law)) return law;
   }
   return std::nullopt;

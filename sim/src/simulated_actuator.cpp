@@ -136,9 +136,14 @@ SimulatedActuator::SimulatedActuator(const SimulatedActuatorConfig& config, doub
   model_ = make_model(c, dt_s_);
   if (!model_) {
     preisach_.emplace(preisach_parameters(c));
-    if (c.rate_dependence.enabled)
+    if (c.rate_dependence.enabled && c.rate_dependence.mechanism == RateMechanism::kSwitchingFront)
       front_.emplace(c.rate_dependence.switching_lag_v, c.rate_dependence.switching_exponent,
                      dt_s_);
+    if (c.rate_dependence.enabled &&
+        c.rate_dependence.mechanism == RateMechanism::kSwitchingThresholds) {
+      widened_.emplace(c.rate_dependence.threshold_rate_s, c.rate_dependence.threshold_filter_s,
+                       dt_s_);
+    }
   }
   if (c.creep.enabled && c.creep.law == CreepLaw::kInputLags) {
     input_creep_ = hc::CreepOperatorBank(
@@ -183,7 +188,7 @@ double SimulatedActuator::clamp_displacement(double x_um) const noexcept {
 
 double SimulatedActuator::static_map(double ud) noexcept {
   if (model_) return model_->step(ud);
-  const double front = front_ ? front_->step(ud) : ud;
+  const double front = front_ ? front_->step(ud) : widened_ ? widened_->step(ud) : ud;
   return preisach_map(config_.hysteresis, config_.input.min_v, preisach_->step(front), ud);
 }
 
@@ -219,6 +224,7 @@ void SimulatedActuator::reset(double u0) noexcept {
     y = model_->peek(u);
   } else {
     if (front_) front_->reset(u);
+    if (widened_) widened_->reset(u);
     preisach_->reset(u);
     y = preisach_map(config_.hysteresis, config_.input.min_v, preisach_->output(), u);
   }

@@ -106,6 +106,17 @@ void validate_rate_dependence(const SimulatedActuatorConfig& c) {
             "rate_dependence.switching_exponent", "must be in [1, 4]");
     return;
   }
+  if (r.mechanism == RateMechanism::kSwitchingThresholds) {
+    require(c.hysteresis.kind == HysteresisKind::kPreisach, "rate_dependence.mechanism",
+            "\"switching_thresholds\" needs hysteresis.kind = \"preisach\" (\"play_weights\" is "
+            "the modified PI's law)");
+    require_non_negative(r.threshold_rate_s, "rate_dependence.threshold_rate_s");
+    require_non_negative(r.threshold_filter_s, "rate_dependence.threshold_filter_s");
+    return;
+  }
+  require(r.rate_law != compensation::RateLaw::kThresholds, "rate_dependence.rate_law",
+          "\"thresholds\" is not a law of play weights (mechanism \"switching_thresholds\" "
+          "widens the thresholds)");
   require(c.hysteresis.kind == HysteresisKind::kModifiedPi, "rate_dependence.mechanism",
           "\"play_weights\" needs hysteresis.kind = \"modified_pi\" (\"switching_front\" is the "
           "Preisach model's)");
@@ -191,7 +202,15 @@ std::string_view to_string(HysteresisKind kind) noexcept {
 }
 
 std::string_view to_string(RateMechanism mechanism) noexcept {
-  return mechanism == RateMechanism::kSwitchingFront ? "switching_front" : "play_weights";
+  switch (mechanism) {
+    case RateMechanism::kSwitchingFront:
+      return "switching_front";
+    case RateMechanism::kSwitchingThresholds:
+      return "switching_thresholds";
+    case RateMechanism::kPlayWeights:
+      break;
+  }
+  return "play_weights";
 }
 
 std::string_view to_string(CreepLaw law) noexcept {

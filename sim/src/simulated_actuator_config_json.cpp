@@ -76,6 +76,8 @@ void visit_fields(S& s, Visit&& visit) {
   visit("mechanism", s.mechanism);
   visit("switching_lag_v", s.switching_lag_v);
   visit("switching_exponent", s.switching_exponent);
+  visit("threshold_rate_s", s.threshold_rate_s);
+  visit("threshold_filter_s", s.threshold_filter_s);
   visit("rate_law", s.rate_law);
   visit("rate_coefficients", s.rate_coefficients);
   visit("max_rate_v_per_s", s.max_rate_v_per_s);
@@ -181,6 +183,9 @@ std::optional<Scope> scope_of(std::string_view section, std::string_view key) {
     if (key == "switching_lag_v" || key == "switching_exponent") {
       return Scope{"mechanism", to_string(RateMechanism::kSwitchingFront)};
     }
+    if (key == "threshold_rate_s" || key == "threshold_filter_s") {
+      return Scope{"mechanism", to_string(RateMechanism::kSwitchingThresholds)};
+    }
     if (key == "rate_law" || key == "rate_coefficients" || key == "max_rate_v_per_s") {
       return Scope{"mechanism", to_string(RateMechanism::kPlayWeights)};
     }
@@ -274,7 +279,9 @@ void decode(const json& j, const std::string& path, HysteresisKind& out) {
 }
 
 void decode(const json& j, const std::string& path, RateMechanism& out) {
-  decode_name(j, path, out, {RateMechanism::kSwitchingFront, RateMechanism::kPlayWeights});
+  decode_name(j, path, out,
+              {RateMechanism::kSwitchingFront, RateMechanism::kPlayWeights,
+               RateMechanism::kSwitchingThresholds});
 }
 
 void decode(const json& j, const std::string& path, CreepLaw& out) {

@@ -105,6 +105,15 @@ TEST(SimulatedActuatorConfigJson, AKeyOfAnotherFormIsNamedNotIgnored) {
       json::parse(R"({"rate_dependence": {"enabled": true, "mechanism": "play_weights"}})"));
   EXPECT_TRUE(mentions(mismatch, "rate_dependence.mechanism")) << mismatch;
   EXPECT_TRUE(mentions(mismatch, "modified_pi")) << mismatch;
+  const auto widening =
+      from_json_error(json::parse(R"({"rate_dependence": {"threshold_rate_s": 1e-3}})"));
+  EXPECT_TRUE(mentions(widening, "rate_dependence.mechanism = \"switching_thresholds\""))
+      << widening;
+  const auto thresholds_on_pi = from_json_error(json::parse(
+      R"({"hysteresis": {"kind": "modified_pi"},
+          "rate_dependence": {"enabled": true, "mechanism": "switching_thresholds"}})"));
+  EXPECT_TRUE(mentions(thresholds_on_pi, "rate_dependence.mechanism")) << thresholds_on_pi;
+  EXPECT_TRUE(mentions(thresholds_on_pi, "preisach")) << thresholds_on_pi;
   const auto kind = from_json_error(json::parse(R"({"hysteresis": {"kind": "bouc_wen"}})"));
   EXPECT_TRUE(mentions(kind, "hysteresis.kind")) << kind;
   EXPECT_TRUE(mentions(kind, "\"preisach\" or \"modified_pi\"")) << kind;
@@ -172,6 +181,14 @@ TEST(SimulatedActuatorConfigJson, InvalidValuesAreNamed) {
           "rate_dependence": {"enabled": true, "max_rate_v_per_s": 5000,
           "rate_coefficients": [1e-4, 0, 0, 0, 0, 0, 0, 0, 0, 0]}})"));
   EXPECT_TRUE(mentions(falling, "rate_dependence.rate_coefficients[0]")) << falling;
+  const auto negative = from_json_error(json::parse(
+      R"({"rate_dependence": {"enabled": true, "mechanism": "switching_thresholds",
+          "threshold_rate_s": -1e-3}})"));
+  EXPECT_TRUE(mentions(negative, "rate_dependence.threshold_rate_s")) << negative;
+  const auto law_on_weights = from_json_error(json::parse(
+      R"({"hysteresis": {"kind": "modified_pi"},
+          "rate_dependence": {"enabled": true, "rate_law": "thresholds"}})"));
+  EXPECT_TRUE(mentions(law_on_weights, "rate_dependence.rate_law")) << law_on_weights;
   EXPECT_NO_THROW(hs::from_json(json::parse(
       R"({"hysteresis": {"kind": "modified_pi"},
           "rate_dependence": {"enabled": true, "rate_law": "magnitude", "max_rate_v_per_s": 5000,

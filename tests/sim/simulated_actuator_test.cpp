@@ -531,6 +531,30 @@ TEST(SimulatedActuator, RateDependenceWidensTheLoopWithTheSquareRootOfTheRate) {
   EXPECT_NEAR(fast_ri.width_at_mid_um, slow_ri.width_at_mid_um, 0.01 * slow_ri.width_at_mid_um);
 }
 
+// Thresholds that widen with |du/dt|: the loop widens in proportion to the rate (sixteen times
+// the rate, about sixteen times the widening), and its tips stay where the input reverses.
+TEST(SimulatedActuator, WideningThresholdsWidenTheLoopInProportionToTheRate) {
+  auto c = bare();
+  c.hysteresis.enabled = true;
+  c.rate_dependence.enabled = true;
+  c.rate_dependence.mechanism = hs::RateMechanism::kSwitchingThresholds;
+  const auto quasi_static = hs::measure_major_loop(c, 1e-4, 0.01);
+  const auto slow = hs::measure_major_loop(c, 1e-4, 1.0);
+  const auto fast = hs::measure_major_loop(c, 1e-4, 16.0);
+  const double ratio = (fast.width_at_mid_um - quasi_static.width_at_mid_um) /
+                       (slow.width_at_mid_um - quasi_static.width_at_mid_um);
+  EXPECT_GT(ratio, 10.0);
+  EXPECT_LT(ratio, 20.0);
+  // The loop's ends: where the input turns, whatever the rate.
+  EXPECT_NEAR(fast.max_um, quasi_static.max_um, 1e-3 * quasi_static.range_um);
+  EXPECT_NEAR(fast.min_um, quasi_static.min_um, 1e-3 * quasi_static.range_um);
+  std::printf("hysteresis of the full-range loop with widening thresholds:");
+  for (const double f : {1.0, 5.0, 10.0, 19.0, 50.0, 100.0}) {
+    std::printf(" %g Hz %.1f %%", f, hs::measure_major_loop(c, 1e-4, f).hysteresis_percent);
+  }
+  std::printf("\n");
+}
+
 TEST(SimulatedActuator, ThePlayWeightLawWidensTheModifiedPiTruthsLoop) {
   auto c = hs::SimulatedActuatorConfig::modified_pi_truth();
   c.creep.enabled = false;

@@ -68,7 +68,7 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
     inv_max_rate_ = 1.0 / s_.max_rate;
     rate_.configure(s_.rate_filter_s, s_.dt, s_.rate_law);
   }
-  play_cols_ = s_.kind == ModelKind::kRateDependentPi ? 2 * n_ : n_;
+  play_cols_ = s_.kind == ModelKind::kRateDependentPi && !thresholds_law() ? 2 * n_ : n_;
   offset_col_ = play_cols_;
   dz_col_ = offset_col_ + 1;
   creep_col_ = dz_col_ + m_pos_ + m_neg_;
@@ -87,7 +87,7 @@ void Design::reset(double u0) noexcept {
   rate_.reset(u0);
 }
 
-void Design::step_operators(double u) noexcept {
+void Design::step_operators(double u, double widen) noexcept {
   const double* r = s_.play_thresholds.data();
   double* z = z_.data();
   if (s_.kind == ModelKind::kCoupledPlayPi) {
@@ -96,17 +96,24 @@ void Design::step_operators(double u) noexcept {
                                                  cp_.rc[i]);
     }
   } else {
-    for (Eigen::Index i = 0; i < n_; ++i) z[i] = std::max(u - r[i], std::min(u + r[i], z[i]));
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      const double ri = r[i] > 0.0 ? r[i] + widen : 0.0;  // the linear term does not lag
+      z[i] = std::max(u - ri, std::min(u + ri, z[i]));
+    }
   }
 }
 
 double Design::row(double u, double y, double* a) noexcept {
-  step_operators(u);
+  // The model's rate: filtered, capped at max_rate (rho in [0, 1], signed: [-1, 1]).
+  const double rho = s_.kind == ModelKind::kRateDependentPi
+                         ? std::clamp(rate_.step(u) * inv_max_rate_, -1.0, 1.0)
+                         : 0.0;
+  step_operators(u, thresholds_law() ? s_.threshold_rate_s * rho * s_.max_rate : 0.0);
   // Cumulative-weight regressors: sum_i w_i (p_i - u_ref) = sum_i W_i (p_i - p_{i+1}).
   const double* z = z_.data();
-  if (s_.kind == ModelKind::kRateDependentPi) {
-    // The model's rate: filtered, capped at max_rate (rho in [0, 1], signed: [-1, 1]).
-    const double rho = std::clamp(rate_.step(u) * inv_max_rate_, -1.0, 1.0);
+  if (thresholds_law()) {
+    for (Eigen::Index i = 0; i < n_; ++i) a[i] = z[i] - (i + 1 < n_ ? z[i + 1] : 0.0);
+  } else if (s_.kind == ModelKind::kRateDependentPi) {
     const bool signed_law = s_.rate_law == RateLaw::kSigned;
     for (Eigen::Index i = 0; i < n_; ++i) {
       const double q = z[i] - (i + 1 < n_ ? z[i + 1] : 0.0);
@@ -176,7 +183,7 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
   const bool signed_law = s_.kind == ModelKind::kRateDependentPi && s_.rate_law == RateLaw::kSigned;
   Eigen::VectorXd rest = x.head(n_);
   Eigen::VectorXd rate_part = Eigen::VectorXd::Zero(n_);
-  if (s_.kind == ModelKind::kRateDependentPi) {
+  if (s_.kind == ModelKind::kRateDependentPi && !thresholds_law()) {
     rate_part = x.segment(n_, n_);
     if (signed_law) {
       for (Eigen::Index i = 1; i < n_; ++i) rate_part[i] += rate_part[i - 1];
@@ -225,6 +232,7 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
     rpi.rate_coefficients[i] = rate_part[k] * inv_max_rate_;
   }
   rpi.rate_law = s_.rate_law;
+  if (thresholds_law()) rpi.threshold_rate_s = s_.threshold_rate_s;
   rpi.max_rate = s_.max_rate;
   rpi.record_max_rate = s_.record_max_rate;
   rpi.rate_filter_s = s_.rate_filter_s;

@@ -16,6 +16,8 @@
 //              with U_i = W_i(+max_rate) >= eps and C_i = sum_{j<=i} e_j, each play's rate
 //              slope -e_j <= 0 (the loop widens with rate, as with |du/dt|; invertible on
 //              [-max_rate, max_rate]).
+//              thresholds law: as MPI, every play's threshold r_i > 0 + threshold_rate_s * rate
+//              (rate = min(|rate|, max_rate)); no rate columns.
 // Creep lags, when present, are extra unconstrained columns; so is the drift column (time from
 // drift_t0_s), which estimates a record's slow drift and is no part of the built model.
 #include <Eigen/Dense>
@@ -44,7 +46,8 @@ struct ModelStructure {
   double max_rate = 0.0;                          ///< RPI: the rate law's cap [input unit / s]
   double record_max_rate = 0.0;  ///< RPI: the record's largest smooth rate [input unit / s]
   double rate_filter_s = 0.0;    ///< RPI: the rate's low-pass time constant (RateEstimator) [s]
-  RateLaw rate_law = RateLaw::kMagnitude;  ///< RPI: du/dt or |du/dt|
+  RateLaw rate_law = RateLaw::kMagnitude;  ///< RPI: du/dt or |du/dt|, on weights or thresholds
+  double threshold_rate_s = 0.0;           ///< RPI thresholds law: widening per rate [s]
   double dt = 1e-3;                        ///< sample period [s]
   double min_play_slope = 0.0;             ///< lower bound on cumulative play weights
   double min_dead_zone_slope = 0.0;        ///< lower bound on cumulative inverse dead-zone weights
@@ -109,7 +112,11 @@ class Design {
   std::unique_ptr<HysteresisModel> build_hysteresis(const Eigen::VectorXd& x) const;
 
  private:
-  void step_operators(double u) noexcept;
+  /// Steps the plays with input u; `widen` is added to every threshold [input unit].
+  void step_operators(double u, double widen) noexcept;
+  bool thresholds_law() const noexcept {
+    return s_.kind == ModelKind::kRateDependentPi && s_.rate_law == RateLaw::kThresholds;
+  }
 
   ModelStructure s_;
   CoupledThresholds cp_;

@@ -2,10 +2,12 @@
 // not ring). Statistic: share of the baseline residual variance explained by the signed input
 // rate (holds and steps left out). It can only be told from the loop shape when the record
 // crosses the same levels at clearly different rates. Extension: the rate-dependent PI on the
-// baseline's plays (and dead zones), cumulative weights linear in du/dt or |du/dt| (the better
-// fit) up to the 99.9th percentile of the record's rates.
+// baseline's plays (and dead zones), cumulative weights linear in du/dt or |du/dt|, or
+// thresholds widening with |du/dt| (the best fit), up to the 99.9th percentile of the record's
+// rates.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "details/diagnosis_candidates.hpp"
 #include "details/rate_groups.hpp"
@@ -17,6 +19,10 @@ namespace {
 constexpr double kThreshold = 0.15;
 constexpr double kMinRateSpread = 1.25;  // as the identification's automatic family choice
 constexpr double kRateQuantile = 0.999;
+// The thresholds law: widening at max_rate as fractions of the input span, and rate filters in
+// samples.
+constexpr double kWideningFractions[] = {0.005, 0.01, 0.02, 0.04, 0.08, 0.16};
+constexpr double kWideningFilterSamples[] = {0.0, 3.0};
 
 }  // namespace
 
@@ -59,10 +65,45 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     ExtensionFit f = fit_extension(r, spec);
     if (law == RateLaw::kSigned || f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
   }
-  out.extension = "rate-dependent PI on " + std::to_string(s.plays()) +
-                  " plays, weights linear in " +
-                  (out.fit.spec.structure.rate_law == RateLaw::kSigned ? "du/dt" : "|du/dt|") +
-                  " up to " + num(s.max_rate) + " " + r.units.input + "/s";
+  // The other mechanism: thresholds that widen with |du/dt|, the widening searched on a grid
+  // of the input span at max_rate (and the rate filter), the best refitted on every row. It has
+  // fewer unknowns than the weight laws, so the fit error chooses fairly between them.
+  ExtensionSpec widened = spec;
+  ModelStructure& w = widened.structure;
+  w.rate_law = RateLaw::kThresholds;
+  const double span = r.u_hi - r.u_lo;
+  double best_search = std::numeric_limits<double>::infinity();
+  ExtensionSpec best_widened = widened;
+  for (const double samples : kWideningFilterSamples) {
+    // Not capped inside the record (as the identification): a step's rate holds the switching.
+    const std::vector<double> filtered = sample_rates(r.u, r.dt, samples * r.dt);
+    w.max_rate = std::max(s.max_rate, *std::max_element(filtered.begin(), filtered.end()));
+    w.record_max_rate = w.max_rate;
+    for (const double fraction : kWideningFractions) {
+      w.rate_filter_s = samples * r.dt;
+      w.threshold_rate_s = fraction * span / s.max_rate;
+      const ExtensionFit f = fit_extension(r, widened, FitRows::kSearch);
+      if (f.fit.rmse < best_search) best_search = f.fit.rmse, best_widened = widened;
+    }
+  }
+  for (const double step : {1.0, std::sqrt(2.0), 1.0 / std::sqrt(2.0)}) {
+    ExtensionSpec t = best_widened;
+    t.structure.threshold_rate_s *= step;
+    ExtensionFit f = fit_extension(r, t);
+    if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
+  }
+  const ModelStructure& chosen = out.fit.spec.structure;
+  out.extension = "rate-dependent PI on " + std::to_string(s.plays()) + " plays, ";
+  if (chosen.rate_law == RateLaw::kThresholds) {
+    out.extension += "thresholds widening by " + num(chosen.threshold_rate_s * 1e3) + " " +
+                     r.units.input + " per " + r.units.input + "/ms of |du/dt|";
+  } else {
+    out.extension += std::string("weights linear in ") +
+                     (chosen.rate_law == RateLaw::kSigned ? "du/dt" : "|du/dt|");
+  }
+  if (chosen.rate_law != RateLaw::kThresholds) {
+    out.extension += " up to " + num(s.max_rate) + " " + r.units.input + "/s";
+  }
   return out;
 }
 

@@ -64,7 +64,8 @@ struct DrivePlan {
   double rms = 0.0;
 };
 
-/// True when plan_drive() plans for this model: a rate-dependent PI hysteresis (for rate-free
+/// True when plan_drive() plans for this model: a rate-dependent PI hysteresis of a weight law
+/// that is not inverted exactly forward in time (for rate-free
 /// models the previewed inverse is already exact where the target is reachable).
 bool can_plan_drive(const ActuatorModel& model) noexcept;
 

@@ -1,10 +1,16 @@
 #pragma once
-// Rate-dependent modified PI (rate-dependent paper, eq. 15-21): the cumulative play weights are
-// linear in the input rate, W_i(rate) = W^_i + c_i * rate [input unit / s], capped at +-max_rate
-// (when > 0); w_i(rate) = W_i(rate) - W_{i-1}(rate). Dead zones are rate-independent.
-// The rate is du/dt (RateLaw::kSigned, eq. 16) or |du/dt| (kMagnitude) through a first-order
-// low-pass of time constant rate_filter_s (RateEstimator; 0 = the per-sample difference
-// (u(k) - u(k-1)) / dt, the paper's form).
+// Rate-dependent modified PI, two laws of the input rate:
+// - weights (rate-dependent paper, eq. 15-21): the cumulative play weights are linear in the
+//   rate, W_i(rate) = W^_i + c_i * rate [input unit / s]; w_i(rate) = W_i(rate) - W_{i-1}(rate).
+//   The rate is du/dt (RateLaw::kSigned, eq. 16) or |du/dt| (kMagnitude).
+// - thresholds (RateLaw::kThresholds, Al Janaideh, Rakheja and Su's dynamic thresholds): every
+//   play's threshold widens with |du/dt|, r_i(rate) = r_i + threshold_rate_s * rate for
+//   r_i > 0 (the r_0 = 0 play is the paper's linear term p_0 u and stays one); the weights are
+//   rate-free. The loop's tips stay where the input reverses (the rate is 0 there),
+//   where a delay would carry the output past them.
+// The rate is capped at max_rate (when > 0) and low-passed with time constant rate_filter_s
+// (RateEstimator; 0 = the per-sample difference (u(k) - u(k-1)) / dt, the paper's form).
+// Dead zones are rate-independent.
 // Needs set_sample_period(). Real-time safe step()/peek()/peek_at_rate().
 #include <optional>
 #include <span>
@@ -27,8 +33,12 @@ struct RateDependentPiParameters {
   /// max_rate (a saturation); equal: max_rate is only where the record ended (an extrapolation
   /// guard).
   double record_max_rate = 0.0;
-  /// du/dt or |du/dt|. Model files without the key are kMagnitude (the only law before).
+  /// du/dt or |du/dt| on the weights, or |du/dt| on the thresholds. Model files without the
+  /// key are kMagnitude.
   RateLaw rate_law = RateLaw::kMagnitude;
+  /// kThresholds: how far every play's threshold widens per unit of rate [s] (input unit per
+  /// input unit / s), >= 0; the rate coefficients are then all 0. Other laws: 0.
+  double threshold_rate_s = 0.0;
 };
 
 class RateDependentPiModel final : public HysteresisModel {
@@ -39,8 +49,8 @@ class RateDependentPiModel final : public HysteresisModel {
   double step(double u) noexcept override;
   double peek(double u) const noexcept override;
   double peek_at_rate(double u, double rate) const noexcept override;
-  /// Exact: the output is S[a(u) + b(u) rate], so rate = (S^-1[y] - a) / b (before the cap;
-  /// kMagnitude: 0 where that is negative).
+  /// Exact for the weight laws: the output is S[a(u) + b(u) rate], so rate = (S^-1[y] - a) / b
+  /// (before the cap; kMagnitude: 0 where that is negative). kThresholds: NaN (not linear).
   double rate_for_output(double u, double y) const noexcept override;
   void reset(double u0) noexcept override;
   void set_sample_period(double dt_s) override;

@@ -19,11 +19,13 @@ namespace hystbench::compensation {
 /// writes it, so the weights fall as they rose when the input reverses and the output stays
 /// smooth through a reversal. kMagnitude: |du/dt|, the same weights on both branches; the
 /// output then has a corner at every reversal (models saved before the law was a choice).
-enum class RateLaw { kMagnitude, kSigned };
+/// kThresholds: |du/dt| widens every play's threshold instead of changing its weight (Al
+/// Janaideh, Rakheja and Su's dynamic thresholds); the weights are rate-free.
+enum class RateLaw { kMagnitude, kSigned, kThresholds };
 
-/// "signed" / "magnitude".
+/// "signed" / "magnitude" / "thresholds".
 const char* to_string(RateLaw law) noexcept;
-/// The law named "signed" or "magnitude"; nullopt for any other name.
+/// The law named "signed", "magnitude" or "thresholds"; nullopt for any other name.
 std::optional<RateLaw> rate_law_from_string(std::string_view name) noexcept;
 
 class RateEstimator {

@@ -22,6 +22,7 @@
 #include "hystbench/sim/modal_dynamics.hpp"
 #include "hystbench/sim/preisach_hysteresis.hpp"
 #include "hystbench/sim/quantizer.hpp"
+#include "hystbench/sim/rate_widened_play.hpp"
 #include "hystbench/sim/simulated_actuator_config.hpp"
 #include "hystbench/sim/switching_front.hpp"
 #include "hystbench/sim/thermal_drift.hpp"
@@ -69,6 +70,7 @@ class SimulatedActuator {
   compensation::DelayLine delay_;
   std::optional<PreisachHysteresis> preisach_;
   std::optional<SwitchingFront> front_;
+  std::optional<RateWidenedPlay> widened_;                // switching_thresholds
   std::unique_ptr<compensation::HysteresisModel> model_;  // modified PI or linear map
   compensation::CreepOperatorBank input_creep_;           // law input_lags
   compensation::CreepOperatorBank displacement_creep_;    // law logarithmic

@@ -39,13 +39,15 @@ struct QuantizationConfig {
 /// modified PI the bench fits (for tests that check exact recovery of a known model).
 enum class HysteresisKind { kPreisach, kModifiedPi };
 /// How the hysteresis depends on the input rate: Preisach relays behind a switching front
-/// (SwitchingFront), or play weights linear in du/dt (the rate-dependent modified PI's own law).
-enum class RateMechanism { kSwitchingFront, kPlayWeights };
+/// (SwitchingFront), Preisach relays whose thresholds widen with |du/dt| (RateWidenedPlay), or
+/// play weights linear in du/dt (the rate-dependent modified PI's own law).
+enum class RateMechanism { kSwitchingFront, kPlayWeights, kSwitchingThresholds };
 /// How the output creeps: logarithmically in time after a change of the displacement (the
 /// default), or as a few first-order lags of the input (the model families' creep operator).
 enum class CreepLaw { kLogarithmic, kInputLags };
 
-/// "preisach", "modified_pi"; "switching_front", "play_weights"; "logarithmic", "input_lags".
+/// "preisach", "modified_pi"; "switching_front", "play_weights", "switching_thresholds";
+/// "logarithmic", "input_lags".
 std::string_view to_string(HysteresisKind kind) noexcept;
 std::string_view to_string(RateMechanism mechanism) noexcept;
 std::string_view to_string(CreepLaw law) noexcept;
@@ -99,6 +101,9 @@ struct SimulatedActuatorConfig {
   /// - mechanism switching_front (kind preisach): the relays switch at a front that moves at a
   ///   speed growing with the square of the input's overdrive past it (SwitchingFront): the loop
   ///   widens with the square root of the rate; the reversible strain does not lag.
+  /// - mechanism switching_thresholds (kind preisach): every relay's switching thresholds widen
+  ///   by threshold_rate_s * |du/dt| (low-passed with threshold_filter_s; RateWidenedPlay): the
+  ///   loop widens in proportion to the rate and its tips stay where the input reverses.
   /// - mechanism play_weights (kind modified_pi; rate-dependent paper, eq. 15-21): the cumulative
   ///   play weights become W_i + c_i * du/dt (rate_law "signed", eq. 16 as written) or
   ///   W_i + c_i * |du/dt| ("magnitude"). The default is signed with c_i <= 0: the loading slope
@@ -113,6 +118,11 @@ struct SimulatedActuatorConfig {
     /// switching_front: n of the front's speed |u - u_s|^n, [1, 4]; 2: the lag grows with the
     /// square root of the rate; 1: a first-order lag (SwitchingFront).
     double switching_exponent = 2.0;
+    /// switching_thresholds: each threshold's widening per unit of rate [s] (V per V/s), >= 0.
+    /// The default widens them by 3.6 V at 19 Hz over the full range (9 kV/s).
+    double threshold_rate_s = 0.4e-3;
+    /// switching_thresholds: the rate's low-pass time constant [s], >= 0.
+    double threshold_filter_s = 0.5e-3;
     compensation::RateLaw rate_law = compensation::RateLaw::kSigned;
     /// play_weights: c_i, one per play [µm/V per V/s]; the default changes the wide plays' share
     /// of the slope by about 10 % per kV/s (every W_i + c_i rate must stay > 0 over the rates).

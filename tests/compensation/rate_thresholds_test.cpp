@@ -1,0 +1,192 @@
+// The rate-dependent PI's thresholds law: plays whose thresholds widen with |du/dt|, their
+// model file, their inverse and their fit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/identification.hpp"
+#include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "support/random_models.hpp"
+
+namespace hc = hystbench::compensation;
+
+namespace {
+
+constexpr double kDt = 1e-3;
+
+hc::RateDependentPiParameters thresholds_law(std::mt19937_64& rng, double widening_s,
+                                             double filter_s) {
+  hc::RateDependentPiParameters p;
+  p.base = hystbench::testing::random_mpi(rng, 8, 1, 10.0);
+  p.rate_coefficients.assign(p.base.play.weights.size(), 0.0);
+  p.rate_law = hc::RateLaw::kThresholds;
+  p.threshold_rate_s = widening_s;
+  p.rate_filter_s = filter_s;
+  return p;
+}
+
+std::vector<double> sine(double hz, double seconds, double lo = 0.0, double hi = 10.0) {
+  std::vector<double> u(static_cast<std::size_t>(seconds / kDt));
+  for (std::size_t k = 0; k < u.size(); ++k) {
+    const double t = static_cast<double>(k) * kDt;
+    u[k] = lo + 0.5 * (hi - lo) * (1.0 - std::cos(2.0 * std::numbers::pi * hz * t));
+  }
+  return u;
+}
+
+}  // namespace
+
+// On a ramp of constant rate the model is its rate-free self with every threshold r_i > 0 wider
+// by beta * rate (r_0 = 0 is the linear term); a slow input sees the rate-free model.
+TEST(RateThresholdsLaw, ARampSeesThresholdsWiderByBetaTimesTheRate) {
+  std::mt19937_64 rng(5);
+  const hc::RateDependentPiParameters p = thresholds_law(rng, 2e-3, 0.0);
+  hc::RateDependentPiModel model(p, kDt);
+  hc::RateDependentPiParameters wide = p;
+  const double rate = 200.0;  // input unit / s
+  wide.rate_law = hc::RateLaw::kMagnitude;
+  wide.threshold_rate_s = 0.0;
+  ASSERT_EQ(wide.base.play.thresholds.front(), 0.0);
+  for (double& r : wide.base.play.thresholds) {
+    if (r > 0.0) r += p.threshold_rate_s * rate;  // the linear term (r_0 = 0) does not widen
+  }
+  hc::ModifiedPiModel widened(wide.base);
+  hc::ModifiedPiModel rate_free(p.base);
+  model.reset(0.0);
+  widened.reset(0.0);
+  for (int k = 1; k <= 40; ++k) {
+    const double u = rate * kDt * k;
+    EXPECT_NEAR(model.step(u), widened.step(u), 1e-12) << k;
+  }
+  hc::RateDependentPiModel slow(p, kDt);
+  slow.reset(0.0);
+  rate_free.reset(0.0);
+  // A slow input: the widening (beta * rate = 2e-3 * 1 = 0.002) is far below the thresholds.
+  for (int k = 1; k <= 200; ++k) {
+    const double u = 1e-3 * k;
+    EXPECT_NEAR(slow.step(u), rate_free.step(u), 0.01) << k;
+  }
+}
+
+// The loop's tips stay where the input reverses: at the input's peak the output is at its own
+// (a delay would carry it further), and the loop is wider at a higher frequency.
+TEST(RateThresholdsLaw, TheLoopWidensWithFrequencyAndItsTipsStayAtTheReversal) {
+  hc::RateDependentPiParameters p;
+  p.base.play = {{0.0, 1.0, 2.0, 3.0}, {1.0, 0.5, 0.5, 0.5}, 0.0};
+  p.base.dead_zone = {{0.0}, {1.0}};  // identity: a classical PI
+  p.rate_coefficients.assign(4, 0.0);
+  p.rate_law = hc::RateLaw::kThresholds;
+  p.threshold_rate_s = 1e-3;
+  struct Loop {
+    double width = 0.0;        // falling minus rising output at mid-input
+    double tip_shortfall = 0;  // the output's peak less its value at the input's peak
+  };
+  auto loop = [&](double hz) {
+    hc::RateDependentPiModel m(p, kDt);
+    const std::vector<double> u = sine(hz, 3.0 / hz);
+    m.reset(u[0]);
+    const std::vector<double> y = m.simulate(u);
+    const auto period = static_cast<std::size_t>(1.0 / (hz * kDt));
+    Loop l;
+    double up = NAN, down = NAN, peak = -INFINITY;
+    std::size_t input_peak = u.size() - period;
+    for (std::size_t k = u.size() - period; k < u.size(); ++k) {
+      peak = std::max(peak, y[k]);
+      if (u[k] > u[input_peak]) input_peak = k;
+      if ((u[k - 1] - 5.0) * (u[k] - 5.0) <= 0.0) (u[k] > u[k - 1] ? up : down) = y[k];
+    }
+    l.width = down - up;
+    l.tip_shortfall = peak - y[input_peak];
+    return l;
+  };
+  const Loop slow = loop(0.5), fast = loop(10.0);
+  EXPECT_GT(slow.width, 0.0);
+  EXPECT_GT(fast.width, slow.width * 1.2) << "slow " << slow.width << ", fast " << fast.width;
+  EXPECT_LT(fast.tip_shortfall, 1e-9);
+  EXPECT_LT(slow.tip_shortfall, 1e-9);
+}
+
+TEST(RateThresholdsLaw, RoundTripsThroughTheModelFileAndOlderFilesStillLoad) {
+  std::mt19937_64 rng(3);
+  hc::RateDependentPiParameters p = thresholds_law(rng, 1.5e-3, 2e-3);
+  p.max_rate = 400.0;
+  hc::ModelFile f;
+  f.model = hc::ActuatorModel(std::make_unique<hc::RateDependentPiModel>(p, kDt));
+  nlohmann::json j = hc::to_json(f);
+  EXPECT_EQ(j["rate"]["law"], "thresholds");
+  const hc::ModelFile back = hc::model_file_from_json(j);
+  const auto& got =
+      dynamic_cast<const hc::RateDependentPiModel&>(back.model.hysteresis()).parameters();
+  EXPECT_EQ(got.rate_law, hc::RateLaw::kThresholds);
+  EXPECT_DOUBLE_EQ(got.threshold_rate_s, p.threshold_rate_s);
+  EXPECT_DOUBLE_EQ(got.rate_filter_s, p.rate_filter_s);
+  // The same outputs on a fast sine.
+  hc::ActuatorModel a = f.model, b = back.model;
+  a.configure(kDt);
+  b.configure(kDt);
+  a.reset(0.0);
+  b.reset(0.0);
+  for (const double u : sine(7.0, 0.5)) ASSERT_DOUBLE_EQ(a.step(u), b.step(u));
+  // A weight-law file without threshold_s loads as before; a widening on a weight law is refused
+  // naming the field.
+  j["rate"]["law"] = "magnitude";
+  j["rate"].erase("threshold_s");
+  EXPECT_NO_THROW(hc::model_file_from_json(j));
+  j["rate"]["threshold_s"] = 1e-3;
+  try {
+    hc::model_file_from_json(j);
+    ADD_FAILURE() << "a widening on the magnitude law loaded";
+  } catch (const hc::ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("rate.threshold_s"), std::string::npos) << e.what();
+  }
+}
+
+// The inverse composes with the model on a fast sine, both where the output grows with the
+// drive at its own rate (a filtered rate: exact each tick) and where it does not (the per-sample
+// rate: solved at the rate the rate-free drive predicts).
+TEST(RateThresholdsLaw, TheInverseComposesWithTheModel) {
+  for (const double filter_s : {5e-3, 0.0}) {
+    std::mt19937_64 rng(11);
+    hc::RateDependentPiParameters p = thresholds_law(rng, 1e-3, filter_s);
+    hc::ActuatorModel model(std::make_unique<hc::RateDependentPiModel>(p, kDt));
+    model.configure(kDt);
+    model.input_min = -2.0;
+    model.input_max = 12.0;
+    // A reachable reference: the model's own output on a 5 Hz sine.
+    hc::ActuatorModel probe = model;
+    probe.reset(0.0);
+    std::vector<double> ref;
+    for (const double u : sine(5.0, 1.0, 1.0, 9.0)) ref.push_back(probe.step(u));
+    model.reset(1.0);
+    auto inverse = hc::make_inverse(model);
+    inverse->reset(1.0);
+    const std::vector<double> drive = hc::invert_sequence(*inverse, ref);
+    hc::ActuatorModel check = model;
+    check.reset(1.0);
+    double worst = 0.0, span = 0.0;
+    for (std::size_t k = 0; k < ref.size(); ++k) {
+      const double y = check.step(drive[k]);
+      if (k > ref.size() / 5) worst = std::max(worst, std::abs(y - ref[k]));
+      span = std::max(span, std::abs(ref[k] - ref[0]));
+    }
+    EXPECT_LT(worst, (filter_s > 0.0 ? 1e-6 : 0.02) * span) << "filter " << filter_s;
+  }
+}
+
+TEST(RateThresholdsLaw, RefusesRateCoefficientsAndANegativeWidening) {
+  std::mt19937_64 rng(1);
+  hc::RateDependentPiParameters p = thresholds_law(rng, 1e-3, 0.0);
+  p.rate_coefficients[1] = 1e-4;
+  EXPECT_THROW(hc::RateDependentPiModel(p, kDt), std::invalid_argument);
+  p = thresholds_law(rng, -1e-3, 0.0);
+  EXPECT_THROW(hc::RateDependentPiModel(p, kDt), std::invalid_argument);
+}
