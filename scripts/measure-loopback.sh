@@ -6,6 +6,9 @@
 #   repeat     identify three times in one daemon, each followed by the 1 Hz triangle (inverse)
 #   rate       rate dependence on (config/loopback-rate-dependent.toml): identify --model mpi,
 #              rpi and auto, each followed by a sweep 1-200 Hz with inverse and inverse+pid
+#   thresholds rate dependence by widening thresholds (the rate-dependent loopback with
+#              mechanism "switching_thresholds"): identify --model mpi, rpi and auto, each
+#              followed by a sweep 1-19 Hz with inverse
 #   delay      the delay on (default and modified-PI truths) and one mode at 800 Hz:
 #              identify --no-extend and identify, each followed by 200 / 500 Hz sines (inverse)
 #   campaign   wall time of identify + a 7-frequency sweep (inverse)
@@ -15,7 +18,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate delay campaign)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -96,6 +99,21 @@ for section in "${sections[@]}"; do
         echo "identify --model $m: $(identify_row "$m" "$id")"
         echo
         hb sweep --frequencies 1,5,10,19,50,100,200 --compensators inverse,inverse+pid || true
+      done
+      echo
+      stop_daemon
+      ;;
+    thresholds)
+      start_daemon thresholds config/loopback-rate-dependent.toml \
+        'mechanism = "switching_thresholds"'
+      echo "### Widening thresholds: identify --model M, then a sweep (rms % of range)"
+      for m in mpi rpi auto; do
+        id=$(hb identify --model "$m" --wait --json || true)
+        law=$(hb model get --json | jq -r '.rate.law // "-"' || true)
+        echo
+        echo "identify --model $m (rate law $law): $(identify_row "$m" "$id")"
+        echo
+        hb sweep --frequencies 1,5,10,19 --compensators inverse || true
       done
       echo
       stop_daemon

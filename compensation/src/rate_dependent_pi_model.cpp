@@ -113,6 +113,11 @@ void RateDependentPiModel::reset(double u0) noexcept {
   rate_.reset(u0);
 }
 
+bool RateDependentPiModel::rate_free() const noexcept {
+  return p_.threshold_rate_s == 0.0 &&
+         std::all_of(dw_.begin(), dw_.end(), [](double d) { return d == 0.0; });
+}
+
 bool RateDependentPiModel::grows_with_signed_rate() const noexcept {
   return p_.rate_law == RateLaw::kSigned &&
          std::all_of(dw_.begin(), dw_.end(), [](double d) { return d >= 0.0; });

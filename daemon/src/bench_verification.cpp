@@ -301,10 +301,7 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
   const auto* rpi = dynamic_cast<const hc::RateDependentPiModel*>(&chosen.model.hysteresis());
   if (rpi == nullptr) return;
   const hc::RateDependentPiParameters& law = rpi->parameters();
-  if (std::all_of(law.rate_coefficients.begin(), law.rate_coefficients.end(),
-                  [](double c) { return c == 0.0; })) {
-    return;
-  }
+  if (rpi->rate_free()) return;
   hc::FitOptions o = neighbour_options(options, "without the rate law: ");
   o.kind = hc::ModelKind::kModifiedPi;
   o.play_thresholds = law.base.play.thresholds;
@@ -316,6 +313,7 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     hc::RateDependentPiParameters free = law;
     free.base = mpi->parameters();
     free.rate_coefficients.assign(free.base.play.thresholds.size(), 0.0);
+    free.threshold_rate_s = 0.0;
     hc::ActuatorModel model(
         std::make_unique<hc::RateDependentPiModel>(std::move(free), fit.model.sample_period()));
     model.set_creep(fit.model.creep());

@@ -13,6 +13,7 @@
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/compensation/pid_tuning.hpp"
 #include "hystbench/compensation/planned_inverse.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/command_error.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
 #include "track_reference.hpp"
@@ -184,7 +185,13 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
               {"preview_samples", inversion.preview_samples()},
               {"bandwidth_hz", inversion.bandwidth_hz()},
               {"how", inversion.describe()}};
-  if (model.hysteresis().kind() == hc::ModelKind::kRateDependentPi) {
+  const auto* rpi = dynamic_cast<const hc::RateDependentPiModel*>(&model.hysteresis());
+  if (rpi != nullptr && rpi->parameters().rate_law == hc::RateLaw::kThresholds) {
+    out["rate"] =
+        "solved each tick (thresholds widening with the rate): at the drive's own rate, exact, "
+        "where the output still grows with the drive; else at the rate the rate-free inverse's "
+        "drive predicts";
+  } else if (rpi != nullptr) {
     out["rate"] = hc::can_plan_drive(model)
                       ? "planned over the known reference where it is fast (the |du/dt| law, or "
                         "weights that fall with the rate)"

@@ -78,21 +78,23 @@ TEST(RateThresholdsLaw, ARampSeesThresholdsWiderByBetaTimesTheRate) {
 }
 
 // The loop's tips stay where the input reverses: at the input's peak the output is at its own
-// (a delay would carry it further), and the loop is wider at a higher frequency.
-TEST(RateThresholdsLaw, TheLoopWidensWithFrequencyAndItsTipsStayAtTheReversal) {
+// (a delay would carry it further). At mid-input, where every play follows the input, the loop
+// is wider by 2 beta |du/dt| times the plays' weights (the linear term's apart).
+TEST(RateThresholdsLaw, TheLoopWidensWithTheRateAndItsTipsStayAtTheReversal) {
   hc::RateDependentPiParameters p;
   p.base.play = {{0.0, 1.0, 2.0, 3.0}, {1.0, 0.5, 0.5, 0.5}, 0.0};
   p.base.dead_zone = {{0.0}, {1.0}};  // identity: a classical PI
   p.rate_coefficients.assign(4, 0.0);
   p.rate_law = hc::RateLaw::kThresholds;
   p.threshold_rate_s = 1e-3;
+  const double lo = 0.0, hi = 20.0, mid = 10.0;  // every play follows the input at mid-input
   struct Loop {
-    double width = 0.0;        // falling minus rising output at mid-input
-    double tip_shortfall = 0;  // the output's peak less its value at the input's peak
+    double width = 0.0;          // falling minus rising output at mid-input
+    double tip_shortfall = 0.0;  // the output's peak less its value at the input's peak
   };
   auto loop = [&](double hz) {
     hc::RateDependentPiModel m(p, kDt);
-    const std::vector<double> u = sine(hz, 3.0 / hz);
+    const std::vector<double> u = sine(hz, 3.0 / hz, lo, hi);
     m.reset(u[0]);
     const std::vector<double> y = m.simulate(u);
     const auto period = static_cast<std::size_t>(1.0 / (hz * kDt));
@@ -102,15 +104,25 @@ TEST(RateThresholdsLaw, TheLoopWidensWithFrequencyAndItsTipsStayAtTheReversal) {
     for (std::size_t k = u.size() - period; k < u.size(); ++k) {
       peak = std::max(peak, y[k]);
       if (u[k] > u[input_peak]) input_peak = k;
-      if ((u[k - 1] - 5.0) * (u[k] - 5.0) <= 0.0) (u[k] > u[k - 1] ? up : down) = y[k];
+      // The branch's output at mid-input, interpolated between the samples around it.
+      const bool rising = u[k - 1] < mid && u[k] >= mid, falling = u[k - 1] > mid && u[k] <= mid;
+      if (rising || falling) {
+        const double a = (mid - u[k - 1]) / (u[k] - u[k - 1]);
+        (rising ? up : down) = y[k - 1] + a * (y[k] - y[k - 1]);
+      }
     }
     l.width = down - up;
     l.tip_shortfall = peak - y[input_peak];
     return l;
   };
   const Loop slow = loop(0.5), fast = loop(10.0);
-  EXPECT_GT(slow.width, 0.0);
-  EXPECT_GT(fast.width, slow.width * 1.2) << "slow " << slow.width << ", fast " << fast.width;
+  // The rate at mid-input: pi f (hi - lo); plays of weight 0.5 each with r > 0.
+  auto widening = [&](double hz) {
+    return 2.0 * p.threshold_rate_s * std::numbers::pi * hz * (hi - lo) * 1.5;
+  };
+  const double rate_free = 2.0 * 0.5 * (1.0 + 2.0 + 3.0);
+  EXPECT_NEAR(slow.width - rate_free, widening(0.5), 0.02 * rate_free);
+  EXPECT_NEAR(fast.width - rate_free, widening(10.0), 0.1 * widening(10.0));
   EXPECT_LT(fast.tip_shortfall, 1e-9);
   EXPECT_LT(slow.tip_shortfall, 1e-9);
 }

