@@ -109,7 +109,7 @@ for section in "${sections[@]}"; do
       echo "### Widening thresholds: identify --model M, then a sweep (rms % of range)"
       for m in mpi rpi auto; do
         id=$(hb identify --model "$m" --wait --json || true)
-        law=$(hb model get --json | jq -r '.rate.law // "-"' || true)
+        law=$(hb model get --json | jq -r '.model.rate.law // "-"' || true)
         echo
         echo "identify --model $m (rate law $law): $(identify_row "$m" "$id")"
         echo
