@@ -66,7 +66,8 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     if (law == RateLaw::kSigned || f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
   }
   // The other mechanism: thresholds that widen with |du/dt|, the widening searched on a grid
-  // of the input span at max_rate (and the rate filter), the best refitted on every row. It has
+  // of the input span at max_rate (and the rate filter) by the regression's residual on the
+  // search rows, the best and its neighbours refitted on every row and simulated. It has
   // fewer unknowns than the weight laws, so the fit error chooses fairly between them.
   ExtensionSpec widened = spec;
   ModelStructure& w = widened.structure;
@@ -82,8 +83,9 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     for (const double fraction : kWideningFractions) {
       w.rate_filter_s = samples * r.dt;
       w.threshold_rate_s = fraction * span / s.max_rate;
-      const ExtensionFit f = fit_extension(r, widened, FitRows::kSearch);
-      if (f.fit.rmse < best_search) best_search = f.fit.rmse, best_widened = widened;
+      // Ranked by the regression's residual, as the dynamics search: no simulation per point.
+      const double mse = fit_extension(r, widened, FitRows::kSearch, false).regression_mse;
+      if (mse < best_search) best_search = mse, best_widened = widened;
     }
   }
   for (const double step : {1.0, std::sqrt(2.0), 1.0 / std::sqrt(2.0)}) {
