@@ -560,16 +560,18 @@ Candidate Identifier::thresholds_law_over(ModelStructure s) {
   Candidate best;
   double best_fraction = 0.0, best_filter_s = 0.0, best_cap = 0.0;
   const double smooth_rate = s.max_rate;
+  // The record's largest rate through each filter tried, the cap of an uncapped law.
+  std::map<double, double> uncapped;
+  for (const double samples : kWideningFilterSamples) {
+    const std::vector<double> rates = details::sample_rates(r_.ud, r_.dt, samples * r_.dt);
+    uncapped[samples * r_.dt] =
+        std::max(smooth_rate, *std::max_element(rates.begin(), rates.end()));
+  }
   // cap 0: not capped inside the record (an input step's rate holds the switching back until
   // it has decayed, the law's own response to a step); else the rate levels off there.
   auto try_at = [&](double fraction, double filter_s, double cap) {
     s.rate_filter_s = filter_s;
-    if (cap > 0.0) {
-      s.max_rate = cap;
-    } else {
-      const std::vector<double> rates = details::sample_rates(r_.ud, r_.dt, filter_s);
-      s.max_rate = std::max(smooth_rate, *std::max_element(rates.begin(), rates.end()));
-    }
+    s.max_rate = cap > 0.0 ? cap : uncapped.at(filter_s);
     s.record_max_rate = std::max(smooth_rate, s.max_rate);
     s.threshold_rate_s = fraction * span / smooth_rate;
     Candidate c = evaluate(s, "constrained-lsq-rate-thresholds");

@@ -101,10 +101,8 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
                      r.units.input + " per " + r.units.input + "/ms of |du/dt|";
   } else {
     out.extension += std::string("weights linear in ") +
-                     (chosen.rate_law == RateLaw::kSigned ? "du/dt" : "|du/dt|");
-  }
-  if (chosen.rate_law != RateLaw::kThresholds) {
-    out.extension += " up to " + num(s.max_rate) + " " + r.units.input + "/s";
+                     (chosen.rate_law == RateLaw::kSigned ? "du/dt" : "|du/dt|") + " up to " +
+                     num(s.max_rate) + " " + r.units.input + "/s";
   }
   return out;
 }
