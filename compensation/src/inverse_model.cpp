@@ -352,6 +352,29 @@ InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const Actuato
   tolerance_ = 1e-9 * std::max(std::abs(model_.input_max - model_.input_min), 1.0);
   u_prev_ = model_.last_input();
   y_prev_ = model_.peek_static(u_prev_);
+  if (!iterate_) {
+    const auto& rpi = static_cast<const RateDependentPiModel&>(model_.hysteresis());
+    const RateDependentPiParameters& p = rpi.parameters();
+    if (p.rate_law == RateLaw::kThresholds) {
+      // The thresholds widen with |du/dt|: at the drive's own rate the output still grows with
+      // it while beta a / dt < 1 (NumericInverse), and the iteration contracts as for a static
+      // map; beyond, each tick is solved at the rate the rate-free structure's drive predicts.
+      iterate_ = true;
+      const double dt = rpi.sample_period();
+      const double a = RateEstimator(p.rate_filter_s, dt).coefficient();
+      if (p.threshold_rate_s * a / dt >= kOwnRateMonotoneMargin) {
+        ActuatorModel rate_free(std::make_unique<ModifiedPiModel>(p.base));
+        rate_free.set_creep(model_.creep());
+        rate_free.input_min = model_.input_min;
+        rate_free.input_max = model_.input_max;
+        rate_free.configure(dt);
+        rate_free.reset(u_prev_);
+        rate_free_ = std::make_unique<InverseMultiplicativeCompensator>(rate_free);
+        rate_.configure(std::max(p.rate_filter_s, kMinRatePredictionSamples * dt), dt, p.rate_law);
+        rate_.reset(u_prev_);
+      }
+    }
+  }
 }
 
 double InverseMultiplicativeCompensator::step(double y_ref) noexcept {
@@ -360,11 +383,14 @@ double InverseMultiplicativeCompensator::step(double y_ref) noexcept {
   // delayed loop, leaves a lag of (g / s) ticks where the local slope s is low (on the loopback
   // worse than no compensation at 200 Hz). A rate-independent model is peeked without advancing
   // it, so the same equation is iterated to its fixed point within the tick (each pass shrinks
-  // the error by 1 - s/g in [0, 1)). A rate-dependent one keeps one pass: its output moves with
-  // u's own rate, and an iteration through that rate does not contract.
+  // the error by 1 - s/g in [0, 1)); so is a thresholds law (see the constructor). A weight
+  // rate law keeps one pass: its output moves with u's own rate, and an iteration through that
+  // rate does not contract.
   if (iterate_) {
+    const double rate = rate_free_ ? rate_.step(rate_free_->step(y_ref)) : 0.0;
     for (int i = 0; i < kMaxIterations; ++i) {
-      const double du = (y_ref - model_.peek_static(u)) / gain_;
+      const double y = rate_free_ ? model_.peek_static_at_rate(u, rate) : model_.peek_static(u);
+      const double du = (y_ref - y) / gain_;
       u += du;
       if (std::abs(du) <= tolerance_) break;
     }
@@ -374,7 +400,22 @@ double InverseMultiplicativeCompensator::step(double y_ref) noexcept {
   return u;
 }
 
+InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(
+    const InverseMultiplicativeCompensator& other)
+    : model_(other.model_),
+      gain_(other.gain_),
+      u_prev_(other.u_prev_),
+      y_prev_(other.y_prev_),
+      iterate_(other.iterate_),
+      tolerance_(other.tolerance_),
+      rate_free_(other.rate_free_
+                     ? std::make_unique<InverseMultiplicativeCompensator>(*other.rate_free_)
+                     : nullptr),
+      rate_(other.rate_) {}
+
 void InverseMultiplicativeCompensator::reset(double u0) noexcept {
+  if (rate_free_) rate_free_->reset(u0);
+  rate_.reset(u0);
   model_.reset(u0);
   u_prev_ = u0;
   y_prev_ = model_.peek_static(u0);
