@@ -38,34 +38,55 @@ double verified_max(const IdentifyCandidate& c) {
   return c.verification["max_error_percent"].get<double>();
 }
 
+// v[key], or null when v is not an object holding it.
+json field(const json& v, const char* key) {
+  return v.is_object() && v.contains(key) ? v[key] : json();
+}
+
 json candidate_summary(const IdentifyCandidate& c) {
   json j = {{"type", type_name(c.fit)},          {"label", c.label},
             {"operators", c.fit.operators},      {"dead_zones", c.fit.dead_zones},
             {"heldout", to_json(c.fit.heldout)}, {"verification", c.verification}};
-  if (!c.fast_verification.is_null()) j["fast_verification"] = c.fast_verification;
+  if (!c.sines.empty()) {
+    j["sine_verifications"] = json::array();
+    for (const auto& [hz, v] : c.sines) j["sine_verifications"].push_back(v);
+  }
   return j;
 }
 
 // The candidate with the lowest verified max error (the first when none was verified), the
-// extended candidate left out.
+// left-out candidates (the extension, the loser of a rate law and its rate-free self) skipped.
 std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
-                          std::optional<std::size_t> extended) {
-  std::size_t best = 0;
-  for (std::size_t i = 1; i < candidates.size(); ++i) {
-    if (i == extended) continue;
-    if (verified_max(candidates[i]) < verified_max(candidates[best])) best = i;
+                          const std::vector<std::size_t>& left_out) {
+  const auto skipped = [&left_out](std::size_t i) {
+    return std::find(left_out.begin(), left_out.end(), i) != left_out.end();
+  };
+  std::optional<std::size_t> best;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (skipped(i)) continue;
+    if (!best || verified_max(candidates[i]) < verified_max(candidates[*best])) best = i;
   }
-  return best;
+  return best.value_or(0);
 }
 
-// Verified rms error of the fast sine [% of the reference span]; +inf when it did not complete.
-double fast_rms(const IdentifyCandidate& c) {
-  const json& v = c.fast_verification;
-  if (v.is_null() || v.value("end", "") != "completed" || !v.contains("rms_error_percent")) {
-    return INFINITY;
-  }
+// Verified rms error of the sine at hz [% of the reference span]; +inf when it did not complete.
+double sine_rms(const IdentifyCandidate& c, double hz) {
+  const auto it = c.sines.find(hz);
+  if (it == c.sines.end()) return INFINITY;
+  const json& v = it->second;
+  if (v.value("end", "") != "completed" || !v.contains("rms_error_percent")) return INFINITY;
   return v["rms_error_percent"].get<double>();
 }
+
+// v[key] of the sine at hz, or null when it did not run.
+json sine_field(const IdentifyCandidate& c, double hz, const char* key) {
+  const auto it = c.sines.find(hz);
+  return it != c.sines.end() && it->second.contains(key) ? it->second[key] : json();
+}
+
+// The sine a rate law is judged on [Hz]: the fastest the rate bench tracks, at most a twentieth
+// of the loop rate.
+double rate_sine_frequency(double loop_rate_hz) { return std::min(20.0, loop_rate_hz / 20.0); }
 
 // The fast sine that judges an extension [Hz], 0 for none: a delay or dynamics show at a
 // twentieth of the loop rate (the fastest `track` plays; a quarter of a mode's frequency below
@@ -81,7 +102,7 @@ double fast_frequency(const std::vector<std::string>& parts, const hc::ActuatorM
     f = loop_rate_hz / 20.0;
     if (extended.dynamics()) f = std::min(f, extended.dynamics()->natural_frequency_hz / 4.0);
   }
-  if (has("rate_dependence")) f = std::max(f, std::min(20.0, loop_rate_hz / 20.0));
+  if (has("rate_dependence")) f = std::max(f, rate_sine_frequency(loop_rate_hz));
   return f;
 }
 
@@ -97,14 +118,60 @@ double triangle_rms(const IdentifyCandidate& c) {
 // the sensor noise, and a delay or a resonance inverted at the triangle's corners costs about
 // that), else on the triangle's max by 10 % without a higher rms.
 bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
-                             bool fast) {
+                             double fast_hz) {
   if (!std::isfinite(verified_max(ext))) return false;
-  if (!fast) {
+  if (!(fast_hz > 0.0)) {
     return verified_max(ext) <= 0.9 * verified_max(base) && triangle_rms(ext) <= triangle_rms(base);
   }
-  const double bf = fast_rms(base), ef = fast_rms(ext);
+  const double bf = sine_rms(base, fast_hz), ef = sine_rms(ext, fast_hz);
   return std::isfinite(ef) && ef <= 0.95 * bf &&
          triangle_rms(ext) <= 1.1 * triangle_rms(base) + 0.05;
+}
+
+// A rate law (candidate 0) against its rate-free self: the law is an extension of it, kept when
+// it tracks the rate sine better by the spread between two runs without losing on the triangle
+// (extension_tracks_better).
+bool rate_law_kept(const std::vector<IdentifyCandidate>& candidates, std::size_t rate_free,
+                   double sine_hz) {
+  return extension_tracks_better(candidates[rate_free], candidates[0], sine_hz);
+}
+
+// The candidates left out of the choice: the extension (judged against its base), and the loser
+// of a rate law and its rate-free self; a law that loses takes its dead-zone neighbour along.
+std::vector<std::size_t> left_out(const std::vector<IdentifyCandidate>& candidates,
+                                  std::optional<std::size_t> extended,
+                                  std::optional<std::size_t> rate_free, double sine_hz) {
+  std::vector<std::size_t> out;
+  if (extended) out.push_back(*extended);
+  if (!rate_free) return out;
+  if (rate_law_kept(candidates, *rate_free, sine_hz)) {
+    out.push_back(*rate_free);
+    return out;
+  }
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const auto* rpi =
+        dynamic_cast<const hc::RateDependentPiModel*>(&candidates[i].fit.model.hysteresis());
+    if (i != *rate_free && i != extended && rpi != nullptr && !rpi->rate_free()) out.push_back(i);
+  }
+  return out;
+}
+
+// How the rate law fared against its rate-free self (for the result).
+json rate_law_json(const std::vector<IdentifyCandidate>& candidates, std::size_t rate_free,
+                   double sine_hz) {
+  const IdentifyCandidate &law = candidates[0], &free = candidates[rate_free];
+  const bool kept = rate_law_kept(candidates, rate_free, sine_hz);
+  return {{"kept", kept},
+          {"sine_hz", sine_hz},
+          {"sine_rms_percent",
+           {{"law", sine_field(law, sine_hz, "rms_error_percent")},
+            {"rate_free", sine_field(free, sine_hz, "rms_error_percent")}}},
+          {"triangle_rms_percent",
+           {{"law", field(law.verification, "rms_error_percent")},
+            {"rate_free", field(free.verification, "rms_error_percent")}}},
+          {"why", kept ? "it tracks the rate sine better than its rate-free self"
+                       : "it does not track the rate sine better than its rate-free self by 5 % "
+                         "without losing on the triangle"}};
 }
 
 // Largest measurement delay identify looks for [ticks].
@@ -202,11 +269,6 @@ json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& adde
   return {{"parts", parts}, {"verdict", d.verdict}};
 }
 
-// v[key], or null when v is not an object holding it.
-json field(const json& v, const char* key) {
-  return v.is_object() && v.contains(key) ? v[key] : json();
-}
-
 // The extension's verified gains against the model it extends: the triangle's max error and
 // the fast sine's rms error (base / extended; > 1 is better).
 json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& ext,
@@ -223,9 +285,9 @@ json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& 
             {"triangle_gain", ratio(verified_max(base), verified_max(ext))}};
   if (fast_hz > 0.0) {
     v["fast_hz"] = fast_hz;
-    v["fast_rms_percent"] = {{"model", field(base.fast_verification, "rms_error_percent")},
-                             {"extended", field(ext.fast_verification, "rms_error_percent")}};
-    v["fast_gain"] = ratio(fast_rms(base), fast_rms(ext));
+    v["fast_rms_percent"] = {{"model", sine_field(base, fast_hz, "rms_error_percent")},
+                             {"extended", sine_field(ext, fast_hz, "rms_error_percent")}};
+    v["fast_gain"] = ratio(sine_rms(base, fast_hz), sine_rms(ext, fast_hz));
   }
   return v;
 }
@@ -234,7 +296,7 @@ json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& 
 
 IdentifyCandidate family_candidate(hc::FitResult fit) {
   std::string label = type_name(fit);
-  return {std::move(fit), json(), std::move(label), json()};
+  return {std::move(fit), json(), std::move(label), {}};
 }
 
 std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t,
@@ -287,7 +349,7 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     hc::FitResult fit = hc::fit_model(t, u, y, o);
     if (fit.dead_zones != o.dead_zones) return;  // e.g. a fall-back to the classical PI
     const std::string label = type_name(fit) + "-" + std::to_string(fit.dead_zones) + "dz";
-    candidates.push_back({std::move(fit), json(), label, json()});
+    candidates.push_back({std::move(fit), json(), label, {}});
   } catch (const std::exception&) {
     // The chosen order stands alone; its own fit succeeded.
   }
@@ -324,7 +386,7 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     model.input_max = fit.model.input_max;
     fit.model = std::move(model);
     fit.notes.push_back("the rate law left out: the modified PI it contains, refitted");
-    candidates.push_back({std::move(fit), json(), "rpi-rate-free", json()});
+    candidates.push_back({std::move(fit), json(), "rpi-rate-free", {}});
   } catch (const std::exception&) {
     // The rate law stands alone; its own fit succeeded.
   }
@@ -384,7 +446,9 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
     // One family: the delay search's fit at the chosen delay is that family's fit.
     session->candidates.push_back(family_candidate(id.fit));
     add_dead_zone_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
+    const std::size_t before = session->candidates.size();
     add_rate_free_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
+    if (session->candidates.size() > before) session->rate_free = before;
   } else {
     session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
   }
@@ -392,7 +456,12 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
     IdentifyCandidate& c = session->candidates[i];
     c.fit.delay_samples = id.delay_ticks;
     c.fit.model.set_delay(static_cast<double>(id.delay_ticks) * dt_);
-    session->jobs.push_back({i, false});
+    session->jobs.push_back({i});
+  }
+  if (session->rate_free) {
+    session->rate_sine_hz = rate_sine_frequency(settings_.loop.rate_hz);
+    session->jobs.push_back({0, session->rate_sine_hz});
+    session->jobs.push_back({*session->rate_free, session->rate_sine_hz});
   }
   session->u.assign(u_rec.begin(), u_rec.end());
   session->y = aligned;
@@ -415,12 +484,13 @@ bool Bench::verify_next_candidate() {
   while (s.next < s.jobs.size()) {
     const VerificationJob job = s.jobs[s.next];
     IdentifyCandidate& c = s.candidates[job.candidate];
-    json& slot = job.fast ? c.fast_verification : c.verification;
+    const bool sine = job.sine_hz > 0.0;
+    json& slot = sine ? c.sines[job.sine_hz] : c.verification;
     std::unique_ptr<RunProgram> p;
     VerificationSpec spec;
-    if (job.fast) {
+    if (sine) {
       spec.reference = VerificationSpec::Reference::kSine;
-      spec.frequency_hz = s.fast_hz;
+      spec.frequency_hz = job.sine_hz;
       spec.periods = 20.0;
     }
     try {
@@ -434,12 +504,13 @@ bool Bench::verify_next_candidate() {
       ++s.next;
       continue;
     }
-    p->run_id =
-        s.result["run_id"].get<std::string>() + "-verify-" + c.label + (job.fast ? "-fast" : "");
+    const std::string sine_label =
+        sine ? "-sine-" + std::to_string(std::lround(job.sine_hz)) + "hz" : "";
+    p->run_id = s.result["run_id"].get<std::string>() + "-verify-" + c.label + sine_label;
     json header = {{"run",
                     {{"kind", "verify"},
                      {"identify_run", s.result["run_id"]},
-                     {"reference", job.fast ? "sine" : "triangle"},
+                     {"reference", sine ? "sine" : "triangle"},
                      {"frequency_hz", spec.frequency_hz},
                      {"compensator", "inverse"},
                      {"precondition_samples", p->excitation.size()},
@@ -471,7 +542,9 @@ bool Bench::verify_next_candidate() {
       return false;
     }
     s.program_id = program_id;
-    active_run_["stage"] = "verify " + c.label + (job.fast ? " (fast sine)" : "");
+    active_run_["stage"] =
+        "verify " + c.label +
+        (sine ? " (" + std::to_string(std::lround(job.sine_hz)) + " Hz sine)" : "");
     active_run_["total"] = total;
     active_run_["verification_log"] = log;
     phase_ = RunPhase::kRunning;  // stop and abort now act on the verification
@@ -497,10 +570,10 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   v["dropped"] = counts.dropped + run->log_drops;
   v["clamps"] = run->clamps;
   v["clock"] = run->summary.value("clock", "wall");
-  if (job.fast) {
+  if (job.sine_hz > 0.0) {
     v["reference"] = "sine";
-    v["frequency_hz"] = s.fast_hz;
-    c.fast_verification = std::move(v);
+    v["frequency_hz"] = job.sine_hz;
+    c.sines[job.sine_hz] = std::move(v);
   } else {
     c.verification = std::move(v);
   }
@@ -526,7 +599,8 @@ void Bench::continue_identify() {
 bool Bench::extend_identified_model() {
   IdentifySession& s = *session_;
   s.extension_tried = true;
-  s.base = best_verified(s.candidates, std::nullopt);
+  s.base = best_verified(s.candidates,
+                         left_out(s.candidates, std::nullopt, s.rate_free, s.rate_sine_hz));
   const IdentifyCandidate& base = s.candidates[s.base];
   const std::string run_id = s.result["run_id"].get<std::string>();
   {
@@ -566,7 +640,7 @@ bool Bench::extend_identified_model() {
     s.extension["from"] = draft->named ? "the diagnosis's extended model (named causes)"
                                        : "significant tests below the naming gain, grafted on the "
                                          "model for the bench to judge";
-    IdentifyCandidate ext{base.fit, json(), base.label, json()};
+    IdentifyCandidate ext{base.fit, json(), base.label, {}};
     hc::ActuatorModel model = std::move(draft->model);
     model.set_delay(model.delay_s() + exchange_s);
     model.units = base.fit.model.units;
@@ -601,8 +675,8 @@ bool Bench::extend_identified_model() {
     s.fast_hz = fast_frequency(draft->parts, s.candidates.back().fit.model, settings_.loop.rate_hz);
     s.jobs.push_back({*s.extended, false});
     if (s.fast_hz > 0.0) {
-      s.jobs.push_back({s.base, true});
-      s.jobs.push_back({*s.extended, true});
+      if (!s.candidates[s.base].sines.contains(s.fast_hz)) s.jobs.push_back({s.base, s.fast_hz});
+      s.jobs.push_back({*s.extended, s.fast_hz});
     }
     s.extension["diagnosis_s"] = seconds();
     return true;
@@ -619,11 +693,12 @@ void Bench::finish_identify() {
   IdentifySession& s = *session;
   json result = std::move(s.result);
   // The verified figure decides when any candidate was verified; else the held-out error.
-  std::size_t chosen = best_verified(s.candidates, s.extended);
+  std::size_t chosen =
+      best_verified(s.candidates, left_out(s.candidates, s.extended, s.rate_free, s.rate_sine_hz));
   bool extended = false;
   if (s.extended) {
     const IdentifyCandidate &base = s.candidates[s.base], &ext = s.candidates[*s.extended];
-    extended = chosen == s.base && extension_tracks_better(base, ext, s.fast_hz > 0.0);
+    extended = chosen == s.base && extension_tracks_better(base, ext, s.fast_hz);
     s.extension["verified"] = verified_gain_json(base, ext, s.fast_hz);
     s.extension["adopted"] = extended;
     s.extension["why"] =
@@ -640,6 +715,8 @@ void Bench::finish_identify() {
     fit.model.units = {"V", "um"};
     json candidates = json::array();
     for (const auto& other : s.candidates) candidates.push_back(candidate_summary(other));
+    const json rate_law =
+        s.rate_free ? rate_law_json(s.candidates, *s.rate_free, s.rate_sine_hz) : json();
     const std::string chosen_by = extended ? "the extension's verified tracking"
                                   : std::isfinite(verified_max(c)) ? "verified tracking max error"
                                                                    : "held-out error";
@@ -662,6 +739,7 @@ void Bench::finish_identify() {
                            {"exchange_ticks", s.history.value("exchange_ticks", 0)},
                            {"extension", s.extension}};
     if (s.candidates.size() > 1) file.identification["candidates"] = candidates;
+    if (s.rate_free) file.identification["rate_law"] = rate_law;
     std::filesystem::create_directories(settings_.model_dir);
     const std::string path = (std::filesystem::path(settings_.model_dir) /
                               (result["run_id"].get<std::string>() + ".json"))
@@ -681,6 +759,7 @@ void Bench::finish_identify() {
                        {"notes", fit.notes},
                        {"chosen_by", chosen_by},
                        {"extension", s.extension}};
+    if (s.rate_free) result["model"]["rate_law"] = rate_law;
     result["verification"] = c.verification;
     if (s.candidates.size() > 1) result["candidates"] = candidates;
     std::lock_guard lock(mutex_);

@@ -4,6 +4,7 @@
 // then the record diagnosed with the best one and its extension verified against it, before
 // the bench adopts one and reports run.finished. Supervisor thread only.
 #include <cstddef>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -22,17 +23,18 @@ struct IdentifyCandidate {
   /// Names the candidate in its verification's run id and stage: its family, and for the
   /// dead-zone neighbour its order too (e.g. "mpi-4dz").
   std::string label;
-  /// The same on the fast sine (null when it did not run): the chosen model and its extension.
-  nlohmann::json fast_verification;
+  /// The same on sines, by frequency [Hz] (none ran: empty): the extension and the model it
+  /// extends on the fast sine, a rate law and its rate-free self on the rate sine.
+  std::map<double, nlohmann::json> sines;
 };
 
 /// A family's fit as a candidate not yet verified, labelled with the family.
 IdentifyCandidate family_candidate(compensation::FitResult fit);
 
-/// One verification segment: a candidate's standard triangle, or its fast sine.
+/// One verification segment: a candidate's standard triangle, or a sine.
 struct VerificationJob {
   std::size_t candidate = 0;
-  bool fast = false;
+  double sine_hz = 0.0;  ///< the sine's frequency [Hz]; 0 = the standard triangle
 };
 
 struct Bench::IdentifySession {
@@ -53,9 +55,14 @@ struct Bench::IdentifySession {
   std::size_t base = 0;                 ///< the candidate the extension extends
   std::optional<std::size_t> extended;  ///< the extended candidate, when there is one
   double fast_hz = 0.0;                 ///< the fast sine's frequency [Hz]; 0 = none
-  nlohmann::json extension;             ///< what the extension found, added and verified
-  std::string program_id;               ///< run id of the verification on the loop
-  bool interrupted = false;             ///< stop, abort or fault during a verification
+  /// The rate-free neighbour of a rate law (candidate 0), when there is one: the two are judged
+  /// against each other on the rate sine; a law that loses is not adopted (nor its dead-zone
+  /// neighbour), a law that wins leaves its rate-free self out.
+  std::optional<std::size_t> rate_free;
+  double rate_sine_hz = 0.0;  ///< the rate sine's frequency [Hz]
+  nlohmann::json extension;   ///< what the extension found, added and verified
+  std::string program_id;     ///< run id of the verification on the loop
+  bool interrupted = false;   ///< stop, abort or fault during a verification
 };
 
 /// Fits the requested family, or with options.kind unset ("auto") each of pi, mpi, cpi and rpi
@@ -80,10 +87,11 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
 
 /// A rate-dependent PI whose rate law the fit kept: the same plays and dead zones without the
 /// law (its nested modified PI refitted, as an rpi with zero rate coefficients), appended as a
-/// candidate for the verification to judge. A law that gains on the held-out record can still
-/// track worse than none where the actuator follows another law (on a switching front, 2.4 %
-/// against 0.7 % at 1 Hz). Nothing is appended for another family, a rate-free fit, or a refit
-/// that fails.
+/// candidate for the verification to judge on the triangle and on the rate sine. A law that
+/// gains on the held-out record can still track worse than none where the actuator follows
+/// another law (on a switching front, 2.4 % against 0.7 % at 1 Hz); on the slow triangle a law
+/// that helps and its rate-free self differ by no more than two runs of one model. Nothing is
+/// appended for another family, a rate-free fit, or a refit that fails.
 void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
                              std::span<const double> u, std::span<const double> y,
                              const compensation::FitOptions& options);

@@ -152,6 +152,13 @@ void print_run_result(const json& r, std::ostream& out) {
       out << "not (" << v.value("end", "?") << ": " << v.value("reason", "") << ")\n";
     }
   }
+  if (r.contains("model") && r["model"].contains("rate_law")) {
+    const json& law = r["model"]["rate_law"];
+    out << "  rate law        " << (law.value("kept", false) ? "kept" : "left out") << ": "
+        << fixed_or_dash(law.value("sine_hz", json()), 0) << " Hz sine rms "
+        << fixed_or_dash(law["sine_rms_percent"].value("rate_free", json()), 3) << " % without, "
+        << fixed_or_dash(law["sine_rms_percent"].value("law", json()), 3) << " % with it\n";
+  }
   if (r.contains("model") && r["model"].contains("extension"))
     print_extension(out, r["model"]["extension"]);
   for (const json& c : r.value("candidates", json::array())) {
