@@ -1,0 +1,68 @@
+#pragma once
+// Iterative learning control over a periodic trial: the next trial's drive from this trial's drive
+// and its measured error,
+//   u_{k+1}(j) = u_k(j) + gamma Q[ D^-1[ Q[e_k] ](j + d) / s_k(j) ]   (u_0 through Q first),
+// circular over the trial's P samples. L comes from the active model: d its input delay (the
+// error is read d ahead of the drive that caused it), D^-1 its second-order dynamics inverted on
+// the error (as the feedforward inverts them on the reference), s_k(j) the local slope of its
+// static map along the trial's drive (the inverse's slope there), kept within [1/4, 4] x its mean
+// along the trial. Q is a zero-phase low-pass (a fourth-order Butterworth run forward and
+// backward around the trial), cut off at a tenth of the sample rate and below half the model's
+// natural frequency: above it the model's phase is not known, and a mode it misses would grow
+// from trial to trial. Pure maths, no I/O; allocates: off the real-time path.
+#include <array>
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "hystbench/compensation/actuator_model.hpp"
+
+namespace hystbench::compensation {
+
+struct LearningOptions {
+  double dt = 1e-4;          ///< sample period [s], > 0
+  double cutoff_hz = 0.0;    ///< Q's cut-off [Hz]; 0 = the default above
+  double u_min = -1e300;     ///< the learned drive stays within [u_min, u_max] [input unit]
+  double u_max = 1e300;      ///<
+  double max_step = 1e300;   ///< largest change between samples [input unit] (slew x dt)
+  double min_slope = 0.25;   ///< local slope floor, a fraction of its mean along the trial
+  double max_slope = 4.0;    ///< local slope cap, a multiple of that mean
+};
+
+class IterativeLearning {
+ public:
+  /// `model`: the active model (copied). period_samples >= 4. Throws std::invalid_argument for
+  /// an empty model or bad options.
+  IterativeLearning(const ActuatorModel& model, std::size_t period_samples, LearningOptions options);
+
+  /// The next trial's drive into `next` (P samples): drive (this trial's feedforward, P samples)
+  /// corrected by gain (gamma, 0 < gain <= 1) times the learned step from error (y_ref - y,
+  /// P samples; error[j] is the reading of the tick that played drive[j]). Drive limits hold.
+  /// The first call's drive (the compensator's) is itself passed through Q.
+  void update(std::span<const double> drive, std::span<const double> error, double gain,
+              std::span<double> next);
+
+  /// The model's local slope along the last drive given to update() [output / input unit].
+  const std::vector<double>& slope() const noexcept { return slope_; }
+  double cutoff_hz() const noexcept { return cutoff_hz_; }
+  std::size_t period_samples() const noexcept { return period_; }
+
+ private:
+  void local_slope(std::span<const double> drive);
+  // Q: zero-phase low-pass in place, circular over the trial.
+  void low_pass(std::vector<double>& x);
+
+  ActuatorModel model_;  // static: delay and dynamics are applied on the error
+  std::size_t period_;
+  LearningOptions o_;
+  double cutoff_hz_ = 0.0;
+  double advance_samples_ = 0.0;  // the model's delay [samples]
+  double dyn_a1_ = 0.0, dyn_a2_ = 0.0;  // D^-1 = 1 + a1 d/dt + a2 d2/dt2 (0: none)
+  // Butterworth sections (b0, b1, b2, a1, a2) of Q, and the warm-up periods its circular run needs.
+  std::vector<std::array<double, 5>> sections_;
+  std::size_t warmup_periods_ = 1;
+  std::vector<double> slope_, work_, shifted_;
+  std::size_t updates_ = 0;
+};
+
+}  // namespace hystbench::compensation

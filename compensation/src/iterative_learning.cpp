@@ -1,0 +1,173 @@
+#include "hystbench/compensation/iterative_learning.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace hystbench::compensation {
+
+namespace {
+
+// The two sections of a fourth-order Butterworth low-pass: their quality factors.
+constexpr std::array<double, 2> kButterworthQ = {0.54119610014619690, 1.30656296487637653};
+// Q's default cut-off: this fraction of the sample rate, and this fraction of a modelled mode.
+constexpr double kCutoffOfRate = 0.1;
+constexpr double kCutoffOfMode = 0.5;
+// The circular run of a section starts this many of its slowest time constants early.
+constexpr double kWarmupTimeConstants = 20.0;
+
+// A low-pass biquad at f0 / fs with quality q (bilinear, exact at f0): b0 b1 b2 a1 a2.
+std::array<double, 5> low_pass_section(double f0_over_fs, double q) {
+  const double w0 = 2.0 * std::numbers::pi * f0_over_fs;
+  const double alpha = std::sin(w0) / (2.0 * q);
+  const double c = std::cos(w0);
+  const double a0 = 1.0 + alpha;
+  const double b0 = 0.5 * (1.0 - c) / a0;
+  return {b0, 2.0 * b0, b0, -2.0 * c / a0, (1.0 - alpha) / a0};
+}
+
+}  // namespace
+
+IterativeLearning::IterativeLearning(const ActuatorModel& model, std::size_t period_samples,
+                                     LearningOptions options)
+    : model_(model), period_(period_samples), o_(options) {
+  if (!model_.valid()) throw std::invalid_argument("iterative learning needs a model");
+  if (period_ < 4) throw std::invalid_argument("iterative learning needs a trial of 4 samples");
+  if (!(o_.dt > 0.0)) throw std::invalid_argument("iterative learning needs a sample period > 0");
+  if (!(o_.u_min < o_.u_max) || !(o_.max_step > 0.0)) {
+    throw std::invalid_argument("iterative learning needs u_min < u_max and max_step > 0");
+  }
+  const double fs = 1.0 / o_.dt;
+  cutoff_hz_ = o_.cutoff_hz > 0.0 ? o_.cutoff_hz : kCutoffOfRate * fs;
+  advance_samples_ = model_.delay_s() / o_.dt;
+  if (const auto& d = model_.dynamics()) {
+    const double wn = 2.0 * std::numbers::pi * d->natural_frequency_hz;
+    dyn_a1_ = 2.0 * d->damping_ratio / wn;
+    dyn_a2_ = 1.0 / (wn * wn);
+    if (o_.cutoff_hz <= 0.0) {
+      cutoff_hz_ = std::min(cutoff_hz_, kCutoffOfMode * d->natural_frequency_hz);
+    }
+  }
+  cutoff_hz_ = std::min(cutoff_hz_, 0.45 * fs);
+  for (const double q : kButterworthQ) sections_.push_back(low_pass_section(cutoff_hz_ / fs, q));
+  const double slowest_s = 2.0 * kButterworthQ[1] / (2.0 * std::numbers::pi * cutoff_hz_);
+  warmup_periods_ = static_cast<std::size_t>(
+      std::ceil(kWarmupTimeConstants * slowest_s / (o_.dt * static_cast<double>(period_))));
+  warmup_periods_ = std::max<std::size_t>(warmup_periods_, 1);
+  model_.set_delay(0.0);
+  model_.set_dynamics(std::nullopt);
+  model_.configure(o_.dt);
+  slope_.assign(period_, 0.0);
+  work_.assign(period_, 0.0);
+  shifted_.assign(period_, 0.0);
+}
+
+void IterativeLearning::low_pass(std::vector<double>& x) {
+  const std::size_t n = x.size();
+  for (int pass = 0; pass < 2; ++pass) {  // forward, then backward: zero phase
+    for (const auto& s : sections_) {
+      double x1 = 0.0, x2 = 0.0, y1 = 0.0, y2 = 0.0;
+      // Start at the trial's mean, at rest, then go round until the state is periodic.
+      double mean = 0.0;
+      for (const double v : x) mean += v;
+      mean /= static_cast<double>(n);
+      x1 = x2 = y1 = y2 = mean;
+      for (std::size_t r = 0; r <= warmup_periods_; ++r) {
+        const bool keep = r == warmup_periods_;
+        for (std::size_t j = 0; j < n; ++j) {
+          const double in = x[j];
+          const double out = s[0] * in + s[1] * x1 + s[2] * x2 - s[3] * y1 - s[4] * y2;
+          x2 = x1, x1 = in, y2 = y1, y1 = out;
+          if (keep) shifted_[j] = out;
+        }
+      }
+      std::copy(shifted_.begin(), shifted_.end(), x.begin());
+    }
+    std::reverse(x.begin(), x.end());
+  }
+}
+
+void IterativeLearning::local_slope(std::span<const double> drive) {
+  const std::size_t n = period_;
+  // The model's static output along the drive, its state periodic after a first pass.
+  model_.reset(drive[n - 1]);
+  std::vector<double>& y = work_;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::size_t j = 0; j < n; ++j) y[j] = model_.step(drive[j]);
+  }
+  // Least-squares slope of dy on du over a window around each sample, circular.
+  const std::size_t w = std::max<std::size_t>(2, n / 100);
+  double sum_dy = 0.0, sum_du = 0.0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t p = (j + n - 1) % n;
+    sum_dy += std::abs(y[j] - y[p]);
+    sum_du += std::abs(drive[j] - drive[p]);
+  }
+  double mean = sum_du > 0.0 ? sum_dy / sum_du : 0.0;
+  if (!(mean > 0.0)) {
+    // A constant drive: the slope of the model's range.
+    ActuatorModel probe = model_;
+    probe.reset(model_.input_min);
+    const double span = model_.input_max - model_.input_min;
+    mean = span > 0.0
+               ? std::abs(probe.peek_static(model_.input_max) - probe.peek_static(model_.input_min)) /
+                     span
+               : 1.0;
+  }
+  for (std::size_t j = 0; j < n; ++j) {
+    double uy = 0.0, uu = 0.0;
+    for (std::size_t i = 0; i <= 2 * w; ++i) {
+      const std::size_t c = (j + n + i - w) % n;
+      const std::size_t p = (c + n - 1) % n;
+      const double du = drive[c] - drive[p];
+      uy += du * (y[c] - y[p]);
+      uu += du * du;
+    }
+    const double s = uu > 0.0 ? uy / uu : mean;
+    slope_[j] = std::clamp(s, o_.min_slope * mean, o_.max_slope * mean);
+  }
+}
+
+void IterativeLearning::update(std::span<const double> drive, std::span<const double> error,
+                               double gain, std::span<double> next) {
+  const std::size_t n = period_;
+  if (drive.size() != n || error.size() != n || next.size() != n) {
+    throw std::invalid_argument("iterative learning: drive, error and next need one trial each");
+  }
+  local_slope(drive);
+  std::vector<double> c(error.begin(), error.end());
+  low_pass(c);
+  // The error d samples on answers the drive here: advance it (linear between samples).
+  const double a = std::fmod(advance_samples_, static_cast<double>(n));
+  const auto whole = static_cast<std::size_t>(std::floor(a));
+  const double frac = a - std::floor(a);
+  std::vector<double> e(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const double v0 = c[(j + whole) % n], v1 = c[(j + whole + 1) % n];
+    e[j] = v0 + frac * (v1 - v0);
+  }
+  // The dynamics inverted on it: e + a1 de/dt + a2 d2e/dt2.
+  const double dt = o_.dt;
+  for (std::size_t j = 0; j < n; ++j) {
+    const double em = e[(j + n - 1) % n], ep = e[(j + 1) % n];
+    c[j] = e[j] + dyn_a1_ * (ep - em) / (2.0 * dt) + dyn_a2_ * (ep - 2.0 * e[j] + em) / (dt * dt);
+  }
+  for (std::size_t j = 0; j < n; ++j) c[j] = gain * c[j] / slope_[j];
+  low_pass(c);
+  // The first trial's drive (the compensator's, not learned) goes through Q itself: a correction
+  // through Q cannot remove what lies above it (the wrap of a drive that was not periodic).
+  std::vector<double> base(drive.begin(), drive.end());
+  if (updates_++ == 0) low_pass(base);
+  for (std::size_t j = 0; j < n; ++j) next[j] = std::clamp(base[j] + c[j], o_.u_min, o_.u_max);
+  // The slew limit, around the trial: each sample within max_step of the one before.
+  for (int round = 0; round < 2; ++round) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const double before = next[(j + n - 1) % n];
+      next[j] = std::clamp(next[j], before - o_.max_step, before + o_.max_step);
+    }
+  }
+}
+
+}  // namespace hystbench::compensation
