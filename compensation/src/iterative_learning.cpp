@@ -13,8 +13,12 @@ namespace {
 // The two sections of a fourth-order Butterworth low-pass: their quality factors.
 constexpr std::array<double, 2> kButterworthQ = {0.54119610014619690, 1.30656296487637653};
 // Q's default cut-off: this fraction of the sample rate, and this fraction of a modelled mode.
-constexpr double kCutoffOfRate = 0.1;
+constexpr double kCutoffOfRate = 0.2;
 constexpr double kCutoffOfMode = 0.5;
+// ... and at most this harmonic of the trial's frequency: a slow trial's error above it is mostly
+// the sensor's noise, which each trial would otherwise learn into the drive (on the loopback at
+// 1 Hz: 0.017 % rms after ten trials with 300 Hz, 0.044 % with 2 kHz).
+constexpr double kCutoffHarmonics = 300.0;
 // The circular run of a section starts this many of its slowest time constants early.
 constexpr double kWarmupTimeConstants = 20.0;
 
@@ -40,7 +44,9 @@ IterativeLearning::IterativeLearning(const ActuatorModel& model, std::size_t per
     throw std::invalid_argument("iterative learning needs u_min < u_max and max_step > 0");
   }
   const double fs = 1.0 / o_.dt;
-  cutoff_hz_ = o_.cutoff_hz > 0.0 ? o_.cutoff_hz : kCutoffOfRate * fs;
+  const double trial_hz = fs / static_cast<double>(period_);
+  cutoff_hz_ = o_.cutoff_hz > 0.0 ? o_.cutoff_hz
+                                  : std::min(kCutoffOfRate * fs, kCutoffHarmonics * trial_hz);
   advance_samples_ = model_.delay_s() / o_.dt;
   if (const auto& d = model_.dynamics()) {
     const double wn = 2.0 * std::numbers::pi * d->natural_frequency_hz;
@@ -116,17 +122,21 @@ void IterativeLearning::local_slope(std::span<const double> drive) {
                      span
                : 1.0;
   }
+  // Running sums over the window [j - w, j + w] around the trial.
+  const auto du = [&](std::size_t c) { return drive[c] - drive[(c + n - 1) % n]; };
+  const auto dy = [&](std::size_t c) { return y[c] - y[(c + n - 1) % n]; };
+  double uy = 0.0, uu = 0.0;
+  for (std::size_t i = 0; i <= 2 * w; ++i) {
+    const std::size_t c = (n + i - w % n) % n;
+    uy += du(c) * dy(c);
+    uu += du(c) * du(c);
+  }
   for (std::size_t j = 0; j < n; ++j) {
-    double uy = 0.0, uu = 0.0;
-    for (std::size_t i = 0; i <= 2 * w; ++i) {
-      const std::size_t c = (j + n + i - w) % n;
-      const std::size_t p = (c + n - 1) % n;
-      const double du = drive[c] - drive[p];
-      uy += du * (y[c] - y[p]);
-      uu += du * du;
-    }
-    const double s = uu > 0.0 ? uy / uu : mean;
+    const double s = uu > 1e-300 ? uy / uu : mean;
     slope_[j] = std::clamp(s, o_.min_slope * mean, o_.max_slope * mean);
+    const std::size_t out = (j + n - w % n) % n, in = (j + w + 1) % n;
+    uy += du(in) * dy(in) - du(out) * dy(out);
+    uu += du(in) * du(in) - du(out) * du(out);
   }
 }
 
@@ -156,8 +166,9 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
   }
   for (std::size_t j = 0; j < n; ++j) c[j] = gain * c[j] / slope_[j];
   low_pass(c);
-  // The first trial's drive (the compensator's, not learned) goes through Q itself: a correction
-  // through Q cannot remove what lies above it (the wrap of a drive that was not periodic).
+  // The first trial's drive (the compensator's) goes through Q itself: above Q a correction
+  // cannot reach it, and what the model put there (its harmonics through modes it does not
+  // know, a wrap that was not periodic) would stay.
   std::vector<double> base(drive.begin(), drive.end());
   if (updates_++ == 0) low_pass(base);
   for (std::size_t j = 0; j < n; ++j) next[j] = std::clamp(base[j] + c[j], o_.u_min, o_.u_max);

@@ -254,6 +254,37 @@ int main(int argc, char** argv) {
   track_cmd->add_option("--precondition", tr_precondition,
                         "Open-loop sweep u_max -> u_min before the reference [s] (default: the "
                         "daemon's, 1 s; 0 = none)");
+  int tr_learn = 0;
+  double tr_learn_gain = NAN;
+  auto* tr_learn_opt =
+      track_cmd
+          ->add_option("--learn", tr_learn,
+                       "Learn over N trials (sine, triangle, sawtooth; a trial is one period): "
+                       "after a start-up period and one with the compensator's drive, each "
+                       "period plays the one before's drive corrected by its measured error "
+                       "(iterative learning through the model's inverse slope, delay and "
+                       "dynamics). The frequency moves to the loop rate over a whole number of "
+                       "ticks. The result lists every trial; the run's errors are the last "
+                       "trial's; the learned drive is saved in the model folder (t,u)")
+          ->check(CLI::Range(1, 1000));
+  track_cmd
+      ->add_option("--learn-gain", tr_learn_gain,
+                   "--learn: share of the error corrected per trial at the start (default 0.5); "
+                   "a trial 20 % above the best halves it, two in a row stop the learning on "
+                   "the best trial's drive")
+      ->check(CLI::Range(1e-3, 20.0))
+      ->needs(tr_learn_opt);
+  double tr_learn_cutoff = NAN;
+  track_cmd
+      ->add_option("--learn-cutoff", tr_learn_cutoff,
+                   "--learn: the learning's low-pass cut-off [Hz] (default: the lowest of a fifth "
+                   "of the loop rate, 300 x the frequency and half a modelled mode); above it "
+                   "nothing is learned")
+      ->check(CLI::PositiveNumber)
+      ->needs(tr_learn_opt);
+  for (const char* other : {"--periods", "--duration"}) {
+    tr_learn_opt->excludes(track_cmd->get_option(other));
+  }
   add_output_flags(track_cmd, true);
   track_cmd->add_option("--plot", remote.plot_dir,
                         "With --wait: write the run's plots (time.png, error.png, loop.png) here "
@@ -429,10 +460,15 @@ int main(int argc, char** argv) {
       return remote_run("track", p);
     }
     nlohmann::json p = {{"reference", tr_reference}, {"frequency_hz", tr_frequency}};
-    if (tr_duration > 0)
+    if (tr_learn > 0) {
+      p["learn_trials"] = tr_learn;
+      if (!std::isnan(tr_learn_gain)) p["learn_gain"] = tr_learn_gain;
+      if (!std::isnan(tr_learn_cutoff)) p["learn_cutoff_hz"] = tr_learn_cutoff;
+    } else if (tr_duration > 0) {
       p["duration_s"] = tr_duration;
-    else
+    } else {
       p["periods"] = tr_periods;
+    }
     if (!tr_compensator.empty()) p["compensator"] = tr_compensator;
     if (!std::isnan(tr_precondition)) p["precondition_s"] = tr_precondition;
     if (!std::isnan(tr_min) || !std::isnan(tr_max)) {

@@ -3,8 +3,10 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cstdio>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 
 #include "command_table.hpp"
 #include "excite_program.hpp"
@@ -367,8 +369,12 @@ json Bench::start_track(const details::Request& request, std::uint64_t client) {
     upload_name = request.string("reference_upload", "");
     upload = uploads_.complete(upload_name, client, UploadKind::kReference);
   }
-  json reply = launch("track", details::make_track_program(request, run_context(), upload.get()));
+  details::BuiltRun run = details::make_track_program(request, run_context(), upload.get());
+  std::unique_ptr<details::TrackLearning> learning = std::move(run.learning);
+  json reply = launch("track", std::move(run));
   if (upload) uploads_.erase(upload_name, client);  // the run has it now
+  learning_ = std::move(learning);  // the supervisor takes the lock before it looks
+  learning_run_id_ = learning_ ? reply["run_id"].get<std::string>() : std::string();
   return reply;
 }
 
@@ -385,6 +391,7 @@ void Bench::supervise() {
     // Before a finished run is taken: on the simulated clock a run can end before the first
     // periodic event, and a client still sees it (and each verification stage) start.
     announce_run();
+    learn();
     if (auto finished = loop_->take_finished()) {
       finalize(std::move(finished));
       continue;
@@ -427,6 +434,87 @@ void Bench::emit_progress(bool started) {
       {"total", total},          {"fraction", total ? static_cast<double>(done) / total : 0.0}};
   if (run.contains("stage")) event["stage"] = run["stage"];  // identify's verification
   emit(event);
+}
+
+void Bench::learn() {
+  details::TrackLearning* learning = nullptr;
+  std::string run_id;
+  {
+    std::lock_guard lock(mutex_);
+    if (!learning_ || phase_ != RunPhase::kRunning) return;
+    learning = learning_.get();
+    run_id = learning_run_id_;
+  }
+  const std::size_t asked = learning->request().trials;
+  for (const details::TrackLearning::Trial& t : learning->poll()) {
+    char rms[32];
+    std::snprintf(rms, sizeof rms, "%.3f", t.rms_percent);
+    const std::string stage = "learning: trial " + std::to_string(t.trial) + " of " +
+                              std::to_string(asked) + ", rms " + rms + " %";
+    {
+      std::lock_guard lock(mutex_);
+      if (!active_run_.is_null()) active_run_["stage"] = stage;
+    }
+    emit({{"event", "run.progress"},
+          {"run_id", run_id},
+          {"kind", "track"},
+          {"stage", stage},
+          {"fraction", static_cast<double>(t.trial + 1) / static_cast<double>(asked + 1)},
+          {"learning",
+           {{"trial", t.trial},
+            {"trials", asked},
+            {"rms_error_percent", t.rms_percent},
+            {"max_error_percent", t.max_percent},
+            {"drive", t.drive}}}});
+  }
+}
+
+void Bench::finish_learning(const RunProgram& run, json& report) {
+  std::unique_ptr<details::TrackLearning> learning;
+  {
+    std::lock_guard lock(mutex_);
+    if (!learning_ || run.run_id != learning_run_id_) return;
+    learning = std::move(learning_);
+    learning_run_id_.clear();
+  }
+  (void)learning->poll();  // the last trial, closed as the run ended
+  json l = learning->result();
+  if (const auto last = learning->last_trial()) {
+    // The run's figures are its last trial's (the log keeps every period).
+    report["rms_error_um"] = last->rms_um;
+    report["max_error_um"] = last->max_um;
+    report["rms_error_percent"] = last->rms_percent;
+    report["max_error_percent"] = last->max_percent;
+  }
+  const std::vector<double>& drive = learning->kept_drive();
+  if (!drive.empty()) {
+    try {
+      const std::filesystem::path dir(settings_.model_dir);
+      std::filesystem::create_directories(dir);
+      const std::filesystem::path csv = dir / (run.run_id + "-learned.csv");
+      std::ofstream out(csv);
+      out << "t,u\n";
+      out.precision(17);
+      for (std::size_t j = 0; j < drive.size(); ++j) {
+        out << static_cast<double>(j) * dt_ << "," << drive[j] << "\n";
+      }
+      if (!out) throw std::runtime_error("cannot write " + csv.string());
+      const details::LearningRequest& r = learning->request();
+      const json meta = {{"drive", csv.filename().string()},
+                         {"run_id", run.run_id},
+                         {"reference", r.reference},
+                         {"frequency_hz", r.frequency_hz},
+                         {"rate_hz", r.rate_hz},
+                         {"period_samples", drive.size()},
+                         {"range_um", r.range_um},
+                         {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
+      std::ofstream(dir / (run.run_id + "-learned.json")) << meta.dump(2) << "\n";
+      l["drive_file"] = csv.string();
+    } catch (const std::exception& e) {
+      l["drive_file_error"] = e.what();
+    }
+  }
+  report["learning"] = std::move(l);
 }
 
 bool Bench::preparation_queued() const {
@@ -504,6 +592,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
   }
   set_phase(RunPhase::kFinalizing);
   details::RunResult result = details::collect_result(*run, loop_->last_output());
+  finish_learning(*run, result.report);
   if (result.wants_fit()) {
     fit_identify(*run, std::move(result));  // delivers when the candidates are verified
     return;

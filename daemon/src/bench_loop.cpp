@@ -258,6 +258,8 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
 
   double y_ref = std::numeric_limits<double>::quiet_NaN();
   double u_request = 0.0;
+  bool learning = false;  // the tick belongs to a learning run's trials, at this phase
+  std::size_t phase = 0;
   if (p.kind != RunKind::kTrack || k < p.excitation.size()) {
     // An open-loop drive (identify, excite), or the pre-conditioning prefix of a tracking run.
     u_request = p.excitation[k];
@@ -292,6 +294,16 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     rec.u_fb = out.u_fb;
     if (out.feedback_saturated) rec.flags |= kSampleFeedbackSaturated;
     u_request = out.u;
+    if (p.learning && k >= p.learning->first_tick) {
+      // A learning run: from trial 1 on the learned feedforward, with the feedback on it.
+      if (simulated_) await_learned_drive(*p.learning, k);
+      phase = p.learning->begin_tick(k);
+      learning = true;
+      if (double u_ff = 0.0; p.learning->learned(phase, u_ff)) {
+        rec.u_ff = u_ff;
+        u_request = u_ff + out.u_fb;
+      }
+    }
   }
   rec.reference = y_ref;
 
@@ -378,17 +390,32 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     p.model_error_max = std::max(p.model_error_max, std::abs(e));
     ++p.model_error_samples;
   }
+  bool last_trial_played = false;
+  if (learning && failure == nullptr) {
+    last_trial_played = p.learning->end_tick(phase, rec.u_ff, y_ref - rec.y_measured);
+  }
   rec.exec_ns = now_ns() - exec_start_ns_;
   log_sample(p, rec);
   p.stats.record(wake_ns - scheduled_ns, rec.exec_ns, overran_);
   p.done.store(k + 1, std::memory_order_release);
+  if (learning && phase + 1 == p.learning->period) signal_event();  // a trial for the learner
 
   if (failure != nullptr) {
     fault(failure);
-  } else if (k + 1 >= p.total_samples) {
+  } else if (k + 1 >= p.total_samples || last_trial_played) {
     end_run(RunEnd::kCompleted, "");
   } else if (stop_requested_.exchange(false, std::memory_order_acq_rel)) {
     end_run(RunEnd::kStopped, "stopped by request");
+  }
+}
+
+void BenchLoop::await_learned_drive(const LearningExchange& learning, std::uint64_t k) noexcept {
+  // Virtual time waits for the learner, as for the log writer: each period after a trial plays
+  // the drive learned from it. A stop, an abort or a shutdown ends the wait.
+  while (learning.owed(k) && !quit_.load(std::memory_order_acquire) &&
+         !stop_requested_.load(std::memory_order_acquire) &&
+         !abort_requested_.load(std::memory_order_acquire)) {
+    std::this_thread::sleep_for(std::chrono::microseconds(50));
   }
 }
 

@@ -106,6 +106,23 @@ void print_run_result(const json& r, std::ostream& out) {
         << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %)\n";
     out << "  hysteresis      " << fixed(r["hysteresis_percent"], 3) << " % of the output range\n";
   }
+  if (const auto l = r.find("learning"); l != r.end() && l->is_object()) {
+    const json& trials = (*l)["trials"];
+    out << "  learning        " << trials.size() << " trials of " << fixed((*l)["frequency_hz"], 3)
+        << " Hz (the first with the compensator's drive): rms %";
+    for (const json& t : trials) out << " " << fixed(t["rms_error_percent"], 3);
+    out << "\n                  " << (*l).value("why", std::string()) << "; best trial "
+        << (*l).value("best_trial", json()).dump() << ", cut-off "
+        << fixed((*l)["cutoff_hz"], 0) << " Hz";
+    if ((*l).value("stale_periods", 0) > 0) {
+      out << ", " << (*l)["stale_periods"].get<int>()
+          << " periods replayed while the update was computed";
+    }
+    out << "\n";
+    if (l->contains("drive_file")) {
+      out << "  learned drive   " << (*l)["drive_file"].get<std::string>() << "\n";
+    }
+  }
   if (r.contains("tare_um")) {
     out << "  tare            " << fixed(r["tare_um"], 4)
         << " um: the offset the model missed on the precondition sweep, taken off the "

@@ -17,6 +17,7 @@
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/daemon/bench.hpp"
 #include "hystbench/daemon/run_program.hpp"
+#include "track_learning.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -72,6 +73,8 @@ struct BuiltRun {
   /// precondition_s, settle_s); null otherwise.
   nlohmann::json fit;
   RunPreparation preparation;
+  /// track --learn: the learner of the run's trials (it holds the program's exchange).
+  std::unique_ptr<TrackLearning> learning;
 };
 
 /// Most samples a run records for its figures and fit (the log keeps every sample).

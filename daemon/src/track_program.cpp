@@ -82,13 +82,67 @@ ActuatorRange known_range(const RunContext& ctx) {
                      "limits.y_min and limits.y_max");
 }
 
+// A learning run's trials (track --learn): each one period of a periodic reference, P whole
+// ticks (the frequency moves to the loop rate / P so that every trial samples the same points).
+struct LearningPlan {
+  std::size_t trials = 0;
+  double gain = 0.5;
+  double cutoff_hz = 0.0;      ///< Q's cut-off; 0 = IterativeLearning's default
+  std::size_t period = 0;      ///< P [ticks]
+  double frequency_hz = 0.0;   ///< the loop rate / P
+  double periods = 0.0;        ///< the reference's length: the start-up period, trial 0, N trials
+  std::string reference;
+};
+
+// The learning gain's default: half the error corrected per trial (a plant whose local slope is
+// half the model's still converges; twice it, at the edge).
+constexpr double kDefaultLearningGain = 0.5;
+// A period on the wall clock may begin before the learner's update for it is ready: the run is
+// long enough for this much update time per trial, and ends after its last trial.
+constexpr double kUpdateAllowanceS = 0.05;
+
+std::optional<LearningPlan> learning_plan(const Request& request, const RunContext& ctx) {
+  if (!request.has("learn_trials") || request.integer("learn_trials", 0) == 0) {
+    for (const char* key : {"learn_gain", "learn_cutoff_hz"}) {
+      if (request.has(key)) {
+        throw CommandError("bad_params", std::string(key) + ": only with learn_trials > 0");
+      }
+    }
+    return std::nullopt;
+  }
+  LearningPlan plan;
+  plan.trials = static_cast<std::size_t>(request.integer("learn_trials", 0));
+  plan.gain = request.number("learn_gain", kDefaultLearningGain);
+  plan.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
+  plan.reference = request.string("reference", "triangle");
+  if (plan.reference != "sine" && plan.reference != "triangle" && plan.reference != "sawtooth") {
+    throw CommandError("bad_params", "learn_trials: a trial is one period of a sine, triangle or "
+                                     "sawtooth; '" + plan.reference + "' does not repeat");
+  }
+  if (request.has("periods") || request.has("duration_s")) {
+    throw CommandError("bad_params",
+                       "learn_trials sets the run's length (the start-up period, the "
+                       "compensator's trial and the learned ones): leave out periods and "
+                       "duration_s");
+  }
+  const double rate = ctx.settings.loop.rate_hz;
+  const double f = request.number("frequency_hz", 1.0, 1e-3, rate / 20.0);
+  plan.period = static_cast<std::size_t>(std::llround(rate / f));
+  plan.frequency_hz = rate / static_cast<double>(plan.period);
+  const double allowance =
+      std::ceil(kUpdateAllowanceS * plan.frequency_hz) * static_cast<double>(plan.trials + 1);
+  plan.periods = static_cast<double>(plan.trials + 2) + allowance;
+  return plan;
+}
+
 TrackReference reference(const Request& request, const RunContext& ctx, const ActuatorRange& range,
-                         const Upload* upload) {
+                         const Upload* upload, const std::optional<LearningPlan>& learn) {
   const auto& lim = ctx.settings.loop.limits;
   const double span = range.y_top - range.y_bottom;
   const ReferenceLimits limits{range.y_bottom, range.y_top,
                                lim.slew_v_per_s * span / (lim.u_max - lim.u_min),
                                ctx.settings.loop.rate_hz};
+  if (learn) return builtin_reference(request, limits, learn->frequency_hz, learn->periods);
   if (upload == nullptr) return builtin_reference(request, limits);
   // The precondition sweep leaves the output at the bottom of its range.
   return uploaded_reference(*upload, limits, range.y_bottom, request.number("approach_s", 0.2));
@@ -316,6 +370,34 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
       }};
 }
 
+// The learner of a learning run: the trials' exchange from the first scored period on, the
+// active model (else the linear map of the limits) as its L, the drive limits of the loop.
+std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
+                                        const RunContext& ctx, const TrackReference& ref) {
+  const auto& lim = ctx.settings.loop.limits;
+  const std::optional<hc::ActuatorModel> model = predictor(ctx, ctx.u_now);
+  if (!model) throw CommandError("no_range", "learning needs a model or limits.y_min/y_max");
+  p.learning = std::make_unique<LearningExchange>(plan.period, p.metrics_from);
+  hc::LearningOptions o;
+  o.dt = ctx.dt();
+  o.u_min = lim.u_min;
+  o.u_max = lim.u_max;
+  o.cutoff_hz = plan.cutoff_hz;
+  if (lim.slew_v_per_s > 0.0) o.max_step = lim.slew_v_per_s * o.dt;
+  LearningRequest r;
+  r.trials = plan.trials;
+  r.gain = plan.gain;
+  r.range_um = ref.max_um - ref.min_um;
+  r.frequency_hz = plan.frequency_hz;
+  r.reference = plan.reference;
+  r.rate_hz = ctx.settings.loop.rate_hz;
+  try {
+    return std::make_unique<TrackLearning>(*model, *p.learning, r, o);
+  } catch (const std::invalid_argument& e) {
+    throw CommandError("bad_params", std::string("learning: ") + e.what());
+  }
+}
+
 }  // namespace
 
 BuiltRun make_track_program(const Request& request, const RunContext& ctx, const Upload* upload) {
@@ -324,7 +406,8 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   const std::string comp_name = request.string("compensator", ctx.model ? "inverse" : "none");
   const hc::CompensatorKind kind = compensator_kind(comp_name, ctx);
   const ActuatorRange range = known_range(ctx);
-  TrackReference ref = reference(request, ctx, range, upload);
+  const std::optional<LearningPlan> learn = learning_plan(request, ctx);
+  TrackReference ref = reference(request, ctx, range, upload, learn);
 
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kTrack;
@@ -368,6 +451,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   allocate_records(*p);
 
   BuiltRun run;
+  if (learn) run.learning = learning(*p, *learn, ctx, ref);
   json run_header = {{"kind", "track"}};
   run_header.update(ref.header);
   run_header.update({{"compensator", comp_name},
@@ -383,6 +467,14 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
                {"compensator", comp_name},
                {"feedback", feedback},
                {"feedforward", p->summary.value("feedforward", json(nullptr))}};
+  if (learn) {
+    const json l = {{"trials", learn->trials},
+                    {"gain", learn->gain},
+                    {"frequency_hz", learn->frequency_hz},
+                    {"period_samples", learn->period}};
+    run.header["run"]["learning"] = l;
+    run.reply["learning"] = l;
+  }
   run.status = {{"compensator", comp_name}};
   run.program = std::move(p);
   run.preparation = std::move(preparation);

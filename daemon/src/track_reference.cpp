@@ -59,7 +59,8 @@ void check_slew(const Upload& u, const std::vector<double>& v, double max_step, 
 
 }  // namespace
 
-TrackReference builtin_reference(const Request& request, const ReferenceLimits& limits) {
+TrackReference builtin_reference(const Request& request, const ReferenceLimits& limits,
+                                 double frequency_hz, double periods_given) {
   const std::string ref_name = request.string("reference", "triangle");
   sim::SignalSpec spec;
   try {
@@ -73,9 +74,11 @@ TrackReference builtin_reference(const Request& request, const ReferenceLimits& 
                                          "decaying_sine, multi_frequency or chirp, or upload "
                                          "a trajectory (reference_upload)");
   }
-  spec.frequency_hz = request.number("frequency_hz", 1.0, 1e-3, limits.rate_hz / 20.0);
-  const double periods = request.number("periods", 5.0);
-  double duration = request.number("duration_s", 0.0);
+  spec.frequency_hz = frequency_hz > 0.0
+                          ? frequency_hz
+                          : request.number("frequency_hz", 1.0, 1e-3, limits.rate_hz / 20.0);
+  const double periods = periods_given > 0.0 ? periods_given : request.number("periods", 5.0);
+  double duration = periods_given > 0.0 ? 0.0 : request.number("duration_s", 0.0);
   if (duration <= 0.0) duration = periods / spec.frequency_hz;
   if (!(duration > 0.0)) throw CommandError("bad_params", "periods or duration_s must be > 0");
 

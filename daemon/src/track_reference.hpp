@@ -33,7 +33,9 @@ struct ReferenceLimits {
 /// A built-in periodic reference from a track request's keys (checked against its command):
 /// reference (kind), frequency_hz, periods or duration_s, range_fraction or min_um/max_um. The
 /// first period is unscored when the run has at least two.
-TrackReference builtin_reference(const Request& request, const ReferenceLimits& limits);
+/// frequency_hz and periods > 0 take the place of the request's (a learning run's trials).
+TrackReference builtin_reference(const Request& request, const ReferenceLimits& limits,
+                                 double frequency_hz = 0.0, double periods = 0.0);
 
 /// A user's trajectory, resampled to the loop rate, after an approach of approach_s (at least
 /// long enough for the slew limit) from y_start to its first value, which is unscored. Refused

@@ -55,7 +55,10 @@ Trials learn(hc::ActuatorModel plant, const hc::ActuatorModel& model, double hz,
   inverse_model.step(model.input_min);
   auto inverse = hc::make_inverse(inverse_model);
   std::vector<double> drive(n), next(n), error(n);
-  for (std::size_t j = 0; j < n; ++j) drive[j] = inverse->step(ref[j]);
+  // The inverse's steady drive: its second period (the first starts from the sweep's end).
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::size_t j = 0; j < n; ++j) drive[j] = inverse->step(ref[j]);
+  }
   o.dt = kDt;
   hc::IterativeLearning learner(model, n, o);
   plant.reset(model.input_min);

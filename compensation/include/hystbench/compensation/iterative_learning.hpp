@@ -7,9 +7,10 @@
 // the error (as the feedforward inverts them on the reference), s_k(j) the local slope of its
 // static map along the trial's drive (the inverse's slope there), kept within [1/4, 4] x its mean
 // along the trial. Q is a zero-phase low-pass (a fourth-order Butterworth run forward and
-// backward around the trial), cut off at a tenth of the sample rate and below half the model's
-// natural frequency: above it the model's phase is not known, and a mode it misses would grow
-// from trial to trial. Pure maths, no I/O; allocates: off the real-time path.
+// backward around the trial), cut off at the lowest of a fifth of the sample rate, the trial's
+// 300th harmonic (above it a slow trial's error is mostly sensor noise) and half the model's
+// natural frequency (above it the model's phase is not known, and a mode it misses would grow
+// from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
 #include <array>
 #include <cstddef>
 #include <span>

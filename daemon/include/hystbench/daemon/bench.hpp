@@ -36,6 +36,7 @@ struct BuiltRun;
 struct RunPreparation;
 struct RunResult;
 struct PlanCache;
+class TrackLearning;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -146,6 +147,12 @@ class Bench {
   void supervise();
   /// Emits run.progress once for a run or stage not announced yet (supervisor thread).
   void announce_run();
+  /// A learning run: scores the trials the loop closed, offers the next drives, and emits
+  /// run.progress for each trial (supervisor thread).
+  void learn();
+  /// A learning run's result: `learning` (its trials), the last trial's errors as the run's,
+  /// and the kept drive saved in the model folder (supervisor thread).
+  void finish_learning(const RunProgram& run, nlohmann::json& report);
   /// run.progress of the active run; `started`: also when the loop no longer (or not yet)
   /// plays it, with done = 0.
   void emit_progress(bool started = false);
@@ -207,6 +214,9 @@ class Bench {
   std::unique_ptr<details::RunPreparation> preparation_;
   RunEnd cancel_preparation_ = RunEnd::kCompleted;
   std::unique_ptr<IdentifySession> session_;  // supervisor thread only
+  // The learner of a learning run (set with it, taken by the supervisor when it ends).
+  std::unique_ptr<details::TrackLearning> learning_;
+  std::string learning_run_id_;
   std::string announced_run_;                 // run_id/stage last announced; supervisor only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;

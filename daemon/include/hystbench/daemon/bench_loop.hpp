@@ -153,6 +153,8 @@ class BenchLoop {
   void fault(const char* reason) noexcept;
   /// Bumps events() and wakes wait_event(): one non-blocking system call.
   void signal_event() noexcept;
+  // Simulated clock: waits until the learner made the drive for the period at tick k ready.
+  void await_learned_drive(const LearningExchange& learning, std::uint64_t k) noexcept;
 
   drivers::Driver& driver_;
   BenchLoopOptions options_;

@@ -15,6 +15,7 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
+#include "hystbench/daemon/learning_exchange.hpp"
 #include "hystbench/daemon/loop_statistics.hpp"
 #include "hystbench/daemon/sample_log_writer.hpp"
 #include "hystbench/daemon/target_window.hpp"
@@ -78,6 +79,10 @@ struct RunProgram {
   /// model's exchange_ticks, 0 for a model made elsewhere. For the tare a reading that answers
   /// the output of response_ticks ago is compared with y_model of (response_ticks - this) ago.
   std::uint64_t model_exchange_ticks = 0;
+  /// track --learn: the trials' hand-over with the learner (null for a run that does not learn).
+  /// From its first_tick on, a period that plays a learned drive plays it in place of the
+  /// compensator's feedforward (its feedback stays on).
+  std::unique_ptr<LearningExchange> learning;
   /// The per-run log (may be null in unit tests).
   std::unique_ptr<SampleLogWriter> log;
   /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).

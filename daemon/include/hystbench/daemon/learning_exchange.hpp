@@ -1,0 +1,69 @@
+#pragma once
+// The hand-over between the loop, which plays a learning run's trials, and the learner, which
+// computes each next trial's drive off the loop thread. A trial is one period of the reference,
+// P samples from first_tick on: the first (trial 0) plays the compensator's own drive; each later
+// one the learned feedforward the learner made ready before the period began. A period that
+// begins with no new drive ready plays the last one again and is not a trial (stale_periods).
+// Every buffer is allocated before the run; the loop's side is real-time safe (no allocation, no
+// locks: atomics only).
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace hystbench::daemon {
+
+struct LearningExchange {
+  /// P samples >= 4, and the run tick of trial 0's first sample.
+  LearningExchange(std::size_t period_samples, std::uint64_t first_tick);
+
+  const std::size_t period;
+  const std::uint64_t first_tick;
+
+  // ---- loop side (loop thread only) ----
+  /// The phase j in [0, P) of tick k >= first_tick; at j = 0 takes the drive made ready (if any)
+  /// and starts recording the trial it plays.
+  std::size_t begin_tick(std::uint64_t k) noexcept;
+  /// True when the period plays a learned drive, with its sample j in u_ff [input unit].
+  bool learned(std::size_t j, double& u_ff) const noexcept;
+  /// Records the feedforward played and the error (reference - reading) at phase j; at the
+  /// period's last sample closes the trial. True when that trial was the last: the run ends.
+  bool end_tick(std::size_t j, double u_ff, double error) noexcept;
+  /// True at a period's start when the learner owes a drive for it (a trial was handed over
+  /// and nothing came back yet): on the simulated clock the loop waits for it.
+  bool owed(std::uint64_t k) const noexcept;
+
+  // ---- learner side ----
+  /// Takes the oldest complete trial not yet taken: copies its drive and error into u and e
+  /// (P samples each) and its number into trial. False when there is none.
+  bool take_trial(std::vector<double>& u, std::vector<double>& e, std::uint64_t& trial) noexcept;
+  /// Makes `drive` (P samples) the next trial's; `last`: the run ends after it. False when the
+  /// loop has not taken the one made ready before (call again after the next trial).
+  bool offer(const std::vector<double>& drive, bool last) noexcept;
+
+  std::uint64_t trials_played() const noexcept { return played_.load(std::memory_order_acquire); }
+  std::uint64_t stale_periods() const noexcept { return stale_.load(std::memory_order_acquire); }
+
+ private:
+  enum Slot : int { kFree = 0, kWriting = 1, kFull = 2, kReading = 3 };
+  std::array<std::vector<double>, 2> drive_;
+  std::array<std::vector<double>, 2> rec_u_, rec_e_;
+  std::array<std::atomic<int>, 2> slot_{};
+  std::array<std::atomic<std::uint64_t>, 2> slot_trial_{};
+  std::atomic<int> ready_{-1};        // drive_ index made ready, -1 = none
+  std::atomic<bool> ready_last_{false};
+  std::atomic<std::uint64_t> played_{0};   // trials closed by the loop
+  std::atomic<std::uint64_t> taken_{0};    // trials taken by the learner
+  std::atomic<std::uint64_t> offered_{0};  // drives made ready by the learner
+  std::atomic<std::uint64_t> stale_{0};
+  std::atomic<bool> final_offered_{false};
+  // loop only
+  void start_recording(std::uint64_t trial) noexcept;
+  int playing_ = -1;
+  bool last_ = false;
+  int rec_slot_ = -1;
+  std::uint64_t trial_ = 0;
+};
+
+}  // namespace hystbench::daemon

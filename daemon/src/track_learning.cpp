@@ -1,0 +1,116 @@
+#include "track_learning.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace hystbench::daemon::details {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+TrackLearning::TrackLearning(const hc::ActuatorModel& model, LearningExchange& exchange,
+                             LearningRequest request, hc::LearningOptions options)
+    : exchange_(exchange),
+      request_(std::move(request)),
+      learner_(model, exchange.period, options),
+      guard_(request_.gain) {}
+
+std::vector<TrackLearning::Trial> TrackLearning::poll() {
+  std::vector<Trial> scored;
+  // A drive the loop had not room for yet (it had not taken the one before).
+  if (has_pending_ && exchange_.offer(pending_, pending_last_)) has_pending_ = false;
+  std::uint64_t number = 0;
+  while (exchange_.take_trial(u_, e_, number)) {
+    const std::size_t n = e_.size();
+    double sum2 = 0.0, peak = 0.0;
+    for (const double e : e_) {
+      sum2 += e * e;
+      peak = std::max(peak, std::abs(e));
+    }
+    Trial t;
+    t.trial = number;
+    t.rms_um = std::sqrt(sum2 / static_cast<double>(n));
+    t.max_um = peak;
+    const double range = request_.range_um;
+    t.rms_percent = range > 0.0 ? 100.0 * t.rms_um / range : 0.0;
+    t.max_percent = range > 0.0 ? 100.0 * peak / range : 0.0;
+    t.gain = number == 0 ? 0.0 : next_gain_;
+    t.drive = number == 0 ? "compensator" : next_drive_;
+    trials_.push_back(t);
+    scored.push_back(t);
+    if (done_) continue;  // the last trial: nothing more to offer
+    const hc::LearningGuard::Action action = guard_.after_trial(t.rms_um);
+    if (guard_.best_trial() == guard_.trials() - 1) best_drive_ = u_;
+    bool last = false;
+    if (action == hc::LearningGuard::Action::kStop) {
+      stopped_ = true;
+      why_ = "two trials in a row more than 20 % above the best (trial " +
+             std::to_string(trials_[guard_.best_trial()].trial) +
+             "): the learning stopped and plays the best trial's drive";
+      next_ = best_drive_;
+      last = true;
+      next_gain_ = 0.0;
+      next_drive_ = "best";
+    } else {
+      next_gain_ = guard_.gain();
+      next_drive_ = "learned";
+      const auto start = std::chrono::steady_clock::now();
+      next_.resize(u_.size());
+      learner_.update(u_, e_, guard_.gain(), next_);
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count();
+      update_ms_sum_ += ms;
+      update_ms_max_ = std::max(update_ms_max_, ms);
+      ++updates_;
+      last = number + 1 >= request_.trials;
+    }
+    kept_ = next_;
+    done_ = last;
+    if (!exchange_.offer(next_, last)) {
+      pending_ = next_;
+      pending_last_ = last;
+      has_pending_ = true;
+    }
+  }
+  return scored;
+}
+
+std::optional<TrackLearning::Trial> TrackLearning::last_trial() const {
+  if (trials_.empty()) return std::nullopt;
+  return trials_.back();
+}
+
+json TrackLearning::result() const {
+  json trials = json::array();
+  for (const Trial& t : trials_) {
+    trials.push_back({{"trial", t.trial},
+                      {"rms_error_percent", t.rms_percent},
+                      {"max_error_percent", t.max_percent},
+                      {"rms_error_um", t.rms_um},
+                      {"max_error_um", t.max_um},
+                      {"gain", t.gain},
+                      {"drive", t.drive}});
+  }
+  const std::size_t best = guard_.trials() > 0 ? guard_.best_trial() : 0;
+  return {{"trials", trials},
+          {"trials_requested", request_.trials},
+          {"gain", request_.gain},
+          {"cutoff_hz", learner_.cutoff_hz()},
+          {"period_samples", exchange_.period},
+          {"frequency_hz", request_.frequency_hz},
+          {"stopped", stopped_},
+          {"why", stopped_ ? why_
+                  : trials_.size() >= request_.trials + 1
+                      ? "every trial asked for was played"
+                      : "the run ended before the trials asked for were played"},
+          {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
+          {"stale_periods", exchange_.stale_periods()},
+          {"update_ms",
+           {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
+            {"max", update_ms_max_},
+            {"count", updates_}}}};
+}
+
+}  // namespace hystbench::daemon::details
