@@ -45,8 +45,8 @@ IterativeLearning::IterativeLearning(const ActuatorModel& model, std::size_t per
   }
   const double fs = 1.0 / o_.dt;
   const double trial_hz = fs / static_cast<double>(period_);
-  cutoff_hz_ = o_.cutoff_hz > 0.0 ? o_.cutoff_hz
-                                  : std::min(kCutoffOfRate * fs, kCutoffHarmonics * trial_hz);
+  cutoff_hz_ =
+      o_.cutoff_hz > 0.0 ? o_.cutoff_hz : std::min(kCutoffOfRate * fs, kCutoffHarmonics * trial_hz);
   advance_samples_ = model_.delay_s() / o_.dt;
   if (const auto& d = model_.dynamics()) {
     const double wn = 2.0 * std::numbers::pi * d->natural_frequency_hz;
@@ -117,10 +117,11 @@ void IterativeLearning::local_slope(std::span<const double> drive) {
     ActuatorModel probe = model_;
     probe.reset(model_.input_min);
     const double span = model_.input_max - model_.input_min;
-    mean = span > 0.0
-               ? std::abs(probe.peek_static(model_.input_max) - probe.peek_static(model_.input_min)) /
-                     span
-               : 1.0;
+    mean =
+        span > 0.0
+            ? std::abs(probe.peek_static(model_.input_max) - probe.peek_static(model_.input_min)) /
+                  span
+            : 1.0;
   }
   // Running sums over the window [j - w, j + w] around the trial.
   const auto du = [&](std::size_t c) { return drive[c] - drive[(c + n - 1) % n]; };

@@ -21,20 +21,21 @@
 namespace hystbench::compensation {
 
 struct LearningOptions {
-  double dt = 1e-4;          ///< sample period [s], > 0
-  double cutoff_hz = 0.0;    ///< Q's cut-off [Hz]; 0 = the default above
-  double u_min = -1e300;     ///< the learned drive stays within [u_min, u_max] [input unit]
-  double u_max = 1e300;      ///<
-  double max_step = 1e300;   ///< largest change between samples [input unit] (slew x dt)
-  double min_slope = 0.25;   ///< local slope floor, a fraction of its mean along the trial
-  double max_slope = 4.0;    ///< local slope cap, a multiple of that mean
+  double dt = 1e-4;         ///< sample period [s], > 0
+  double cutoff_hz = 0.0;   ///< Q's cut-off [Hz]; 0 = the default above
+  double u_min = -1e300;    ///< the learned drive stays within [u_min, u_max] [input unit]
+  double u_max = 1e300;     ///<
+  double max_step = 1e300;  ///< largest change between samples [input unit] (slew x dt)
+  double min_slope = 0.25;  ///< local slope floor, a fraction of its mean along the trial
+  double max_slope = 4.0;   ///< local slope cap, a multiple of that mean
 };
 
 class IterativeLearning {
  public:
   /// `model`: the active model (copied). period_samples >= 4. Throws std::invalid_argument for
   /// an empty model or bad options.
-  IterativeLearning(const ActuatorModel& model, std::size_t period_samples, LearningOptions options);
+  IterativeLearning(const ActuatorModel& model, std::size_t period_samples,
+                    LearningOptions options);
 
   /// The next trial's drive into `next` (P samples): drive (this trial's feedforward, P samples)
   /// corrected by gain (gamma, 0 < gain <= 1) times the learned step from error (y_ref - y,
@@ -57,7 +58,7 @@ class IterativeLearning {
   std::size_t period_;
   LearningOptions o_;
   double cutoff_hz_ = 0.0;
-  double advance_samples_ = 0.0;  // the model's delay [samples]
+  double advance_samples_ = 0.0;        // the model's delay [samples]
   double dyn_a1_ = 0.0, dyn_a2_ = 0.0;  // D^-1 = 1 + a1 d/dt + a2 d2/dt2 (0: none)
   // Butterworth sections (b0, b1, b2, a1, a2) of Q, and the warm-up periods its circular run needs.
   std::vector<std::array<double, 5>> sections_;
