@@ -12,13 +12,15 @@
 #   delay      the delay on (default and modified-PI truths) and one mode at 800 Hz:
 #              identify --no-extend and identify, each followed by 200 / 500 Hz sines (inverse)
 #   campaign   wall time of identify + a 7-frequency sweep (inverse)
+#   learning   rate dependence, the delay and thermal drift on: identify, a sweep 1-500 Hz with
+#              none / inverse / inverse+pid, then track --learn 10 at each frequency
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign learning)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -114,6 +116,24 @@ for section in "${sections[@]}"; do
         echo "identify --model $m (rate law $law): $(identify_row "$m" "$id")"
         echo
         hb sweep --frequencies 1,5,10,19 --compensators inverse || true
+      done
+      echo
+      stop_daemon
+      ;;
+    learning)
+      start_daemon learning config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      echo "### Every effect on: identify, then sines without and with learning (rms % of range)"
+      echo
+      echo "identify: $(identify_row default "$(hb identify --wait --json || true)")"
+      echo
+      hb sweep --frequencies 1,10,50,200,500 --compensators none,inverse,inverse+pid || true
+      echo
+      echo "| f [Hz] | trials (rms %, the first the inverse's) | last rms % | last max % | update ms |"
+      echo "| --- | --- | --- | --- | --- |"
+      for f in 1 10 50 200 500; do
+        hb track --reference sine --frequency "$f" --learn 10 --wait --json |
+          jq -r --arg f "$f" "$f3"'
+            "| \($f) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f) | \(.learning.update_ms.mean | f) |"' || true
       done
       echo
       stop_daemon

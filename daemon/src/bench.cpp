@@ -373,7 +373,7 @@ json Bench::start_track(const details::Request& request, std::uint64_t client) {
   std::unique_ptr<details::TrackLearning> learning = std::move(run.learning);
   json reply = launch("track", std::move(run));
   if (upload) uploads_.erase(upload_name, client);  // the run has it now
-  learning_ = std::move(learning);  // the supervisor takes the lock before it looks
+  learning_ = std::move(learning);                  // the supervisor takes the lock before it looks
   learning_run_id_ = learning_ ? reply["run_id"].get<std::string>() : std::string();
   return reply;
 }

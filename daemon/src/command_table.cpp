@@ -28,15 +28,21 @@ constexpr ParamSpec kTrackUploaded[] = {{"reference_upload", T::kString},
                                         {"ki", T::kNumber, 0.0, 1e9},
                                         {"kd", T::kNumber, 0.0, 1e3},
                                         {"precondition_s", T::kNumber, 0.0, 60.0}};
-constexpr ParamSpec kTrackBuiltin[] = {
-    {"reference", T::kString},         {"frequency_hz", T::kNumber, 1e-3},
-    {"periods", T::kNumber, 0.0, 1e7}, {"duration_s", T::kNumber, 0.0, kWeekS},
-    {"compensator", T::kString},       {"range_fraction", T::kNumber, 0.01, 1.0},
-    {"min_um", T::kNumber, -1e9, 1e9}, {"max_um", T::kNumber, -1e9, 1e9},
-    {"kp", T::kNumber, 0.0, 1e6},      {"ki", T::kNumber, 0.0, 1e9},
-    {"kd", T::kNumber, 0.0, 1e3},      {"precondition_s", T::kNumber, 0.0, 60.0},
-    {"learn_trials", T::kInteger, 0, 1000}, {"learn_gain", T::kNumber, 1e-3, 20.0},
-    {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9}};
+constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
+                                       {"frequency_hz", T::kNumber, 1e-3},
+                                       {"periods", T::kNumber, 0.0, 1e7},
+                                       {"duration_s", T::kNumber, 0.0, kWeekS},
+                                       {"compensator", T::kString},
+                                       {"range_fraction", T::kNumber, 0.01, 1.0},
+                                       {"min_um", T::kNumber, -1e9, 1e9},
+                                       {"max_um", T::kNumber, -1e9, 1e9},
+                                       {"kp", T::kNumber, 0.0, 1e6},
+                                       {"ki", T::kNumber, 0.0, 1e9},
+                                       {"kd", T::kNumber, 0.0, 1e3},
+                                       {"precondition_s", T::kNumber, 0.0, 60.0},
+                                       {"learn_trials", T::kInteger, 0, 1000},
+                                       {"learn_gain", T::kNumber, 1e-3, 20.0},
+                                       {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9}};
 constexpr ParamSpec kExcite[] = {{"drive_upload", T::kString}};
 // The upload store checks the ranges (and what is missing) itself, with the same validator.
 constexpr ParamSpec kUploadBegin[] = {{"kind", T::kString},

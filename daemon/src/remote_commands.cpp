@@ -112,8 +112,8 @@ void print_run_result(const json& r, std::ostream& out) {
         << " Hz (the first with the compensator's drive): rms %";
     for (const json& t : trials) out << " " << fixed(t["rms_error_percent"], 3);
     out << "\n                  " << (*l).value("why", std::string()) << "; best trial "
-        << (*l).value("best_trial", json()).dump() << ", cut-off "
-        << fixed((*l)["cutoff_hz"], 0) << " Hz";
+        << (*l).value("best_trial", json()).dump() << ", cut-off " << fixed((*l)["cutoff_hz"], 0)
+        << " Hz";
     if ((*l).value("stale_periods", 0) > 0) {
       out << ", " << (*l)["stale_periods"].get<int>()
           << " periods replayed while the update was computed";

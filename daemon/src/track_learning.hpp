@@ -19,12 +19,12 @@ namespace hystbench::daemon::details {
 
 /// What a learning run is asked for and built with.
 struct LearningRequest {
-  std::size_t trials = 10;      ///< learned trials after the first (the compensator's)
-  double gain = 0.5;            ///< gamma at the start, (0, 20]
-  double range_um = 0.0;        ///< the reference's span: errors in % of it
-  double frequency_hz = 0.0;    ///< the trial's frequency (the loop rate / P)
-  std::string reference;        ///< its kind (sine, triangle, sawtooth)
-  double rate_hz = 0.0;         ///< the loop rate
+  std::size_t trials = 10;    ///< learned trials after the first (the compensator's)
+  double gain = 0.5;          ///< gamma at the start, (0, 20]
+  double range_um = 0.0;      ///< the reference's span: errors in % of it
+  double frequency_hz = 0.0;  ///< the trial's frequency (the loop rate / P)
+  std::string reference;      ///< its kind (sine, triangle, sawtooth)
+  double rate_hz = 0.0;       ///< the loop rate
 };
 
 class TrackLearning {
@@ -65,8 +65,8 @@ class TrackLearning {
   bool stopped_ = false;
   bool done_ = false;  ///< the last drive was offered
   std::string why_;
-  double next_gain_ = 0.0;    ///< the gain the drive offered last was learned with
-  std::string next_drive_;    ///< what it is: "learned" or "best"
+  double next_gain_ = 0.0;  ///< the gain the drive offered last was learned with
+  std::string next_drive_;  ///< what it is: "learned" or "best"
   double update_ms_sum_ = 0.0, update_ms_max_ = 0.0;
   std::size_t updates_ = 0;
 };

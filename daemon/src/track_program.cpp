@@ -87,10 +87,10 @@ ActuatorRange known_range(const RunContext& ctx) {
 struct LearningPlan {
   std::size_t trials = 0;
   double gain = 0.5;
-  double cutoff_hz = 0.0;      ///< Q's cut-off; 0 = IterativeLearning's default
-  std::size_t period = 0;      ///< P [ticks]
-  double frequency_hz = 0.0;   ///< the loop rate / P
-  double periods = 0.0;        ///< the reference's length: the start-up period, trial 0, N trials
+  double cutoff_hz = 0.0;     ///< Q's cut-off; 0 = IterativeLearning's default
+  std::size_t period = 0;     ///< P [ticks]
+  double frequency_hz = 0.0;  ///< the loop rate / P
+  double periods = 0.0;       ///< the reference's length: the start-up period, trial 0, N trials
   std::string reference;
 };
 
@@ -116,8 +116,10 @@ std::optional<LearningPlan> learning_plan(const Request& request, const RunConte
   plan.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
   plan.reference = request.string("reference", "triangle");
   if (plan.reference != "sine" && plan.reference != "triangle" && plan.reference != "sawtooth") {
-    throw CommandError("bad_params", "learn_trials: a trial is one period of a sine, triangle or "
-                                     "sawtooth; '" + plan.reference + "' does not repeat");
+    throw CommandError("bad_params",
+                       "learn_trials: a trial is one period of a sine, triangle or "
+                       "sawtooth; '" +
+                           plan.reference + "' does not repeat");
   }
   if (request.has("periods") || request.has("duration_s")) {
     throw CommandError("bad_params",

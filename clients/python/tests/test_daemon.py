@@ -126,6 +126,27 @@ class WithoutModelTest(unittest.TestCase):
         last = self.bench.status()["last_result"]
         self.assertEqual(last["run_id"], result["run_id"])
 
+    def test_track_learns_over_trials_and_reports_each(self) -> None:
+        seen: List[str] = []
+        result = self.bench.track(
+            "sine",
+            compensator="none",
+            frequency_hz=20.0,
+            learn=4,
+            precondition_s=0.2,
+            wait=True,
+            progress=lambda f, what: seen.append(what),
+        )
+        self.assertTrue(result.completed, result)
+        trials = result["learning"]["trials"]
+        self.assertEqual([t["trial"] for t in trials], [0, 1, 2, 3, 4])
+        self.assertEqual(trials[0]["drive"], "compensator")
+        rms = [t["rms_error_percent"] for t in trials]
+        self.assertLess(rms[-1], 0.5 * rms[0], rms)
+        self.assertEqual(result["rms_error_percent"], rms[-1])
+        self.assertTrue(os.path.exists(result["learning"]["drive_file"]), result["learning"])
+        self.assertTrue(any(what.startswith("learning: trial 4 of 4") for what in seen), seen)
+
     def test_a_run_followed_from_another_connection(self) -> None:
         started = self.bench.track(
             compensator="none", frequency_hz=5.0, periods=5, precondition_s=0.1

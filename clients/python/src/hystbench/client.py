@@ -756,6 +756,8 @@ class Bench:
         max_um: Optional[float] = None,
         precondition_s: Optional[float] = None,
         approach_s: Optional[float] = None,
+        learn: Optional[int] = None,
+        learn_gain: Optional[float] = None,
         wait: bool = False,
         progress: Optional[Progress] = None,
         timeout: Optional[float] = None,
@@ -786,7 +788,15 @@ class Bench:
                 precondition left the output to the first sample [s] (daemon default 0.2 s,
                 longer when the slew limit needs it); the error is scored over the whole
                 trajectory after it.
-            **params: further request parameters, sent as given (``kp``, ``ki``, ``kd``).
+            learn: learn over this many trials (a sine, triangle or sawtooth; a trial is one
+                period, instead of ``periods`` / ``duration_s``): after a start-up period and
+                one with the compensator's drive, each period plays the one before's drive
+                corrected by its error. The result's ``learning["trials"]`` lists each trial's
+                rms and max error [% of range]; ``rms_error_percent`` is the last trial's; the
+                learned drive is saved in the daemon's model folder (``learning["drive_file"]``).
+            learn_gain: the share of the error corrected per trial (daemon default 0.5).
+            **params: further request parameters, sent as given (``kp``, ``ki``, ``kd``,
+                ``learn_cutoff_hz``).
             wait, progress, timeout: as for ``identify``; ``progress`` also sees the upload
                 (label ``"upload"``).
         """
@@ -795,7 +805,13 @@ class Bench:
         upload_id: Optional[str] = None
         source = None
         request = _without_none(
-            {"compensator": compensator, "precondition_s": precondition_s, **params}
+            {
+                "compensator": compensator,
+                "precondition_s": precondition_s,
+                "learn_trials": learn,
+                "learn_gain": learn_gain,
+                **params,
+            }
         )
         waveform = dict(
             frequency_hz=frequency_hz,

@@ -217,7 +217,7 @@ class Bench {
   // The learner of a learning run (set with it, taken by the supervisor when it ends).
   std::unique_ptr<details::TrackLearning> learning_;
   std::string learning_run_id_;
-  std::string announced_run_;                 // run_id/stage last announced; supervisor only
+  std::string announced_run_;  // run_id/stage last announced; supervisor only
   EventSink sink_;
   std::uint64_t run_counter_ = 0;
   UploadStore uploads_;  // its own lock

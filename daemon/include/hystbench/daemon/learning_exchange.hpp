@@ -51,7 +51,7 @@ struct LearningExchange {
   std::array<std::vector<double>, 2> rec_u_, rec_e_;
   std::array<std::atomic<int>, 2> slot_{};
   std::array<std::atomic<std::uint64_t>, 2> slot_trial_{};
-  std::atomic<int> ready_{-1};        // drive_ index made ready, -1 = none
+  std::atomic<int> ready_{-1};  // drive_ index made ready, -1 = none
   std::atomic<bool> ready_last_{false};
   std::atomic<std::uint64_t> played_{0};   // trials closed by the loop
   std::atomic<std::uint64_t> taken_{0};    // trials taken by the learner
