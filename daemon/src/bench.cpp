@@ -446,7 +446,14 @@ void Bench::learn() {
     run_id = learning_run_id_;
   }
   const std::size_t asked = learning->request().trials;
-  for (const details::TrackLearning::Trial& t : learning->poll()) {
+  std::vector<details::TrackLearning::Trial> scored;
+  try {
+    scored = learning->poll();
+  } catch (const std::exception& e) {
+    learning->fail(e.what());  // the loop must not wait for a drive that will not come
+    spdlog::error("run {}: the learning failed: {}", run_id, e.what());
+  }
+  for (const details::TrackLearning::Trial& t : scored) {
     char rms[32];
     std::snprintf(rms, sizeof rms, "%.3f", t.rms_percent);
     const std::string stage = "learning: trial " + std::to_string(t.trial) + " of " +
@@ -477,7 +484,11 @@ void Bench::finish_learning(const RunProgram& run, json& report) {
     learning = std::move(learning_);
     learning_run_id_.clear();
   }
-  (void)learning->poll();  // the last trial, closed as the run ended
+  try {
+    (void)learning->poll();  // the last trial, closed as the run ended
+  } catch (const std::exception& e) {
+    learning->fail(e.what());
+  }
   json l = learning->result();
   if (const auto last = learning->last_trial()) {
     // The run's figures are its last trial's (the log keeps every period).

@@ -77,6 +77,14 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
   return scored;
 }
 
+void TrackLearning::fail(const std::string& why) {
+  exchange_.give_up();
+  done_ = true;
+  stopped_ = true;
+  has_pending_ = false;
+  why_ = "the learning failed (" + why + "): the last drive played on to the run's end";
+}
+
 std::optional<TrackLearning::Trial> TrackLearning::last_trial() const {
   if (trials_.empty()) return std::nullopt;
   return trials_.back();

@@ -44,6 +44,8 @@ class TrackLearning {
   /// Takes every trial the loop closed since the last call and offers the next drive; returns
   /// the trials scored now (for run.progress).
   std::vector<Trial> poll();
+  /// The learning failed (`why`): no more drives are offered, and the result says so.
+  void fail(const std::string& why);
 
   /// The run's `learning` object; the last trial's rms and max [µm] when any was scored.
   nlohmann::json result() const;

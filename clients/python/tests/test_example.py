@@ -1,4 +1,4 @@
-"""examples/identify_sweep_track.py --quick against its own hystbenchd on the simulated clock."""
+"""The examples (--quick) against their own hystbenchd on the simulated clock."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import unittest
 import _support
 
 EXAMPLE = _support.REPO_ROOT / "examples" / "identify_sweep_track.py"
+LEARN_EXAMPLE = _support.REPO_ROOT / "examples" / "learn_a_sine.py"
 
 
 class ExampleTest(unittest.TestCase):
@@ -51,6 +52,31 @@ class ExampleTest(unittest.TestCase):
         else:
             self.assertTrue((plots / "sweep.png").is_file(), out)
             self.assertTrue((plots / "raster.png").is_file(), out)
+
+    def test_learn_a_sine_quick(self) -> None:
+        daemon = _support.Daemon("hbpy-learn", clock="simulated")
+        self.addCleanup(daemon.stop)
+        env = dict(os.environ, PYTHONPATH=str(_support.SRC_DIR))
+        env.pop("HYSTBENCH_SOCKET", None)
+        run = subprocess.run(
+            [sys.executable, str(LEARN_EXAMPLE), "--quick", "--socket", daemon.socket],
+            cwd=str(daemon.dir),
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            timeout=240,
+        )
+        self.assertEqual(run.returncode, 0, run.stdout + daemon.daemon_log()[-3000:])
+        out = run.stdout
+        self.assertIn("identified mpi", out)
+        rows = [line.split() for line in out.splitlines() if line.strip().startswith(("10.0", "50.0"))]
+        self.assertEqual(len(rows), 2, out)
+        for row in rows:
+            first, last = float(row[1]), float(row[-1])
+            self.assertEqual(len(row), 6, out)  # f, then trial 0 and four learned trials
+            self.assertLess(last, 0.5 * first, out)
+        self.assertIn("learned drive: ", out)
 
 
 if __name__ == "__main__":

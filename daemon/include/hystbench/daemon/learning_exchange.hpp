@@ -41,6 +41,9 @@ struct LearningExchange {
   /// Makes `drive` (P samples) the next trial's; `last`: the run ends after it. False when the
   /// loop has not taken the one made ready before (call again after the next trial).
   bool offer(const std::vector<double>& drive, bool last) noexcept;
+  /// The learner offers no more drives (it failed): the loop stops waiting for one and plays
+  /// the last drive it took to the run's end.
+  void give_up() noexcept { final_offered_.store(true, std::memory_order_release); }
 
   std::uint64_t trials_played() const noexcept { return played_.load(std::memory_order_acquire); }
   std::uint64_t stale_periods() const noexcept { return stale_.load(std::memory_order_acquire); }
