@@ -445,12 +445,19 @@ void Bench::learn() {
     learning = learning_.get();
     run_id = learning_run_id_;
   }
-  const std::size_t asked = learning->request().trials;
+  // Its exchange lives in the program the loop plays (handed back to this thread when it ends).
+  const RunProgram* active = loop_->active();
+  if (active == nullptr || active->run_id != run_id) return;
+  announce_trials(*learning, run_id);
+}
+
+void Bench::announce_trials(details::TrackLearning& learning, const std::string& run_id) {
+  const std::size_t asked = learning.request().trials;
   std::vector<details::TrackLearning::Trial> scored;
   try {
-    scored = learning->poll();
+    scored = learning.poll();
   } catch (const std::exception& e) {
-    learning->fail(e.what());  // the loop must not wait for a drive that will not come
+    learning.fail(e.what());  // the loop must not wait for a drive that will not come
     spdlog::error("run {}: the learning failed: {}", run_id, e.what());
   }
   for (const details::TrackLearning::Trial& t : scored) {
@@ -484,11 +491,7 @@ void Bench::finish_learning(const RunProgram& run, json& report) {
     learning = std::move(learning_);
     learning_run_id_.clear();
   }
-  try {
-    (void)learning->poll();  // the last trial, closed as the run ended
-  } catch (const std::exception& e) {
-    learning->fail(e.what());
-  }
+  announce_trials(*learning, run.run_id);  // the last trial, closed as the run ended
   json l = learning->result();
   if (const auto last = learning->last_trial()) {
     // The run's figures are its last trial's (the log keeps every period).
@@ -592,6 +595,7 @@ void Bench::end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std:
   set_phase(RunPhase::kFinalizing);
   run->end = end;
   json report = details::collect_result(*run, loop_->last_output()).report;
+  finish_learning(*run, report);  // its learner goes with the program it holds
   report["reason"] = reason;
   deliver_result(std::move(report));
 }

@@ -150,6 +150,8 @@ class Bench {
   /// A learning run: scores the trials the loop closed, offers the next drives, and emits
   /// run.progress for each trial (supervisor thread).
   void learn();
+  /// Takes the trials the loop closed, offers the next drive and emits run.progress for each.
+  void announce_trials(details::TrackLearning& learning, const std::string& run_id);
   /// A learning run's result: `learning` (its trials), the last trial's errors as the run's,
   /// and the kept drive saved in the model folder (supervisor thread).
   void finish_learning(const RunProgram& run, nlohmann::json& report);
