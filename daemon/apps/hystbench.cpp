@@ -301,7 +301,7 @@ int main(int argc, char** argv) {
                        "actuator range or moves faster than the slew limit")
           ->check(CLI::ExistingFile);
   for (const char* other : {"--reference", "--frequency", "--periods", "--duration",
-                            "--range-fraction", "--min", "--max"}) {
+                            "--range-fraction", "--min", "--max", "--learn"}) {
     tr_file_opt->excludes(track_cmd->get_option(other));
   }
   track_cmd->add_option("--t-column", tr_t_column, "--reference-file: time column [s]")
