@@ -31,6 +31,13 @@ struct IdentifyCandidate {
 /// A family's fit as a candidate not yet verified, labelled with the family.
 IdentifyCandidate family_candidate(compensation::FitResult fit);
 
+/// The candidate that tracks best: the lowest verified max error on the standard triangle,
+/// figures within 3 % of the lowest counting as equal (two triangles on one model differ by
+/// about 1 % with the bench's history) and the first of them taken: candidates come by held-out
+/// error, best first. Candidates in `left_out` are skipped; none verified: the first.
+std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
+                          const std::vector<std::size_t>& left_out);
+
 /// One verification segment: a candidate's standard triangle, or a sine.
 struct VerificationJob {
   std::size_t candidate = 0;
