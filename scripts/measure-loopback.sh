@@ -130,10 +130,22 @@ for section in "${sections[@]}"; do
       echo
       echo "| f [Hz] | trials (rms %, the first the inverse's) | last rms % | last max % | update ms |"
       echo "| --- | --- | --- | --- | --- |"
+      declare -A drives=()
       for f in 1 10 50 200 500; do
-        hb track --reference sine --frequency "$f" --learn 10 --wait --json |
-          jq -r --arg f "$f" "$f3"'
-            "| \($f) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f) | \(.learning.update_ms.mean | f) |"' || true
+        out=$(hb track --reference sine --frequency "$f" --learn 10 --wait --json || true)
+        drives[$f]=$(jq -r '.learning.drive // empty' <<<"$out")
+        jq -r --arg f "$f" "$f3"'
+          "| \($f) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f) | \(.learning.update_ms.mean | f) |"' <<<"$out" || true
+      done
+      echo
+      echo "Each learned drive replayed (track --learned NAME, no new trial):"
+      echo
+      echo "| f [Hz] | replay rms % | replay max % |"
+      echo "| --- | --- | --- |"
+      for f in 1 10 50 200 500; do
+        [ -n "${drives[$f]:-}" ] || continue
+        hb track --reference sine --frequency "$f" --learned "${drives[$f]}" --wait --json |
+          jq -r --arg f "$f" "$f3"'"| \($f) | \(.rms_error_percent | f) | \(.max_error_percent | f) |"' || true
       done
       echo
       stop_daemon

@@ -282,8 +282,18 @@ int main(int argc, char** argv) {
                    "nothing is learned")
       ->check(CLI::PositiveNumber)
       ->needs(tr_learn_opt);
+  std::string tr_learned;
+  auto* tr_learned_opt = track_cmd->add_option(
+      "--learned", tr_learned,
+      "Start from a drive learned before (the learning run's id, as its result and "
+      "`hystbench model list` show; also after a restart of the daemon): after the start-up "
+      "period its drive plays instead of the compensator's, for one scored period, or as "
+      "the first trial with --learn. Only for the reference, range and loop rate it was "
+      "learned for: give the same --reference, --frequency and range, with the model it "
+      "was learned with loaded");
   for (const char* other : {"--periods", "--duration"}) {
     tr_learn_opt->excludes(track_cmd->get_option(other));
+    tr_learned_opt->excludes(track_cmd->get_option(other));
   }
   add_output_flags(track_cmd, true);
   track_cmd->add_option("--plot", remote.plot_dir,
@@ -301,7 +311,7 @@ int main(int argc, char** argv) {
                        "actuator range or moves faster than the slew limit")
           ->check(CLI::ExistingFile);
   for (const char* other : {"--reference", "--frequency", "--periods", "--duration",
-                            "--range-fraction", "--min", "--max", "--learn"}) {
+                            "--range-fraction", "--min", "--max", "--learn", "--learned"}) {
     tr_file_opt->excludes(track_cmd->get_option(other));
   }
   track_cmd->add_option("--t-column", tr_t_column, "--reference-file: time column [s]")
@@ -460,10 +470,13 @@ int main(int argc, char** argv) {
       return remote_run("track", p);
     }
     nlohmann::json p = {{"reference", tr_reference}, {"frequency_hz", tr_frequency}};
+    if (!tr_learned.empty()) p["learned"] = tr_learned;
     if (tr_learn > 0) {
       p["learn_trials"] = tr_learn;
       if (!std::isnan(tr_learn_gain)) p["learn_gain"] = tr_learn_gain;
       if (!std::isnan(tr_learn_cutoff)) p["learn_cutoff_hz"] = tr_learn_cutoff;
+    } else if (!tr_learned.empty()) {
+      // the learned drive's run: its start-up period and one scored period
     } else if (tr_duration > 0) {
       p["duration_s"] = tr_duration;
     } else {

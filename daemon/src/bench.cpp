@@ -12,6 +12,7 @@
 #include "excite_program.hpp"
 #include "identify_program.hpp"
 #include "identify_session.hpp"
+#include "learned_drive.hpp"
 #include "model_folder.hpp"
 #include "run_context.hpp"
 #include "run_result.hpp"
@@ -144,7 +145,14 @@ std::string Bench::new_run_id(const char* kind) {
   gmtime_r(&now, &tm);
   char stamp[32];
   std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
-  return std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
+  // A daemon restarted within the second counts from 1 again: an id whose log is there
+  // already is taken by the run before the restart.
+  std::string id;
+  std::error_code ec;
+  do {
+    id = std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
+  } while (std::filesystem::exists(std::filesystem::path(settings_.log_dir) / (id + ".csv"), ec));
+  return id;
 }
 
 void Bench::open_log(RunProgram& p, json header) {
@@ -485,11 +493,13 @@ void Bench::announce_trials(details::TrackLearning& learning, const std::string&
 
 void Bench::finish_learning(const RunProgram& run, json& report) {
   std::unique_ptr<details::TrackLearning> learning;
+  std::string model_path;  // the model the run played with (a run holds model.load off)
   {
     std::lock_guard lock(mutex_);
     if (!learning_ || run.run_id != learning_run_id_) return;
     learning = std::move(learning_);
     learning_run_id_.clear();
+    model_path = model_path_;
   }
   announce_trials(*learning, run.run_id);  // the last trial, closed as the run ended
   json l = learning->result();
@@ -501,29 +511,22 @@ void Bench::finish_learning(const RunProgram& run, json& report) {
     report["max_error_percent"] = last->max_percent;
   }
   const std::vector<double>& drive = learning->kept_drive();
-  if (!drive.empty()) {
+  const details::LearningRequest& r = learning->request();
+  // A replay (no trial learned) keeps nothing new: its drive is the one it started from.
+  if (!drive.empty() && r.trials > 0) {
     try {
-      const std::filesystem::path dir(settings_.model_dir);
-      std::filesystem::create_directories(dir);
-      const std::filesystem::path csv = dir / (run.run_id + "-learned.csv");
-      std::ofstream out(csv);
-      out << "t,u\n";
-      out.precision(17);
-      for (std::size_t j = 0; j < drive.size(); ++j) {
-        out << static_cast<double>(j) * dt_ << "," << drive[j] << "\n";
-      }
-      if (!out) throw std::runtime_error("cannot write " + csv.string());
-      const details::LearningRequest& r = learning->request();
-      const json meta = {{"drive", csv.filename().string()},
-                         {"run_id", run.run_id},
-                         {"reference", r.reference},
-                         {"frequency_hz", r.frequency_hz},
-                         {"rate_hz", r.rate_hz},
-                         {"period_samples", drive.size()},
-                         {"range_um", r.range_um},
-                         {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
-      std::ofstream(dir / (run.run_id + "-learned.json")) << meta.dump(2) << "\n";
-      l["drive_file"] = csv.string();
+      const json meta = {
+          {"range_um", r.range_um},
+          {"model", model_path.empty()
+                        ? json()
+                        : json(std::filesystem::path(model_path).filename().string())},
+          {"started_from", r.start_name.empty() ? json() : json(r.start_name)},
+          {"compensator_offset_um", learning->target_offset(report.value("tare_um", 0.0))},
+          {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
+      l["drive_file"] = details::save_learned_drive(
+          settings_.model_dir, run.run_id, drive, learning->kept_compensator(), dt_,
+          {r.reference, drive.size(), r.frequency_hz, r.rate_hz, r.min_um, r.max_um}, meta);
+      l["drive"] = run.run_id + "-learned";
     } catch (const std::exception& e) {
       l["drive_file_error"] = e.what();
     }

@@ -260,6 +260,8 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   double u_request = 0.0;
   bool learning = false;  // the tick belongs to a learning run's trials, at this phase
   std::size_t phase = 0;
+  double u_compensator = 0.0;  // the compensator's feedforward, for a learning run
+  bool lead_in = false;        // a drive learned before plays the period before trial 0
   if (p.kind != RunKind::kTrack || k < p.excitation.size()) {
     // An open-loop drive (identify, excite), or the pre-conditioning prefix of a tracking run.
     u_request = p.excitation[k];
@@ -275,7 +277,9 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     // The feedforward's target at run time tt: the reference, or with a preview the static
     // target that inverts the model's delay and dynamics (the reference ahead by the delay).
     // Less the tare: the output offset the model did not predict on the open-loop prefix.
-    const double tare = p.tare_um();
+    // A drive learned before: the offset taken off when it was learned, and from trial 0 on
+    // also the offset its lead-in measured.
+    const double tare = p.learning ? p.learning->target_offset(k, p.tare_um()) : p.tare_um();
     auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
     // The feedback's reference; before feedback_from NaN: the PID holds (RunProgram).
     const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : y_ref;
@@ -292,6 +296,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     }
     rec.u_ff = out.u_ff;
     rec.u_fb = out.u_fb;
+    u_compensator = out.u_ff;
     if (out.feedback_saturated) rec.flags |= kSampleFeedbackSaturated;
     u_request = out.u;
     if (p.learning && k >= p.learning->first_tick) {
@@ -299,10 +304,14 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
       if (simulated_) await_learned_drive(*p.learning, k);
       phase = p.learning->begin_tick(k);
       learning = true;
-      if (double u_ff = 0.0; p.learning->learned(phase, u_ff)) {
+      if (double u_ff = out.u_ff; p.learning->learned(phase, u_ff)) {
         rec.u_ff = u_ff;
         u_request = u_ff + out.u_fb;
       }
+    } else if (double u_ff = out.u_ff; p.learning && p.learning->lead_in(k, u_ff)) {
+      rec.u_ff = u_ff;  // a drive learned before plays the start-up period too
+      u_request = u_ff + out.u_fb;
+      lead_in = true;
     }
   }
   rec.reference = y_ref;
@@ -391,8 +400,10 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     ++p.model_error_samples;
   }
   bool last_trial_played = false;
+  if (lead_in && failure == nullptr) p.learning->lead_in_error(k, y_ref - rec.y_measured);
   if (learning && failure == nullptr) {
-    last_trial_played = p.learning->end_tick(phase, rec.u_ff, y_ref - rec.y_measured);
+    last_trial_played =
+        p.learning->end_tick(phase, rec.u_ff, u_compensator, y_ref - rec.y_measured);
   }
   rec.exec_ns = now_ns() - exec_start_ns_;
   log_sample(p, rec);

@@ -42,7 +42,8 @@ constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"precondition_s", T::kNumber, 0.0, 60.0},
                                        {"learn_trials", T::kInteger, 0, 1000},
                                        {"learn_gain", T::kNumber, 1e-3, 20.0},
-                                       {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9}};
+                                       {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9},
+                                       {"learned", T::kString}};
 constexpr ParamSpec kExcite[] = {{"drive_upload", T::kString}};
 // The upload store checks the ranges (and what is missing) itself, with the same validator.
 constexpr ParamSpec kUploadBegin[] = {{"kind", T::kString},

@@ -7,6 +7,7 @@
 
 #include "hystbench/daemon/command_error.hpp"
 #include "hystbench/daemon/model_file_io.hpp"
+#include "learned_drive.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -18,11 +19,7 @@ namespace {
 
 // The file name of model `name` given as request key `key`; never a path.
 std::string model_file_name(const std::string& key, const std::string& name) {
-  const bool ok = !name.empty() && name.size() <= 128 && name.front() != '.' &&
-                  std::all_of(name.begin(), name.end(), [](unsigned char c) {
-                    return std::isalnum(c) || c == '.' || c == '_' || c == '-';
-                  });
-  if (!ok) {
+  if (!is_folder_name(name)) {
     throw CommandError("bad_params", key +
                                          ": a model name (letters, digits, '.', '_', '-'; not a "
                                          "path), as `hystbench model list` shows");
@@ -32,6 +29,13 @@ std::string model_file_name(const std::string& key, const std::string& name) {
 }
 
 }  // namespace
+
+bool is_folder_name(const std::string& name) {
+  return !name.empty() && name.size() <= 128 && name.front() != '.' &&
+         std::all_of(name.begin(), name.end(), [](unsigned char c) {
+           return std::isalnum(c) || c == '.' || c == '_' || c == '-';
+         });
+}
 
 FolderModel load_stored_model(const std::string& dir, const std::string& name) {
   const std::string file_name = model_file_name("stored", name);
@@ -78,6 +82,12 @@ json list_model_folder(const std::string& dir, const std::string& active_path) {
   json models = json::array();
   for (const auto& e : entries) {
     json m = {{"name", e.path().filename().string()}, {"bytes", e.file_size()}};
+    if (is_learned_drive_file(e.path().filename().string())) {
+      m["type"] = "learned_drive";  // track --learned takes it, not model.load
+      m["active"] = false;
+      models.push_back(std::move(m));
+      continue;
+    }
     try {
       const hc::ModelFile f = load_model_file(e.path().string());
       m["type"] = std::string(hc::to_string(f.model.hysteresis().kind()));

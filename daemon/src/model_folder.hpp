@@ -10,6 +10,9 @@
 
 namespace hystbench::daemon::details {
 
+/// True for a name a client may give for a file in the model folder (see above).
+bool is_folder_name(const std::string& name);
+
 struct FolderModel {
   compensation::ModelFile file;
   std::string path;  ///< in the model folder

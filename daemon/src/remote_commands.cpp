@@ -108,8 +108,12 @@ void print_run_result(const json& r, std::ostream& out) {
   }
   if (const auto l = r.find("learning"); l != r.end() && l->is_object()) {
     const json& trials = (*l)["trials"];
+    const json from = l->value("started_from", json());
     out << "  learning        " << trials.size() << " trials of " << fixed((*l)["frequency_hz"], 3)
-        << " Hz (the first with the compensator's drive): rms %";
+        << " Hz (the first with "
+        << (from.is_string() ? "the drive " + from.get<std::string>() + " learned before"
+                             : std::string("the compensator's drive"))
+        << "): rms %";
     for (const json& t : trials) out << " " << fixed(t["rms_error_percent"], 3);
     out << "\n                  " << (*l).value("why", std::string()) << "; best trial "
         << (*l).value("best_trial", json()).dump() << ", cut-off " << fixed((*l)["cutoff_hz"], 0)
@@ -120,7 +124,9 @@ void print_run_result(const json& r, std::ostream& out) {
     }
     out << "\n";
     if (l->contains("drive_file")) {
-      out << "  learned drive   " << (*l)["drive_file"].get<std::string>() << "\n";
+      out << "  learned drive   " << (*l).value("drive", std::string()) << " ("
+          << (*l)["drive_file"].get<std::string>() << "): track --learned "
+          << (*l).value("drive", std::string()) << " replays it\n";
     }
   }
   if (r.contains("tare_um")) {

@@ -14,14 +14,24 @@ TrackLearning::TrackLearning(const hc::ActuatorModel& model, LearningExchange& e
     : exchange_(exchange),
       request_(std::move(request)),
       learner_(model, exchange.period, options),
-      guard_(request_.gain) {}
+      guard_(request_.gain) {
+  if (request_.start_drive.empty()) return;
+  if (!exchange.start_from(request_.start_drive, request_.start_compensator,
+                           request_.trials == 0)) {
+    throw std::invalid_argument("the drive '" + request_.start_name + "' holds " +
+                                std::to_string(request_.start_drive.size()) + " samples (" +
+                                std::to_string(request_.start_compensator.size()) +
+                                " of the compensator's), a trial " +
+                                std::to_string(exchange.period));
+  }
+  kept_ = request_.start_drive;
+  done_ = request_.trials == 0;  // a replay: trial 0 is the last
+}
 
 std::vector<TrackLearning::Trial> TrackLearning::poll() {
   std::vector<Trial> scored;
-  // A drive the loop had not room for yet (it had not taken the one before).
-  if (has_pending_ && exchange_.offer(pending_, pending_last_)) has_pending_ = false;
   std::uint64_t number = 0;
-  while (exchange_.take_trial(u_, e_, number)) {
+  while (exchange_.take_trial(u_, c_, e_, number)) {
     const std::size_t n = e_.size();
     double sum2 = 0.0, peak = 0.0;
     for (const double e : e_) {
@@ -36,7 +46,7 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
     t.rms_percent = range > 0.0 ? 100.0 * t.rms_um / range : 0.0;
     t.max_percent = range > 0.0 ? 100.0 * peak / range : 0.0;
     t.gain = number == 0 ? 0.0 : next_gain_;
-    t.drive = number == 0 ? "compensator" : next_drive_;
+    t.drive = number != 0 ? next_drive_ : request_.start_drive.empty() ? "compensator" : "saved";
     trials_.push_back(t);
     scored.push_back(t);
     if (done_) continue;  // the last trial: nothing more to offer
@@ -68,10 +78,9 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
     }
     kept_ = next_;
     done_ = last;
+    // The loop took the drive before: it played the trial just taken.
     if (!exchange_.offer(next_, last)) {
-      pending_ = next_;
-      pending_last_ = last;
-      has_pending_ = true;
+      fail("the loop had not taken the drive before trial " + std::to_string(number));
     }
   }
   return scored;
@@ -81,7 +90,6 @@ void TrackLearning::fail(const std::string& why) {
   exchange_.give_up();
   done_ = true;
   stopped_ = true;
-  has_pending_ = false;
   why_ = "the learning failed (" + why + "): the last drive played on to the run's end";
 }
 
@@ -101,7 +109,11 @@ json TrackLearning::result() const {
                       {"gain", t.gain},
                       {"drive", t.drive}});
   }
-  const std::size_t best = guard_.trials() > 0 ? guard_.best_trial() : 0;
+  // The best of every trial played (the guard does not score the last one).
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < trials_.size(); ++i) {
+    if (trials_[i].rms_um < trials_[best].rms_um) best = i;
+  }
   return {{"trials", trials},
           {"trials_requested", request_.trials},
           {"gain", request_.gain},
@@ -113,6 +125,8 @@ json TrackLearning::result() const {
                   : trials_.size() >= request_.trials + 1
                       ? "every trial asked for was played"
                       : "the run ended before the trials asked for were played"},
+          {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
+          {"lead_in_offset_um", exchange_.lead_in_offset()},
           {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
           {"stale_periods", exchange_.stale_periods()},
           {"update_ms",

@@ -19,12 +19,20 @@ namespace hystbench::daemon::details {
 
 /// What a learning run is asked for and built with.
 struct LearningRequest {
-  std::size_t trials = 10;    ///< learned trials after the first (the compensator's)
-  double gain = 0.5;          ///< gamma at the start, (0, 20]
-  double range_um = 0.0;      ///< the reference's span: errors in % of it
-  double frequency_hz = 0.0;  ///< the trial's frequency (the loop rate / P)
-  std::string reference;      ///< its kind (sine, triangle, sawtooth)
-  double rate_hz = 0.0;       ///< the loop rate
+  std::size_t trials = 10;            ///< learned trials after the first (the compensator's)
+  double gain = 0.5;                  ///< gamma at the start, (0, 20]
+  double range_um = 0.0;              ///< the reference's span: errors in % of it
+  double frequency_hz = 0.0;          ///< the trial's frequency (the loop rate / P)
+  std::string reference;              ///< its kind (sine, triangle, sawtooth)
+  double rate_hz = 0.0;               ///< the loop rate
+  double min_um = 0.0, max_um = 0.0;  ///< the reference's extremes
+  /// A drive learned before (P samples) that trial 0 plays instead of the compensator's, and
+  /// its name; empty: the compensator's.
+  std::vector<double> start_drive;
+  /// The compensator's feedforward in the run that learned it (P samples; empty: the drive
+  /// plays as saved): the drive moves by how far the compensator's moves from it.
+  std::vector<double> start_compensator;
+  std::string start_name;
 };
 
 class TrackLearning {
@@ -38,7 +46,9 @@ class TrackLearning {
     std::uint64_t trial = 0;
     double rms_percent = 0.0, max_percent = 0.0, rms_um = 0.0, max_um = 0.0;
     double gain = 0.0;
-    std::string drive;  ///< "compensator", "learned" or "best" (kept after the guard stopped)
+    /// "compensator", "saved" (a drive learned before), "learned" or "best" (kept after the
+    /// guard stopped)
+    std::string drive;
   };
 
   /// Takes every trial the loop closed since the last call and offers the next drive; returns
@@ -51,8 +61,14 @@ class TrackLearning {
   nlohmann::json result() const;
   std::optional<Trial> last_trial() const;
   /// The drive the run ends with: the best trial's when the guard stopped, else the last one
-  /// offered; empty before any.
+  /// offered (the drive started from before any); empty before any.
   const std::vector<double>& kept_drive() const noexcept { return kept_; }
+  /// The compensator's feedforward over the last trial taken (P samples; empty before any).
+  const std::vector<double>& kept_compensator() const noexcept { return c_; }
+  /// What the compensator's target took off in the trials [µm], the run's tare given.
+  double target_offset(double tare_um) const noexcept {
+    return exchange_.target_offset(exchange_.first_tick, tare_um);
+  }
   const LearningRequest& request() const noexcept { return request_; }
 
  private:
@@ -61,9 +77,7 @@ class TrackLearning {
   compensation::IterativeLearning learner_;
   compensation::LearningGuard guard_;
   std::vector<Trial> trials_;
-  std::vector<double> u_, e_, next_, best_drive_, kept_, pending_;
-  bool pending_last_ = false;
-  bool has_pending_ = false;
+  std::vector<double> u_, c_, e_, next_, best_drive_, kept_;
   bool stopped_ = false;
   bool done_ = false;  ///< the last drive was offered
   std::string why_;

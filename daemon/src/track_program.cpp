@@ -16,6 +16,7 @@
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/command_error.hpp"
 #include "hystbench/daemon/inverse_track_program.hpp"
+#include "learned_drive.hpp"
 #include "track_reference.hpp"
 
 namespace hystbench::daemon::details {
@@ -92,6 +93,7 @@ struct LearningPlan {
   double frequency_hz = 0.0;  ///< the loop rate / P
   double periods = 0.0;       ///< the reference's length: the start-up period, trial 0, N trials
   std::string reference;
+  std::optional<LearnedDrive> start;  ///< the drive trial 0 plays (`learned`), else none
 };
 
 // The learning gain's default: half the error corrected per trial (a plant whose local slope is
@@ -102,7 +104,8 @@ constexpr double kDefaultLearningGain = 0.5;
 constexpr double kUpdateAllowanceS = 0.05;
 
 std::optional<LearningPlan> learning_plan(const Request& request, const RunContext& ctx) {
-  if (!request.has("learn_trials") || request.integer("learn_trials", 0) == 0) {
+  const bool learns = request.has("learn_trials") && request.integer("learn_trials", 0) > 0;
+  if (!learns && !request.has("learned")) {
     for (const char* key : {"learn_gain", "learn_cutoff_hz"}) {
       if (request.has(key)) {
         throw CommandError("bad_params", std::string(key) + ": only with learn_trials > 0");
@@ -110,22 +113,23 @@ std::optional<LearningPlan> learning_plan(const Request& request, const RunConte
     }
     return std::nullopt;
   }
+  const char* key = learns ? "learn_trials" : "learned";
   LearningPlan plan;
   plan.trials = static_cast<std::size_t>(request.integer("learn_trials", 0));
   plan.gain = request.number("learn_gain", kDefaultLearningGain);
   plan.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
   plan.reference = request.string("reference", "triangle");
   if (plan.reference != "sine" && plan.reference != "triangle" && plan.reference != "sawtooth") {
-    throw CommandError("bad_params",
-                       "learn_trials: a trial is one period of a sine, triangle or "
-                       "sawtooth; '" +
-                           plan.reference + "' does not repeat");
+    throw CommandError("bad_params", std::string(key) +
+                                         ": a trial is one period of a sine, triangle or "
+                                         "sawtooth; '" +
+                                         plan.reference + "' does not repeat");
   }
   if (request.has("periods") || request.has("duration_s")) {
-    throw CommandError("bad_params",
-                       "learn_trials sets the run's length (the start-up period, the "
-                       "compensator's trial and the learned ones): leave out periods and "
-                       "duration_s");
+    throw CommandError("bad_params", std::string(key) +
+                                         " sets the run's length (the start-up period, the "
+                                         "first trial and the learned ones): leave out periods "
+                                         "and duration_s");
   }
   const double rate = ctx.settings.loop.rate_hz;
   const double f = request.number("frequency_hz", 1.0, 1e-3, rate / 20.0);
@@ -134,6 +138,9 @@ std::optional<LearningPlan> learning_plan(const Request& request, const RunConte
   const double allowance =
       std::ceil(kUpdateAllowanceS * plan.frequency_hz) * static_cast<double>(plan.trials + 1);
   plan.periods = static_cast<double>(plan.trials + 2) + allowance;
+  if (request.has("learned")) {
+    plan.start = load_learned_drive(ctx.settings.model_dir, request.string("learned", ""));
+  }
   return plan;
 }
 
@@ -372,6 +379,11 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
       }};
 }
 
+// What a learning run's drive is learned for.
+LearnedFor learned_for(const LearningRequest& r, std::size_t period) {
+  return {r.reference, period, r.frequency_hz, r.rate_hz, r.min_um, r.max_um};
+}
+
 // The learner of a learning run: the trials' exchange from the first scored period on, the
 // active model (else the linear map of the limits) as its L, the drive limits of the loop.
 std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
@@ -393,6 +405,14 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   r.frequency_hz = plan.frequency_hz;
   r.reference = plan.reference;
   r.rate_hz = ctx.settings.loop.rate_hz;
+  r.min_um = ref.min_um;
+  r.max_um = ref.max_um;
+  if (plan.start) {
+    check_learned_drive(*plan.start, learned_for(r, plan.period));
+    r.start_drive = plan.start->u;
+    r.start_compensator = plan.start->compensator;
+    r.start_name = plan.start->name;
+  }
   try {
     return std::make_unique<TrackLearning>(*model, *p.learning, r, o);
   } catch (const std::invalid_argument& e) {
@@ -470,10 +490,11 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
                {"feedback", feedback},
                {"feedforward", p->summary.value("feedforward", json(nullptr))}};
   if (learn) {
-    const json l = {{"trials", learn->trials},
-                    {"gain", learn->gain},
-                    {"frequency_hz", learn->frequency_hz},
-                    {"period_samples", learn->period}};
+    json l = {{"trials", learn->trials},
+              {"gain", learn->gain},
+              {"frequency_hz", learn->frequency_hz},
+              {"period_samples", learn->period}};
+    if (learn->start) l["started_from"] = learn->start->name;
     run.header["run"]["learning"] = l;
     run.reply["learning"] = l;
   }

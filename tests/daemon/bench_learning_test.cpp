@@ -2,10 +2,12 @@
 // switched on beside every default effect (a truth no model family contains), identify with its
 // defaults, then sines learned over ten trials. The error falls to near the sensor's noise floor
 // (5 nm, 0.011 % of range), no trial is worse than the first, each trial is reported as it ends,
-// and the learned drive is kept. A wrong model still converges; a learning forced to diverge is
+// and the learned drive is kept: it replays by its name, also after a restart, and only for its
+// own reference. A wrong model still converges; a learning forced to diverge is
 // stopped on its best drive; what cannot be learned is refused, naming why.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -107,13 +109,14 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
       }
     }
     EXPECT_EQ(announced, std::vector<int>({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10}));
-    // The kept drive: one period of t,u in the model folder, with the reference it belongs to.
+    // The kept drive: one period of t,u (and the compensator's u) in the model folder, with the
+    // reference it belongs to.
     const std::string path = l.value("drive_file", "");
     ASSERT_TRUE(std::filesystem::exists(path)) << l.dump(2);
     std::ifstream csv(path);
     std::string line;
     std::getline(csv, line);
-    EXPECT_EQ(line, "t,u");
+    EXPECT_EQ(line, "t,u,u_compensator");
     std::size_t rows = 0;
     while (std::getline(csv, line)) ++rows;
     EXPECT_EQ(rows, l["period_samples"].get<std::size_t>());
@@ -128,7 +131,9 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
     std::ostringstream text;
     hd::print_run_result(r, text);
     EXPECT_NE(text.str().find("learning        11 trials of "), std::string::npos) << text.str();
-    EXPECT_NE(text.str().find("learned drive   " + path), std::string::npos) << text.str();
+    EXPECT_NE(text.str().find("learned drive   " + l["drive"].get<std::string>() + " (" + path),
+              std::string::npos)
+        << text.str();
   }
 }
 
@@ -192,4 +197,101 @@ TEST_F(BenchLearningTest, RefusesWhatItCannotLearn) {
   json too_many = sine;
   too_many.update({{"learn_trials", 5000}});
   EXPECT_EQ(error_code(too_many), "bad_params");
+}
+
+// What is learned is kept: `track --learned NAME` plays the saved drive from the start-up period
+// on, moved with the output offset the run measures; on the same bench within 1.5x of the last
+// trial, without a new trial. A restart of the loopback daemon restarts its simulated actuator
+// too (creep relaxed, drift from its start), a history the drive was not learned on: there the
+// replay keeps most of what was learned (measured 0.10 % against the compensator's 1.0 % and the
+// last trial's 0.018 %), and `--learn` goes on from it. Another reference, range or name is
+// refused, naming what the drive was learned for. The saved CSV replays open loop through
+// `excite`.
+TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReference) {
+  const hd::BenchSettings settings = settings_from_toml(loopback_toml(kEveryEffect));
+  start(settings);
+  const json id = run_and_wait("identify", json::object());
+  ASSERT_EQ(id["end"], "completed") << id.dump(2);
+  const json learned = learn(50.0, 10);
+  ASSERT_EQ(learned["end"], "completed") << learned.dump(2);
+  const std::vector<double> rms = trial_rms(learned);
+  const double first = rms.front(), last = rms.back();
+  const std::string name = learned["learning"]["drive"];
+  const json replay_params = {{"reference", "sine"}, {"frequency_hz", 50.0}, {"learned", name}};
+
+  const auto replay = [&](const char* when, double bound) {
+    const json r = run_and_wait("track", replay_params);
+    ASSERT_EQ(r["end"], "completed") << when << r.dump(2);
+    const json& l = r["learning"];
+    ASSERT_EQ(l["trials"].size(), 1u) << when << l.dump(2);
+    EXPECT_EQ(l["trials"][0]["drive"], "saved") << when;
+    EXPECT_EQ(l["started_from"], name) << when;
+    EXPECT_TRUE(std::isfinite(l["lead_in_offset_um"].get<double>())) << when << l.dump(2);
+    EXPECT_FALSE(l.contains("drive_file")) << when << l.dump(2);  // nothing new to keep
+    EXPECT_LE(r["rms_error_percent"].get<double>(), bound) << when << l.dump(2);
+    std::cout << when << ": " << r["rms_error_percent"] << " % (learned from " << first << " to "
+              << last << " %)\n";
+  };
+  replay("on the same bench", 1.5 * last);
+
+  // Another reference, range or loop rate: refused, naming what it was learned for.
+  for (const json& other : {json{{"frequency_hz", 20.0}}, json{{"reference", "triangle"}},
+                            json{{"range_fraction", 0.5}}}) {
+    json params = replay_params;
+    params.update(other);
+    try {
+      bench_->handle("track", params);
+      ADD_FAILURE() << "accepted " << params;
+    } catch (const hd::CommandError& e) {
+      EXPECT_EQ(e.code(), "bad_params");
+      EXPECT_NE(std::string(e.what()).find("was learned for a 50 Hz sine"), std::string::npos)
+          << e.what();
+    }
+  }
+  for (const char* bad : {"no-such-run", "../models/x"}) {
+    json params = replay_params;
+    params["learned"] = bad;
+    EXPECT_EQ(error_code(params), "bad_params") << bad;
+  }
+  json with_periods = replay_params;
+  with_periods["periods"] = 3;
+  EXPECT_EQ(error_code(with_periods), "bad_params");
+
+  // The model list names it as a learned drive.
+  bool listed = false;
+  const json list = bench_->handle("model.list", json::object());
+  for (const json& m : list["models"]) {
+    listed = listed || (m["name"] == name + ".json" && m["type"] == "learned_drive");
+  }
+  EXPECT_TRUE(listed) << list.dump(2);
+
+  // A restarted daemon: the same folders, its model loaded from the folder.
+  bench_.reset();
+  start(settings);
+  const std::string model =
+      std::filesystem::path(id["model"]["path"].get<std::string>()).filename().string();
+  bench_->handle("model.load", {{"stored", model}});
+  replay("after a restart", 0.1 * first);
+
+  // Learning goes on from it.
+  json more = replay_params;
+  more["learn_trials"] = 4;
+  const json r = run_and_wait("track", more);
+  ASSERT_EQ(r["end"], "completed") << r.dump(2);
+  const std::vector<double> resumed = trial_rms(r);
+  ASSERT_EQ(resumed.size(), 5u) << r["learning"].dump(2);
+  EXPECT_EQ(r["learning"]["trials"][0]["drive"], "saved");
+  EXPECT_LE(resumed.back(), 0.5 * resumed.front()) << r["learning"].dump(2);
+  EXPECT_TRUE(std::filesystem::exists(r["learning"].value("drive_file", ""))) << r.dump(2);
+
+  // The CSV replays open loop with excite (`hystbench excite --input-file`).
+  const hd::RemoteUpload drive =
+      hd::read_upload(learned["learning"]["drive_file"], "drive", "t", "u", 1.0, 0.0);
+  const json begun =
+      bench_->handle("upload.begin", {{"kind", "drive"}, {"samples", drive.values.size()}});
+  bench_->handle(
+      "upload.chunk",
+      {{"upload", begun["upload"]}, {"offset", 0}, {"t", drive.t}, {"values", drive.values}});
+  const json excited = run_and_wait("excite", {{"drive_upload", begun["upload"]}});
+  EXPECT_EQ(excited["end"], "completed") << excited.dump(2);
 }

@@ -146,6 +146,24 @@ class WithoutModelTest(unittest.TestCase):
         self.assertEqual(result["rms_error_percent"], rms[-1])
         self.assertTrue(os.path.exists(result["learning"]["drive_file"]), result["learning"])
         self.assertTrue(any(what.startswith("learning: trial 4 of 4") for what in seen), seen)
+        # The learned drive replays by its name, and only for its own reference.
+        replay = self.bench.track(
+            "sine",
+            compensator="none",
+            frequency_hz=20.0,
+            learned=result["learning"]["drive"],
+            precondition_s=0.2,
+            wait=True,
+        )
+        self.assertTrue(replay.completed, replay)
+        self.assertEqual(replay["learning"]["trials"][0]["drive"], "saved")
+        self.assertLess(replay["rms_error_percent"], 1.5 * rms[-1], replay["learning"])
+        with self.assertRaises(BenchError) as refused:
+            self.bench.track(
+                "triangle", frequency_hz=20.0, learned=result["learning"]["drive"]
+            )
+        self.assertEqual(refused.exception.code, "bad_params")
+        self.assertIn("was learned for", str(refused.exception))
 
     def test_a_run_followed_from_another_connection(self) -> None:
         started = self.bench.track(

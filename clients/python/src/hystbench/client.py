@@ -758,6 +758,7 @@ class Bench:
         approach_s: Optional[float] = None,
         learn: Optional[int] = None,
         learn_gain: Optional[float] = None,
+        learned: Optional[str] = None,
         wait: bool = False,
         progress: Optional[Progress] = None,
         timeout: Optional[float] = None,
@@ -795,6 +796,11 @@ class Bench:
                 rms and max error [% of range]; ``rms_error_percent`` is the last trial's; the
                 learned drive is saved in the daemon's model folder (``learning["drive_file"]``).
             learn_gain: the share of the error corrected per trial (daemon default 0.5).
+            learned: start from a drive learned before (``learning["drive"]`` of its run; also
+                after a restart of the daemon): after the start-up period it plays instead of
+                the compensator's drive, for one scored period, or as the first trial with
+                ``learn``. Only for the waveform, range and loop rate it was learned for
+                (``bad_params`` names both otherwise).
             **params: further request parameters, sent as given (``kp``, ``ki``, ``kd``,
                 ``learn_cutoff_hz``).
             wait, progress, timeout: as for ``identify``; ``progress`` also sees the upload
@@ -810,6 +816,7 @@ class Bench:
                 "precondition_s": precondition_s,
                 "learn_trials": learn,
                 "learn_gain": learn_gain,
+                "learned": learned,
                 **params,
             }
         )

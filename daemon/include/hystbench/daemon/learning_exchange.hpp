@@ -1,11 +1,11 @@
 #pragma once
 // The hand-over between the loop, which plays a learning run's trials, and the learner, which
 // computes each next trial's drive off the loop thread. A trial is one period of the reference,
-// P samples from first_tick on: the first (trial 0) plays the compensator's own drive; each later
-// one the learned feedforward the learner made ready before the period began. A period that
-// begins with no new drive ready plays the last one again and is not a trial (stale_periods).
-// Every buffer is allocated before the run; the loop's side is real-time safe (no allocation, no
-// locks: atomics only).
+// P samples from first_tick on: the first (trial 0) plays the compensator's own drive, or a drive
+// learned before (start_from); each later one the learned feedforward the learner made ready before
+// the period began. A period that begins with no new drive ready plays the last one again and is
+// not a trial (stale_periods). Every buffer is allocated before the run; the loop's side is
+// real-time safe (no allocation, no locks: atomics only).
 #include <array>
 #include <atomic>
 #include <cstddef>
@@ -25,19 +25,48 @@ struct LearningExchange {
   /// The phase j in [0, P) of tick k >= first_tick; at j = 0 takes the drive made ready (if any)
   /// and starts recording the trial it plays.
   std::size_t begin_tick(std::uint64_t k) noexcept;
-  /// True when the period plays a learned drive, with its sample j in u_ff [input unit].
+  /// True when the period plays a learned drive: u_ff holds the compensator's feedforward at
+  /// phase j on entry [input unit] and the drive's sample on return. A drive learned before
+  /// (start_from) moves by how far the compensator's moved from its own in the run that learned
+  /// it (the output offset the run measured, through the model's inverse).
   bool learned(std::size_t j, double& u_ff) const noexcept;
-  /// Records the feedforward played and the error (reference - reading) at phase j; at the
-  /// period's last sample closes the trial. True when that trial was the last: the run ends.
-  bool end_tick(std::size_t j, double u_ff, double error) noexcept;
+  /// Before first_tick: as learned() for tick k, true when a drive learned before plays the
+  /// period before trial 0 too, so that trial 0 follows its own drive as a learned trial
+  /// follows the one before.
+  bool lead_in(std::uint64_t k, double& u_ff) const noexcept;
+  /// The error (reference - reading) of lead-in tick k: its second half measures the output
+  /// offset the drive learned before now plays at.
+  void lead_in_error(std::uint64_t k, double error) noexcept;
+  /// That offset [output unit] (0 without a lead-in).
+  double lead_in_offset() const noexcept {
+    return lead_in_samples_ > 0 ? -lead_in_error_sum_ / static_cast<double>(lead_in_samples_) : 0.0;
+  }
+  /// What the compensator's target takes off at tick k [output unit]: the run's tare (the
+  /// offset measured on the precondition sweep), and with a drive learned before, from trial 0
+  /// on, the offset its lead-in measured too; the drive moves with the compensator.
+  double target_offset(std::uint64_t k, double tare) const noexcept {
+    return tare + (started_from_ != 0 && k >= first_tick ? lead_in_offset() : 0.0);
+  }
+  /// Records the feedforward played, the compensator's own and the error (reference -
+  /// reading) at phase j; at the period's last sample closes the trial. True when that trial
+  /// was the last: the run ends.
+  bool end_tick(std::size_t j, double u_ff, double u_compensator, double error) noexcept;
   /// True at a period's start when the learner owes a drive for it (a trial was handed over
   /// and nothing came back yet): on the simulated clock the loop waits for it.
   bool owed(std::uint64_t k) const noexcept;
 
   // ---- learner side ----
-  /// Takes the oldest complete trial not yet taken: copies its drive and error into u and e
-  /// (P samples each) and its number into trial. False when there is none.
-  bool take_trial(std::vector<double>& u, std::vector<double>& e, std::uint64_t& trial) noexcept;
+  /// Before the run is handed to the loop: trial 0 plays `drive` (P samples, a drive learned
+  /// before) instead of the compensator's, moved by the compensator's feedforward less
+  /// `compensator` (P samples: the compensator's in the run that learned it; empty: not
+  /// moved); `last`: the run ends after it. False for another length, or a second call.
+  bool start_from(const std::vector<double>& drive, const std::vector<double>& compensator,
+                  bool last);
+  /// Takes the oldest complete trial not yet taken: copies its drive, the compensator's
+  /// feedforward and its error into u, c and e (P samples each) and its number into trial.
+  /// False when there is none.
+  bool take_trial(std::vector<double>& u, std::vector<double>& c, std::vector<double>& e,
+                  std::uint64_t& trial);
   /// Makes `drive` (P samples) the next trial's; `last`: the run ends after it. False when the
   /// loop has not taken the one made ready before (call again after the next trial).
   bool offer(const std::vector<double>& drive, bool last) noexcept;
@@ -51,7 +80,8 @@ struct LearningExchange {
  private:
   enum Slot : int { kFree = 0, kWriting = 1, kFull = 2, kReading = 3 };
   std::array<std::vector<double>, 2> drive_;
-  std::array<std::vector<double>, 2> rec_u_, rec_e_;
+  std::array<std::vector<double>, 2> rec_u_, rec_c_, rec_e_;
+  std::vector<double> started_compensator_;  // start_from's compensator (empty: not moved)
   std::array<std::atomic<int>, 2> slot_{};
   std::array<std::atomic<std::uint64_t>, 2> slot_trial_{};
   std::atomic<int> ready_{-1};  // drive_ index made ready, -1 = none
@@ -61,12 +91,16 @@ struct LearningExchange {
   std::atomic<std::uint64_t> offered_{0};  // drives made ready by the learner
   std::atomic<std::uint64_t> stale_{0};
   std::atomic<bool> final_offered_{false};
+  std::uint64_t started_from_ = 0;  // 1 when trial 0 plays a drive given before the run
   // loop only
   void start_recording(std::uint64_t trial) noexcept;
   int playing_ = -1;
+  bool playing_started_ = false;  // the period plays the drive start_from gave
   bool last_ = false;
   int rec_slot_ = -1;
   std::uint64_t trial_ = 0;
+  double lead_in_error_sum_ = 0.0;
+  std::uint64_t lead_in_samples_ = 0;
 };
 
 }  // namespace hystbench::daemon
