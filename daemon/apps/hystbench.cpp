@@ -298,7 +298,8 @@ int main(int argc, char** argv) {
   add_output_flags(track_cmd, true);
   track_cmd->add_option("--plot", remote.plot_dir,
                         "With --wait: write the run's plots (time.png, error.png, loop.png) here "
-                        "when it ends, as `hystbench plot` does");
+                        "when it ends, as `hystbench plot` does; with --learn also learning.png "
+                        "(the error per trial, and the last trial's error)");
   // A user's trajectory instead of a built-in reference: read here, uploaded over the socket.
   std::string tr_file, tr_t_column = "t", tr_yr_column = "yr";
   double tr_yr_scale = 1.0, tr_rate = 0.0, tr_approach = NAN;
@@ -403,6 +404,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep_cmd->add_option("--plot", sweep.plot_dir,
                         "Write sweep.png (error against frequency, log axes) and its data here");
+  sweep_cmd
+      ->add_option("--learn", sweep.learn_trials,
+                   "Add a column 'learned': at each frequency a `track --learn N` run from the "
+                   "daemon's default compensator (a trial is one period; the frequency moves to "
+                   "the loop rate over a whole number of ticks), its last trial's error")
+      ->check(CLI::Range(1, 1000));
   sweep_cmd->add_flag("--json", sweep.json_output, "Print one JSON object instead of the table");
 
   auto* stop_cmd = app.add_subcommand("stop", "End the active run normally (its result is kept)");

@@ -126,6 +126,58 @@ std::vector<fs::path> plot_run_log(const std::string& log_path, const fs::path& 
   return pngs;
 }
 
+fs::path plot_learning(const nlohmann::json& learning, const std::string& log_path,
+                       const fs::path& dir) {
+  const nlohmann::json& trials = learning.at("trials");
+  if (trials.empty()) throw std::runtime_error("learning.png: the run played no trial");
+  const auto period = learning.at("period_samples").get<std::size_t>();
+  const DataTable table = DataTable::read_csv(log_path);
+  for (const char* name : {"t", "y", "yr"}) {
+    if (!table.has(name)) throw std::runtime_error(log_path + ": no '" + name + "' column");
+  }
+  const std::size_t n = table.rows();
+  if (n < period) throw std::runtime_error(log_path + ": shorter than one trial");
+  fs::create_directories(dir);
+  const fs::path dat = dir / "learning.dat";
+  std::ofstream d(dat, std::ios::trunc);
+  if (!d) throw std::runtime_error(dat.string() + ": cannot write");
+  d.precision(9);
+  d << "# trial rms_percent max_percent\n";
+  for (const auto& t : trials) {
+    d << t.at("trial").get<int>();
+    put(d, t.at("rms_error_percent").get<double>());
+    put(d, t.at("max_error_percent").get<double>());
+    d << '\n';
+  }
+  // A second block (gnuplot's index 1): the last trial, the log's last period.
+  d << "\n\n# t_ms error_um (the last trial: y - yr)\n";
+  const std::vector<double>&t = table.column("t"), &y = table.column("y"), &yr = table.column("yr");
+  for (std::size_t k = n - period; k < n; ++k) {
+    d << 1e3 * (t[k] - t[n - period]);
+    put(d, y[k] - yr[k]);
+    d << '\n';
+  }
+  d.close();
+  const std::string data = details::gnuplot_quoted(dat);
+  const fs::path png = dir / "learning.png", script = dir / "learning.gp";
+  std::ofstream gp(script, std::ios::trunc);
+  if (!gp) throw std::runtime_error(script.string() + ": cannot write");
+  gp << "# hystbench learning plot of " << log_path << ": gnuplot "
+     << details::gnuplot_quoted(script) << "\nset terminal pngcairo size 1000,800\n"
+     << "set output " << details::gnuplot_quoted(png) << "\nset grid\nset key top right\n"
+     << "set datafile missing 'NaN'\nset multiplot layout 2,1\n"
+     << "set title 'learning: error per trial (trial 0: the drive it started from)'\n"
+     << "set logscale y\nset xlabel 'trial'\nset ylabel 'error [% of range]'\n"
+     << "plot " << data << " index 0 using 1:2 with linespoints lw 2 lc 1 title 'rms', " << data
+     << " index 0 using 1:3 with linespoints dt 2 lc 2 title 'max'\n"
+     << "unset logscale y\nset title 'the last trial: y - yr'\nset xlabel 't [ms]'\n"
+     << "set ylabel 'error [um]'\nplot " << data
+     << " index 1 using 1:2 with lines lc 1 title 'error'\nunset multiplot\n";
+  gp.close();
+  details::run_gnuplot(script, dir / "gnuplot-learning.log");
+  return png;
+}
+
 int run_plot(const PlotCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
     const fs::path dir =

@@ -343,6 +343,9 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
         for (const auto& png : plot_run_log(r["log"].get<std::string>(), cmd.plot_dir)) {
           files.push_back(png.string());
         }
+        if (r.contains("learning")) {
+          files.push_back(plot_learning(r["learning"], r["log"], cmd.plot_dir).string());
+        }
         r["plots"] = files;
       } catch (const std::exception& e) {
         err << "hystbench: error: --plot: " << e.what() << "\n";

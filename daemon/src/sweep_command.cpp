@@ -20,6 +20,8 @@ using nlohmann::json;
 
 namespace {
 
+constexpr const char* kLearned = "learned";
+
 std::string fixed(double v, int digits) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(digits) << v;
@@ -28,6 +30,27 @@ std::string fixed(double v, int digits) {
 
 double number_or_nan(const json& r, const char* key) {
   return r.contains(key) && r[key].is_number() ? r[key].get<double>() : std::nan("");
+}
+
+// The sweep's columns: each compensator by its name, then "learned" with --learn N.
+std::vector<std::string> columns(const SweepCommand& cmd) {
+  std::vector<std::string> out = cmd.compensators;
+  if (cmd.learn_trials > 0) out.emplace_back(kLearned);
+  return out;
+}
+
+// The track request of column c at frequency f: a compensator's run over max(periods,
+// min_duration_s x f) periods, or a learning run over learn_trials trials.
+json track_params(const SweepCommand& cmd, const std::string& c, double f) {
+  json p = {
+      {"reference", cmd.reference}, {"frequency_hz", f}, {"range_fraction", cmd.range_fraction}};
+  if (c == kLearned) {
+    p["learn_trials"] = cmd.learn_trials;
+  } else {
+    p["compensator"] = c;
+    p["periods"] = std::max(cmd.periods, std::ceil(cmd.min_duration_s * f));
+  }
+  return p;
 }
 
 // The row of frequency f and compensator c, or null.
@@ -41,12 +64,16 @@ const json* find_row(const json& rows, double f, const std::string& c) {
 void print_table(const SweepCommand& cmd, const json& rows, std::ostream& out) {
   out << "sweep: " << cmd.reference << " over " << fixed(100 * cmd.range_fraction, 0)
       << " % of range; tracking error rms / max, % of range\n";
+  const std::vector<std::string> cols = columns(cmd);
   out << std::setw(12) << "f [Hz]";
-  for (const auto& c : cmd.compensators) out << std::setw(24) << c;
+  for (const auto& c : cols) {
+    out << std::setw(24)
+        << (c == kLearned ? "learned (" + std::to_string(cmd.learn_trials) + ")" : c);
+  }
   out << "\n";
   for (const double f : cmd.frequencies_hz) {
     out << std::setw(12) << fixed(f, 3);
-    for (const auto& c : cmd.compensators) {
+    for (const auto& c : cols) {
       std::string cell = "-";
       if (const json* r = find_row(rows, f, c)) {
         cell = r->contains("rms_error_percent") ? fixed((*r)["rms_error_percent"], 3) + " / " +
@@ -65,12 +92,13 @@ void write_plot(const SweepCommand& cmd, const json& rows) {
   fs::create_directories(dir);
   std::ofstream dat(dir / "sweep.dat", std::ios::trunc);
   if (!dat) throw std::runtime_error((dir / "sweep.dat").string() + ": cannot write");
+  const std::vector<std::string> cols = columns(cmd);
   dat << "# frequency_hz";
-  for (const auto& c : cmd.compensators) dat << " rms_percent_" << c << " max_percent_" << c;
+  for (const auto& c : cols) dat << " rms_percent_" << c << " max_percent_" << c;
   dat << "\n";
   for (const double f : cmd.frequencies_hz) {
     dat << f;
-    for (const auto& c : cmd.compensators) {
+    for (const auto& c : cols) {
       const json* r = find_row(rows, f, c);
       const double rms = r != nullptr ? number_or_nan(*r, "rms_error_percent") : std::nan("");
       const double mx = r != nullptr ? number_or_nan(*r, "max_error_percent") : std::nan("");
@@ -87,12 +115,12 @@ void write_plot(const SweepCommand& cmd, const json& rows) {
      << "set xlabel 'reference frequency [Hz]'\nset ylabel 'tracking error [% of range]'\n"
      << "set title 'hystbench sweep: " << cmd.reference << ", rms (solid) and max (dashed)'\n"
      << "plot ";
-  for (std::size_t i = 0; i < cmd.compensators.size(); ++i) {
+  for (std::size_t i = 0; i < cols.size(); ++i) {
     const auto col = 2 + 2 * i;
     gp << (i ? ", " : "") << details::gnuplot_quoted(dir / "sweep.dat") << " using 1:" << col
-       << " with linespoints lw 2 lc " << i + 1 << " title '" << cmd.compensators[i] << " rms', "
+       << " with linespoints lw 2 lc " << i + 1 << " title '" << cols[i] << " rms', "
        << details::gnuplot_quoted(dir / "sweep.dat") << " using 1:" << col + 1
-       << " with linespoints dt 2 lc " << i + 1 << " title '" << cmd.compensators[i] << " max'";
+       << " with linespoints dt 2 lc " << i + 1 << " title '" << cols[i] << " max'";
   }
   gp << "\n";
   gp.close();
@@ -105,20 +133,19 @@ int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
   json rows = json::array();
   int status = 0;
   const bool tty = ::isatty(STDERR_FILENO) == 1 && !cmd.json_output;
-  const std::size_t total = cmd.frequencies_hz.size() * cmd.compensators.size();
+  const std::vector<std::string> cols = columns(cmd);
+  const std::size_t total = cmd.frequencies_hz.size() * cols.size();
   std::size_t done = 0;
   try {
     BenchClient client(cmd.socket_path);
-    for (const auto& comp : cmd.compensators) {
+    for (const auto& comp : cols) {
       for (const double f : cmd.frequencies_hz) {
-        const double periods = std::max(cmd.periods, std::ceil(cmd.min_duration_s * f));
-        const json params = {{"reference", cmd.reference},
-                             {"frequency_hz", f},
-                             {"periods", periods},
-                             {"compensator", comp},
-                             {"range_fraction", cmd.range_fraction}};
+        const json params = track_params(cmd, comp, f);
         const json reply = client.request("track", params);
-        json row = {{"frequency_hz", f}, {"compensator", comp}, {"periods", periods}};
+        json row = {{"frequency_hz", f}, {"compensator", comp}};
+        for (const char* key : {"periods", "learn_trials"}) {
+          if (params.contains(key)) row[key] = params[key];
+        }
         if (!reply.value("ok", false)) {
           const json& e = reply["error"];
           row["end"] = "refused";
@@ -148,6 +175,14 @@ int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
               "max_error_um", "range_um", "model_rms_error_percent", "log"}) {
           if (r.contains(key)) row[key] = r[key];
         }
+        if (const auto l = r.find("learning"); l != r.end() && l->is_object()) {
+          json trials = json::array();
+          for (const json& t : (*l)["trials"]) trials.push_back(t["rms_error_percent"]);
+          row["learning"] = {{"frequency_hz", (*l)["frequency_hz"]},
+                             {"trials_rms_percent", trials},
+                             {"stopped", (*l)["stopped"]},
+                             {"drive", l->value("drive", json())}};
+        }
         rows.push_back(row);
         if (r.value("end", "") != "completed") {
           err << (tty ? "\r\x1b[K" : "") << "hystbench: sweep: " << label << " ended "
@@ -164,11 +199,9 @@ int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
     return 2;
   }
   if (cmd.json_output) {
-    out << json{{"reference", cmd.reference},
-                {"range_fraction", cmd.range_fraction},
-                {"frequencies_hz", cmd.frequencies_hz},
-                {"compensators", cmd.compensators},
-                {"rows", rows}}
+    out << json{{"reference", cmd.reference},           {"range_fraction", cmd.range_fraction},
+                {"frequencies_hz", cmd.frequencies_hz}, {"compensators", cmd.compensators},
+                {"learn_trials", cmd.learn_trials},     {"rows", rows}}
                .dump()
         << "\n";
   } else {

@@ -92,3 +92,38 @@ TEST_F(PlotCommandTest, AFileThatIsNotARunLogIsRefusedByName) {
   EXPECT_NE(err.str().find("no 'u' column"), std::string::npos) << err.str();
   EXPECT_FALSE(fs::exists(dir_ / "q" / "time.png"));
 }
+
+// learning.png: each trial's rms and max, and the last trial's error from the log's last period
+// (its data file holds exactly that period, y - yr).
+TEST_F(PlotCommandTest, ALearningRunDrawsItsTrialsAndItsLastTrial) {
+  const std::string log = write_log(true);
+  nlohmann::json learning = {{"period_samples", 1000}, {"trials", nlohmann::json::array()}};
+  for (int k = 0; k < 4; ++k) {
+    learning["trials"].push_back({{"trial", k},
+                                  {"rms_error_percent", std::pow(0.3, k)},
+                                  {"max_error_percent", 3.0 * std::pow(0.3, k)}});
+  }
+  const fs::path png = hd::plot_learning(learning, log, dir_);
+  EXPECT_EQ(png, dir_ / "learning.png");
+  ASSERT_TRUE(fs::exists(png));
+  EXPECT_GT(fs::file_size(png), 10000u);  // two panels drawn, not an empty canvas
+  std::ifstream dat(dir_ / "learning.dat");
+  std::string line;
+  int trials = 0, last = 0, block = 0;
+  while (std::getline(dat, line)) {
+    if (line.empty()) {
+      block = 1;
+    } else if (line[0] != '#') {
+      ++(block == 0 ? trials : last);
+    }
+  }
+  EXPECT_EQ(trials, 4);
+  EXPECT_EQ(last, 1000);
+  // A learning without a trial, or a log shorter than one, is named.
+  nlohmann::json none = learning;
+  none["trials"] = nlohmann::json::array();
+  EXPECT_THROW(hd::plot_learning(none, log, dir_), std::runtime_error);
+  nlohmann::json long_period = learning;
+  long_period["period_samples"] = 100000;
+  EXPECT_THROW(hd::plot_learning(long_period, log, dir_), std::runtime_error);
+}

@@ -328,6 +328,17 @@ class WithModelTest(unittest.TestCase):
         self.assertIn("inverse", table)
         self.assertIn(f"{rows[0]['rms_error_percent']:.3f}", table)
 
+    def test_sweep_with_a_learned_column(self) -> None:
+        rows = self.bench.sweep(
+            [20.0], ["inverse"], periods=2, min_duration_s=0.0, precondition_s=0.2, learn=3
+        )
+        self.assertTrue(rows.completed, rows)
+        learned, inverse = rows.row(20.0, "learned"), rows.row(20.0, "inverse")
+        self.assertEqual(learned["learn_trials"], 3)
+        self.assertEqual(len(learned["learning"]["trials_rms_percent"]), 4)
+        self.assertLess(learned["rms_error_percent"], inverse["rms_error_percent"])
+        self.assertIn("learned", rows.table())
+
     def test_model_get_and_load_round_trip(self) -> None:
         active = self.bench.model_get()
         self.assertEqual(active["path"], self.identified["model"]["path"])

@@ -898,6 +898,7 @@ class Bench:
         min_duration_s: float = 1.0,
         range_fraction: float = 0.8,
         precondition_s: Optional[float] = None,
+        learn: Optional[int] = None,
         progress: Optional[Progress] = None,
         timeout: Optional[float] = None,
     ) -> SweepResult:
@@ -909,6 +910,9 @@ class Bench:
         when given.
 
         Args:
+            learn: add a column ``"learned"``: at each frequency a ``track(learn=N)`` run
+                from the daemon's default compensator; its row has the last trial's error and
+                ``learning`` (``trials_rms_percent``, ``drive``).
             progress: called with (fraction of the whole sweep, label such as
                 ``"inverse 5 Hz (2/4)"``).
             timeout: for each run [s]; None waits.
@@ -919,19 +923,21 @@ class Bench:
             raises ``BenchError``; its ``rows`` attribute then holds the rows so far.
         """
         freqs = [float(f) for f in frequencies]
-        comps = list(compensators)
+        comps = list(compensators) + (["learned"] if learn else [])
         rows = SweepResult([], freqs, comps)
         total = len(freqs) * len(comps)
         done = 0
         for comp in comps:
             for f in freqs:
-                n = max(float(periods), float(math.ceil(min_duration_s * f)))
+                learned = comp == "learned"
+                n = None if learned else max(float(periods), float(math.ceil(min_duration_s * f)))
                 params = _without_none(
                     {
                         "reference": reference,
                         "frequency_hz": f,
                         "periods": n,
-                        "compensator": comp,
+                        "compensator": None if learned else comp,
+                        "learn_trials": learn if learned else None,
                         "range_fraction": range_fraction,
                         "precondition_s": precondition_s,
                     }
@@ -948,7 +954,18 @@ class Bench:
                     run_progress = _scaled(progress, done / total, 1.0 / total, label)
                 result = self.wait(started["run_id"], progress=run_progress, timeout=timeout)
                 done += 1
-                row: Dict[str, Any] = {"frequency_hz": f, "compensator": comp, "periods": n}
+                row: Dict[str, Any] = {"frequency_hz": f, "compensator": comp}
+                row.update(_without_none({"periods": n, "learn_trials": learn if learned else None}))
+                learning = result.get("learning")
+                if isinstance(learning, dict):
+                    row["learning"] = {
+                        "frequency_hz": learning.get("frequency_hz"),
+                        "trials_rms_percent": [
+                            t["rms_error_percent"] for t in learning.get("trials", [])
+                        ],
+                        "stopped": learning.get("stopped"),
+                        "drive": learning.get("drive"),
+                    }
                 for key in (
                     "run_id",
                     "end",

@@ -5,9 +5,11 @@
 //   error.png  tracking error y - yr against time (each point's bin min and max, so no peak is
 //              lost to thinning), or y - y_model when the run had no reference
 //   loop.png   output against input, with the model's loop over the measured one
-// `track --wait --plot DIR` draws the same when the run ends. Not real-time.
+// `track --wait --plot DIR` draws the same when the run ends, and learning.png for a learning
+// run. Not real-time.
 #include <filesystem>
 #include <iosfwd>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -24,6 +26,13 @@ struct PlotCommand {
 /// t, u or y column, no finite sample, gnuplot missing or failing.
 std::vector<std::filesystem::path> plot_run_log(const std::string& log_path,
                                                 const std::filesystem::path& dir);
+
+/// learning.png of a learning run (`track --learn N --plot DIR`): each trial's rms and max error
+/// [% of range] on a log axis, and the last trial's error against time [um] from the log's last
+/// period_samples rows. `learning`: the result's learning object. Writes learning.dat,
+/// learning.gp beside it; throws as plot_run_log does.
+std::filesystem::path plot_learning(const nlohmann::json& learning, const std::string& log_path,
+                                    const std::filesystem::path& dir);
 
 /// The default folder for a log's plots: "<log without .csv>-plots".
 std::filesystem::path default_plot_dir(const std::string& log_path);

@@ -17,6 +17,9 @@ struct SweepCommand {
   double periods = 5.0;         ///< per run; raised so that every run lasts min_duration_s
   double min_duration_s = 1.0;  ///< [s]
   double range_fraction = 0.8;  ///< (0, 1]
+  /// > 0: a column "learned" beside the compensators: at each frequency a `track --learn N`
+  /// run from the daemon's default compensator, its last trial's error (0 = none).
+  int learn_trials = 0;
   bool json_output = false;
   std::string plot_dir;  ///< empty = no plot; else sweep.dat, sweep.gp and sweep.png there
 };
