@@ -50,16 +50,20 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
     trials_.push_back(t);
     scored.push_back(t);
     if (done_) continue;  // the last trial: nothing more to offer
-    const hc::LearningGuard::Action action = guard_.after_trial(t.rms_um);
-    if (guard_.best_trial() == guard_.trials() - 1) best_drive_ = u_;
     bool last = false;
+    const hc::LearningGuard::Action action =
+        stopped_ ? hc::LearningGuard::Action::kStop : guard_.after_trial(t.rms_um);
+    if (!stopped_ && guard_.best_trial() == guard_.trials() - 1) best_drive_ = u_;
     if (action == hc::LearningGuard::Action::kStop) {
+      // The best drive plays twice: the first period settles the actuator after the trials that
+      // went wrong (their extremes and creep), the second is the run's last trial.
+      last = stopped_;
       stopped_ = true;
       why_ = "two trials in a row more than 20 % above the best (trial " +
              std::to_string(trials_[guard_.best_trial()].trial) +
-             "): the learning stopped and plays the best trial's drive";
+             "): the learning stopped and plays the best trial's drive, twice (the first "
+             "settles the actuator)";
       next_ = best_drive_;
-      last = true;
       next_gain_ = 0.0;
       next_drive_ = "best";
     } else {

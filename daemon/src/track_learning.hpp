@@ -1,9 +1,9 @@
 #pragma once
 // The learner of a `track --learn N` run, on the supervisor thread: takes each trial the loop
 // closes (LearningExchange), scores it, lets the guard decide, and offers the next trial's drive
-// (compensation::IterativeLearning), or the best trial's drive as the last when the guard stops
-// the learning. Its result is the run's `learning` object; the drive it keeps is saved for
-// replay. Not real-time safe.
+// (compensation::IterativeLearning), or the best trial's drive twice (a period to settle, then the
+// last) when the guard stops the learning. Its result is the run's `learning` object; the drive it
+// keeps is saved for replay. Not real-time safe.
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
