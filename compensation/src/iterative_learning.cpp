@@ -19,6 +19,10 @@ constexpr double kCutoffOfMode = 0.5;
 // the sensor's noise, which each trial would otherwise learn into the drive (on the loopback at
 // 1 Hz: 0.017 % rms after ten trials with 300 Hz, 0.044 % with 2 kHz).
 constexpr double kCutoffHarmonics = 300.0;
+// The bench's delay is searched up to this many samples beyond the model's, and taken from a
+// pair of trials whose changes correlate at least this well at it.
+constexpr std::size_t kDelaySearch = 50;
+constexpr double kDelayClear = 0.5;
 // The circular run of a section starts this many of its slowest time constants early.
 constexpr double kWarmupTimeConstants = 20.0;
 
@@ -44,10 +48,11 @@ IterativeLearning::IterativeLearning(const ActuatorModel& model, std::size_t per
     throw std::invalid_argument("iterative learning needs u_min < u_max and max_step > 0");
   }
   const double fs = 1.0 / o_.dt;
-  const double trial_hz = fs / static_cast<double>(period_);
+  const double trial_hz =
+      std::max(fs / static_cast<double>(period_), std::max(o_.fundamental_hz, 0.0));
   cutoff_hz_ =
       o_.cutoff_hz > 0.0 ? o_.cutoff_hz : std::min(kCutoffOfRate * fs, kCutoffHarmonics * trial_hz);
-  advance_samples_ = model_.delay_s() / o_.dt;
+  advance_samples_ = model_delay_samples_ = model_.delay_s() / o_.dt;
   if (const auto& d = model_.dynamics()) {
     const double wn = 2.0 * std::numbers::pi * d->natural_frequency_hz;
     dyn_a1_ = 2.0 * d->damping_ratio / wn;
@@ -72,14 +77,14 @@ IterativeLearning::IterativeLearning(const ActuatorModel& model, std::size_t per
 
 void IterativeLearning::low_pass(std::vector<double>& x) {
   const std::size_t n = x.size();
+  // Each section starts at the trial's mean, at rest (a low-pass keeps the mean), then goes round
+  // until its state is periodic.
+  double mean = 0.0;
+  for (const double v : x) mean += v;
+  mean /= static_cast<double>(n);
   for (int pass = 0; pass < 2; ++pass) {  // forward, then backward: zero phase
     for (const auto& s : sections_) {
-      double x1 = 0.0, x2 = 0.0, y1 = 0.0, y2 = 0.0;
-      // Start at the trial's mean, at rest, then go round until the state is periodic.
-      double mean = 0.0;
-      for (const double v : x) mean += v;
-      mean /= static_cast<double>(n);
-      x1 = x2 = y1 = y2 = mean;
+      double x1 = mean, x2 = mean, y1 = mean, y2 = mean;
       for (std::size_t r = 0; r <= warmup_periods_; ++r) {
         const bool keep = r == warmup_periods_;
         for (std::size_t j = 0; j < n; ++j) {
@@ -141,12 +146,58 @@ void IterativeLearning::local_slope(std::span<const double> drive) {
   }
 }
 
+void IterativeLearning::measure_delay(std::span<const double> drive,
+                                      std::span<const double> error) {
+  const std::size_t n = period_;
+  // The drive's change between the trials through the slope along the one before (slope_ is
+  // still its), and the output's change: dy(j + d) = du(j) at the bench's delay d. Both are
+  // differenced: what changes slowly (creep answering the drive late, drift) would stretch the
+  // delay found, and is not what the preview has to meet.
+  // The output's change goes through Q first, as the drive's did: above it is the sensor's noise.
+  std::vector<double> cu(n), cy(n), du(n), dy(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    cu[j] = (drive[j] - last_drive_[j]) * slope_[j];
+    cy[j] = last_error_[j] - error[j];
+  }
+  low_pass(cu);
+  low_pass(cy);
+  double uu = 0.0, yy = 0.0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t p = (j + n - 1) % n;
+    du[j] = cu[j] - cu[p];
+    dy[j] = cy[j] - cy[p];
+    uu += du[j] * du[j];
+    yy += dy[j] * dy[j];
+  }
+  if (!(uu > 0.0 && yy > 0.0)) return;
+  const std::size_t lags =
+      std::min(n / 4, static_cast<std::size_t>(std::ceil(model_delay_samples_)) + kDelaySearch);
+  std::vector<double> corr(lags + 1, 0.0);
+  std::size_t best = 0;
+  for (std::size_t d = 0; d <= lags; ++d) {
+    for (std::size_t j = 0; j < n; ++j) corr[d] += dy[(j + d) % n] * du[j];
+    if (corr[d] > corr[best]) best = d;
+  }
+  // A clear peak inside the search only: a change that mostly is not the drive's (noise, drift)
+  // or a delay beyond the search tells nothing.
+  if (best == 0 || best == lags || corr[best] < kDelayClear * std::sqrt(uu * yy)) return;
+  const double c0 = corr[best - 1], c1 = corr[best], c2 = corr[best + 1];
+  const double curvature = c0 - 2.0 * c1 + c2;
+  const double vertex = curvature < 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
+  delay_sum_ += static_cast<double>(best) + std::clamp(vertex, -0.5, 0.5);
+  ++delay_count_;
+  advance_samples_ = delay_sum_ / static_cast<double>(delay_count_);
+}
+
 void IterativeLearning::update(std::span<const double> drive, std::span<const double> error,
                                double gain, std::span<double> next) {
   const std::size_t n = period_;
   if (drive.size() != n || error.size() != n || next.size() != n) {
     throw std::invalid_argument("iterative learning: drive, error and next need one trial each");
   }
+  if (updates_ > 0) measure_delay(drive, error);
+  last_drive_.assign(drive.begin(), drive.end());
+  last_error_.assign(error.begin(), error.end());
   local_slope(drive);
   std::vector<double> c(error.begin(), error.end());
   low_pass(c);

@@ -259,9 +259,11 @@ int main(int argc, char** argv) {
   auto* tr_learn_opt =
       track_cmd
           ->add_option("--learn", tr_learn,
-                       "Learn over N trials (sine, triangle, sawtooth; a trial is one period): "
-                       "after a start-up period and one with the compensator's drive, each "
-                       "period plays the one before's drive corrected by its measured error "
+                       "Learn over N trials (sine, triangle, sawtooth: a trial is one period; "
+                       "--reference-file: one pass, its approach from the end then the "
+                       "trajectory, scored on the trajectory): after a start-up period and one "
+                       "with the compensator's drive, each plays the one before's drive "
+                       "corrected by its measured error "
                        "(iterative learning through the model's inverse slope, delay and "
                        "dynamics). The frequency moves to the loop rate over a whole number of "
                        "ticks. The result lists every trial; the run's errors are the last "
@@ -289,8 +291,8 @@ int main(int argc, char** argv) {
       "`hystbench model list` show; also after a restart of the daemon): after the start-up "
       "period its drive plays instead of the compensator's, for one scored period, or as "
       "the first trial with --learn. Only for the reference, range and loop rate it was "
-      "learned for: give the same --reference, --frequency and range, with the model it "
-      "was learned with loaded");
+      "learned for: give the same --reference, --frequency and range (or the same "
+      "--reference-file), with the model it was learned with loaded");
   for (const char* other : {"--periods", "--duration"}) {
     tr_learn_opt->excludes(track_cmd->get_option(other));
     tr_learned_opt->excludes(track_cmd->get_option(other));
@@ -312,7 +314,7 @@ int main(int argc, char** argv) {
                        "actuator range or moves faster than the slew limit")
           ->check(CLI::ExistingFile);
   for (const char* other : {"--reference", "--frequency", "--periods", "--duration",
-                            "--range-fraction", "--min", "--max", "--learn", "--learned"}) {
+                            "--range-fraction", "--min", "--max"}) {
     tr_file_opt->excludes(track_cmd->get_option(other));
   }
   track_cmd->add_option("--t-column", tr_t_column, "--reference-file: time column [s]")
@@ -462,11 +464,22 @@ int main(int argc, char** argv) {
                    "ends; or run `hystbench plot LOG` afterwards)\n";
       return 2;
     }
+    // --learn and --learned into the request; false when neither is given.
+    const auto add_learning = [&](nlohmann::json& p) {
+      if (!tr_learned.empty()) p["learned"] = tr_learned;
+      if (tr_learn > 0) {
+        p["learn_trials"] = tr_learn;
+        if (!std::isnan(tr_learn_gain)) p["learn_gain"] = tr_learn_gain;
+        if (!std::isnan(tr_learn_cutoff)) p["learn_cutoff_hz"] = tr_learn_cutoff;
+      }
+      return tr_learn > 0 || !tr_learned.empty();
+    };
     if (!tr_file.empty()) {
       nlohmann::json p = nlohmann::json::object();
       if (!tr_compensator.empty()) p["compensator"] = tr_compensator;
       if (!std::isnan(tr_precondition)) p["precondition_s"] = tr_precondition;
       if (!std::isnan(tr_approach)) p["approach_s"] = tr_approach;
+      add_learning(p);
       try {
         remote.upload =
             hd::read_upload(tr_file, "reference", tr_t_column, tr_yr_column, tr_yr_scale, tr_rate);
@@ -477,13 +490,8 @@ int main(int argc, char** argv) {
       return remote_run("track", p);
     }
     nlohmann::json p = {{"reference", tr_reference}, {"frequency_hz", tr_frequency}};
-    if (!tr_learned.empty()) p["learned"] = tr_learned;
-    if (tr_learn > 0) {
-      p["learn_trials"] = tr_learn;
-      if (!std::isnan(tr_learn_gain)) p["learn_gain"] = tr_learn_gain;
-      if (!std::isnan(tr_learn_cutoff)) p["learn_cutoff_hz"] = tr_learn_cutoff;
-    } else if (!tr_learned.empty()) {
-      // the learned drive's run: its start-up period and one scored period
+    if (add_learning(p)) {
+      // a learning run, or a learned drive's (its start-up period and one scored period)
     } else if (tr_duration > 0) {
       p["duration_s"] = tr_duration;
     } else {

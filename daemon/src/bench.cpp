@@ -525,7 +525,8 @@ void Bench::finish_learning(const RunProgram& run, json& report) {
           {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
       l["drive_file"] = details::save_learned_drive(
           settings_.model_dir, run.run_id, drive, learning->kept_compensator(), dt_,
-          {r.reference, drive.size(), r.frequency_hz, r.rate_hz, r.min_um, r.max_um}, meta);
+          {r.reference, drive.size(), r.frequency_hz, r.rate_hz, r.min_um, r.max_um, r.signature},
+          meta);
       l["drive"] = run.run_id + "-learned";
     } catch (const std::exception& e) {
       l["drive_file_error"] = e.what();

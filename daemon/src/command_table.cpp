@@ -27,7 +27,11 @@ constexpr ParamSpec kTrackUploaded[] = {{"reference_upload", T::kString},
                                         {"kp", T::kNumber, 0.0, 1e6},
                                         {"ki", T::kNumber, 0.0, 1e9},
                                         {"kd", T::kNumber, 0.0, 1e3},
-                                        {"precondition_s", T::kNumber, 0.0, 60.0}};
+                                        {"precondition_s", T::kNumber, 0.0, 60.0},
+                                        {"learn_trials", T::kInteger, 0, 1000},
+                                        {"learn_gain", T::kNumber, 1e-3, 20.0},
+                                        {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9},
+                                        {"learned", T::kString}};
 constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"frequency_hz", T::kNumber, 1e-3},
                                        {"periods", T::kNumber, 0.0, 1e7},

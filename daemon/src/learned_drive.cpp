@@ -49,8 +49,13 @@ std::string number(double v) {
 std::string describe(const LearnedFor& f) {
   std::ostringstream s;
   s.precision(6);
-  s << "a " << f.frequency_hz << " Hz " << f.reference << " (" << f.period_samples
-    << " ticks) from " << f.min_um << " to " << f.max_um << " um at " << f.rate_hz << " Hz";
+  if (f.reference == "upload") {
+    s << "an uploaded trajectory " << f.signature << " (passes of " << f.period_samples
+      << " ticks)";
+  } else {
+    s << "a " << f.frequency_hz << " Hz " << f.reference << " (" << f.period_samples << " ticks)";
+  }
+  s << " from " << f.min_um << " to " << f.max_um << " um at " << f.rate_hz << " Hz";
   return s.str();
 }
 
@@ -117,6 +122,7 @@ std::string save_learned_drive(const std::string& dir, const std::string& run_id
               {"period_samples", f.period_samples},
               {"min_um", f.min_um},
               {"max_um", f.max_um}});
+    if (!f.signature.empty()) m["signature"] = f.signature;
     std::ofstream out(fs::path(dir) / (name + ".json"));
     out << m.dump(2) << "\n";
     if (!out) throw std::runtime_error("cannot write " + name + ".json in " + dir);
@@ -144,6 +150,7 @@ LearnedDrive load_learned_drive(const std::string& dir, const std::string& name)
     f.rate_hz = d.meta.at("rate_hz").get<double>();
     f.min_um = d.meta.at("min_um").get<double>();
     f.max_um = d.meta.at("max_um").get<double>();
+    f.signature = d.meta.value("signature", std::string());
     read_drive_csv(fs::path(dir) / (d.name + ".csv"), d);
     if (d.u.size() != f.period_samples) {
       throw std::runtime_error("its CSV holds " + std::to_string(d.u.size()) +
@@ -160,8 +167,16 @@ void check_learned_drive(const LearnedDrive& drive, const LearnedFor& run) {
   const double tol = 1e-6 * std::max(std::abs(f.max_um - f.min_um), 1e-9);
   const bool same = f.reference == run.reference && f.period_samples == run.period_samples &&
                     f.rate_hz == run.rate_hz && std::abs(f.min_um - run.min_um) <= tol &&
-                    std::abs(f.max_um - run.max_um) <= tol;
+                    std::abs(f.max_um - run.max_um) <= tol && f.signature == run.signature;
   if (same) return;
+  if (f.reference == "upload" || run.reference == "upload") {
+    throw CommandError("bad_params",
+                       "learned: '" + drive.name + "' was learned for " + describe(f) +
+                           "; this run asks for " + describe(run) +
+                           ". A learned drive replays only its own reference at its own loop "
+                           "rate: upload the same trajectory (the same file, --approach and "
+                           "resampling), or learn this one with --learn N");
+  }
   throw CommandError("bad_params",
                      "learned: '" + drive.name + "' was learned for " + describe(f) +
                          "; this run asks for " + describe(run) +

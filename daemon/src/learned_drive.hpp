@@ -16,11 +16,12 @@ namespace hystbench::daemon::details {
 
 /// What a drive was learned for.
 struct LearnedFor {
-  std::string reference;  ///< sine, triangle or sawtooth
+  std::string reference;  ///< sine, triangle, sawtooth or upload
   std::size_t period_samples = 0;
   double frequency_hz = 0.0;          ///< the loop rate / period_samples
   double rate_hz = 0.0;               ///< the loop rate
   double min_um = 0.0, max_um = 0.0;  ///< the reference's extremes
+  std::string signature;              ///< an upload's fingerprint (empty for a built-in one)
 };
 
 struct LearnedDrive {
@@ -43,7 +44,8 @@ std::string save_learned_drive(const std::string& dir, const std::string& run_id
 LearnedDrive load_learned_drive(const std::string& dir, const std::string& name);
 
 /// Throws bad_params when `run` is not what `drive` was learned for: another reference kind,
-/// period (frequency), loop rate or extremes (beyond 1e-6 of the span); the message names both.
+/// period (frequency), loop rate, extremes (beyond 1e-6 of the span) or uploaded trajectory
+/// (signature); the message names both.
 void check_learned_drive(const LearnedDrive& drive, const LearnedFor& run);
 
 /// True for a model-folder file name that is a learned drive's JSON (RUN-learned.json).

@@ -109,8 +109,11 @@ void print_run_result(const json& r, std::ostream& out) {
   if (const auto l = r.find("learning"); l != r.end() && l->is_object()) {
     const json& trials = (*l)["trials"];
     const json from = l->value("started_from", json());
-    out << "  learning        " << trials.size() << " trials of " << fixed((*l)["frequency_hz"], 3)
-        << " Hz (the first with "
+    out << "  learning        " << trials.size() << " trials of "
+        << (l->value("reference", std::string()) == "upload"
+                ? "a pass of " + std::to_string(l->value("period_samples", 0)) + " ticks"
+                : fixed((*l)["frequency_hz"], 3) + " Hz")
+        << " (the first with "
         << (from.is_string() ? "the drive " + from.get<std::string>() + " learned before"
                              : std::string("the compensator's drive"))
         << "): rms %";
@@ -121,6 +124,10 @@ void print_run_result(const json& r, std::ostream& out) {
     if ((*l).value("stale_periods", 0) > 0) {
       out << ", " << (*l)["stale_periods"].get<int>()
           << " periods replayed while the update was computed";
+    }
+    if ((*l).value("late_periods", 0) > 0) {
+      out << ", " << (*l)["late_periods"].get<int>() << " trials took their drive up to "
+          << (*l).value("late_ticks_max", 0) << " ticks into the period";
     }
     out << "\n";
     if (l->contains("drive_file")) {

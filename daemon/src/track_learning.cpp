@@ -32,11 +32,12 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
   std::vector<Trial> scored;
   std::uint64_t number = 0;
   while (exchange_.take_trial(u_, c_, e_, number)) {
-    const std::size_t n = e_.size();
+    const std::size_t from = std::min(request_.scored_from, e_.size() - 1);
+    const std::size_t n = e_.size() - from;
     double sum2 = 0.0, peak = 0.0;
-    for (const double e : e_) {
-      sum2 += e * e;
-      peak = std::max(peak, std::abs(e));
+    for (std::size_t j = from; j < e_.size(); ++j) {
+      sum2 += e_[j] * e_[j];
+      peak = std::max(peak, std::abs(e_[j]));
     }
     Trial t;
     t.trial = number;
@@ -122,7 +123,13 @@ json TrackLearning::result() const {
           {"trials_requested", request_.trials},
           {"gain", request_.gain},
           {"cutoff_hz", learner_.cutoff_hz()},
+          {"delay_ticks",
+           {{"model", learner_.model_delay_samples()},
+            {"used", learner_.delay_samples()},
+            {"measurements", learner_.delay_measurements()}}},
           {"period_samples", exchange_.period},
+          {"scored_from", request_.scored_from},
+          {"reference", request_.reference},
           {"frequency_hz", request_.frequency_hz},
           {"stopped", stopped_},
           {"why", stopped_ ? why_
@@ -133,6 +140,8 @@ json TrackLearning::result() const {
           {"lead_in_offset_um", exchange_.lead_in_offset()},
           {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
           {"stale_periods", exchange_.stale_periods()},
+          {"late_periods", exchange_.late_periods()},
+          {"late_ticks_max", exchange_.late_ticks_max()},
           {"update_ms",
            {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
             {"max", update_ms_max_},

@@ -19,11 +19,15 @@ namespace hystbench::daemon::details {
 
 /// What a learning run is asked for and built with.
 struct LearningRequest {
-  std::size_t trials = 10;            ///< learned trials after the first (the compensator's)
-  double gain = 0.5;                  ///< gamma at the start, (0, 20]
-  double range_um = 0.0;              ///< the reference's span: errors in % of it
-  double frequency_hz = 0.0;          ///< the trial's frequency (the loop rate / P)
-  std::string reference;              ///< its kind (sine, triangle, sawtooth)
+  std::size_t trials = 10;    ///< learned trials after the first (the compensator's)
+  double gain = 0.5;          ///< gamma at the start, (0, 20]
+  double range_um = 0.0;      ///< the reference's span: errors in % of it
+  double frequency_hz = 0.0;  ///< the trial's frequency (the loop rate / P)
+  std::string reference;      ///< its kind (sine, triangle, sawtooth, upload)
+  std::string signature;      ///< an upload's fingerprint (empty for a built-in one)
+  /// A trial's first scored phase: an upload's pass scores its trajectory, not the approach
+  /// before it (the learner learns both).
+  std::size_t scored_from = 0;
   double rate_hz = 0.0;               ///< the loop rate
   double min_um = 0.0, max_um = 0.0;  ///< the reference's extremes
   /// A drive learned before (P samples) that trial 0 plays instead of the compensator's, and

@@ -84,45 +84,53 @@ ActuatorRange known_range(const RunContext& ctx) {
 }
 
 // A learning run's trials (track --learn): each one period of a periodic reference, P whole
-// ticks (the frequency moves to the loop rate / P so that every trial samples the same points).
+// ticks (the frequency moves to the loop rate / P so that every trial samples the same points),
+// or one pass of a user's trajectory (its approach from the end, then itself).
 struct LearningPlan {
   std::size_t trials = 0;
   double gain = 0.5;
-  double cutoff_hz = 0.0;     ///< Q's cut-off; 0 = IterativeLearning's default
-  std::size_t period = 0;     ///< P [ticks]
-  double frequency_hz = 0.0;  ///< the loop rate / P
-  double periods = 0.0;       ///< the reference's length: the start-up period, trial 0, N trials
-  std::string reference;
+  double cutoff_hz = 0.0;             ///< Q's cut-off; 0 = IterativeLearning's default
+  std::size_t period = 0;             ///< P [ticks]
+  double frequency_hz = 0.0;          ///< the loop rate / P
+  std::string reference;              ///< sine, triangle, sawtooth, or upload
+  std::size_t scored_from = 0;        ///< a trial's first scored phase (an upload's approach: not)
   std::optional<LearnedDrive> start;  ///< the drive trial 0 plays (`learned`), else none
 };
 
 // The learning gain's default: half the error corrected per trial (a plant whose local slope is
 // half the model's still converges; twice it, at the edge).
 constexpr double kDefaultLearningGain = 0.5;
-// A period on the wall clock may begin before the learner's update for it is ready: the run is
-// long enough for this much update time per trial, and ends after its last trial.
-constexpr double kUpdateAllowanceS = 0.05;
 
-std::optional<LearningPlan> learning_plan(const Request& request, const RunContext& ctx) {
+// The plan of a learning run from its request; its period is the reference's (set_period) for an
+// upload.
+std::optional<LearningPlan> learning_plan(const Request& request, const RunContext& ctx,
+                                          const Upload* upload) {
   const bool learns = request.has("learn_trials") && request.integer("learn_trials", 0) > 0;
-  if (!learns && !request.has("learned")) {
+  if (!learns) {
     for (const char* key : {"learn_gain", "learn_cutoff_hz"}) {
       if (request.has(key)) {
         throw CommandError("bad_params", std::string(key) + ": only with learn_trials > 0");
       }
     }
-    return std::nullopt;
+    if (!request.has("learned")) return std::nullopt;
   }
   const char* key = learns ? "learn_trials" : "learned";
   LearningPlan plan;
   plan.trials = static_cast<std::size_t>(request.integer("learn_trials", 0));
   plan.gain = request.number("learn_gain", kDefaultLearningGain);
   plan.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
+  if (request.has("learned")) {
+    plan.start = load_learned_drive(ctx.settings.model_dir, request.string("learned", ""));
+  }
+  if (upload != nullptr) {
+    plan.reference = "upload";
+    return plan;
+  }
   plan.reference = request.string("reference", "triangle");
   if (plan.reference != "sine" && plan.reference != "triangle" && plan.reference != "sawtooth") {
     throw CommandError("bad_params", std::string(key) +
                                          ": a trial is one period of a sine, triangle or "
-                                         "sawtooth; '" +
+                                         "sawtooth, or one pass of an uploaded trajectory; '" +
                                          plan.reference + "' does not repeat");
   }
   if (request.has("periods") || request.has("duration_s")) {
@@ -135,26 +143,30 @@ std::optional<LearningPlan> learning_plan(const Request& request, const RunConte
   const double f = request.number("frequency_hz", 1.0, 1e-3, rate / 20.0);
   plan.period = static_cast<std::size_t>(std::llround(rate / f));
   plan.frequency_hz = rate / static_cast<double>(plan.period);
-  const double allowance =
-      std::ceil(kUpdateAllowanceS * plan.frequency_hz) * static_cast<double>(plan.trials + 1);
-  plan.periods = static_cast<double>(plan.trials + 2) + allowance;
-  if (request.has("learned")) {
-    plan.start = load_learned_drive(ctx.settings.model_dir, request.string("learned", ""));
-  }
   return plan;
 }
 
 TrackReference reference(const Request& request, const RunContext& ctx, const ActuatorRange& range,
-                         const Upload* upload, const std::optional<LearningPlan>& learn) {
+                         const Upload* upload, std::optional<LearningPlan>& learn) {
   const auto& lim = ctx.settings.loop.limits;
   const double span = range.y_top - range.y_bottom;
   const ReferenceLimits limits{range.y_bottom, range.y_top,
                                lim.slew_v_per_s * span / (lim.u_max - lim.u_min),
                                ctx.settings.loop.rate_hz};
-  if (learn) return builtin_reference(request, limits, learn->frequency_hz, learn->periods);
-  if (upload == nullptr) return builtin_reference(request, limits);
+  if (upload == nullptr) {
+    if (!learn) return builtin_reference(request, limits);
+    return builtin_reference(request, limits, learn->frequency_hz,
+                             learning_periods(learn->trials, learn->frequency_hz));
+  }
   // The precondition sweep leaves the output at the bottom of its range.
-  return uploaded_reference(*upload, limits, range.y_bottom, request.number("approach_s", 0.2));
+  const double approach_s = request.number("approach_s", 0.2);
+  if (!learn) return uploaded_reference(*upload, limits, range.y_bottom, approach_s);
+  TrackReference ref =
+      uploaded_reference(*upload, limits, range.y_bottom, approach_s, learn->trials);
+  learn->period = ref.pass_samples;
+  learn->frequency_hz = ref.frequency_hz;
+  learn->scored_from = ref.pass_samples - ref.header.value("resampled_samples", std::size_t{0});
+  return ref;
 }
 
 // The model's inverse, started in the state the sweep `prefix` leaves it in; null for a
@@ -381,7 +393,7 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
 
 // What a learning run's drive is learned for.
 LearnedFor learned_for(const LearningRequest& r, std::size_t period) {
-  return {r.reference, period, r.frequency_hz, r.rate_hz, r.min_um, r.max_um};
+  return {r.reference, period, r.frequency_hz, r.rate_hz, r.min_um, r.max_um, r.signature};
 }
 
 // The learner of a learning run: the trials' exchange from the first scored period on, the
@@ -397,6 +409,7 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   o.u_min = lim.u_min;
   o.u_max = lim.u_max;
   o.cutoff_hz = plan.cutoff_hz;
+  o.fundamental_hz = ref.content_hz;
   if (lim.slew_v_per_s > 0.0) o.max_step = lim.slew_v_per_s * o.dt;
   LearningRequest r;
   r.trials = plan.trials;
@@ -407,6 +420,8 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   r.rate_hz = ctx.settings.loop.rate_hz;
   r.min_um = ref.min_um;
   r.max_um = ref.max_um;
+  r.signature = ref.signature;
+  r.scored_from = plan.scored_from;
   if (plan.start) {
     check_learned_drive(*plan.start, learned_for(r, plan.period));
     r.start_drive = plan.start->u;
@@ -428,7 +443,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   const std::string comp_name = request.string("compensator", ctx.model ? "inverse" : "none");
   const hc::CompensatorKind kind = compensator_kind(comp_name, ctx);
   const ActuatorRange range = known_range(ctx);
-  const std::optional<LearningPlan> learn = learning_plan(request, ctx);
+  std::optional<LearningPlan> learn = learning_plan(request, ctx, upload);
   TrackReference ref = reference(request, ctx, range, upload, learn);
 
   auto p = std::make_unique<RunProgram>();
@@ -494,6 +509,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
               {"gain", learn->gain},
               {"frequency_hz", learn->frequency_hz},
               {"period_samples", learn->period}};
+    if (learn->scored_from > 0) l["scored_from"] = learn->scored_from;
     if (learn->start) l["started_from"] = learn->start->name;
     run.header["run"]["learning"] = l;
     run.reply["learning"] = l;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <string>
 
@@ -56,6 +57,92 @@ void check_slew(const Upload& u, const std::vector<double>& v, double max_step, 
     }
   }
 }
+
+/// A raised cosine of n ticks from `from` towards `to` (its last tick one short of `to`).
+std::vector<double> approach(double from, double to, std::size_t n) {
+  std::vector<double> v(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double f = 0.5 * (1.0 - std::cos(M_PI * static_cast<double>(k) / n));
+    v[k] = from + f * (to - from);
+  }
+  return v;
+}
+
+/// FNV-1a over the values to a picometre: a trajectory's identity for its learned drive.
+std::string signature_of(const std::vector<double>& values) {
+  std::uint64_t h = 1469598103934665603ULL;
+  for (const double v : values) {
+    auto q = static_cast<std::uint64_t>(std::llround(v * 1e6));
+    for (int b = 0; b < 8; ++b, q >>= 8) {
+      h ^= q & 0xffU;
+      h *= 1099511628211ULL;
+    }
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
+
+/// The fundamental [Hz] of a trajectory sampled every dt_s: its reversals (moves back by more
+/// than 2 % of its span) over twice its duration; 0 for one that never turns.
+double reversal_rate(const std::vector<double>& v, double dt_s) {
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  const double band = 0.02 * (*hi - *lo);
+  if (!(band > 0.0)) return 0.0;
+  std::size_t reversals = 0;
+  int direction = 0;  // +1 rising, -1 falling, 0 not yet known
+  double low = v.front(), high = v.front(), extreme = v.front();
+  for (const double x : v) {
+    if (direction == 0) {
+      low = std::min(low, x);
+      high = std::max(high, x);
+      direction = x > low + band ? 1 : x < high - band ? -1 : 0;
+      extreme = x;
+    } else if (direction * (x - extreme) > 0.0) {
+      extreme = x;  // further the same way
+    } else if (std::abs(x - extreme) > band) {
+      ++reversals;
+      direction = -direction;
+      extreme = x;
+    }
+  }
+  return static_cast<double>(reversals) / (2.0 * static_cast<double>(v.size()) * dt_s);
+}
+
+/// A trajectory in passes: the first pass's ticks, then the later passes' (each P ticks), linear
+/// in between, the end held. Real-time safe.
+class RepeatedPasses final : public sim::SignalGenerator {
+ public:
+  RepeatedPasses(std::vector<double> first, std::vector<double> later, std::size_t passes,
+                 double dt_s)
+      : first_(std::move(first)),
+        later_(std::move(later)),
+        samples_(passes * first_.size()),
+        dt_s_(dt_s) {}
+  double value(double t_s) const noexcept override {
+    const double x = t_s / dt_s_;
+    if (!(x > 0.0)) return first_.front();  // before the start, and NaN
+    const double last = static_cast<double>(samples_ - 1);
+    if (x >= last) return at(samples_ - 1);
+    const auto k = static_cast<std::size_t>(x);
+    const double f = x - static_cast<double>(k);
+    return at(k) + f * (at(k + 1) - at(k));
+  }
+  double duration_s() const noexcept override { return static_cast<double>(samples_ - 1) * dt_s_; }
+
+ private:
+  double at(std::size_t k) const noexcept {
+    const std::size_t p = first_.size();
+    return k < p ? first_[k] : later_[k % p];
+  }
+  std::vector<double> first_, later_;
+  std::size_t samples_;
+  double dt_s_;
+};
+
+// A period on the wall clock may begin before the learner's update for it is ready: a learning
+// run is long enough for this much update time per trial, and ends after its last trial.
+constexpr double kUpdateAllowanceS = 0.05;
 
 }  // namespace
 
@@ -129,7 +216,8 @@ TrackReference builtin_reference(const Request& request, const ReferenceLimits& 
 }
 
 TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& limits,
-                                  double y_start, double approach_s) {
+                                  double y_start, double approach_s,
+                                  std::optional<std::size_t> learned_trials) {
   const double dt = 1.0 / limits.rate_hz;
   check_range(upload, limits.y_bottom, limits.y_top, "um", "reference");
   std::vector<double> traj = upload.resampled(dt);
@@ -142,27 +230,42 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
   check_slew(upload, traj, max_step, dt, limits.slew_um_per_s, "um", "reference");
 
   // The approach: a raised cosine from where the precondition left the output to the first
-  // value, long enough that its steepest point moves at most half the slew limit.
-  const double jump = std::abs(traj.front() - y_start);
-  const double needed = M_PI / 2.0 * jump / (0.5 * limits.slew_um_per_s);
-  const double approach = std::max(approach_s, needed);
-  const auto n_a = static_cast<std::size_t>(std::ceil(approach / dt));
-  std::vector<double> values;
-  values.reserve(n_a + traj.size());
-  for (std::size_t k = 0; k < n_a; ++k) {
-    const double f = 0.5 * (1.0 - std::cos(M_PI * static_cast<double>(k) / n_a));
-    values.push_back(y_start + f * (traj.front() - y_start));
-  }
+  // value, long enough that its steepest point moves at most half the slew limit; between
+  // passes, from the trajectory's end, as long as the first.
+  const auto approach_ticks = [&](double jump) {
+    const double needed = M_PI / 2.0 * std::abs(jump) / (0.5 * limits.slew_um_per_s);
+    return static_cast<std::size_t>(std::ceil(std::max(approach_s, needed) / dt));
+  };
+  std::size_t n_a = approach_ticks(traj.front() - y_start);
+  if (learned_trials) n_a = std::max(n_a, approach_ticks(traj.front() - traj.back()));
   const auto [lo, hi] = std::minmax_element(traj.begin(), traj.end());
   TrackReference r;
   r.min_um = *lo;
   r.max_um = *hi;
-  r.samples = n_a + traj.size();
-  r.unscored = n_a;
+  r.signature = signature_of(traj);
+  r.content_hz = reversal_rate(traj, dt);
   const std::size_t resampled = traj.size();
-  values.insert(values.end(), traj.begin(), traj.end());
-  traj = {};
-  r.signal = sim::make_uniform_signal(std::move(values), dt);
+  const std::size_t pass = n_a + resampled;
+  std::vector<double> first = approach(y_start, traj.front(), n_a);
+  first.insert(first.end(), traj.begin(), traj.end());
+  double passes = 1.0;
+  if (learned_trials) {
+    passes = learning_periods(*learned_trials, limits.rate_hz / static_cast<double>(pass));
+    std::vector<double> later = approach(traj.back(), traj.front(), n_a);
+    later.insert(later.end(), traj.begin(), traj.end());
+    traj = {};
+    r.pass_samples = pass;
+    r.frequency_hz = limits.rate_hz / static_cast<double>(pass);
+    r.samples = static_cast<std::uint64_t>(passes) * pass;
+    r.unscored = pass;
+    r.signal = std::make_unique<RepeatedPasses>(std::move(first), std::move(later),
+                                                static_cast<std::size_t>(passes), dt);
+  } else {
+    traj = {};
+    r.samples = pass;
+    r.unscored = n_a;
+    r.signal = sim::make_uniform_signal(std::move(first), dt);
+  }
   r.header = {{"reference", "upload"},
               {"source", upload.source},
               {"upload_samples", upload.values.size()},
@@ -170,15 +273,27 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
               {"approach_s", static_cast<double>(n_a) * dt},
               {"duration_s", static_cast<double>(r.samples) * dt},
               {"min_um", r.min_um},
-              {"max_um", r.max_um}};
+              {"max_um", r.max_um},
+              {"signature", r.signature}};
   r.reply = {{"kind", "upload"},
              {"source", upload.source},
              {"samples", upload.values.size()},
              {"resampled_samples", resampled},
              {"approach_s", static_cast<double>(n_a) * dt},
              {"min_um", r.min_um},
-             {"max_um", r.max_um}};
+             {"max_um", r.max_um},
+             {"signature", r.signature}};
+  if (learned_trials) {
+    r.header["passes"] = passes;
+    r.reply["pass_samples"] = pass;
+  }
   return r;
+}
+
+double learning_periods(std::size_t trials, double frequency_hz) {
+  const double allowance =
+      std::ceil(kUpdateAllowanceS * frequency_hz) * static_cast<double>(trials + 1);
+  return static_cast<double>(trials + 2) + allowance;
 }
 
 std::vector<double> checked_drive(const Upload& upload, double u_min, double u_max,

@@ -165,6 +165,33 @@ class WithoutModelTest(unittest.TestCase):
         self.assertEqual(refused.exception.code, "bad_params")
         self.assertIn("was learned for", str(refused.exception))
 
+    def test_track_learns_an_uploaded_trajectory_pass_by_pass(self) -> None:
+        # Four lines of a raster (a triangle between 10 and 30 um at 5 Hz) at 1 kHz.
+        line = [10.0 + 20.0 * (1.0 - abs(1.0 - 2.0 * ((5.0 * k / 1000.0) % 1.0))) for k in range(801)]
+        result = self.bench.track(
+            line, rate_hz=1000.0, compensator="none", learn=3, precondition_s=0.2, wait=True
+        )
+        self.assertTrue(result.completed, result)
+        learning = result["learning"]
+        self.assertEqual(learning["reference"], "upload")
+        rms = [t["rms_error_percent"] for t in learning["trials"]]
+        self.assertEqual(len(rms), 4, learning)
+        self.assertLess(rms[-1], 0.5 * rms[0], rms)
+        self.assertGreater(learning["scored_from"], 0)
+        self.assertTrue(os.path.exists(learning["drive_file"]), learning)
+        # Its drive replays for the same trajectory only.
+        replay = self.bench.track(
+            line, rate_hz=1000.0, compensator="none", learned=learning["drive"],
+            precondition_s=0.2, wait=True,
+        )
+        self.assertTrue(replay.completed, replay)
+        self.assertEqual(replay["learning"]["trials"][0]["drive"], "saved")
+        with self.assertRaises(BenchError) as refused:
+            self.bench.track(
+                [v * 0.9 for v in line], rate_hz=1000.0, learned=learning["drive"]
+            )
+        self.assertEqual(refused.exception.code, "bad_params")
+
     def test_a_run_followed_from_another_connection(self) -> None:
         started = self.bench.track(
             compensator="none", frequency_hz=5.0, periods=5, precondition_s=0.1

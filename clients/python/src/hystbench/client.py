@@ -789,18 +789,19 @@ class Bench:
                 precondition left the output to the first sample [s] (daemon default 0.2 s,
                 longer when the slew limit needs it); the error is scored over the whole
                 trajectory after it.
-            learn: learn over this many trials (a sine, triangle or sawtooth; a trial is one
-                period, instead of ``periods`` / ``duration_s``): after a start-up period and
-                one with the compensator's drive, each period plays the one before's drive
-                corrected by its error. The result's ``learning["trials"]`` lists each trial's
+            learn: learn over this many trials (a sine, triangle or sawtooth: a trial is one
+                period, instead of ``periods`` / ``duration_s``; an uploaded trajectory: a
+                trial is one pass, its approach from the trajectory's end then the trajectory,
+                scored on the trajectory): after a start-up period and one with the
+                compensator's drive, each plays the one before's drive corrected by its error. The result's ``learning["trials"]`` lists each trial's
                 rms and max error [% of range]; ``rms_error_percent`` is the last trial's; the
                 learned drive is saved in the daemon's model folder (``learning["drive_file"]``).
             learn_gain: the share of the error corrected per trial (daemon default 0.5).
             learned: start from a drive learned before (``learning["drive"]`` of its run; also
                 after a restart of the daemon): after the start-up period it plays instead of
                 the compensator's drive, for one scored period, or as the first trial with
-                ``learn``. Only for the waveform, range and loop rate it was learned for
-                (``bad_params`` names both otherwise).
+                ``learn``. Only for the waveform, range and loop rate it was learned for, or
+                the same uploaded trajectory (``bad_params`` names both otherwise).
             **params: further request parameters, sent as given (``kp``, ``ki``, ``kd``,
                 ``learn_cutoff_hz``).
             wait, progress, timeout: as for ``identify``; ``progress`` also sees the upload

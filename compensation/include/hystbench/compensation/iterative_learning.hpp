@@ -3,14 +3,16 @@
 // and its measured error,
 //   u_{k+1}(j) = u_k(j) + gamma Q[ D^-1[ Q[e_k] ](j + d) / s_k(j) ]   (u_0 through Q first),
 // circular over the trial's P samples. L comes from the active model: d its input delay (the
-// error is read d ahead of the drive that caused it), D^-1 its second-order dynamics inverted on
+// error is read d ahead of the drive that caused it; from the second update on, the delay the
+// bench shows: where the output's change between two trials best follows the drive's, averaged
+// over the pairs where that is clear), D^-1 its second-order dynamics inverted on
 // the error (as the feedforward inverts them on the reference), s_k(j) the local slope of its
 // static map along the trial's drive (the inverse's slope there), kept within [1/4, 4] x its mean
 // along the trial. Q is a zero-phase low-pass (a fourth-order Butterworth run forward and
-// backward around the trial), cut off at the lowest of a fifth of the sample rate, the trial's
-// 300th harmonic (above it a slow trial's error is mostly sensor noise) and half the model's
-// natural frequency (above it the model's phase is not known, and a mode it misses would grow
-// from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
+// backward around the trial), cut off at the lowest of a fifth of the sample rate, the 300th
+// harmonic of the trial's fundamental (above it a slow trial's error is mostly sensor noise) and
+// half the model's natural frequency (above it the model's phase is not known, and a mode it
+// misses would grow from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
 #include <array>
 #include <cstddef>
 #include <span>
@@ -21,8 +23,11 @@
 namespace hystbench::compensation {
 
 struct LearningOptions {
-  double dt = 1e-4;         ///< sample period [s], > 0
-  double cutoff_hz = 0.0;   ///< Q's cut-off [Hz]; 0 = the default above
+  double dt = 1e-4;        ///< sample period [s], > 0
+  double cutoff_hz = 0.0;  ///< Q's cut-off [Hz]; 0 = the default above
+  /// The trial's fundamental for the harmonic bound [Hz]; 0 = its repetition rate (a trial
+  /// that holds several cycles, a raster's lines in one pass, gives theirs).
+  double fundamental_hz = 0.0;
   double u_min = -1e300;    ///< the learned drive stays within [u_min, u_max] [input unit]
   double u_max = 1e300;     ///<
   double max_step = 1e300;  ///< largest change between samples [input unit] (slew x dt)
@@ -47,10 +52,17 @@ class IterativeLearning {
   /// The model's local slope along the last drive given to update() [output / input unit].
   const std::vector<double>& slope() const noexcept { return slope_; }
   double cutoff_hz() const noexcept { return cutoff_hz_; }
+  /// The delay the error is read ahead by [samples]: the model's, or the bench's once measured.
+  double delay_samples() const noexcept { return advance_samples_; }
+  double model_delay_samples() const noexcept { return model_delay_samples_; }
+  /// How many trial pairs measured the bench's delay clearly.
+  std::size_t delay_measurements() const noexcept { return delay_count_; }
   std::size_t period_samples() const noexcept { return period_; }
 
  private:
   void local_slope(std::span<const double> drive);
+  // The bench's delay from this trial and the one before (last_drive_, last_error_).
+  void measure_delay(std::span<const double> drive, std::span<const double> error);
   // Q: zero-phase low-pass in place, circular over the trial.
   void low_pass(std::vector<double>& x);
 
@@ -58,8 +70,12 @@ class IterativeLearning {
   std::size_t period_;
   LearningOptions o_;
   double cutoff_hz_ = 0.0;
-  double advance_samples_ = 0.0;        // the model's delay [samples]
-  double dyn_a1_ = 0.0, dyn_a2_ = 0.0;  // D^-1 = 1 + a1 d/dt + a2 d2/dt2 (0: none)
+  double advance_samples_ = 0.0;      // the delay the error is read ahead by [samples]
+  double model_delay_samples_ = 0.0;  // the model's
+  double delay_sum_ = 0.0;            // the bench's, measured delay_count_ times
+  std::size_t delay_count_ = 0;
+  std::vector<double> last_drive_, last_error_;  // the trial the last update was given
+  double dyn_a1_ = 0.0, dyn_a2_ = 0.0;           // D^-1 = 1 + a1 d/dt + a2 d2/dt2 (0: none)
   // Butterworth sections (b0, b1, b2, a1, a2) of Q, and the warm-up periods its circular run needs.
   std::vector<std::array<double, 5>> sections_;
   std::size_t warmup_periods_ = 1;
