@@ -13,14 +13,17 @@
 #              identify --no-extend and identify, each followed by 200 / 500 Hz sines (inverse)
 #   campaign   wall time of identify + a 7-frequency sweep (inverse)
 #   learning   rate dependence, the delay and thermal drift on: identify, a sweep 1-500 Hz with
-#              none / inverse / inverse+pid, then track --learn 10 at each frequency
+#              none / inverse / inverse+pid, then track --learn 10 at each frequency, each drive
+#              replayed, and a raster line (--reference-file) learned over 10 passes
+#   learning-delay  the same effects, the model identified with the delay off: track --learn 20
+#              at each frequency
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign learning)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign learning learning-delay)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -146,6 +149,36 @@ for section in "${sections[@]}"; do
         [ -n "${drives[$f]:-}" ] || continue
         hb track --reference sine --frequency "$f" --learned "${drives[$f]}" --wait --json |
           jq -r --arg f "$f" "$f3"'"| \($f) | \(.rms_error_percent | f) | \(.max_error_percent | f) |"' || true
+      done
+      echo
+      # The raster line of the upload figures: an 8-36 um triangle at 2.5 Hz, 2 s in a 5 kHz file.
+      raster="$work/learning/raster.csv"
+      awk 'BEGIN { print "t,yr"; for (k = 0; k <= 10000; k++) { t = k / 5000; p = 2.5 * t - int(2.5 * t);
+        printf "%.6f,%.6f\n", t, 8 + 28 * (p < 0.5 ? 2 * p : 2 - 2 * p) } }' >"$raster"
+      echo "A raster line learned over 10 passes (track --reference-file raster.csv --learn 10):"
+      echo
+      out=$(hb track --reference-file "$raster" --learn 10 --wait --json || true)
+      jq -r "$f3"'"passes (rms %): \([.learning.trials[].rms_error_percent | f] | join(" ")); last max \(.max_error_percent | f) %; cut-off \(.learning.cutoff_hz | f) Hz"' <<<"$out" || true
+      name=$(jq -r '.learning.drive // empty' <<<"$out")
+      [ -z "$name" ] || hb track --reference-file "$raster" --learned "$name" --wait --json |
+        jq -r "$f3"'"replayed: \(.rms_error_percent | f) % rms"' || true
+      echo
+      stop_daemon
+      ;;
+    learning-delay)
+      start_daemon learning-delay-off config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      model=$(hb identify --wait --json | jq -r '.model.path')
+      stop_daemon
+      start_daemon learning-delay-on config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      hb model load "$model" >/dev/null
+      echo "### The model identified with the delay off, learning with it on (rms % of range)"
+      echo
+      echo "| f [Hz] | trials (rms %, the first the inverse's) | last rms % | last max % | delay ticks: model, used |"
+      echo "| --- | --- | --- | --- | --- |"
+      for f in 1 10 50 200 500; do
+        hb track --reference sine --frequency "$f" --learn 20 --wait --json |
+          jq -r --arg f "$f" "$f3"'
+          "| \($f) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f) | \(.learning.delay_ticks.model | f), \(.learning.delay_ticks.used | f) |"' || true
       done
       echo
       stop_daemon

@@ -184,9 +184,17 @@ void IterativeLearning::measure_delay(std::span<const double> drive,
   const double c0 = corr[best - 1], c1 = corr[best], c2 = corr[best + 1];
   const double curvature = c0 - 2.0 * c1 + c2;
   const double vertex = curvature < 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
-  delay_sum_ += static_cast<double>(best) + std::clamp(vertex, -0.5, 0.5);
-  ++delay_count_;
-  advance_samples_ = delay_sum_ / static_cast<double>(delay_count_);
+  delays_.push_back(static_cast<double>(best) + std::clamp(vertex, -0.5, 0.5));
+  // Their median: a pair that one slow or noisy change misled does not move it.
+  std::vector<double> sorted = delays_;
+  const std::size_t m = sorted.size() / 2;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(m), sorted.end());
+  advance_samples_ = sorted[m];
+  if (sorted.size() % 2 == 0) {
+    advance_samples_ =
+        0.5 * (advance_samples_ +
+               *std::max_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(m)));
+  }
 }
 
 void IterativeLearning::update(std::span<const double> drive, std::span<const double> error,

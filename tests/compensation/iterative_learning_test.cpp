@@ -80,7 +80,7 @@ Trials learn(hc::ActuatorModel plant, const hc::ActuatorModel& model, double hz,
   }
   out.last_drive = drive;
   out.delay_samples = learner.delay_samples();
-  out.delay_measurements = learner.delay_measurements();
+  out.delay_measurements = learner.delay_measurements().size();
   return out;
 }
 

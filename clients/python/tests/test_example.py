@@ -13,32 +13,30 @@ EXAMPLE = _support.REPO_ROOT / "examples" / "identify_sweep_track.py"
 LEARN_EXAMPLE = _support.REPO_ROOT / "examples" / "learn_a_sine.py"
 
 
+def _run_example(test: unittest.TestCase, name: str, script, *args: str):
+    """Runs ``script --quick --socket S args`` against a daemon of its own on the simulated
+    clock; returns (its output, the daemon). The run must exit 0."""
+    daemon = _support.Daemon(name, clock="simulated")
+    test.addCleanup(daemon.stop)
+    env = dict(os.environ, PYTHONPATH=str(_support.SRC_DIR))
+    env.pop("HYSTBENCH_SOCKET", None)
+    run = subprocess.run(
+        [sys.executable, str(script), "--quick", "--socket", daemon.socket, *args],
+        cwd=str(daemon.dir),
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        timeout=240,
+    )
+    test.assertEqual(run.returncode, 0, run.stdout + daemon.daemon_log()[-3000:])
+    return run.stdout, daemon
+
+
 class ExampleTest(unittest.TestCase):
     def test_identify_sweep_track_quick(self) -> None:
-        daemon = _support.Daemon("hbpy-ex", clock="simulated")
-        self.addCleanup(daemon.stop)
-        env = dict(os.environ, PYTHONPATH=str(_support.SRC_DIR))
-        env.pop("HYSTBENCH_SOCKET", None)
+        out, daemon = _run_example(self, "hbpy-ex", EXAMPLE, "--plot-dir", "plots")
         plots = daemon.dir / "plots"
-        run = subprocess.run(
-            [
-                sys.executable,
-                str(EXAMPLE),
-                "--quick",
-                "--socket",
-                daemon.socket,
-                "--plot-dir",
-                str(plots),
-            ],
-            cwd=str(daemon.dir),
-            env=env,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            timeout=240,
-        )
-        self.assertEqual(run.returncode, 0, run.stdout + daemon.daemon_log()[-3000:])
-        out = run.stdout
         self.assertIn("identified mpi", out)
         self.assertIn("      f [Hz]", out)
         self.assertIn("10.000", out)
@@ -54,21 +52,7 @@ class ExampleTest(unittest.TestCase):
             self.assertTrue((plots / "raster.png").is_file(), out)
 
     def test_learn_a_sine_quick(self) -> None:
-        daemon = _support.Daemon("hbpy-learn", clock="simulated")
-        self.addCleanup(daemon.stop)
-        env = dict(os.environ, PYTHONPATH=str(_support.SRC_DIR))
-        env.pop("HYSTBENCH_SOCKET", None)
-        run = subprocess.run(
-            [sys.executable, str(LEARN_EXAMPLE), "--quick", "--socket", daemon.socket],
-            cwd=str(daemon.dir),
-            env=env,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            timeout=240,
-        )
-        self.assertEqual(run.returncode, 0, run.stdout + daemon.daemon_log()[-3000:])
-        out = run.stdout
+        out, _ = _run_example(self, "hbpy-learn", LEARN_EXAMPLE)
         self.assertIn("identified mpi", out)
         rows = [line.split() for line in out.splitlines() if line.strip().startswith(("10.0", "50.0"))]
         self.assertEqual(len(rows), 2, out)

@@ -4,7 +4,7 @@
 //   u_{k+1}(j) = u_k(j) + gamma Q[ D^-1[ Q[e_k] ](j + d) / s_k(j) ]   (u_0 through Q first),
 // circular over the trial's P samples. L comes from the active model: d its input delay (the
 // error is read d ahead of the drive that caused it; from the second update on, the delay the
-// bench shows: where the output's change between two trials best follows the drive's, averaged
+// bench shows: where the output's change between two trials best follows the drive's, the median
 // over the pairs where that is clear), D^-1 its second-order dynamics inverted on
 // the error (as the feedforward inverts them on the reference), s_k(j) the local slope of its
 // static map along the trial's drive (the inverse's slope there), kept within [1/4, 4] x its mean
@@ -55,8 +55,8 @@ class IterativeLearning {
   /// The delay the error is read ahead by [samples]: the model's, or the bench's once measured.
   double delay_samples() const noexcept { return advance_samples_; }
   double model_delay_samples() const noexcept { return model_delay_samples_; }
-  /// How many trial pairs measured the bench's delay clearly.
-  std::size_t delay_measurements() const noexcept { return delay_count_; }
+  /// The bench's delay [samples] from each trial pair that showed it clearly, in order.
+  const std::vector<double>& delay_measurements() const noexcept { return delays_; }
   std::size_t period_samples() const noexcept { return period_; }
 
  private:
@@ -70,10 +70,9 @@ class IterativeLearning {
   std::size_t period_;
   LearningOptions o_;
   double cutoff_hz_ = 0.0;
-  double advance_samples_ = 0.0;      // the delay the error is read ahead by [samples]
-  double model_delay_samples_ = 0.0;  // the model's
-  double delay_sum_ = 0.0;            // the bench's, measured delay_count_ times
-  std::size_t delay_count_ = 0;
+  double advance_samples_ = 0.0;                 // the delay the error is read ahead by [samples]
+  double model_delay_samples_ = 0.0;             // the model's
+  std::vector<double> delays_;                   // the bench's, measured
   std::vector<double> last_drive_, last_error_;  // the trial the last update was given
   double dyn_a1_ = 0.0, dyn_a2_ = 0.0;           // D^-1 = 1 + a1 d/dt + a2 d2/dt2 (0: none)
   // Butterworth sections (b0, b1, b2, a1, a2) of Q, and the warm-up periods its circular run needs.
