@@ -25,30 +25,10 @@ void LearningExchange::start_recording(std::uint64_t trial) noexcept {
   rec_slot_ = state == kFree || state == kFull ? static_cast<int>(s) : -1;
 }
 
-void LearningExchange::play(int ready) noexcept {
-  playing_ = ready;
-  playing_started_ = false;
-  last_ = ready_last_.load(std::memory_order_acquire);
-}
-
 std::size_t LearningExchange::begin_tick(std::uint64_t k) noexcept {
   const std::uint64_t since = k - first_tick;
   const auto j = static_cast<std::size_t>(since % period);
-  if (j != 0) {
-    if (!awaiting_) return j;
-    // The period began before its drive was ready: the drive takes over at the tick it is.
-    const int ready = ready_.exchange(-1, std::memory_order_acq_rel);
-    if (ready >= 0) {
-      awaiting_ = false;
-      play(ready);
-      ++trial_;
-      late_.fetch_add(1, std::memory_order_acq_rel);
-      if (j > late_ticks_max_.load(std::memory_order_relaxed)) {
-        late_ticks_max_.store(j, std::memory_order_release);
-      }
-    }
-    return j;
-  }
+  if (j != 0) return j;
   const int ready = ready_.exchange(-1, std::memory_order_acq_rel);
   if (since == 0) {
     playing_ = ready;  // the compensator's drive (-1), or one learned before
@@ -59,14 +39,13 @@ std::size_t LearningExchange::begin_tick(std::uint64_t k) noexcept {
     return j;
   }
   if (ready < 0) {
-    // Recorded as the next trial in case its drive comes within the period (the last one plays
-    // until then); a period it never comes in is not a trial.
-    awaiting_ = true;
-    start_recording(trial_ + 1);
+    stale_.fetch_add(1, std::memory_order_acq_rel);
+    rec_slot_ = -1;
     return j;
   }
-  awaiting_ = false;
-  play(ready);
+  playing_ = ready;
+  playing_started_ = false;
+  last_ = ready_last_.load(std::memory_order_acquire);
   start_recording(++trial_);
   return j;
 }
@@ -103,15 +82,6 @@ bool LearningExchange::end_tick(std::size_t j, double u_ff, double u_compensator
     rec_e_[s][j] = error;
   }
   if (j + 1 < period) return false;
-  if (awaiting_) {
-    // No drive came within the period: it played the last one again and is not a trial.
-    awaiting_ = false;
-    stale_.fetch_add(1, std::memory_order_acq_rel);
-    if (rec_slot_ >= 0)
-      slot_[static_cast<std::size_t>(rec_slot_)].store(kFree, std::memory_order_release);
-    rec_slot_ = -1;
-    return false;
-  }
   if (rec_slot_ >= 0) {
     const auto s = static_cast<std::size_t>(rec_slot_);
     slot_trial_[s].store(trial_, std::memory_order_relaxed);

@@ -125,10 +125,6 @@ void print_run_result(const json& r, std::ostream& out) {
       out << ", " << (*l)["stale_periods"].get<int>()
           << " periods replayed while the update was computed";
     }
-    if ((*l).value("late_periods", 0) > 0) {
-      out << ", " << (*l)["late_periods"].get<int>() << " trials took their drive up to "
-          << (*l).value("late_ticks_max", 0) << " ticks into the period";
-    }
     out << "\n";
     if (l->contains("drive_file")) {
       out << "  learned drive   " << (*l).value("drive", std::string()) << " ("

@@ -140,8 +140,6 @@ json TrackLearning::result() const {
           {"lead_in_offset_um", exchange_.lead_in_offset()},
           {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
           {"stale_periods", exchange_.stale_periods()},
-          {"late_periods", exchange_.late_periods()},
-          {"late_ticks_max", exchange_.late_ticks_max()},
           {"update_ms",
            {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
             {"max", update_ms_max_},

@@ -1,7 +1,6 @@
 // The hand-over between the loop and the learner, ticked by hand: trial 0 plays the
-// compensator's drive; a drive offered before a period begins is that period's trial, one offered
-// within it takes over at the next tick; a period with none replays the last drive and is not a
-// trial; the drive offered as the last ends the
+// compensator's drive; a drive offered before a period begins is that period's trial; a period
+// with none replays the last drive and is not a trial; the drive offered as the last ends the
 // run after its period; the loop owes a wait only for a drive the learner owes.
 #include "hystbench/daemon/learning_exchange.hpp"
 
@@ -22,10 +21,9 @@ struct Played {
   std::vector<double> drive;
   bool ends = false;
 };
-Played tick_period(hd::LearningExchange& x, std::uint64_t k, std::size_t from = 0,
-                   std::size_t to = kPeriod) {
+Played tick_period(hd::LearningExchange& x, std::uint64_t k) {
   Played p;
-  for (std::size_t i = from; i < to; ++i) {
+  for (std::size_t i = 0; i < kPeriod; ++i) {
     const std::size_t j = x.begin_tick(k + i);
     EXPECT_EQ(j, i);
     double u = -1.0;
@@ -80,38 +78,6 @@ TEST(LearningExchange, TrialsAreThePeriodsThatBeginWithANewDrive) {
   ASSERT_TRUE(x.take_trial(u, c, e, trial));
   EXPECT_EQ(trial, 2u);
   EXPECT_FALSE(x.owed(kFirst + 4 * kPeriod));
-}
-
-// On the wall clock a drive can come after its period began: it takes over at the next tick,
-// and the period is its trial (the first ticks played by the drive before).
-TEST(LearningExchange, ADriveReadyAfterItsPeriodBeganTakesOverAtTheNextTick) {
-  hd::LearningExchange x(kPeriod, kFirst);
-  std::vector<double> u, c, e;
-  std::uint64_t trial = 99;
-  (void)tick_period(x, kFirst);
-  ASSERT_TRUE(x.take_trial(u, c, e, trial));
-  ASSERT_TRUE(x.offer({1, 2, 3, 4}, false));
-  (void)tick_period(x, kFirst + kPeriod);
-  ASSERT_TRUE(x.take_trial(u, c, e, trial));
-  Played p = tick_period(x, kFirst + 2 * kPeriod, 0, 2);
-  EXPECT_EQ(p.drive, std::vector<double>({1, 2}));
-  ASSERT_TRUE(x.offer({5, 6, 7, 8}, false));
-  p = tick_period(x, kFirst + 2 * kPeriod, 2, kPeriod);
-  EXPECT_EQ(p.drive, std::vector<double>({7, 8}));
-  EXPECT_EQ(x.stale_periods(), 0u);
-  EXPECT_EQ(x.late_periods(), 1u);
-  EXPECT_EQ(x.late_ticks_max(), 2u);
-  ASSERT_TRUE(x.take_trial(u, c, e, trial));
-  EXPECT_EQ(trial, 2u);
-  EXPECT_EQ(u, std::vector<double>({1, 2, 7, 8}));  // what played
-  EXPECT_EQ(e, std::vector<double>({200, 201, 202, 203}));
-  // The next one on time: trial 3, the whole period its drive.
-  ASSERT_TRUE(x.offer({9, 9, 9, 9}, true));
-  p = tick_period(x, kFirst + 3 * kPeriod);
-  EXPECT_EQ(p.drive, std::vector<double>({9, 9, 9, 9}));
-  EXPECT_TRUE(p.ends);
-  ASSERT_TRUE(x.take_trial(u, c, e, trial));
-  EXPECT_EQ(trial, 3u);
 }
 
 // A learner that gives up owes nothing: the loop plays on with the last drive it took.

@@ -9,10 +9,11 @@
 // the error (as the feedforward inverts them on the reference), s_k(j) the local slope of its
 // static map along the trial's drive (the inverse's slope there), kept within [1/4, 4] x its mean
 // along the trial. Q is a zero-phase low-pass (a fourth-order Butterworth run forward and
-// backward around the trial), cut off at the lowest of a fifth of the sample rate, the 300th
-// harmonic of the trial's fundamental (above it a slow trial's error is mostly sensor noise) and
-// half the model's natural frequency (above it the model's phase is not known, and a mode it
-// misses would grow from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
+// backward around the trial), cut off at the lowest of a fifth of the sample rate and the 300th
+// harmonic of the trial's fundamental (above it a slow trial's error is mostly sensor noise), but
+// past its fifth harmonic within 0.3 of the sample rate (a fast trial's error is mostly its odd
+// harmonics), and below half the model's natural frequency (above it the model's phase is not
+// known, and a mode it misses would grow from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
 #include <array>
 #include <cstddef>
 #include <span>

@@ -2,11 +2,10 @@
 // The hand-over between the loop, which plays a learning run's trials, and the learner, which
 // computes each next trial's drive off the loop thread. A trial is one period of the reference,
 // P samples from first_tick on: the first (trial 0) plays the compensator's own drive, or a drive
-// learned before (start_from); each later one the learned feedforward the learner made ready for
-// it. A drive made ready after its period began takes over at the next tick (the period is the
-// trial, its first ticks played by the drive before: late_periods); a period it does not come in
-// at all plays the last drive again and is not a trial (stale_periods). Every buffer is allocated
-// before the run; the loop's side is real-time safe (no allocation, no locks: atomics only).
+// learned before (start_from); each later one the learned feedforward the learner made ready before
+// the period began. A period that begins with no new drive ready plays the last one again and is
+// not a trial (stale_periods). Every buffer is allocated before the run; the loop's side is
+// real-time safe (no allocation, no locks: atomics only).
 #include <array>
 #include <atomic>
 #include <cstddef>
@@ -77,11 +76,6 @@ struct LearningExchange {
 
   std::uint64_t trials_played() const noexcept { return played_.load(std::memory_order_acquire); }
   std::uint64_t stale_periods() const noexcept { return stale_.load(std::memory_order_acquire); }
-  /// Trials whose drive took over after their period began, and the latest phase it did [ticks].
-  std::uint64_t late_periods() const noexcept { return late_.load(std::memory_order_acquire); }
-  std::size_t late_ticks_max() const noexcept {
-    return late_ticks_max_.load(std::memory_order_acquire);
-  }
 
  private:
   enum Slot : int { kFree = 0, kWriting = 1, kFull = 2, kReading = 3 };
@@ -97,13 +91,9 @@ struct LearningExchange {
   std::atomic<std::uint64_t> offered_{0};  // drives made ready by the learner
   std::atomic<std::uint64_t> stale_{0};
   std::atomic<bool> final_offered_{false};
-  std::atomic<std::uint64_t> late_{0};
-  std::atomic<std::size_t> late_ticks_max_{0};
   std::uint64_t started_from_ = 0;  // 1 when trial 0 plays a drive given before the run
   // loop only
   void start_recording(std::uint64_t trial) noexcept;
-  void play(int ready) noexcept;  // drive_[ready] plays from this tick on
-  bool awaiting_ = false;         // the period began before its drive was ready
   int playing_ = -1;
   bool playing_started_ = false;  // the period plays the drive start_from gave
   bool last_ = false;
