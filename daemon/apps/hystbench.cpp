@@ -420,7 +420,8 @@ int main(int argc, char** argv) {
   add_output_flags(abort_cmd, false);
   auto* reset_cmd = app.add_subcommand("reset", "Leave FAULT after the cause is fixed");
   add_output_flags(reset_cmd, false);
-  auto* model_cmd = app.add_subcommand("model", "Show, list or load the active model");
+  auto* model_cmd =
+      app.add_subcommand("model", "Show, list, load or delete the models in the daemon's folder");
   model_cmd->require_subcommand(1);
   auto* model_get = model_cmd->add_subcommand("get", "Print the active model file");
   std::string model_path, stored_model;
@@ -436,6 +437,14 @@ int main(int argc, char** argv) {
                    "Name of a model in the daemon's model folder (see `hystbench model list`)")
       ->excludes(model_file_opt);
   auto* model_list = model_cmd->add_subcommand("list", "The models in the daemon's model folder");
+  std::string deleted_model;
+  auto* model_delete = model_cmd->add_subcommand(
+      "delete",
+      "Delete a model or a learned drive (its JSON and CSV) from the daemon's model folder; "
+      "never the active model");
+  model_delete->add_option("name", deleted_model, "Its name, as `hystbench model list` shows")
+      ->required();
+  add_output_flags(model_delete, false);
   add_output_flags(model_get, false);
   add_output_flags(model_load, false);
   add_output_flags(model_list, false);
@@ -528,6 +537,7 @@ int main(int argc, char** argv) {
   if (*model_get) return remote_run("model.get", nlohmann::json::object());
   // The daemon resolves paths from its own folder: send the file as the user named it here.
   if (*model_list) return remote_run("model.list", nlohmann::json::object());
+  if (*model_delete) return remote_run("model.delete", {{"name", deleted_model}});
   if (*model_load) {
     if (!stored_model.empty()) return remote_run("model.load", {{"stored", stored_model}});
     if (model_path.empty()) {

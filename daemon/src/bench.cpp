@@ -287,6 +287,12 @@ nlohmann::json Bench::list_models() const {
   return details::list_model_folder(settings_.model_dir, model_path_);
 }
 
+nlohmann::json Bench::delete_model(const details::Request& request) {
+  std::lock_guard lock(mutex_);
+  return details::delete_from_model_folder(settings_.model_dir, request.string("name", ""),
+                                           model_path_);
+}
+
 void Bench::require_idle() const {
   if (loop_->state() == BenchLoop::State::kFault) {
     throw CommandError("fault", std::string("the bench is in FAULT (") + loop_->fault_reason() +

@@ -58,6 +58,7 @@ constexpr ParamSpec kUploadBegin[] = {{"kind", T::kString},
 constexpr ParamSpec kUploadChunk[] = {
     {"upload", T::kString}, {"offset", T::kInteger}, {"values", T::kArray}, {"t", T::kArray}};
 constexpr ParamSpec kUploadCancel[] = {{"upload", T::kString}};
+constexpr ParamSpec kModelDelete[] = {{"name", T::kString}};
 constexpr ParamSpec kModelLoad[] = {
     {"model", T::kObject, 0, 0, "the model file's JSON object"},
     {"name", T::kString},
@@ -98,6 +99,8 @@ std::span<const Command> bench_commands() {
        [](Bench& b, const Request&, std::uint64_t) { return b.model_get(); }},
       {"model.load", nullptr, kModelLoad,
        [](Bench& b, const Request& r, std::uint64_t) { return b.load_model(r); }},
+      {"model.delete", nullptr, kModelDelete,
+       [](Bench& b, const Request& r, std::uint64_t) { return b.delete_model(r); }},
       {"model.list",
        nullptr,
        {},

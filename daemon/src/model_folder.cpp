@@ -101,4 +101,32 @@ json list_model_folder(const std::string& dir, const std::string& active_path) {
   return {{"folder", fs::path(dir).string()}, {"models", models}};
 }
 
+json delete_from_model_folder(const std::string& dir, const std::string& name,
+                              const std::string& active_path) {
+  const std::string file_name = model_file_name("name", name);
+  const fs::path path = fs::path(dir) / file_name;
+  if (!fs::is_regular_file(fs::symlink_status(path))) {
+    throw CommandError("bad_params", "name: no model or learned drive '" + file_name +
+                                         "' in the daemon's model folder (hystbench model list)");
+  }
+  if (path.string() == active_path) {
+    throw CommandError("bad_params",
+                       "name: '" + file_name + "' is the active model; load another one first");
+  }
+  // A learned drive is its JSON and the CSV beside it.
+  std::vector<fs::path> files{path};
+  if (is_learned_drive_file(file_name)) files.push_back(fs::path(path).replace_extension(".csv"));
+  json deleted = json::array();
+  for (const fs::path& f : files) {
+    std::error_code ec;
+    if (!fs::remove(f, ec) && ec) {
+      throw CommandError("io_error", "cannot delete " + f.filename().string() + ": " +
+                                         ec.message() +
+                                         (deleted.empty() ? "; nothing deleted" : ""));
+    }
+    if (!ec) deleted.push_back(f.filename().string());
+  }
+  return {{"deleted", deleted}};
+}
+
 }  // namespace hystbench::daemon::details

@@ -27,5 +27,10 @@ FolderModel keep_model_document(const std::string& dir, const std::string& name,
 /// model.list: {"folder", "models": [{name, bytes, type, operators, active}]} by name;
 /// `active_path` is the active model's path ("type": "unreadable" for a file that is not one).
 nlohmann::json list_model_folder(const std::string& dir, const std::string& active_path);
+/// model.delete: removes model `name` from the folder, or a learned drive (RUN-learned.json and
+/// its CSV); {"deleted": [file names]}. Refuses (bad_params) a name that is not there and the
+/// active model (`active_path`).
+nlohmann::json delete_from_model_folder(const std::string& dir, const std::string& name,
+                                        const std::string& active_path);
 
 }  // namespace hystbench::daemon::details

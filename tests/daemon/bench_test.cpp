@@ -130,6 +130,23 @@ TEST_F(BenchTest, ModelsTravelAsDocumentsAndLoadByNameFromTheModelFolder) {
     EXPECT_EQ(std::string(e.what()).find("Secret"), std::string::npos) << e.what();
   }
   EXPECT_EQ(bench_->handle("model.list", json::object())["models"].size(), 2u);
+
+  // model.delete: never the active model, never a path; a learned drive goes with its CSV.
+  EXPECT_EQ(error_code("model.delete", {{"name", "mine"}}), "bad_params");
+  EXPECT_EQ(error_code("model.delete", {{"name", "../mine.json"}}), "bad_params");
+  EXPECT_EQ(error_code("model.delete", {{"name", "absent"}}), "bad_params");
+  EXPECT_EQ(error_code("model.delete", json::object()), "bad_params");
+  EXPECT_EQ(bench_->handle("model.delete", {{"name", "notes"}})["deleted"],
+            json::array({"notes.json"}));
+  const fs::path dir(settings().model_dir);
+  std::ofstream(dir / "run-1-learned.json") << "{}\n";
+  std::ofstream(dir / "run-1-learned.csv") << "t,u,u_compensator\n";
+  EXPECT_EQ(bench_->handle("model.delete", {{"name", "run-1-learned.json"}})["deleted"],
+            json::array({"run-1-learned.json", "run-1-learned.csv"}));
+  EXPECT_FALSE(fs::exists(dir / "run-1-learned.csv"));
+  const json left = bench_->handle("model.list", json::object());
+  ASSERT_EQ(left["models"].size(), 1u) << left.dump();
+  EXPECT_EQ(left["models"][0]["name"], "mine.json");
 }
 
 // On the wall clock: the run must still be going when the second request comes.

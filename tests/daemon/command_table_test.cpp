@@ -81,7 +81,7 @@ TEST(CommandTable, AnUnknownCommandListsEveryCommandOnce) {
   EXPECT_EQ(refusal("fly", json::object()),
             "unknown_command: unknown command 'fly' (status, identify, track, excite, "
             "upload.begin, upload.chunk, upload.cancel, stop, abort, reset, model.get, "
-            "model.load, model.list, config.get)");
+            "model.load, model.delete, model.list, config.get)");
   for (const hdd::Command& c : hdd::bench_commands()) {
     ASSERT_NE(c.handle, nullptr) << c.name;
     EXPECT_THAT(refusal(c.name, {{"no_such_key", 0}}),

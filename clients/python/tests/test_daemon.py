@@ -191,6 +191,12 @@ class WithoutModelTest(unittest.TestCase):
                 [v * 0.9 for v in line], rate_hz=1000.0, learned=learning["drive"]
             )
         self.assertEqual(refused.exception.code, "bad_params")
+        # Deleted from the model folder, its CSV too.
+        name = learning["drive"] + ".json"
+        deleted = self.bench.model_delete(name)["deleted"]
+        self.assertEqual(deleted, [name, learning["drive"] + ".csv"])
+        self.assertFalse(os.path.exists(learning["drive_file"]))
+        self.assertNotIn(name, [m["name"] for m in self.bench.model_list()["models"]])
 
     def test_a_run_followed_from_another_connection(self) -> None:
         started = self.bench.track(

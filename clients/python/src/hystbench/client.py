@@ -420,6 +420,12 @@ class Bench:
         "operators", "bytes", "active"}, ..]}``."""
         return self.request("model.list")
 
+    def model_delete(self, name: str) -> Dict[str, Any]:
+        """Deletes a model or a learned drive (its JSON and CSV) from the daemon's model folder,
+        by the name ``model_list()`` shows; never the active model (``bad_params``).
+        Returns ``{"deleted": [file names]}``."""
+        return self.request("model.delete", {"name": name})
+
     def model_load(
         self,
         model: Union[Mapping[str, Any], PathLike, None] = None,

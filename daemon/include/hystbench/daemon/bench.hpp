@@ -121,6 +121,8 @@ class Bench {
   nlohmann::json load_model(const details::Request& request);
   /// model.list: the model folder's *.json files (name, bytes, type, active).
   nlohmann::json list_models() const;
+  /// model.delete: a model or learned drive out of the model folder (not the active model).
+  nlohmann::json delete_model(const details::Request& request);
   /// Throws CommandError fault or busy unless a run may start. Caller holds mutex_.
   void require_idle() const;
   struct SubmittedRun {
