@@ -101,8 +101,8 @@ struct LearningPlan {
 // half the model's still converges; twice it, at the edge).
 constexpr double kDefaultLearningGain = 0.5;
 
-// The plan of a learning run from its request; its period is the reference's (set_period) for an
-// upload.
+// The plan of a learning run from its request; for an upload, reference() sets its period (a
+// pass) and its scored part from the trajectory.
 std::optional<LearningPlan> learning_plan(const Request& request, const RunContext& ctx,
                                           const Upload* upload) {
   const bool learns = request.has("learn_trials") && request.integer("learn_trials", 0) > 0;
