@@ -529,10 +529,9 @@ void Bench::finish_learning(const RunProgram& run, json& report) {
           {"started_from", r.start_name.empty() ? json() : json(r.start_name)},
           {"compensator_offset_um", learning->target_offset(report.value("tare_um", 0.0))},
           {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
-      l["drive_file"] = details::save_learned_drive(
-          settings_.model_dir, run.run_id, drive, learning->kept_compensator(), dt_,
-          {r.reference, drive.size(), r.frequency_hz, r.rate_hz, r.min_um, r.max_um, r.signature},
-          meta);
+      l["drive_file"] = details::save_learned_drive(settings_.model_dir, run.run_id, drive,
+                                                    learning->kept_compensator(), dt_,
+                                                    details::learned_for(r, drive.size()), meta);
       l["drive"] = run.run_id + "-learned";
     } catch (const std::exception& e) {
       l["drive_file_error"] = e.what();

@@ -169,22 +169,18 @@ void check_learned_drive(const LearnedDrive& drive, const LearnedFor& run) {
                     f.rate_hz == run.rate_hz && std::abs(f.min_um - run.min_um) <= tol &&
                     std::abs(f.max_um - run.max_um) <= tol && f.signature == run.signature;
   if (same) return;
-  if (f.reference == "upload" || run.reference == "upload") {
-    throw CommandError("bad_params",
-                       "learned: '" + drive.name + "' was learned for " + describe(f) +
-                           "; this run asks for " + describe(run) +
-                           ". A learned drive replays only its own reference at its own loop "
-                           "rate: upload the same trajectory (the same file, --approach and "
-                           "resampling), or learn this one with --learn N");
-  }
-  throw CommandError("bad_params",
-                     "learned: '" + drive.name + "' was learned for " + describe(f) +
-                         "; this run asks for " + describe(run) +
-                         ". A learned drive replays only its own reference at its own loop "
-                         "rate: give its extremes (--min " +
-                         number(f.min_um) + " --max " + number(f.max_um) +
-                         "), or load the model it was learned with, whose range they come "
-                         "from; or learn this reference with --learn N");
+  const std::string how =
+      f.reference == "upload" || run.reference == "upload"
+          ? "upload the same trajectory (the same file, --approach and resampling), or learn "
+            "this one"
+          : "give its extremes (--min " + number(f.min_um) + " --max " + number(f.max_um) +
+                "), or load the model it was learned with, whose range they come from; or "
+                "learn this reference";
+  throw CommandError("bad_params", "learned: '" + drive.name + "' was learned for " + describe(f) +
+                                       "; this run asks for " + describe(run) +
+                                       ". A learned drive replays only its own reference at its "
+                                       "own loop rate: " +
+                                       how + " with --learn N");
 }
 
 }  // namespace hystbench::daemon::details

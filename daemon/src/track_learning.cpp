@@ -9,6 +9,10 @@ namespace hystbench::daemon::details {
 namespace hc = compensation;
 using nlohmann::json;
 
+LearnedFor learned_for(const LearningRequest& r, std::size_t period_samples) {
+  return {r.reference, period_samples, r.frequency_hz, r.rate_hz, r.min_um, r.max_um, r.signature};
+}
+
 TrackLearning::TrackLearning(const hc::ActuatorModel& model, LearningExchange& exchange,
                              LearningRequest request, hc::LearningOptions options)
     : exchange_(exchange),

@@ -14,6 +14,7 @@
 #include "hystbench/compensation/iterative_learning.hpp"
 #include "hystbench/compensation/learning_guard.hpp"
 #include "hystbench/daemon/learning_exchange.hpp"
+#include "learned_drive.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -38,6 +39,9 @@ struct LearningRequest {
   std::vector<double> start_compensator;
   std::string start_name;
 };
+
+/// What a drive of `period_samples` learned for `r` belongs to (saved with it, checked on replay).
+LearnedFor learned_for(const LearningRequest& r, std::size_t period_samples);
 
 class TrackLearning {
  public:

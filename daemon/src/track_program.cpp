@@ -165,7 +165,7 @@ TrackReference reference(const Request& request, const RunContext& ctx, const Ac
       uploaded_reference(*upload, limits, range.y_bottom, approach_s, learn->trials);
   learn->period = ref.pass_samples;
   learn->frequency_hz = ref.frequency_hz;
-  learn->scored_from = ref.pass_samples - ref.header.value("resampled_samples", std::size_t{0});
+  learn->scored_from = ref.pass_approach;
   return ref;
 }
 
@@ -389,11 +389,6 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
         }
         program.summary["feedforward"]["planned"] = planned;
       }};
-}
-
-// What a learning run's drive is learned for.
-LearnedFor learned_for(const LearningRequest& r, std::size_t period) {
-  return {r.reference, period, r.frequency_hz, r.rate_hz, r.min_um, r.max_um, r.signature};
 }
 
 // The learner of a learning run: the trials' exchange from the first scored period on, the

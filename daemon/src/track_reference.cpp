@@ -255,6 +255,7 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
     later.insert(later.end(), traj.begin(), traj.end());
     traj = {};
     r.pass_samples = pass;
+    r.pass_approach = n_a;
     r.frequency_hz = limits.rate_hz / static_cast<double>(pass);
     r.samples = static_cast<std::uint64_t>(passes) * pass;
     r.unscored = pass;

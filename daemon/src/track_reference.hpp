@@ -25,6 +25,7 @@ struct TrackReference {
   /// A trajectory played over and over (learned): ticks per pass (its approach and itself);
   /// 0 otherwise.
   std::size_t pass_samples = 0;
+  std::size_t pass_approach = 0;  ///< its leading ticks, the approach (unscored in every pass)
   /// A trajectory's fundamental [Hz] estimated from its reversals (a raster's line rate); 0 for
   /// a built-in one.
   double content_hz = 0.0;
