@@ -32,6 +32,10 @@ int main(int argc, char** argv) {
       "  hystbench invert actuator.json reference.csv -o drive.csv\n"
       "  hystbench diagnose run.csv --report diagnosis/ --save-extended extended.json\n"
       "  hystbench diagnose daq.csv --u-column u1_V --y-column y1_m --y-scale 1e6 --rate 6400\n"
+      "  hystbench fit mirror.csv --u-column u1_V,u2_V,u3_V --y-column y1_m,y2_m,y3_m --y-scale "
+      "1e6 "
+      "-o mirror.json\n"
+      "  hystbench simulate mirror.json test.csv --y-scale 1e6 --skip 0.1 -o predicted.csv\n"
       "  hystbench diagnose run_1hz.csv run_5hz.csv run_20hz.csv --validate run_10hz.csv\n"
       "  hystbench identify --wait                  (bench: identify the actuator on the bench)\n"
       "  hystbench track --reference triangle --frequency 1 --periods 5 --compensator inverse "
@@ -44,10 +48,17 @@ int main(int argc, char** argv) {
   // Column mapping shared by the commands that read a measured record.
   auto add_column_options = [](CLI::App* c, hd::RecordColumns& columns, bool y_optional) {
     c->add_option("--t-column", columns.t, "Name of the time column [s]")->capture_default_str();
-    c->add_option("--u-column", columns.u, "Name of the input column")->capture_default_str();
+    c->add_option("--u-column", columns.u,
+                  "Name of the input column; several, comma-separated (u1_V,u2_V,u3_V), for a "
+                  "record of several inputs")
+        ->capture_default_str();
     c->add_option("--y-column", columns.y,
-                  y_optional ? "Name of the (optional) measured output column"
-                             : "Name of the measured output column")
+                  std::string(y_optional ? "Name of the (optional) measured output column"
+                                         : "Name of the measured output column") +
+                      "; several, comma-separated, for several outputs. A record of several "
+                      "columns may hold `realization` and `period` columns (whole numbers): "
+                      "experiments that each start from rest, and the periods of a periodic "
+                      "excitation (the first dropped as a transient)")
         ->capture_default_str();
     c->add_option("--u-scale", columns.u_scale, "Multiply the input column by this (mV -> V: 1e-3)")
         ->capture_default_str();
@@ -70,11 +81,16 @@ int main(int argc, char** argv) {
   fit_cmd->add_option("data", fit.data_path, "CSV file with columns t, u, y")
       ->required()
       ->check(CLI::ExistingFile);
+  std::vector<std::string> fit_families = hd::fit_family_name_list();
+  fit_families.push_back("hammerstein");
   fit_cmd
       ->add_option("--model", fit.model_name,
                    "Model family: pi (classical), mpi (modified, asymmetric), cpi (coupled-play), "
-                   "rpi (rate-dependent), auto (lowest held-out error)")
-      ->check(CLI::IsMember(hd::fit_family_name_list()))
+                   "rpi (rate-dependent), auto (lowest held-out error); hammerstein (a play "
+                   "model per input, then linear dynamics with shared poles: the family of "
+                   "several inputs and outputs, which comma lists in --u-column / --y-column "
+                   "choose)")
+      ->check(CLI::IsMember(fit_families))
       ->capture_default_str();
   fit_cmd
       ->add_option("--operators", fit.operators,
@@ -115,7 +131,9 @@ int main(int argc, char** argv) {
 
   hd::SimulateCommand sim;
   auto* sim_cmd = app.add_subcommand(
-      "simulate", "Run a model file over an input record; writes t,u,y_model[,y,residual]");
+      "simulate",
+      "Run a model file over an input record; writes t,u,y_model[,y,residual] (one of each per "
+      "column for a model of several inputs; by default the columns it was fitted on)");
   sim_cmd->add_option("model", sim.model_path, "Model file (JSON)")
       ->required()
       ->check(CLI::ExistingFile);
@@ -124,6 +142,11 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   sim_cmd->add_option("-o,--output", sim.output_path, "CSV file to write")->required();
   add_column_options(sim_cmd, sim.columns, true);
+  sim_cmd
+      ->add_option("--skip", sim.skip_s,
+                   "A model of several inputs: seconds at the start of each realization "
+                   "simulated but not scored (the model starts from rest)")
+      ->check(CLI::NonNegativeNumber);
   sim_cmd->add_flag(
       "--json", sim.json_output,
       "Print {\"rmse\",\"max_abs\",\"range\",...} as one JSON line (when y is present)");

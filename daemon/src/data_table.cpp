@@ -250,7 +250,9 @@ compensation::Units Record::units() const {
   return units;
 }
 
-Record read_record(const std::string& path, const RecordColumns& columns, bool y_required) {
+namespace {
+
+void check_options(const RecordColumns& columns) {
   for (const auto& [name, value] :
        {std::pair{"u scale", columns.u_scale}, std::pair{"y scale", columns.y_scale}}) {
     if (!std::isfinite(value) || value == 0.0) {
@@ -267,77 +269,174 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
   if (!std::isfinite(columns.rate_hz) || columns.rate_hz < 0.0) {
     throw DataFileError("the sample rate must be a positive number of Hz (or 0: read t)");
   }
+}
+
+// A missing column is named with the columns the file has and the option that picks another.
+void require_column(const DataTable& data, const std::string& path, const std::string& name,
+                    const char* role, const char* option) {
+  if (data.has(name)) return;
+  std::string have;
+  for (const auto& n : data.names()) have += (have.empty() ? "" : ", ") + n;
+  throw DataFileError(path + ": no " + role + " column '" + name + "' (columns: " + have +
+                      "); name it with " + option);
+}
+
+std::vector<double> scaled_column(const DataTable& data, const std::string& path,
+                                  const std::string& name, double scale) {
+  std::vector<double> v = data.column(name);
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    if (!std::isfinite(v[k])) {
+      throw DataFileError(path + ":" + std::to_string(data.line_of_row(k)) + ": column '" + name +
+                          "', data row " + std::to_string(k + 1) + ": " + std::to_string(v[k]) +
+                          " is not a finite number");
+    }
+    v[k] *= scale;
+  }
+  return v;
+}
+
+// The unit after scaling: the option's, else the header's moved by the scale.
+std::optional<std::string> unit_of(const DataTable& data, const std::string& path,
+                                   const RecordColumns& columns, const std::string& name,
+                                   double scale, const std::optional<std::string>& given,
+                                   const char* unit_option, const char* scale_option) {
+  if (!columns.read_units) return std::nullopt;
+  if (given) return trim(*given);
+  const auto header = data.unit(name);
+  if (!header) return std::nullopt;
+  if (header->empty()) {
+    throw DataFileError(path + ": the header of column '" + name +
+                        "' names an empty unit; name it with " + unit_option);
+  }
+  auto scaled = scaled_unit(*header, scale);
+  if (!scaled) {
+    char factor[32];
+    std::snprintf(factor, sizeof factor, "%g", scale);
+    throw DataFileError(
+        path + ": column '" + name + "' is in " + *header + ", and " + scale_option + " " + factor +
+        " turns it into a unit that cannot be named from it; name it with " + unit_option);
+  }
+  return scaled;
+}
+
+void require_time_in_seconds(const DataTable& data, const std::string& path,
+                             const RecordColumns& columns) {
+  require_column(data, path, columns.t, "time", "--t-column, or give the sample rate with --rate");
+  if (const auto unit = data.unit(columns.t); unit && *unit != "s") {
+    throw DataFileError(path + ": the header of time column '" + columns.t + "' names the unit '" +
+                        *unit +
+                        "'; the time column must be in s (or give the sample rate with "
+                        "--rate)");
+  }
+}
+
+std::vector<std::string> comma_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t from = 0;
+  while (true) {
+    const std::size_t comma = s.find(',', from);
+    out.push_back(
+        trim(s.substr(from, comma == std::string::npos ? std::string::npos : comma - from)));
+    if (comma == std::string::npos) break;
+    from = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+Record read_record(const std::string& path, const RecordColumns& columns, bool y_required) {
+  check_options(columns);
   const DataTable data = DataTable::read_csv(path);
   Record r;
   r.lines.resize(data.rows());
   for (std::size_t k = 0; k < r.lines.size(); ++k) r.lines[k] = data.line_of_row(k);
-  // A missing column is named with the columns the file has and the option that picks another.
-  auto require_column = [&](const std::string& name, const char* role, const char* option) {
-    if (data.has(name)) return;
-    std::string have;
-    for (const auto& n : data.names()) have += (have.empty() ? "" : ", ") + n;
-    throw DataFileError(path + ": no " + role + " column '" + name + "' (columns: " + have +
-                        "); name it with " + option);
-  };
-  auto scaled = [&](const std::string& name, double scale) {
-    std::vector<double> v = data.column(name);
-    for (std::size_t k = 0; k < v.size(); ++k) {
-      if (!std::isfinite(v[k])) {
-        throw DataFileError(path + ":" + std::to_string(data.line_of_row(k)) + ": column '" + name +
-                            "', data row " + std::to_string(k + 1) + ": " + std::to_string(v[k]) +
-                            " is not a finite number");
-      }
-      v[k] *= scale;
-    }
-    return v;
-  };
-  // The unit after scaling: the option's, else the header's moved by the scale.
-  auto unit_of = [&](const std::string& name, double scale, const std::optional<std::string>& given,
-                     const char* unit_option,
-                     const char* scale_option) -> std::optional<std::string> {
-    if (!columns.read_units) return std::nullopt;
-    if (given) return trim(*given);
-    const auto header = data.unit(name);
-    if (!header) return std::nullopt;
-    if (header->empty()) {
-      throw DataFileError(path + ": the header of column '" + name +
-                          "' names an empty unit; name it with " + unit_option);
-    }
-    auto scaled = scaled_unit(*header, scale);
-    if (!scaled) {
-      char factor[32];
-      std::snprintf(factor, sizeof factor, "%g", scale);
-      throw DataFileError(path + ": column '" + name + "' is in " + *header + ", and " +
-                          scale_option + " " + factor +
-                          " turns it into a unit that cannot be named from it; name it with " +
-                          unit_option);
-    }
-    return scaled;
-  };
   if (columns.rate_hz > 0.0) {
     r.t.resize(data.rows());
     for (std::size_t k = 0; k < r.t.size(); ++k) r.t[k] = static_cast<double>(k) / columns.rate_hz;
     r.sample_period_s = 1.0 / columns.rate_hz;
   } else {
-    require_column(columns.t, "time", "--t-column, or give the sample rate with --rate");
-    if (const auto unit = data.unit(columns.t); unit && *unit != "s") {
-      throw DataFileError(path + ": the header of time column '" + columns.t +
-                          "' names the unit '" + *unit +
-                          "'; the time column must be in s (or give the sample rate with "
-                          "--rate)");
-    }
+    require_time_in_seconds(data, path, columns);
     data.require_increasing(columns.t);
     r.t = data.column(columns.t);
     if (r.t.size() < 2) throw DataFileError(path + ": need at least 2 rows");
     r.sample_period_s = median_step(r.t);
   }
-  require_column(columns.u, "input", "--u-column");
-  r.u = scaled(columns.u, columns.u_scale);
-  r.u_unit = unit_of(columns.u, columns.u_scale, columns.u_unit, "--u-unit", "--u-scale");
-  if (y_required) require_column(columns.y, "output", "--y-column");
+  require_column(data, path, columns.u, "input", "--u-column");
+  r.u = scaled_column(data, path, columns.u, columns.u_scale);
+  r.u_unit = unit_of(data, path, columns, columns.u, columns.u_scale, columns.u_unit, "--u-unit",
+                     "--u-scale");
+  if (y_required) require_column(data, path, columns.y, "output", "--y-column");
   if (y_required || data.has(columns.y)) {
-    r.y = scaled(columns.y, columns.y_scale);
-    r.y_unit = unit_of(columns.y, columns.y_scale, columns.y_unit, "--y-unit", "--y-scale");
+    r.y = scaled_column(data, path, columns.y, columns.y_scale);
+    r.y_unit = unit_of(data, path, columns, columns.y, columns.y_scale, columns.y_unit, "--y-unit",
+                       "--y-scale");
+  }
+  return r;
+}
+
+bool names_several(const RecordColumns& columns) {
+  return columns.u.find(',') != std::string::npos || columns.y.find(',') != std::string::npos;
+}
+
+MultiRecord read_multi_record(const std::string& path, const RecordColumns& columns,
+                              bool y_required) {
+  check_options(columns);
+  const DataTable data = DataTable::read_csv(path);
+  MultiRecord r;
+  r.rows = data.rows();
+  if (r.rows < 2) throw DataFileError(path + ": need at least 2 rows");
+  for (const char* layout : {"realization", "period"}) {
+    if (!data.has(layout)) continue;
+    auto& ids = std::string(layout) == "realization" ? r.realization : r.period;
+    ids = scaled_column(data, path, layout, 1.0);
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+      if (ids[k] < 0.0 || ids[k] != std::floor(ids[k])) {
+        throw DataFileError(path + ":" + std::to_string(data.line_of_row(k)) + ": column '" +
+                            layout + "' holds " + std::to_string(ids[k]) +
+                            ", not a whole number >= 0");
+      }
+    }
+  }
+  if (columns.rate_hz > 0.0) {
+    r.sample_period_s = 1.0 / columns.rate_hz;
+  } else {
+    // t increases within each realization (each starts its own clock).
+    require_time_in_seconds(data, path, columns);
+    const auto& t = data.column(columns.t);
+    std::vector<double> steps;
+    for (std::size_t k = 1; k < t.size(); ++k) {
+      if (!r.realization.empty() && r.realization[k] != r.realization[k - 1]) continue;
+      if (!(t[k] > t[k - 1])) {
+        throw DataFileError(path + ":" + std::to_string(data.line_of_row(k)) + ": time column '" +
+                            columns.t + "' does not increase (" + std::to_string(t[k - 1]) +
+                            " then " + std::to_string(t[k]) + ")");
+      }
+      steps.push_back(t[k] - t[k - 1]);
+    }
+    if (steps.empty()) throw DataFileError(path + ": need at least 2 rows per realization");
+    std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
+                     steps.end());
+    r.sample_period_s = steps[steps.size() / 2];
+  }
+  const auto read = [&](const std::string& list, double scale,
+                        const std::optional<std::string>& unit, std::vector<std::string>& names,
+                        std::vector<std::vector<double>>& values,
+                        std::vector<std::optional<std::string>>& units, const char* role,
+                        const char* option, const char* unit_option, const char* scale_option) {
+    names = comma_list(list);
+    for (const auto& name : names) {
+      if (name.empty()) throw DataFileError(std::string(option) + ": an empty column name");
+      require_column(data, path, name, role, option);
+      values.push_back(scaled_column(data, path, name, scale));
+      units.push_back(unit_of(data, path, columns, name, scale, unit, unit_option, scale_option));
+    }
+  };
+  read(columns.u, columns.u_scale, columns.u_unit, r.u_names, r.u, r.u_units, "input", "--u-column",
+       "--u-unit", "--u-scale");
+  if (y_required || data.has(comma_list(columns.y).front())) {
+    read(columns.y, columns.y_scale, columns.y_unit, r.y_names, r.y, r.y_units, "output",
+         "--y-column", "--y-unit", "--y-scale");
   }
   return r;
 }

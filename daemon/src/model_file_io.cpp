@@ -54,15 +54,44 @@ nlohmann::json read_model_document(const std::string& path) {
   return json::parse(text);
 }
 
-void save_model_file(const std::string& path, const hc::ModelFile& file) {
+namespace {
+
+// Writes a JSON document atomically (temp file + rename).
+void save_document(const std::string& path, const json& doc) {
   const std::string tmp = path + ".tmp";
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw std::runtime_error(path + ": cannot write model file");
-    out << std::setw(2) << hc::to_json(file) << "\n";
+    out << std::setw(2) << doc << "\n";
     if (!out) throw std::runtime_error(path + ": write failed");
   }
   std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
+
+void save_model_file(const std::string& path, const hc::ModelFile& file) {
+  save_document(path, hc::to_json(file));
+}
+
+std::optional<hc::MimoModelFile> load_mimo_model_file(const std::string& path) {
+  const std::string text = read_model_text(path);
+  json doc;
+  try {
+    doc = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw std::runtime_error(path + ": not JSON (" + e.what() + ")");
+  }
+  if (!hc::is_mimo_model_file(doc)) return std::nullopt;
+  try {
+    return hc::mimo_model_file_from_json(doc);
+  } catch (const hc::ModelFileError& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+}
+
+void save_mimo_model_file(const std::string& path, const hc::MimoModelFile& file) {
+  save_document(path, hc::to_json(file));
 }
 
 }  // namespace hystbench::daemon

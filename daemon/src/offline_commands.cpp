@@ -12,6 +12,7 @@
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/fit_families.hpp"
+#include "mimo_commands.hpp"
 
 namespace hystbench::daemon {
 
@@ -43,6 +44,14 @@ int guarded(std::ostream& err, F&& body) {
 
 int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
   return guarded(err, [&] {
+    if (cmd.model_name == "hammerstein" || names_several(cmd.columns)) {
+      if (cmd.model_name != "hammerstein" && cmd.model_name != FitCommand{}.model_name) {
+        throw std::invalid_argument("--model " + cmd.model_name +
+                                    " takes one input and one output column; several are fitted "
+                                    "as --model hammerstein");
+      }
+      return details::run_fit_mimo(cmd, out, err);
+    }
     const Record data = read_record(cmd.data_path, cmd.columns, true);
     hc::FitOptions opt;
     try {
@@ -111,6 +120,12 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
 
 int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& err) {
   return guarded(err, [&] {
+    if (const auto mimo = load_mimo_model_file(cmd.model_path)) {
+      return details::run_simulate_mimo(cmd, *mimo, out, err);
+    }
+    if (cmd.skip_s) {
+      throw std::invalid_argument("--skip: only for a model of several inputs (mimo_hammerstein)");
+    }
     hc::ModelFile file = load_model_file(cmd.model_path);
     const Record data = read_record(cmd.data_path, cmd.columns, false);
     // The record's units, where it names them, must be the model's.

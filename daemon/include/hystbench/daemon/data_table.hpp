@@ -93,6 +93,28 @@ struct Record {
 /// scale turns into a unit it cannot name).
 Record read_record(const std::string& path, const RecordColumns& columns, bool y_required);
 
+/// True where RecordColumns names several input or output columns (comma lists: "u1,u2,u3").
+bool names_several(const RecordColumns& columns);
+
+/// A record of several inputs and outputs: the columns that RecordColumns' u and y name as comma
+/// lists, each scaled by u_scale / y_scale, and the record's layout where the file has
+/// `realization` and `period` columns (whole numbers; else empty): experiments that each start
+/// from rest, and the periods of a periodic excitation within them.
+struct MultiRecord {
+  std::vector<std::string> u_names, y_names;
+  std::vector<std::vector<double>> u, y;  ///< per column, scaled; y empty where optional and absent
+  std::vector<std::optional<std::string>> u_units, y_units;  ///< as Record's, per column
+  std::vector<double> realization, period;                   ///< per row, or empty
+  double sample_period_s = 0.0;  ///< median t step within realizations, or 1 / rate
+  std::size_t rows = 0;
+};
+
+/// Reads path's CSV as a MultiRecord. Throws DataFileError as read_record does, and for a
+/// layout column that holds other than whole numbers >= 0, or t not increasing within a
+/// realization.
+MultiRecord read_multi_record(const std::string& path, const RecordColumns& columns,
+                              bool y_required);
+
 /// The units of records read together (several of one device, or one with a model): each unit
 /// a record names must agree with the others' and with `given`'s (a model's; unset: none);
 /// V and um where nothing names them. Throws DataFileError naming the path and both units.

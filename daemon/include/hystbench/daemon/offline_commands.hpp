@@ -1,5 +1,6 @@
 #pragma once
-// The offline commands of the `hystbench` CLI: fit, simulate, invert on CSV files.
+// The offline commands of the `hystbench` CLI: fit, simulate, invert on CSV files. fit and
+// simulate also take records of several inputs and outputs (comma lists of columns).
 // Each returns a process exit code and writes human-readable text (or one JSON line with
 // `json_output`) to `out`, progress and errors to `err`.
 #include <iosfwd>
@@ -17,9 +18,11 @@ namespace hystbench::daemon {
 
 struct FitCommand {
   std::string data_path;
-  std::string model_name = "mpi";  ///< pi | mpi | cpi | rpi | auto
-  int operators = 0;               ///< 0 = chosen by held-out error
-  int dead_zones = -1;             ///< -1 = chosen by held-out error
+  /// pi | mpi | cpi | rpi | auto, or hammerstein: operators per input, then linear dynamics (the
+  /// family of several inputs or outputs, which comma lists in columns.u / columns.y choose)
+  std::string model_name = "mpi";
+  int operators = 0;    ///< 0 = chosen by held-out error
+  int dead_zones = -1;  ///< -1 = chosen by held-out error
   double heldout_fraction = 0.25;
   bool refine = true;
   /// Seconds at the start neither fitted nor scored; unset = until the input has reached both
@@ -41,6 +44,9 @@ struct SimulateCommand {
   std::string output_path;
   bool json_output = false;
   RecordColumns columns;  ///< which columns are t, u and the optional y
+  /// A model of several inputs: seconds at the start of each realization simulated but not
+  /// scored (the model starts from rest, the record did not). Unset: 0.
+  std::optional<double> skip_s;
 };
 
 struct InvertCommand {

@@ -1,0 +1,40 @@
+#pragma once
+// A Hammerstein model with several inputs and outputs: a hysteresis operator per input (a
+// classical Prandtl-Ishlinskii model of the input, or none: the input as it is), then a MIMO
+// linear dynamic block (MimoLinearModel). Units: the inputs' and outputs' as given; an operator's
+// output is in its input's unit. Pure maths; simulate() allocates its result.
+#include <Eigen/Dense>
+#include <optional>
+#include <vector>
+
+#include "hystbench/compensation/mimo_linear_model.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+
+namespace hystbench::compensation {
+
+class HammersteinMimoModel {
+ public:
+  HammersteinMimoModel() = default;
+  /// One operator slot per input of `dynamics` (nullopt: none). Throws std::invalid_argument
+  /// on a count mismatch or invalid operator parameters.
+  HammersteinMimoModel(std::vector<std::optional<PiParameters>> operators,
+                       MimoLinearModel dynamics);
+
+  std::size_t inputs() const noexcept { return dynamics_.inputs(); }
+  std::size_t outputs() const noexcept { return dynamics_.outputs(); }
+  const std::vector<std::optional<PiParameters>>& operators() const noexcept { return operators_; }
+  const MimoLinearModel& dynamics() const noexcept { return dynamics_; }
+  bool has_hysteresis() const noexcept;
+
+  /// The operators' outputs (m x N) for input u (m x N), each operator starting at rest at the
+  /// input's first value.
+  Eigen::MatrixXd operator_outputs(const Eigen::MatrixXd& u) const;
+  /// Output (p x N) for input u (m x N), from rest.
+  Eigen::MatrixXd simulate(const Eigen::MatrixXd& u) const;
+
+ private:
+  std::vector<std::optional<PiParameters>> operators_;
+  MimoLinearModel dynamics_;
+};
+
+}  // namespace hystbench::compensation

@@ -1,0 +1,41 @@
+#pragma once
+// Model files of several inputs and outputs (schema "hystbench.model/1", type
+// "mimo_hammerstein"):
+//   {"schema": ..., "type": "mimo_hammerstein", "sample_period_s": dt,
+//    "inputs": [{"name": "u1_V", "unit": "V"}, ...], "outputs": [{"name": ..., "unit": ...}],
+//    "operators": [null | {"thresholds": [...], "weights": [...], "offset": 0}, ...],  (per input)
+//    "dynamics": {"poles": [[re, im], ...], "terms": [[[row], ...], ...],          (p x m each)
+//                 "output_offset": [...]},
+//    "identification": {...}}                                                     (free-form)
+// The dynamics are discrete-time: the model holds at its own sample period only.
+// Pure conversion between JSON values and models; reading and writing files is the caller's.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/hammerstein_mimo_model.hpp"
+#include "hystbench/compensation/model_file.hpp"
+
+namespace hystbench::compensation {
+
+inline constexpr const char* kMimoModelType = "mimo_hammerstein";
+
+struct MimoChannel {
+  std::string name;  ///< the record's column
+  std::string unit;  ///< after the column's scale
+};
+
+struct MimoModelFile {
+  HammersteinMimoModel model;
+  double sample_period_s = 0.0;  ///< > 0 [s]
+  std::vector<MimoChannel> inputs, outputs;
+  nlohmann::json identification = nlohmann::json::object();
+};
+
+/// True for a model file of this type (whatever else it holds).
+bool is_mimo_model_file(const nlohmann::json& j);
+nlohmann::json to_json(const MimoModelFile& file);
+/// Validates every field and builds the model; throws ModelFileError naming the field.
+MimoModelFile mimo_model_file_from_json(const nlohmann::json& j);
+
+}  // namespace hystbench::compensation

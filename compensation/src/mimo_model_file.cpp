@@ -1,0 +1,172 @@
+#include "hystbench/compensation/mimo_model_file.hpp"
+
+#include <cmath>
+
+namespace hystbench::compensation {
+
+using nlohmann::json;
+
+namespace {
+
+[[noreturn]] void fail(const std::string& field, const std::string& what) {
+  throw ModelFileError(field + ": " + what);
+}
+
+const json& member(const json& j, const std::string& key, const std::string& field) {
+  if (!j.is_object() || !j.contains(key)) fail(field + key, "missing");
+  return j.at(key);
+}
+
+double number(const json& j, const std::string& field) {
+  if (!j.is_number()) fail(field, "not a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) fail(field, "not finite");
+  return v;
+}
+
+std::vector<double> numbers(const json& j, const std::string& field) {
+  if (!j.is_array()) fail(field, "not an array");
+  std::vector<double> v;
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    v.push_back(number(j[i], field + "[" + std::to_string(i) + "]"));
+  }
+  return v;
+}
+
+std::vector<MimoChannel> channels(const json& j, const std::string& field) {
+  if (!j.is_array() || j.empty()) fail(field, "not a non-empty array");
+  std::vector<MimoChannel> out;
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    const std::string f = field + "[" + std::to_string(i) + "].";
+    const json& n = member(j[i], "name", f);
+    const json& u = member(j[i], "unit", f);
+    if (!n.is_string() || !u.is_string()) fail(f + "name/unit", "not strings");
+    out.push_back({n.get<std::string>(), u.get<std::string>()});
+  }
+  return out;
+}
+
+json matrix_json(const Eigen::MatrixXd& m) {
+  json rows = json::array();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    json row = json::array();
+    for (Eigen::Index j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+Eigen::MatrixXd matrix_of(const json& j, std::size_t rows, std::size_t cols,
+                          const std::string& field) {
+  if (!j.is_array() || j.size() != rows) {
+    fail(field, "not " + std::to_string(rows) + " rows (one per output)");
+  }
+  Eigen::MatrixXd m(rows, cols);
+  for (std::size_t i = 0; i < rows; ++i) {
+    const std::vector<double> row = numbers(j[i], field + "[" + std::to_string(i) + "]");
+    if (row.size() != cols) {
+      fail(field + "[" + std::to_string(i) + "]",
+           "not " + std::to_string(cols) + " values (one per input)");
+    }
+    for (std::size_t c = 0; c < cols; ++c) {
+      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(c)) = row[c];
+    }
+  }
+  return m;
+}
+
+}  // namespace
+
+bool is_mimo_model_file(const json& j) {
+  return j.is_object() && j.contains("type") && j["type"] == kMimoModelType;
+}
+
+json to_json(const MimoModelFile& file) {
+  const auto& g = file.model.dynamics();
+  json poles = json::array(), terms = json::array(), ops = json::array();
+  for (const auto p : g.poles()) poles.push_back({p.real(), p.imag()});
+  for (const auto& t : g.terms()) terms.push_back(matrix_json(t));
+  for (const auto& op : file.model.operators()) {
+    if (op) {
+      ops.push_back(
+          {{"thresholds", op->thresholds}, {"weights", op->weights}, {"offset", op->offset}});
+    } else {
+      ops.push_back(nullptr);
+    }
+  }
+  const auto channel_list = [](const std::vector<MimoChannel>& cs) {
+    json a = json::array();
+    for (const auto& c : cs) a.push_back({{"name", c.name}, {"unit", c.unit}});
+    return a;
+  };
+  const Eigen::VectorXd& off = g.output_offset();
+  return {{"schema", kModelSchema},
+          {"type", kMimoModelType},
+          {"sample_period_s", file.sample_period_s},
+          {"inputs", channel_list(file.inputs)},
+          {"outputs", channel_list(file.outputs)},
+          {"operators", ops},
+          {"dynamics",
+           {{"poles", poles},
+            {"terms", terms},
+            {"output_offset", std::vector<double>(off.data(), off.data() + off.size())}}},
+          {"identification", file.identification}};
+}
+
+MimoModelFile mimo_model_file_from_json(const json& j) {
+  if (!j.is_object()) fail("model", "not a JSON object");
+  const json& schema = member(j, "schema", "");
+  if (schema != kModelSchema) fail("schema", "not " + std::string(kModelSchema));
+  if (!is_mimo_model_file(j)) fail("type", std::string("not ") + kMimoModelType);
+  MimoModelFile f;
+  f.sample_period_s = number(member(j, "sample_period_s", ""), "sample_period_s");
+  if (!(f.sample_period_s > 0.0)) fail("sample_period_s", "not > 0");
+  f.inputs = channels(member(j, "inputs", ""), "inputs");
+  f.outputs = channels(member(j, "outputs", ""), "outputs");
+  const std::size_t m = f.inputs.size(), p = f.outputs.size();
+  const json& ops = member(j, "operators", "");
+  if (!ops.is_array() || ops.size() != m) fail("operators", "not one entry per input");
+  std::vector<std::optional<PiParameters>> operators(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::string field = "operators[" + std::to_string(i) + "]";
+    if (ops[i].is_null()) continue;
+    PiParameters pp;
+    pp.thresholds = numbers(member(ops[i], "thresholds", field + "."), field + ".thresholds");
+    pp.weights = numbers(member(ops[i], "weights", field + "."), field + ".weights");
+    pp.offset = ops[i].contains("offset") ? number(ops[i]["offset"], field + ".offset") : 0.0;
+    try {
+      PiModel check(pp);
+    } catch (const std::invalid_argument& e) {
+      fail(field, e.what());
+    }
+    operators[i] = std::move(pp);
+  }
+  const json& dyn = member(j, "dynamics", "");
+  const json& pj = member(dyn, "poles", "dynamics.");
+  if (!pj.is_array()) fail("dynamics.poles", "not an array");
+  std::vector<std::complex<double>> poles;
+  for (std::size_t i = 0; i < pj.size(); ++i) {
+    const auto v = numbers(pj[i], "dynamics.poles[" + std::to_string(i) + "]");
+    if (v.size() != 2) fail("dynamics.poles[" + std::to_string(i) + "]", "not [re, im]");
+    poles.emplace_back(v[0], v[1]);
+  }
+  const json& tj = member(dyn, "terms", "dynamics.");
+  if (!tj.is_array()) fail("dynamics.terms", "not an array");
+  std::vector<Eigen::MatrixXd> terms;
+  for (std::size_t q = 0; q < tj.size(); ++q) {
+    terms.push_back(matrix_of(tj[q], p, m, "dynamics.terms[" + std::to_string(q) + "]"));
+  }
+  const auto off = numbers(member(dyn, "output_offset", "dynamics."), "dynamics.output_offset");
+  if (off.size() != p) fail("dynamics.output_offset", "not one value per output");
+  try {
+    MimoLinearModel g(std::move(poles), std::move(terms),
+                      Eigen::Map<const Eigen::VectorXd>(off.data(), static_cast<Eigen::Index>(p)));
+    f.model = HammersteinMimoModel(std::move(operators), std::move(g));
+  } catch (const std::invalid_argument& e) {
+    fail("dynamics", e.what());
+  }
+  if (j.contains("identification")) f.identification = j["identification"];
+  return f;
+}
+
+}  // namespace hystbench::compensation
