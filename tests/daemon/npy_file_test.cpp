@@ -1,8 +1,9 @@
 // NumPy .npy files: arrays written byte by byte here read back with their shape and the same
 // doubles; files the reader does not take (no magic, another dtype, Fortran order, truncated
-// data, a malformed header) give an error naming the file and the cause; the measured CubeSpec
-// mirror set (../shared/data/piezo-fsm-cubespec) reads to the same values as the CSV shipped
-// with it.
+// data, a malformed header) give an error naming the file and the cause. `hystbench convert`
+// writes a U/Y pair as one CSV in realization, period, sample order, exactly; the measured
+// CubeSpec mirror set (../shared/data/piezo-fsm-cubespec) reads and converts to the same values
+// as the CSV shipped with it.
 #include "hystbench/daemon/npy_file.hpp"
 
 #include <gmock/gmock.h>
@@ -15,9 +16,12 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "hystbench/daemon/convert_command.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "support/temp_dir_test.hpp"
 
@@ -64,7 +68,8 @@ std::string float64_dict(const std::string& shape) {
 // The shared CubeSpec mirror data set; README.md there describes it.
 const fs::path kCubeSpec = fs::path(HYSTBENCH_SHARED_DATA_DIR) / "piezo-fsm-cubespec";
 constexpr std::size_t kCubeSpecSamples = 8192;  // per period
-// The shipped CSV's columns besides k.
+constexpr double kCubeSpecRateHz = 6400.0;
+// The shipped CSV's columns besides k, in both it and `convert`'s output.
 const std::vector<std::string> kCubeSpecColumns = {"period", "n_in_period", "u1_V", "u2_V",
                                                    "u3_V",   "y1_m",        "y2_m", "y3_m"};
 
@@ -233,6 +238,140 @@ TEST_F(NpyFileTest, MeasuredCubeSpecTestSetMatchesItsCsvConversion) {
     return (name[0] == 'u' ? u : y).values[((n * 3 + c) * 3 + 0) * 2 + p];
   };
   EXPECT_EQ(rows_unlike_shipped_realization0(value), 0U);
+}
+
+class ConvertCommandTest : public NpyFileTest {
+ protected:
+  int run(const hd::ConvertCommand& cmd) {
+    std::ostringstream out, err;
+    const int code = hd::run_convert(cmd, out, err);
+    out_ = out.str();
+    err_ = err.str();
+    return code;
+  }
+  hd::ConvertCommand command(const std::string& u, const std::string& y, double rate_hz) const {
+    hd::ConvertCommand cmd;
+    cmd.u_path = u;
+    cmd.y_path = y;
+    cmd.rate_hz = rate_hz;
+    cmd.output_path = path("record.csv");
+    return cmd;
+  }
+  // An array of `shape` whose every value is its own C-order index plus `offset`.
+  std::string write_counting(const std::string& name, const std::string& shape, std::size_t count,
+                             double offset) const {
+    std::vector<double> values(count);
+    for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<double>(i) + offset;
+    return write_file(name, npy_bytes(float64_dict(shape), float64_bytes(values)));
+  }
+
+  std::string out_, err_;
+};
+
+TEST_F(ConvertCommandTest, WritesRowsInRealizationPeriodSampleOrder) {
+  // (N=3, channel, realization=2, period=2): U with 2 channels, Y with 1.
+  hd::ConvertCommand cmd = command(write_counting("u.npy", "(3, 2, 2, 2)", 24, 0.0),
+                                   write_counting("y.npy", "(3, 1, 2, 2)", 12, 0.5), 4.0);
+  cmd.json_output = true;
+  ASSERT_EQ(run(cmd), 0) << err_;
+  const nlohmann::json result = nlohmann::json::parse(out_);
+  EXPECT_EQ(result.at("rows"), 12);
+  EXPECT_EQ(result.at("realizations"), 2);
+  EXPECT_EQ(result.at("periods"), 2);
+  EXPECT_EQ(result.at("samples_per_period"), 3);
+  const hd::DataTable t = hd::DataTable::read_csv(cmd.output_path);
+  EXPECT_EQ(t.names(), (std::vector<std::string>{"t", "realization", "period", "n_in_period",
+                                                 "u1_V", "u2_V", "y1_m"}));
+  ASSERT_EQ(t.rows(), 12U);
+  std::size_t row = 0;
+  for (std::size_t r = 0; r < 2; ++r) {
+    for (std::size_t p = 0; p < 2; ++p) {
+      for (std::size_t n = 0; n < 3; ++n, ++row) {
+        EXPECT_EQ(t.column("t")[row], static_cast<double>(p * 3 + n) / 4.0) << row;
+        EXPECT_EQ(t.column("realization")[row], static_cast<double>(r));
+        EXPECT_EQ(t.column("period")[row], static_cast<double>(p));
+        EXPECT_EQ(t.column("n_in_period")[row], static_cast<double>(n));
+        EXPECT_EQ(t.column("u1_V")[row], static_cast<double>(((n * 2 + 0) * 2 + r) * 2 + p));
+        EXPECT_EQ(t.column("u2_V")[row], static_cast<double>(((n * 2 + 1) * 2 + r) * 2 + p));
+        EXPECT_EQ(t.column("y1_m")[row], static_cast<double>((n * 2 + r) * 2 + p) + 0.5);
+      }
+    }
+  }
+}
+
+TEST_F(ConvertCommandTest, TakesTwoAndThreeDimensionalArraysAndGivenNames) {
+  // (N, channel): one realization, one period.
+  hd::ConvertCommand cmd = command(write_counting("u2.npy", "(4, 2)", 8, 0.0),
+                                   write_counting("y2.npy", "(4, 1)", 4, 0.0), 2.0);
+  cmd.u_names = {"V_a", "V_b"};
+  cmd.y_names = {"x_um"};
+  ASSERT_EQ(run(cmd), 0) << err_;
+  EXPECT_THAT(out_, HasSubstr("4 rows, 2 input and 1 output channels, 1 realizations x 1 periods"));
+  EXPECT_THAT(out_, HasSubstr(cmd.output_path));
+  hd::DataTable t = hd::DataTable::read_csv(cmd.output_path);
+  EXPECT_EQ(t.names(), (std::vector<std::string>{"t", "realization", "period", "n_in_period", "V_a",
+                                                 "V_b", "x_um"}));
+  EXPECT_EQ(t.column("t"), (std::vector<double>{0.0, 0.5, 1.0, 1.5}));
+  EXPECT_EQ(t.column("V_b"), (std::vector<double>{1, 3, 5, 7}));
+  // (N, channel, realization): one period; t starts again with each realization.
+  cmd = command(write_counting("u3.npy", "(2, 1, 3)", 6, 0.0),
+                write_counting("y3.npy", "(2, 1, 3)", 6, 0.25), 10.0);
+  ASSERT_EQ(run(cmd), 0) << err_;
+  t = hd::DataTable::read_csv(cmd.output_path);
+  EXPECT_EQ(t.column("t"), (std::vector<double>{0.0, 0.1, 0.0, 0.1, 0.0, 0.1}));
+  EXPECT_EQ(t.column("realization"), (std::vector<double>{0, 0, 1, 1, 2, 2}));
+  EXPECT_EQ(t.column("u1_V"), (std::vector<double>{0, 3, 1, 4, 2, 5}));
+  EXPECT_EQ(t.column("y1_m"), (std::vector<double>{0.25, 3.25, 1.25, 4.25, 2.25, 5.25}));
+}
+
+TEST_F(ConvertCommandTest, RefusesShapesThatDisagreeAndBadNamesWritingNothing) {
+  const std::string u = write_counting("u.npy", "(4, 2, 3)", 24, 0.0);
+  hd::ConvertCommand cmd = command(u, write_counting("y.npy", "(4, 2, 2)", 16, 0.0), 1.0);
+  EXPECT_EQ(run(cmd), 1);
+  EXPECT_THAT(err_, HasSubstr("u.npy has shape (4, 2, 3)"));
+  EXPECT_THAT(err_, HasSubstr("y.npy has shape (4, 2, 2)"));
+  cmd.y_path = write_counting("y1.npy", "(8,)", 8, 0.0);
+  EXPECT_EQ(run(cmd), 1);
+  EXPECT_THAT(err_, HasSubstr("y1.npy: shape (8,) is not (N, channel)"));
+  cmd.y_path = write_counting("y_ok.npy", "(4, 1, 3)", 12, 0.0);
+  cmd.u_names = {"a"};
+  EXPECT_EQ(run(cmd), 1);
+  EXPECT_THAT(err_, HasSubstr("--u-names gives 1 names, " + u + " has 2 channels"));
+  cmd.u_names = {"a", "t"};
+  EXPECT_EQ(run(cmd), 1);
+  EXPECT_THAT(err_, HasSubstr("column name 't' is given twice"));
+  cmd.u_names = {"a", "#b"};
+  EXPECT_EQ(run(cmd), 1);
+  EXPECT_THAT(err_, HasSubstr("--u-names: '#b' cannot be a CSV column name"));
+  cmd.u_names.clear();
+  cmd.rate_hz = 0.0;
+  EXPECT_EQ(run(cmd), 1);
+  EXPECT_THAT(err_, HasSubstr("--rate must be the sample rate in Hz"));
+  EXPECT_FALSE(fs::exists(cmd.output_path));
+}
+
+TEST_F(ConvertCommandTest, MeasuredCubeSpecPairConvertsToTheShippedValues) {
+  if (!cubespec_300mv_test_set_present()) {
+    GTEST_SKIP() << "shared data set piezo-fsm-cubespec (u_300mV_test.npy, y_300mV_test.npy, "
+                    "fsm_300mV_test_realization0.csv) not found under "
+                 << HYSTBENCH_SHARED_DATA_DIR;
+  }
+  hd::ConvertCommand cmd = command((kCubeSpec / "u_300mV_test.npy").string(),
+                                   (kCubeSpec / "y_300mV_test.npy").string(), kCubeSpecRateHz);
+  ASSERT_EQ(run(cmd), 0) << err_;
+  EXPECT_THAT(out_, HasSubstr("49152 rows, 3 input and 3 output channels, 3 realizations x 2 "
+                              "periods x 8192 samples at 6400 Hz"));
+  const hd::DataTable t = hd::DataTable::read_csv(cmd.output_path);
+  ASSERT_EQ(t.rows(), 3 * 2 * kCubeSpecSamples);
+  // Realization 0 is the first 2 * 8192 rows; t = k / 6400 as the shipped CSV's README says.
+  const auto value = [&](std::size_t k, const std::string& name) { return t.column(name)[k]; };
+  EXPECT_EQ(rows_unlike_shipped_realization0(value), 0U);
+  for (std::size_t k = 0; k < 2 * kCubeSpecSamples; ++k) {
+    ASSERT_EQ(t.column("realization")[k], 0.0) << k;
+    ASSERT_EQ(t.column("t")[k], static_cast<double>(k) / kCubeSpecRateHz) << k;
+  }
+  EXPECT_EQ(t.column("realization")[2 * kCubeSpecSamples], 1.0);
+  EXPECT_EQ(t.column("t")[2 * kCubeSpecSamples], 0.0);
 }
 
 }  // namespace
