@@ -1,5 +1,5 @@
 // hystbench: the bench's command-line tool.
-//   Offline (no daemon needed): fit, simulate, invert, diagnose on CSV files.
+//   Offline (no daemon needed): fit, simulate, invert, diagnose on CSV files; convert .npy to CSV.
 //   Bench (talks to hystbenchd over its Unix socket): status, identify, track, excite, sweep,
 //   stop, abort, reset, model, config.
 #include <CLI/CLI.hpp>
@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "hystbench/daemon/convert_command.hpp"
 #include "hystbench/daemon/diagnose_command.hpp"
 #include "hystbench/daemon/fit_families.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
@@ -37,6 +38,7 @@ int main(int argc, char** argv) {
       "-o mirror.json\n"
       "  hystbench simulate mirror.json test.csv --y-scale 1e6 --skip 0.1 -o predicted.csv\n"
       "  hystbench diagnose run_1hz.csv run_5hz.csv run_20hz.csv --validate run_10hz.csv\n"
+      "  hystbench convert u_300mV_test.npy y_300mV_test.npy --rate 6400 -o fsm_300mV_test.csv\n"
       "  hystbench identify --wait                  (bench: identify the actuator on the bench)\n"
       "  hystbench track --reference triangle --frequency 1 --periods 5 --compensator inverse "
       "--wait --json\n"
@@ -211,6 +213,42 @@ int main(int argc, char** argv) {
   diag_cmd->add_option("--save-baseline", diag.save_baseline, "Write the baseline model file");
   diag_cmd->add_option("--save-extended", diag.save_extended,
                        "Write the extended model file (the baseline plus the named effect)");
+
+  hd::ConvertCommand conv;
+  auto* conv_cmd = app.add_subcommand(
+      "convert",
+      "Write a record stored as NumPy arrays (inputs in one .npy, outputs in another; float64 "
+      "or float32, C order) as one CSV: t,realization,period,n_in_period, then one column per "
+      "input and output channel. The arrays' axes are (N, channel), (N, channel, realization) "
+      "or (N, channel, realization, period), N samples per period; the two files must agree in "
+      "N, realizations and periods. Rows go realization by realization, period by period; t "
+      "[s] = (period * N + n_in_period) / rate starts again at 0 with each realization. Values "
+      "are copied exactly (17 significant digits).\n"
+      "Example (the CubeSpec mirror data, (8192, 3, 3, 2) sampled at 6400 Hz):\n"
+      "  hystbench convert u_300mV_test.npy y_300mV_test.npy --rate 6400 -o fsm_300mV_test.csv");
+  conv_cmd->add_option("u", conv.u_path, "Input array (.npy), e.g. voltages")
+      ->required()
+      ->check(CLI::ExistingFile);
+  conv_cmd->add_option("y", conv.y_path, "Output array (.npy), e.g. displacements")
+      ->required()
+      ->check(CLI::ExistingFile);
+  conv_cmd->add_option("-o,--output", conv.output_path, "CSV file to write")->required();
+  conv_cmd
+      ->add_option("--rate", conv.rate_hz,
+                   "Sample rate [Hz] of the arrays (the files do not store it; the CubeSpec "
+                   "data's is 6400)")
+      ->required()
+      ->check(CLI::PositiveNumber);
+  conv_cmd
+      ->add_option("--u-names", conv.u_names,
+                   "Input column names, one per channel, comma-separated (default u1_V,u2_V,...)")
+      ->delimiter(',');
+  conv_cmd
+      ->add_option("--y-names", conv.y_names,
+                   "Output column names, one per channel, comma-separated (default "
+                   "y1_m,y2_m,...)")
+      ->delimiter(',');
+  conv_cmd->add_flag("--json", conv.json_output, "Print the result as one JSON line");
 
   // ---- bench commands (talk to hystbenchd) ----
   hd::RemoteCommand remote;
@@ -586,5 +624,6 @@ int main(int argc, char** argv) {
   if (*sim_cmd) return hd::run_simulate(sim, std::cout, std::cerr);
   if (*inv_cmd) return hd::run_invert(inv, std::cout, std::cerr);
   if (*diag_cmd) return hd::run_diagnose(diag, std::cout, std::cerr);
+  if (*conv_cmd) return hd::run_convert(conv, std::cout, std::cerr);
   return 2;
 }

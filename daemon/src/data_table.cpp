@@ -469,7 +469,7 @@ compensation::Units common_units(std::span<const Record> records,
 
 void write_csv(const std::string& path, const std::vector<std::string>& names,
                const std::vector<const std::vector<double>*>& columns,
-               const std::vector<std::string>& comments) {
+               const std::vector<std::string>& comments, int significant_digits) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) throw DataFileError(path + ": cannot write (" + std::strerror(errno) + ")");
   for (const auto& c : comments) std::fprintf(f, "# %s\n", c.c_str());
@@ -482,7 +482,7 @@ void write_csv(const std::string& path, const std::vector<std::string>& names,
   for (std::size_t r = 0; r < rows; ++r) {
     for (std::size_t i = 0; i < columns.size(); ++i) {
       const auto& c = *columns[i];
-      std::fprintf(f, "%s%.10g", i ? "," : "", r < c.size() ? c[r] : NAN);
+      std::fprintf(f, "%s%.*g", i ? "," : "", significant_digits, r < c.size() ? c[r] : NAN);
     }
     std::fputc('\n', f);
   }

@@ -123,9 +123,10 @@ compensation::Units common_units(std::span<const Record> records,
                                  const std::optional<compensation::Units>& given = std::nullopt);
 
 /// Writes columns as CSV with a header row and optional '#' comment lines first.
-/// Values use 10 significant digits. Throws DataFileError when the file cannot be written.
+/// Values use `significant_digits` significant digits (17 reads back every double exactly).
+/// Throws DataFileError when the file cannot be written.
 void write_csv(const std::string& path, const std::vector<std::string>& names,
                const std::vector<const std::vector<double>*>& columns,
-               const std::vector<std::string>& comments = {});
+               const std::vector<std::string>& comments = {}, int significant_digits = 10);
 
 }  // namespace hystbench::daemon
