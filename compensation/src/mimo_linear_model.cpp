@@ -85,7 +85,8 @@ Eigen::MatrixXd MimoLinearModel::simulate(const Eigen::MatrixXd& u) const {
       Eigen::VectorXd x = Eigen::VectorXd::Zero(u.rows());
       for (Eigen::Index t = 0; t < n; ++t) {
         y.col(t).noalias() += r * x;
-        x = p.real() * x + u.col(t);
+        x *= p.real();
+        x += u.col(t);
       }
     } else {
       const Eigen::MatrixXd two_a = 2.0 * terms_[q];
@@ -96,9 +97,12 @@ Eigen::MatrixXd MimoLinearModel::simulate(const Eigen::MatrixXd& u) const {
       for (Eigen::Index t = 0; t < n; ++t) {
         y.col(t).noalias() += two_a * xr;
         y.col(t).noalias() += minus_two_b * xi;
-        next = pr * xr - pi * xi + u.col(t);
-        xi = pi * xr + pr * xi;
-        xr = next;
+        next = pr * xr;
+        next -= pi * xi;
+        next += u.col(t);
+        xi *= pr;
+        xi += pi * xr;
+        xr.swap(next);
       }
     }
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iomanip>
 #include <ostream>
+#include <sstream>
 
 #include "hystbench/daemon/model_file_io.hpp"
 
@@ -228,10 +229,10 @@ int run_simulate_mimo(const SimulateCommand& cmd, const hc::MimoModelFile& file,
   check_units(data.u_units, file.inputs, "--u-scale");
   check_units(data.y_units, file.outputs, "--y-scale");
   if (std::abs(data.sample_period_s - file.sample_period_s) > 1e-6 * file.sample_period_s) {
-    throw DataFileError(cmd.data_path + ": sampled at " +
-                        std::to_string(1.0 / data.sample_period_s) +
-                        " Hz; the model's dynamics hold at " +
-                        std::to_string(1.0 / file.sample_period_s) + " Hz only");
+    std::ostringstream msg;
+    msg << cmd.data_path << ": sampled at " << 1.0 / data.sample_period_s
+        << " Hz; the model's dynamics hold at " << 1.0 / file.sample_period_s << " Hz only";
+    throw DataFileError(msg.str());
   }
   const double skip_s = cmd.skip_s.value_or(0.0);
   if (!(skip_s >= 0.0)) throw std::invalid_argument("--skip: seconds >= 0");

@@ -94,7 +94,7 @@ hd::DiagnoseCommand command_for(const std::string& data, const std::string& u, c
 
 double rms_of_simulation(const std::string& model, const std::string& data,
                          const std::string& output) {
-  hd::SimulateCommand sim{model, data, output, true, {}};
+  hd::SimulateCommand sim{model, data, output, true, {}, {}};
   std::ostringstream out, err;
   EXPECT_EQ(hd::run_simulate(sim, out, err), 0) << err.str();
   return json::parse(out.str()).at("rmse").get<double>();
