@@ -794,7 +794,9 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
         "output, as in a multi-axis stage, or a disturbance), which no single-input model or "
         "candidate here explains; such a model could lower the error to about " +
         num(floor_rms) + " " + unit + " at best (gain " +
-        num(floor_rms > 0.0 ? d.baseline_heldout.rmse / floor_rms : 0.0) + ")");
+        num(floor_rms > 0.0 ? d.baseline_heldout.rmse / floor_rms : 0.0) +
+        "); where the record holds the other inputs, name them all (--u-column u1,u2,...) and "
+        "diagnose measures their coupling");
   }
   if (d.refit_heldout && d.refit_heldout->rmse > 0.0 &&
       d.baseline_heldout.rmse / d.refit_heldout->rmse >= options.min_gain) {

@@ -684,4 +684,40 @@ Eigen::MatrixXd coupling_shares(const HammersteinMimoModel& model, const Periodi
   return explained;
 }
 
+PeriodicSpectra subset(const PeriodicSpectra& spectra, const std::vector<std::size_t>& inputs,
+                       const std::vector<std::size_t>& outputs) {
+  for (const auto j : inputs) {
+    if (j >= spectra.inputs())
+      throw std::invalid_argument("spectra: no input " + std::to_string(j));
+  }
+  for (const auto i : outputs) {
+    if (i >= spectra.outputs())
+      throw std::invalid_argument("spectra: no output " + std::to_string(i));
+  }
+  const auto rows = [](const Eigen::MatrixXcd& m, const std::vector<std::size_t>& idx) {
+    Eigen::MatrixXcd out(static_cast<Eigen::Index>(idx.size()), m.cols());
+    for (std::size_t q = 0; q < idx.size(); ++q)
+      out.row(static_cast<Eigen::Index>(q)) = m.row(static_cast<Eigen::Index>(idx[q]));
+    return out;
+  };
+  PeriodicSpectra out = spectra;
+  for (std::size_t r = 0; r < spectra.u.size(); ++r) {
+    out.u[r] = rows(spectra.u[r], inputs);
+    out.y[r] = rows(spectra.y[r], outputs);
+  }
+  out.noise_var =
+      Eigen::MatrixXd(static_cast<Eigen::Index>(outputs.size()), spectra.noise_var.cols());
+  out.u_mean.resize(static_cast<Eigen::Index>(inputs.size()));
+  out.y_mean.resize(static_cast<Eigen::Index>(outputs.size()));
+  for (std::size_t q = 0; q < outputs.size(); ++q) {
+    out.noise_var.row(static_cast<Eigen::Index>(q)) =
+        spectra.noise_var.row(static_cast<Eigen::Index>(outputs[q]));
+    out.y_mean(static_cast<Eigen::Index>(q)) =
+        spectra.y_mean(static_cast<Eigen::Index>(outputs[q]));
+  }
+  for (std::size_t q = 0; q < inputs.size(); ++q)
+    out.u_mean(static_cast<Eigen::Index>(q)) = spectra.u_mean(static_cast<Eigen::Index>(inputs[q]));
+  return out;
+}
+
 }  // namespace hystbench::compensation

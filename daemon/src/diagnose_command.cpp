@@ -17,6 +17,7 @@
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/daemon/data_table.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
+#include "mimo_commands.hpp"
 
 namespace hystbench::daemon {
 
@@ -388,6 +389,7 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
 int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
     if (cmd.data_paths.empty()) throw std::invalid_argument("no record to diagnose");
+    if (names_several(cmd.columns)) return details::run_diagnose_mimo(cmd, out, err);
     // The records diagnosed, then those only validated: every unit they name must agree.
     std::vector<Record> records;
     std::vector<std::string> paths = cmd.data_paths;

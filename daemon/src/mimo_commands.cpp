@@ -2,10 +2,14 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
 #include <iomanip>
 #include <ostream>
 #include <sstream>
 
+#include "hystbench/compensation/mimo_diagnosis.hpp"
 #include "hystbench/daemon/model_file_io.hpp"
 
 namespace hystbench::daemon::details {
@@ -311,6 +315,120 @@ int run_simulate_mimo(const SimulateCommand& cmd, const hc::MimoModelFile& file,
     out << result.dump() << "\n";
   } else {
     out << "wrote " << cmd.output_path << " (" << data.rows << " samples)\n";
+  }
+  return 0;
+}
+
+int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
+  if (cmd.data_paths.size() != 1 || !cmd.validate_paths.empty() || !cmd.model_path.empty() ||
+      !cmd.save_baseline.empty()) {
+    throw std::invalid_argument(
+        "a record of several columns is diagnosed alone: one file (its realizations are the "
+        "held-out checks), without --validate, --model or --save-baseline");
+  }
+  const std::string& path = cmd.data_paths.front();
+  const MultiRecord data = read_multi_record(path, cmd.columns, true);
+  const std::size_t m = data.u.size(), p = data.y.size();
+  if (m < 2) {
+    throw std::invalid_argument("--u-column names one input: cross-coupling needs several");
+  }
+  if (p != 1 && p != m) {
+    throw std::invalid_argument(
+        "--y-column names " + std::to_string(p) + " outputs for " + std::to_string(m) +
+        " inputs: give one output (its own input the first), or one per input in their order");
+  }
+  std::vector<std::size_t> own(p);
+  for (std::size_t i = 0; i < p; ++i) own[i] = p == 1 ? 0 : i;
+  const hc::PeriodicRecord rec = periodic_record(data, path);
+  const hc::PeriodicSpectra spectra = hc::periodic_spectra(rec);
+  std::function<void(double, const std::string&)> progress;
+  if (!cmd.json_output)
+    progress = [&err](double f, const std::string& w) { progress_line(err, f, w); };
+  const hc::CouplingDiagnosis d = hc::diagnose_cross_coupling(spectra, own, progress);
+  if (!cmd.json_output) err << "\n";
+  const std::string unit = data.y_units.front().value_or("um");
+  json outputs = json::array();
+  bool any = false;
+  for (const auto& c : d.outputs) {
+    json shares = json::object(), named = json::array();
+    for (std::size_t j = 0; j < m; ++j) shares[data.u_names[j]] = c.shares[j];
+    for (const auto j : c.named_inputs) named.push_back(data.u_names[j]);
+    any = any || c.named;
+    outputs.push_back({{"output", data.y_names[c.output]},
+                       {"own_input", data.u_names[c.own_input]},
+                       {"cause", c.named ? "cross_coupling" : "none"},
+                       {"cross_coupling",
+                        {{"named", c.named},
+                         {"inputs", named},
+                         {"shares", shares},
+                         {"gain", c.gain},
+                         {"baseline_heldout_rms", c.baseline_heldout_rms},
+                         {"baseline_order", c.baseline_order},
+                         {"extended_heldout_rms", c.extended_heldout_rms},
+                         {"left_out_gains", c.left_out_gains},
+                         {"naming_gain", hc::kCouplingNamingGain}}}});
+  }
+  const json result = {{"cause", any ? "cross_coupling" : "none"},
+                       {"data", path},
+                       {"heldout", d.heldout},
+                       {"extended_order", d.extended_order},
+                       {"unit", unit},
+                       {"realizations", rec.u.size()},
+                       {"periods", rec.periods},
+                       {"excited_bins", spectra.bins.size()},
+                       {"outputs", outputs}};
+  if (!cmd.save_extended.empty()) {
+    hc::MimoModelFile file;
+    file.model =
+        hc::HammersteinMimoModel(std::vector<std::optional<hc::PiParameters>>(m), d.extended);
+    file.sample_period_s = rec.dt;
+    file.inputs = channels(data.u_names, data.u_units, "V");
+    file.outputs = channels(data.y_names, data.y_units, "um");
+    file.identification = {
+        {"data_file", path}, {"from", "diagnose: every input"}, {"order", d.extended_order}};
+    save_mimo_model_file(cmd.save_extended, file);
+  }
+  std::ostringstream text;
+  text << "record    " << path << ": " << rec.u.size() << " realization(s) x " << rec.periods
+       << " period(s) of " << rec.period << " samples; " << spectra.bins.size()
+       << " excited bins; held out: " << d.heldout << "\n"
+       << std::fixed;
+  for (const auto& c : d.outputs) {
+    const std::string& y = data.y_names[c.output];
+    text << std::setprecision(4) << y << ": from " << data.u_names[c.own_input] << " alone "
+         << c.baseline_heldout_rms << " " << unit << " held-out rms (order " << c.baseline_order
+         << "); from every input " << c.extended_heldout_rms << " (order " << d.extended_order
+         << "): " << std::setprecision(2) << c.gain << "x";
+    if (!c.left_out_gains.empty()) {
+      text << "; each realization left out:";
+      for (const double g : c.left_out_gains) text << " " << g << "x";
+    }
+    text << "\n  power per input:";
+    text << std::setprecision(1);
+    for (std::size_t j = 0; j < m; ++j)
+      text << " " << data.u_names[j] << " " << 100.0 * c.shares[j] << " %";
+    text << "\n  cause: ";
+    if (c.named) {
+      text << "cross_coupling from";
+      for (const auto j : c.named_inputs) text << " " << data.u_names[j];
+    } else {
+      text << "none named (cross-coupling needs " << std::setprecision(1) << hc::kCouplingNamingGain
+           << "x on the held-out part and on every realization left out, from an input carrying "
+           << 100.0 * hc::kCouplingNamedShare << " % of the power)";
+    }
+    text << "\n";
+  }
+  if (!cmd.save_extended.empty()) text << "saved     " << cmd.save_extended << " (every input)\n";
+  if (!cmd.report_dir.empty()) {
+    std::filesystem::create_directories(cmd.report_dir);
+    std::ofstream(cmd.report_dir + "/report.txt") << text.str();
+    std::ofstream(cmd.report_dir + "/diagnosis.json") << result.dump(2) << "\n";
+    text << "report    " << cmd.report_dir << " (report.txt, diagnosis.json)\n";
+  }
+  if (cmd.json_output) {
+    out << result.dump() << "\n";
+  } else {
+    out << text.str();
   }
   return 0;
 }

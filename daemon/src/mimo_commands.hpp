@@ -1,11 +1,13 @@
 #pragma once
-// fit and simulate for records of several inputs and outputs (a Hammerstein MIMO model); the
-// offline commands hand over to these when the columns name several (or --model hammerstein).
+// fit, simulate and diagnose for records of several inputs and outputs (a Hammerstein MIMO
+// model); the offline commands hand over to these when the columns name several (or fit's
+// --model hammerstein).
 #include <iosfwd>
 
 #include "hystbench/compensation/mimo_identification.hpp"
 #include "hystbench/compensation/mimo_model_file.hpp"
 #include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/diagnose_command.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 
 namespace hystbench::daemon::details {
@@ -16,6 +18,9 @@ namespace hystbench::daemon::details {
 compensation::PeriodicRecord periodic_record(const MultiRecord& data, const std::string& path);
 
 int run_fit_mimo(const FitCommand& cmd, std::ostream& out, std::ostream& err);
+/// diagnose of a record of several inputs: cross-coupling per output (each output's own input:
+/// the one of its position, or the first where one output is given).
+int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err);
 int run_simulate_mimo(const SimulateCommand& cmd, const compensation::MimoModelFile& file,
                       std::ostream& out, std::ostream& err);
 

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 
+#include "hystbench/compensation/mimo_diagnosis.hpp"
 #include "hystbench/compensation/mimo_model_file.hpp"
 
 namespace hc = hystbench::compensation;
@@ -210,4 +211,26 @@ TEST(MimoModelFile, RoundTripsAndNamesABadField) {
   bad = j;
   bad["dynamics"]["poles"][0] = {1.5, 0.1};
   EXPECT_THROW((void)hc::mimo_model_file_from_json(bad), hc::ModelFileError);
+}
+
+TEST(MimoDiagnosis, CrossCouplingIsNamedWhereItIsAndNotWhereItIsNot) {
+  const auto u = multisines(2, 4, 2, kBins);
+  for (const double coupling : {0.0, 1.0}) {
+    const auto rec = record_of(linear(coupled_truth(coupling)), u, 2, 1e-3);
+    const hc::CouplingDiagnosis d = hc::diagnose_cross_coupling(hc::periodic_spectra(rec), {0, 1});
+    ASSERT_EQ(d.outputs.size(), 2u);
+    EXPECT_EQ(d.heldout, "realization 3");
+    for (const auto& c : d.outputs) {
+      EXPECT_EQ(c.left_out_gains.size(), 4u);
+      EXPECT_EQ(c.named, coupling > 0.0) << "output " << c.output << " gain " << c.gain;
+      if (coupling > 0.0) {
+        ASSERT_EQ(c.named_inputs.size(), 1u);
+        EXPECT_EQ(c.named_inputs[0], 1 - c.output);  // the other input
+        EXPECT_GT(c.gain, 2.0);
+      } else {
+        EXPECT_TRUE(c.named_inputs.empty());
+        EXPECT_LT(c.gain, 1.2);
+      }
+    }
+  }
 }

@@ -13,6 +13,7 @@
 
 #include "hystbench/compensation/hammerstein_mimo_model.hpp"
 #include "hystbench/daemon/convert_command.hpp"
+#include "hystbench/daemon/diagnose_command.hpp"
 #include "hystbench/daemon/offline_commands.hpp"
 
 namespace hc = hystbench::compensation;
@@ -244,4 +245,43 @@ TEST_F(MimoCommandsTest, TheCubeSpecMirrorBeatsThePublishedLinearModelAtItsAmpli
   // Published: 0.228 um for the linear model trained at 300 mV, 0.1686 for the nonlinear LFR.
   EXPECT_LT(r["rmse"].get<double>(), 0.228);
   EXPECT_LT(r["rmse"].get<double>(), 0.1686);
+}
+
+TEST_F(MimoCommandsTest, DiagnoseNamesEachMirrorOutputsCouplingWithTheOtherInputs) {
+  for (const char* f : {"u_300mV_test.npy", "y_300mV_test.npy"}) {
+    if (!fs::exists(kCubeSpec / f)) {
+      GTEST_SKIP() << "shared data set piezo-fsm-cubespec (" << f << ") is not in " << kCubeSpec;
+    }
+  }
+  hd::ConvertCommand convert;
+  convert.u_path = (kCubeSpec / "u_300mV_test.npy").string();
+  convert.y_path = (kCubeSpec / "y_300mV_test.npy").string();
+  convert.output_path = path("test.csv");
+  convert.rate_hz = 6400.0;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_convert(convert, o, e); }), 0) << err_;
+  hd::DiagnoseCommand diag;
+  diag.data_paths = {path("test.csv")};
+  diag.columns.u = "u1_V,u2_V,u3_V";
+  diag.columns.y = "y1_m,y2_m,y3_m";
+  diag.columns.y_scale = 1e6;
+  diag.json_output = true;
+  diag.save_extended = path("extended.json");
+  json d;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_diagnose(diag, o, e); }, &d), 0) << err_;
+  EXPECT_EQ(d["cause"], "cross_coupling");
+  const std::vector<std::vector<std::string>> others = {
+      {"u2_V", "u3_V"}, {"u1_V", "u3_V"}, {"u1_V", "u2_V"}};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const json& o = d["outputs"][i];
+    EXPECT_EQ(o["cause"], "cross_coupling") << o;
+    EXPECT_EQ(o["cross_coupling"]["inputs"].get<std::vector<std::string>>(), others[i]) << o;
+    EXPECT_EQ(o["cross_coupling"]["left_out_gains"].size(), 3u);
+    EXPECT_GT(o["cross_coupling"]["gain"].get<double>(), 1.2);
+  }
+  // The extended model it saved predicts the record through simulate.
+  hd::SimulateCommand sim = simulate_command(path("extended.json"), path("test.csv"));
+  sim.skip_s = 1000.0 / 6400.0;
+  json r;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_simulate(sim, o, e); }, &r), 0) << err_;
+  EXPECT_LT(r["rmse"].get<double>(), 0.2);
 }

@@ -116,6 +116,10 @@ struct HammersteinFitResult {
 HammersteinFitResult identify_mimo_hammerstein(const PeriodicRecord& record,
                                                const HammersteinFitOptions& options = {});
 
+/// The spectra of some inputs and outputs only (indices into spectra's), the bins kept.
+PeriodicSpectra subset(const PeriodicSpectra& spectra, const std::vector<std::size_t>& inputs,
+                       const std::vector<std::size_t>& outputs);
+
 /// The share of each output's power (over the excited bins of the steady state) that each
 /// input explains through the model: p x m, each in [0, 1] (rows need not sum to one: inputs
 /// correlate, and the model misses some).
