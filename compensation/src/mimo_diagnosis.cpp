@@ -75,6 +75,7 @@ CouplingDiagnosis diagnose_cross_coupling(
     c.output = i;
     c.own_input = own_input[i];
     c.baseline_order = baselines[i].order;
+    c.baseline = baselines[i].model;
     for (const auto& s : baselines[i].scores) {
       if (s.order == baselines[i].order) c.baseline_heldout_rms = s.heldout_rms;
     }

@@ -190,7 +190,9 @@ int main(int argc, char** argv) {
       "diagnose",
       "Find what a model misses on records (t,u,y) of one device: asymmetry, rate_dependence, "
       "creep, dynamics, delay, drift or none; gains measured on held-out parts, and with "
-      "several records on each record left out whole");
+      "several records on each record left out whole. A record of several inputs "
+      "(--u-column u1,u2,...) names cross_coupling per output, each realization left out in "
+      "turn");
   diag_cmd
       ->add_option("data", diag.data_paths,
                    "CSV with columns t, u, y (a bench run log works too); several records of one "

@@ -9,6 +9,7 @@
 #include <ostream>
 #include <sstream>
 
+#include "details/gnuplot.hpp"
 #include "hystbench/compensation/mimo_diagnosis.hpp"
 #include "hystbench/daemon/model_file_io.hpp"
 
@@ -16,6 +17,7 @@ namespace hystbench::daemon::details {
 
 namespace hc = compensation;
 using nlohmann::json;
+using cd = std::complex<double>;
 
 namespace {
 
@@ -319,6 +321,116 @@ int run_simulate_mimo(const SimulateCommand& cmd, const hc::MimoModelFile& file,
   return 0;
 }
 
+namespace {
+
+// The report folder of a coupling diagnosis: the text and JSON, the frequency-response matrix
+// measured (per bin, least squares over the realizations, where there are as many as inputs)
+// and modelled (every input), and each output's residual spectrum from its own input alone and
+// from every input, plotted by gnuplot.
+void write_coupling_report(const std::string& dir_name, const hc::PeriodicSpectra& s,
+                           const hc::CouplingDiagnosis& d, const MultiRecord& data,
+                           const std::string& text, const json& result) {
+  const std::filesystem::path dir(dir_name);
+  std::filesystem::create_directories(dir);
+  const auto open = [&](const char* name) {
+    std::ofstream f(dir / name);
+    if (!f) throw std::runtime_error((dir / name).string() + ": cannot write");
+    f.precision(8);
+    return f;
+  };
+  open("report.txt") << text;
+  open("diagnosis.json") << result.dump(2) << "\n";
+  const std::size_t m = s.inputs(), p = s.outputs(), nr = s.u.size();
+  const bool measured = nr >= m;
+  const double df = 1.0 / (static_cast<double>(s.period) * s.dt);
+  // Amplitude of a bin's sinusoid from the unnormalised DFT of one period: 2 |X| / N.
+  const double amplitude = 2.0 / static_cast<double>(s.period);
+  {
+    auto f = open("frf.dat");
+    f << "# f_Hz, then per output i and input j: measured |G_ij| (nan: fewer realizations than "
+         "inputs), model |G_ij|\n";
+    for (std::size_t k = 0; k < s.bins.size(); ++k) {
+      const auto kk = static_cast<Eigen::Index>(k);
+      Eigen::MatrixXcd gm = Eigen::MatrixXcd::Constant(static_cast<Eigen::Index>(p),
+                                                       static_cast<Eigen::Index>(m), std::nan(""));
+      if (measured) {
+        Eigen::MatrixXcd u(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(nr)),
+            y(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(nr));
+        for (std::size_t r = 0; r < nr; ++r) {
+          u.col(static_cast<Eigen::Index>(r)) = s.u[r].col(kk);
+          y.col(static_cast<Eigen::Index>(r)) = s.y[r].col(kk);
+        }
+        gm = (u * u.adjoint()).ldlt().solve(u * y.adjoint()).adjoint();
+      }
+      const Eigen::MatrixXcd g = d.extended.response(s.z(k));
+      f << static_cast<double>(s.bins[k]) * df;
+      for (std::size_t i = 0; i < p; ++i) {
+        for (std::size_t j = 0; j < m; ++j) {
+          const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
+          f << " " << std::abs(gm(ii, jj)) << " " << std::abs(g(ii, jj));
+        }
+      }
+      f << "\n";
+    }
+  }
+  {
+    auto f = open("residual.dat");
+    f << "# f_Hz, then per output: residual amplitude from its own input alone, from every "
+         "input (rms over the realizations, output unit)\n";
+    for (std::size_t k = 0; k < s.bins.size(); ++k) {
+      const auto kk = static_cast<Eigen::Index>(k);
+      const Eigen::MatrixXcd g = d.extended.response(s.z(k));
+      f << static_cast<double>(s.bins[k]) * df;
+      for (std::size_t i = 0; i < p; ++i) {
+        const auto& c = d.outputs[i];
+        const cd gb = c.baseline.response(s.z(k))(0, 0);
+        double before = 0.0, after = 0.0;
+        for (std::size_t r = 0; r < nr; ++r) {
+          const cd y = s.y[r](static_cast<Eigen::Index>(i), kk);
+          before += std::norm(y - gb * s.u[r](static_cast<Eigen::Index>(c.own_input), kk));
+          after += std::norm(y - (g.row(static_cast<Eigen::Index>(i)) * s.u[r].col(kk))(0, 0));
+        }
+        f << " " << amplitude * std::sqrt(before / static_cast<double>(nr)) << " "
+          << amplitude * std::sqrt(after / static_cast<double>(nr));
+      }
+      f << "\n";
+    }
+  }
+  const std::string unit = data.y_units.front().value_or("um");
+  auto gp = open("report.gp");
+  gp << "# hystbench diagnose report (several inputs): gnuplot "
+     << details::gnuplot_quoted(dir / "report.gp") << "\n"
+     << "set terminal pngcairo size 1200,900 font ',9' noenhanced\nset grid\n"
+     << "set logscale xy\nset format y '%g'\n"
+     << "set output " << details::gnuplot_quoted(dir / "frf.png") << "\n"
+     << "set multiplot layout " << p << "," << m << " title 'frequency response |G| [" << unit
+     << "/input unit]: measured per bin (points), the model of every input (line)'\n";
+  for (std::size_t i = 0; i < p; ++i) {
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t col = 2 + 2 * (i * m + j);
+      gp << "set title '" << data.y_names[i] << " from " << data.u_names[j] << "'\n"
+         << "plot " << details::gnuplot_quoted(dir / "frf.dat") << " using 1:" << col
+         << " with points pt 7 ps 0.2 notitle, '' using 1:" << col + 1
+         << " with lines lw 1.5 notitle\n";
+    }
+  }
+  gp << "unset multiplot\n"
+     << "set output " << details::gnuplot_quoted(dir / "residual_spectrum.png") << "\n"
+     << "set multiplot layout " << p << ",1 title 'residual amplitude per bin [" << unit
+     << "]: from the own input alone, from every input'\n";
+  for (std::size_t i = 0; i < p; ++i) {
+    gp << "set title '" << data.y_names[i] << "'\nset key top right\n"
+       << "plot " << details::gnuplot_quoted(dir / "residual.dat") << " using 1:" << 2 + 2 * i
+       << " with lines title 'own input (" << data.u_names[d.outputs[i].own_input]
+       << ")', '' using 1:" << 3 + 2 * i << " with lines title 'every input'\n";
+  }
+  gp << "unset multiplot\n";
+  gp.close();
+  details::run_gnuplot(dir / "report.gp", dir / "gnuplot.log");
+}
+
+}  // namespace
+
 int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
   if (cmd.data_paths.size() != 1 || !cmd.validate_paths.empty() || !cmd.model_path.empty() ||
       !cmd.save_baseline.empty()) {
@@ -420,10 +532,9 @@ int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostrea
   }
   if (!cmd.save_extended.empty()) text << "saved     " << cmd.save_extended << " (every input)\n";
   if (!cmd.report_dir.empty()) {
-    std::filesystem::create_directories(cmd.report_dir);
-    std::ofstream(cmd.report_dir + "/report.txt") << text.str();
-    std::ofstream(cmd.report_dir + "/diagnosis.json") << result.dump(2) << "\n";
-    text << "report    " << cmd.report_dir << " (report.txt, diagnosis.json)\n";
+    write_coupling_report(cmd.report_dir, spectra, d, data, text.str(), result);
+    text << "report    " << cmd.report_dir
+         << " (report.txt, diagnosis.json, frf.png, residual_spectrum.png)\n";
   }
   if (cmd.json_output) {
     out << result.dump() << "\n";

@@ -266,6 +266,7 @@ TEST_F(MimoCommandsTest, DiagnoseNamesEachMirrorOutputsCouplingWithTheOtherInput
   diag.columns.y_scale = 1e6;
   diag.json_output = true;
   diag.save_extended = path("extended.json");
+  diag.report_dir = path("report");
   json d;
   ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_diagnose(diag, o, e); }, &d), 0) << err_;
   EXPECT_EQ(d["cause"], "cross_coupling");
@@ -277,6 +278,9 @@ TEST_F(MimoCommandsTest, DiagnoseNamesEachMirrorOutputsCouplingWithTheOtherInput
     EXPECT_EQ(o["cross_coupling"]["inputs"].get<std::vector<std::string>>(), others[i]) << o;
     EXPECT_EQ(o["cross_coupling"]["left_out_gains"].size(), 3u);
     EXPECT_GT(o["cross_coupling"]["gain"].get<double>(), 1.2);
+  }
+  for (const char* f : {"report.txt", "diagnosis.json", "frf.png", "residual_spectrum.png"}) {
+    EXPECT_TRUE(fs::exists(fs::path(path("report")) / f)) << f;
   }
   // The extended model it saved predicts the record through simulate.
   hd::SimulateCommand sim = simulate_command(path("extended.json"), path("test.csv"));

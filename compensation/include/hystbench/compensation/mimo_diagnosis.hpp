@@ -22,6 +22,7 @@ inline constexpr double kCouplingNamedShare = 0.05;
 struct OutputCoupling {
   std::size_t output = 0, own_input = 0;
   std::size_t baseline_order = 0;
+  MimoLinearModel baseline;  ///< the output from its own input, fitted on all of the record
   double baseline_heldout_rms = 0.0;  ///< [output unit], steady state
   double extended_heldout_rms = 0.0;
   double gain = 0.0;                   ///< baseline / extended
