@@ -62,10 +62,23 @@ int main(int argc, char** argv) {
                       "experiments that each start from rest, and the periods of a periodic "
                       "excitation (the first dropped as a transient)")
         ->capture_default_str();
-    c->add_option("--u-scale", columns.u_scale, "Multiply the input column by this (mV -> V: 1e-3)")
-        ->capture_default_str();
-    c->add_option("--y-scale", columns.y_scale, "Multiply the output column by this (m -> um: 1e6)")
-        ->capture_default_str();
+    // One scale for every column, or one per column of a list.
+    const auto scales = [](double& one, std::vector<double>& each) {
+      return [&one, &each](const std::vector<double>& v) {
+        one = v.front();
+        each = v.size() > 1 ? v : std::vector<double>{};
+      };
+    };
+    c->add_option_function<std::vector<double>>(
+         "--u-scale", scales(columns.u_scale, columns.u_scales),
+         "Multiply the input column by this (mV -> V: 1e-3); several columns: one for all, or "
+         "one each, comma-separated (default 1)")
+        ->delimiter(',');
+    c->add_option_function<std::vector<double>>(
+         "--y-scale", scales(columns.y_scale, columns.y_scales),
+         "Multiply the output column by this (m -> um: 1e6); several columns: one for all, or "
+         "one each, comma-separated (default 1)")
+        ->delimiter(',');
     c->add_option("--rate", columns.rate_hz,
                   "Sample rate [Hz] of a file without a time column (t = row / rate)")
         ->check(CLI::PositiveNumber);

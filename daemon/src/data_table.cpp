@@ -253,8 +253,11 @@ compensation::Units Record::units() const {
 namespace {
 
 void check_options(const RecordColumns& columns) {
-  for (const auto& [name, value] :
-       {std::pair{"u scale", columns.u_scale}, std::pair{"y scale", columns.y_scale}}) {
+  std::vector<std::pair<const char*, double>> scales{{"u scale", columns.u_scale},
+                                                     {"y scale", columns.y_scale}};
+  for (const double v : columns.u_scales) scales.emplace_back("u scale", v);
+  for (const double v : columns.y_scales) scales.emplace_back("y scale", v);
+  for (const auto& [name, value] : scales) {
     if (!std::isfinite(value) || value == 0.0) {
       throw DataFileError(std::string(name) + " must be a finite, non-zero number");
     }
@@ -347,6 +350,10 @@ std::vector<std::string> comma_list(const std::string& s) {
 
 Record read_record(const std::string& path, const RecordColumns& columns, bool y_required) {
   check_options(columns);
+  if (!columns.u_scales.empty() || !columns.y_scales.empty()) {
+    throw DataFileError(
+        "--u-scale / --y-scale: several values for one input and one output column");
+  }
   const DataTable data = DataTable::read_csv(path);
   Record r;
   r.lines.resize(data.rows());
@@ -419,24 +426,31 @@ MultiRecord read_multi_record(const std::string& path, const RecordColumns& colu
                      steps.end());
     r.sample_period_s = steps[steps.size() / 2];
   }
-  const auto read = [&](const std::string& list, double scale,
+  const auto read = [&](const std::string& list, double scale, const std::vector<double>& scales,
                         const std::optional<std::string>& unit, std::vector<std::string>& names,
                         std::vector<std::vector<double>>& values,
                         std::vector<std::optional<std::string>>& units, const char* role,
                         const char* option, const char* unit_option, const char* scale_option) {
     names = comma_list(list);
-    for (const auto& name : names) {
+    if (!scales.empty() && scales.size() != names.size()) {
+      throw DataFileError(std::string(scale_option) + ": " + std::to_string(scales.size()) +
+                          " scales for " + std::to_string(names.size()) + " " + role +
+                          " columns; give one for all, or one per column");
+    }
+    for (std::size_t c = 0; c < names.size(); ++c) {
+      const std::string& name = names[c];
       if (name.empty()) throw DataFileError(std::string(option) + ": an empty column name");
       require_column(data, path, name, role, option);
-      values.push_back(scaled_column(data, path, name, scale));
-      units.push_back(unit_of(data, path, columns, name, scale, unit, unit_option, scale_option));
+      const double sc = scales.empty() ? scale : scales[c];
+      values.push_back(scaled_column(data, path, name, sc));
+      units.push_back(unit_of(data, path, columns, name, sc, unit, unit_option, scale_option));
     }
   };
-  read(columns.u, columns.u_scale, columns.u_unit, r.u_names, r.u, r.u_units, "input", "--u-column",
-       "--u-unit", "--u-scale");
+  read(columns.u, columns.u_scale, columns.u_scales, columns.u_unit, r.u_names, r.u, r.u_units,
+       "input", "--u-column", "--u-unit", "--u-scale");
   if (y_required || data.has(comma_list(columns.y).front())) {
-    read(columns.y, columns.y_scale, columns.y_unit, r.y_names, r.y, r.y_units, "output",
-         "--y-column", "--y-unit", "--y-scale");
+    read(columns.y, columns.y_scale, columns.y_scales, columns.y_unit, r.y_names, r.y, r.y_units,
+         "output", "--y-column", "--y-unit", "--y-scale");
   }
   return r;
 }

@@ -135,6 +135,16 @@ int run_fit_mimo(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
   for (const auto& s : r.linear.scores) {
     orders.push_back({{"order", s.order}, {"heldout_rms", s.heldout_rms}});
   }
+  // The noise on the averaged period, from the differences between periods (Parseval).
+  const double n2 = static_cast<double>(rec.period) * static_cast<double>(rec.period);
+  const Eigen::VectorXd noise = (spectra.noise_var.rowwise().sum() * 2.0 / n2).cwiseSqrt();
+  const bool noise_known = rec.periods >= 2;
+  const std::string noise_from =
+      !noise_known ? "unknown: one period"
+      : spectra.periods_used >= 2
+          ? "the differences between the periods after the first"
+          : "the differences between both periods, the first's transient included: an upper "
+            "bound";
   json coupling = json::array();
   for (Eigen::Index i = 0; i < shares.rows(); ++i) coupling.push_back(to_vector(shares.row(i)));
   const json fitted = {
@@ -145,6 +155,8 @@ int run_fit_mimo(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
       {"heldout_rms", {{"linear", r.heldout_linear}, {"hammerstein", r.heldout_hammerstein}}},
       {"hysteresis_kept", r.hysteresis_kept},
       {"fit_rms", to_vector(r.fit_rms)},
+      {"noise_rms", noise_known ? json(to_vector(noise)) : json(nullptr)},
+      {"noise_from", noise_from},
       {"coupling", coupling},
       {"realizations", rec.u.size()},
       {"periods", rec.periods},
@@ -192,7 +204,16 @@ int run_fit_mimo(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     out << " " << data.y_names[static_cast<std::size_t>(i)] << " " << r.fit_rms(i) << " " << y_unit
         << ";";
   }
-  out << "\n" << std::setprecision(1);
+  out << "\n";
+  if (noise_known) {
+    out << "noise     rms";
+    for (Eigen::Index i = 0; i < noise.size(); ++i) {
+      out << " " << data.y_names[static_cast<std::size_t>(i)] << " " << noise(i) << " " << y_unit
+          << ";";
+    }
+    out << " from " << noise_from << "\n";
+  }
+  out << std::setprecision(1);
   for (Eigen::Index i = 0; i < shares.rows(); ++i) {
     out << "coupling  " << data.y_names[static_cast<std::size_t>(i)] << ":";
     for (Eigen::Index j = 0; j < shares.cols(); ++j) {

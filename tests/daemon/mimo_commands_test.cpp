@@ -48,10 +48,10 @@ class MimoCommandsTest : public ::testing::Test {
   }
 
   // Two inputs, two outputs, each input reaching both: modes at 150 and 600 Hz at 5 kHz, a play
-  // model on neither. Realizations of random-phase multisines, two periods each, written with
+  // model on neither. Realizations of random-phase multisines, `periods` each, written with
   // `realization` and `period` columns, y in m as a sensor gives it.
   void write_coupled_record(const std::string& file, std::size_t realizations, unsigned seed,
-                            std::size_t period = 1024) {
+                            std::size_t period = 1024, std::size_t periods = 2) {
     const double dt = 2e-4;
     const auto mode = [dt](double f, double zeta) {
       const double wn = 2.0 * std::numbers::pi * f, wd = wn * std::sqrt(1.0 - zeta * zeta);
@@ -72,7 +72,7 @@ class MimoCommandsTest : public ::testing::Test {
     out << "t,realization,period,u1_V,u2_V,y1_m,y2_m\n";
     out.precision(17);
     for (std::size_t r = 0; r < realizations; ++r) {
-      Eigen::MatrixXd u = Eigen::MatrixXd::Zero(2, static_cast<Eigen::Index>(2 * period));
+      Eigen::MatrixXd u = Eigen::MatrixXd::Zero(2, static_cast<Eigen::Index>(periods * period));
       for (Eigen::Index j = 0; j < 2; ++j) {
         for (std::size_t k = 1; k <= period / 3; ++k) {
           const double ph = phase(rng);
@@ -120,7 +120,7 @@ class MimoCommandsTest : public ::testing::Test {
 }  // namespace
 
 TEST_F(MimoCommandsTest, ACoupledSystemIsFittedAndPredictsARecordItDidNotSee) {
-  write_coupled_record(path("train.csv"), 3, 1);
+  write_coupled_record(path("train.csv"), 3, 1, 1024, 3);
   write_coupled_record(path("test.csv"), 2, 2);
   json fit;
   ASSERT_EQ(run(
@@ -135,6 +135,10 @@ TEST_F(MimoCommandsTest, ACoupledSystemIsFittedAndPredictsARecordItDidNotSee) {
   EXPECT_EQ(fit["heldout"], "realization 2");
   EXPECT_FALSE(fit["hysteresis_kept"].get<bool>());
   EXPECT_LT(fit["fit_rms"][0].get<double>(), 1e-6);
+  // No noise in the record: the periods after the transient agree, and the report says so.
+  ASSERT_TRUE(fit["noise_rms"].is_array());
+  EXPECT_LT(fit["noise_rms"][0].get<double>(), 1e-6);
+  EXPECT_EQ(fit["noise_from"], "the differences between the periods after the first");
   // Each output is reached by both inputs, and the fit says so.
   for (const auto& row : fit["coupling"]) {
     EXPECT_GT(row[0].get<double>(), 0.05);
@@ -231,6 +235,7 @@ TEST_F(MimoCommandsTest, TheCubeSpecMirrorBeatsThePublishedLinearModelAtItsAmpli
   hd::FitCommand fit = fit_command(path("300mV_train.csv"), path("mirror.json"));
   fit.columns.u = "u1_V,u2_V,u3_V";
   fit.columns.y = "y1_m,y2_m,y3_m";
+  fit.columns.y_scales = {1e6, 1e6, 1e6};  // one per column, as --y-scale 1e6,1e6,1e6 gives
   json f;
   ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_fit(fit, o, e); }, &f), 0) << err_;
   // Every output is reached by every input: the coupling is named, none is below a tenth.

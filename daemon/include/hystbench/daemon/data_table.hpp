@@ -65,6 +65,8 @@ struct RecordColumns {
   std::string t = "t", u = "u", y = "y";
   double u_scale = 1.0;  ///< u = column * u_scale (e.g. 1e-3 for mV -> V)
   double y_scale = 1.0;  ///< y = column * y_scale (e.g. 1e6 for m -> um)
+  /// Several columns: one scale per column, in their order (empty: u_scale / y_scale for all).
+  std::vector<double> u_scales, y_scales;
   double rate_hz = 0.0;  ///< > 0: the file has no usable time column; t = row / rate_hz [s]
   /// Units of u and y after scaling (e.g. "N", "mm"); unset: the column header's (its unit
   /// moved by the scale's power of 1000: m with 1e6 is um), else V and um.
@@ -97,7 +99,7 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
 bool names_several(const RecordColumns& columns);
 
 /// A record of several inputs and outputs: the columns that RecordColumns' u and y name as comma
-/// lists, each scaled by u_scale / y_scale, and the record's layout where the file has
+/// lists, each scaled by its entry of u_scales / y_scales or else by u_scale / y_scale, and the record's layout where the file has
 /// `realization` and `period` columns (whole numbers; else empty): experiments that each start
 /// from rest, and the periods of a periodic excitation within them.
 struct MultiRecord {
