@@ -576,12 +576,12 @@ HammersteinMimoModel alternate(const PeriodicSpectra& s,
     g = round + 1 < rounds ? residues(sv, cross_spectra(sv, sel), g.poles())
                            : fit_on(sv, order, sel);
   }
-  std::vector<std::optional<PiParameters>> ops(m);
+  std::vector<std::optional<ActuatorModel>> ops(m);
   for (std::size_t j = 0; j < m; ++j) {
-    ops[j] = PiParameters{thresholds[j],
-                          std::vector<double>(w[j].data(), w[j].data() + w[j].size()), 0.0};
+    ops[j] = classical_pi_operator(PiParameters{
+        thresholds[j], std::vector<double>(w[j].data(), w[j].data() + w[j].size()), 0.0});
   }
-  return HammersteinMimoModel(std::move(ops), std::move(g));
+  return HammersteinMimoModel(std::move(ops), std::move(g), s.dt);
 }
 
 // Steady-state rms over outputs of a Hammerstein model on `sel`.
@@ -607,8 +607,8 @@ HammersteinFitResult identify_mimo_hammerstein(const PeriodicRecord& record,
     };
   }
   result.linear = identify_mimo_linear(s, linear);
-  std::vector<std::optional<PiParameters>> none(s.inputs());
-  result.model = HammersteinMimoModel(none, result.linear.model);
+  std::vector<std::optional<ActuatorModel>> none(s.inputs());
+  result.model = HammersteinMimoModel(none, result.linear.model, s.dt);
   result.fit_rms = result.linear.fit_rms;
   const auto [train, test] = heldout_split(s, result.heldout);
   for (const auto& sc : result.linear.scores) {

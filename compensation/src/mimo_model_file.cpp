@@ -75,6 +75,38 @@ Eigen::MatrixXd matrix_of(const json& j, std::size_t rows, std::size_t cols,
   return m;
 }
 
+// A classical PI operator alone (what the fit makes) in the compact form; any other model of one
+// input as its own model file document.
+json operator_json(const std::optional<ActuatorModel>& op) {
+  if (!op) return nullptr;
+  const auto* pi = dynamic_cast<const PiModel*>(&op->hysteresis());
+  if (pi != nullptr && !op->creep() && !op->dynamics() && op->delay_s() == 0.0) {
+    const PiParameters& p = pi->parameters();
+    return {{"thresholds", p.thresholds}, {"weights", p.weights}, {"offset", p.offset}};
+  }
+  return {{"model", to_json(ModelFile{*op, json::object()})}};
+}
+
+std::optional<ActuatorModel> operator_of(const json& j, const std::string& field) {
+  if (j.is_null()) return std::nullopt;
+  if (j.is_object() && j.contains("model")) {
+    try {
+      return model_file_from_json(j["model"]).model;
+    } catch (const ModelFileError& e) {
+      fail(field + ".model", e.what());
+    }
+  }
+  PiParameters pp;
+  pp.thresholds = numbers(member(j, "thresholds", field + "."), field + ".thresholds");
+  pp.weights = numbers(member(j, "weights", field + "."), field + ".weights");
+  pp.offset = j.contains("offset") ? number(j["offset"], field + ".offset") : 0.0;
+  try {
+    return classical_pi_operator(std::move(pp));
+  } catch (const std::invalid_argument& e) {
+    fail(field, e.what());
+  }
+}
+
 }  // namespace
 
 bool is_mimo_model_file(const json& j) {
@@ -87,12 +119,7 @@ json to_json(const MimoModelFile& file) {
   for (const auto p : g.poles()) poles.push_back({p.real(), p.imag()});
   for (const auto& t : g.terms()) terms.push_back(matrix_json(t));
   for (const auto& op : file.model.operators()) {
-    if (op) {
-      ops.push_back(
-          {{"thresholds", op->thresholds}, {"weights", op->weights}, {"offset", op->offset}});
-    } else {
-      ops.push_back(nullptr);
-    }
+    ops.push_back(operator_json(op));
   }
   const auto channel_list = [](const std::vector<MimoChannel>& cs) {
     json a = json::array();
@@ -126,20 +153,9 @@ MimoModelFile mimo_model_file_from_json(const json& j) {
   const std::size_t m = f.inputs.size(), p = f.outputs.size();
   const json& ops = member(j, "operators", "");
   if (!ops.is_array() || ops.size() != m) fail("operators", "not one entry per input");
-  std::vector<std::optional<PiParameters>> operators(m);
+  std::vector<std::optional<ActuatorModel>> operators(m);
   for (std::size_t i = 0; i < m; ++i) {
-    const std::string field = "operators[" + std::to_string(i) + "]";
-    if (ops[i].is_null()) continue;
-    PiParameters pp;
-    pp.thresholds = numbers(member(ops[i], "thresholds", field + "."), field + ".thresholds");
-    pp.weights = numbers(member(ops[i], "weights", field + "."), field + ".weights");
-    pp.offset = ops[i].contains("offset") ? number(ops[i]["offset"], field + ".offset") : 0.0;
-    try {
-      PiModel check(pp);
-    } catch (const std::invalid_argument& e) {
-      fail(field, e.what());
-    }
-    operators[i] = std::move(pp);
+    operators[i] = operator_of(ops[i], "operators[" + std::to_string(i) + "]");
   }
   const json& dyn = member(j, "dynamics", "");
   const json& pj = member(dyn, "poles", "dynamics.");
@@ -161,7 +177,7 @@ MimoModelFile mimo_model_file_from_json(const json& j) {
   try {
     MimoLinearModel g(std::move(poles), std::move(terms),
                       Eigen::Map<const Eigen::VectorXd>(off.data(), static_cast<Eigen::Index>(p)));
-    f.model = HammersteinMimoModel(std::move(operators), std::move(g));
+    f.model = HammersteinMimoModel(std::move(operators), std::move(g), f.sample_period_s);
   } catch (const std::invalid_argument& e) {
     fail("dynamics", e.what());
   }

@@ -512,8 +512,8 @@ int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostrea
                        {"outputs", outputs}};
   if (!cmd.save_extended.empty()) {
     hc::MimoModelFile file;
-    file.model =
-        hc::HammersteinMimoModel(std::vector<std::optional<hc::PiParameters>>(m), d.extended);
+    file.model = hc::HammersteinMimoModel(std::vector<std::optional<hc::ActuatorModel>>(m),
+                                          d.extended, rec.dt);
     file.sample_period_s = rec.dt;
     file.inputs = channels(data.u_names, data.u_units, "V");
     file.outputs = channels(data.y_names, data.y_units, "um");

@@ -79,7 +79,8 @@ hc::PeriodicRecord record_of(const hc::HammersteinMimoModel& truth,
 }
 
 hc::HammersteinMimoModel linear(const hc::MimoLinearModel& g) {
-  return hc::HammersteinMimoModel(std::vector<std::optional<hc::PiParameters>>(g.inputs()), g);
+  return hc::HammersteinMimoModel(std::vector<std::optional<hc::ActuatorModel>>(g.inputs()), g,
+                                  kDt);
 }
 
 double max_response_error(const hc::MimoLinearModel& a, const hc::MimoLinearModel& b) {
@@ -175,7 +176,7 @@ TEST(MimoIdentification, APlayModelOnAnInputIsFoundAndKept) {
   for (const auto& m : u)
     lo = std::min(lo, m.row(0).minCoeff()), hi = std::max(hi, m.row(0).maxCoeff());
   hc::PiParameters op{hc::uniform_thresholds(4, 0.5 * (hi - lo)), {0.6, 0.25, 0.1, 0.05}, 0.0};
-  const hc::HammersteinMimoModel truth({op, std::nullopt}, g);
+  const hc::HammersteinMimoModel truth({hc::classical_pi_operator(op), std::nullopt}, g, kDt);
   const auto rec = record_of(truth, u, 2);
   hc::HammersteinFitOptions o;
   o.linear.orders = {4};
@@ -185,8 +186,10 @@ TEST(MimoIdentification, APlayModelOnAnInputIsFoundAndKept) {
   EXPECT_LT(r.heldout_hammerstein, 0.2 * r.heldout_linear);
   ASSERT_TRUE(r.model.operators()[0].has_value());
   // The weights sum to one by construction; their shape is the truth's.
-  EXPECT_NEAR(r.model.operators()[0]->weights[1] / r.model.operators()[0]->weights[0], 0.25 / 0.6,
-              0.02);
+  const auto* pi = dynamic_cast<const hc::PiModel*>(&r.model.operators()[0]->hysteresis());
+  ASSERT_NE(pi, nullptr);
+  const std::vector<double>& w = pi->parameters().weights;
+  EXPECT_NEAR(w[1] / w[0], 0.25 / 0.6, 0.02);
 }
 
 TEST(MimoModelFile, RoundTripsAndNamesABadField) {
@@ -232,5 +235,39 @@ TEST(MimoDiagnosis, CrossCouplingIsNamedWhereItIsAndNotWhereItIsNot) {
         EXPECT_LT(c.gain, 1.2);
       }
     }
+  }
+}
+
+TEST(MimoModelFile, AnOperatorOfAnyPiFamilyTravelsAsItsOwnModelFile) {
+  // A modified PI with creep and a delay on input 0 (a model `fit` makes of one axis).
+  const nlohmann::json mpi = nlohmann::json::parse(R"({"schema":"hystbench.model/1",
+    "type":"mpi","units":{"input":"V","output":"V"},"input_range":[-1,1],
+    "play":{"thresholds":[0,0.1,0.2],"weights":[0.8,0.1,0.1],"offset":0},
+    "deadzone":{"thresholds":[-0.5,0,0.5],"weights":[0.1,1.0,-0.1],"center":0},
+    "creep":{"time_constants_s":[0.01],"gains":[0.02]},"delay_s":0.0002})");
+  hc::MimoModelFile f;
+  f.model = hc::HammersteinMimoModel({hc::model_file_from_json(mpi).model, std::nullopt},
+                                     coupled_truth(1.0), kDt);
+  f.sample_period_s = kDt;
+  f.inputs = {{"u1", "V"}, {"u2", "V"}};
+  f.outputs = {{"y1", "um"}, {"y2", "um"}};
+  const nlohmann::json j = hc::to_json(f);
+  EXPECT_EQ(j["operators"][0]["model"]["type"], "mpi");
+  EXPECT_TRUE(j["operators"][1].is_null());
+  const hc::MimoModelFile back = hc::mimo_model_file_from_json(j);
+  const Eigen::MatrixXd u = multisines(2, 1, 1, 50)[0];
+  const Eigen::MatrixXd y = f.model.simulate(u), y_back = back.model.simulate(u);
+  EXPECT_LT((y - y_back).cwiseAbs().maxCoeff(), 1e-12);
+  // The operator acts: the same dynamics without it give another output.
+  const hc::HammersteinMimoModel plain({std::nullopt, std::nullopt}, coupled_truth(1.0), kDt);
+  EXPECT_GT((y - plain.simulate(u)).cwiseAbs().maxCoeff(), 1e-3);
+  // A fault inside the operator's own document is named with its place.
+  nlohmann::json bad = j;
+  bad["operators"][0]["model"]["play"]["weights"] = {1.0};
+  try {
+    (void)hc::mimo_model_file_from_json(bad);
+    FAIL() << "a bad operator was accepted";
+  } catch (const hc::ModelFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("operators[0].model"), std::string::npos) << e.what();
   }
 }

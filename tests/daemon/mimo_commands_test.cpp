@@ -65,7 +65,8 @@ class MimoCommandsTest : public ::testing::Test {
     const hc::HammersteinMimoModel truth(
         {std::nullopt, std::nullopt},
         hc::MimoLinearModel({mode(150.0, 0.08), mode(600.0, 0.05)}, {d, a1, b1, a2, b2},
-                            Eigen::Vector2d(1.0, 2.0)));
+                            Eigen::Vector2d(1.0, 2.0)),
+        dt);
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> phase(0.0, 2.0 * std::numbers::pi);
     std::ofstream out(file);

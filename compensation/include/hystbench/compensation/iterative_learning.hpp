@@ -13,7 +13,8 @@
 // harmonic of the trial's fundamental (above it a slow trial's error is mostly sensor noise), but
 // past its fifth harmonic within 0.3 of the sample rate (a fast trial's error is mostly its odd
 // harmonics), and below half the model's natural frequency (above it the model's phase is not
-// known, and a mode it misses would grow from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
+// known, and a mode it misses would grow from trial to trial). Pure maths, no I/O; allocates: off
+// the real-time path.
 #include <array>
 #include <cstddef>
 #include <span>

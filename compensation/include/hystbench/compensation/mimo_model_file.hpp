@@ -3,7 +3,9 @@
 // "mimo_hammerstein"):
 //   {"schema": ..., "type": "mimo_hammerstein", "sample_period_s": dt,
 //    "inputs": [{"name": "u1_V", "unit": "V"}, ...], "outputs": [{"name": ..., "unit": ...}],
-//    "operators": [null | {"thresholds": [...], "weights": [...], "offset": 0}, ...],  (per input)
+//    "operators": [null                                     (per input: none, the input as it is)
+//                  | {"thresholds": [...], "weights": [...], "offset": 0}     (a classical PI)
+//                  | {"model": {a model file of one input: any PI family}}, ...],
 //    "dynamics": {"poles": [[re, im], ...], "terms": [[[row], ...], ...],          (p x m each)
 //                 "output_offset": [...]},
 //    "identification": {...}}                                                     (free-form)
