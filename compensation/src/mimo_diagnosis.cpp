@@ -49,27 +49,8 @@ CouplingDiagnosis diagnose_cross_coupling(
   d.heldout = ext.heldout;
   d.extended_order = ext.order;
   d.extended = ext.model;
-  // The extension's held-out error per output at its order (identify scores it over outputs).
-  std::vector<std::size_t> test_realization;
-  if (nr >= 2) test_realization = {nr - 1};
-  const Eigen::VectorXd ext_heldout =
-      nr >= 2 ? steady_state_rms(fit_mimo_linear(spectra, ext.order, all_but(nr, nr - 1)), spectra,
-                                 test_realization)
-              : ext.fit_rms;  // one realization: the odd bins are not exposed; see below
   // Shares of each output's power per input, through the extension fitted on all of it.
-  Eigen::MatrixXd explained =
-      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(m));
-  Eigen::VectorXd total = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p));
-  for (std::size_t k = 0; k < spectra.bins.size(); ++k) {
-    const Eigen::MatrixXcd g = ext.model.response(spectra.z(k));
-    for (std::size_t r = 0; r < nr; ++r) {
-      const auto kk = static_cast<Eigen::Index>(k);
-      for (Eigen::Index j = 0; j < static_cast<Eigen::Index>(m); ++j) {
-        explained.col(j) += (g.col(j) * spectra.u[r](j, kk)).cwiseAbs2();
-      }
-      total += spectra.y[r].col(kk).cwiseAbs2();
-    }
-  }
+  const Eigen::MatrixXd shares = coupling_shares(ext.model, spectra);
   for (std::size_t i = 0; i < p; ++i) {
     OutputCoupling c;
     c.output = i;
@@ -79,7 +60,6 @@ CouplingDiagnosis diagnose_cross_coupling(
     for (const auto& s : baselines[i].scores) {
       if (s.order == baselines[i].order) c.baseline_heldout_rms = s.heldout_rms;
     }
-    c.extended_heldout_rms = ext_heldout(static_cast<Eigen::Index>(i));
     if (nr < 2) {
       // One realization: the extension's held-out error on the odd bins, fitted on the even.
       c.extended_heldout_rms = ext.scores.empty() ? 0.0 : ext.scores.back().heldout_rms;
@@ -87,17 +67,14 @@ CouplingDiagnosis diagnose_cross_coupling(
         if (s.order == ext.order) c.extended_heldout_rms = s.heldout_rms;
       }
     }
-    c.gain = c.extended_heldout_rms > 0.0 ? c.baseline_heldout_rms / c.extended_heldout_rms : 0.0;
     for (std::size_t j = 0; j < m; ++j) {
-      const double t = total(static_cast<Eigen::Index>(i));
-      c.shares.push_back(
-          t > 0.0 ? explained(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) / t
-                  : 0.0);
+      c.shares.push_back(shares(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
       if (j != own_input[i] && c.shares.back() >= kCouplingNamedShare) c.named_inputs.push_back(j);
     }
     d.outputs.push_back(std::move(c));
   }
-  // Each realization left out in turn: both models at their orders, fitted on the others.
+  // Each realization left out in turn: both models at their orders, fitted on the others. The
+  // last realization left out is the extension's held-out figure (identify's test realization).
   for (std::size_t r = 0; nr >= 2 && r < nr; ++r) {
     report(0.8 + 0.2 * static_cast<double>(r) / static_cast<double>(nr),
            "realization " + std::to_string(r) + " left out");
@@ -109,10 +86,12 @@ CouplingDiagnosis diagnose_cross_coupling(
       const double b =
           steady_state_rms(fit_mimo_linear(own, baselines[i].order, train), own, {r})(0);
       const double x = e(static_cast<Eigen::Index>(i));
+      if (r + 1 == nr) d.outputs[i].extended_heldout_rms = x;
       d.outputs[i].left_out_gains.push_back(x > 0.0 ? b / x : 0.0);
     }
   }
   for (auto& c : d.outputs) {
+    c.gain = c.extended_heldout_rms > 0.0 ? c.baseline_heldout_rms / c.extended_heldout_rms : 0.0;
     double worst = c.gain;
     for (const double g : c.left_out_gains) worst = std::min(worst, g);
     c.named = worst >= kCouplingNamingGain && !c.named_inputs.empty();

@@ -661,27 +661,32 @@ HammersteinFitResult identify_mimo_hammerstein(const PeriodicRecord& record,
   return result;
 }
 
-Eigen::MatrixXd coupling_shares(const HammersteinMimoModel& model, const PeriodicRecord& record) {
-  const PeriodicSpectra s = periodic_spectra(record);
-  std::vector<Eigen::MatrixXd> v(record.u.size());
-  for (std::size_t r = 0; r < v.size(); ++r) v[r] = model.operator_outputs(record.u[r]);
-  const PeriodicSpectra sv = with_inputs(s, v);
-  const auto m = static_cast<Eigen::Index>(s.inputs()), p = static_cast<Eigen::Index>(s.outputs());
+Eigen::MatrixXd coupling_shares(const MimoLinearModel& dynamics, const PeriodicSpectra& spectra) {
+  const auto m = static_cast<Eigen::Index>(spectra.inputs());
+  const auto p = static_cast<Eigen::Index>(spectra.outputs());
   Eigen::MatrixXd explained = Eigen::MatrixXd::Zero(p, m);
   Eigen::VectorXd total = Eigen::VectorXd::Zero(p);
-  for (std::size_t k = 0; k < s.bins.size(); ++k) {
-    const Eigen::MatrixXcd g = model.dynamics().response(s.z(k));
+  for (std::size_t k = 0; k < spectra.bins.size(); ++k) {
+    const Eigen::MatrixXcd g = dynamics.response(spectra.z(k));
     const auto kk = static_cast<Eigen::Index>(k);
-    for (std::size_t r = 0; r < s.u.size(); ++r) {
+    for (std::size_t r = 0; r < spectra.u.size(); ++r) {
       for (Eigen::Index j = 0; j < m; ++j)
-        explained.col(j) += (g.col(j) * sv.u[r](j, kk)).cwiseAbs2();
-      total += s.y[r].col(kk).cwiseAbs2();
+        explained.col(j) += (g.col(j) * spectra.u[r](j, kk)).cwiseAbs2();
+      total += spectra.y[r].col(kk).cwiseAbs2();
     }
   }
   for (Eigen::Index i = 0; i < p; ++i) {
     if (total(i) > 0.0) explained.row(i) /= total(i);
   }
   return explained;
+}
+
+Eigen::MatrixXd coupling_shares(const HammersteinMimoModel& model, const PeriodicRecord& record) {
+  const PeriodicSpectra s = periodic_spectra(record);
+  std::vector<Eigen::MatrixXd> v(record.u.size());
+  for (std::size_t r = 0; r < v.size(); ++r) v[r] = model.operator_outputs(record.u[r]);
+  // The shares of the outputs' power: the inputs through their operators, the outputs as measured.
+  return coupling_shares(model.dynamics(), with_inputs(s, v));
 }
 
 PeriodicSpectra subset(const PeriodicSpectra& spectra, const std::vector<std::size_t>& inputs,

@@ -124,5 +124,7 @@ PeriodicSpectra subset(const PeriodicSpectra& spectra, const std::vector<std::si
 /// input explains through the model: p x m, each in [0, 1] (rows need not sum to one: inputs
 /// correlate, and the model misses some).
 Eigen::MatrixXd coupling_shares(const HammersteinMimoModel& model, const PeriodicRecord& record);
+/// The same for a linear block on spectra whose inputs are the block's inputs.
+Eigen::MatrixXd coupling_shares(const MimoLinearModel& dynamics, const PeriodicSpectra& spectra);
 
 }  // namespace hystbench::compensation
