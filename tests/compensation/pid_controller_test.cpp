@@ -34,6 +34,54 @@ TEST(PidController, ProportionalOnlyLeavesAnOffset) {
   EXPECT_GT(std::abs(10.0 - y), 1.0);
 }
 
+// The incremental law summed up is the positional PID
+//   u_k = kp (e_k - e_0) + ki dt sum_{i<=k} e_i + kd (ef_k - ef_{k-1}) / dt,
+// with ef the error through the derivative's first-order low-pass (ef_{-1} = ef_0 = e_0): every
+// term, the derivative's included, checked on an error that ramps, jumps and oscillates.
+TEST(PidController, MatchesThePositionalPidWithEveryTerm) {
+  const double dt = 1e-3;
+  for (const double filter_hz : {0.0, 50.0}) {
+    const hc::PidParameters p{0.4, 30.0, 2e-3, filter_hz, -1e9, 1e9};
+    hc::PidController pid(p, dt);
+    const double alpha =
+        filter_hz > 0.0 ? dt / (1.0 / (2.0 * std::acos(-1.0) * filter_hz) + dt) : 1.0;
+    double sum = 0.0, e0 = 0.0, ef = 0.0, ef_prev = 0.0;
+    for (int k = 0; k < 400; ++k) {
+      const double e = (k < 100 ? 0.02 * k : 3.0) + (k >= 200 ? std::sin(0.3 * k) : 0.0);
+      if (k == 0) {
+        e0 = ef = ef_prev = e;
+      } else {
+        ef_prev = ef;
+        ef += alpha * (e - ef);
+      }
+      sum += e;
+      const double expected = p.kp * (e - e0) + p.ki * dt * sum + p.kd * (ef - ef_prev) / dt;
+      ASSERT_NEAR(pid.step(e), expected, 1e-9 * (1.0 + std::abs(expected)))
+          << "sample " << k << ", derivative filter " << filter_hz << " Hz";
+    }
+  }
+}
+
+// A step of the error kicks the derivative term by kd / dt once (unfiltered), or by
+// kd alpha (1 - alpha)^(k-1) / dt decaying (filtered): the rate of the error, not its size.
+TEST(PidController, DerivativeActsOnTheErrorsRate) {
+  const double dt = 1e-3, kd = 1e-3;
+  hc::PidController pid({0.0, 0.0, kd, 0.0, -1e9, 1e9}, dt);
+  EXPECT_DOUBLE_EQ(pid.step(0.0), 0.0);
+  EXPECT_NEAR(pid.step(1.0), kd / dt, 1e-12);  // the kick
+  EXPECT_NEAR(pid.step(1.0), 0.0, 1e-12);      // a constant error has no rate
+  EXPECT_NEAR(pid.step(3.0), 2.0 * kd / dt, 1e-12);
+
+  const double hz = 20.0;
+  const double alpha = dt / (1.0 / (2.0 * std::acos(-1.0) * hz) + dt);
+  hc::PidController filtered({0.0, 0.0, kd, hz, -1e9, 1e9}, dt);
+  filtered.step(0.0);
+  for (int k = 1; k < 50; ++k) {
+    EXPECT_NEAR(filtered.step(1.0), kd / dt * alpha * std::pow(1.0 - alpha, k - 1), 1e-12)
+        << "sample " << k;
+  }
+}
+
 TEST(PidController, ClampsAndDoesNotWindUp) {
   const double dt = 1e-3;
   hc::PidController pid({0.1, 50.0, 0.0, 0.0, -5.0, 5.0}, dt);

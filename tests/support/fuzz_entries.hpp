@@ -68,14 +68,17 @@ inline void request_line(const std::uint8_t* data, std::size_t size) {
   bench->client_closed(client);
 }
 
-/// TOML configuration text through the loader and the mapping onto the bench settings.
-inline void config_text(const std::uint8_t* data, std::size_t size) {
+/// TOML configuration text through the loader and the mapping onto the bench settings; true
+/// when accepted, false on its documented error (ConfigError).
+inline bool config_text(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   try {
     const auto config = daemon::parse_config(text, "fuzz.toml");
     (void)daemon::to_json(config).dump();
     (void)daemon::bench_settings_from(config);
+    return true;
   } catch (const daemon::ConfigError&) {
+    return false;
   }
 }
 
@@ -91,8 +94,9 @@ inline void model_file_text(const std::uint8_t* data, std::size_t size) {
   }
 }
 
-/// CSV text through the data-table reader (DataFileError is its documented error).
-inline void csv_text(const std::uint8_t* data, std::size_t size) {
+/// CSV text through the data-table reader; true when accepted, false on its documented error
+/// (DataFileError).
+inline bool csv_text(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
     const auto table = daemon::DataTable::parse_csv(text, "fuzz.csv");
@@ -101,7 +105,9 @@ inline void csv_text(const std::uint8_t* data, std::size_t size) {
       table.require_increasing("t");
       (void)table.sample_period();
     }
+    return true;
   } catch (const daemon::DataFileError&) {
+    return false;
   }
 }
 
