@@ -75,7 +75,7 @@ void inverse_step(benchmark::State& state, const std::string& kind, hc::InverseK
   }
 }
 
-// The feedforward's per-tick work with a model holding delay and dynamics (issue 14): the
+// The feedforward's per-tick work with a model holding delay and dynamics: the
 // dynamics inversion's target from three previewed reference values, then the analytic MPI
 // inverse (the loop samples the generator three times; that is the generator's cost, not this).
 void dynamic_feedforward_step(benchmark::State& state) {

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 19: is identification repeatable on a bench with a history? Starts hystbenchd on the
+# Is identification repeatable on a bench with a history? Starts hystbenchd on the
 # loopback default and, in that one daemon, runs `identify --model M` then `track` (1 Hz
 # triangle, 5 periods, inverse) for every M given (default: mpi mpi cpi mpi), printing one table
 # row per pair: held-out error, verified error (when identify reports one), tracking error.

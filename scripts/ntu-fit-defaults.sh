@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fits every model family to the NTU piezo identification record with `hystbench fit`'s defaults
 # and scores each on the tracking record's three sine segments (rows 1200-2800, 7600-9200,
-# 12400-14000, 0-based, segment mean removed), as issue 15 measures it. Prints one line per
+# 12400-14000, 0-based, segment mean removed). Prints one line per
 # family: prediction rms per segment [um]. Needs ../shared/data/piezo-ntu-dbo and a build.
 # Usage: scripts/ntu-fit-defaults.sh [families...]   (default: pi mpi cpi rpi auto)
 set -euo pipefail

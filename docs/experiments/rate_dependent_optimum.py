@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """The best drive any feedforward could play to the loopback's rate-dependent truth.
 
-Issue 13 asks for an rpi inverse within 1 % of range at 1-19 Hz on the loopback actuator with
-its rate dependence on. This script asks how well *any* drive can do there: it takes the
+How well can *any* drive track the loopback actuator with its rate dependence on, at 1-19 Hz?
+This script asks it: it takes the
 simulator's truth (sim/include/hystbench/sim/simulated_actuator_config.hpp: modified PI with the
 rate-dependent paper's per-sample law W_i + c_i |du/dt|, its defaults), a sine over 80 % of the
 output range (22.5 +- 18 um), and minimises sum (y - y_r)^2 over every sample of the drive with

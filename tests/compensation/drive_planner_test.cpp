@@ -320,8 +320,8 @@ TEST(PlannedInverse, PlaysThePlanAndCorrectsAnOffsetTarget) {
 // the rate adds B |du/dt| (B = sum of the rate slopes times the plays' outputs) on both
 // branches, so the falling drive solved for the reference is unstable with time constant
 // T = B / w_0: to follow it the drive would have to be already |y_r''| T^2 / w_0 below the top
-// at the top. Any drive pays a mismatch of order |y_r''| T^2 there (7 um at 10 Hz here,
-// docs/measurements.md "Why no drive tracks this truth within 1 % at 10 Hz"); the plan shares
+// at the top. Any drive pays a mismatch of order |y_r''| T^2 there (7 um at 10 Hz here); the
+// plan shares
 // it before and after the top, its error's jump there stays within it, the previewed inverse's
 // (which must follow the reference up to the top) does not.
 TEST(DrivePlanner, SharesTheRateLawsMismatchAtEachTop) {

@@ -504,7 +504,7 @@ TEST(Identification, FitsCreepLagsJointlyWhenTheyHelp) {
   EXPECT_GT(without.heldout.rmse_percent(), 0.1);
 }
 
-// A bench's history (issue 19): the creep of earlier runs still settles during the record, a slow
+// A bench's history: the creep of earlier runs still settles during the record, a slow
 // drift of the output that no hysteresis weight explains. With FitOptions::drift the fit
 // fits it with the weights of every candidate and scores each with it (extrapolated over the
 // held-out part), and the model is the hysteresis alone; exact for the classical PI, where the

@@ -288,7 +288,7 @@ INSTANTIATE_TEST_SUITE_P(Families, BenchRepeatTest, ::testing::Values("mpi", "cp
                            return std::string(i.param);
                          });
 
-// The tare (issue 19): an output offset the model does not predict (a sensor offset, the slow
+// The tare: an output offset the model does not predict (a sensor offset, the slow
 // creep a bench's history leaves) is measured as y - y_model on the precondition sweep's falling
 // ramp and taken off the feedforward's target. A model shifted by 2 µm (4.4 % of the range)
 // tracks as well as the model it was shifted from, and the result names the tare it applied.

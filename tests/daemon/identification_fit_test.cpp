@@ -171,7 +171,7 @@ TEST(IdentificationFit, AutoCandidatesAreFittedAtNoFurtherDelay) {
   EXPECT_EQ(hc::fit_model(r.t, r.u, r.y, o).delay_samples, 2);
 }
 
-// identify --model mpi with its dead zones chosen by held-out error (issue 19): the held-out error
+// identify --model mpi with its dead zones chosen by held-out error: the held-out error
 // hardly tells m from m - 1, the verification does, so the neighbour with one dead zone per side
 // fewer is fitted on the same record and joins the candidates, named for its verification log.
 TEST(IdentificationFit, TheDeadZoneOrderIsVerifiedAgainstItsNeighbour) {

@@ -7,7 +7,7 @@
 //     mean slope [µm/V]. Low, because above f_c an integral loop with any extra lag (delay,
 //     output filter, a hysteretic or rate-dependent gain) has |S| > 1: at 20 Hz with the output
 //     filter at 80 Hz it made the rate-free loopback 33 % worse at 50 Hz and left a 35-40 Hz
-//     limit cycle on the rate-dependent one (issue 13);
+//     limit cycle on the rate-dependent one;
 //   - the output low-passed at 100 f_c for a rate-free model (a filter near f_c is itself the lag
 //     that makes |S| > 1 a little above it), at 4 f_c for a rate-dependent one;
 //   - for a rate-dependent model, whose output reacts to |du/dt| with a gain up to
