@@ -43,7 +43,13 @@ echo "== identify: play the identification excitation, fit a modified-PI model"
 for comp in none inverse inverse+pid; do
   echo
   echo "== track: 1 Hz triangle over 80 % of the range, 5 periods, compensator '$comp'"
-  "$bin/hystbench" track --reference triangle --frequency 1 --periods 5 --compensator "$comp" --wait
+  "$bin/hystbench" track --reference triangle --frequency 1 --periods 5 --compensator "$comp" \
+    --wait --plot "$work/plots/$comp"
 done
+# One picture of the loop before and after compensation: output against reference, the scored
+# periods of the runs without compensation and with the inverse (the README shows it).
+run_log() { ls "$work"/logs/*-track-"$1".csv; }
+gnuplot -e "none='$(run_log 2)'; inverse='$(run_log 3)'; out='$work/tracking.png'" \
+  scripts/lib/demo-tracking.gp 2>/dev/null && echo && echo "picture: $work/tracking.png" || true
 echo
-echo "logs and models: $work"
+echo "logs, models and plots: $work"
