@@ -16,12 +16,10 @@ constexpr std::array<double, 2> kButterworthQ = {0.54119610014619690, 1.30656296
 constexpr double kCutoffOfRate = 0.2;
 constexpr double kCutoffOfMode = 0.5;
 // ... and at most this harmonic of the trial's frequency: a slow trial's error above it is mostly
-// the sensor's noise, which each trial would otherwise learn into the drive (on the loopback at
-// 1 Hz: 0.017 % rms after ten trials with 300 Hz, 0.044 % with 2 kHz).
+// the sensor's noise, which each trial would otherwise learn into the drive.
 constexpr double kCutoffHarmonics = 300.0;
-// ... but at least past the fifth harmonic (a loop's error is mostly its odd harmonics: a 500 Hz
-// trial at 10 kHz cut at 2 kHz learned half its error, 0.64 % after ten trials; at 2.75 kHz
-// 0.32 %), within this fraction of the sample rate.
+// ... but at least past the fifth harmonic (a loop's error is mostly its odd harmonics, and a fast
+// trial cut below its fifth learns only part of it), within this fraction of the sample rate.
 constexpr double kCutoffFloorHarmonic = 5.5;
 constexpr double kCutoffFloorOfRate = 0.3;
 // The bench's delay is searched up to this many samples beyond the model's, and taken from a

@@ -69,17 +69,17 @@ PidTuning tune_pid(double gain_um_per_v, double loop_rate_hz, double bandwidth_h
   // The rate law's loop gain grows with frequency (K_i K_r at most): the output low-pass caps it
   // for |du/dt|, whose falling branch rang without it. For the signed law the feedback holds the
   // reading to the feedforward's predicted output (the bench), and a low-pass close above the
-  // crossover would only add its lag to the sensitivity at 5-19 Hz (0.37 -> 0.41 % at 5 Hz).
+  // crossover would only add its lag to the sensitivity a few times above the crossover.
   const bool signed_rate = kr > 0.0 && signed_law(*model);
   const double filter_factor =
       kr > 0.0 && !signed_rate ? kRateOutputFilterFactor : kOutputFilterFactor;
   // Falling, a faster fall raises the output (|du/dt|): to a small change of the drive the
   // actuator is g - K_r s, a zero in the right half plane at g / K_r [rad/s]. The integral loop
-  // crosses over well below it, or it rings on every falling branch (a 35-40 Hz limit cycle on
-  // the loopback). The signed law has that zero only where its weights fall with the rate; where
+  // crosses over well below it, or it rings on every falling branch (a limit cycle a little
+  // below the zero). The signed law has that zero only where its weights fall with the rate; where
   // they grow, g + K_r s, the rate-dependent feedforward already tracks above g / K_r / 14 to
-  // the model's accuracy (0.35-0.95 % at 5-19 Hz on the loopback), and an integral loop crossing
-  // over there only adds its sensitivity peak to that residual (0.35 -> 0.43 % at 5 Hz): the
+  // the model's accuracy, and an integral loop crossing over there only adds its sensitivity
+  // peak to that residual: the
   // same limit keeps the feedback on the slow errors the model does not predict.
   const double kz = model != nullptr ? rate_gain(*model, true) : 0.0;
   const double k_limit = kz > 0.0 ? kz : kr;

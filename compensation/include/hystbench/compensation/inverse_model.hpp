@@ -141,7 +141,7 @@ class NumericInverse final : public InverseModel {
 /// equation solved, not its one-tick-delayed form. A thresholds rate law is iterated the same
 /// way, at the drive's own rate where the output still grows with it, else at the rate its
 /// rate-free self's drive (the same structure on the law's modified PI) predicts: one pass a
-/// tick through widening thresholds chatters (28 % of range at 19 Hz). Needs no inverse parameters:
+/// tick through widening thresholds chatters. Needs no inverse parameters:
 /// it runs the model itself in feedback. step() is real-time safe.
 class InverseMultiplicativeCompensator final : public InverseModel {
  public:

@@ -5,30 +5,29 @@
 //   - crossover f_c = bandwidth_hz, by default min(loop rate / 500, 2 Hz), at most a twentieth
 //     of the model's natural frequency when it has dynamics: ki = 2 pi f_c / g, g the model's
 //     mean slope [µm/V]. Low, because above f_c an integral loop with any extra lag (delay,
-//     output filter, a hysteretic or rate-dependent gain) has |S| > 1: at 20 Hz with the output
-//     filter at 80 Hz it made the rate-free loopback 33 % worse at 50 Hz and left a 35-40 Hz
-//     limit cycle on the rate-dependent one;
+//     output filter, a hysteretic or rate-dependent gain) has |S| > 1 (a crossover of tens of
+//     Hz makes a rate-free actuator worse above it, and leaves a limit cycle on a
+//     rate-dependent one);
 //   - the output low-passed at 100 f_c for a rate-free model (a filter near f_c is itself the lag
 //     that makes |S| > 1 a little above it), at 4 f_c for a rate-dependent one;
 //   - for a rate-dependent model, whose output reacts to |du/dt| with a gain up to
 //     K_r = sum_i |c_i - c_{i-1}| * max|u| [µm per V/s]: on a falling branch a faster fall raises
 //     the output, so to a small change of the drive the actuator is g - K_r s, a right-half-plane
-//     zero at g / K_r. f_c is lowered to (g / K_r) / (2 pi 14) (measured: with 2 Hz on a 14 Hz zero
-//     the integrator answered the transients at the reversal tops and left a tail, 5-10 Hz worse
-//     than the inverse alone; with 1 Hz it is not worse at any frequency), and further until the
+//     zero at g / K_r. f_c is lowered to (g / K_r) / (2 pi 14) (closer to the zero, the
+//     integrator answers the transients at the reversal tops and leaves a tail that makes the
+//     tracking worse than the inverse alone), and further until the
 //     high-frequency loop gain ki * 2 pi f_lp * K_r stays at a quarter of 1 / (1.5 loop periods).
 //   - behind a model's inverse whose reference is periodic with f_0 > f_c / 2 (f_0 > f_c behind
 //     the linear map, whose error is the hysteresis loop itself, carried by its fundamental,
-//     which the loop lowers below its crossover: 4.4 against 6.6 % at 1 Hz), the error is averaged
+//     which the loop lowers below its crossover), the error is averaged
 //     over one period first (PeriodAverage) and f_c is at most f_0 / 10 (the average delays by
 //     half a period; at f_0 / 4 the mean error alternated in sign from period to period). What
 //     repeats with such a reference is the feedforward's model error at f_0 and its harmonics,
 //     at or above the crossover: an integral loop cannot lower it there, only raise it by
-//     |S| - 1 > 0 (any lag, the rate law's zero above all: the rate-free model on the
-//     rate-dependent loopback was 13 % worse than its inverse alone at 5-19 Hz; at 1 Hz, 0.8 of
-//     a 1.27 Hz crossover, the rpi model's loop lowered the fundamental but raised the harmonics,
-//     0.56-1.18 times the inverse's error). The loop keeps the slow errors (offset, drift,
-//     creep), which the average passes.
+//     |S| - 1 > 0 (any lag, the rate law's zero above all; near the crossover the loop lowers
+//     the fundamental but raises the harmonics). The loop keeps the slow errors (offset, drift,
+//     creep), which the average passes. docs/measurements.md has the figures behind these
+//     rules (inverse against inverse+pid on each truth).
 // Not real-time (runs when a run is built).
 #include <string>
 
