@@ -7,18 +7,19 @@
 # permitted, otherwise the daemon says so and runs degraded).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# Only what the demo runs (the CLI and the daemon, not the tests and benchmarks): the first
-# output comes minutes sooner on a fresh machine. scripts/build.sh builds everything.
+# Only what the demo runs (the CLI and the daemon, optimised without debug info, in build-demo/):
+# the first output comes minutes sooner on a fresh machine. scripts/build.sh builds everything,
+# with debug info, in build/.
 bash scripts/deps.sh build >&2
-cmake --preset default >/dev/null
-echo "hystbench: building hystbench and hystbenchd (the tests are built by scripts/test.sh)" >&2
-cmake --build --preset default -j "$(nproc)" --target hystbench hystbenchd >&2
+cmake --preset demo >/dev/null
+echo "hystbench: building hystbench and hystbenchd in build-demo/ (the tests: scripts/test.sh)" >&2
+cmake --build --preset demo -j "$(nproc)" >&2
 
 work="${HYSTBENCH_DEMO_DIR:-$(mktemp -d -t hystbench-demo.XXXXXX)}"
 mkdir -p "$work"
 sock="$work/hystbench.sock"
 export HYSTBENCH_SOCKET="$sock"
-bin=build/bin
+bin=build-demo/bin
 
 "$bin/hystbenchd" --config config/loopback.toml --socket "$sock" \
   --log-dir "$work/logs" --model-dir "$work/models" >"$work/hystbenchd.log" 2>&1 &
