@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <chrono>
 #include <iostream>
+#include <optional>
 
 #include "hystbench/daemon/bench.hpp"
 #include "hystbench/daemon/config.hpp"
@@ -16,62 +17,57 @@
 
 namespace hd = hystbench::daemon;
 
-int main(int argc, char** argv) {
-  CLI::App app{
-      "hystbenchd - hystbench bench daemon: fixed-rate loop, every-sample logs, command socket\n"
-      "\n"
-      "Without --config it runs on the built-in defaults: the loopback driver (a simulated\n"
-      "150 V / 45 um piezo stack) at 10 kHz. Script it with `hystbench` (see `hystbench --help`).\n"
-      "SIGTERM or SIGINT: safe output, the active run ends, its log is closed, exit 0."};
+namespace {
+
+// The command line: a configuration file and the settings that override it.
+struct DaemonOptions {
   std::string config_path, socket_path, log_dir, model_dir, clock;
   bool check_only = false;
-  app.add_option("-c,--config", config_path, "TOML configuration file (see config/*.toml)")
+};
+
+void add_daemon_options(CLI::App& app, DaemonOptions& options) {
+  app.add_option("-c,--config", options.config_path, "TOML configuration file (see config/*.toml)")
       ->check(CLI::ExistingFile);
-  app.add_option("--socket", socket_path, "Command socket path (overrides daemon.socket_path)");
-  app.add_option("--log-dir", log_dir, "Run log folder (overrides daemon.log_dir)");
-  app.add_option("--model-dir", model_dir, "Model folder (overrides daemon.model_dir)");
-  app.add_option("--clock", clock,
+  app.add_option("--socket", options.socket_path,
+                 "Command socket path (overrides daemon.socket_path)");
+  app.add_option("--log-dir", options.log_dir, "Run log folder (overrides daemon.log_dir)");
+  app.add_option("--model-dir", options.model_dir, "Model folder (overrides daemon.model_dir)");
+  app.add_option("--clock", options.clock,
                  "Loop clock (overrides loop.clock): wall, or simulated (loopback driver only:\n"
                  "virtual time, runs tick as fast as they compute, idle ticks stay paced)")
       ->check(CLI::IsMember({"wall", "simulated"}));
-  app.add_flag("--check-config", check_only, "Validate the configuration, print it and exit");
+  app.add_flag("--check-config", options.check_only,
+               "Validate the configuration, print it and exit");
   app.set_version_flag("--version", std::string(HYSTBENCH_VERSION));
-  CLI11_PARSE(app, argc, argv);
+}
 
+// The configuration file's (the built-in defaults without one) with the command line's
+// overrides; nullopt after printing why it is not valid.
+std::optional<hd::DaemonConfig> load_daemon_config(const DaemonOptions& options) {
   hd::DaemonConfig config;
   try {
-    if (!config_path.empty()) config = hd::load_config(config_path);
+    if (!options.config_path.empty()) config = hd::load_config(options.config_path);
   } catch (const hd::ConfigError& e) {
     std::cerr << "hystbenchd: configuration error: " << e.what() << "\n";
-    return 2;
+    return std::nullopt;
   }
-  if (!socket_path.empty()) config.daemon.socket_path = socket_path;
-  if (!log_dir.empty()) config.daemon.log_dir = log_dir;
-  if (!model_dir.empty()) config.daemon.model_dir = model_dir;
-  if (!clock.empty()) {
-    if (const std::string why = hd::clock_conflict(clock, config.driver.type); !why.empty()) {
+  if (!options.socket_path.empty()) config.daemon.socket_path = options.socket_path;
+  if (!options.log_dir.empty()) config.daemon.log_dir = options.log_dir;
+  if (!options.model_dir.empty()) config.daemon.model_dir = options.model_dir;
+  if (!options.clock.empty()) {
+    if (const std::string why = hd::clock_conflict(options.clock, config.driver.type);
+        !why.empty()) {
       std::cerr << "hystbenchd: configuration error: --clock: " << why << "\n";
-      return 2;
+      return std::nullopt;
     }
-    config.loop.clock = clock;
+    config.loop.clock = options.clock;
   }
-  spdlog::set_level(spdlog::level::from_str(config.daemon.log_level));
-  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ %v");
+  return config;
+}
 
-  hd::BenchSettings settings;
-  try {
-    settings = hd::bench_settings_from(config);
-  } catch (const hd::ConfigError& e) {
-    std::cerr << "hystbenchd: configuration error: " << e.what() << "\n";
-    return 2;
-  }
-  if (check_only) {
-    std::cout << settings.config_json.dump(2) << "\n";
-    return 0;
-  }
-
-  // Signals are taken synchronously by the main thread; every thread started below inherits
-  // the blocked mask, so none of them is interrupted.
+// Blocks SIGTERM, SIGINT and SIGHUP, which the main thread then takes synchronously; every
+// thread started afterwards inherits the blocked mask, so none of them is interrupted.
+sigset_t block_stop_signals() {
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGTERM);
@@ -79,13 +75,19 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   signal(SIGPIPE, SIG_IGN);
+  return signals;
+}
 
+// Starts the driver and the loop and logs the realtime setup; nullptr after logging why the
+// driver cannot start.
+std::unique_ptr<hd::Bench> start_bench(const hd::DaemonConfig& config,
+                                       const hd::BenchSettings& settings) {
   std::unique_ptr<hd::Bench> bench;
   try {
     bench = std::make_unique<hd::Bench>(settings);
   } catch (const std::exception& e) {
     spdlog::critical("cannot start the driver '{}': {}", config.driver.type, e.what());
-    return 1;
+    return nullptr;
   }
   const hd::RealtimeReport rt = bench->start();
   hd::RealtimeOptions requested = settings.loop.realtime;
@@ -95,31 +97,28 @@ int main(int argc, char** argv) {
   } else {
     spdlog::info("{}", rt.summary(requested));
   }
+  return bench;
+}
 
-  hd::SocketServer server(
-      {config.daemon.socket_path},
-      [&bench](const hd::Request& req) -> hd::Reply {
-        try {
-          spdlog::debug("client {}: {}", req.client, req.cmd);
-          return hd::Reply::success(bench->handle(req.cmd, req.params, req.client));
-        } catch (const hd::CommandError& e) {
-          spdlog::info("client {}: {} refused: {}", req.client, req.cmd, e.what());
-          return hd::Reply::failure(e.code(), e.what(), e.detail());
-        } catch (const std::exception& e) {
-          spdlog::error("client {}: {} failed: {}", req.client, req.cmd, e.what());
-          return hd::Reply::failure("internal", e.what());
-        }
-      },
-      // A connection that goes away mid-upload leaves nothing behind.
-      [&bench](std::uint64_t client) { bench->client_closed(client); });
-  try {
-    server.start();
-  } catch (const std::exception& e) {
-    spdlog::critical("command socket: {}", e.what());
-    bench->shutdown();
-    return 1;
-  }
-  bench->set_event_sink([&server](const nlohmann::json& event) {
+// Answers a client's request with the bench's reply, a refusal or an internal failure.
+hd::SocketServer::Dispatcher bench_dispatcher(hd::Bench& bench) {
+  return [&bench](const hd::Request& req) -> hd::Reply {
+    try {
+      spdlog::debug("client {}: {}", req.client, req.cmd);
+      return hd::Reply::success(bench.handle(req.cmd, req.params, req.client));
+    } catch (const hd::CommandError& e) {
+      spdlog::info("client {}: {} refused: {}", req.client, req.cmd, e.what());
+      return hd::Reply::failure(e.code(), e.what(), e.detail());
+    } catch (const std::exception& e) {
+      spdlog::error("client {}: {} failed: {}", req.client, req.cmd, e.what());
+      return hd::Reply::failure("internal", e.what());
+    }
+  };
+}
+
+// Logs every finished run and sends every event of the bench to the socket's clients.
+void forward_events(hd::Bench& bench, hd::SocketServer& server) {
+  bench.set_event_sink([&server](const nlohmann::json& event) {
     if (event.value("event", "") == "run.finished") {
       const auto& r = event["result"];
       spdlog::info("run {} {}{}{}", r.value("run_id", "?"), r.value("end", "?"),
@@ -128,12 +127,11 @@ int main(int argc, char** argv) {
     }
     server.broadcast_event(event);
   });
-  spdlog::info("hystbenchd {} ready: driver {}, {} Hz, {} clock, socket {}, logs {}",
-               HYSTBENCH_VERSION, config.driver.type, config.loop.rate_hz, config.loop.clock,
-               config.daemon.socket_path, config.daemon.log_dir);
-  sd_notifyf(0, "READY=1\nSTATUS=driver %s, %.0f Hz", config.driver.type.c_str(),
-             config.loop.rate_hz);
+}
 
+// Waits for SIGTERM or SIGINT and returns it; feeds systemd's watchdog meanwhile while the loop
+// advances, and ignores SIGHUP.
+int wait_for_stop_signal(const sigset_t& signals, hd::Bench& bench) {
   std::uint64_t watchdog_usec = 0;
   const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0 && watchdog_usec > 0;
   const auto interval =
@@ -148,14 +146,72 @@ int main(int argc, char** argv) {
       received = sig;
     } else if (sig == SIGHUP) {
       spdlog::info("SIGHUP ignored (restart the service to apply a new configuration)");
-    } else if (watchdog && bench->loop_advanced()) {
+    } else if (watchdog && bench.loop_advanced()) {
       sd_notify(0, "WATCHDOG=1");
     }
   }
+  return received;
+}
+
+// Runs the bench and its command socket until a stop signal; returns the exit code.
+int run_daemon(const hd::DaemonConfig& config, const hd::BenchSettings& settings,
+               const sigset_t& signals) {
+  std::unique_ptr<hd::Bench> bench = start_bench(config, settings);
+  if (!bench) return 1;
+  hd::SocketServer server({config.daemon.socket_path}, bench_dispatcher(*bench),
+                          // A connection that goes away mid-upload leaves nothing behind.
+                          [&bench](std::uint64_t client) { bench->client_closed(client); });
+  try {
+    server.start();
+  } catch (const std::exception& e) {
+    spdlog::critical("command socket: {}", e.what());
+    bench->shutdown();
+    return 1;
+  }
+  forward_events(*bench, server);
+  spdlog::info("hystbenchd {} ready: driver {}, {} Hz, {} clock, socket {}, logs {}",
+               HYSTBENCH_VERSION, config.driver.type, config.loop.rate_hz, config.loop.clock,
+               config.daemon.socket_path, config.daemon.log_dir);
+  sd_notifyf(0, "READY=1\nSTATUS=driver %s, %.0f Hz", config.driver.type.c_str(),
+             config.loop.rate_hz);
+
+  const int received = wait_for_stop_signal(signals, *bench);
   spdlog::info("{} received: safe output, ending the run, closing the log", strsignal(received));
   sd_notify(0, "STOPPING=1");
   bench->shutdown();
   server.stop();
   spdlog::info("hystbenchd stopped");
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "hystbenchd - hystbench bench daemon: fixed-rate loop, every-sample logs, command socket\n"
+      "\n"
+      "Without --config it runs on the built-in defaults: the loopback driver (a simulated\n"
+      "150 V / 45 um piezo stack) at 10 kHz. Script it with `hystbench` (see `hystbench --help`).\n"
+      "SIGTERM or SIGINT: safe output, the active run ends, its log is closed, exit 0."};
+  DaemonOptions options;
+  add_daemon_options(app, options);
+  CLI11_PARSE(app, argc, argv);
+
+  const std::optional<hd::DaemonConfig> config = load_daemon_config(options);
+  if (!config) return 2;
+  spdlog::set_level(spdlog::level::from_str(config->daemon.log_level));
+  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ %v");
+
+  hd::BenchSettings settings;
+  try {
+    settings = hd::bench_settings_from(*config);
+  } catch (const hd::ConfigError& e) {
+    std::cerr << "hystbenchd: configuration error: " << e.what() << "\n";
+    return 2;
+  }
+  if (options.check_only) {
+    std::cout << settings.config_json.dump(2) << "\n";
+    return 0;
+  }
+  return run_daemon(*config, settings, block_stop_signals());
 }
