@@ -373,6 +373,20 @@ struct Naming {
   const OnTopOfShape* beyond = nullptr;  ///< the first cause, named beyond the shape
 };
 
+/// The extended model as the causes after the first join it.
+struct Joint {
+  details::ExtensionFit fit;       ///< the joint model so far, predicted and scored
+  std::string named_extension;     ///< what the first cause's extension (and the shape's) adds
+  std::vector<std::string> added;  ///< what each part joined after it adds
+};
+
+/// A cause after the first, tried on top of the joint model.
+struct Next {
+  std::size_t index;  ///< in Diagnosis::candidates
+  double gain;        ///< over the reference (or the shape): the gain it is ranked by
+  bool contender;     ///< it may be named; else it may only join the extended model
+};
+
 double quadrature_difference(double before, double after) {
   return std::sqrt(std::max(0.0, before * before - after * after));
 }
@@ -394,62 +408,73 @@ std::string within_noise(const std::string& before, double added_rms, double all
          " the noise allows";
 }
 
-/// d.cause (not none) and the candidates' not_named set for the candidates that cannot be named:
-/// names every other cause (Diagnosis::causes) and builds the extended model, the named cause's
-/// extension joined by every other significant one that lowers the held-out error on top of it
-/// (Diagnosis::extended_parts).
-void name_causes_and_extend(Diagnosis& d, const Naming& x,
-                            const std::function<void(double, const std::string&)>& progress) {
-  const DiagnosisOptions& options = x.options;
-  const std::string unit = x.r.units.output;
-  const std::string shape_name = "the loop's shape (asymmetry)";
-  auto index_of = [&](Cause c) {
-    std::size_t i = 0;
-    while (d.candidates[i].cause != c) ++i;
-    return i;
-  };
-  auto on_shape_of = [&](Cause c) -> const OnTopOfShape* {
-    for (const OnTopOfShape& o : x.on_shape) {
-      if (o.cause == c) return &o;
-    }
-    return nullptr;
-  };
-  CandidateReport& w = d.candidates[index_of(d.cause)];
+// Calls the options' progress callback, when there is one.
+void report(const DiagnosisOptions& options, double fraction, const std::string& what) {
+  if (options.progress) options.progress(fraction, what);
+}
+
+// What the other causes are judged against when the first is named beyond the shape.
+std::string shape_name() { return "the loop's shape (asymmetry)"; }
+
+// Where cause c stands in d.candidates (it is there).
+std::size_t index_of(const Diagnosis& d, Cause c) {
+  std::size_t i = 0;
+  while (d.candidates[i].cause != c) ++i;
+  return i;
+}
+
+// Cause c tested on top of the shape, or nullptr when it was not.
+const OnTopOfShape* on_shape_of(const Naming& x, Cause c) {
+  for (const OnTopOfShape& o : x.on_shape) {
+    if (o.cause == c) return &o;
+  }
+  return nullptr;
+}
+
+// The extended model's model, errors and prediction from a joint fit (not its description).
+void set_extended(Diagnosis& d, const details::ExtensionFit& joint) {
+  d.extended = joint.model;
+  d.extended_fit = joint.fit;
+  d.extended_heldout = joint.heldout;
+  d.extended_prediction = joint.prediction;
+}
+
+// Names d.cause and makes its extension (on top of the shape when it is named beyond it) the
+// extended model so far.
+Joint name_first_cause(Diagnosis& d, const Naming& x) {
+  CandidateReport& w = d.candidates[index_of(d, d.cause)];
   w.named = true;
   w.not_named.clear();
-  std::string named_extension = w.extension;
-  details::ExtensionFit joint;
+  Joint joint;
+  joint.named_extension = w.extension;
   if (x.beyond) {
     // The named cause on top of the shape: both are parts of the extended model.
-    joint = x.beyond->outcome.fit;
-    named_extension =
+    joint.fit = x.beyond->outcome.fit;
+    joint.named_extension =
         x.beyond->outcome.extension + "; " + d.candidate(Cause::kAsymmetry)->extension;
     d.extended_parts = {std::string(to_string(d.cause)), std::string(to_string(Cause::kAsymmetry))};
     const double shape_rms = d.candidate(Cause::kAsymmetry)->heldout.rmse;
-    d.causes = {{d.cause, x.beyond->gain, joint.heldout.rmse, shape_name, x.beyond->gain,
-                 quadrature_difference(shape_rms, joint.heldout.rmse), x.beyond->outcome.evidence,
-                 x.beyond->outcome.extension}};
+    d.causes = {{d.cause, x.beyond->gain, joint.fit.heldout.rmse, shape_name(), x.beyond->gain,
+                 quadrature_difference(shape_rms, joint.fit.heldout.rmse),
+                 x.beyond->outcome.evidence, x.beyond->outcome.extension}};
   } else {
-    joint = x.fits[index_of(d.cause)];
+    joint.fit = x.fits[index_of(d, d.cause)];
     d.extended_parts = {std::string(to_string(d.cause))};
     const double gain = x.reference / w.heldout.rmse;
     d.causes = {{d.cause, gain, w.heldout.rmse, x.reference_name, gain,
                  quadrature_difference(x.reference, w.heldout.rmse), w.evidence, w.extension}};
   }
-  d.extended = joint.model;
-  d.extended_description = details::describe_model(joint.model) + " (" + named_extension + ")";
-  d.extended_fit = joint.fit;
-  d.extended_heldout = joint.heldout;
-  d.extended_prediction = joint.prediction;
+  set_extended(d, joint.fit);
+  d.extended_description =
+      details::describe_model(joint.fit.model) + " (" + joint.named_extension + ")";
+  return joint;
+}
 
-  // The others, strongest first. A contender may be named: significant and carrying over (when
-  // the first is named beyond the shape, significant on top of the shape). Every significant
-  // extension that carries over (drift aside: never extrapolated) may join the extended model.
-  struct Next {
-    std::size_t index;
-    double gain;  ///< over the reference (or the shape): the gain it is ranked by
-    bool contender;
-  };
+// The others, strongest first. A contender may be named: significant and carrying over (when
+// the first is named beyond the shape, significant on top of the shape). Every significant
+// extension that carries over (drift aside: never extrapolated) may join the extended model.
+// Says why a candidate that carries over is no contender beyond the shape.
+std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
   std::vector<Next> order;
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
     CandidateReport& c = d.candidates[i];
@@ -458,11 +483,11 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
         d.extended_parts.end()) {
       continue;
     }
-    const OnTopOfShape* s = x.beyond ? on_shape_of(c.cause) : nullptr;
+    const OnTopOfShape* s = x.beyond ? on_shape_of(x, c.cause) : nullptr;
     const bool contender = c.carries_over && (x.beyond ? s && s->significant : c.significant);
     if (x.beyond && c.carries_over && !contender) {
-      c.not_named = !s ? "it could not be fitted on top of " + shape_name
-                       : "on top of " + shape_name + " its statistic is not significant (gain " +
+      c.not_named = !s ? "it could not be fitted on top of " + shape_name()
+                       : "on top of " + shape_name() + " its statistic is not significant (gain " +
                              num(s->gain) + ")";
     }
     const bool joins = c.significant && c.carries_over && c.cause != Cause::kDrift;
@@ -471,117 +496,131 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x,
   }
   std::sort(order.begin(), order.end(),
             [](const Next& a, const Next& b) { return a.gain > b.gain; });
-  progress(0.97, "naming the other causes and joining the significant extensions");
-  std::vector<std::string> added;
-  for (const Next& next : order) {
-    CandidateReport& c = d.candidates[next.index];
-    const std::string before = joined(d.extended_parts);
-    // The candidate's test again, its baseline the joint model so far: its parameters (a
-    // resonance, a delay) are found on what the joint model leaves.
-    std::vector<double> joint_residual(x.r.n);
-    for (std::size_t k = 0; k < x.r.n; ++k) joint_residual[k] = x.r.y[k] - joint.prediction[k];
-    const details::CandidateContext jc{
-        x.r,  joint.spec, joint,      joint.prediction, joint_residual,
-        x.ev, x.profiles, x.response, d.noise_rms};
-    try {
-      details::CandidateOutcome o = test_of(c.cause)(jc);
-      if (next.contender) {
-        // Named when it reaches min_gain on its own or added to the stronger causes (an effect
-        // beside a larger one gains little over the baseline), and is not within their noise.
-        const double rms = o.fit.heldout.rmse;
-        const double added_rms = quadrature_difference(joint.heldout.rmse, rms);
-        const double added_gain = rms > 0.0 ? joint.heldout.rmse / rms : 0.0;
-        const OnTopOfShape* s = x.beyond ? on_shape_of(c.cause) : nullptr;
-        if (added_rms < d.noise_allowance_rms) {
-          c.not_named = within_noise(before, added_rms, d.noise_allowance_rms, unit);
-        } else if (next.gain < options.min_gain && added_gain < options.min_gain) {
-          c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
-                        ", and " + num(added_gain) + " added to the model holding " + before +
-                        ", are below " + num(options.min_gain);
-        } else if (added_gain < options.min_gain && added_gain < kMinAddedGain) {
-          // Its own gain was mostly the stronger causes' (a rate law widening the loop as a
-          // delay does): added to them it explains little.
-          c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
-                        " is mostly that of " + before + ": added to the model holding it, " +
-                        num(added_gain) + ", below " + num(kMinAddedGain);
-        } else {
-          d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
-                              s ? shape_name : x.reference_name, added_gain, added_rms,
-                              s ? s->outcome.evidence : c.evidence,
-                              s ? s->outcome.extension : c.extension});
-          c.named = true;
-          c.not_named.clear();
-        }
-      }
-      // A part joins when it lowers the joint model's held-out rms by kMinJoinGain: less only
-      // adds parameters, which the inverse extrapolates (a rate law beyond the record's rates).
-      if (c.cause != Cause::kDrift && o.fit.heldout.rmse * kMinJoinGain < joint.heldout.rmse) {
-        joint = std::move(o.fit);
-        added.push_back(o.extension);
-        d.extended_parts.push_back(std::string(to_string(c.cause)));
-      }
-    } catch (const std::exception&) {
-      // A combination the designs cannot fit is left out.
-      if (next.contender) c.not_named = "it could not be fitted on top of " + before;
-    }
-  }
-  if (!added.empty()) {
-    d.extended = joint.model;
-    d.extended_fit = joint.fit;
-    d.extended_heldout = joint.heldout;
-    d.extended_prediction = joint.prediction;
-    d.extended_description = details::describe_model(joint.model) + " (" + named_extension;
-    for (const std::string& a : added) d.extended_description += "; " + a;
-    d.extended_description += ", refitted jointly)";
-  }
-  if (x.beyond) {
-    // The shape, judged on top of the first cause: the first alone against both together.
-    CandidateReport& shape = d.candidates[index_of(Cause::kAsymmetry)];
-    const double alone = d.candidate(d.cause)->heldout.rmse;
-    const double both = x.beyond->outcome.fit.heldout.rmse;
-    const double added_rms = quadrature_difference(alone, both);
-    if (added_rms >= d.noise_allowance_rms) {
-      d.causes.push_back({Cause::kAsymmetry, x.reference / shape.heldout.rmse, shape.heldout.rmse,
-                          x.reference_name, alone / both, added_rms, shape.evidence,
-                          shape.extension});
-      shape.named = true;
-    } else {
-      shape.not_named =
-          within_noise(std::string(to_string(d.cause)), added_rms, d.noise_allowance_rms, unit);
-    }
-  }
-  if (d.causes.size() > 1) {
-    d.verdict += ". Also named, each adding more than the noise allows (" +
-                 num(d.noise_allowance_rms) + " " + unit + " rms) to the causes before it: ";
-    for (std::size_t i = 1; i < d.causes.size(); ++i) {
-      const NamedCause& n = d.causes[i];
-      d.verdict += (i > 1 ? ", " : "") + std::string(to_string(n.cause)) + " (gain " + num(n.gain) +
-                   (n.against == shape_name ? " over the shape" : "") + ", " + num(n.added_gain) +
-                   " added to those, " + num(n.added_rms) + " " + unit + " rms)";
-    }
+  return order;
+}
+
+// Names a contender whose outcome `o` on top of the joint model (held-out rms joint_rms, holding
+// `before`) reaches min_gain on its own or added to the stronger causes (an effect beside a
+// larger one gains little over the baseline), and is not within their noise; else says why not.
+void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
+                     const details::CandidateOutcome& o, double joint_rms,
+                     const std::string& before) {
+  CandidateReport& c = d.candidates[next.index];
+  const DiagnosisOptions& options = x.options;
+  const std::string unit = x.r.units.output;
+  const double rms = o.fit.heldout.rmse;
+  const double added_rms = quadrature_difference(joint_rms, rms);
+  const double added_gain = rms > 0.0 ? joint_rms / rms : 0.0;
+  const OnTopOfShape* s = x.beyond ? on_shape_of(x, c.cause) : nullptr;
+  if (added_rms < d.noise_allowance_rms) {
+    c.not_named = within_noise(before, added_rms, d.noise_allowance_rms, unit);
+  } else if (next.gain < options.min_gain && added_gain < options.min_gain) {
+    c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") + ", and " +
+                  num(added_gain) + " added to the model holding " + before + ", are below " +
+                  num(options.min_gain);
+  } else if (added_gain < options.min_gain && added_gain < kMinAddedGain) {
+    // Its own gain was mostly the stronger causes' (a rate law widening the loop as a delay
+    // does): added to them it explains little.
+    c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
+                  " is mostly that of " + before + ": added to the model holding it, " +
+                  num(added_gain) + ", below " + num(kMinAddedGain);
+  } else {
+    d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
+                        s ? shape_name() : x.reference_name, added_gain, added_rms,
+                        s ? s->outcome.evidence : c.evidence,
+                        s ? s->outcome.extension : c.extension});
+    c.named = true;
+    c.not_named.clear();
   }
 }
 
-Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
-                        std::span<const double> y, const DiagnosisOptions& options,
-                        std::vector<details::RecordPart> parts) {
-  auto progress = [&](double f, const std::string& what) {
-    if (options.progress) options.progress(f, what);
-  };
-  progress(0.0, "checking the record");
-  const std::vector<std::size_t> starts = starts_of(parts);
-  const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options, starts);
-  Diagnosis d;
-  for (const details::RecordPart& p : parts) d.records.push_back(p.name);
-  d.record_starts = starts;
-  d.samples = r.n;
-  d.sample_period_s = r.dt;
-  d.split = r.split;
+// The next cause's test again, its baseline the joint model so far (its parameters, a
+// resonance, a delay, are found on what the joint model leaves): a contender is judged for
+// naming, and its part joins the joint model when it lowers the held-out rms by kMinJoinGain.
+void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& joint) {
+  CandidateReport& c = d.candidates[next.index];
+  const std::string before = joined(d.extended_parts);
+  std::vector<double> joint_residual(x.r.n);
+  for (std::size_t k = 0; k < x.r.n; ++k) joint_residual[k] = x.r.y[k] - joint.fit.prediction[k];
+  const details::CandidateContext jc{
+      x.r,  joint.fit.spec, joint.fit,  joint.fit.prediction, joint_residual,
+      x.ev, x.profiles,     x.response, d.noise_rms};
+  try {
+    details::CandidateOutcome o = test_of(c.cause)(jc);
+    if (next.contender) judge_contender(d, x, next, o, joint.fit.heldout.rmse, before);
+    // Less than kMinJoinGain only adds parameters, which the inverse extrapolates (a rate law
+    // beyond the record's rates).
+    if (c.cause != Cause::kDrift && o.fit.heldout.rmse * kMinJoinGain < joint.fit.heldout.rmse) {
+      joint.fit = std::move(o.fit);
+      joint.added.push_back(o.extension);
+      d.extended_parts.push_back(std::string(to_string(c.cause)));
+    }
+  } catch (const std::exception&) {
+    // A combination the designs cannot fit is left out.
+    if (next.contender) c.not_named = "it could not be fitted on top of " + before;
+  }
+}
 
-  // ---- baseline
-  progress(0.05, "baseline");
-  details::ExtensionSpec base;
-  details::ExtensionFit base_fit;
+// The shape, judged on top of the first cause: the first alone against both together.
+void judge_shape(Diagnosis& d, const Naming& x) {
+  CandidateReport& shape = d.candidates[index_of(d, Cause::kAsymmetry)];
+  const double alone = d.candidate(d.cause)->heldout.rmse;
+  const double both = x.beyond->outcome.fit.heldout.rmse;
+  const double added_rms = quadrature_difference(alone, both);
+  if (added_rms >= d.noise_allowance_rms) {
+    d.causes.push_back({Cause::kAsymmetry, x.reference / shape.heldout.rmse, shape.heldout.rmse,
+                        x.reference_name, alone / both, added_rms, shape.evidence,
+                        shape.extension});
+    shape.named = true;
+  } else {
+    shape.not_named = within_noise(std::string(to_string(d.cause)), added_rms,
+                                   d.noise_allowance_rms, x.r.units.output);
+  }
+}
+
+// The causes named after the first, each with what it adds, appended to the verdict.
+void append_also_named(Diagnosis& d, const std::string& unit) {
+  d.verdict += ". Also named, each adding more than the noise allows (" +
+               num(d.noise_allowance_rms) + " " + unit + " rms) to the causes before it: ";
+  for (std::size_t i = 1; i < d.causes.size(); ++i) {
+    const NamedCause& n = d.causes[i];
+    d.verdict += (i > 1 ? ", " : "") + std::string(to_string(n.cause)) + " (gain " + num(n.gain) +
+                 (n.against == shape_name() ? " over the shape" : "") + ", " + num(n.added_gain) +
+                 " added to those, " + num(n.added_rms) + " " + unit + " rms)";
+  }
+}
+
+/// d.cause (not none) and the candidates' not_named set for the candidates that cannot be named:
+/// names every other cause (Diagnosis::causes) and builds the extended model, the named cause's
+/// extension joined by every other significant one that lowers the held-out error on top of it
+/// (Diagnosis::extended_parts).
+void name_causes_and_extend(Diagnosis& d, const Naming& x) {
+  Joint joint = name_first_cause(d, x);
+  const std::vector<Next> order = next_causes(d, x);
+  report(x.options, 0.97, "naming the other causes and joining the significant extensions");
+  for (const Next& next : order) try_next_cause(d, x, next, joint);
+  if (!joint.added.empty()) {
+    set_extended(d, joint.fit);
+    d.extended_description =
+        details::describe_model(joint.fit.model) + " (" + joint.named_extension;
+    for (const std::string& a : joint.added) d.extended_description += "; " + a;
+    d.extended_description += ", refitted jointly)";
+  }
+  if (x.beyond) judge_shape(d, x);
+  if (d.causes.size() > 1) append_also_named(d, x.r.units.output);
+}
+
+/// The baseline structure every extension starts from, and that structure fitted here.
+struct Baseline {
+  details::ExtensionSpec spec;
+  details::ExtensionFit fit;
+};
+
+// The baseline (the given model, or a classical PI identified here) into d: its description,
+// prediction and errors; with a given model also the refit's held-out error.
+Baseline fit_baseline(Diagnosis& d, const details::DiagnosisRecord& r,
+                      const DiagnosisOptions& options) {
+  Baseline base;
   if (options.baseline) {
     if (!options.baseline->valid())
       throw std::invalid_argument("the given baseline model is empty");
@@ -590,23 +629,26 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     ActuatorModel sim(d.baseline);
     d.baseline_prediction = sim.simulate(r.u, r.dt);
     d.baseline_description = "given model: " + details::describe_model(d.baseline);
-    base = details::spec_of_model(d.baseline, r);
-    base_fit = details::fit_extension(r, base);
-    d.refit_heldout = base_fit.heldout;
+    base.spec = details::spec_of_model(d.baseline, r);
+    base.fit = details::fit_extension(r, base.spec);
+    d.refit_heldout = base.fit.heldout;
   } else {
     details::PiBaseline b = details::fit_pi_baseline(r);
     d.baseline = b.fit.model;
     d.baseline_prediction = std::move(b.fit.prediction);
     d.baseline_description = b.description;
-    base = b.finest_spec;
-    base_fit = std::move(b.finest_fit);
+    base.spec = b.finest_spec;
+    base.fit = std::move(b.finest_fit);
   }
   const details::SplitErrors be = details::split_errors(r, d.baseline_prediction);
   d.baseline_fit = be.fit;
   d.baseline_heldout = be.heldout;
+  return base;
+}
 
-  // ---- what the baseline gets wrong
-  progress(0.2, "residual structure");
+// The baseline's residual y - prediction [output unit]; sets d's noise rms, how it was
+// estimated and the input's period.
+std::vector<double> residual_and_noise(Diagnosis& d, const details::DiagnosisRecord& r) {
   std::vector<double> e(r.n);
   for (std::size_t k = 0; k < r.n; ++k) e[k] = r.y[k] - d.baseline_prediction[k];
   d.noise_rms = details::noise_rms(e);
@@ -620,40 +662,59 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                        std::to_string(d.input_period) + " samples)";
     }
   }
-  const details::InputEvents ev = details::find_input_events(r.u, r.dt);
-  d.profiles = residual_profiles(r, e, ev);
-  d.frequency_response = details::frequency_response(d.baseline_prediction, r.y, r.dt, d.noise_rms);
-  {
-    const FrequencyResponse& fr = d.frequency_response;
-    double coherent = 0.0, total = 0.0;
-    for (std::size_t i = 0; i < fr.coherence.size(); ++i) {
-      coherent += fr.coherence[i] * fr.output_psd[i];
-      total += fr.output_psd[i];
-    }
-    if (total > 0.0) d.coherent_share = coherent / total;
-  }
+  return e;
+}
 
-  // ---- candidates: their statistics read the residual of the reference the gains are judged
-  // against, the refit when a given model no longer matches this record.
-  const bool stale = d.refit_heldout && d.refit_heldout->rmse > 0.0 &&
-                     d.baseline_heldout.rmse / d.refit_heldout->rmse >= options.min_gain;
-  std::vector<double> ref_e = e;
-  std::vector<ResidualProfile> ref_profiles = d.profiles;
-  FrequencyResponse ref_response = d.frequency_response;
-  if (stale) {
-    for (std::size_t k = 0; k < r.n; ++k) ref_e[k] = r.y[k] - base_fit.prediction[k];
-    ref_profiles = residual_profiles(r, ref_e, ev);
-    ref_response = details::frequency_response(base_fit.prediction, r.y, r.dt, d.noise_rms);
+// d.coherent_share from d.frequency_response (left as it is when the output has no power).
+void set_coherent_share(Diagnosis& d) {
+  const FrequencyResponse& fr = d.frequency_response;
+  double coherent = 0.0, total = 0.0;
+  for (std::size_t i = 0; i < fr.coherence.size(); ++i) {
+    coherent += fr.coherence[i] * fr.output_psd[i];
+    total += fr.output_psd[i];
   }
-  const std::span<const double> ref_prediction =
-      stale ? std::span<const double>(base_fit.prediction) : d.baseline_prediction;
-  const details::CandidateContext ctx{r,  base,         base_fit,     ref_prediction, ref_e,
-                                      ev, ref_profiles, ref_response, d.noise_rms};
-  std::vector<details::ExtensionFit> fits;  // each candidate's, for the joint extended model
+  if (total > 0.0) d.coherent_share = coherent / total;
+}
+
+// A given model whose structure, refitted here, gains min_gain: its parameters do not match.
+bool given_model_stale(const Diagnosis& d, const DiagnosisOptions& options) {
+  return d.refit_heldout && d.refit_heldout->rmse > 0.0 &&
+         d.baseline_heldout.rmse / d.refit_heldout->rmse >= options.min_gain;
+}
+
+/// The prediction whose residual the candidates' statistics read.
+struct Reference {
+  std::vector<double> residual;  ///< y - prediction [output unit]
+  std::vector<ResidualProfile> profiles;
+  FrequencyResponse response;
+  std::span<const double> prediction;
+};
+
+// The baseline's (its residual e, profiles and response), or the refit's when a given model no
+// longer matches this record.
+Reference reference_of(const Diagnosis& d, const details::DiagnosisRecord& r,
+                       const details::ExtensionFit& base_fit, const details::InputEvents& ev,
+                       std::vector<double> e, const DiagnosisOptions& options) {
+  Reference ref{std::move(e), d.profiles, d.frequency_response, d.baseline_prediction};
+  if (given_model_stale(d, options)) {
+    for (std::size_t k = 0; k < r.n; ++k) ref.residual[k] = r.y[k] - base_fit.prediction[k];
+    ref.profiles = residual_profiles(r, ref.residual, ev);
+    ref.response = details::frequency_response(base_fit.prediction, r.y, r.dt, d.noise_rms);
+    ref.prediction = base_fit.prediction;
+  }
+  return ref;
+}
+
+// Tests every candidate against the context's reference into d.candidates; returns each one's
+// extension fit, in candidate order (for the joint extended model).
+std::vector<details::ExtensionFit> test_candidates(Diagnosis& d,
+                                                   const details::CandidateContext& ctx,
+                                                   const DiagnosisOptions& options) {
+  std::vector<details::ExtensionFit> fits;
   for (std::size_t i = 0; i < kCandidates.size(); ++i) {
     const Cause c = kCandidates[i];
-    progress(0.25 + 0.7 * static_cast<double>(i) / kCandidates.size(),
-             "testing " + std::string(to_string(c)));
+    report(options, 0.25 + 0.7 * static_cast<double>(i) / kCandidates.size(),
+           "testing " + std::string(to_string(c)));
     details::CandidateOutcome o = test_of(c)(ctx);
     fits.push_back(o.fit);
     CandidateReport rep;
@@ -671,22 +732,26 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     rep.prediction = std::move(o.fit.prediction);
     d.candidates.push_back(std::move(rep));
   }
-  if (parts.size() > 1) {
-    progress(0.93, "leaving each record out");
-    score_left_out(d, r, parts, base, fits, options);
-  }
+  return fits;
+}
 
-  // ---- decision
-  progress(0.95, "deciding");
-  double reference = d.baseline_heldout.rmse;
-  if (d.refit_heldout) reference = std::min(reference, d.refit_heldout->rmse);
-  const double floor = options.noise_floor_factor * d.noise_rms;
-  const bool at_floor = d.baseline_heldout.rmse <= floor;
-  d.noise_allowance_rms =
-      std::sqrt(options.noise_floor_factor * options.noise_floor_factor - 1.0) * d.noise_rms;
+/// What the verdict and the notes are decided on.
+struct Decision {
+  double reference = 0.0;  ///< held-out rms the gains are judged against: baseline or refit
+  bool at_floor = false;   ///< the baseline's held-out error is at the noise floor
+  std::vector<const CandidateReport*> eligible;  ///< may be named, largest gain first
+  std::vector<OnTopOfShape> on_shape;            ///< the other causes on top of the shape
+  const OnTopOfShape* beyond = nullptr;          ///< the strongest of those that counts
+  const CandidateReport* best_any = nullptr;     ///< the largest gain of all
+};
+
+// The candidates that may be named (significant, min_gain over the reference, carrying over),
+// largest gain first; says why each other one is not.
+std::vector<const CandidateReport*> eligible_candidates(Diagnosis& d, const Decision& decision,
+                                                        const DiagnosisOptions& options) {
   std::vector<const CandidateReport*> eligible;
   for (CandidateReport& c : d.candidates) {
-    const double gain = c.heldout.rmse > 0.0 ? reference / c.heldout.rmse : 0.0;
+    const double gain = c.heldout.rmse > 0.0 ? decision.reference / c.heldout.rmse : 0.0;
     if (!c.significant) {
       c.not_named =
           "its statistic " + num(c.statistic) + " is below its threshold " + num(c.threshold);
@@ -703,43 +768,52 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                         "predicts each record left out whole at gain " +
                         left_out_summary(c) + "; not named");
     }
-    if (at_floor) c.not_named = "the baseline's held-out error is at the noise floor";
+    if (decision.at_floor) c.not_named = "the baseline's held-out error is at the noise floor";
   }
   std::sort(eligible.begin(), eligible.end(),
             [](const CandidateReport* a, const CandidateReport* b) { return a->gain > b->gain; });
-  const std::string unit = r.units.output;
-  // ---- the loop's shape first. A classical PI follows neither a bent loop (a Preisach density,
-  // a saturating top) nor an asymmetric one, and what it misses there inflates every other
-  // candidate's gain: when the shape (asymmetry) is eligible, the other causes are tested again
-  // on top of it and named for what they gain beyond it.
-  std::vector<OnTopOfShape> on_shape;
-  const OnTopOfShape* beyond = nullptr;
-  const bool shape = std::any_of(eligible.begin(), eligible.end(), [](const CandidateReport* c) {
-    return c->cause == Cause::kAsymmetry;
-  });
-  if (shape && !at_floor) {
-    progress(0.955, "testing the other causes on top of the loop's shape");
-    on_shape = beyond_shape(d, r, fits, ev, d.notes);
-    for (const OnTopOfShape& o : on_shape) {
-      if (o.counts(options) && (!beyond || o.gain > beyond->gain)) beyond = &o;
+  return eligible;
+}
+
+// The loop's shape first. A classical PI follows neither a bent loop (a Preisach density, a
+// saturating top) nor an asymmetric one, and what it misses there inflates every other
+// candidate's gain: when the shape (asymmetry) is eligible, the other causes are tested again
+// on top of it (on_shape) and the strongest that counts is named beyond it (beyond).
+void test_on_shape(Diagnosis& d, const details::DiagnosisRecord& r,
+                   const std::vector<details::ExtensionFit>& fits, const details::InputEvents& ev,
+                   const DiagnosisOptions& options, Decision& decision) {
+  const bool shape =
+      std::any_of(decision.eligible.begin(), decision.eligible.end(),
+                  [](const CandidateReport* c) { return c->cause == Cause::kAsymmetry; });
+  if (!shape || decision.at_floor) return;
+  report(options, 0.955, "testing the other causes on top of the loop's shape");
+  decision.on_shape = beyond_shape(d, r, fits, ev, d.notes);
+  for (const OnTopOfShape& o : decision.on_shape) {
+    if (o.counts(options) && (!decision.beyond || o.gain > decision.beyond->gain)) {
+      decision.beyond = &o;
     }
   }
-  const CandidateReport* best_any = &*std::max_element(
-      d.candidates.begin(), d.candidates.end(),
-      [](const CandidateReport& a, const CandidateReport& b) { return a.gain < b.gain; });
-  if (at_floor) {
+}
+
+// d.cause and the verdict: none at the noise floor or without an eligible candidate, else the
+// cause named beyond the shape, else the eligible one of the largest gain.
+void decide_cause(Diagnosis& d, const Decision& decision, const DiagnosisOptions& options,
+                  const std::string& unit) {
+  const CandidateReport* best_any = decision.best_any;
+  if (decision.at_floor) {
     d.cause = Cause::kNone;
     d.verdict = "none: the baseline's held-out rms error " + num(d.baseline_heldout.rmse) + " " +
                 unit + " is at the noise floor (noise rms " + num(d.noise_rms) + " " + unit +
                 "); there is nothing left to explain";
-  } else if (eligible.empty()) {
+  } else if (decision.eligible.empty()) {
     d.cause = Cause::kNone;
     d.verdict = "none: no candidate lowers the held-out error by " + num(options.min_gain) +
                 "x with a significant statistic (best: " + std::string(to_string(best_any->cause)) +
                 ", gain " + num(best_any->gain) +
                 (best_any->significant ? "" : ", not significant") +
                 "); the baseline explains the data as far as these effects go";
-  } else if (beyond) {
+  } else if (decision.beyond) {
+    const OnTopOfShape* beyond = decision.beyond;
     const CandidateReport& shape_report = *d.candidate(Cause::kAsymmetry);
     d.cause = beyond->cause;
     d.verdict = std::string(to_string(beyond->cause)) + ": " + beyond->outcome.evidence + ". " +
@@ -750,7 +824,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                 "; " + num(d.baseline_heldout.rmse / beyond->outcome.fit.heldout.rmse) +
                 " over the baseline)";
   } else {
-    const CandidateReport& w = *eligible.front();
+    const CandidateReport& w = *decision.eligible.front();
     d.cause = w.cause;
     d.verdict = std::string(to_string(w.cause)) + ": " + w.evidence + ". " + w.extension +
                 " lowers the held-out rms error from " + num(d.baseline_heldout.rmse) + " to " +
@@ -760,7 +834,12 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
           ", and carries over to every record left out whole (gain " + left_out_summary(w) + ")";
     }
   }
-  if (d.cause != Cause::kNone && !beyond) {
+}
+
+// Notes where the verdict is not clean: a candidate gaining more than the named one without a
+// significant statistic, or no cause while the baseline's error is above the noise floor.
+void note_unclean_verdict(Diagnosis& d, const Decision& decision, const DiagnosisOptions& options) {
+  if (d.cause != Cause::kNone && !decision.beyond) {
     const CandidateReport& named = *d.candidate(d.cause);
     for (const CandidateReport& c : d.candidates) {
       if (!c.significant && c.gain > named.gain * 1.05 && c.gain >= options.min_gain) {
@@ -770,36 +849,65 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
       }
     }
   }
-  if (d.cause == Cause::kNone && !at_floor) {
+  if (d.cause == Cause::kNone && !decision.at_floor) {
+    const CandidateReport* best_any = decision.best_any;
     d.notes.push_back("not clean: the baseline's held-out error is " +
                       num(d.baseline_heldout.rmse / d.noise_rms) +
                       "x the noise, but no single candidate explains the rest (best gain " +
                       num(best_any->gain) + ", " + std::string(to_string(best_any->cause)) +
                       (best_any->significant ? "" : ", statistic not significant") + ")");
   }
-  if (!at_floor && d.coherent_share < kMinCoherentShare) {
-    double mean = 0.0, square = 0.0;
-    for (const double v : r.y) mean += v, square += v * v;
-    mean /= static_cast<double>(r.n);
-    const double variance = square / static_cast<double>(r.n) - mean * mean;
-    const double noise_share = variance > 0.0 ? d.noise_rms * d.noise_rms / variance : 0.0;
-    // The incoherent power stays in the error of any model driven by this input alone (of any
-    // linear filter of the prediction, exactly; of other models, about).
-    const double floor_rms = std::sqrt(std::max(0.0, (1.0 - d.coherent_share) * variance));
-    d.notes.push_back(
-        "not clean: only " + num(100.0 * d.coherent_share) +
-        " % of the output's power is coherent with this input's prediction, and noise makes " +
-        num(100.0 * noise_share) +
-        " %: the rest comes from something not in this record (another input driving this "
-        "output, as in a multi-axis stage, or a disturbance), which no single-input model or "
-        "candidate here explains; such a model could lower the error to about " +
-        num(floor_rms) + " " + unit + " at best (gain " +
-        num(floor_rms > 0.0 ? d.baseline_heldout.rmse / floor_rms : 0.0) +
-        "); where the record holds the other inputs, name them all (--u-column u1,u2,...) and "
-        "diagnose measures their coupling");
+}
+
+// Notes how much of the output's power something other than this input drives (called when the
+// coherent share is below kMinCoherentShare).
+void note_incoherent_output(Diagnosis& d, const details::DiagnosisRecord& r,
+                            const std::string& unit) {
+  double mean = 0.0, square = 0.0;
+  for (const double v : r.y) mean += v, square += v * v;
+  mean /= static_cast<double>(r.n);
+  const double variance = square / static_cast<double>(r.n) - mean * mean;
+  const double noise_share = variance > 0.0 ? d.noise_rms * d.noise_rms / variance : 0.0;
+  // The incoherent power stays in the error of any model driven by this input alone (of any
+  // linear filter of the prediction, exactly; of other models, about).
+  const double floor_rms = std::sqrt(std::max(0.0, (1.0 - d.coherent_share) * variance));
+  d.notes.push_back(
+      "not clean: only " + num(100.0 * d.coherent_share) +
+      " % of the output's power is coherent with this input's prediction, and noise makes " +
+      num(100.0 * noise_share) +
+      " %: the rest comes from something not in this record (another input driving this "
+      "output, as in a multi-axis stage, or a disturbance), which no single-input model or "
+      "candidate here explains; such a model could lower the error to about " +
+      num(floor_rms) + " " + unit + " at best (gain " +
+      num(floor_rms > 0.0 ? d.baseline_heldout.rmse / floor_rms : 0.0) +
+      "); where the record holds the other inputs, name them all (--u-column u1,u2,...) and "
+      "diagnose measures their coupling");
+}
+
+// Notes when every reversal of the input is at its extremes: the record shows one loop only.
+void note_single_loop(Diagnosis& d, const details::DiagnosisRecord& r,
+                      const details::InputEvents& ev) {
+  const auto [lo, hi] = std::minmax_element(r.u.begin(), r.u.end());
+  const double band = kOneLoopBand * (*hi - *lo);
+  std::size_t reversals = 0, inner = 0;
+  for (const std::size_t k : ev.event_samples) {
+    if (ev.step[k]) continue;
+    ++reversals;
+    if (r.u[k] > *lo + band && r.u[k] < *hi - band) ++inner;
   }
-  if (d.refit_heldout && d.refit_heldout->rmse > 0.0 &&
-      d.baseline_heldout.rmse / d.refit_heldout->rmse >= options.min_gain) {
+  if (reversals >= 4 && inner == 0) {
+    d.notes.push_back("every reversal of the input is at its extremes (" + num(*lo) + " and " +
+                      num(*hi) + " " + r.units.input +
+                      "): the record shows one loop and no minor loops, so a model fitted on "
+                      "it may not hold for smaller loops or other excitations; check it on "
+                      "another record (hystbench simulate, or diagnose --model)");
+  }
+}
+
+// Notes on the record: a given model that does not match it, what its excitation cannot show.
+void note_record(Diagnosis& d, const details::DiagnosisRecord& r, const details::InputEvents& ev,
+                 const DiagnosisOptions& options) {
+  if (given_model_stale(d, options)) {
     d.notes.push_back(
         "the given model's parameters do not match this record: the same structure "
         "refitted here lowers the held-out error " +
@@ -810,53 +918,103 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
   if (ev.hold_seconds < 0.5) {
     d.notes.push_back("the input never holds: creep and drift can only be seen indirectly");
   }
-  {
-    const auto [lo, hi] = std::minmax_element(r.u.begin(), r.u.end());
-    const double band = kOneLoopBand * (*hi - *lo);
-    std::size_t reversals = 0, inner = 0;
-    for (const std::size_t k : ev.event_samples) {
-      if (ev.step[k]) continue;
-      ++reversals;
-      if (r.u[k] > *lo + band && r.u[k] < *hi - band) ++inner;
-    }
-    if (reversals >= 4 && inner == 0) {
-      d.notes.push_back("every reversal of the input is at its extremes (" + num(*lo) + " and " +
-                        num(*hi) + " " + r.units.input +
-                        "): the record shows one loop and no minor loops, so a model fitted on "
-                        "it may not hold for smaller loops or other excitations; check it on "
-                        "another record (hystbench simulate, or diagnose --model)");
-    }
-  }
+  note_single_loop(d, r, ev);
   if (ev.steps == 0) {
     d.notes.push_back(
         "no input steps: dynamics and delay show only through the fast parts of "
         "the excitation");
   }
+}
 
-  if (d.cause == Cause::kNone) {
-    d.extended = d.baseline;
-    d.extended_description = "the baseline (no extension named)";
-    d.extended_fit = d.baseline_fit;
-    d.extended_heldout = d.baseline_heldout;
-    d.extended_prediction = d.baseline_prediction;
-  } else {
-    const std::string reference_name =
-        reference < d.baseline_heldout.rmse ? "the given model refitted here" : "the baseline";
-    name_causes_and_extend(d,
-                           {r, fits, ev, ref_profiles, ref_response, options, reference,
-                            reference_name, on_shape, beyond},
-                           progress);
-    // A runner-up that explains the same as the named cause (within the noise of it) and about
-    // as well leaves the choice between them open.
-    for (std::size_t i = 1; i < eligible.size() && !beyond; ++i) {
-      if (!eligible[i]->named && eligible[i]->gain >= kAmbiguity * eligible.front()->gain) {
-        d.notes.push_back("not clean: " + std::string(to_string(eligible[i]->cause)) +
-                          " explains the data almost as well (gain " + num(eligible[i]->gain) +
-                          " against " + num(eligible.front()->gain) + ")");
-      }
+// A runner-up that explains the same as the named cause (within the noise of it) and about as
+// well leaves the choice between them open.
+void note_ambiguity(Diagnosis& d, const Decision& decision) {
+  const std::vector<const CandidateReport*>& eligible = decision.eligible;
+  for (std::size_t i = 1; i < eligible.size() && !decision.beyond; ++i) {
+    if (!eligible[i]->named && eligible[i]->gain >= kAmbiguity * eligible.front()->gain) {
+      d.notes.push_back("not clean: " + std::string(to_string(eligible[i]->cause)) +
+                        " explains the data almost as well (gain " + num(eligible[i]->gain) +
+                        " against " + num(eligible.front()->gain) + ")");
     }
   }
-  progress(1.0, "done");
+}
+
+// The extended model: the baseline's when no cause is named.
+void extend_by_nothing(Diagnosis& d) {
+  d.extended = d.baseline;
+  d.extended_description = "the baseline (no extension named)";
+  d.extended_fit = d.baseline_fit;
+  d.extended_heldout = d.baseline_heldout;
+  d.extended_prediction = d.baseline_prediction;
+}
+
+Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
+                        std::span<const double> y, const DiagnosisOptions& options,
+                        std::vector<details::RecordPart> parts) {
+  report(options, 0.0, "checking the record");
+  const std::vector<std::size_t> starts = starts_of(parts);
+  const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options, starts);
+  Diagnosis d;
+  for (const details::RecordPart& p : parts) d.records.push_back(p.name);
+  d.record_starts = starts;
+  d.samples = r.n;
+  d.sample_period_s = r.dt;
+  d.split = r.split;
+
+  report(options, 0.05, "baseline");
+  const Baseline base = fit_baseline(d, r, options);
+
+  // What the baseline gets wrong.
+  report(options, 0.2, "residual structure");
+  std::vector<double> e = residual_and_noise(d, r);
+  const details::InputEvents ev = details::find_input_events(r.u, r.dt);
+  d.profiles = residual_profiles(r, e, ev);
+  d.frequency_response = details::frequency_response(d.baseline_prediction, r.y, r.dt, d.noise_rms);
+  set_coherent_share(d);
+
+  // The candidates: their statistics read the residual of the reference the gains are judged
+  // against.
+  const Reference ref = reference_of(d, r, base.fit, ev, std::move(e), options);
+  const details::CandidateContext ctx{r,  base.spec,    base.fit,     ref.prediction, ref.residual,
+                                      ev, ref.profiles, ref.response, d.noise_rms};
+  const std::vector<details::ExtensionFit> fits = test_candidates(d, ctx, options);
+  if (parts.size() > 1) {
+    report(options, 0.93, "leaving each record out");
+    score_left_out(d, r, parts, base.spec, fits, options);
+  }
+
+  report(options, 0.95, "deciding");
+  Decision decision;
+  decision.reference = d.baseline_heldout.rmse;
+  if (d.refit_heldout) decision.reference = std::min(decision.reference, d.refit_heldout->rmse);
+  const double floor = options.noise_floor_factor * d.noise_rms;
+  decision.at_floor = d.baseline_heldout.rmse <= floor;
+  d.noise_allowance_rms =
+      std::sqrt(options.noise_floor_factor * options.noise_floor_factor - 1.0) * d.noise_rms;
+  decision.eligible = eligible_candidates(d, decision, options);
+  const std::string unit = r.units.output;
+  test_on_shape(d, r, fits, ev, options, decision);
+  decision.best_any = &*std::max_element(
+      d.candidates.begin(), d.candidates.end(),
+      [](const CandidateReport& a, const CandidateReport& b) { return a.gain < b.gain; });
+  decide_cause(d, decision, options, unit);
+  note_unclean_verdict(d, decision, options);
+  if (!decision.at_floor && d.coherent_share < kMinCoherentShare) {
+    note_incoherent_output(d, r, unit);
+  }
+  note_record(d, r, ev, options);
+
+  if (d.cause == Cause::kNone) {
+    extend_by_nothing(d);
+  } else {
+    const std::string reference_name = decision.reference < d.baseline_heldout.rmse
+                                           ? "the given model refitted here"
+                                           : "the baseline";
+    name_causes_and_extend(d, {r, fits, ev, ref.profiles, ref.response, options, decision.reference,
+                               reference_name, decision.on_shape, decision.beyond});
+    note_ambiguity(d, decision);
+  }
+  report(options, 1.0, "done");
   return d;
 }
 

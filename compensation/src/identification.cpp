@@ -222,6 +222,17 @@ class Identifier {
   FitResult run();
 
  private:
+  // The best of the families the options allow, by held-out error (auto skips rpi on a record
+  // of a single excitation rate); throws std::logic_error when none is invertible.
+  Candidate search_families();
+  // Replaces `best` by the model it nests when that is as good (rpi, cpi over the modified PI).
+  void check_nesting(Candidate& best);
+  // A family asked for falls back to the classical PI it contains when that scores better; the
+  // note and the PI's own delay come with it.
+  void fall_back_to_pi(Candidate& best, int& delay, std::vector<std::string>& notes);
+  // The FitResult of `best` at `delay` samples, scored on the record (its drift removed from
+  // r_.y), with the notes.
+  FitResult scored_result(Candidate& best, int delay, std::vector<std::string> notes);
   void progress(double fraction, const std::string& what) const {
     if (o_.progress) o_.progress(fraction, what);
   }
@@ -744,7 +755,23 @@ FitResult Identifier::run() {
   int delay = choose_delay(o_.kind.value_or(ModelKind::kModifiedPi));
   r_.set_delay(delay);
   memo_.clear();
+  Candidate best = search_families();
+  if (o_.refine_thresholds) {
+    progress(0.7, "refining thresholds (Levenberg-Marquardt)");
+    refine(best);
+  }
+  if (o_.creep) {
+    progress(0.9, "fitting creep");
+    add_creep(best);
+  }
+  check_nesting(best);
+  std::vector<std::string> notes;
+  fall_back_to_pi(best, delay, notes);
+  progress(0.97, "scoring");
+  return scored_result(best, delay, std::move(notes));
+}
 
+Candidate Identifier::search_families() {
   std::vector<ModelKind> kinds;
   if (o_.kind) {
     kinds.push_back(*o_.kind);
@@ -768,24 +795,20 @@ FitResult Identifier::run() {
   if (!std::isfinite(best->score())) {
     throw std::logic_error("identification found no invertible model: " + best->method);
   }
-  if (o_.refine_thresholds) {
-    progress(0.7, "refining thresholds (Levenberg-Marquardt)");
-    refine(*best);
-  }
-  if (o_.creep) {
-    progress(0.9, "fitting creep");
-    add_creep(*best);
-  }
+  return std::move(*best);
+}
+
+void Identifier::check_nesting(Candidate& best) {
   // The nesting checks hold for a family's fit whether it was asked for or won `auto`; in
   // `auto` the nested model is returned as its own family.
-  const ModelKind best_kind = best->structure.kind;
+  const ModelKind best_kind = best.structure.kind;
   if (best_kind == ModelKind::kRateDependentPi && rpi_by_mpi_order_) {
     // The order search_rpi() preferred over the modified PI's, finished alike, must still win.
     progress(0.92, "checking the dead zones against the modified PI's order");
     Candidate other = std::move(*rpi_by_mpi_order_);
     rpi_by_mpi_order_.reset();
     finish(other);
-    if (other.score() < best->score()) best = std::move(other);
+    if (other.score() < best.score()) best = std::move(other);
   }
   if (best_kind == ModelKind::kRateDependentPi) {
     // Nesting: the modified PI, refined and with creep as the RPI was, is a feasible RPI (zero
@@ -793,59 +816,61 @@ FitResult Identifier::run() {
     progress(0.93, "checking the rate law against the modified PI it extends");
     Candidate mpi = search_mpi();
     finish(mpi);
-    if (mpi.score() <= best->score()) {
-      best = o_.kind ? nested_rpi(mpi, best->structure) : std::move(mpi);
+    if (mpi.score() <= best.score()) {
+      best = o_.kind ? nested_rpi(mpi, best.structure) : std::move(mpi);
     }
   }
-  if (best_kind == ModelKind::kCoupledPlayPi && best->structure.has_dead_zones() &&
-      best->structure.cp_scale != std::array<double, 3>{1.0, 1.0, 1.0}) {
+  if (best_kind == ModelKind::kCoupledPlayPi && best.structure.has_dead_zones() &&
+      best.structure.cp_scale != std::array<double, 3>{1.0, 1.0, 1.0}) {
     // Nesting, as for the order: the asymmetry must beat the modified PI it extends (refined
     // and with creep alike) by the parsimony margin. On the loopback (a modified PI) it gained
     // nothing held-out once both were refined, and tracked 0.27 to 0.48 % max as it varied.
     progress(0.93, "checking the asymmetry against the modified PI it extends");
     Candidate mpi = search_mpi();
     finish(mpi);
-    if (best->score() > mpi.score() * (1.0 - kParsimony)) {
+    if (best.score() > mpi.score() * (1.0 - kParsimony)) {
       best = o_.kind ? nested_cpi(mpi) : std::move(mpi);
     }
   }
-  std::vector<std::string> notes;
-  if (o_.kind && *o_.kind != ModelKind::kPi && o_.play_thresholds.empty()) {
-    // The classical PI is contained in every richer family (no dead zones, unit coupling, zero
-    // rate coefficients): a richer fit that does worse on held-out data than it has fitted the
-    // record's noise or transients, not the device, and the PI is returned in its place.
-    progress(0.95, "checking against the classical PI it contains");
-    // At the delay a classical PI fit would choose itself, so that `--model pi` on the same
-    // record is never better than what this returns.
-    const int pi_delay = choose_delay(ModelKind::kPi);
-    if (pi_delay != delay) r_.set_delay(pi_delay), memo_.clear();
-    Candidate pi = search_pi();
-    finish(pi);
-    if (pi.score() < best->score()) {
-      const std::string unit = " " + o_.units.output;
-      notes.push_back("fell back to the classical PI: the " + std::string(to_string(*o_.kind)) +
-                      " fit's held-out rms was " + fmt(best->score()) + unit +
-                      ", the classical PI's " + fmt(pi.score()) + unit +
-                      " (a richer family is never returned worse than the PI it contains)");
-      pi.method += " (fall-back: better than " + std::string(to_string(*o_.kind)) + ")";
-      best = std::move(pi);
-      delay = pi_delay;
-    }
-  }
-  progress(0.97, "scoring");
+}
 
+void Identifier::fall_back_to_pi(Candidate& best, int& delay, std::vector<std::string>& notes) {
+  if (!o_.kind || *o_.kind == ModelKind::kPi || !o_.play_thresholds.empty()) return;
+  // The classical PI is contained in every richer family (no dead zones, unit coupling, zero
+  // rate coefficients): a richer fit that does worse on held-out data than it has fitted the
+  // record's noise or transients, not the device, and the PI is returned in its place.
+  progress(0.95, "checking against the classical PI it contains");
+  // At the delay a classical PI fit would choose itself, so that `--model pi` on the same
+  // record is never better than what this returns.
+  const int pi_delay = choose_delay(ModelKind::kPi);
+  if (pi_delay != delay) r_.set_delay(pi_delay), memo_.clear();
+  Candidate pi = search_pi();
+  finish(pi);
+  if (pi.score() < best.score()) {
+    const std::string unit = " " + o_.units.output;
+    notes.push_back("fell back to the classical PI: the " + std::string(to_string(*o_.kind)) +
+                    " fit's held-out rms was " + fmt(best.score()) + unit +
+                    ", the classical PI's " + fmt(pi.score()) + unit +
+                    " (a richer family is never returned worse than the PI it contains)");
+    pi.method += " (fall-back: better than " + std::string(to_string(*o_.kind)) + ")";
+    best = std::move(pi);
+    delay = pi_delay;
+  }
+}
+
+FitResult Identifier::scored_result(Candidate& best, int delay, std::vector<std::string> notes) {
   FitResult out;
-  out.model = std::move(*best->model);
-  out.drift_per_s = best->drift;
+  out.model = std::move(*best.model);
+  out.drift_per_s = best.drift;
   std::vector<double> y_without_drift;
   if (o_.drift) {
     const double duration = static_cast<double>(r_.n - 1) * r_.dt;
-    notes.push_back("fitted a drift of " + fmt(best->drift) + " " + o_.units.output + "/s (" +
-                    fmt(best->drift * duration) + " " + o_.units.output +
+    notes.push_back("fitted a drift of " + fmt(best.drift) + " " + o_.units.output + "/s (" +
+                    fmt(best.drift * duration) + " " + o_.units.output +
                     " over the record) with the weights: the record's, not the model's (the "
                     "errors are of the record without it)");
     y_without_drift.assign(r_.y.begin(), r_.y.end());
-    details::add_drift(best->structure, -best->drift, y_without_drift);
+    details::add_drift(best.structure, -best.drift, y_without_drift);
     r_.y = y_without_drift;
   }
   out.model.configure(r_.dt);
@@ -859,11 +884,11 @@ FitResult Identifier::run() {
   out.heldout = s.heldout;
   out.fit_samples = r_.fit_end - r_.begin;
   out.heldout_samples = r_.n - r_.fit_end;
-  out.operators = static_cast<int>(best->structure.plays());
-  out.dead_zones = dead_zones_of(best->structure);
-  out.method = best->method;
+  out.operators = static_cast<int>(best.structure.plays());
+  out.dead_zones = dead_zones_of(best.structure);
+  out.method = best.method;
   out.delay_samples = delay;
-  out.creep = !best->structure.creep_time_constants.empty();
+  out.creep = !best.structure.creep_time_constants.empty();
   out.skipped_samples = r_.begin;
   if (!o_.skip_samples && r_.begin > 0) {
     notes.insert(notes.begin(),

@@ -91,79 +91,102 @@ cd denominator(const Eigen::VectorXd& a, cd z) {
   return v;
 }
 
-// One Sanathanan-Koerner step: the denominator minimising
-//   sum_k w_k sum_r sum_i |a(z_k) Y_ir - sum_j B_ij(z_k) U_jr|^2,
-// the numerators (order n, with feedthrough) eliminated. Only the weighted lag sums
-// T(d) = sum_k w_k z_k^d S(k), d in [-n, n], of each cross-spectrum enter.
-// Returns the denominator's coefficients and the output error sum_k sum_r sum_i |Y - B/a U|^2 of
-// the rational model it and its eliminated numerators make.
-std::pair<Eigen::VectorXd, double> sk_step(const PeriodicSpectra& s, const CrossSpectra& c,
-                                           const std::vector<double>& w, std::size_t n) {
+/// The weighted lag sums T(d) = sum_k w_k z_k^d S(k), d in [-n, n], of each cross-spectrum.
+struct LagSums {
+  std::vector<Eigen::MatrixXcd> uu, yu;  ///< at index d + n
+  std::vector<Eigen::VectorXd> yy;       ///< at index d + n
+  Eigen::Index n = 0;
+
+  Eigen::Index lag(Eigen::Index d) const { return d + n; }
+};
+
+// The lag sums of the cross-spectra c with the bin weights w, for order n.
+LagSums lag_sums(const PeriodicSpectra& s, const CrossSpectra& c, const std::vector<double>& w,
+                 Eigen::Index n) {
   const auto m = static_cast<Eigen::Index>(s.inputs()), p = static_cast<Eigen::Index>(s.outputs());
-  const auto N = static_cast<Eigen::Index>(n);
-  const Eigen::Index lags = 2 * N + 1;  // d = -n .. n at index d + n
-  std::vector<Eigen::MatrixXcd> tuu(lags, Eigen::MatrixXcd::Zero(m, m)),
-      tyu(lags, Eigen::MatrixXcd::Zero(p, m));
-  std::vector<Eigen::VectorXd> tyy(lags, Eigen::VectorXd::Zero(p));
+  const Eigen::Index lags = 2 * n + 1;  // d = -n .. n at index d + n
+  LagSums t{std::vector<Eigen::MatrixXcd>(lags, Eigen::MatrixXcd::Zero(m, m)),
+            std::vector<Eigen::MatrixXcd>(lags, Eigen::MatrixXcd::Zero(p, m)),
+            std::vector<Eigen::VectorXd>(lags, Eigen::VectorXd::Zero(p)), n};
   for (std::size_t q = 0; q < c.k.size(); ++q) {
     const cd z = s.z(c.k[q]);
-    cd zd = std::pow(z, -static_cast<double>(N));
+    cd zd = std::pow(z, -static_cast<double>(n));
     for (Eigen::Index d = 0; d < lags; ++d) {
       const cd f = w[q] * zd;
-      tuu[d] += f * c.uu[q];
-      tyu[d] += f * c.yu[q];
-      tyy[d] += w[q] * zd.real() * c.yy[q];
+      t.uu[d] += f * c.uu[q];
+      t.yu[d] += f * c.yu[q];
+      t.yy[d] += w[q] * zd.real() * c.yy[q];
       zd *= z;
     }
   }
-  const auto lag = [N](Eigen::Index d) { return d + N; };
-  // The numerators' block (j, l) l = 0..n, the same for every output.
+  return t;
+}
+
+// The numerators' block (j, l) l = 0..n of the normal equations, the same for every output.
+Eigen::MatrixXd numerator_block(const LagSums& t, Eigen::Index m) {
+  const Eigen::Index N = t.n;
   const Eigen::Index nb = m * (N + 1);
   Eigen::MatrixXd mbb(nb, nb);
   for (Eigen::Index j = 0; j < m; ++j) {
     for (Eigen::Index l = 0; l <= N; ++l) {
       for (Eigen::Index j2 = 0; j2 < m; ++j2) {
         for (Eigen::Index l2 = 0; l2 <= N; ++l2) {
-          mbb(j * (N + 1) + l, j2 * (N + 1) + l2) = tuu[lag(l - l2)](j, j2).real();
+          mbb(j * (N + 1) + l, j2 * (N + 1) + l2) = t.uu[t.lag(l - l2)](j, j2).real();
         }
       }
     }
   }
-  const Eigen::LDLT<Eigen::MatrixXd> bb(mbb);
+  return mbb;
+}
+
+/// The denominator with the numerators eliminated, and what gives them back:
+/// b_i = M_bb^-1 rb_i - x_i a, rows (j, l).
+struct Elimination {
+  Eigen::VectorXd a;
+  std::vector<Eigen::MatrixXd> x;   ///< per output: M_bb^-1 M_ab^T
+  std::vector<Eigen::VectorXd> rb;  ///< per output: the numerators' right-hand side
+};
+
+// The denominator's normal equations, the numerators eliminated output by output, solved.
+Elimination eliminate_numerators(const LagSums& t, const Eigen::LDLT<Eigen::MatrixXd>& bb,
+                                 Eigen::Index m, Eigen::Index p) {
+  const Eigen::Index N = t.n;
+  const Eigen::Index nb = m * (N + 1);
   Eigen::MatrixXd reduced = Eigen::MatrixXd::Zero(N, N);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(N);
-  std::vector<Eigen::MatrixXd> x_of(static_cast<std::size_t>(p));
-  std::vector<Eigen::VectorXd> rb_of(static_cast<std::size_t>(p));
+  Elimination e{Eigen::VectorXd(), std::vector<Eigen::MatrixXd>(static_cast<std::size_t>(p)),
+                std::vector<Eigen::VectorXd>(static_cast<std::size_t>(p))};
   for (Eigen::Index i = 0; i < p; ++i) {
     Eigen::MatrixXd maa(N, N), mab(N, nb);
     Eigen::VectorXd ra(N), rb(nb);
     for (Eigen::Index l = 1; l <= N; ++l) {
-      for (Eigen::Index l2 = 1; l2 <= N; ++l2) maa(l - 1, l2 - 1) = tyy[lag(l - l2)](i);
+      for (Eigen::Index l2 = 1; l2 <= N; ++l2) maa(l - 1, l2 - 1) = t.yy[t.lag(l - l2)](i);
       for (Eigen::Index j = 0; j < m; ++j) {
         for (Eigen::Index l2 = 0; l2 <= N; ++l2) {
-          mab(l - 1, j * (N + 1) + l2) = -tyu[lag(l - l2)](i, j).real();
+          mab(l - 1, j * (N + 1) + l2) = -t.yu[t.lag(l - l2)](i, j).real();
         }
       }
-      ra(l - 1) = -tyy[lag(l)](i);
+      ra(l - 1) = -t.yy[t.lag(l)](i);
     }
     for (Eigen::Index j = 0; j < m; ++j) {
-      for (Eigen::Index l = 0; l <= N; ++l) rb(j * (N + 1) + l) = tyu[lag(-l)](i, j).real();
+      for (Eigen::Index l = 0; l <= N; ++l) rb(j * (N + 1) + l) = t.yu[t.lag(-l)](i, j).real();
     }
     const Eigen::MatrixXd x = bb.solve(mab.transpose());
     reduced += maa - mab * x;
     rhs += ra - x.transpose() * rb;
-    x_of[static_cast<std::size_t>(i)] = x;
-    rb_of[static_cast<std::size_t>(i)] = rb;
+    e.x[static_cast<std::size_t>(i)] = x;
+    e.rb[static_cast<std::size_t>(i)] = rb;
   }
-  const Eigen::VectorXd a = reduced.ldlt().solve(rhs);
-  // The numerators b_i = M_bb^-1 rb_i - x_i a, rows (j, l), and the model's output error:
-  // sum |Y_i - g_i U|^2 = yy_i - 2 Re(g_i^H conj(yu_i)^T... ) + g_i^H uu g_i per bin, g = B/a.
+  e.a = reduced.ldlt().solve(rhs);
+  return e;
+}
+
+// The output error sum_k sum_r sum_i |Y - B/a U|^2 of the rational model with denominator a and
+// numerators b (one per output, rows (j, l)) of order n.
+double output_error(const PeriodicSpectra& s, const CrossSpectra& c, const Eigen::VectorXd& a,
+                    const std::vector<Eigen::VectorXd>& b, Eigen::Index N) {
+  const auto m = static_cast<Eigen::Index>(s.inputs()), p = static_cast<Eigen::Index>(s.outputs());
   double cost = 0.0;
-  std::vector<Eigen::VectorXd> b(static_cast<std::size_t>(p));
-  for (Eigen::Index i = 0; i < p; ++i) {
-    const auto ii = static_cast<std::size_t>(i);
-    b[ii] = bb.solve(rb_of[ii]) - x_of[ii] * a;
-  }
   for (std::size_t q = 0; q < c.k.size(); ++q) {
     const cd z = s.z(c.k[q]);
     Eigen::VectorXcd zl(N + 1);
@@ -184,7 +207,30 @@ std::pair<Eigen::VectorXd, double> sk_step(const PeriodicSpectra& s, const Cross
       cost += c.yy[q](i) - 2.0 * cross.real() + quad.real();
     }
   }
-  return {a, cost};
+  return cost;
+}
+
+// One Sanathanan-Koerner step: the denominator minimising
+//   sum_k w_k sum_r sum_i |a(z_k) Y_ir - sum_j B_ij(z_k) U_jr|^2,
+// the numerators (order n, with feedthrough) eliminated. Only the weighted lag sums
+// T(d) = sum_k w_k z_k^d S(k), d in [-n, n], of each cross-spectrum enter.
+// Returns the denominator's coefficients and the output error sum_k sum_r sum_i |Y - B/a U|^2 of
+// the rational model it and its eliminated numerators make.
+std::pair<Eigen::VectorXd, double> sk_step(const PeriodicSpectra& s, const CrossSpectra& c,
+                                           const std::vector<double>& w, std::size_t n) {
+  const auto m = static_cast<Eigen::Index>(s.inputs()), p = static_cast<Eigen::Index>(s.outputs());
+  const auto N = static_cast<Eigen::Index>(n);
+  const LagSums t = lag_sums(s, c, w, N);
+  const Eigen::LDLT<Eigen::MatrixXd> bb(numerator_block(t, m));
+  const Elimination e = eliminate_numerators(t, bb, m, p);
+  // The numerators b_i = M_bb^-1 rb_i - x_i a, rows (j, l), and the model's output error:
+  // sum |Y_i - g_i U|^2 = yy_i - 2 Re(g_i^H conj(yu_i)^T... ) + g_i^H uu g_i per bin, g = B/a.
+  std::vector<Eigen::VectorXd> b(static_cast<std::size_t>(p));
+  for (Eigen::Index i = 0; i < p; ++i) {
+    const auto ii = static_cast<std::size_t>(i);
+    b[ii] = bb.solve(e.rb[ii]) - e.x[ii] * e.a;
+  }
+  return {e.a, output_error(s, c, e.a, b, N)};
 }
 
 // The stable poles of a(z), pairs once with Im > 0.
@@ -329,6 +375,90 @@ double overall(const Eigen::VectorXd& per_output) {
   return std::sqrt(per_output.squaredNorm() / static_cast<double>(per_output.size()));
 }
 
+// Throws unless the record has a period of >= 4 samples, >= 1 period, dt > 0 and every
+// realization channels x (periods x period) like the first.
+void validate_periodic_record(const PeriodicRecord& record) {
+  const std::size_t n = record.period, np = record.periods;
+  if (n < 4 || np < 1 || !(record.dt > 0.0) || record.u.empty() ||
+      record.u.size() != record.y.size()) {
+    throw std::invalid_argument(
+        "periodic record: needs a period of >= 4 samples, >= 1 period, dt > 0 and as many "
+        "output realizations as input ones");
+  }
+  const Eigen::Index m = record.u[0].rows(), p = record.y[0].rows();
+  for (std::size_t r = 0; r < record.u.size(); ++r) {
+    if (record.u[r].rows() != m || record.y[r].rows() != p ||
+        record.u[r].cols() != static_cast<Eigen::Index>(n * np) ||
+        record.y[r].cols() != static_cast<Eigen::Index>(n * np) || m == 0 || p == 0) {
+      throw std::invalid_argument("periodic record: realization " + std::to_string(r) +
+                                  " is not channels x (periods x period) like the first");
+    }
+  }
+}
+
+// DFT of each period of each channel of each realization x[r] (channels x (np n)):
+// [r][period] is channels x (n / 2 + 1).
+std::vector<std::vector<Eigen::MatrixXcd>> period_dfts(const std::vector<Eigen::MatrixXd>& x,
+                                                       std::size_t n, std::size_t np) {
+  const std::size_t nr = x.size(), half = n / 2;
+  Eigen::FFT<double> fft;
+  std::vector<std::vector<Eigen::MatrixXcd>> out(nr);
+  std::vector<double> buf(n);
+  std::vector<cd> f;
+  for (std::size_t r = 0; r < nr; ++r) {
+    for (std::size_t q = 0; q < np; ++q) {
+      Eigen::MatrixXcd per(x[r].rows(), static_cast<Eigen::Index>(half + 1));
+      for (Eigen::Index ch = 0; ch < x[r].rows(); ++ch) {
+        for (std::size_t t = 0; t < n; ++t) buf[t] = x[r](ch, static_cast<Eigen::Index>(q * n + t));
+        fft.fwd(f, buf);
+        for (std::size_t k = 0; k <= half; ++k) per(ch, static_cast<Eigen::Index>(k)) = f[k];
+      }
+      out[r].push_back(std::move(per));
+    }
+  }
+  return out;
+}
+
+// The mean of the per-period spectra over the periods [from, np).
+Eigen::MatrixXcd mean_over_periods(const std::vector<Eigen::MatrixXcd>& per, std::size_t from,
+                                   std::size_t np) {
+  Eigen::MatrixXcd avg = Eigen::MatrixXcd::Zero(per[0].rows(), per[0].cols());
+  for (std::size_t q = from; q < np; ++q) avg += per[q];
+  return Eigen::MatrixXcd(avg / static_cast<double>(np - from));
+}
+
+// The bins 1 .. n / 2 where the inputs' power (summed over the realizations' mean spectra ua) is
+// at least kExcitedFraction of the strongest; DC and Nyquist never count.
+std::vector<std::size_t> excited_bins(const std::vector<Eigen::MatrixXcd>& ua, std::size_t n) {
+  const std::size_t half = n / 2;
+  Eigen::VectorXd power = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(half + 1));
+  for (const Eigen::MatrixXcd& u : ua) power += u.cwiseAbs2().colwise().sum().transpose();
+  power(0) = 0.0;  // DC is the offset, not an excitation
+  if (n % 2 == 0) power(static_cast<Eigen::Index>(half)) = 0.0;  // Nyquist: no phase
+  const double strongest = power.maxCoeff();
+  if (!(strongest > 0.0)) throw std::invalid_argument("periodic record: no excited frequency");
+  std::vector<std::size_t> bins;
+  for (std::size_t k = 1; k <= half; ++k) {
+    if (power(static_cast<Eigen::Index>(k)) >= kExcitedFraction * strongest) bins.push_back(k);
+  }
+  return bins;
+}
+
+// Noise at s.bins: the scatter of one realization's output periods [from, np) about their mean,
+// divided by their count (the mean's), added to s.noise_var for the nr realizations' average.
+void add_period_scatter(PeriodicSpectra& s, const std::vector<Eigen::MatrixXcd>& ys,
+                        std::size_t from, std::size_t np, std::size_t nr) {
+  const auto kb = static_cast<Eigen::Index>(s.bins.size());
+  const Eigen::MatrixXcd avg = mean_over_periods(ys, from, np);
+  const double count = static_cast<double>(np - from);
+  for (std::size_t q = from; q < np; ++q) {
+    for (Eigen::Index k = 0; k < kb; ++k) {
+      const auto b = static_cast<Eigen::Index>(s.bins[static_cast<std::size_t>(k)]);
+      s.noise_var.col(k) += (ys[q].col(b) - avg.col(b)).cwiseAbs2() / ((count - 1.0) * count * nr);
+    }
+  }
+}
+
 }  // namespace
 
 PeriodicSpectra with_inputs(const PeriodicSpectra& spectra, const std::vector<Eigen::MatrixXd>& v) {
@@ -357,69 +487,23 @@ cd PeriodicSpectra::z(std::size_t k) const {
 }
 
 PeriodicSpectra periodic_spectra(const PeriodicRecord& record) {
+  validate_periodic_record(record);
   const std::size_t n = record.period, np = record.periods;
-  if (n < 4 || np < 1 || !(record.dt > 0.0) || record.u.empty() ||
-      record.u.size() != record.y.size()) {
-    throw std::invalid_argument(
-        "periodic record: needs a period of >= 4 samples, >= 1 period, dt > 0 and as many "
-        "output realizations as input ones");
-  }
   const Eigen::Index m = record.u[0].rows(), p = record.y[0].rows();
-  for (std::size_t r = 0; r < record.u.size(); ++r) {
-    if (record.u[r].rows() != m || record.y[r].rows() != p ||
-        record.u[r].cols() != static_cast<Eigen::Index>(n * np) ||
-        record.y[r].cols() != static_cast<Eigen::Index>(n * np) || m == 0 || p == 0) {
-      throw std::invalid_argument("periodic record: realization " + std::to_string(r) +
-                                  " is not channels x (periods x period) like the first");
-    }
-  }
   PeriodicSpectra s;
   s.period = n;
   s.dt = record.dt;
   s.transient_periods = np >= 2 ? 1 : 0;
   s.periods_used = np - s.transient_periods;
-  const std::size_t nr = record.u.size(), half = n / 2;
-  Eigen::FFT<double> fft;
-  // DFT of each period of each channel: spectrum[r][period] is channels x (half + 1).
-  const auto spectra_of = [&](const std::vector<Eigen::MatrixXd>& x) {
-    std::vector<std::vector<Eigen::MatrixXcd>> out(nr);
-    std::vector<double> buf(n);
-    std::vector<cd> f;
-    for (std::size_t r = 0; r < nr; ++r) {
-      for (std::size_t q = 0; q < np; ++q) {
-        Eigen::MatrixXcd per(x[r].rows(), static_cast<Eigen::Index>(half + 1));
-        for (Eigen::Index ch = 0; ch < x[r].rows(); ++ch) {
-          for (std::size_t t = 0; t < n; ++t)
-            buf[t] = x[r](ch, static_cast<Eigen::Index>(q * n + t));
-          fft.fwd(f, buf);
-          for (std::size_t k = 0; k <= half; ++k) per(ch, static_cast<Eigen::Index>(k)) = f[k];
-        }
-        out[r].push_back(std::move(per));
-      }
-    }
-    return out;
-  };
-  const auto us = spectra_of(record.u), ys = spectra_of(record.y);
+  const std::size_t nr = record.u.size();
+  const auto us = period_dfts(record.u, n, np), ys = period_dfts(record.y, n, np);
   // The steady state: the mean over the periods used.
-  const auto mean_of = [&](const std::vector<Eigen::MatrixXcd>& per, std::size_t from) {
-    Eigen::MatrixXcd avg = Eigen::MatrixXcd::Zero(per[0].rows(), per[0].cols());
-    for (std::size_t q = from; q < np; ++q) avg += per[q];
-    return Eigen::MatrixXcd(avg / static_cast<double>(np - from));
-  };
   std::vector<Eigen::MatrixXcd> ua(nr), ya(nr);
-  Eigen::VectorXd power = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(half + 1));
   for (std::size_t r = 0; r < nr; ++r) {
-    ua[r] = mean_of(us[r], s.transient_periods);
-    ya[r] = mean_of(ys[r], s.transient_periods);
-    power += ua[r].cwiseAbs2().colwise().sum().transpose();
+    ua[r] = mean_over_periods(us[r], s.transient_periods, np);
+    ya[r] = mean_over_periods(ys[r], s.transient_periods, np);
   }
-  power(0) = 0.0;  // DC is the offset, not an excitation
-  if (n % 2 == 0) power(static_cast<Eigen::Index>(half)) = 0.0;  // Nyquist: no phase
-  const double strongest = power.maxCoeff();
-  if (!(strongest > 0.0)) throw std::invalid_argument("periodic record: no excited frequency");
-  for (std::size_t k = 1; k <= half; ++k) {
-    if (power(static_cast<Eigen::Index>(k)) >= kExcitedFraction * strongest) s.bins.push_back(k);
-  }
+  s.bins = excited_bins(ua, n);
   const auto kb = static_cast<Eigen::Index>(s.bins.size());
   s.noise_var = Eigen::MatrixXd::Zero(p, kb);
   s.u_mean = Eigen::VectorXd::Zero(m);
@@ -435,18 +519,7 @@ PeriodicSpectra periodic_spectra(const PeriodicRecord& record) {
     s.y.push_back(std::move(y));
     s.u_mean += ua[r].col(0).real() / static_cast<double>(n * nr);
     s.y_mean += ya[r].col(0).real() / static_cast<double>(n * nr);
-    // Noise: the periods' scatter about their mean, divided by their count (the mean's).
-    if (np - from >= 2) {
-      const Eigen::MatrixXcd avg = mean_of(ys[r], from);
-      const double count = static_cast<double>(np - from);
-      for (std::size_t q = from; q < np; ++q) {
-        for (Eigen::Index k = 0; k < kb; ++k) {
-          const auto b = static_cast<Eigen::Index>(s.bins[static_cast<std::size_t>(k)]);
-          s.noise_var.col(k) +=
-              (ys[r][q].col(b) - avg.col(b)).cwiseAbs2() / ((count - 1.0) * count * nr);
-        }
-      }
-    }
+    if (np - from >= 2) add_period_scatter(s, ys[r], from, np, nr);
   }
   return s;
 }

@@ -103,6 +103,77 @@ json dead_zone_to_json(const DeadZoneParameters& d, double center) {
   return {{"thresholds", d.thresholds}, {"weights", d.weights}, {"center", center}};
 }
 
+// The document's model kind, after checking that it is an object of this schema.
+ModelKind model_kind_from_json(const json& j) {
+  if (!j.is_object()) fail("(top level)", "a model file must be a JSON object");
+  const json& schema = member(j, "", "schema");
+  if (!schema.is_string() || schema.get<std::string>() != kModelSchema) {
+    fail("schema", std::string("must be \"") + kModelSchema + "\", got " + schema.dump());
+  }
+  const json& type = member(j, "", "type");
+  if (!type.is_string()) fail("type", "must be a string");
+  const auto kind = model_kind_from_string(type.get<std::string>());
+  if (!kind)
+    fail("type", "unknown model type \"" + type.get<std::string>() + "\" (pi, mpi, cpi, rpi)");
+  return *kind;
+}
+
+// The hysteresis model of `kind` from the document's play, deadzone, rate and coupled_play
+// members. Throws ModelFileError for a bad member, std::invalid_argument from a constructor.
+std::unique_ptr<HysteresisModel> hysteresis_from_json(const json& j, ModelKind kind) {
+  std::unique_ptr<HysteresisModel> h;
+  switch (kind) {
+    case ModelKind::kPi:
+      h = std::make_unique<PiModel>(play_from_json(j));
+      break;
+    case ModelKind::kModifiedPi: {
+      auto [dz, center] = dead_zone_from_json(j);
+      h = std::make_unique<ModifiedPiModel>(ModifiedPiParameters{play_from_json(j), dz, center});
+      break;
+    }
+    case ModelKind::kRateDependentPi: {
+      auto [dz, center] = dead_zone_from_json(j);
+      const json& r = member(j, "", "rate");
+      RateDependentPiParameters p{
+          ModifiedPiParameters{play_from_json(j), dz, center}, numbers(r, "rate", "coefficients"),
+          number_member(r, "rate", "max_rate", 0.0), number_member(r, "rate", "filter_s", 0.0),
+          number_member(r, "rate", "record_max_rate", 0.0)};
+      p.rate_law = rate_law_from_json(r);
+      p.threshold_rate_s = number_member(r, "rate", "threshold_s", 0.0);
+      h = std::make_unique<RateDependentPiModel>(std::move(p));
+      break;
+    }
+    case ModelKind::kCoupledPlayPi: {
+      const json& c = member(j, "", "coupled_play");
+      CoupledPlayParameters p{numbers(c, "coupled_play", "r"),
+                              numbers(c, "coupled_play", "ra"),
+                              numbers(c, "coupled_play", "rb"),
+                              numbers(c, "coupled_play", "rc"),
+                              numbers(c, "coupled_play", "weights"),
+                              number_member(c, "coupled_play", "offset", 0.0),
+                              {},
+                              0.0};
+      if (j.contains("deadzone")) std::tie(p.dead_zone, p.center) = dead_zone_from_json(j);
+      h = std::make_unique<CoupledPlayPiModel>(std::move(p));
+      break;
+    }
+  }
+  return h;
+}
+
+// The units member's input and output names (each optional) into `units`.
+void units_from_json(const json& u, Units& units) {
+  if (!u.is_object()) fail("units", "must be an object");
+  if (u.contains("input")) {
+    if (!u["input"].is_string()) fail("units.input", "must be a string");
+    units.input = u["input"].get<std::string>();
+  }
+  if (u.contains("output")) {
+    if (!u["output"].is_string()) fail("units.output", "must be a string");
+    units.output = u["output"].get<std::string>();
+  }
+}
+
 }  // namespace
 
 json to_json(const Units& units) { return {{"input", units.input}, {"output", units.output}}; }
@@ -161,57 +232,10 @@ json to_json(const ModelFile& file) {
 }
 
 ModelFile model_file_from_json(const json& j) {
-  if (!j.is_object()) fail("(top level)", "a model file must be a JSON object");
-  const json& schema = member(j, "", "schema");
-  if (!schema.is_string() || schema.get<std::string>() != kModelSchema) {
-    fail("schema", std::string("must be \"") + kModelSchema + "\", got " + schema.dump());
-  }
-  const json& type = member(j, "", "type");
-  if (!type.is_string()) fail("type", "must be a string");
-  const auto kind = model_kind_from_string(type.get<std::string>());
-  if (!kind)
-    fail("type", "unknown model type \"" + type.get<std::string>() + "\" (pi, mpi, cpi, rpi)");
-
+  const ModelKind kind = model_kind_from_json(j);
   ModelFile out;
   try {
-    std::unique_ptr<HysteresisModel> h;
-    switch (*kind) {
-      case ModelKind::kPi:
-        h = std::make_unique<PiModel>(play_from_json(j));
-        break;
-      case ModelKind::kModifiedPi: {
-        auto [dz, center] = dead_zone_from_json(j);
-        h = std::make_unique<ModifiedPiModel>(ModifiedPiParameters{play_from_json(j), dz, center});
-        break;
-      }
-      case ModelKind::kRateDependentPi: {
-        auto [dz, center] = dead_zone_from_json(j);
-        const json& r = member(j, "", "rate");
-        RateDependentPiParameters p{
-            ModifiedPiParameters{play_from_json(j), dz, center}, numbers(r, "rate", "coefficients"),
-            number_member(r, "rate", "max_rate", 0.0), number_member(r, "rate", "filter_s", 0.0),
-            number_member(r, "rate", "record_max_rate", 0.0)};
-        p.rate_law = rate_law_from_json(r);
-        p.threshold_rate_s = number_member(r, "rate", "threshold_s", 0.0);
-        h = std::make_unique<RateDependentPiModel>(std::move(p));
-        break;
-      }
-      case ModelKind::kCoupledPlayPi: {
-        const json& c = member(j, "", "coupled_play");
-        CoupledPlayParameters p{numbers(c, "coupled_play", "r"),
-                                numbers(c, "coupled_play", "ra"),
-                                numbers(c, "coupled_play", "rb"),
-                                numbers(c, "coupled_play", "rc"),
-                                numbers(c, "coupled_play", "weights"),
-                                number_member(c, "coupled_play", "offset", 0.0),
-                                {},
-                                0.0};
-        if (j.contains("deadzone")) std::tie(p.dead_zone, p.center) = dead_zone_from_json(j);
-        h = std::make_unique<CoupledPlayPiModel>(std::move(p));
-        break;
-      }
-    }
-    out.model = ActuatorModel(std::move(h));
+    out.model = ActuatorModel(hysteresis_from_json(j, kind));
     if (j.contains("creep")) {
       const json& c = j["creep"];
       out.model.set_creep(
@@ -229,18 +253,7 @@ ModelFile model_file_from_json(const json& j) {
     // Model constructors name the field; keep their message.
     throw ModelFileError(e.what());
   }
-  if (j.contains("units")) {
-    const json& u = j["units"];
-    if (!u.is_object()) fail("units", "must be an object");
-    if (u.contains("input")) {
-      if (!u["input"].is_string()) fail("units.input", "must be a string");
-      out.model.units.input = u["input"].get<std::string>();
-    }
-    if (u.contains("output")) {
-      if (!u["output"].is_string()) fail("units.output", "must be a string");
-      out.model.units.output = u["output"].get<std::string>();
-    }
-  }
+  if (j.contains("units")) units_from_json(j["units"], out.model.units);
   if (j.contains("input_range")) {
     const json& r = j["input_range"];
     if (!r.is_array() || r.size() != 2) fail("input_range", "must be [min, max]");

@@ -106,24 +106,12 @@ class ExcitationBuilder {
   Excitation excitation_;
 };
 
-}  // namespace
-
-const ExcitationSegment* Excitation::find(const std::string& name) const noexcept {
-  for (const auto& s : segments) {
-    if (s.name == name) return &s;
-  }
-  return nullptr;
-}
-
-Excitation identification_excitation(double range_min, double range_max, double dt_s,
-                                     const IdentificationExcitationOptions& o) {
-  validate(range_min, range_max, dt_s, o);
-  const double span = range_max - range_min;
-  ExcitationBuilder builder(range_min, range_max, dt_s);
-
-  // Settle at mid-range first: creep lags approach the level the record works around, so
-  // what ran before leaves little creep transient in it. Then the sweep, from where the
-  // settle left the input, wipes the hysteresis memory and ends at range_min.
+// The settle hold and the precondition sweep, as far as the options ask for them.
+// Settle at mid-range first: creep lags approach the level the record works around, so what ran
+// before leaves little creep transient in it. Then the sweep, from where the settle left the
+// input, wipes the hysteresis memory and ends at range_min.
+void append_settle_and_sweep(ExcitationBuilder& builder, double range_min, double span,
+                             const IdentificationExcitationOptions& o) {
   double sweep_from = 0.0;  // fraction of the range
   if (o.settle_s > 0.0) {
     sweep_from = 0.5;
@@ -144,6 +132,11 @@ Excitation identification_excitation(double range_min, double range_max, double 
     sweep.samples = {{0.0, sweep_from}, {up, 1.0}, {o.precondition_s, 0.0}};
     builder.append("precondition", sweep);
   }
+}
+
+// The major loop, the minor loops and the cycles at each rate frequency.
+void append_loops(ExcitationBuilder& builder, double range_min, double span,
+                  const IdentificationExcitationOptions& o) {
   builder.append("major_loop", cycles_from_bottom(range_min, span, o.major_loop_frequency_hz,
                                                   o.major_loop_cycles));
 
@@ -163,40 +156,62 @@ Excitation identification_excitation(double range_min, double range_max, double 
     builder.append("rate_" + frequency_label(f) + "hz",
                    cycles_from_bottom(range_min, o.rate_span_fraction * span, f, o.rate_cycles[k]));
   }
+}
 
-  auto append_reversals = [&] {
-    if (!o.reversal_points.empty()) {
-      SignalSpec reversals;
-      reversals.kind = SignalKind::kSamples;
-      reversals.amplitude = span;
-      reversals.offset = range_min;
-      double t = 0.0, previous = 0.0;
-      reversals.samples.push_back({0.0, 0.0});
-      for (const double point : o.reversal_points) {
-        if (point == previous) continue;
-        t += std::abs(point - previous) / o.reversal_rate_fraction_per_s;
-        reversals.samples.push_back({t, point});
-        previous = point;
-      }
-      if (reversals.samples.size() > 1) builder.append("reversals", reversals);
-    }
-  };
-  auto append_holds = [&] {
-    for (std::size_t k = 0; k < o.hold_levels.size(); ++k) {
-      SignalSpec hold;
-      hold.kind = SignalKind::kSteps;
-      hold.amplitude = span;
-      hold.offset = range_min;
-      hold.steps = {{o.hold_levels[k], o.hold_s}};
-      builder.append("hold_" + std::to_string(k + 1), hold);
-    }
-  };
+// Constant-rate ramps through the reversal points (none when no point moves the input).
+void append_reversals(ExcitationBuilder& builder, double range_min, double span,
+                      const IdentificationExcitationOptions& o) {
+  if (o.reversal_points.empty()) return;
+  SignalSpec reversals;
+  reversals.kind = SignalKind::kSamples;
+  reversals.amplitude = span;
+  reversals.offset = range_min;
+  double t = 0.0, previous = 0.0;
+  reversals.samples.push_back({0.0, 0.0});
+  for (const double point : o.reversal_points) {
+    if (point == previous) continue;
+    t += std::abs(point - previous) / o.reversal_rate_fraction_per_s;
+    reversals.samples.push_back({t, point});
+    previous = point;
+  }
+  if (reversals.samples.size() > 1) builder.append("reversals", reversals);
+}
+
+// One hold of hold_s at each hold level.
+void append_holds(ExcitationBuilder& builder, double range_min, double span,
+                  const IdentificationExcitationOptions& o) {
+  for (std::size_t k = 0; k < o.hold_levels.size(); ++k) {
+    SignalSpec hold;
+    hold.kind = SignalKind::kSteps;
+    hold.amplitude = span;
+    hold.offset = range_min;
+    hold.steps = {{o.hold_levels[k], o.hold_s}};
+    builder.append("hold_" + std::to_string(k + 1), hold);
+  }
+}
+
+}  // namespace
+
+const ExcitationSegment* Excitation::find(const std::string& name) const noexcept {
+  for (const auto& s : segments) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
+Excitation identification_excitation(double range_min, double range_max, double dt_s,
+                                     const IdentificationExcitationOptions& o) {
+  validate(range_min, range_max, dt_s, o);
+  const double span = range_max - range_min;
+  ExcitationBuilder builder(range_min, range_max, dt_s);
+  append_settle_and_sweep(builder, range_min, span, o);
+  append_loops(builder, range_min, span, o);
   if (o.reversals_last) {
-    append_holds();
-    append_reversals();
+    append_holds(builder, range_min, span, o);
+    append_reversals(builder, range_min, span, o);
   } else {
-    append_reversals();
-    append_holds();
+    append_reversals(builder, range_min, span, o);
+    append_holds(builder, range_min, span, o);
   }
   return std::move(builder).finish();
 }

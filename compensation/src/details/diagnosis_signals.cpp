@@ -26,6 +26,109 @@ double median_of(std::vector<double>& v) {
   return *mid;
 }
 
+// du/dt over about 1 ms (at least one sample) [u/s]; 0 at the first sample.
+std::vector<double> input_rate(std::span<const double> u, double dt) {
+  const std::size_t n = u.size();
+  std::vector<double> rate(n, 0.0);
+  const auto m = static_cast<std::size_t>(std::max(1.0, std::round(1e-3 / dt)));
+  for (std::size_t k = 1; k < n; ++k) {
+    const std::size_t back = std::min(k, m);
+    rate[k] = (u[k] - u[k - back]) / (static_cast<double>(back) * dt);
+  }
+  return rate;
+}
+
+/// The input's turning points and steps: each sample's direction of movement, and the events.
+struct TurningPoints {
+  std::vector<signed char> dir;  ///< +1 rising, -1 falling, 0 before the first move
+  /// (sample, reference level) in sample order: the input before a step, at a turning point.
+  std::vector<std::pair<std::size_t, double>> events;
+};
+
+// Turning points with a dead band of `band` [u] and the steps of ev.step as events; counts the
+// turning points into ev.reversals.
+TurningPoints find_turning_points(std::span<const double> u, double band, InputEvents& ev) {
+  const std::size_t n = u.size();
+  TurningPoints tp;
+  tp.dir.assign(n, 0);
+  int state = 0;
+  double ext = u[0];
+  std::size_t ext_k = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (ev.step[k]) tp.events.emplace_back(k, u[k - 1]);
+    if (state == 0) {
+      if (u[k] > u[0] + band) state = 1, ext = u[k], ext_k = k;
+      if (u[k] < u[0] - band) state = -1, ext = u[k], ext_k = k;
+    } else if (state == 1) {
+      if (u[k] >= ext) {
+        ext = u[k], ext_k = k;
+      } else if (u[k] < ext - band) {
+        if (!ev.step[k]) tp.events.emplace_back(ext_k, u[ext_k]);
+        ++ev.reversals;
+        state = -1, ext = u[k], ext_k = k;
+      }
+    } else {
+      if (u[k] <= ext) {
+        ext = u[k], ext_k = k;
+      } else if (u[k] > ext + band) {
+        if (!ev.step[k]) tp.events.emplace_back(ext_k, u[ext_k]);
+        ++ev.reversals;
+        state = 1, ext = u[k], ext_k = k;
+      }
+    }
+    tp.dir[k] = static_cast<signed char>(state);
+  }
+  std::sort(tp.events.begin(), tp.events.end());
+  return tp;
+}
+
+// Holds: runs within `hold_band` [u] lasting at least kMinHoldSeconds, into ev.holding, ev.holds
+// and ev.hold_seconds.
+void mark_holds(std::span<const double> u, double dt, double hold_band, InputEvents& ev) {
+  const std::size_t n = u.size();
+  ev.holding.assign(n, 0);
+  const auto min_hold = static_cast<std::size_t>(std::max(5.0, std::ceil(kMinHoldSeconds / dt)));
+  std::size_t start = 0;
+  for (std::size_t k = 1; k <= n; ++k) {
+    if (k < n && std::abs(u[k] - u[start]) <= hold_band) continue;
+    if (k - start >= min_hold) {
+      std::fill(ev.holding.begin() + static_cast<std::ptrdiff_t>(start),
+                ev.holding.begin() + static_cast<std::ptrdiff_t>(k), 1);
+      ++ev.holds;
+      ev.hold_seconds += static_cast<double>(k - start) * dt;
+    }
+    start = k;
+  }
+}
+
+// Each sample's direction (0 while holding), sign of the last move and time since the last
+// event, and the event samples; needs ev.holding.
+void mark_since_events(std::span<const double> u, double dt, double hold_band,
+                       const TurningPoints& turns, InputEvents& ev) {
+  const std::size_t n = u.size();
+  const auto& events = turns.events;
+  ev.direction.assign(n, 0);
+  ev.last_move.assign(n, 0);
+  ev.since_event_s.assign(n, 0.0);
+  std::size_t next = 0;
+  std::size_t last = 0;
+  double reference = u[0];
+  bool any = false;
+  for (std::size_t k = 0; k < n; ++k) {
+    while (next < events.size() && events[next].first <= k) {
+      last = events[next].first, reference = events[next].second, any = true;
+      ++next;
+    }
+    ev.since_event_s[k] = static_cast<double>(k - last) * dt;
+    ev.direction[k] = ev.holding[k] ? 0 : turns.dir[k];
+    const double moved = u[k] - reference;
+    if (any) ev.last_move[k] = std::abs(moved) > hold_band ? (moved > 0 ? 1 : -1) : turns.dir[k];
+  }
+  for (const auto& e : events) ev.event_samples.push_back(e.first);
+  ev.event_samples.erase(std::unique(ev.event_samples.begin(), ev.event_samples.end()),
+                         ev.event_samples.end());
+}
+
 }  // namespace
 
 std::vector<std::size_t> find_steps(std::span<const double> u) {
@@ -52,12 +155,7 @@ InputEvents find_input_events(std::span<const double> u, double dt) {
   const double band = kReversalBand * span;
   const double hold_band = kHoldBand * span;
 
-  ev.rate.assign(n, 0.0);
-  const auto m = static_cast<std::size_t>(std::max(1.0, std::round(1e-3 / dt)));
-  for (std::size_t k = 1; k < n; ++k) {
-    const std::size_t back = std::min(k, m);
-    ev.rate[k] = (u[k] - u[k - back]) / (static_cast<double>(back) * dt);
-  }
+  ev.rate = input_rate(u, dt);
 
   ev.step.assign(n, 0);
   for (const std::size_t k : find_steps(u)) {
@@ -65,74 +163,9 @@ InputEvents find_input_events(std::span<const double> u, double dt) {
     ++ev.steps;
   }
 
-  // Turning points with a dead band; steps are events too. Reference level of each event:
-  // the input before it (steps) or at it (turning points).
-  std::vector<signed char> dir(n, 0);
-  std::vector<std::pair<std::size_t, double>> events;
-  int state = 0;
-  double ext = u[0];
-  std::size_t ext_k = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    if (ev.step[k]) events.emplace_back(k, u[k - 1]);
-    if (state == 0) {
-      if (u[k] > u[0] + band) state = 1, ext = u[k], ext_k = k;
-      if (u[k] < u[0] - band) state = -1, ext = u[k], ext_k = k;
-    } else if (state == 1) {
-      if (u[k] >= ext) {
-        ext = u[k], ext_k = k;
-      } else if (u[k] < ext - band) {
-        if (!ev.step[k]) events.emplace_back(ext_k, u[ext_k]);
-        ++ev.reversals;
-        state = -1, ext = u[k], ext_k = k;
-      }
-    } else {
-      if (u[k] <= ext) {
-        ext = u[k], ext_k = k;
-      } else if (u[k] > ext + band) {
-        if (!ev.step[k]) events.emplace_back(ext_k, u[ext_k]);
-        ++ev.reversals;
-        state = 1, ext = u[k], ext_k = k;
-      }
-    }
-    dir[k] = static_cast<signed char>(state);
-  }
-  std::sort(events.begin(), events.end());
-
-  // Holds: runs within the hold band lasting at least kMinHoldSeconds.
-  ev.holding.assign(n, 0);
-  const auto min_hold = static_cast<std::size_t>(std::max(5.0, std::ceil(kMinHoldSeconds / dt)));
-  std::size_t start = 0;
-  for (std::size_t k = 1; k <= n; ++k) {
-    if (k < n && std::abs(u[k] - u[start]) <= hold_band) continue;
-    if (k - start >= min_hold) {
-      std::fill(ev.holding.begin() + static_cast<std::ptrdiff_t>(start),
-                ev.holding.begin() + static_cast<std::ptrdiff_t>(k), 1);
-      ++ev.holds;
-      ev.hold_seconds += static_cast<double>(k - start) * dt;
-    }
-    start = k;
-  }
-
-  ev.direction.assign(n, 0);
-  ev.last_move.assign(n, 0);
-  ev.since_event_s.assign(n, 0.0);
-  std::size_t next = 0;
-  std::size_t last = 0;
-  double reference = u[0];
-  bool any = false;
-  for (std::size_t k = 0; k < n; ++k) {
-    while (next < events.size() && events[next].first <= k) {
-      last = events[next].first, reference = events[next].second, any = true;
-      ++next;
-    }
-    ev.since_event_s[k] = static_cast<double>(k - last) * dt;
-    ev.direction[k] = ev.holding[k] ? 0 : dir[k];
-    const double moved = u[k] - reference;
-    if (any) ev.last_move[k] = std::abs(moved) > hold_band ? (moved > 0 ? 1 : -1) : dir[k];
-  }
-  for (const auto& e : events) ev.event_samples.push_back(e.first);
-  ev.event_samples.erase(std::unique(ev.event_samples.begin(), ev.event_samples.end()),
-                         ev.event_samples.end());
+  const TurningPoints turns = find_turning_points(u, band, ev);
+  mark_holds(u, dt, hold_band, ev);
+  mark_since_events(u, dt, hold_band, turns, ev);
   return ev;
 }
 
