@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <future>
+#include <limits>
 #include <thread>
 
 #include "details/futex.hpp"
@@ -245,6 +246,37 @@ void BenchLoop::idle_tick() noexcept {
   }
 }
 
+/// What the drive stage asks of the output, for the stages after it.
+struct BenchLoop::TickDrive {
+  double y_ref = std::numeric_limits<double>::quiet_NaN();  ///< NaN: no reference at this tick
+  double u_request = 0.0;                                   ///< the output asked for, unlimited
+  double u_compensator = 0.0;  ///< the compensator's feedforward, for a learning run
+  std::size_t phase = 0;       ///< the learning trial's phase
+  bool learning = false;       ///< the tick belongs to a learning run's trials, at this phase
+  bool lead_in = false;        ///< a drive learned before plays the period before trial 0
+};
+
+/// What the exchange with the driver leaves for the stages after it.
+struct BenchLoop::TickExchange {
+  const char* failure = nullptr;  ///< why the run faults at this tick; null when it does not
+  std::uint32_t response = RunProgram::kNoFreshReading;  ///< the fresh reading's response_ticks
+};
+
+namespace {
+/// Adds the tare's sample: a fresh reading on the open-loop prefix less the model's prediction
+/// for the output it answers (the reading answers the output of response_ticks ago, less the
+/// exchange latency the model's delay holds).
+void add_tare_sample(RunProgram& p, std::uint64_t k, const drivers::Measurement& m) noexcept {
+  const std::uint64_t lag =
+      m.response_ticks > p.model_exchange_ticks ? m.response_ticks - p.model_exchange_ticks : 0;
+  if (p.model && k >= p.tare_from && k < p.excitation.size() && lag < RunProgram::kModelHistory &&
+      lag <= k) {
+    p.tare_sum += m.position_um - p.y_model_history[(k - lag) % RunProgram::kModelHistory];
+    ++p.tare_samples;
+  }
+}
+}  // namespace
+
 void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   const std::uint64_t k = p.done.load(std::memory_order_relaxed);
   SampleRecord rec;
@@ -255,68 +287,87 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     rec.flags |= kSampleOverrun;
     ++p.overruns;
   }
+  const TickDrive d = drive(p, k, rec);
+  const OutputLimiter::Applied lim = limit(p, k, d.u_request, rec);
+  const TickExchange x = exchange(p, k, lim, rec);
+  const bool last_trial_played = x.failure == nullptr && score(p, k, d, rec);
+  record(p, k, d, x.response, wake_ns - scheduled_ns, rec);
 
-  double y_ref = std::numeric_limits<double>::quiet_NaN();
-  double u_request = 0.0;
-  bool learning = false;  // the tick belongs to a learning run's trials, at this phase
-  std::size_t phase = 0;
-  double u_compensator = 0.0;  // the compensator's feedforward, for a learning run
-  bool lead_in = false;        // a drive learned before plays the period before trial 0
+  if (x.failure != nullptr) {
+    fault(x.failure);
+  } else if (k + 1 >= p.total_samples || last_trial_played) {
+    end_run(RunEnd::kCompleted, "");
+  } else if (stop_requested_.exchange(false, std::memory_order_acq_rel)) {
+    end_run(RunEnd::kStopped, "stopped by request");
+  }
+}
+
+BenchLoop::TickDrive BenchLoop::drive(RunProgram& p, std::uint64_t k, SampleRecord& rec) noexcept {
+  TickDrive d;
   if (p.kind != RunKind::kTrack || k < p.excitation.size()) {
     // An open-loop drive (identify, excite), or the pre-conditioning prefix of a tracking run.
-    u_request = p.excitation[k];
-    rec.u_ff = u_request;
+    d.u_request = p.excitation[k];
+    rec.u_ff = d.u_request;
   } else {
-    const double t = static_cast<double>(k - p.excitation.size()) * dt_;
-    y_ref = p.reference->value(t);
-    if (y_ref < p.y_ref_min || y_ref > p.y_ref_max) {
-      y_ref = std::min(std::max(y_ref, p.y_ref_min), p.y_ref_max);
-      rec.flags |= kSampleReferenceLimited;
-      ++p.reference_clips;
-    }
-    // The feedforward's target at run time tt: the reference, or with a preview the static
-    // target that inverts the model's delay and dynamics (the reference ahead by the delay).
-    // Less the tare: the output offset the model did not predict on the open-loop prefix.
-    // A drive learned before: the offset taken off when it was learned, and from trial 0 on
-    // also the offset its lead-in measured.
-    const double tare = p.learning ? p.learning->target_offset(k, p.tare_um()) : p.tare_um();
-    auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
-    // The feedback's reference; before feedback_from NaN: the PID holds (RunProgram).
-    const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : y_ref;
-    compensation::CompensatorOutput out;
-    if (const std::size_t ahead = p.targets.capacity(); ahead > 1) {
-      if (p.targets.view().empty()) {
-        for (std::size_t j = 0; j + 1 < ahead; ++j)
-          p.targets.push(target_at(t + static_cast<double>(j) * dt_));
-      }
-      p.targets.push(target_at(t + static_cast<double>(ahead - 1) * dt_));
-      out = p.compensator->step(fb_ref, y_prev_, p.targets.view());
-    } else {
-      out = p.compensator->step(fb_ref, y_prev_, target_at(t));
-    }
-    rec.u_ff = out.u_ff;
-    rec.u_fb = out.u_fb;
-    u_compensator = out.u_ff;
-    if (out.feedback_saturated) rec.flags |= kSampleFeedbackSaturated;
-    u_request = out.u;
-    if (p.learning && k >= p.learning->first_tick) {
-      // A learning run: from trial 1 on the learned feedforward, with the feedback on it.
-      if (simulated_) await_learned_drive(*p.learning, k);
-      phase = p.learning->begin_tick(k);
-      learning = true;
-      if (double u_ff = out.u_ff; p.learning->learned(phase, u_ff)) {
-        rec.u_ff = u_ff;
-        u_request = u_ff + out.u_fb;
-      }
-    } else if (double u_ff = out.u_ff; p.learning && p.learning->lead_in(k, u_ff)) {
-      rec.u_ff = u_ff;  // a drive learned before plays the start-up period too
-      u_request = u_ff + out.u_fb;
-      lead_in = true;
-    }
+    track_drive(p, k, d, rec);
   }
-  rec.reference = y_ref;
+  rec.reference = d.y_ref;
+  return d;
+}
 
-  const auto lim = limiter_.apply(u_request);
+void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
+                            SampleRecord& rec) noexcept {
+  const double t = static_cast<double>(k - p.excitation.size()) * dt_;
+  d.y_ref = p.reference->value(t);
+  if (d.y_ref < p.y_ref_min || d.y_ref > p.y_ref_max) {
+    d.y_ref = std::min(std::max(d.y_ref, p.y_ref_min), p.y_ref_max);
+    rec.flags |= kSampleReferenceLimited;
+    ++p.reference_clips;
+  }
+  // The feedforward's target at run time tt: the reference, or with a preview the static
+  // target that inverts the model's delay and dynamics (the reference ahead by the delay).
+  // Less the tare: the output offset the model did not predict on the open-loop prefix.
+  // A drive learned before: the offset taken off when it was learned, and from trial 0 on
+  // also the offset its lead-in measured.
+  const double tare = p.learning ? p.learning->target_offset(k, p.tare_um()) : p.tare_um();
+  auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
+  // The feedback's reference; before feedback_from NaN: the PID holds (RunProgram).
+  const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : d.y_ref;
+  compensation::CompensatorOutput out;
+  if (const std::size_t ahead = p.targets.capacity(); ahead > 1) {
+    if (p.targets.view().empty()) {
+      for (std::size_t j = 0; j + 1 < ahead; ++j)
+        p.targets.push(target_at(t + static_cast<double>(j) * dt_));
+    }
+    p.targets.push(target_at(t + static_cast<double>(ahead - 1) * dt_));
+    out = p.compensator->step(fb_ref, y_prev_, p.targets.view());
+  } else {
+    out = p.compensator->step(fb_ref, y_prev_, target_at(t));
+  }
+  rec.u_ff = out.u_ff;
+  rec.u_fb = out.u_fb;
+  d.u_compensator = out.u_ff;
+  if (out.feedback_saturated) rec.flags |= kSampleFeedbackSaturated;
+  d.u_request = out.u;
+  if (p.learning && k >= p.learning->first_tick) {
+    // A learning run: from trial 1 on the learned feedforward, with the feedback on it.
+    if (simulated_) await_learned_drive(*p.learning, k);
+    d.phase = p.learning->begin_tick(k);
+    d.learning = true;
+    if (double u_ff = out.u_ff; p.learning->learned(d.phase, u_ff)) {
+      rec.u_ff = u_ff;
+      d.u_request = u_ff + out.u_fb;
+    }
+  } else if (double u_ff = out.u_ff; p.learning && p.learning->lead_in(k, u_ff)) {
+    rec.u_ff = u_ff;  // a drive learned before plays the start-up period too
+    d.u_request = u_ff + out.u_fb;
+    d.lead_in = true;
+  }
+}
+
+OutputLimiter::Applied BenchLoop::limit(RunProgram& p, std::uint64_t k, double u_request,
+                                        SampleRecord& rec) noexcept {
+  const OutputLimiter::Applied lim = limiter_.apply(u_request);
   if (p.compensator) p.compensator->notify_saturation(lim.direction);
   if (lim.clamped) {
     rec.flags |= kSampleOutputClamped;
@@ -331,13 +382,17 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     rec.y_model = p.model->step(lim.u);
     p.y_model_history[k % RunProgram::kModelHistory] = rec.y_model;
   }
+  return lim;
+}
 
-  const char* failure = nullptr;
-  std::uint32_t response = RunProgram::kNoFreshReading;
+BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::uint64_t k,
+                                            const OutputLimiter::Applied& lim,
+                                            SampleRecord& rec) noexcept {
+  TickExchange x;
   if ((lim.clamped || lim.slew_limited) && options_.fatal_on_limit) {
-    failure = "output limit reached (limits.fatal_on_limit)";
+    x.failure = "output limit reached (limits.fatal_on_limit)";
   } else if (driver_.write(lim.u) != drivers::DriverStatus::kOk) {
-    failure = "driver write failed";
+    x.failure = "driver write failed";
   } else {
     last_u_.store(lim.u, std::memory_order_relaxed);
     drivers::Measurement m;
@@ -347,77 +402,66 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
       ++p.stale_reads;
       stuck_.stale(lim.u);
     } else if (st != drivers::DriverStatus::kOk) {
-      failure =
+      x.failure =
           st == drivers::DriverStatus::kTimeout ? "driver read timed out" : "driver read failed";
     }
-    if (failure == nullptr && !std::isfinite(m.position_um)) {
-      failure = "measurement is not a finite number";
+    if (x.failure == nullptr && !std::isfinite(m.position_um)) {
+      x.failure = "measurement is not a finite number";
     } else if (st == drivers::DriverStatus::kOk &&
                stuck_.update(lim.u, m.position_um, m.response_ticks)) {
-      failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
+      x.failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
     }
     rec.y_measured = m.position_um;
     if (st == drivers::DriverStatus::kOk) {
-      response = static_cast<std::uint32_t>(
+      x.response = static_cast<std::uint32_t>(
           std::min<std::uint64_t>(m.response_ticks, RunProgram::kNoFreshReading - 1));
     }
-    if (failure == nullptr) {
+    if (x.failure == nullptr) {
       y_prev_ = m.position_um;
       last_y_.store(m.position_um, std::memory_order_relaxed);
-      // The reading answers the output of response_ticks ago: compare it with the model's
-      // prediction for that output (less the exchange latency the model's delay holds).
-      const std::uint64_t lag =
-          m.response_ticks > p.model_exchange_ticks ? m.response_ticks - p.model_exchange_ticks : 0;
-      if (p.model && st == drivers::DriverStatus::kOk && k >= p.tare_from &&
-          k < p.excitation.size() && lag < RunProgram::kModelHistory && lag <= k) {
-        p.tare_sum += m.position_um - p.y_model_history[(k - lag) % RunProgram::kModelHistory];
-        ++p.tare_samples;
-      }
+      if (st == drivers::DriverStatus::kOk) add_tare_sample(p, k, m);
     }
   }
-  if (failure == nullptr && p.overruns > options_.overrun_budget) {
-    failure = "overrun budget exceeded (loop.overrun_budget)";
+  if (x.failure == nullptr && p.overruns > options_.overrun_budget) {
+    x.failure = "overrun budget exceeded (loop.overrun_budget)";
   }
-  if (failure != nullptr) rec.flags |= kSampleFault;
+  if (x.failure != nullptr) rec.flags |= kSampleFault;
+  return x;
+}
 
-  if (p.recorded < p.record_capacity && k >= p.metrics_from) {
-    p.rec_u[p.recorded] = rec.u_out;
-    p.rec_y[p.recorded] = rec.y_measured;
-    p.rec_yr[p.recorded] = y_ref;
-    if (!p.rec_response.empty()) p.rec_response[p.recorded] = response;
-    ++p.recorded;
-  }
-  if (failure == nullptr && k >= p.metrics_from && !std::isnan(y_ref)) {
-    const double e = rec.y_measured - y_ref;
+bool BenchLoop::score(RunProgram& p, std::uint64_t k, const TickDrive& d,
+                      const SampleRecord& rec) noexcept {
+  if (k >= p.metrics_from && !std::isnan(d.y_ref)) {
+    const double e = rec.y_measured - d.y_ref;
     p.error_sum2 += e * e;
     p.error_max = std::max(p.error_max, std::abs(e));
     ++p.error_samples;
   }
-  if (failure == nullptr && k >= p.metrics_from && k >= p.model_metrics_from && p.model) {
+  if (k >= p.metrics_from && k >= p.model_metrics_from && p.model) {
     const double e = rec.y_measured - rec.y_model;
     p.model_error_sum2 += e * e;
     p.model_error_max = std::max(p.model_error_max, std::abs(e));
     ++p.model_error_samples;
   }
-  bool last_trial_played = false;
-  if (lead_in && failure == nullptr) p.learning->lead_in_error(k, y_ref - rec.y_measured);
-  if (learning && failure == nullptr) {
-    last_trial_played =
-        p.learning->end_tick(phase, rec.u_ff, u_compensator, y_ref - rec.y_measured);
+  if (d.lead_in) p.learning->lead_in_error(k, d.y_ref - rec.y_measured);
+  if (!d.learning) return false;
+  return p.learning->end_tick(d.phase, rec.u_ff, d.u_compensator, d.y_ref - rec.y_measured);
+}
+
+void BenchLoop::record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::uint32_t response,
+                       std::int64_t wake_latency_ns, SampleRecord& rec) noexcept {
+  if (p.recorded < p.record_capacity && k >= p.metrics_from) {
+    p.rec_u[p.recorded] = rec.u_out;
+    p.rec_y[p.recorded] = rec.y_measured;
+    p.rec_yr[p.recorded] = d.y_ref;
+    if (!p.rec_response.empty()) p.rec_response[p.recorded] = response;
+    ++p.recorded;
   }
   rec.exec_ns = now_ns() - exec_start_ns_;
   log_sample(p, rec);
-  p.stats.record(wake_ns - scheduled_ns, rec.exec_ns, overran_);
+  p.stats.record(wake_latency_ns, rec.exec_ns, overran_);
   p.done.store(k + 1, std::memory_order_release);
-  if (learning && phase + 1 == p.learning->period) signal_event();  // a trial for the learner
-
-  if (failure != nullptr) {
-    fault(failure);
-  } else if (k + 1 >= p.total_samples || last_trial_played) {
-    end_run(RunEnd::kCompleted, "");
-  } else if (stop_requested_.exchange(false, std::memory_order_acq_rel)) {
-    end_run(RunEnd::kStopped, "stopped by request");
-  }
+  if (d.learning && d.phase + 1 == p.learning->period) signal_event();  // a trial for the learner
 }
 
 void BenchLoop::await_learned_drive(const LearningExchange& learning, std::uint64_t k) noexcept {

@@ -258,6 +258,66 @@ json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& adde
   return {{"parts", parts}, {"verdict", d.verdict}};
 }
 
+// identify's record at the loop rate, and how the candidates are scored on it.
+struct ScoredRecord {
+  std::span<const double> t, u, y;
+  double heldout_fraction = 0.0;
+  std::size_t unscored = 0;  ///< samples simulated but not scored
+};
+
+// The extension as a candidate: the draft's model with the exchange latency back in its delay,
+// the base's units and input range, configured for the loop and scored as the candidates are
+// (at the loop rate: the dynamics need it). `extension` gets both held-out errors and the gain.
+IdentifyCandidate extended_candidate(const IdentifyCandidate& base, hc::ActuatorModel model,
+                                     double exchange_s, double dt, const ScoredRecord& record,
+                                     json& extension) {
+  IdentifyCandidate ext{base.fit, json(), base.label, {}};
+  model.set_delay(model.delay_s() + exchange_s);
+  model.units = base.fit.model.units;
+  model.input_min = base.fit.model.input_min;
+  model.input_max = base.fit.model.input_max;
+  model.configure(dt);
+  ext.fit.model = std::move(model);
+  ext.fit.delay_samples = static_cast<int>(std::lround(ext.fit.model.delay_s() / dt));
+  const hc::ModelScore score = hc::score_model(ext.fit.model, record.t, record.u, record.y,
+                                               record.heldout_fraction, record.unscored);
+  ext.fit.fit = score.fit;
+  ext.fit.heldout = score.heldout;
+  hc::ActuatorModel given = base.fit.model;
+  given.configure(dt);
+  const double before = hc::score_model(std::move(given), record.t, record.u, record.y,
+                                        record.heldout_fraction, record.unscored)
+                            .heldout.rmse;
+  extension["heldout_rms_um"] = {{"model", before}, {"extended", score.heldout.rmse}};
+  extension["heldout_gain"] = score.heldout.rmse > 0.0 ? before / score.heldout.rmse : 1.0;
+  return ext;
+}
+
+// What the extension adds: the diagnosis's extended model's description, or the parts grafted.
+std::string extension_added(const hc::Diagnosis& d, bool named, const json& parts) {
+  if (named) return d.extended_description;
+  std::string added = "grafted";
+  for (const json& part : parts) added += "; " + part["extension"].get<std::string>();
+  return added;
+}
+
+// The chosen fit, as the model file's identification and the run's result both describe it.
+json fit_description(const hc::FitResult& fit, const json& history, const std::string& chosen_by,
+                     const json& extension) {
+  return {{"method", fit.method},
+          {"operators", fit.operators},
+          {"dead_zones", fit.dead_zones},
+          {"history", history},
+          {"delay_ticks", history.value("delay_ticks", 0)},
+          {"exchange_ticks", history.value("exchange_ticks", 0)},
+          {"fit", to_json(fit.fit)},
+          {"heldout", to_json(fit.heldout)},
+          {"drift_um_per_s", fit.drift_per_s},
+          {"notes", fit.notes},
+          {"chosen_by", chosen_by},
+          {"extension", extension}};
+}
+
 // The extension's verified gains against the model it extends: the triangle's max error and
 // the fast sine's rms error (base / extended; > 1 is better).
 json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& ext,
@@ -649,33 +709,10 @@ bool Bench::extend_identified_model() {
     s.extension["from"] = draft->named ? "the diagnosis's extended model (named causes)"
                                        : "significant tests below the naming gain, grafted on the "
                                          "model for the bench to judge";
-    IdentifyCandidate ext{base.fit, json(), base.label, {}};
-    hc::ActuatorModel model = std::move(draft->model);
-    model.set_delay(model.delay_s() + exchange_s);
-    model.units = base.fit.model.units;
-    model.input_min = base.fit.model.input_min;
-    model.input_max = base.fit.model.input_max;
-    model.configure(dt_);
-    ext.fit.model = std::move(model);
-    ext.fit.delay_samples = static_cast<int>(std::lround(ext.fit.model.delay_s() / dt_));
-    // Scored as the candidates are, at the loop rate (the dynamics need it).
-    const hc::ModelScore score = hc::score_model(ext.fit.model, t, s.u, s.y,
-                                                 settings_.identify.heldout_fraction, s.unscored);
-    ext.fit.fit = score.fit;
-    ext.fit.heldout = score.heldout;
-    hc::ActuatorModel given = base.fit.model;
-    given.configure(dt_);
-    const double before = hc::score_model(std::move(given), t, s.u, s.y,
-                                          settings_.identify.heldout_fraction, s.unscored)
-                              .heldout.rmse;
-    s.extension["heldout_rms_um"] = {{"model", before}, {"extended", score.heldout.rmse}};
-    s.extension["heldout_gain"] = score.heldout.rmse > 0.0 ? before / score.heldout.rmse : 1.0;
-    std::string added = d.extended_description;
-    if (!draft->named) {
-      added = "grafted";
-      for (const json& part : s.extension["parts"])
-        added += "; " + part["extension"].get<std::string>();
-    }
+    const ScoredRecord record{t, s.u, s.y, settings_.identify.heldout_fraction, s.unscored};
+    IdentifyCandidate ext =
+        extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
+    const std::string added = extension_added(d, draft->named, s.extension["parts"]);
     ext.fit.notes.push_back("extended by the diagnosis of its record: " + added);
     s.extension["description"] = added;
     ext.label += "-extended";
@@ -730,23 +767,12 @@ void Bench::finish_identify() {
                                   : std::isfinite(verified_max(c)) ? "verified tracking max error"
                                                                    : "held-out error";
     hc::ModelFile file{fit.model, json::object()};
-    file.identification = {{"run_id", result["run_id"]},
-                           {"log", s.log_path},
-                           {"samples", s.samples},
-                           {"fit_sample_period_s", s.fit_sample_period_s},
-                           {"history", s.history},
-                           {"method", fit.method},
-                           {"operators", fit.operators},
-                           {"dead_zones", fit.dead_zones},
-                           {"fit", to_json(fit.fit)},
-                           {"heldout", to_json(fit.heldout)},
-                           {"drift_um_per_s", fit.drift_per_s},
-                           {"notes", fit.notes},
-                           {"verification", c.verification},
-                           {"chosen_by", chosen_by},
-                           {"delay_ticks", s.history.value("delay_ticks", 0)},
-                           {"exchange_ticks", s.history.value("exchange_ticks", 0)},
-                           {"extension", s.extension}};
+    file.identification = fit_description(fit, s.history, chosen_by, s.extension);
+    file.identification.update({{"run_id", result["run_id"]},
+                                {"log", s.log_path},
+                                {"samples", s.samples},
+                                {"fit_sample_period_s", s.fit_sample_period_s},
+                                {"verification", c.verification}});
     if (s.candidates.size() > 1) file.identification["candidates"] = candidates;
     if (s.rate_free) file.identification["rate_law"] = rate_law;
     std::filesystem::create_directories(settings_.model_dir);
@@ -754,20 +780,8 @@ void Bench::finish_identify() {
                               (result["run_id"].get<std::string>() + ".json"))
                                  .string();
     save_model_file(path, file);
-    result["model"] = {{"path", path},
-                       {"type", type_name(fit)},
-                       {"operators", fit.operators},
-                       {"dead_zones", fit.dead_zones},
-                       {"method", fit.method},
-                       {"history", s.history},
-                       {"delay_ticks", s.history.value("delay_ticks", 0)},
-                       {"exchange_ticks", s.history.value("exchange_ticks", 0)},
-                       {"fit", to_json(fit.fit)},
-                       {"heldout", to_json(fit.heldout)},
-                       {"drift_um_per_s", fit.drift_per_s},
-                       {"notes", fit.notes},
-                       {"chosen_by", chosen_by},
-                       {"extension", s.extension}};
+    result["model"] = fit_description(fit, s.history, chosen_by, s.extension);
+    result["model"].update({{"path", path}, {"type", type_name(fit)}});
     if (s.rate_free) result["model"]["rate_law"] = rate_law;
     result["verification"] = c.verification;
     if (s.candidates.size() > 1) result["candidates"] = candidates;

@@ -1,5 +1,6 @@
 #include "hystbench/daemon/convert_command.hpp"
 
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <nlohmann/json.hpp>
@@ -65,6 +66,60 @@ std::vector<std::string> channel_names(const std::vector<std::string>& given, st
   return given;
 }
 
+// The columns before the channels: a row's time, realization, period and sample in the period.
+constexpr std::array<const char*, 4> kIndexColumns{"t", "realization", "period", "n_in_period"};
+
+// The CSV's column names: the index columns, then the input and the output channels; each
+// name once.
+std::vector<std::string> column_names(const ConvertCommand& cmd, const RecordLayout& u_layout,
+                                      const RecordLayout& y_layout) {
+  std::vector<std::string> names(kIndexColumns.begin(), kIndexColumns.end());
+  for (const auto& name :
+       channel_names(cmd.u_names, u_layout.channels, "u", "_V", "--u-names", cmd.u_path)) {
+    names.push_back(name);
+  }
+  for (const auto& name :
+       channel_names(cmd.y_names, y_layout.channels, "y", "_m", "--y-names", cmd.y_path)) {
+    names.push_back(name);
+  }
+  std::set<std::string> seen;
+  for (const std::string& name : names) {
+    if (!seen.insert(name).second) {
+      throw std::invalid_argument("column name '" + name + "' is given twice");
+    }
+  }
+  return names;
+}
+
+// The CSV's columns: a row per sample of each realization and period, in that order, with the
+// index columns and then the channels of u and of y.
+std::vector<std::vector<double>> record_columns(const NpyArray& u, const RecordLayout& u_layout,
+                                                const NpyArray& y, const RecordLayout& y_layout,
+                                                double rate_hz, std::size_t column_count) {
+  const RecordLayout& layout = u_layout;
+  const std::size_t rows = layout.samples * layout.realizations * layout.periods;
+  std::vector<std::vector<double>> columns(column_count, std::vector<double>(rows));
+  std::size_t row = 0;
+  for (std::size_t r = 0; r < layout.realizations; ++r) {
+    for (std::size_t p = 0; p < layout.periods; ++p) {
+      for (std::size_t n = 0; n < layout.samples; ++n, ++row) {
+        columns[0][row] = static_cast<double>(p * layout.samples + n) / rate_hz;
+        columns[1][row] = static_cast<double>(r);
+        columns[2][row] = static_cast<double>(p);
+        columns[3][row] = static_cast<double>(n);
+        std::size_t column = kIndexColumns.size();
+        for (std::size_t c = 0; c < u_layout.channels; ++c) {
+          columns[column++][row] = u.values[u_layout.index(n, c, r, p)];
+        }
+        for (std::size_t c = 0; c < y_layout.channels; ++c) {
+          columns[column++][row] = y.values[y_layout.index(n, c, r, p)];
+        }
+      }
+    }
+  }
+  return columns;
+}
+
 }  // namespace
 
 int run_convert(const ConvertCommand& cmd, std::ostream& out, std::ostream& err) {
@@ -81,44 +136,11 @@ int run_convert(const ConvertCommand& cmd, std::ostream& out, std::ostream& err)
                           " has shape " + shape_text(y.shape) +
                           ": N, realizations and periods must agree");
     }
-    std::vector<std::string> names{"t", "realization", "period", "n_in_period"};
-    const std::size_t index_columns = names.size();
-    for (const auto& name :
-         channel_names(cmd.u_names, u_layout.channels, "u", "_V", "--u-names", cmd.u_path)) {
-      names.push_back(name);
-    }
-    for (const auto& name :
-         channel_names(cmd.y_names, y_layout.channels, "y", "_m", "--y-names", cmd.y_path)) {
-      names.push_back(name);
-    }
-    std::set<std::string> seen;
-    for (const std::string& name : names) {
-      if (!seen.insert(name).second) {
-        throw std::invalid_argument("column name '" + name + "' is given twice");
-      }
-    }
-
+    const std::vector<std::string> names = column_names(cmd, u_layout, y_layout);
     const RecordLayout& layout = u_layout;
     const std::size_t rows = layout.samples * layout.realizations * layout.periods;
-    std::vector<std::vector<double>> columns(names.size(), std::vector<double>(rows));
-    std::size_t row = 0;
-    for (std::size_t r = 0; r < layout.realizations; ++r) {
-      for (std::size_t p = 0; p < layout.periods; ++p) {
-        for (std::size_t n = 0; n < layout.samples; ++n, ++row) {
-          columns[0][row] = static_cast<double>(p * layout.samples + n) / cmd.rate_hz;
-          columns[1][row] = static_cast<double>(r);
-          columns[2][row] = static_cast<double>(p);
-          columns[3][row] = static_cast<double>(n);
-          std::size_t column = index_columns;
-          for (std::size_t c = 0; c < u_layout.channels; ++c) {
-            columns[column++][row] = u.values[u_layout.index(n, c, r, p)];
-          }
-          for (std::size_t c = 0; c < y_layout.channels; ++c) {
-            columns[column++][row] = y.values[y_layout.index(n, c, r, p)];
-          }
-        }
-      }
-    }
+    const std::vector<std::vector<double>> columns =
+        record_columns(u, u_layout, y, y_layout, cmd.rate_hz, names.size());
     std::vector<const std::vector<double>*> column_pointers;
     for (const auto& column : columns) column_pointers.push_back(&column);
     std::ostringstream rate;

@@ -112,33 +112,49 @@ std::ofstream open_for_writing(const std::filesystem::path& p) {
   return out;
 }
 
+// A candidate cause's test, its held-out score and what it would add.
+json candidate_json(const hc::CandidateReport& c) {
+  json left_out = json::array();
+  for (const hc::LeftOutScore& l : c.left_out) {
+    left_out.push_back(
+        {{"record", l.record}, {"baseline_rms", l.baseline_rms}, {"rms", l.rms}, {"gain", l.gain}});
+  }
+  return {{"cause", std::string(hc::to_string(c.cause))},
+          {"statistic", c.statistic},
+          {"threshold", c.threshold},
+          {"significant", c.significant},
+          {"rmse_heldout", c.heldout.rmse},
+          {"rmse_fit", c.fit.rmse},
+          {"gain", c.gain},
+          {"evidence", c.evidence},
+          {"extension", c.extension},
+          {"carries_over", c.carries_over},
+          {"left_out_gain", c.left_out_gain},
+          {"left_out", left_out},
+          {"named", c.named},
+          {"not_named", c.not_named}};
+}
+
+// The records diagnosed end to end: each one's first sample, length and output offset.
+json records_json(const hc::Diagnosis& d) {
+  json records = json::array();
+  for (std::size_t i = 0; i < d.records.size(); ++i) {
+    const std::size_t start = i < d.record_starts.size() ? d.record_starts[i] : 0;
+    const std::size_t end = i + 1 < d.record_starts.size() ? d.record_starts[i + 1] : d.samples;
+    const double offset = i < d.record_offsets.size() ? d.record_offsets[i] : 0.0;
+    records.push_back({{"data", d.records[i]},
+                       {"start", start},
+                       {"samples", end - start},
+                       {"output_offset", offset}});
+  }
+  return records;
+}
+
 }  // namespace
 
 json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
   json candidates = json::array();
-  for (const hc::CandidateReport& c : d.candidates) {
-    json left_out = json::array();
-    for (const hc::LeftOutScore& l : c.left_out) {
-      left_out.push_back({{"record", l.record},
-                          {"baseline_rms", l.baseline_rms},
-                          {"rms", l.rms},
-                          {"gain", l.gain}});
-    }
-    candidates.push_back({{"cause", std::string(hc::to_string(c.cause))},
-                          {"statistic", c.statistic},
-                          {"threshold", c.threshold},
-                          {"significant", c.significant},
-                          {"rmse_heldout", c.heldout.rmse},
-                          {"rmse_fit", c.fit.rmse},
-                          {"gain", c.gain},
-                          {"evidence", c.evidence},
-                          {"extension", c.extension},
-                          {"carries_over", c.carries_over},
-                          {"left_out_gain", c.left_out_gain},
-                          {"left_out", left_out},
-                          {"named", c.named},
-                          {"not_named", c.not_named}});
-  }
+  for (const hc::CandidateReport& c : d.candidates) candidates.push_back(candidate_json(c));
   json causes = json::array();
   for (const hc::NamedCause& n : d.causes) {
     causes.push_back({{"cause", std::string(hc::to_string(n.cause))},
@@ -150,16 +166,7 @@ json diagnosis_to_json(const hc::Diagnosis& d, const std::string& data_path) {
                       {"evidence", n.evidence},
                       {"extension", n.extension}});
   }
-  json records = json::array();
-  for (std::size_t i = 0; i < d.records.size(); ++i) {
-    const std::size_t start = i < d.record_starts.size() ? d.record_starts[i] : 0;
-    const std::size_t end = i + 1 < d.record_starts.size() ? d.record_starts[i + 1] : d.samples;
-    const double offset = i < d.record_offsets.size() ? d.record_offsets[i] : 0.0;
-    records.push_back({{"data", d.records[i]},
-                       {"start", start},
-                       {"samples", end - start},
-                       {"output_offset", offset}});
-  }
+  const json records = records_json(d);
   json structure = json::object();
   for (const hc::ResidualProfile& p : d.profiles) structure[p.variable] = p.explained;
   json baseline = {{"model", model_json(d.baseline, identification_of(d, data_path, false))},
@@ -270,68 +277,88 @@ void print_diagnosis(std::ostream& out, const hc::Diagnosis& d, const std::strin
       << " " << unit << "\n";
 }
 
-void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
-                            const std::string& data_path, std::span<const double> t,
-                            std::span<const double> u, std::span<const double> y) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::absolute(dir_name);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) {
-    throw std::runtime_error(dir.string() + ": cannot create the report folder");
-  }
-  {
-    auto f = open_for_writing(dir / "report.txt");
-    print_diagnosis(f, d, data_path);
-  }
-  {
-    auto f = open_for_writing(dir / "diagnosis.json");
-    f << std::setw(2) << diagnosis_to_json(d, data_path) << "\n";
-  }
-  // Whole-record series, thinned to at most kMaxPlotPoints rows.
+namespace {
+
+// record.dat: the whole record with both models' predictions and residuals, thinned to at most
+// kMaxPlotPoints rows.
+void write_record_series(const std::filesystem::path& file, const hc::Diagnosis& d,
+                         std::span<const double> t, std::span<const double> u,
+                         std::span<const double> y) {
   const std::size_t n = u.size();
   const std::size_t stride = std::max<std::size_t>(1, (n + kMaxPlotPoints - 1) / kMaxPlotPoints);
-  {
-    auto f = open_for_writing(dir / "record.dat");
-    f << "# t u y y_baseline y_extended residual_baseline residual_extended part "
-         "(0 fit, 1 held out, 2 start-up: neither)\n";
-    for (std::size_t k = 0; k < n; k += stride) {
-      const double yb = d.baseline_prediction[k], ye = d.extended_prediction[k];
-      const int part = d.split.is_skipped(k) ? 2 : d.split.is_heldout(k) ? 1 : 0;
-      f << t[k] << ' ' << u[k] << ' ' << y[k] << ' ' << yb << ' ' << ye << ' ' << y[k] - yb << ' '
-        << y[k] - ye << ' ' << part << '\n';
+  auto f = open_for_writing(file);
+  f << "# t u y y_baseline y_extended residual_baseline residual_extended part "
+       "(0 fit, 1 held out, 2 start-up: neither)\n";
+  for (std::size_t k = 0; k < n; k += stride) {
+    const double yb = d.baseline_prediction[k], ye = d.extended_prediction[k];
+    const int part = d.split.is_skipped(k) ? 2 : d.split.is_heldout(k) ? 1 : 0;
+    f << t[k] << ' ' << u[k] << ' ' << y[k] << ' ' << yb << ' ' << ye << ' ' << y[k] - yb << ' '
+      << y[k] - ye << ' ' << part << '\n';
+  }
+}
+
+// explanatory.dat: the frequency response, or the baseline residual binned against the variable
+// that explains the cause (empty when there is no such profile).
+void write_explanatory(const std::filesystem::path& file, const hc::Diagnosis& d,
+                       const std::string& variable, const hc::ResidualProfile* profile) {
+  auto f = open_for_writing(file);
+  if (variable == "frequency") {
+    f << "# frequency_hz gain phase_deg coherence informative (measured / baseline "
+         "prediction)\n";
+    const auto& fr = d.frequency_response;
+    for (std::size_t i = 0; i < fr.frequency_hz.size(); ++i) {
+      f << fr.frequency_hz[i] << ' ' << fr.gain[i] << ' ' << fr.phase_rad[i] * 180.0 / M_PI << ' '
+        << fr.coherence[i] << ' ' << int{fr.informative[i]} << '\n';
+    }
+  } else if (profile != nullptr) {
+    f << "# " << profile->label << " | mean baseline residual | samples\n";
+    for (std::size_t i = 0; i < profile->centers.size(); ++i) {
+      f << profile->centers[i] << ' ' << profile->means[i] << ' ' << profile->counts[i] << '\n';
     }
   }
-  const std::string variable = explanatory_variable(d.cause);
-  const hc::ResidualProfile* profile = d.profile(variable);
-  {
-    auto f = open_for_writing(dir / "explanatory.dat");
-    if (variable == "frequency") {
-      f << "# frequency_hz gain phase_deg coherence informative (measured / baseline "
-           "prediction)\n";
-      const auto& fr = d.frequency_response;
-      for (std::size_t i = 0; i < fr.frequency_hz.size(); ++i) {
-        f << fr.frequency_hz[i] << ' ' << fr.gain[i] << ' ' << fr.phase_rad[i] * 180.0 / M_PI << ' '
-          << fr.coherence[i] << ' ' << int{fr.informative[i]} << '\n';
-      }
-    } else if (profile != nullptr) {
-      f << "# " << profile->label << " | mean baseline residual | samples\n";
-      for (std::size_t i = 0; i < profile->centers.size(); ++i) {
-        f << profile->centers[i] << ' ' << profile->means[i] << ' ' << profile->counts[i] << '\n';
-      }
-    }
+}
+
+// candidates.dat: the baseline's and each candidate's held-out rms and gain.
+void write_candidates(const std::filesystem::path& file, const hc::Diagnosis& d) {
+  auto f = open_for_writing(file);
+  f << "# index name heldout_rms gain\n0 baseline " << d.baseline_heldout.rmse << " 1\n";
+  int i = 1;
+  for (const hc::CandidateReport& c : d.candidates) {
+    f << i++ << ' ' << hc::to_string(c.cause) << ' ' << c.heldout.rmse << ' ' << c.gain << '\n';
   }
-  {
-    auto f = open_for_writing(dir / "candidates.dat");
-    f << "# index name heldout_rms gain\n0 baseline " << d.baseline_heldout.rmse << " 1\n";
-    int i = 1;
-    for (const hc::CandidateReport& c : d.candidates) {
-      f << i++ << ' ' << hc::to_string(c.cause) << ' ' << c.heldout.rmse << ' ' << c.gain << '\n';
-    }
+}
+
+// The cause's plot: explanatory.dat against its variable.
+void plot_cause(std::ostream& gp, const std::filesystem::path& dir, const std::string& variable,
+                const hc::ResidualProfile* profile, const std::string& out) {
+  const std::filesystem::path expl = dir / "explanatory.dat";
+  gp << "set output " << details::gnuplot_quoted(dir / ("cause_" + variable + ".png")) << "\n";
+  if (variable == "frequency") {
+    gp << "set title 'measured / baseline prediction against frequency (Welch)'\n"
+       << "set logscale x\nset xlabel 'f [Hz]'\nset ylabel 'gain'\nset y2label 'phase [deg]'\n"
+       << "set ytics nomirror\nset y2tics\n"
+       << "plot " << details::gnuplot_quoted(expl)
+       << " using 1:($5 > 0 ? $2 : 1/0) with lines lw 2 title "
+          "'gain (informative bins)', \\\n"
+       << "     '' using 1:($5 > 0 ? $3 : 1/0) axes x1y2 with lines title 'phase'\n"
+       << "unset logscale x\nunset y2tics\nunset y2label\nset ytics mirror\n";
+  } else {
+    const std::string label = profile != nullptr ? profile->label : variable;
+    gp << "set title 'baseline residual against " << label << " (binned mean)'\nset xlabel '"
+       << label << "'\nset ylabel 'mean residual [" << out << "]'\n";
+    if (variable == "since_event") gp << "set logscale x\n";
+    gp << "plot " << details::gnuplot_quoted(expl)
+       << " using 1:2 with linespoints lw 2 title 'mean residual'\n";
+    if (variable == "since_event") gp << "unset logscale x\n";
   }
+}
+
+// report.gp: the loops, the residual against time, the cause's plot and the held-out errors.
+std::string report_script(const std::filesystem::path& dir, const hc::Diagnosis& d,
+                          const std::string& variable, const hc::ResidualProfile* profile) {
   const std::string in = d.baseline.units.input, out = d.baseline.units.output;
   const std::string cause(hc::to_string(d.cause));
-  const fs::path record = dir / "record.dat";
+  const std::filesystem::path record = dir / "record.dat";
   std::ostringstream gp;
   gp << "# hystbench diagnose report: gnuplot " << details::gnuplot_quoted(dir / "report.gp")
      << "\n"
@@ -352,26 +379,7 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
      << " using 1:($8 == 1 ? $6 : 1/0) with impulses lc rgb '#dddddd' notitle, \\\n"
      << "     '' using 1:($8 < 2 ? $6 : 1/0) with lines lc rgb '#d62728' title 'baseline', \\\n"
      << "     '' using 1:($8 < 2 ? $7 : 1/0) with lines lc rgb '#1f77b4' title 'extended'\n";
-  const fs::path expl = dir / "explanatory.dat";
-  gp << "set output " << details::gnuplot_quoted(dir / ("cause_" + variable + ".png")) << "\n";
-  if (variable == "frequency") {
-    gp << "set title 'measured / baseline prediction against frequency (Welch)'\n"
-       << "set logscale x\nset xlabel 'f [Hz]'\nset ylabel 'gain'\nset y2label 'phase [deg]'\n"
-       << "set ytics nomirror\nset y2tics\n"
-       << "plot " << details::gnuplot_quoted(expl)
-       << " using 1:($5 > 0 ? $2 : 1/0) with lines lw 2 title "
-          "'gain (informative bins)', \\\n"
-       << "     '' using 1:($5 > 0 ? $3 : 1/0) axes x1y2 with lines title 'phase'\n"
-       << "unset logscale x\nunset y2tics\nunset y2label\nset ytics mirror\n";
-  } else {
-    const std::string label = profile != nullptr ? profile->label : variable;
-    gp << "set title 'baseline residual against " << label << " (binned mean)'\nset xlabel '"
-       << label << "'\nset ylabel 'mean residual [" << out << "]'\n";
-    if (variable == "since_event") gp << "set logscale x\n";
-    gp << "plot " << details::gnuplot_quoted(expl)
-       << " using 1:2 with linespoints lw 2 title 'mean residual'\n";
-    if (variable == "since_event") gp << "unset logscale x\n";
-  }
+  plot_cause(gp, dir, variable, profile, out);
   gp << "set output " << details::gnuplot_quoted(dir / "heldout_errors.png") << "\n"
      << "set title 'held-out rms error: baseline and each candidate (gain above the bars)'\n"
      << "set style fill solid 0.6\nset boxwidth 0.6\nset xlabel ''\nset ylabel 'rms [" << out
@@ -379,9 +387,38 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
      << "plot " << details::gnuplot_quoted(dir / "candidates.dat")
      << " using 1:3:xtic(2) with boxes lc rgb '#1f77b4' notitle, \\\n"
      << "     '' using 1:3:(sprintf('%.2fx', $4)) with labels offset 0,1 notitle\n";
+  return gp.str();
+}
+
+}  // namespace
+
+void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
+                            const std::string& data_path, std::span<const double> t,
+                            std::span<const double> u, std::span<const double> y) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::absolute(dir_name);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
+    throw std::runtime_error(dir.string() + ": cannot create the report folder");
+  }
+  {
+    auto f = open_for_writing(dir / "report.txt");
+    print_diagnosis(f, d, data_path);
+  }
+  {
+    auto f = open_for_writing(dir / "diagnosis.json");
+    f << std::setw(2) << diagnosis_to_json(d, data_path) << "\n";
+  }
+  write_record_series(dir / "record.dat", d, t, u, y);
+  const std::string variable = explanatory_variable(d.cause);
+  const hc::ResidualProfile* profile = d.profile(variable);
+  write_explanatory(dir / "explanatory.dat", d, variable, profile);
+  write_candidates(dir / "candidates.dat", d);
+  const std::string script = report_script(dir, d, variable, profile);
   {
     auto f = open_for_writing(dir / "report.gp");
-    f << gp.str();
+    f << script;
   }
   details::run_gnuplot(dir / "report.gp", dir / "gnuplot.log");
 }

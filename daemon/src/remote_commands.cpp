@@ -95,99 +95,100 @@ json wait_for_run(BenchClient& client, const std::string& run_id,
   }
 }
 
-void print_run_result(const json& r, std::ostream& out) {
-  out << "run " << r.value("run_id", "?") << " " << r.value("end", "?");
-  if (!r.value("reason", std::string()).empty())
-    out << " (" << r["reason"].get<std::string>() << ")";
-  out << ": " << r.value("samples", 0) << " samples, " << r.value("dropped", 0) << " dropped\n";
-  if (r.contains("rms_error_um")) {
-    out << "  tracking error  rms " << fixed(r["rms_error_um"], 4) << " um ("
-        << fixed(r["rms_error_percent"], 3) << " % of " << fixed(r["range_um"], 2) << " um)   max "
-        << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %)\n";
-    out << "  hysteresis      " << fixed(r["hysteresis_percent"], 3) << " % of the output range\n";
+namespace {
+
+// A tracking run's error against its reference, and the hysteresis it leaves.
+void print_tracking_error(std::ostream& out, const json& r) {
+  out << "  tracking error  rms " << fixed(r["rms_error_um"], 4) << " um ("
+      << fixed(r["rms_error_percent"], 3) << " % of " << fixed(r["range_um"], 2) << " um)   max "
+      << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %)\n";
+  out << "  hysteresis      " << fixed(r["hysteresis_percent"], 3) << " % of the output range\n";
+}
+
+// A learning run: each trial's error, why it stopped, and the drive it saved.
+void print_learning(std::ostream& out, const json& l) {
+  const json& trials = l["trials"];
+  const json from = l.value("started_from", json());
+  out << "  learning        " << trials.size() << " trials of "
+      << (l.value("reference", std::string()) == "upload"
+              ? "a pass of " + std::to_string(l.value("period_samples", 0)) + " ticks"
+              : fixed(l["frequency_hz"], 3) + " Hz")
+      << " (the first with "
+      << (from.is_string() ? "the drive " + from.get<std::string>() + " learned before"
+                           : std::string("the compensator's drive"))
+      << "): rms %";
+  for (const json& t : trials) out << " " << fixed(t["rms_error_percent"], 3);
+  out << "\n                  " << l.value("why", std::string()) << "; best trial "
+      << l.value("best_trial", json()).dump() << ", cut-off " << fixed(l["cutoff_hz"], 0) << " Hz";
+  if (l.value("stale_periods", 0) > 0) {
+    out << ", " << l["stale_periods"].get<int>()
+        << " periods replayed while the update was computed";
   }
-  if (const auto l = r.find("learning"); l != r.end() && l->is_object()) {
-    const json& trials = (*l)["trials"];
-    const json from = l->value("started_from", json());
-    out << "  learning        " << trials.size() << " trials of "
-        << (l->value("reference", std::string()) == "upload"
-                ? "a pass of " + std::to_string(l->value("period_samples", 0)) + " ticks"
-                : fixed((*l)["frequency_hz"], 3) + " Hz")
-        << " (the first with "
-        << (from.is_string() ? "the drive " + from.get<std::string>() + " learned before"
-                             : std::string("the compensator's drive"))
-        << "): rms %";
-    for (const json& t : trials) out << " " << fixed(t["rms_error_percent"], 3);
-    out << "\n                  " << (*l).value("why", std::string()) << "; best trial "
-        << (*l).value("best_trial", json()).dump() << ", cut-off " << fixed((*l)["cutoff_hz"], 0)
-        << " Hz";
-    if ((*l).value("stale_periods", 0) > 0) {
-      out << ", " << (*l)["stale_periods"].get<int>()
-          << " periods replayed while the update was computed";
-    }
-    out << "\n";
-    if (l->contains("drive_file")) {
-      out << "  learned drive   " << (*l).value("drive", std::string()) << " ("
-          << (*l)["drive_file"].get<std::string>() << "): track --learned "
-          << (*l).value("drive", std::string()) << " replays it\n";
-    }
+  out << "\n";
+  if (l.contains("drive_file")) {
+    out << "  learned drive   " << l.value("drive", std::string()) << " ("
+        << l["drive_file"].get<std::string>() << "): track --learned "
+        << l.value("drive", std::string()) << " replays it\n";
   }
-  if (r.contains("tare_um")) {
-    out << "  tare            " << fixed(r["tare_um"], 4)
-        << " um: the offset the model missed on the precondition sweep, taken off the "
-           "feedforward\n";
+}
+
+// The feedforward planned before the run: its size and error on the model, or why not.
+void print_planned_feedforward(std::ostream& out, const json& p) {
+  if (p.value("samples", 0) > 0) {
+    out << "  feedforward     planned over " << p.value("samples", 0) << " samples in "
+        << fixed(p["seconds"], 2) << " s: model rms " << fixed(p["model_rms_um"], 4)
+        << " um (the previewed inverse's " << fixed(p["previewed_model_rms_um"], 4) << " um)\n";
+  } else {
+    out << "  feedforward     not planned: " << p.value("why_not", std::string("?")) << "\n";
   }
-  if (const auto ff = r.find("feedforward"); ff != r.end() && ff->contains("planned")) {
-    const json& p = (*ff)["planned"];
-    if (p.value("samples", 0) > 0) {
-      out << "  feedforward     planned over " << p.value("samples", 0) << " samples in "
-          << fixed(p["seconds"], 2) << " s: model rms " << fixed(p["model_rms_um"], 4)
-          << " um (the previewed inverse's " << fixed(p["previewed_model_rms_um"], 4) << " um)\n";
-    } else {
-      out << "  feedforward     not planned: " << p.value("why_not", std::string("?")) << "\n";
-    }
+}
+
+// The bench's output against the model's prediction over the run.
+void print_model_error(std::ostream& out, const json& r) {
+  out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
+      << fixed(r["model_rms_error_percent"], 3) << " %)   max " << fixed(r["model_max_error_um"], 4)
+      << " um (" << fixed(r["model_max_error_percent"], 3)
+      << " %): y - y_model (y_model: " << r.value("y_model", std::string("?")) << ")\n";
+}
+
+// identify's model: its structure and file, its fit and held-out errors, the fit's notes.
+void print_model(std::ostream& out, const json& m) {
+  out << "  model           " << m.value("type", "?") << ", " << m.value("operators", 0)
+      << " plays, " << m.value("dead_zones", 0) << " dead zones per side -> "
+      << m.value("path", "?") << "\n";
+  if (m.contains("heldout")) {
+    out << "  model error     fit rms " << fixed(m["fit"]["rmse"], 4) << " um, held-out rms "
+        << fixed(m["heldout"]["rmse"], 4) << " um (" << fixed(m["heldout"]["rmse_percent"], 3)
+        << " %), max " << fixed(m["heldout"]["max_abs"], 4) << " um\n";
   }
-  if (r.contains("model_rms_error_um")) {
-    out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
-        << fixed(r["model_rms_error_percent"], 3) << " %)   max "
-        << fixed(r["model_max_error_um"], 4) << " um (" << fixed(r["model_max_error_percent"], 3)
-        << " %): y - y_model (y_model: " << r.value("y_model", std::string("?")) << ")\n";
+  for (const json& note : m.value("notes", json::array())) {
+    out << "  fit note        " << note.get<std::string>() << "\n";
   }
-  if (r.contains("model")) {
-    const json& m = r["model"];
-    out << "  model           " << m.value("type", "?") << ", " << m.value("operators", 0)
-        << " plays, " << m.value("dead_zones", 0) << " dead zones per side -> "
-        << m.value("path", "?") << "\n";
-    if (m.contains("heldout")) {
-      out << "  model error     fit rms " << fixed(m["fit"]["rmse"], 4) << " um, held-out rms "
-          << fixed(m["heldout"]["rmse"], 4) << " um (" << fixed(m["heldout"]["rmse_percent"], 3)
-          << " %), max " << fixed(m["heldout"]["max_abs"], 4) << " um\n";
-    }
-    for (const json& note : m.value("notes", json::array())) {
-      out << "  fit note        " << note.get<std::string>() << "\n";
-    }
+}
+
+// identify's verification through the inverse: its tracking error, or why it did not run.
+void print_verification(std::ostream& out, const json& v) {
+  out << "  verified        ";
+  if (v.contains("max_error_percent")) {
+    out << "tracking rms " << fixed(v["rms_error_percent"], 3) << " %, max "
+        << fixed(v["max_error_percent"], 3) << " % (1 Hz triangle through the inverse, "
+        << v.value("end", "?") << ")\n";
+  } else {
+    out << "not (" << v.value("end", "?") << ": " << v.value("reason", "") << ")\n";
   }
-  if (r.contains("verification") && r["verification"].is_object()) {
-    const json& v = r["verification"];
-    out << "  verified        ";
-    if (v.contains("max_error_percent")) {
-      out << "tracking rms " << fixed(v["rms_error_percent"], 3) << " %, max "
-          << fixed(v["max_error_percent"], 3) << " % (1 Hz triangle through the inverse, "
-          << v.value("end", "?") << ")\n";
-    } else {
-      out << "not (" << v.value("end", "?") << ": " << v.value("reason", "") << ")\n";
-    }
-  }
-  if (r.contains("model") && r["model"].contains("rate_law")) {
-    const json& law = r["model"]["rate_law"];
-    out << "  rate law        " << (law.value("kept", false) ? "kept" : "left out") << ": "
-        << fixed_or_dash(law.value("sine_hz", json()), 0) << " Hz sine rms "
-        << fixed_or_dash(law["sine_rms_percent"].value("rate_free", json()), 3) << " % without, "
-        << fixed_or_dash(law["sine_rms_percent"].value("law", json()), 3) << " % with it\n";
-  }
-  if (r.contains("model") && r["model"].contains("extension"))
-    print_extension(out, r["model"]["extension"]);
-  for (const json& c : r.value("candidates", json::array())) {
+}
+
+// Whether identify kept the rate law: the sine's error without it and with it.
+void print_rate_law(std::ostream& out, const json& law) {
+  out << "  rate law        " << (law.value("kept", false) ? "kept" : "left out") << ": "
+      << fixed_or_dash(law.value("sine_hz", json()), 0) << " Hz sine rms "
+      << fixed_or_dash(law["sine_rms_percent"].value("rate_free", json()), 3) << " % without, "
+      << fixed_or_dash(law["sine_rms_percent"].value("law", json()), 3) << " % with it\n";
+}
+
+// identify's other candidates: each one's held-out and verified error.
+void print_candidates(std::ostream& out, const json& candidates) {
+  for (const json& c : candidates) {
     const json& v = c["verification"];
     out << "  candidate       " << c.value("type", "?") << " " << c.value("operators", 0) << "/"
         << c.value("dead_zones", 0) << ": held-out rms " << fixed(c["heldout"]["rmse_percent"], 3)
@@ -196,20 +197,54 @@ void print_run_result(const json& r, std::ostream& out) {
                                                              : std::string("-"))
         << " %\n";
   }
+}
+
+// The loop's timing over the run: wake latency, execution time, overruns.
+void print_loop_timing(std::ostream& out, const json& r) {
+  const json& l = r["loop"];
+  const json w = l.value("wake_latency_ns", json::object());
+  const json e = l.value("exec_ns", json::object());
+  out << "  loop            wake latency p50 " << us(w.value("p50", json())) << " us, p99 "
+      << us(w.value("p99", json())) << " us, max " << us(w.value("max", json()))
+      << " us; execution p99 " << us(e.value("p99", json())) << " us; " << l.value("overruns", 0)
+      << " overruns";
+  // Virtual time: no wake-up to be late, no overrun; the execution time is measured.
+  if (r.value("clock", "") == "simulated") out << " (simulated clock)";
+  out << "\n";
+}
+
+}  // namespace
+
+void print_run_result(const json& r, std::ostream& out) {
+  out << "run " << r.value("run_id", "?") << " " << r.value("end", "?");
+  if (!r.value("reason", std::string()).empty())
+    out << " (" << r["reason"].get<std::string>() << ")";
+  out << ": " << r.value("samples", 0) << " samples, " << r.value("dropped", 0) << " dropped\n";
+  if (r.contains("rms_error_um")) print_tracking_error(out, r);
+  if (const auto l = r.find("learning"); l != r.end() && l->is_object()) print_learning(out, *l);
+  if (r.contains("tare_um")) {
+    out << "  tare            " << fixed(r["tare_um"], 4)
+        << " um: the offset the model missed on the precondition sweep, taken off the "
+           "feedforward\n";
+  }
+  if (const auto ff = r.find("feedforward"); ff != r.end() && ff->contains("planned")) {
+    print_planned_feedforward(out, (*ff)["planned"]);
+  }
+  if (r.contains("model_rms_error_um")) print_model_error(out, r);
+  if (r.contains("model")) print_model(out, r["model"]);
+  if (r.contains("verification") && r["verification"].is_object()) {
+    print_verification(out, r["verification"]);
+  }
+  if (r.contains("model") && r["model"].contains("rate_law")) {
+    print_rate_law(out, r["model"]["rate_law"]);
+  }
+  if (r.contains("model") && r["model"].contains("extension"))
+    print_extension(out, r["model"]["extension"]);
+  print_candidates(out, r.value("candidates", json::array()));
   if (r.contains("fit_error"))
     out << "  fit failed      " << r["fit_error"].get<std::string>() << "\n";
-  if (r.contains("loop") && r.value("samples", 0) > 0) {  // an unplayed run has no timing
-    const json& l = r["loop"];
-    const json w = l.value("wake_latency_ns", json::object());
-    const json e = l.value("exec_ns", json::object());
-    out << "  loop            wake latency p50 " << us(w.value("p50", json())) << " us, p99 "
-        << us(w.value("p99", json())) << " us, max " << us(w.value("max", json()))
-        << " us; execution p99 " << us(e.value("p99", json())) << " us; " << l.value("overruns", 0)
-        << " overruns";
-    // Virtual time: no wake-up to be late, no overrun; the execution time is measured.
-    if (r.value("clock", "") == "simulated") out << " (simulated clock)";
-    out << "\n";
-  }
+  // An unplayed run has no timing.
+  if (r.contains("loop") && r.value("samples", 0) > 0) print_loop_timing(out, r);
   if (r.contains("clamps")) {
     out << "  limits          " << r.value("clamps", 0) << " clamped, " << r.value("slew_limits", 0)
         << " slew-limited samples\n";
@@ -282,40 +317,76 @@ std::string send_upload(BenchClient& client, const RemoteUpload& upload,
   return name;
 }
 
+namespace {
+
+/// Sends the command, after its upload, and returns the daemon's reply; CommandError when the
+/// daemon refuses either.
+json request_command(BenchClient& client, const RemoteCommand& cmd, bool tty, std::ostream& err) {
+  json params = cmd.params;
+  if (cmd.upload) {
+    std::function<void(double)> shown;
+    if (tty && !cmd.json_output && cmd.upload->values.size() > 100'000) {
+      shown = [&](double f) { progress_bar(err, f, "uploading " + cmd.upload->source); };
+    }
+    params[cmd.upload->param] = send_upload(client, *cmd.upload, shown);
+    if (shown) err << "\r\x1b[K" << std::flush;
+  }
+  json reply = client.request(cmd.cmd, params);
+  (void)result_or_throw(reply);
+  return reply;
+}
+
+/// The daemon's refusal: as JSON, or as a message naming the first offending row of an upload.
+void report_refusal(const RemoteCommand& cmd, const CommandError& e, std::ostream& out,
+                    std::ostream& err) {
+  if (cmd.json_output) {
+    json error = e.detail();
+    error["code"] = e.code();
+    error["message"] = e.what();
+    out << json{{"ok", false}, {"error", error}}.dump() << "\n";
+    return;
+  }
+  err << "hystbench: " << cmd.cmd << " refused: " << e.what() << " [" << e.code() << "]\n";
+  // The first offending sample, as the line of the user's file.
+  if (cmd.upload && e.detail().contains("sample") && e.detail()["sample"].is_number()) {
+    const auto k = e.detail()["sample"].get<std::size_t>();
+    if (k < cmd.upload->lines.size()) {
+      err << "hystbench: " << cmd.upload->source << ":" << cmd.upload->lines[k]
+          << ": the first offending row (data row " << k + 1 << ")\n";
+    }
+  }
+}
+
+/// Plots the finished run's log into --plot's folder and lists the images in r["plots"]; false
+/// when plotting failed.
+bool plot_run(const RemoteCommand& cmd, json& r, std::ostream& err) {
+  try {
+    json files = json::array();
+    for (const auto& png : plot_run_log(r["log"].get<std::string>(), cmd.plot_dir)) {
+      files.push_back(png.string());
+    }
+    if (r.contains("learning")) {
+      files.push_back(plot_learning(r["learning"], r["log"], cmd.plot_dir).string());
+    }
+    r["plots"] = files;
+    return true;
+  } catch (const std::exception& e) {
+    err << "hystbench: error: --plot: " << e.what() << "\n";
+    return false;
+  }
+}
+
+}  // namespace
+
 int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
     BenchClient client(cmd.socket_path);
     const bool tty = ::isatty(STDERR_FILENO) == 1;
-    json params = cmd.params;
     json reply;
     try {
-      if (cmd.upload) {
-        std::function<void(double)> shown;
-        if (tty && !cmd.json_output && cmd.upload->values.size() > 100'000) {
-          shown = [&](double f) { progress_bar(err, f, "uploading " + cmd.upload->source); };
-        }
-        params[cmd.upload->param] = send_upload(client, *cmd.upload, shown);
-        if (shown) err << "\r\x1b[K" << std::flush;
-      }
-      reply = client.request(cmd.cmd, params);
-      (void)result_or_throw(reply);
+      reply = request_command(client, cmd, tty, err);
     } catch (const CommandError& e) {
-      if (cmd.json_output) {
-        json error = e.detail();
-        error["code"] = e.code();
-        error["message"] = e.what();
-        out << json{{"ok", false}, {"error", error}}.dump() << "\n";
-      } else {
-        err << "hystbench: " << cmd.cmd << " refused: " << e.what() << " [" << e.code() << "]\n";
-        // The first offending sample, as the line of the user's file.
-        if (cmd.upload && e.detail().contains("sample") && e.detail()["sample"].is_number()) {
-          const auto k = e.detail()["sample"].get<std::size_t>();
-          if (k < cmd.upload->lines.size()) {
-            err << "hystbench: " << cmd.upload->source << ":" << cmd.upload->lines[k]
-                << ": the first offending row (data row " << k + 1 << ")\n";
-          }
-        }
-      }
+      report_refusal(cmd, e, out, err);
       return 1;
     }
     const json& result = reply["result"];
@@ -340,20 +411,8 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
     json r = wait_for_run(client, run_id, show);
     if (show) err << "\r\x1b[K" << std::flush;
     int status = r.value("end", "") == "completed" && !r.contains("fit_error") ? 0 : 1;
-    if (!cmd.plot_dir.empty() && !r.value("log", std::string()).empty()) {
-      try {
-        json files = json::array();
-        for (const auto& png : plot_run_log(r["log"].get<std::string>(), cmd.plot_dir)) {
-          files.push_back(png.string());
-        }
-        if (r.contains("learning")) {
-          files.push_back(plot_learning(r["learning"], r["log"], cmd.plot_dir).string());
-        }
-        r["plots"] = files;
-      } catch (const std::exception& e) {
-        err << "hystbench: error: --plot: " << e.what() << "\n";
-        status = 1;
-      }
+    if (!cmd.plot_dir.empty() && !r.value("log", std::string()).empty() && !plot_run(cmd, r, err)) {
+      status = 1;
     }
     if (cmd.json_output) {
       out << r.dump() << "\n";

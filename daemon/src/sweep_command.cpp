@@ -127,6 +127,23 @@ void write_plot(const SweepCommand& cmd, const json& rows) {
   details::run_gnuplot(dir / "sweep.gp", dir / "gnuplot.log");
 }
 
+// The finished run's figures in its row: its end, errors and log, and a learning run's trials.
+void add_run_figures(json& row, const json& r) {
+  for (const char* key :
+       {"run_id", "end", "reason", "rms_error_percent", "max_error_percent", "rms_error_um",
+        "max_error_um", "range_um", "model_rms_error_percent", "log"}) {
+    if (r.contains(key)) row[key] = r[key];
+  }
+  if (const auto l = r.find("learning"); l != r.end() && l->is_object()) {
+    json trials = json::array();
+    for (const json& t : (*l)["trials"]) trials.push_back(t["rms_error_percent"]);
+    row["learning"] = {{"frequency_hz", (*l)["frequency_hz"]},
+                       {"trials_rms_percent", trials},
+                       {"stopped", (*l)["stopped"]},
+                       {"drive", l->value("drive", json())}};
+  }
+}
+
 }  // namespace
 
 int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
@@ -170,19 +187,7 @@ int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
         }
         const json r = wait_for_run(client, reply["result"].value("run_id", ""), show);
         ++done;
-        for (const char* key :
-             {"run_id", "end", "reason", "rms_error_percent", "max_error_percent", "rms_error_um",
-              "max_error_um", "range_um", "model_rms_error_percent", "log"}) {
-          if (r.contains(key)) row[key] = r[key];
-        }
-        if (const auto l = r.find("learning"); l != r.end() && l->is_object()) {
-          json trials = json::array();
-          for (const json& t : (*l)["trials"]) trials.push_back(t["rms_error_percent"]);
-          row["learning"] = {{"frequency_hz", (*l)["frequency_hz"]},
-                             {"trials_rms_percent", trials},
-                             {"stopped", (*l)["stopped"]},
-                             {"drive", l->value("drive", json())}};
-        }
+        add_run_figures(row, r);
         rows.push_back(row);
         if (r.value("end", "") != "completed") {
           err << (tty ? "\r\x1b[K" : "") << "hystbench: sweep: " << label << " ended "

@@ -6,6 +6,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/drive_planner.hpp"
@@ -276,6 +277,115 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
   return out;
 }
 
+// The work of feedforward_plan's preparation: the drive planned over the targets (or the plan
+// kept from the same inputs), put in the program's compensator in place of the previewed
+// inverse where it is better on the model; the program's summary says which and why.
+struct FeedforwardPlanning {
+  hc::ActuatorModel relaxed;  ///< the model relaxed at the present output u_now
+  double u_now = 0.0;
+  std::vector<double> targets;
+  std::uint64_t planned_samples = 0;  ///< the targets planned; a periodic rest continues them
+  double period_samples = 0.0;
+  hc::CompensatorKind kind;
+  std::optional<hc::PidController> pid;
+  hc::LinearMap linear;
+  std::shared_ptr<PlanCache> cache;
+  std::uint64_t generation = 0;  ///< the model's, for the cache
+
+  void operator()(RunProgram& program, const std::function<void(double)>& progress) {
+    hc::DrivePlanOptions options;
+    options.progress = progress;
+    // Below 0.1 % of the reference's span on the model the previewed inverse is kept:
+    // the model's own mismatch is larger (a slow reference; 1 Hz on the loopback).
+    const auto [lo, hi] = std::minmax_element(targets.begin(), targets.end());
+    options.accept_start_rms = kGoodEnoughFraction * (*hi - *lo);
+    const auto start = std::chrono::steady_clock::now();
+    json planned = {{"samples", 0}};
+    std::optional<hc::DrivePlan> plan;
+    const bool reused = cache && reuse_plan(*cache, generation, u_now, program.excitation, targets,
+                                            planned_samples, period_samples, plan);
+    try {
+      if (reused) {
+        progress(1.0);  // a stop or abort meanwhile still cancels the run
+      } else {
+        make_plan(program, options, plan);
+      }
+    } catch (const PreparationCancelled&) {
+      program.summary["feedforward"]["planned"] = {
+          {"samples", 0}, {"why_not", "cancelled before the plan was done"}};
+      throw;
+    } catch (const std::exception& e) {
+      planned["why_not"] =
+          std::string("planning failed (") + e.what() + "): the previewed inverse follows it";
+    }
+    if (plan && plan->start_rms <= options.accept_start_rms) {
+      planned["why_not"] = "the previewed inverse already meets the targets on the model (" +
+                           std::to_string(plan->start_rms) +
+                           " um rms, within 0.1 % of the reference's span): it follows them";
+      plan.reset();
+    }
+    if (plan) {
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      adopt(program, *plan, reused, seconds, planned);
+    }
+    program.summary["feedforward"]["planned"] = planned;
+  }
+
+  // Plans the drive over the first planned_samples targets, continues a periodic plan over the
+  // rest and keeps the plan in the cache.
+  void make_plan(const RunProgram& program, const hc::DrivePlanOptions& options,
+                 std::optional<hc::DrivePlan>& plan) {
+    plan = hc::plan_drive(relaxed, u_now, program.excitation,
+                          std::span<const double>(targets).first(planned_samples), options);
+    if (planned_samples < targets.size()) {
+      plan = hc::continue_periodic_plan(std::move(*plan), period_samples, targets.size());
+    }
+    if (cache) {
+      keep_plan(*cache, generation, u_now, program.excitation, targets, planned_samples,
+                period_samples, *plan);
+    }
+  }
+
+  // Puts the plan in the program's compensator where it is better on the model than the
+  // previewed inverse; `planned` gets its figures, or why it does not play.
+  void adopt(RunProgram& program, hc::DrivePlan& plan, bool reused, double seconds, json& planned) {
+    planned = {{"samples", targets.size()}, {"optimised_samples", planned_samples},
+               {"seconds", seconds},        {"reused", reused},
+               {"model_rms_um", plan.rms},  {"previewed_model_rms_um", plan.start_rms}};
+    // The plan pays for its smoothness, and beyond the rates its model was identified
+    // at it plans on the continued law: where that leaves it worse on the model as it
+    // is, the previewed inverse plays.
+    if (plan.rms <= plan.start_rms) {
+      program.compensator.emplace(
+          kind, std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(plan)), pid,
+          linear);
+    } else {
+      planned["samples"] = 0;
+      planned["why_not"] = "on the model the plan's error (" + std::to_string(plan.rms) +
+                           " um rms) is not below the previewed inverse's (" +
+                           std::to_string(plan.start_rms) +
+                           " um): the previewed inverse follows it";
+    }
+  }
+};
+
+// The samples of the reference the planner plans, and its period in samples (0: planned
+// whole). A periodic reference too long to plan whole: its first four periods are planned and
+// the third repeats (the model's state repeats with the reference after one period; not with
+// creep, whose state drifts over the run).
+std::pair<std::uint64_t, double> planned_window(const hc::ActuatorModel& model,
+                                                std::uint64_t samples, double reference_hz,
+                                                double dt) {
+  if (hc::plan_drive_work(model, samples) > kMaxPlanWork && reference_hz > 0.0 && !model.creep()) {
+    const double period_samples = 1.0 / (reference_hz * dt);
+    return {std::min<std::uint64_t>(
+                samples, static_cast<std::uint64_t>(std::ceil(4.0 * period_samples)) + 1),
+            period_samples};
+  }
+  return {samples, 0.0};
+}
+
 // The feedforward planned over the whole known reference for a rate-dependent model
 // (compensation::plan_drive: the per-sample rate law leaves a tick-by-tick inverse no good
 // choice at a fast reference's tops), as the run's preparation: the bench plans on its
@@ -295,17 +405,8 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
   if (!hc::can_plan_drive(ctx.model->model) || samples == 0) return {};
   const auto& lim = ctx.settings.loop.limits;
   const double dt = ctx.dt();
-  // A periodic reference too long to plan whole: its first four periods are planned and the
-  // third repeats (the model's state repeats with the reference after one period; not with
-  // creep, whose state drifts over the run).
-  std::uint64_t planned_samples = samples;
-  double period_samples = 0.0;
-  if (hc::plan_drive_work(ctx.model->model, samples) > kMaxPlanWork && reference_hz > 0.0 &&
-      !ctx.model->model.creep()) {
-    period_samples = 1.0 / (reference_hz * dt);
-    planned_samples = std::min<std::uint64_t>(
-        samples, static_cast<std::uint64_t>(std::ceil(4.0 * period_samples)) + 1);
-  }
+  const auto [planned_samples, period_samples] =
+      planned_window(ctx.model->model, samples, reference_hz, dt);
   if (hc::plan_drive_work(ctx.model->model, planned_samples) > kMaxPlanWork) {
     const auto longest =
         static_cast<std::uint64_t>(kMaxPlanWork / hc::plan_drive_work(ctx.model->model, 1));
@@ -323,72 +424,9 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
   feedforward["planned"] = {{"samples", samples}, {"planning", true}};
   return {
       "planning the feedforward",
-      [relaxed = model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt),
-       u_now = ctx.u_now, targets = std::move(targets), planned_samples, period_samples, kind, pid,
-       linear, cache = ctx.plans, generation = ctx.model_generation](
-          RunProgram& program, const std::function<void(double)>& progress) mutable {
-        hc::DrivePlanOptions options;
-        options.progress = progress;
-        // Below 0.1 % of the reference's span on the model the previewed inverse is kept:
-        // the model's own mismatch is larger (a slow reference; 1 Hz on the loopback).
-        const auto [lo, hi] = std::minmax_element(targets.begin(), targets.end());
-        options.accept_start_rms = kGoodEnoughFraction * (*hi - *lo);
-        const auto start = std::chrono::steady_clock::now();
-        json planned = {{"samples", 0}};
-        std::optional<hc::DrivePlan> plan;
-        const bool reused = cache && reuse_plan(*cache, generation, u_now, program.excitation,
-                                                targets, planned_samples, period_samples, plan);
-        try {
-          if (reused) {
-            progress(1.0);  // a stop or abort meanwhile still cancels the run
-          } else {
-            plan = hc::plan_drive(relaxed, u_now, program.excitation,
-                                  std::span<const double>(targets).first(planned_samples), options);
-            if (planned_samples < targets.size()) {
-              plan = hc::continue_periodic_plan(std::move(*plan), period_samples, targets.size());
-            }
-            if (cache) {
-              keep_plan(*cache, generation, u_now, program.excitation, targets, planned_samples,
-                        period_samples, *plan);
-            }
-          }
-        } catch (const PreparationCancelled&) {
-          program.summary["feedforward"]["planned"] = {
-              {"samples", 0}, {"why_not", "cancelled before the plan was done"}};
-          throw;
-        } catch (const std::exception& e) {
-          planned["why_not"] =
-              std::string("planning failed (") + e.what() + "): the previewed inverse follows it";
-        }
-        if (plan && plan->start_rms <= options.accept_start_rms) {
-          planned["why_not"] = "the previewed inverse already meets the targets on the model (" +
-                               std::to_string(plan->start_rms) +
-                               " um rms, within 0.1 % of the reference's span): it follows them";
-          plan.reset();
-        }
-        if (plan) {
-          const double seconds =
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-          planned = {{"samples", targets.size()}, {"optimised_samples", planned_samples},
-                     {"seconds", seconds},        {"reused", reused},
-                     {"model_rms_um", plan->rms}, {"previewed_model_rms_um", plan->start_rms}};
-          // The plan pays for its smoothness, and beyond the rates its model was identified
-          // at it plans on the continued law: where that leaves it worse on the model as it
-          // is, the previewed inverse plays.
-          if (plan->rms <= plan->start_rms) {
-            program.compensator.emplace(
-                kind, std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(*plan)),
-                pid, linear);
-          } else {
-            planned["samples"] = 0;
-            planned["why_not"] = "on the model the plan's error (" + std::to_string(plan->rms) +
-                                 " um rms) is not below the previewed inverse's (" +
-                                 std::to_string(plan->start_rms) +
-                                 " um): the previewed inverse follows it";
-          }
-        }
-        program.summary["feedforward"]["planned"] = planned;
-      }};
+      FeedforwardPlanning{model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt),
+                          ctx.u_now, std::move(targets), planned_samples, period_samples, kind, pid,
+                          linear, ctx.plans, ctx.model_generation}};
 }
 
 // The learner of a learning run: the trials' exchange from the first scored period on, the
@@ -428,6 +466,17 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   } catch (const std::invalid_argument& e) {
     throw CommandError("bad_params", std::string("learning: ") + e.what());
   }
+}
+
+// A learning run's plan, for the run's header and the start reply.
+json learning_summary(const LearningPlan& learn) {
+  json l = {{"trials", learn.trials},
+            {"gain", learn.gain},
+            {"frequency_hz", learn.frequency_hz},
+            {"period_samples", learn.period}};
+  if (learn.scored_from > 0) l["scored_from"] = learn.scored_from;
+  if (learn.start) l["started_from"] = learn.start->name;
+  return l;
 }
 
 }  // namespace
@@ -500,12 +549,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
                {"feedback", feedback},
                {"feedforward", p->summary.value("feedforward", json(nullptr))}};
   if (learn) {
-    json l = {{"trials", learn->trials},
-              {"gain", learn->gain},
-              {"frequency_hz", learn->frequency_hz},
-              {"period_samples", learn->period}};
-    if (learn->scored_from > 0) l["scored_from"] = learn->scored_from;
-    if (learn->start) l["started_from"] = learn->start->name;
+    const json l = learning_summary(*learn);
     run.header["run"]["learning"] = l;
     run.reply["learning"] = l;
   }

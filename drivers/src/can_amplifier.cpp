@@ -77,6 +77,22 @@ Result CanAmplifierDriver::on_configure(const nlohmann::json& params, double rat
 Result CanAmplifierDriver::on_activate() {
   const std::string where = interface_.empty() ? "socket " + std::to_string(socket_fd_)
                                                : "interface '" + interface_ + "'";
+  if (auto r = check_controller(where); !r) return r;
+  if (auto r = check_bus_rate(where); !r) return r;
+  if (auto r = open_socket(); !r) return r;
+  if (auto r = enable_amplifier(where); !r) return r;
+  consecutive_send_failures_ = 0;
+  last_feedback_ns_ = monotonic_ns();
+  bus_off_ = false;
+  socket_dead_ = false;
+  if (restart_on_bus_off_ && controller_) {
+    quit_ = false;
+    supervisor_ = std::thread([this] { supervise(); });
+  }
+  return Result::success();
+}
+
+Result CanAmplifierDriver::check_controller(const std::string& where) {
   try {
     if (socket_fd_ < 0 && !interface_is_up(interface_)) {
       return Result::failure("driver.can: " + where + " is down (ip link set " + interface_ +
@@ -86,37 +102,43 @@ Result CanAmplifierDriver::on_activate() {
     return Result::failure(e.what());
   }
   bitrate_ = 0;
-  if (controller_) {
-    CanController::State s = controller_->state();
-    if (s == CanController::State::kBusOff && restart_on_bus_off_) {
-      if (auto r = controller_->restart(); !r) return r;
-      restarts_.fetch_add(1);
-      s = controller_->state();
-    }
-    controller_state_ = to_string(s);
-    if (s == CanController::State::kBusOff) {
-      return Result::failure("driver.can: " + where + " is bus-off: restart it (ip link set " +
-                             interface_ +
-                             " type can restart) or set driver.can.restart_on_bus_off = true");
-    }
-    if (s == CanController::State::kStopped || s == CanController::State::kSleeping) {
-      return Result::failure("driver.can: " + where + " controller is " + controller_state_ +
-                             " (ip link set " + interface_ + " up type can bitrate 1000000)");
-    }
-    bitrate_ = controller_->bitrate();
+  if (!controller_) return Result::success();
+  CanController::State s = controller_->state();
+  if (s == CanController::State::kBusOff && restart_on_bus_off_) {
+    if (auto r = controller_->restart(); !r) return r;
+    restarts_.fetch_add(1);
+    s = controller_->state();
   }
-  if (bitrate_ > 0) {
-    const int bits = can_frame_bits(protocol_.setpoint_length, protocol_.setpoint_id.extended) +
-                     can_frame_bits(protocol_.feedback_length, protocol_.feedback_id.extended);
-    const double bus_max = std::floor(static_cast<double>(bitrate_) / bits);
-    max_rate_hz_ = declared_max_rate_hz_ > 0.0 ? std::min(declared_max_rate_hz_, bus_max) : bus_max;
-    if (rate_hz_ > max_rate_hz_) {
-      return Result::failure("loop.rate_hz: " + fixed(rate_hz_, 0) + " Hz is beyond what " + where +
-                             " carries at " + std::to_string(bitrate_) + " bit/s: a setpoint and " +
-                             "a feedback frame take up to " + std::to_string(bits) +
-                             " bits, so at most " + fixed(bus_max, 0) + " Hz");
-    }
+  controller_state_ = to_string(s);
+  if (s == CanController::State::kBusOff) {
+    return Result::failure("driver.can: " + where + " is bus-off: restart it (ip link set " +
+                           interface_ +
+                           " type can restart) or set driver.can.restart_on_bus_off = true");
   }
+  if (s == CanController::State::kStopped || s == CanController::State::kSleeping) {
+    return Result::failure("driver.can: " + where + " controller is " + controller_state_ +
+                           " (ip link set " + interface_ + " up type can bitrate 1000000)");
+  }
+  bitrate_ = controller_->bitrate();
+  return Result::success();
+}
+
+Result CanAmplifierDriver::check_bus_rate(const std::string& where) {
+  if (bitrate_ == 0) return Result::success();
+  const int bits = can_frame_bits(protocol_.setpoint_length, protocol_.setpoint_id.extended) +
+                   can_frame_bits(protocol_.feedback_length, protocol_.feedback_id.extended);
+  const double bus_max = std::floor(static_cast<double>(bitrate_) / bits);
+  max_rate_hz_ = declared_max_rate_hz_ > 0.0 ? std::min(declared_max_rate_hz_, bus_max) : bus_max;
+  if (rate_hz_ > max_rate_hz_) {
+    return Result::failure("loop.rate_hz: " + fixed(rate_hz_, 0) + " Hz is beyond what " + where +
+                           " carries at " + std::to_string(bitrate_) + " bit/s: a setpoint and " +
+                           "a feedback frame take up to " + std::to_string(bits) +
+                           " bits, so at most " + fixed(bus_max, 0) + " Hz");
+  }
+  return Result::success();
+}
+
+Result CanAmplifierDriver::open_socket() {
   try {
     if (socket_fd_ >= 0) {
       const int fd = ::fcntl(socket_fd_, F_DUPFD_CLOEXEC, 0);
@@ -131,6 +153,10 @@ Result CanAmplifierDriver::on_activate() {
   } catch (const std::exception& e) {
     return Result::failure(e.what());
   }
+  return Result::success();
+}
+
+Result CanAmplifierDriver::enable_amplifier(const std::string& where) {
   can_frame f{};
   while (socket_->receive(f) == 1) {
   }
@@ -169,14 +195,6 @@ Result CanAmplifierDriver::on_activate() {
     }() + ") on " + where));
   }
   activation_y_ = y;
-  consecutive_send_failures_ = 0;
-  last_feedback_ns_ = monotonic_ns();
-  bus_off_ = false;
-  socket_dead_ = false;
-  if (restart_on_bus_off_ && controller_) {
-    quit_ = false;
-    supervisor_ = std::thread([this] { supervise(); });
-  }
   return Result::success();
 }
 

@@ -145,6 +145,29 @@ class BenchLoop {
   }
   void tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
   void run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
+  // run_tick's stages, in order: drive -> limit -> exchange -> score -> record. Each fills its
+  // part of the sample's record. Inline, defined in bench_loop.cpp (their only caller), so that
+  // the compiler can keep the tick one function.
+  struct TickDrive;
+  struct TickExchange;
+  /// The output the run asks for at tick k: its open-loop drive, or the compensator's.
+  inline TickDrive drive(RunProgram& p, std::uint64_t k, SampleRecord& rec) noexcept;
+  /// A tracking tick: the reference, limited to the range, and the compensator's output for it
+  /// (or a learned drive's).
+  inline void track_drive(RunProgram& p, std::uint64_t k, TickDrive& d, SampleRecord& rec) noexcept;
+  /// The requested output through the limits, counted, and the model's prediction for it.
+  inline OutputLimiter::Applied limit(RunProgram& p, std::uint64_t k, double u_request,
+                                      SampleRecord& rec) noexcept;
+  /// Writes the output and reads the measurement: the fault, if any, and the reading's age.
+  inline TickExchange exchange(RunProgram& p, std::uint64_t k, const OutputLimiter::Applied& lim,
+                               SampleRecord& rec) noexcept;
+  /// Adds a sample that did not fault to the run's errors and to its learning trial; true when
+  /// the last trial has played.
+  static inline bool score(RunProgram& p, std::uint64_t k, const TickDrive& d,
+                           const SampleRecord& rec) noexcept;
+  /// Keeps the sample in the run's record, log and timing, and publishes it as done.
+  inline void record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::uint32_t response,
+                     std::int64_t wake_latency_ns, SampleRecord& rec) noexcept;
   void idle_tick() noexcept;
   /// Pushes the record to the run's log: a full ring drops it on the wall clock and waits for
   /// room on the simulated clock.

@@ -70,6 +70,17 @@ class CanAmplifierDriver final : public DriverInterface {
   void stop_supervisor() noexcept;
   /// Safe setpoint and disable frame, socket closed; returns the failure `message`.
   Result release(const std::string& message);
+  // on_activate's steps, in order; `where` names the interface or socket in their messages.
+  /// The interface is up and its controller (when there is one) neither bus-off, after a
+  /// restart where configured, nor stopped; reads its bitrate (0 without a controller).
+  Result check_controller(const std::string& where);
+  /// The loop rate fits on the bus: a setpoint and a feedback frame per tick at the bitrate.
+  Result check_bus_rate(const std::string& where);
+  /// The socket: a duplicate of socket_fd, else the interface's.
+  Result open_socket();
+  /// Sends the enable frame, then safe setpoints until the amplifier's feedback answers
+  /// without a fault; keeps its position as the activation position.
+  Result enable_amplifier(const std::string& where);
 
   CanProtocol protocol_;
   std::string interface_;
