@@ -4,7 +4,7 @@
 #   model_file csv; default all)
 # Corpora live in build-fuzz/corpus/<target>/ (seeded from config/ and the tests); a crash,
 # hang (-timeout) or sanitizer report is copied to fuzz/regressions/<target>/ -- commit it: the
-# normal test suite replays every file there (tests/daemon/fuzz_regressions_test.cpp).
+# normal test suite replays every file there (tests/daemon/service/fuzz_regressions_test.cpp).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}

@@ -10,10 +10,10 @@
 #include <iostream>
 #include <optional>
 
-#include "hystbench/daemon/bench.hpp"
-#include "hystbench/daemon/config.hpp"
-#include "hystbench/daemon/daemon_settings.hpp"
-#include "hystbench/daemon/socket_server.hpp"
+#include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/config/daemon_settings.hpp"
+#include "hystbench/daemon/service/socket_server.hpp"
 
 namespace hd = hystbench::daemon;
 

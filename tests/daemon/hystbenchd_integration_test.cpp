@@ -22,9 +22,9 @@
 
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pi_model.hpp"
-#include "hystbench/daemon/bench_client.hpp"
-#include "hystbench/daemon/data_table.hpp"
-#include "hystbench/daemon/remote_commands.hpp"
+#include "hystbench/cli/remote/bench_client.hpp"
+#include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/cli/remote/remote_commands.hpp"
 #include "support/daemon_process.hpp"
 #include "support/temp_dir_test.hpp"
 

@@ -4,8 +4,8 @@
 
 #include <filesystem>
 
-#include "hystbench/daemon/config.hpp"
-#include "hystbench/daemon/daemon_settings.hpp"
+#include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/config/daemon_settings.hpp"
 #include "hystbench/drivers/driver.hpp"
 
 namespace hdm = hystbench::daemon;

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <thread>
 
-#include "hystbench/daemon/bench_loop.hpp"
+#include "hystbench/daemon/loop/bench_loop.hpp"
 #include "hystbench/drivers/driver.hpp"
 
 namespace hd = hystbench::drivers;

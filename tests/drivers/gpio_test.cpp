@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <thread>
 
-#include "hystbench/daemon/bench_loop.hpp"
+#include "hystbench/daemon/loop/bench_loop.hpp"
 #include "hystbench/drivers/gpio_driver.hpp"
 #include "hystbench/drivers/loopback_driver.hpp"
 

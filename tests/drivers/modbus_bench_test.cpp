@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <thread>
 
-#include "hystbench/daemon/bench.hpp"
-#include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/cli/offline/data_table.hpp"
 #include "peer_process.hpp"
 #include "support/bench_fixture.hpp"
 

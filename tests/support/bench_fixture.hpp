@@ -14,9 +14,9 @@
 #include <thread>
 #include <vector>
 
-#include "hystbench/daemon/bench.hpp"
-#include "hystbench/daemon/config.hpp"
-#include "hystbench/daemon/daemon_settings.hpp"
+#include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/config/daemon_settings.hpp"
 #include "support/temp_dir_test.hpp"
 
 namespace hystbench::test {

@@ -17,7 +17,7 @@
 #include <thread>
 #include <vector>
 
-#include "hystbench/daemon/bench_client.hpp"
+#include "hystbench/cli/remote/bench_client.hpp"
 
 extern char** environ;
 

@@ -12,12 +12,12 @@
 #include <string>
 #include <string_view>
 
-#include "../../daemon/src/details/json_lines.hpp"
+#include "service/details/json_lines.hpp"
 #include "hystbench/compensation/model_file.hpp"
-#include "hystbench/daemon/bench.hpp"
-#include "hystbench/daemon/config.hpp"
-#include "hystbench/daemon/daemon_settings.hpp"
-#include "hystbench/daemon/data_table.hpp"
+#include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/config/daemon_settings.hpp"
+#include "hystbench/cli/offline/data_table.hpp"
 
 namespace hystbench::fuzz {
 

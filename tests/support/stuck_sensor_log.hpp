@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstddef>
 
-#include "hystbench/daemon/data_table.hpp"
+#include "hystbench/cli/offline/data_table.hpp"
 
 namespace hystbench::test {
 

@@ -1,0 +1,420 @@
+// The bench commands of the `hystbench` CLI: they talk to hystbenchd over its socket.
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "subcommands.hpp"
+#include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/common/fit_families.hpp"
+#include "hystbench/common/model_file_io.hpp"
+#include "hystbench/cli/remote/remote_commands.hpp"
+#include "hystbench/cli/remote/sweep_command.hpp"
+
+namespace hd = hystbench::daemon;
+
+namespace {
+
+// --json, and --wait for a command that starts a run.
+void add_output_flags(CLI::App* c, hd::RemoteCommand& remote, bool waits) {
+  c->add_flag("--json", remote.json_output, "Print the result as one JSON line");
+  if (waits) {
+    c->add_flag("--wait", remote.wait,
+                "Show progress until the run ends, then print its result (exit 1 unless it "
+                "completed)");
+  }
+}
+
+// Sends the daemon `cmd` with `params`; returns the exit code of run_remote.
+int send_request(hd::RemoteCommand& remote, const std::string& cmd, nlohmann::json params) {
+  remote.cmd = cmd;
+  remote.params = std::move(params);
+  return hd::run_remote(remote, std::cout, std::cerr);
+}
+
+// hd::read_upload, or nullopt after printing why the file cannot be read.
+std::optional<hd::RemoteUpload> read_upload_or_report(const std::string& path,
+                                                      const std::string& kind,
+                                                      const std::string& t_column,
+                                                      const std::string& value_column, double scale,
+                                                      double rate_hz) {
+  try {
+    return hd::read_upload(path, kind, t_column, value_column, scale, rate_hz);
+  } catch (const std::exception& e) {
+    std::cerr << "hystbench: error: " << e.what() << "\n";
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+CliCommand add_plain_request(CLI::App& parent, hd::RemoteCommand& remote, const std::string& name,
+                             const std::string& description, const std::string& request) {
+  auto* cmd = parent.add_subcommand(name, description);
+  add_output_flags(cmd, remote, false);
+  return {cmd,
+          [&remote, request] { return send_request(remote, request, nlohmann::json::object()); }};
+}
+
+namespace {
+
+// identify's choices; unset ones are the daemon's configuration's.
+struct IdentifyOptions {
+  std::string model;
+  int operators = -2, dead_zones = -2;  ///< -2: the daemon's
+  bool no_extend = false;
+};
+
+}  // namespace
+
+CliCommand add_identify(CLI::App& app, hd::RemoteCommand& remote) {
+  auto id = std::make_shared<IdentifyOptions>();
+  auto* cmd = app.add_subcommand(
+      "identify",
+      "Precondition, play the identification excitation, fit a model, verify it by tracking "
+      "through its inverse, make it the active model. Then the record is diagnosed with that "
+      "model: what it misses (delay, dynamics, creep, rate law, asymmetry) is added where it "
+      "lowers the held-out error, and the extended model is kept when it tracks better on the "
+      "bench (the result lists the parts and their gains)");
+  cmd->add_option("--model", id->model,
+                  "pi, mpi, cpi, rpi or auto (every family, the best verified tracking "
+                  "kept; default: the config's)")
+      ->check(CLI::IsMember(hd::fit_family_name_list()));
+  cmd->add_option("--operators", id->operators, "Number of plays (0 = by held-out error)");
+  cmd->add_option("--deadzones", id->dead_zones, "Dead zones per side (-1 = by held-out error)");
+  cmd->add_flag("--no-extend", id->no_extend,
+                "Keep the fitted model as it is: no diagnosis of the record, no "
+                "extension (default: the config's [identify] extend, true)");
+  add_output_flags(cmd, remote, true);
+  return {cmd, [id, &remote] {
+            nlohmann::json p = nlohmann::json::object();
+            if (!id->model.empty()) p["model"] = id->model;
+            if (id->operators != -2) p["operators"] = id->operators;
+            if (id->dead_zones != -2) p["dead_zones"] = id->dead_zones;
+            if (id->no_extend) p["extend"] = false;
+            return send_request(remote, "identify", p);
+          }};
+}
+
+namespace {
+
+// track: a built-in reference or a reference file, the compensator, learning.
+struct TrackOptions {
+  std::string reference = "triangle", compensator;
+  double frequency = 1.0, periods = 5.0, duration = 0.0, fraction = 0.8;
+  double min = NAN, max = NAN, precondition = NAN;
+  int learn = 0;
+  double learn_gain = NAN, learn_cutoff = NAN;
+  std::string learned;
+  // A user's trajectory instead of a built-in reference: read here, uploaded over the socket.
+  std::string file, t_column = "t", yr_column = "yr";
+  double yr_scale = 1.0, rate = 0.0, approach = NAN;
+};
+
+// track's built-in reference: its shape, frequency, length and range.
+void add_track_reference_options(CLI::App* cmd, TrackOptions& tr) {
+  cmd->add_option("--reference", tr.reference,
+                  "sine, triangle, sawtooth, decaying_sine, multi_frequency, chirp")
+      ->capture_default_str();
+  cmd->add_option("--frequency", tr.frequency, "Reference frequency [Hz]")->capture_default_str();
+  cmd->add_option("--periods", tr.periods, "Number of periods")->capture_default_str();
+  cmd->add_option("--duration", tr.duration, "Duration [s] (instead of --periods)");
+  cmd->add_option("--compensator", tr.compensator,
+                  "none, inverse, inverse_multiplicative, inverse+pid, pid (default: inverse "
+                  "with a model, none without)");
+  cmd->add_option("--range-fraction", tr.fraction,
+                  "Part of the actuator range the reference spans, centred")
+      ->capture_default_str();
+  cmd->add_option("--min", tr.min, "Reference minimum [um] (instead of --range-fraction)");
+  cmd->add_option("--max", tr.max, "Reference maximum [um]");
+  cmd->add_option("--precondition", tr.precondition,
+                  "Open-loop sweep u_max -> u_min before the reference [s] (default: the "
+                  "daemon's, 1 s; 0 = none)");
+}
+
+// track --learn and its settings, and --learned.
+void add_track_learning_options(CLI::App* cmd, TrackOptions& tr) {
+  auto* learn_opt =
+      cmd->add_option("--learn", tr.learn,
+                      "Learn over N trials (sine, triangle, sawtooth: a trial is one period; "
+                      "--reference-file: one pass, its approach from the end then the "
+                      "trajectory, scored on the trajectory): after a start-up period and one "
+                      "with the compensator's drive, each plays the one before's drive "
+                      "corrected by its measured error "
+                      "(iterative learning through the model's inverse slope, delay and "
+                      "dynamics). The frequency moves to the loop rate over a whole number of "
+                      "ticks. The result lists every trial; the run's errors are the last "
+                      "trial's; the learned drive is saved in the model folder (t,u)")
+          ->check(CLI::Range(1, 1000));
+  cmd->add_option("--learn-gain", tr.learn_gain,
+                  "--learn: share of the error corrected per trial at the start (default 0.5); "
+                  "a trial 20 % above the best halves it, two in a row stop the learning on "
+                  "the best trial's drive")
+      ->check(CLI::Range(1e-3, 20.0))
+      ->needs(learn_opt);
+  cmd->add_option("--learn-cutoff", tr.learn_cutoff,
+                  "--learn: the learning's low-pass cut-off [Hz] (default: the lowest of a fifth "
+                  "of the loop rate, 300 x the frequency and half a modelled mode); above it "
+                  "nothing is learned")
+      ->check(CLI::PositiveNumber)
+      ->needs(learn_opt);
+  auto* learned_opt = cmd->add_option(
+      "--learned", tr.learned,
+      "Start from a drive learned before (the learning run's id, as its result and "
+      "`hystbench model list` show; also after a restart of the daemon): after the start-up "
+      "period its drive plays instead of the compensator's, for one scored period, or as "
+      "the first trial with --learn. Only for the reference, range and loop rate it was "
+      "learned for: give the same --reference, --frequency and range (or the same "
+      "--reference-file), with the model it was learned with loaded");
+  for (const char* other : {"--periods", "--duration"}) {
+    learn_opt->excludes(cmd->get_option(other));
+    learned_opt->excludes(cmd->get_option(other));
+  }
+}
+
+// track --reference-file: a user's trajectory instead of a built-in reference.
+void add_track_file_options(CLI::App* cmd, TrackOptions& tr) {
+  auto* file_opt =
+      cmd->add_option("--reference-file", tr.file,
+                      "Follow your own trajectory: a CSV with columns t [s] and yr [um] (an AFM "
+                      "raster line, a recorded motion). The daemon resamples it to the loop "
+                      "rate and refuses it, naming the first offending row, when it leaves the "
+                      "actuator range or moves faster than the slew limit")
+          ->check(CLI::ExistingFile);
+  for (const char* other : {"--reference", "--frequency", "--periods", "--duration",
+                            "--range-fraction", "--min", "--max"}) {
+    file_opt->excludes(cmd->get_option(other));
+  }
+  cmd->add_option("--t-column", tr.t_column, "--reference-file: time column [s]")
+      ->capture_default_str();
+  cmd->add_option("--yr-column", tr.yr_column, "--reference-file: reference column")
+      ->capture_default_str();
+  cmd->add_option("--yr-scale", tr.yr_scale,
+                  "--reference-file: multiply the reference by this (m -> um: 1e6)")
+      ->capture_default_str();
+  cmd->add_option("--rate", tr.rate,
+                  "--reference-file: sample rate [Hz] of a file without a time column")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--approach", tr.approach,
+                  "--reference-file: unscored move from the precondition's end to the "
+                  "first value [s] (default 0.2, longer when the slew limit needs it)");
+}
+
+// --learn and --learned into the request; false when neither is given.
+bool add_learning(const TrackOptions& tr, nlohmann::json& p) {
+  if (!tr.learned.empty()) p["learned"] = tr.learned;
+  if (tr.learn > 0) {
+    p["learn_trials"] = tr.learn;
+    if (!std::isnan(tr.learn_gain)) p["learn_gain"] = tr.learn_gain;
+    if (!std::isnan(tr.learn_cutoff)) p["learn_cutoff_hz"] = tr.learn_cutoff;
+  }
+  return tr.learn > 0 || !tr.learned.empty();
+}
+
+// track --reference-file: uploads the trajectory, then starts the run on it.
+int track_reference_file(const TrackOptions& tr, hd::RemoteCommand& remote) {
+  nlohmann::json p = nlohmann::json::object();
+  if (!tr.compensator.empty()) p["compensator"] = tr.compensator;
+  if (!std::isnan(tr.precondition)) p["precondition_s"] = tr.precondition;
+  if (!std::isnan(tr.approach)) p["approach_s"] = tr.approach;
+  add_learning(tr, p);
+  remote.upload =
+      read_upload_or_report(tr.file, "reference", tr.t_column, tr.yr_column, tr.yr_scale, tr.rate);
+  if (!remote.upload) return 1;
+  return send_request(remote, "track", p);
+}
+
+int run_track(const TrackOptions& tr, hd::RemoteCommand& remote) {
+  if (!remote.plot_dir.empty() && !remote.wait) {
+    std::cerr << "hystbench: error: track --plot needs --wait (the plots are drawn when the run "
+                 "ends; or run `hystbench plot LOG` afterwards)\n";
+    return 2;
+  }
+  if (!tr.file.empty()) return track_reference_file(tr, remote);
+  nlohmann::json p = {{"reference", tr.reference}, {"frequency_hz", tr.frequency}};
+  if (add_learning(tr, p)) {
+    // a learning run, or a learned drive's (its start-up period and one scored period)
+  } else if (tr.duration > 0) {
+    p["duration_s"] = tr.duration;
+  } else {
+    p["periods"] = tr.periods;
+  }
+  if (!tr.compensator.empty()) p["compensator"] = tr.compensator;
+  if (!std::isnan(tr.precondition)) p["precondition_s"] = tr.precondition;
+  if (!std::isnan(tr.min) || !std::isnan(tr.max)) {
+    if (!std::isnan(tr.min)) p["min_um"] = tr.min;
+    if (!std::isnan(tr.max)) p["max_um"] = tr.max;
+  } else {
+    p["range_fraction"] = tr.fraction;
+  }
+  return send_request(remote, "track", p);
+}
+
+}  // namespace
+
+CliCommand add_track(CLI::App& app, hd::RemoteCommand& remote) {
+  auto tr = std::make_shared<TrackOptions>();
+  auto* cmd =
+      app.add_subcommand("track", "Follow a reference with a compensator and report the error");
+  add_track_reference_options(cmd, *tr);
+  add_track_learning_options(cmd, *tr);
+  add_output_flags(cmd, remote, true);
+  cmd->add_option("--plot", remote.plot_dir,
+                  "With --wait: write the run's plots (time.png, error.png, loop.png) here "
+                  "when it ends, as `hystbench plot` does; with --learn also learning.png "
+                  "(the error per trial, and the last trial's error)");
+  add_track_file_options(cmd, *tr);
+  return {cmd, [tr, &remote] { return run_track(*tr, remote); }};
+}
+
+namespace {
+
+// excite: the drive file and its columns.
+struct ExciteOptions {
+  std::string input_file;
+  hd::RecordColumns columns;
+};
+
+}  // namespace
+
+CliCommand add_excite(CLI::App& app, hd::RemoteCommand& remote) {
+  auto ex = std::make_shared<ExciteOptions>();
+  auto* cmd = app.add_subcommand(
+      "excite",
+      "Play your own open-loop drive (t [s], u [V]) and log every sample: the run log is a "
+      "record that `hystbench fit` and `diagnose` read as it is");
+  cmd->add_option("--input-file", ex->input_file,
+                  "CSV with columns t [s] and u [V]; refused, naming the first offending row, "
+                  "when it leaves [u_min, u_max] or moves faster than the slew limit")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--t-column", ex->columns.t, "Time column [s]")->capture_default_str();
+  cmd->add_option("--u-column", ex->columns.u, "Drive column")->capture_default_str();
+  cmd->add_option("--u-scale", ex->columns.u_scale, "Multiply the drive by this (mV -> V: 1e-3)")
+      ->capture_default_str();
+  cmd->add_option("--rate", ex->columns.rate_hz,
+                  "Sample rate [Hz] of a file without a time column (t = row / rate)")
+      ->check(CLI::PositiveNumber);
+  add_output_flags(cmd, remote, true);
+  return {cmd, [ex, &remote] {
+            const hd::RecordColumns& c = ex->columns;
+            remote.upload =
+                read_upload_or_report(ex->input_file, "drive", c.t, c.u, c.u_scale, c.rate_hz);
+            if (!remote.upload) return 1;
+            return send_request(remote, "excite", nlohmann::json::object());
+          }};
+}
+
+CliCommand add_sweep(CLI::App& app, hd::RemoteCommand& remote) {
+  auto sweep = std::make_shared<hd::SweepCommand>();
+  auto* cmd = app.add_subcommand(
+      "sweep",
+      "Track a reference at each of a list of frequencies with each compensator and print one "
+      "table of the tracking error (rms / max, % of range): how a stage behaves with frequency.\n"
+      "Example: hystbench sweep --frequencies 1,5,10,19,50,100,200 --compensators "
+      "none,inverse,inverse+pid --plot sweep/");
+  cmd->add_option("--frequencies", sweep->frequencies_hz, "Reference frequencies [Hz]")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--compensators", sweep->compensators,
+                  "Compensators, each run at every frequency (none, inverse, "
+                  "inverse_multiplicative, inverse+pid, pid)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"none", "inverse", "inverse_multiplicative", "inverse+pid", "pid"}))
+      ->capture_default_str();
+  cmd->add_option("--reference", sweep->reference, "sine, triangle, sawtooth")
+      ->check(CLI::IsMember({"sine", "triangle", "sawtooth"}))
+      ->capture_default_str();
+  cmd->add_option("--periods", sweep->periods, "Periods per run (the first is not scored)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--min-duration", sweep->min_duration_s,
+                  "Each run lasts at least this long [s] (more periods at high frequency)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--range-fraction", sweep->range_fraction,
+                  "Part of the actuator range the reference spans, centred")
+      ->check(CLI::Range(0.01, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--plot", sweep->plot_dir,
+                  "Write sweep.png (error against frequency, log axes) and its data here");
+  cmd->add_option("--learn", sweep->learn_trials,
+                  "Add a column 'learned': at each frequency a `track --learn N` run from the "
+                  "daemon's default compensator (a trial is one period; the frequency moves to "
+                  "the loop rate over a whole number of ticks), its last trial's error")
+      ->check(CLI::Range(1, 1000));
+  cmd->add_flag("--json", sweep->json_output, "Print one JSON object instead of the table");
+  return {cmd, [sweep, &remote] {
+            sweep->socket_path = remote.socket_path;
+            return hd::run_sweep(*sweep, std::cout, std::cerr);
+          }};
+}
+
+namespace {
+
+// model load: a model file (read here, its document sent) or a model stored in the daemon's folder.
+int load_model(const std::string& model_path, const std::string& stored_model,
+               hd::RemoteCommand& remote) {
+  if (!stored_model.empty()) return send_request(remote, "model.load", {{"stored", stored_model}});
+  if (model_path.empty()) {
+    std::cerr << "hystbench: error: model load: give a model file or --stored NAME\n";
+    return 2;
+  }
+  // The file is read here, with the user's rights, and its document travels over the
+  // socket: the daemon (its own user, its own /tmp and no /home) never opens a client's path.
+  nlohmann::json document;
+  try {
+    document = hd::read_model_document(model_path);
+  } catch (const std::exception& e) {
+    std::cerr << "hystbench: error: " << e.what() << "\n";
+    return 1;
+  }
+  return send_request(remote, "model.load",
+                      {{"model", std::move(document)},
+                       {"name", std::filesystem::path(model_path).filename().string()}});
+}
+
+// model: get, load, list, delete.
+struct ModelOptions {
+  std::string model_path, stored_model, deleted_model;
+};
+
+}  // namespace
+
+CliCommand add_model(CLI::App& app, hd::RemoteCommand& remote) {
+  auto model = std::make_shared<ModelOptions>();
+  auto* cmd =
+      app.add_subcommand("model", "Show, list, load or delete the models in the daemon's folder");
+  cmd->require_subcommand(1);
+  const CliCommand get =
+      add_plain_request(*cmd, remote, "get", "Print the active model file", "model.get");
+  auto* load = cmd->add_subcommand(
+      "load",
+      "Make a model active: a model file here (read by this command and sent to the daemon, "
+      "which keeps a copy in its model folder), or --stored NAME from that folder");
+  auto* file_opt =
+      load->add_option("file", model->model_path, "Model file (JSON, from fit, diagnose, identify)")
+          ->check(CLI::ExistingFile);
+  load->add_option("--stored", model->stored_model,
+                   "Name of a model in the daemon's model folder (see `hystbench model list`)")
+      ->excludes(file_opt);
+  add_output_flags(load, remote, false);
+  const CliCommand list = add_plain_request(
+      *cmd, remote, "list", "The models in the daemon's model folder", "model.list");
+  auto* del = cmd->add_subcommand(
+      "delete",
+      "Delete a model or a learned drive (its JSON and CSV) from the daemon's model folder; "
+      "never the active model");
+  del->add_option("name", model->deleted_model, "Its name, as `hystbench model list` shows")
+      ->required();
+  add_output_flags(del, remote, false);
+  return {cmd, [=, &remote] {
+            if (*get.app) return get.run();
+            if (*list.app) return list.run();
+            if (*del) return send_request(remote, "model.delete", {{"name", model->deleted_model}});
+            return load_model(model->model_path, model->stored_model, remote);
+          }};
+}

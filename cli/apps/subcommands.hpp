@@ -1,0 +1,35 @@
+#pragma once
+// The subcommands of the `hystbench` CLI: each add_ function registers one command's options on
+// `app` and returns the command with what it does once parsed.
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <string>
+
+#include "hystbench/cli/remote/remote_commands.hpp"
+
+// A subcommand and what it does once parsed: returns the process's exit code.
+struct CliCommand {
+  CLI::App* app;
+  std::function<int()> run;
+};
+
+// Offline commands, no daemon needed (offline_subcommands.cpp).
+CliCommand add_fit(CLI::App& app);
+CliCommand add_simulate(CLI::App& app);
+CliCommand add_invert(CLI::App& app);
+CliCommand add_diagnose(CLI::App& app);
+CliCommand add_convert(CLI::App& app);
+CliCommand add_plot(CLI::App& app);
+
+// Bench commands, which talk to hystbenchd (bench_subcommands.cpp). They share `remote`: the
+// socket path and the output options --json, --wait and --plot.
+
+// A command that sends the daemon one request without parameters (status, stop, config ...).
+CliCommand add_plain_request(CLI::App& parent, hystbench::daemon::RemoteCommand& remote,
+                             const std::string& name, const std::string& description,
+                             const std::string& request);
+CliCommand add_identify(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
+CliCommand add_track(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
+CliCommand add_excite(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
+CliCommand add_sweep(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
+CliCommand add_model(CLI::App& app, hystbench::daemon::RemoteCommand& remote);

@@ -1,0 +1,432 @@
+#include "hystbench/cli/remote/remote_commands.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "hystbench/cli/remote/bench_client.hpp"
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/cli/report/plot_command.hpp"
+
+namespace hystbench::daemon {
+
+using nlohmann::json;
+
+std::string default_socket_path() {
+  const char* env = std::getenv("HYSTBENCH_SOCKET");
+  return env != nullptr && *env != '\0' ? env : "/run/hystbench/hystbench.sock";
+}
+
+namespace {
+
+std::string fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+std::string us(const json& ns) {
+  return ns.is_number() ? fixed(ns.get<double>() / 1000.0, 1) : "?";
+}
+
+// A number with `digits` decimals, "-" for null.
+std::string fixed_or_dash(const json& v, int digits) {
+  return v.is_number() ? fixed(v.get<double>(), digits) : "-";
+}
+
+// identify's extension: each part with its held-out gain, the verified figures, the decision.
+void print_extension(std::ostream& out, const json& e) {
+  out << "  extension       ";
+  const json parts = e.value("parts", json::array());
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    out << (i ? " + " : "") << parts[i].value("cause", "?") << " (held-out gain "
+        << fixed_or_dash(parts[i].value("heldout_gain", json()), 2) << "x)";
+  }
+  if (parts.empty()) out << "nothing added";
+  out << ": " << (e.value("adopted", false) ? "adopted" : "not adopted") << ", "
+      << e.value("why", std::string()) << "\n";
+  if (e.contains("verified")) {
+    const json& v = e["verified"];
+    out << "  extension check triangle max "
+        << fixed_or_dash(v["triangle_max_percent"].value("model", json()), 3) << " -> "
+        << fixed_or_dash(v["triangle_max_percent"].value("extended", json()), 3) << " %";
+    if (v.contains("fast_hz")) {
+      out << ", " << fixed(v["fast_hz"].get<double>(), 0) << " Hz sine rms "
+          << fixed_or_dash(v["fast_rms_percent"].value("model", json()), 3) << " -> "
+          << fixed_or_dash(v["fast_rms_percent"].value("extended", json()), 3) << " %";
+    }
+    out << "\n";
+  }
+}
+
+}  // namespace
+
+void progress_bar(std::ostream& err, double fraction, const std::string& label) {
+  const int width = 30;
+  const int filled = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * width));
+  err << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
+      << std::setw(3) << static_cast<int>(100 * fraction) << " % " << label << "\x1b[K"
+      << std::flush;
+}
+
+json wait_for_run(BenchClient& client, const std::string& run_id,
+                  const std::function<void(double, const std::string&)>& progress) {
+  for (;;) {
+    auto event = client.next_event(std::chrono::seconds(3600));
+    if (!event) continue;
+    const std::string name = event->value("event", "");
+    if (name == "run.finished" && (*event)["result"].value("run_id", "") == run_id) {
+      return (*event)["result"];
+    }
+    if (!progress || event->value("run_id", "") != run_id) continue;
+    if (name == "run.progress") {
+      progress(event->value("fraction", 0.0), event->value("stage", std::string()));
+    } else if (name == "fit.progress") {
+      progress(event->value("fraction", 0.0), "fitting: " + event->value("stage", ""));
+    }
+  }
+}
+
+namespace {
+
+// A tracking run's error against its reference, and the hysteresis it leaves.
+void print_tracking_error(std::ostream& out, const json& r) {
+  out << "  tracking error  rms " << fixed(r["rms_error_um"], 4) << " um ("
+      << fixed(r["rms_error_percent"], 3) << " % of " << fixed(r["range_um"], 2) << " um)   max "
+      << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %)\n";
+  out << "  hysteresis      " << fixed(r["hysteresis_percent"], 3) << " % of the output range\n";
+}
+
+// A learning run: each trial's error, why it stopped, and the drive it saved.
+void print_learning(std::ostream& out, const json& l) {
+  const json& trials = l["trials"];
+  const json from = l.value("started_from", json());
+  out << "  learning        " << trials.size() << " trials of "
+      << (l.value("reference", std::string()) == "upload"
+              ? "a pass of " + std::to_string(l.value("period_samples", 0)) + " ticks"
+              : fixed(l["frequency_hz"], 3) + " Hz")
+      << " (the first with "
+      << (from.is_string() ? "the drive " + from.get<std::string>() + " learned before"
+                           : std::string("the compensator's drive"))
+      << "): rms %";
+  for (const json& t : trials) out << " " << fixed(t["rms_error_percent"], 3);
+  out << "\n                  " << l.value("why", std::string()) << "; best trial "
+      << l.value("best_trial", json()).dump() << ", cut-off " << fixed(l["cutoff_hz"], 0) << " Hz";
+  if (l.value("stale_periods", 0) > 0) {
+    out << ", " << l["stale_periods"].get<int>()
+        << " periods replayed while the update was computed";
+  }
+  out << "\n";
+  if (l.contains("drive_file")) {
+    out << "  learned drive   " << l.value("drive", std::string()) << " ("
+        << l["drive_file"].get<std::string>() << "): track --learned "
+        << l.value("drive", std::string()) << " replays it\n";
+  }
+}
+
+// The feedforward planned before the run: its size and error on the model, or why not.
+void print_planned_feedforward(std::ostream& out, const json& p) {
+  if (p.value("samples", 0) > 0) {
+    out << "  feedforward     planned over " << p.value("samples", 0) << " samples in "
+        << fixed(p["seconds"], 2) << " s: model rms " << fixed(p["model_rms_um"], 4)
+        << " um (the previewed inverse's " << fixed(p["previewed_model_rms_um"], 4) << " um)\n";
+  } else {
+    out << "  feedforward     not planned: " << p.value("why_not", std::string("?")) << "\n";
+  }
+}
+
+// The bench's output against the model's prediction over the run.
+void print_model_error(std::ostream& out, const json& r) {
+  out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
+      << fixed(r["model_rms_error_percent"], 3) << " %)   max " << fixed(r["model_max_error_um"], 4)
+      << " um (" << fixed(r["model_max_error_percent"], 3)
+      << " %): y - y_model (y_model: " << r.value("y_model", std::string("?")) << ")\n";
+}
+
+// identify's model: its structure and file, its fit and held-out errors, the fit's notes.
+void print_model(std::ostream& out, const json& m) {
+  out << "  model           " << m.value("type", "?") << ", " << m.value("operators", 0)
+      << " plays, " << m.value("dead_zones", 0) << " dead zones per side -> "
+      << m.value("path", "?") << "\n";
+  if (m.contains("heldout")) {
+    out << "  model error     fit rms " << fixed(m["fit"]["rmse"], 4) << " um, held-out rms "
+        << fixed(m["heldout"]["rmse"], 4) << " um (" << fixed(m["heldout"]["rmse_percent"], 3)
+        << " %), max " << fixed(m["heldout"]["max_abs"], 4) << " um\n";
+  }
+  for (const json& note : m.value("notes", json::array())) {
+    out << "  fit note        " << note.get<std::string>() << "\n";
+  }
+}
+
+// identify's verification through the inverse: its tracking error, or why it did not run.
+void print_verification(std::ostream& out, const json& v) {
+  out << "  verified        ";
+  if (v.contains("max_error_percent")) {
+    out << "tracking rms " << fixed(v["rms_error_percent"], 3) << " %, max "
+        << fixed(v["max_error_percent"], 3) << " % (1 Hz triangle through the inverse, "
+        << v.value("end", "?") << ")\n";
+  } else {
+    out << "not (" << v.value("end", "?") << ": " << v.value("reason", "") << ")\n";
+  }
+}
+
+// Whether identify kept the rate law: the sine's error without it and with it.
+void print_rate_law(std::ostream& out, const json& law) {
+  out << "  rate law        " << (law.value("kept", false) ? "kept" : "left out") << ": "
+      << fixed_or_dash(law.value("sine_hz", json()), 0) << " Hz sine rms "
+      << fixed_or_dash(law["sine_rms_percent"].value("rate_free", json()), 3) << " % without, "
+      << fixed_or_dash(law["sine_rms_percent"].value("law", json()), 3) << " % with it\n";
+}
+
+// identify's other candidates: each one's held-out and verified error.
+void print_candidates(std::ostream& out, const json& candidates) {
+  for (const json& c : candidates) {
+    const json& v = c["verification"];
+    out << "  candidate       " << c.value("type", "?") << " " << c.value("operators", 0) << "/"
+        << c.value("dead_zones", 0) << ": held-out rms " << fixed(c["heldout"]["rmse_percent"], 3)
+        << " %, verified max "
+        << (v.is_object() && v.contains("max_error_percent") ? fixed(v["max_error_percent"], 3)
+                                                             : std::string("-"))
+        << " %\n";
+  }
+}
+
+// The loop's timing over the run: wake latency, execution time, overruns.
+void print_loop_timing(std::ostream& out, const json& r) {
+  const json& l = r["loop"];
+  const json w = l.value("wake_latency_ns", json::object());
+  const json e = l.value("exec_ns", json::object());
+  out << "  loop            wake latency p50 " << us(w.value("p50", json())) << " us, p99 "
+      << us(w.value("p99", json())) << " us, max " << us(w.value("max", json()))
+      << " us; execution p99 " << us(e.value("p99", json())) << " us; " << l.value("overruns", 0)
+      << " overruns";
+  // Virtual time: no wake-up to be late, no overrun; the execution time is measured.
+  if (r.value("clock", "") == "simulated") out << " (simulated clock)";
+  out << "\n";
+}
+
+}  // namespace
+
+void print_run_result(const json& r, std::ostream& out) {
+  out << "run " << r.value("run_id", "?") << " " << r.value("end", "?");
+  if (!r.value("reason", std::string()).empty())
+    out << " (" << r["reason"].get<std::string>() << ")";
+  out << ": " << r.value("samples", 0) << " samples, " << r.value("dropped", 0) << " dropped\n";
+  if (r.contains("rms_error_um")) print_tracking_error(out, r);
+  if (const auto l = r.find("learning"); l != r.end() && l->is_object()) print_learning(out, *l);
+  if (r.contains("tare_um")) {
+    out << "  tare            " << fixed(r["tare_um"], 4)
+        << " um: the offset the model missed on the precondition sweep, taken off the "
+           "feedforward\n";
+  }
+  if (const auto ff = r.find("feedforward"); ff != r.end() && ff->contains("planned")) {
+    print_planned_feedforward(out, (*ff)["planned"]);
+  }
+  if (r.contains("model_rms_error_um")) print_model_error(out, r);
+  if (r.contains("model")) print_model(out, r["model"]);
+  if (r.contains("verification") && r["verification"].is_object()) {
+    print_verification(out, r["verification"]);
+  }
+  if (r.contains("model") && r["model"].contains("rate_law")) {
+    print_rate_law(out, r["model"]["rate_law"]);
+  }
+  if (r.contains("model") && r["model"].contains("extension"))
+    print_extension(out, r["model"]["extension"]);
+  print_candidates(out, r.value("candidates", json::array()));
+  if (r.contains("fit_error"))
+    out << "  fit failed      " << r["fit_error"].get<std::string>() << "\n";
+  // An unplayed run has no timing.
+  if (r.contains("loop") && r.value("samples", 0) > 0) print_loop_timing(out, r);
+  if (r.contains("clamps")) {
+    out << "  limits          " << r.value("clamps", 0) << " clamped, " << r.value("slew_limits", 0)
+        << " slew-limited samples\n";
+  }
+  if (!r.value("log", std::string()).empty())
+    out << "  log             " << r["log"].get<std::string>() << "\n";
+}
+
+RemoteUpload read_upload(const std::string& path, const std::string& kind,
+                         const std::string& t_column, const std::string& value_column, double scale,
+                         double rate_hz) {
+  RecordColumns columns;
+  columns.t = t_column;
+  columns.u = value_column;
+  columns.y.clear();  // no output column to read
+  columns.u_scale = scale;
+  columns.rate_hz = rate_hz;
+  columns.read_units = false;  // a drive in V, a reference in um: what the daemon takes
+  Record r = read_record(path, columns, false);
+  RemoteUpload u;
+  u.kind = kind;
+  u.param = kind == "drive" ? "drive_upload" : "reference_upload";
+  u.source = path;
+  u.rate_hz = rate_hz;
+  if (rate_hz <= 0.0) u.t = std::move(r.t);
+  u.values = std::move(r.u);
+  u.lines = std::move(r.lines);
+  return u;
+}
+
+namespace {
+
+/// The daemon's reply's result, or CommandError with its code, message and details.
+json result_or_throw(const json& reply) {
+  if (reply.value("ok", false)) return reply["result"];
+  json e = reply.value("error", json::object());
+  const std::string code = e.value("code", "error");
+  const std::string message = e.value("message", "?");
+  e.erase("code");
+  e.erase("message");
+  throw CommandError(code, message, e);
+}
+
+}  // namespace
+
+std::string send_upload(BenchClient& client, const RemoteUpload& upload,
+                        const std::function<void(double)>& progress) {
+  const std::size_t n = upload.values.size();
+  json begin = {{"kind", upload.kind},
+                {"samples", n},
+                {"source", std::filesystem::path(upload.source).filename().string()}};
+  if (upload.rate_hz > 0.0) begin["rate_hz"] = upload.rate_hz;
+  const json started = result_or_throw(client.request("upload.begin", begin));
+  const std::string name = started.value("upload", "");
+  // Below the daemon's bound and well inside the 64 KiB request line with t and values.
+  const std::size_t chunk =
+      std::clamp<std::size_t>(started.value("max_chunk_samples", std::size_t{1000}), 1, 1000);
+  for (std::size_t k = 0; k < n; k += chunk) {
+    const std::size_t m = std::min(chunk, n - k);
+    json params = {
+        {"upload", name},
+        {"offset", k},
+        {"values", std::vector<double>(upload.values.begin() + k, upload.values.begin() + k + m)}};
+    if (upload.rate_hz <= 0.0) {
+      params["t"] = std::vector<double>(upload.t.begin() + k, upload.t.begin() + k + m);
+    }
+    (void)result_or_throw(client.request("upload.chunk", params));
+    if (progress) progress(static_cast<double>(k + m) / static_cast<double>(n));
+  }
+  return name;
+}
+
+namespace {
+
+/// Sends the command, after its upload, and returns the daemon's reply; CommandError when the
+/// daemon refuses either.
+json request_command(BenchClient& client, const RemoteCommand& cmd, bool tty, std::ostream& err) {
+  json params = cmd.params;
+  if (cmd.upload) {
+    std::function<void(double)> shown;
+    if (tty && !cmd.json_output && cmd.upload->values.size() > 100'000) {
+      shown = [&](double f) { progress_bar(err, f, "uploading " + cmd.upload->source); };
+    }
+    params[cmd.upload->param] = send_upload(client, *cmd.upload, shown);
+    if (shown) err << "\r\x1b[K" << std::flush;
+  }
+  json reply = client.request(cmd.cmd, params);
+  (void)result_or_throw(reply);
+  return reply;
+}
+
+/// The daemon's refusal: as JSON, or as a message naming the first offending row of an upload.
+void report_refusal(const RemoteCommand& cmd, const CommandError& e, std::ostream& out,
+                    std::ostream& err) {
+  if (cmd.json_output) {
+    json error = e.detail();
+    error["code"] = e.code();
+    error["message"] = e.what();
+    out << json{{"ok", false}, {"error", error}}.dump() << "\n";
+    return;
+  }
+  err << "hystbench: " << cmd.cmd << " refused: " << e.what() << " [" << e.code() << "]\n";
+  // The first offending sample, as the line of the user's file.
+  if (cmd.upload && e.detail().contains("sample") && e.detail()["sample"].is_number()) {
+    const auto k = e.detail()["sample"].get<std::size_t>();
+    if (k < cmd.upload->lines.size()) {
+      err << "hystbench: " << cmd.upload->source << ":" << cmd.upload->lines[k]
+          << ": the first offending row (data row " << k + 1 << ")\n";
+    }
+  }
+}
+
+/// Plots the finished run's log into --plot's folder and lists the images in r["plots"]; false
+/// when plotting failed.
+bool plot_run(const RemoteCommand& cmd, json& r, std::ostream& err) {
+  try {
+    json files = json::array();
+    for (const auto& png : plot_run_log(r["log"].get<std::string>(), cmd.plot_dir)) {
+      files.push_back(png.string());
+    }
+    if (r.contains("learning")) {
+      files.push_back(plot_learning(r["learning"], r["log"], cmd.plot_dir).string());
+    }
+    r["plots"] = files;
+    return true;
+  } catch (const std::exception& e) {
+    err << "hystbench: error: --plot: " << e.what() << "\n";
+    return false;
+  }
+}
+
+}  // namespace
+
+int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
+  try {
+    BenchClient client(cmd.socket_path);
+    const bool tty = ::isatty(STDERR_FILENO) == 1;
+    json reply;
+    try {
+      reply = request_command(client, cmd, tty, err);
+    } catch (const CommandError& e) {
+      report_refusal(cmd, e, out, err);
+      return 1;
+    }
+    const json& result = reply["result"];
+    const bool is_run = cmd.cmd == "identify" || cmd.cmd == "track" || cmd.cmd == "excite";
+    if (!(is_run && cmd.wait)) {
+      if (cmd.json_output || !is_run) {
+        out << (cmd.json_output ? result.dump() : result.dump(2)) << "\n";
+      } else {
+        out << "started " << result.value("run_id", "?") << " ("
+            << fixed(result.value("duration_s", 0.0), 1) << " s), log " << result.value("log", "?")
+            << "\n";
+      }
+      return 0;
+    }
+    const std::string run_id = result.value("run_id", "");
+    std::function<void(double, const std::string&)> show;
+    if (tty && !cmd.json_output) {
+      show = [&](double f, const std::string& what) {
+        progress_bar(err, f, what.empty() ? cmd.cmd + " " + run_id : what);
+      };
+    }
+    json r = wait_for_run(client, run_id, show);
+    if (show) err << "\r\x1b[K" << std::flush;
+    int status = r.value("end", "") == "completed" && !r.contains("fit_error") ? 0 : 1;
+    if (!cmd.plot_dir.empty() && !r.value("log", std::string()).empty() && !plot_run(cmd, r, err)) {
+      status = 1;
+    }
+    if (cmd.json_output) {
+      out << r.dump() << "\n";
+    } else {
+      print_run_result(r, out);
+      for (const auto& png : r.value("plots", json::array())) {
+        out << "  plot            " << png.get<std::string>() << "\n";
+      }
+    }
+    return status;
+  } catch (const ClientError& e) {
+    err << "hystbench: " << e.what() << "\n";
+    return 2;
+  }
+}
+
+}  // namespace hystbench::daemon

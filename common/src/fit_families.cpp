@@ -1,0 +1,41 @@
+#include "hystbench/common/fit_families.hpp"
+
+#include <array>
+#include <stdexcept>
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+
+namespace {
+constexpr std::array kFamilies{hc::ModelKind::kPi, hc::ModelKind::kModifiedPi,
+                               hc::ModelKind::kCoupledPlayPi, hc::ModelKind::kRateDependentPi};
+constexpr const char* kAuto = "auto";
+}  // namespace
+
+std::span<const hc::ModelKind> fit_families() noexcept { return kFamilies; }
+
+std::string fit_family_names() {
+  std::string names;
+  for (const hc::ModelKind k : kFamilies) names += std::string(hc::to_string(k)) + ", ";
+  return names + kAuto;
+}
+
+std::vector<std::string> fit_family_name_list() {
+  std::vector<std::string> names;
+  for (const hc::ModelKind k : kFamilies) names.emplace_back(hc::to_string(k));
+  names.emplace_back(kAuto);
+  return names;
+}
+
+bool is_fit_family(const std::string& name) noexcept {
+  return name == kAuto || hc::model_kind_from_string(name).has_value();
+}
+
+std::optional<hc::ModelKind> parse_fit_family(const std::string& name) {
+  if (name == kAuto) return std::nullopt;
+  if (const auto kind = hc::model_kind_from_string(name)) return kind;
+  throw std::invalid_argument("unknown '" + name + "' (" + fit_family_names() + ")");
+}
+
+}  // namespace hystbench::daemon

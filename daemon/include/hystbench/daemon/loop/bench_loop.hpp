@@ -1,0 +1,215 @@
+#pragma once
+// The fixed-rate loop thread: absolute deadlines (clock_nanosleep, CLOCK_MONOTONIC), optional
+// SCHED_FIFO / mlockall / CPU affinity. Per tick: reference -> compensator -> limits ->
+// driver write -> driver read -> record and log. Idle ticks ramp the output to the driver's safe
+// value through the slew limit and keep reading, so timing statistics are kept all the time.
+//
+// Threads: the loop thread runs tick(); every public method except the constructor, start(),
+// step() and shutdown() is for the control thread and is lock-free. step() runs one tick on the
+// caller's thread instead (no loop thread, the clock of BenchLoopOptions::clock_ns): tests drive
+// the loop deterministically, tick by tick, through the same per-tick path. Runs are handed over as
+// whole RunProgram objects (see run_program.hpp); the loop never allocates, locks or throws.
+//
+// Faults (driver error, non-finite or stuck measurement, overrun budget, a limit hit with fatal
+// limits): the driver goes to its safe state in the same tick, the run ends with the reason and the
+// loop stays in kFault, writing the safe output, until reset_fault().
+//
+// Clocks (BenchLoopOptions::clock). kWall: every tick waits for its deadline on CLOCK_MONOTONIC,
+// sample times are the deadlines and wake-ups, late ticks count as overruns. kSimulated, for a
+// plant that follows a virtual clock (the loopback's simulated actuator): time is the tick count
+// times the period, and a sample's scheduled and wake-up times are both that virtual time, so logs
+// have the same columns and time grid as on the wall clock. During a run the loop ticks without
+// sleeping, each tick as soon as the previous one is computed; while idle (no run, or in kFault)
+// ticks stay paced on the wall clock, so an idle daemon does not burn a core and the idle plant
+// evolves at a real one's pace while the bench fits or plans. Wake latency is 0 and there are no
+// overruns and no overrun faults (lateness means nothing there); execution time per tick is still
+// measured on CLOCK_MONOTONIC. No SCHED_FIFO (a free-running FIFO thread would starve the rest of
+// the process on its CPU) and no memory lock. A full sample-log ring makes the loop wait for room
+// (a short sleep, not real time) instead of dropping the record: every sample is logged.
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <thread>
+
+#include "hystbench/daemon/loop/loop_statistics.hpp"
+#include "hystbench/daemon/loop/output_limiter.hpp"
+#include "hystbench/daemon/loop/realtime.hpp"
+#include "hystbench/daemon/runs/run_program.hpp"
+#include "hystbench/daemon/loop/stuck_sensor_detector.hpp"
+#include "hystbench/drivers/driver.hpp"
+
+namespace hystbench::daemon {
+
+/// What the loop's time is (see the header comment).
+enum class LoopClock { kWall, kSimulated };
+/// "wall" | "simulated".
+const char* to_string(LoopClock clock) noexcept;
+
+struct BenchLoopOptions {
+  double rate_hz = 10000.0;  ///< [1, 20000]
+  LoopClock clock = LoopClock::kWall;
+  RealtimeOptions realtime;
+  /// Overruns tolerated in one run: overrun number overrun_budget + 1 faults it (0 = the first).
+  std::uint64_t overrun_budget = 100;
+  OutputLimits limits;
+  /// A range or slew limit hit during a run faults it instead of being clamped and counted.
+  bool fatal_on_limit = false;
+  /// A fresh reading repeated bit for bit after the output has moved a span faults the run (see
+  /// stuck_sensor_detector.hpp); resolution_um 0 takes the driver's measurement count.
+  StuckSensorOptions stuck_sensor;
+  /// Monotonic time [ns] for the sample times and execution figures; null = CLOCK_MONOTONIC
+  /// (LoopTimer::now_ns). Must be real-time safe. Used by step() only: the loop thread's
+  /// deadlines and figures stay on CLOCK_MONOTONIC.
+  std::int64_t (*clock_ns)() noexcept = nullptr;
+};
+
+class BenchLoop {
+ public:
+  enum class State : int { kStopped = 0, kIdle, kRunning, kFault };
+
+  /// The driver must be configured and active; it must outlive the loop.
+  BenchLoop(drivers::Driver& driver, BenchLoopOptions options);
+  ~BenchLoop();
+  BenchLoop(const BenchLoop&) = delete;
+  BenchLoop& operator=(const BenchLoop&) = delete;
+
+  /// Starts the loop thread and returns what its real-time setup achieved (with the simulated
+  /// clock: no SCHED_FIFO and no memory lock, whatever options.realtime asks).
+  RealtimeReport start();
+  /// Ends any run (aborted), drives the safe output, joins the thread. Idempotent.
+  void shutdown();
+  /// One tick now (the clock's time is both its deadline and its wake-up), on the caller's
+  /// thread, for a loop that was not start()ed: idle -> running -> finished exactly as on the
+  /// loop thread, without the real-time setup or sleeping. Real-time safe. Ignored while the
+  /// loop thread runs.
+  void step() noexcept;
+
+  /// Hands a run to the loop. Fails (returns the program back) when a run is active, another
+  /// is pending, a finished one has not been taken yet, or the loop is in kFault.
+  std::unique_ptr<RunProgram> submit(std::unique_ptr<RunProgram> program);
+  /// Ends the active run normally at the next tick.
+  void request_stop() noexcept { stop_requested_.store(true, std::memory_order_release); }
+  /// Safe output at the next tick; the active run ends as aborted (not a fault).
+  void request_abort() noexcept { abort_requested_.store(true, std::memory_order_release); }
+  /// A finished run (completed, stopped, aborted or faulted), or null.
+  std::unique_ptr<RunProgram> take_finished() noexcept;
+  /// Leaves kFault for kIdle, waiting up to a second for the loop to acknowledge; false when
+  /// not in kFault or the loop did not leave it.
+  bool reset_fault() noexcept;
+  /// Counts what the control thread waits for: a run finished, a fault, a reset, shutdown.
+  std::uint32_t events() const noexcept { return events_.load(std::memory_order_acquire); }
+  /// Bumps events(): wakes the control thread's wait_event() for work of its own (the bench
+  /// queued a run's preparation). Real-time safe.
+  void wake_control() noexcept { signal_event(); }
+  /// Blocks until events() differs from `seen` or `timeout` has passed (control thread; the
+  /// loop wakes it without a lock). True when it changed.
+  bool wait_event(std::uint32_t seen, std::chrono::nanoseconds timeout) const noexcept;
+  /// Blocks until done() holds, re-checked on every event, or `timeout` has passed; returns
+  /// done() (control thread).
+  template <class Done>
+  bool wait_for(Done done, std::chrono::nanoseconds timeout) const {
+    const auto until = std::chrono::steady_clock::now() + timeout;
+    for (;;) {
+      const std::uint32_t seen = events();
+      if (done()) return true;
+      if (!wait_event(seen, until - std::chrono::steady_clock::now())) return done();
+    }
+  }
+
+  State state() const noexcept { return state_.load(std::memory_order_acquire); }
+  /// Why the loop is in kFault (static string; empty otherwise).
+  const char* fault_reason() const noexcept {
+    return fault_reason_.load(std::memory_order_acquire);
+  }
+  /// The active run's program (for progress), valid only while state() == kRunning.
+  const RunProgram* active() const noexcept { return active_pub_.load(std::memory_order_acquire); }
+  /// Timing since start (or the last reset_statistics()).
+  LoopStatisticsSnapshot statistics() const noexcept { return stats_.snapshot(); }
+  void reset_statistics() noexcept { stats_.request_reset(); }
+  double last_measurement() const noexcept { return last_y_.load(std::memory_order_relaxed); }
+  double last_output() const noexcept { return last_u_.load(std::memory_order_relaxed); }
+  /// Increments every tick: the watchdog is fed only while it advances.
+  std::uint64_t ticks() const noexcept { return ticks_.load(std::memory_order_relaxed); }
+  const BenchLoopOptions& options() const noexcept { return options_; }
+
+ private:
+  std::int64_t now_ns() const noexcept;
+  /// The wall-clock loop: sleeps to each deadline.
+  void run_wall();
+  /// The simulated-clock loop: free-running ticks during a run, paced ones while idle.
+  void run_simulated();
+  /// A run is active or waiting to be picked up by the next tick (loop thread).
+  bool run_in_play() const noexcept {
+    return active_ != nullptr || pending_.load(std::memory_order_acquire) != nullptr;
+  }
+  void tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
+  void run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept;
+  // run_tick's stages, in order: drive -> limit -> exchange -> score -> record. Each fills its
+  // part of the sample's record. Inline, defined in bench_loop.cpp (their only caller), so that
+  // the compiler can keep the tick one function.
+  struct TickDrive;
+  struct TickExchange;
+  /// The output the run asks for at tick k: its open-loop drive, or the compensator's.
+  inline TickDrive drive(RunProgram& p, std::uint64_t k, SampleRecord& rec) noexcept;
+  /// A tracking tick: the reference, limited to the range, and the compensator's output for it
+  /// (or a learned drive's).
+  inline void track_drive(RunProgram& p, std::uint64_t k, TickDrive& d, SampleRecord& rec) noexcept;
+  /// The requested output through the limits, counted, and the model's prediction for it.
+  inline OutputLimiter::Applied limit(RunProgram& p, std::uint64_t k, double u_request,
+                                      SampleRecord& rec) noexcept;
+  /// Writes the output and reads the measurement: the fault, if any, and the reading's age.
+  inline TickExchange exchange(RunProgram& p, std::uint64_t k, const OutputLimiter::Applied& lim,
+                               SampleRecord& rec) noexcept;
+  /// Adds a sample that did not fault to the run's errors and to its learning trial; true when
+  /// the last trial has played.
+  static inline bool score(RunProgram& p, std::uint64_t k, const TickDrive& d,
+                           const SampleRecord& rec) noexcept;
+  /// Keeps the sample in the run's record, log and timing, and publishes it as done.
+  inline void record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::uint32_t response,
+                     std::int64_t wake_latency_ns, SampleRecord& rec) noexcept;
+  void idle_tick() noexcept;
+  /// Pushes the record to the run's log: a full ring drops it on the wall clock and waits for
+  /// room on the simulated clock.
+  void log_sample(RunProgram& p, const SampleRecord& rec) noexcept;
+  void end_run(RunEnd end, const char* reason) noexcept;
+  void fault(const char* reason) noexcept;
+  /// Bumps events() and wakes wait_event(): one non-blocking system call.
+  void signal_event() noexcept;
+  // Simulated clock: waits until the learner made the drive for the period at tick k ready.
+  void await_learned_drive(const LearningExchange& learning, std::uint64_t k) noexcept;
+
+  drivers::Driver& driver_;
+  BenchLoopOptions options_;
+  OutputLimiter limiter_;
+  StuckSensorDetector stuck_;
+  LoopStatistics stats_;
+  std::thread thread_;
+  std::atomic<bool> quit_{false};
+  std::atomic<State> state_{State::kStopped};
+  std::atomic<const char*> fault_reason_{""};
+  std::atomic<RunProgram*> pending_{nullptr};
+  std::atomic<RunProgram*> finished_{nullptr};
+  std::atomic<const RunProgram*> active_pub_{nullptr};
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> abort_requested_{false};
+  std::atomic<bool> reset_requested_{false};
+  std::atomic<double> last_y_{0.0};
+  std::atomic<double> last_u_{0.0};
+  std::atomic<std::uint64_t> ticks_{0};
+  std::atomic<std::uint32_t> events_{0};
+  RealtimeReport realtime_report_;
+
+  // Loop-thread state.
+  RunProgram* active_ = nullptr;
+  std::int64_t run_start_ns_ = 0;
+  double y_prev_ = 0.0;
+  double dt_ = 1e-4;
+  std::int64_t period_ns_ = 100000;
+  bool overran_ = false;
+  bool stepped_ = false;  // driven by step(): the injected clock applies
+  bool simulated_ = false;
+  std::int64_t exec_start_ns_ = 0;  // CLOCK_MONOTONIC (or step()'s clock) when this tick began
+};
+
+}  // namespace hystbench::daemon

@@ -1,0 +1,123 @@
+#pragma once
+// Everything one run needs inside the loop, allocated by the control thread before the run and
+// handed to the loop whole, so the loop itself never allocates. The loop writes progress and the
+// outcome into it; the control thread reads them after the loop hands the program back.
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/compensator.hpp"
+#include "hystbench/compensation/dynamics_inversion.hpp"
+#include "hystbench/daemon/runs/learning_exchange.hpp"
+#include "hystbench/daemon/loop/loop_statistics.hpp"
+#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/runs/target_window.hpp"
+#include "hystbench/sim/signal_generator.hpp"
+
+namespace hystbench::daemon {
+
+/// identify: the built-in excitation, then a fit; track: a reference through a compensator;
+/// excite: a user's drive, open loop, logged for fit and diagnose.
+enum class RunKind { kIdentify, kTrack, kExcite };
+enum class RunEnd { kCompleted, kStopped, kAborted, kFault };
+const char* to_string(RunKind kind) noexcept;
+const char* to_string(RunEnd end) noexcept;
+
+struct RunProgram {
+  // ---- set by the control thread before submit() ----
+  std::string run_id;
+  RunKind kind = RunKind::kTrack;
+  std::uint64_t total_samples = 0;
+  /// identify, excite: the open-loop drive, one value per sample [V]; track: its open-loop
+  /// prefix (the precondition sweep).
+  std::vector<double> excitation;
+  /// track: the reference [µm] as a function of run time, and the compensator.
+  std::unique_ptr<sim::SignalGenerator> reference;
+  std::optional<compensation::Compensator> compensator;
+  /// track: the model's delay and dynamics inverted from the previewed reference (the
+  /// feedforward then inverts its target, not y_ref); absent for a static model or `none`/`pid`.
+  std::optional<compensation::DynamicsInversion> preview;
+  /// track: the feedforward targets ahead for an inverse that uses them (BenchLoop::submit()
+  /// sizes it from the compensator; capacity 0 = this tick's target only).
+  TargetWindow targets;
+  /// The active model, configured at the loop's period and relaxed at the run's first output:
+  /// stepped every tick with the drive actually applied, its output is y_model (absent = NaN).
+  std::optional<compensation::ActuatorModel> model;
+  /// The feedback sees no error before this tick (its PID holds): it starts with the scored
+  /// part, after the run's start from rest, a transient the feedforward predicts and an
+  /// integral loop would wind up on and pay back over the next periods.
+  std::uint64_t feedback_from = 0;
+  /// track: references outside [y_ref_min, y_ref_max] are clipped and flagged [µm].
+  double y_ref_min = -std::numeric_limits<double>::infinity();
+  double y_ref_max = std::numeric_limits<double>::infinity();
+  /// Samples before this index are left out of the error figures (start-up transient).
+  std::uint64_t metrics_from = 0;
+  /// y - y_model is scored from max(metrics_from, this): where the drive has swept the range
+  /// since the run began, so the model's state no longer depends on the one it started in (an
+  /// identify run's major loop: its settle and precondition start from wherever the last run
+  /// left the actuator, which the model, relaxed at the run's first output, does not know).
+  std::uint64_t model_metrics_from = 0;
+  /// Keys merged into the run's result: what the run was built with (compensator, feedback),
+  /// set by the control thread, never touched by the loop.
+  nlohmann::json summary = nlohmann::json::object();
+  /// The active model's identified input delay [ticks]: the stuck-sensor detector waits this
+  /// much longer for the reading to answer the output.
+  std::uint64_t response_delay_ticks = 0;
+  /// track: the output offset the model does not predict (slow creep, a sensor offset): the mean
+  /// of y - y_model over the open-loop prefix samples [tare_from, excitation.size()) is subtracted
+  /// from the feedforward's target (not from the reference the error and the PID see).
+  /// tare_from >= excitation.size() = no tare.
+  std::uint64_t tare_from = std::numeric_limits<std::uint64_t>::max();
+  /// The driver exchange latency that the model's delay already holds [ticks]: an identified
+  /// model's exchange_ticks, 0 for a model made elsewhere. For the tare a reading that answers
+  /// the output of response_ticks ago is compared with y_model of (response_ticks - this) ago.
+  std::uint64_t model_exchange_ticks = 0;
+  /// track --learn: the trials' hand-over with the learner (null for a run that does not learn).
+  /// From its first_tick on, a period that plays a learned drive plays it in place of the
+  /// compensator's feedforward (its feedback stays on).
+  std::unique_ptr<LearningExchange> learning;
+  /// The per-run log (may be null in unit tests).
+  std::unique_ptr<SampleLogWriter> log;
+  /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).
+  std::vector<double> rec_u, rec_y, rec_yr;
+  /// identify: per recorded sample, the fresh reading's response_ticks, or kNoFreshReading
+  /// (preallocated like rec_u; empty = not recorded).
+  std::vector<std::uint32_t> rec_response;
+  static constexpr std::uint32_t kNoFreshReading = 0xffffffffu;
+  std::uint64_t record_capacity = 0;
+
+  // ---- written by the loop thread ----
+  std::atomic<std::uint64_t> done{0};  ///< samples completed (any thread may read)
+  std::uint64_t recorded = 0;
+  RunEnd end = RunEnd::kCompleted;
+  const char* end_reason = "";  ///< static string, set when the run did not complete
+  std::uint64_t overruns = 0, clamps = 0, slew_limits = 0, reference_clips = 0;
+  std::uint64_t stale_reads = 0, log_drops = 0;
+  double error_sum2 = 0.0, error_max = 0.0;  ///< tracking error from metrics_from on [µm]
+  std::uint64_t error_samples = 0;
+  double model_error_sum2 = 0.0, model_error_max = 0.0;  ///< y - y_model, see model_metrics_from
+  std::uint64_t model_error_samples = 0;
+  static constexpr std::size_t kModelHistory = 64;      ///< y_model ticks kept for the tare
+  std::array<double, kModelHistory> y_model_history{};  ///< y_model of tick k at k % size
+  double tare_sum = 0.0;  ///< sum of y - y_model over the tare window [µm]
+  std::uint64_t tare_samples = 0;
+  /// The tare the feedforward applies [µm] (0 until the window has a sample).
+  double tare_um() const noexcept {
+    return tare_samples > 0 ? tare_sum / static_cast<double>(tare_samples) : 0.0;
+  }
+  LoopStatistics stats;  ///< this run's loop timing
+
+  /// track: the feedforward's target at run time t_s [s] (0 = the reference's first sample): the
+  /// reference clipped to [y_ref_min, y_ref_max], or with a preview the static target that
+  /// inverts the model's delay and dynamics (the reference ahead); less `tare_um`. Real-time safe.
+  double feedforward_target(double t_s, double tare_um) const noexcept;
+};
+
+}  // namespace hystbench::daemon

@@ -1,0 +1,234 @@
+#pragma once
+// The bench: owns the driver, the loop, the active model and the runs; answers commands.
+// Commands arrive as (cmd, params) JSON from the socket server's thread; run completion,
+// progress events and model fitting happen on the bench's supervisor thread. Nothing here runs
+// on the loop thread except through BenchLoop.
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "hystbench/compensation/identification.hpp"
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/pid_controller.hpp"
+#include "hystbench/daemon/loop/bench_loop.hpp"
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/drivers/driver.hpp"
+#include "hystbench/sim/identification_excitation.hpp"
+
+namespace hystbench::daemon {
+
+namespace details {
+class Request;
+struct Command;
+struct RunContext;
+struct BuiltRun;
+struct RunPreparation;
+struct RunResult;
+struct PlanCache;
+class TrackLearning;
+std::span<const Command> bench_commands();
+}  // namespace details
+
+struct BenchSettings {
+  BenchLoopOptions loop;
+  std::string driver_type = "loopback";
+  nlohmann::json driver_params = nlohmann::json::object();
+  std::string log_dir = "/var/lib/hystbench/logs";
+  std::string model_dir = "/var/lib/hystbench/models";
+  std::size_t log_ring_capacity = std::size_t{1} << 16;
+  /// Reference range without a model [µm]; with a model its major loop defines the range.
+  double y_min = 0.0;
+  double y_max = 0.0;
+  /// identify's defaults (a request overrides model, operators, dead_zones and the span): the
+  /// configuration's [identify] section, the same struct and defaults, so tests identify as the
+  /// daemon does.
+  IdentifySection identify;
+  /// The excitation's other segments (minor loops, rates, holds, reversals); `identify` sets
+  /// its major-loop and preconditioning options. The standard one by default.
+  sim::IdentificationExcitationOptions identify_excitation;
+  /// track's feedback: the configuration's [pid] section (no gains = derived per run from the
+  /// model and the loop rate, compensation::tune_pid, unless a request gives kp, ki or kd).
+  PidSection pid;
+  /// Open-loop sweep to u_max and back to u_min before every track run [s], so the actuator's
+  /// hysteresis state is known and the inverse starts consistent with it.
+  double precondition_s = 1.0;
+  /// Roll-off of the feedforward's dynamics inversion [Hz]; 0 = the default (DynamicsInversion).
+  double feedforward_bandwidth_hz = 0.0;
+  /// The effective configuration, returned by config.get.
+  nlohmann::json config_json = nlohmann::json::object();
+};
+
+class Bench {
+ public:
+  using EventSink = std::function<void(const nlohmann::json&)>;
+
+  /// Creates, configures and activates the driver. Throws std::runtime_error naming the cause.
+  explicit Bench(BenchSettings settings);
+  ~Bench();
+  Bench(const Bench&) = delete;
+  Bench& operator=(const Bench&) = delete;
+
+  /// Starts the loop and the supervisor; returns the real-time setup report.
+  RealtimeReport start();
+  /// Ends a run (aborted, log closed), safe output, stops threads, deactivates the driver.
+  void shutdown();
+
+  /// Executes one command of connection `client` (its uploads are its own); returns its result
+  /// object. Throws CommandError.
+  nlohmann::json handle(const std::string& cmd, const nlohmann::json& params,
+                        std::uint64_t client = 0);
+  /// Connection `client` went away: its uploads are discarded (a run already started keeps
+  /// what it took).
+  void client_closed(std::uint64_t client);
+  /// Receives progress and run events (from the supervisor thread).
+  void set_event_sink(EventSink sink);
+
+  /// True when the loop has ticked since the previous call (for the systemd watchdog).
+  bool loop_advanced();
+  /// Waits until no run is active or pending finalisation and the last run's `run.finished`
+  /// event has reached the sink (for tests and shutdown).
+  bool wait_idle(std::chrono::milliseconds timeout);
+  BenchLoop& loop() { return *loop_; }
+  drivers::Driver& driver() { return *driver_; }
+
+ private:
+  // The socket commands (command_table.cpp): its rows call these handlers with the request
+  // already checked against the row's parameters.
+  friend std::span<const details::Command> details::bench_commands();
+  nlohmann::json status() const;
+  nlohmann::json start_identify(const details::Request& request);
+  nlohmann::json start_track(const details::Request& request, std::uint64_t client);
+  /// excite: a complete drive upload played open loop after a ramp from the present output.
+  nlohmann::json start_excite(const details::Request& request, std::uint64_t client);
+  nlohmann::json stop_run();
+  nlohmann::json abort_run();
+  /// reset: leaves FAULT (reset_failed when the loop does not).
+  nlohmann::json reset();
+  nlohmann::json model_get() const;
+  /// model.load: {"model": document, "name": file name} (kept in the model folder) or
+  /// {"stored": name in the model folder}; never a path.
+  nlohmann::json load_model(const details::Request& request);
+  /// model.list: the model folder's *.json files (name, bytes, type, active).
+  nlohmann::json list_models() const;
+  /// model.delete: a model or learned drive out of the model folder (not the active model).
+  nlohmann::json delete_model(const details::Request& request);
+  /// Throws CommandError fault or busy unless a run may start. Caller holds mutex_.
+  void require_idle() const;
+  struct SubmittedRun {
+    std::string run_id, log_path;
+    std::uint64_t total;
+  };
+  /// What the run builders need to know (settings, model, present output). Caller holds mutex_.
+  details::RunContext run_context() const;
+  /// Names the built run, submits it and makes it the active run; returns the start reply.
+  /// Caller holds mutex_.
+  nlohmann::json launch(const char* kind, details::BuiltRun run);
+  /// Opens the run's log with `header` and hands the run to the loop; throws busy when the loop
+  /// does not take it (the log is closed). Caller holds mutex_.
+  SubmittedRun submit_run(std::unique_ptr<RunProgram> p, const nlohmann::json& header);
+  /// Where the bench is with its run. kPreparing: started, its preparation (track's planned
+  /// feedforward) queued or under way on the supervisor thread, not yet on the loop (stop and
+  /// abort cancel it); kRunning: submitted to the loop (stop and abort act on it); kFinalizing:
+  /// ended, its result or identify's fit being made. Guarded by mutex_.
+  enum class RunPhase { kIdle, kPreparing, kRunning, kFinalizing };
+  void set_phase(RunPhase phase);
+  /// The supervisor thread: finalises each run the loop hands back (woken by the loop's
+  /// events), and emits run.progress when a run (or a verification stage) starts and every
+  /// 0.5 s while one runs.
+  void supervise();
+  /// Emits run.progress once for a run or stage not announced yet (supervisor thread).
+  void announce_run();
+  /// A learning run: scores the trials the loop closed, offers the next drives, and emits
+  /// run.progress for each trial (supervisor thread).
+  void learn();
+  /// Takes the trials the loop closed, offers the next drive and emits run.progress for each.
+  void announce_trials(details::TrackLearning& learning, const std::string& run_id);
+  /// A learning run's result: `learning` (its trials), the last trial's errors as the run's,
+  /// and the kept drive saved in the model folder (supervisor thread).
+  void finish_learning(const RunProgram& run, nlohmann::json& report);
+  /// run.progress of the active run; `started`: also when the loop no longer (or not yet)
+  /// plays it, with done = 0.
+  void emit_progress(bool started = false);
+  bool preparation_queued() const;
+  /// Runs the queued preparation (supervisor thread), then hands the run to the loop; a
+  /// cancelled one ends unplayed.
+  void prepare();
+  /// The result of a run that ends before the loop played it (stopped or aborted while it was
+  /// prepared, refused by the loop): delivered with 0 samples and `reason`.
+  void end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason);
+  void finalize(std::unique_ptr<RunProgram> run);
+  /// Sets the last result, leaves the bench idle and emits run.finished.
+  void deliver_result(nlohmann::json result);
+  // identify's verification (bench_verification.cpp, identify_session.hpp).
+  struct IdentifySession;
+  /// Submits the next verification segment; false when none is left or it failed.
+  bool verify_next_candidate();
+  void verification_finished(std::unique_ptr<RunProgram> run);
+  /// The next segment, else the extension (once), else finish_identify().
+  void continue_identify();
+  /// Diagnoses the record with the best verified candidate and queues its extension's
+  /// verification; false when nothing is added (the reason in the session's extension).
+  bool extend_identified_model();
+  /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
+  /// when the fit fails).
+  void fit_identify(const RunProgram& run, details::RunResult result);
+  /// The fitted candidates of identify's record, not yet verified. Throws when none fits.
+  std::unique_ptr<IdentifySession> fit_candidates(const RunProgram& run,
+                                                  const details::RunResult& result,
+                                                  const nlohmann::json& fit_request);
+  /// Adopts the chosen candidate and delivers the identify result.
+  void finish_identify();
+  /// Opens p's log (p.log) with `header`; the header's run and p's result name the loop's clock.
+  /// Throws CommandError log_error.
+  void open_log(RunProgram& p, nlohmann::json header);
+  std::string new_run_id(const char* kind);
+  void emit(const nlohmann::json& event);
+
+  BenchSettings settings_;
+  std::unique_ptr<drivers::Driver> driver_;
+  std::unique_ptr<BenchLoop> loop_;
+  RealtimeReport realtime_;
+  double dt_;
+
+  mutable std::mutex mutex_;  // guards everything below
+  std::optional<compensation::ModelFile> model_;
+  std::string model_path_;
+  std::uint64_t model_generation_ = 0;         // bumped with every change of model_
+  std::shared_ptr<details::PlanCache> plans_;  // track's last plan (its own lock)
+  nlohmann::json last_result_;
+  nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
+  RunPhase phase_ = RunPhase::kIdle;
+  bool delivering_result_ = false;   // run.finished is on its way to the sink (wait_idle waits)
+  std::condition_variable idle_cv_;  // phase_ back to kIdle and run.finished delivered
+  nlohmann::json pending_fit_;       // identify's fit request (details::BuiltRun::fit)
+  // The run being prepared (phase_ kPreparing): its program and preparation until the
+  // supervisor takes them; what stop or abort asked for meanwhile (kCompleted = nothing).
+  std::unique_ptr<RunProgram> preparing_;
+  std::unique_ptr<details::RunPreparation> preparation_;
+  RunEnd cancel_preparation_ = RunEnd::kCompleted;
+  std::unique_ptr<IdentifySession> session_;  // supervisor thread only
+  // The learner of a learning run (set with it, taken by the supervisor when it ends).
+  std::unique_ptr<details::TrackLearning> learning_;
+  std::string learning_run_id_;
+  std::string announced_run_;  // run_id/stage last announced; supervisor only
+  EventSink sink_;
+  std::uint64_t run_counter_ = 0;
+  UploadStore uploads_;  // its own lock
+
+  std::thread supervisor_;
+  std::atomic<bool> quit_{false};
+  std::uint64_t watchdog_ticks_ = 0;
+};
+
+}  // namespace hystbench::daemon

@@ -1,0 +1,63 @@
+#include "runs/details/run_result.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "hystbench/daemon/runs/inverse_track_program.hpp"
+
+namespace hystbench::daemon::details {
+
+using nlohmann::json;
+
+namespace {
+
+// The simulation's error on the bench: y - y_model over the scored samples, in µm and in % of
+// the output range the run covered (the reference's for a tracking run).
+void add_model_error(const RunProgram& run, json& report) {
+  const std::size_t n = run.recorded;
+  if (run.model_error_samples == 0 || n <= 2) return;
+  const auto [lo, hi] = std::minmax_element(run.rec_y.begin(), run.rec_y.begin() + n);
+  const double range = report.contains("range_um") ? report["range_um"].get<double>() : *hi - *lo;
+  const double rms = std::sqrt(run.model_error_sum2 / run.model_error_samples);
+  report["model_rms_error_um"] = rms;
+  report["model_max_error_um"] = run.model_error_max;
+  report["model_rms_error_percent"] = range > 0 ? 100.0 * rms / range : 0.0;
+  report["model_max_error_percent"] = range > 0 ? 100.0 * run.model_error_max / range : 0.0;
+}
+
+}  // namespace
+
+RunResult collect_result(RunProgram& run, double output_v_after) {
+  RunResult r;
+  r.kind = run.kind;
+  r.end = run.end;
+  r.recorded = run.recorded;
+  SampleLogCounts counts;
+  if (run.log) {
+    r.log_path = run.log->path().string();
+    counts = run.log->close();
+  }
+  r.report = {{"run_id", run.run_id},
+              {"kind", to_string(run.kind)},
+              {"end", to_string(run.end)},
+              {"reason", run.end_reason},
+              {"samples", run.done.load()},
+              {"planned_samples", run.total_samples},
+              {"logged", counts.written},
+              {"dropped", counts.dropped + run.log_drops},
+              {"log", r.log_path},
+              {"loop", to_json(run.stats.snapshot())},
+              {"overruns", run.overruns},
+              {"clamps", run.clamps},
+              {"slew_limits", run.slew_limits},
+              {"reference_clips", run.reference_clips},
+              {"stale_reads", run.stale_reads},
+              {"output_v_after", output_v_after}};
+  if (!counts.error.empty()) r.report["log_error"] = counts.error;
+  r.report.update(run.summary);
+  if (run.kind == RunKind::kTrack) r.report.update(tracking_error_json(run));
+  add_model_error(run, r.report);
+  return r;
+}
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,98 @@
+#pragma once
+// The learner of a `track --learn N` run, on the supervisor thread: takes each trial the loop
+// closes (LearningExchange), scores it, lets the guard decide, and offers the next trial's drive
+// (compensation::IterativeLearning), or the best trial's drive twice (a period to settle, then the
+// last) when the guard stops the learning. Its result is the run's `learning` object; the drive it
+// keeps is saved for replay. Not real-time safe.
+#include <cstddef>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/iterative_learning.hpp"
+#include "hystbench/compensation/learning_guard.hpp"
+#include "hystbench/daemon/runs/learning_exchange.hpp"
+#include "runs/details/learned_drive.hpp"
+
+namespace hystbench::daemon::details {
+
+/// What a learning run is asked for and built with.
+struct LearningRequest {
+  std::size_t trials = 10;    ///< learned trials after the first (the compensator's)
+  double gain = 0.5;          ///< gamma at the start, (0, 20]
+  double range_um = 0.0;      ///< the reference's span: errors in % of it
+  double frequency_hz = 0.0;  ///< the trial's frequency (the loop rate / P)
+  std::string reference;      ///< its kind (sine, triangle, sawtooth, upload)
+  std::string signature;      ///< an upload's fingerprint (empty for a built-in one)
+  /// A trial's first scored phase: an upload's pass scores its trajectory, not the approach
+  /// before it (the learner learns both).
+  std::size_t scored_from = 0;
+  double rate_hz = 0.0;               ///< the loop rate
+  double min_um = 0.0, max_um = 0.0;  ///< the reference's extremes
+  /// A drive learned before (P samples) that trial 0 plays instead of the compensator's, and
+  /// its name; empty: the compensator's.
+  std::vector<double> start_drive;
+  /// The compensator's feedforward in the run that learned it (P samples; empty: the drive
+  /// plays as saved): the drive moves by how far the compensator's moves from it.
+  std::vector<double> start_compensator;
+  std::string start_name;
+};
+
+/// What a drive of `period_samples` learned for `r` belongs to (saved with it, checked on replay).
+LearnedFor learned_for(const LearningRequest& r, std::size_t period_samples);
+
+class TrackLearning {
+ public:
+  TrackLearning(const compensation::ActuatorModel& model, LearningExchange& exchange,
+                LearningRequest request, compensation::LearningOptions options);
+
+  /// A trial the learner scored: number, rms and max error [% of range], the gain it was
+  /// learned with, what drive it played.
+  struct Trial {
+    std::uint64_t trial = 0;
+    double rms_percent = 0.0, max_percent = 0.0, rms_um = 0.0, max_um = 0.0;
+    double gain = 0.0;
+    /// "compensator", "saved" (a drive learned before), "learned" or "best" (kept after the
+    /// guard stopped)
+    std::string drive;
+  };
+
+  /// Takes every trial the loop closed since the last call and offers the next drive; returns
+  /// the trials scored now (for run.progress).
+  std::vector<Trial> poll();
+  /// The learning failed (`why`): no more drives are offered, and the result says so.
+  void fail(const std::string& why);
+
+  /// The run's `learning` object; the last trial's rms and max [µm] when any was scored.
+  nlohmann::json result() const;
+  std::optional<Trial> last_trial() const;
+  /// The drive the run ends with: the best trial's when the guard stopped, else the last one
+  /// offered (the drive started from before any); empty before any.
+  const std::vector<double>& kept_drive() const noexcept { return kept_; }
+  /// The compensator's feedforward over the last trial taken (P samples; empty before any).
+  const std::vector<double>& kept_compensator() const noexcept { return c_; }
+  /// What the compensator's target took off in the trials [µm], the run's tare given.
+  double target_offset(double tare_um) const noexcept {
+    return exchange_.target_offset(exchange_.first_tick, tare_um);
+  }
+  const LearningRequest& request() const noexcept { return request_; }
+
+ private:
+  LearningExchange& exchange_;
+  LearningRequest request_;
+  compensation::IterativeLearning learner_;
+  compensation::LearningGuard guard_;
+  std::vector<Trial> trials_;
+  std::vector<double> u_, c_, e_, next_, best_drive_, kept_;
+  bool stopped_ = false;
+  bool done_ = false;  ///< the last drive was offered
+  std::string why_;
+  double next_gain_ = 0.0;  ///< the gain the drive offered last was learned with
+  std::string next_drive_;  ///< what it is: "learned" or "best"
+  double update_ms_sum_ = 0.0, update_ms_max_ = 0.0;
+  std::size_t updates_ = 0;
+};
+
+}  // namespace hystbench::daemon::details

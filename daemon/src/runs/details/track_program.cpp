@@ -1,0 +1,562 @@
+#include "runs/details/track_program.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+
+#include "hystbench/compensation/compensator.hpp"
+#include "hystbench/compensation/drive_planner.hpp"
+#include "hystbench/compensation/dynamics_inversion.hpp"
+#include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/compensation/pid_tuning.hpp"
+#include "hystbench/compensation/planned_inverse.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "runs/details/learned_drive.hpp"
+#include "runs/details/track_reference.hpp"
+
+namespace hystbench::daemon::details {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+namespace {
+
+/// Takes the kept plan into `plan` when it was made from the same inputs; true then.
+bool reuse_plan(PlanCache& cache, std::uint64_t generation, double u_now,
+                const std::vector<double>& excitation, const std::vector<double>& targets,
+                std::uint64_t planned_samples, double period_samples,
+                std::optional<hc::DrivePlan>& plan) {
+  std::lock_guard lock(cache.mutex);
+  if (!cache.plan || cache.model_generation != generation || cache.u_now != u_now ||
+      cache.planned_samples != planned_samples || cache.period_samples != period_samples ||
+      cache.excitation != excitation || cache.targets != targets) {
+    return false;
+  }
+  plan = cache.plan;
+  return true;
+}
+
+/// Keeps `plan` and what it was made from, in place of the plan kept before.
+void keep_plan(PlanCache& cache, std::uint64_t generation, double u_now,
+               const std::vector<double>& excitation, const std::vector<double>& targets,
+               std::uint64_t planned_samples, double period_samples, const hc::DrivePlan& plan) {
+  std::lock_guard lock(cache.mutex);
+  cache.model_generation = generation;
+  cache.u_now = u_now;
+  cache.excitation = excitation;
+  cache.targets = targets;
+  cache.planned_samples = planned_samples;
+  cache.period_samples = period_samples;
+  cache.plan = plan;
+}
+
+// The most planning a track run waits for before it starts (compensation::plan_drive_work:
+// about 10 s on one core; 120 000 samples, 12 s at 10 kHz, for a model of 6 plays).
+constexpr double kMaxPlanWork = 1.0e6;
+// The previewed inverse's error on the model below which a plan is not worth its time, as a
+// fraction of the reference's span.
+constexpr double kGoodEnoughFraction = 1e-3;
+
+hc::CompensatorKind compensator_kind(const std::string& name, const RunContext& ctx) {
+  const auto kind = hc::compensator_kind_from_string(name);
+  if (!kind) {
+    throw CommandError("bad_params", "compensator: unknown '" + name +
+                                         "' (none, inverse, inverse_multiplicative, "
+                                         "inverse+pid, pid)");
+  }
+  if (hc::needs_model(*kind) && ctx.model == nullptr) {
+    throw CommandError(
+        "no_model", "compensator '" + name + "' needs a model: run identify or model.load first");
+  }
+  return *kind;
+}
+
+ActuatorRange known_range(const RunContext& ctx) {
+  if (const auto range = actuator_range(ctx)) return *range;
+  throw CommandError("no_range",
+                     "the actuator range is unknown: identify or load a model, or set "
+                     "limits.y_min and limits.y_max");
+}
+
+// A learning run's trials (track --learn): each one period of a periodic reference, P whole
+// ticks (the frequency moves to the loop rate / P so that every trial samples the same points),
+// or one pass of a user's trajectory (its approach from the end, then itself).
+struct LearningPlan {
+  std::size_t trials = 0;
+  double gain = 0.5;
+  double cutoff_hz = 0.0;             ///< Q's cut-off; 0 = IterativeLearning's default
+  std::size_t period = 0;             ///< P [ticks]
+  double frequency_hz = 0.0;          ///< the loop rate / P
+  std::string reference;              ///< sine, triangle, sawtooth, or upload
+  std::size_t scored_from = 0;        ///< a trial's first scored phase (an upload's approach: not)
+  std::optional<LearnedDrive> start;  ///< the drive trial 0 plays (`learned`), else none
+};
+
+// The learning gain's default: half the error corrected per trial (a plant whose local slope is
+// half the model's still converges; twice it, at the edge).
+constexpr double kDefaultLearningGain = 0.5;
+
+// The plan of a learning run from its request; for an upload, reference() sets its period (a
+// pass) and its scored part from the trajectory.
+std::optional<LearningPlan> learning_plan(const Request& request, const RunContext& ctx,
+                                          const Upload* upload) {
+  const bool learns = request.has("learn_trials") && request.integer("learn_trials", 0) > 0;
+  if (!learns) {
+    for (const char* key : {"learn_gain", "learn_cutoff_hz"}) {
+      if (request.has(key)) {
+        throw CommandError("bad_params", std::string(key) + ": only with learn_trials > 0");
+      }
+    }
+    if (!request.has("learned")) return std::nullopt;
+  }
+  const char* key = learns ? "learn_trials" : "learned";
+  LearningPlan plan;
+  plan.trials = static_cast<std::size_t>(request.integer("learn_trials", 0));
+  plan.gain = request.number("learn_gain", kDefaultLearningGain);
+  plan.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
+  if (request.has("learned")) {
+    plan.start = load_learned_drive(ctx.settings.model_dir, request.string("learned", ""));
+  }
+  if (upload != nullptr) {
+    plan.reference = "upload";
+    return plan;
+  }
+  plan.reference = request.string("reference", "triangle");
+  if (plan.reference != "sine" && plan.reference != "triangle" && plan.reference != "sawtooth") {
+    throw CommandError("bad_params", std::string(key) +
+                                         ": a trial is one period of a sine, triangle or "
+                                         "sawtooth, or one pass of an uploaded trajectory; '" +
+                                         plan.reference + "' does not repeat");
+  }
+  if (request.has("periods") || request.has("duration_s")) {
+    throw CommandError("bad_params", std::string(key) +
+                                         " sets the run's length (the start-up period, the "
+                                         "first trial and the learned ones): leave out periods "
+                                         "and duration_s");
+  }
+  const double rate = ctx.settings.loop.rate_hz;
+  const double f = request.number("frequency_hz", 1.0, 1e-3, rate / 20.0);
+  plan.period = static_cast<std::size_t>(std::llround(rate / f));
+  plan.frequency_hz = rate / static_cast<double>(plan.period);
+  return plan;
+}
+
+TrackReference reference(const Request& request, const RunContext& ctx, const ActuatorRange& range,
+                         const Upload* upload, std::optional<LearningPlan>& learn) {
+  const auto& lim = ctx.settings.loop.limits;
+  const double span = range.y_top - range.y_bottom;
+  const ReferenceLimits limits{range.y_bottom, range.y_top,
+                               lim.slew_v_per_s * span / (lim.u_max - lim.u_min),
+                               ctx.settings.loop.rate_hz};
+  if (upload == nullptr) {
+    if (!learn) return builtin_reference(request, limits);
+    return builtin_reference(request, limits, learn->frequency_hz,
+                             learning_periods(learn->trials, learn->frequency_hz));
+  }
+  // The precondition sweep leaves the output at the bottom of its range.
+  const double approach_s = request.number("approach_s", 0.2);
+  if (!learn) return uploaded_reference(*upload, limits, range.y_bottom, approach_s);
+  TrackReference ref =
+      uploaded_reference(*upload, limits, range.y_bottom, approach_s, learn->trials);
+  learn->period = ref.pass_samples;
+  learn->frequency_hz = ref.frequency_hz;
+  learn->scored_from = ref.pass_approach;
+  return ref;
+}
+
+// The model's inverse, started in the state the sweep `prefix` leaves it in; null for a
+// compensator without one.
+std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
+                                                      const RunContext& ctx,
+                                                      const std::vector<double>& prefix) {
+  if (ctx.model == nullptr || !hc::needs_model(kind)) return nullptr;
+  const auto& lim = ctx.settings.loop.limits;
+  const hc::ActuatorModel m =
+      model_after(ctx.model->model, prefix, ctx.u_now, lim.u_min, lim.u_max, ctx.dt());
+  try {
+    return hc::make_inverse(m, kind == hc::CompensatorKind::kInverseMultiplicative
+                                   ? hc::InverseKind::kMultiplicative
+                                   : hc::InverseKind::kAuto);
+  } catch (const hc::NotInvertibleError& e) {
+    throw CommandError("not_invertible", e.what());
+  } catch (const std::exception& e) {
+    throw CommandError("bad_model", e.what());
+  }
+}
+
+// The PID's gains (derived, the request's or the configuration's) and clamp; `summary` says
+// which. Derived gains (always behind a feedforward: the inverse, or the linear map for `pid`)
+// average the error over the period of a periodic reference of reference_hz (0: none) where
+// tune_pid says so. nullopt for a compensator without feedback.
+std::optional<hc::PidController> feedback_controller(const Request& request,
+                                                     hc::CompensatorKind kind,
+                                                     const RunContext& ctx, double gain,
+                                                     double reference_hz, json& summary) {
+  if (!hc::uses_feedback(kind)) return std::nullopt;
+  const BenchSettings& s = ctx.settings;
+  const PidSection& c = s.pid;
+  hc::PidParameters pp{c.kp.value_or(0.0),
+                       c.ki.value_or(0.0),
+                       c.kd.value_or(0.0),
+                       c.derivative_filter_hz,
+                       c.u_fb_min,
+                       c.u_fb_max,
+                       c.output_filter_hz.value_or(0.0)};
+  const bool derived = !c.kp && !c.ki && !c.kd;
+  const bool given = request.has("kp") || request.has("ki") || request.has("kd");
+  if (derived && !given) {
+    const hc::ActuatorModel* m = ctx.model != nullptr ? &ctx.model->model : nullptr;
+    const hc::PidTuning t =
+        hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m, reference_hz,
+                     kind == hc::CompensatorKind::kPid ? hc::FeedforwardKind::kLinearMap
+                                                       : hc::FeedforwardKind::kModelInverse);
+    pp.kp = t.kp;
+    pp.ki = t.ki;
+    pp.kd = t.kd;
+    pp.output_filter_hz = c.output_filter_hz.value_or(t.output_filter_hz);
+    pp.error_period_s = t.error_period_s;
+    summary = {{"gains", "derived"}, {"basis", t.basis}};
+  } else {
+    pp.kp = request.number("kp", pp.kp);
+    pp.ki = request.number("ki", pp.ki);
+    pp.kd = request.number("kd", pp.kd);
+    summary = {{"gains", given ? "request" : "config"}};
+  }
+  std::optional<hc::PidController> pid;
+  try {
+    pid.emplace(pp, ctx.dt());
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  summary.update({{"kp", pp.kp},
+                  {"ki", pp.ki},
+                  {"kd", pp.kd},
+                  {"output_filter_hz", pp.output_filter_hz},
+                  {"error_period_s", pp.error_period_s},
+                  {"u_fb_min", pp.output_min},
+                  {"u_fb_max", pp.output_max}});
+  return pid;
+}
+
+// The feedforward inverts the whole model: hysteresis, creep and rate in the static inverse,
+// the delay and dynamics from the previewed reference. Sets the preview and the tare; returns
+// the summary.
+json arm_feedforward(RunProgram& p, const RunContext& ctx) {
+  const hc::ActuatorModel& model = ctx.model->model;
+  const hc::DynamicsInversion inversion(model, ctx.dt(), ctx.settings.feedforward_bandwidth_hz);
+  json inverted = json::array({"hysteresis"});
+  if (model.creep()) inverted.push_back("creep");
+  if (model.hysteresis().kind() == hc::ModelKind::kRateDependentPi) inverted.push_back("rate");
+  if (model.delay_samples() > 0 || model.delay_s() > 0.0) inverted.push_back("delay");
+  if (model.dynamics()) inverted.push_back("dynamics");
+  if (inversion.active()) p.preview = inversion;
+  arm_tare(p, model_exchange_ticks(ctx));
+  json out = {{"inverted", inverted},
+              {"preview_samples", inversion.preview_samples()},
+              {"bandwidth_hz", inversion.bandwidth_hz()},
+              {"how", inversion.describe()}};
+  const auto* rpi = dynamic_cast<const hc::RateDependentPiModel*>(&model.hysteresis());
+  if (rpi != nullptr && rpi->parameters().rate_law == hc::RateLaw::kThresholds) {
+    out["rate"] =
+        "solved each tick (thresholds widening with the rate): at the drive's own rate, exact, "
+        "where the output still grows with the drive; else at the rate the rate-free inverse's "
+        "drive predicts";
+  } else if (rpi != nullptr) {
+    out["rate"] = hc::can_plan_drive(model)
+                      ? "planned over the known reference where it is fast (the |du/dt| law, or "
+                        "weights that fall with the rate)"
+                      : "solved each tick at the drive's own rate (the signed law, weights growing "
+                        "with it: exact)";
+  }
+  return out;
+}
+
+// The work of feedforward_plan's preparation: the drive planned over the targets (or the plan
+// kept from the same inputs), put in the program's compensator in place of the previewed
+// inverse where it is better on the model; the program's summary says which and why.
+struct FeedforwardPlanning {
+  hc::ActuatorModel relaxed;  ///< the model relaxed at the present output u_now
+  double u_now = 0.0;
+  std::vector<double> targets;
+  std::uint64_t planned_samples = 0;  ///< the targets planned; a periodic rest continues them
+  double period_samples = 0.0;
+  hc::CompensatorKind kind;
+  std::optional<hc::PidController> pid;
+  hc::LinearMap linear;
+  std::shared_ptr<PlanCache> cache;
+  std::uint64_t generation = 0;  ///< the model's, for the cache
+
+  void operator()(RunProgram& program, const std::function<void(double)>& progress) {
+    hc::DrivePlanOptions options;
+    options.progress = progress;
+    // Below 0.1 % of the reference's span on the model the previewed inverse is kept:
+    // the model's own mismatch is larger (a slow reference; 1 Hz on the loopback).
+    const auto [lo, hi] = std::minmax_element(targets.begin(), targets.end());
+    options.accept_start_rms = kGoodEnoughFraction * (*hi - *lo);
+    const auto start = std::chrono::steady_clock::now();
+    json planned = {{"samples", 0}};
+    std::optional<hc::DrivePlan> plan;
+    const bool reused = cache && reuse_plan(*cache, generation, u_now, program.excitation, targets,
+                                            planned_samples, period_samples, plan);
+    try {
+      if (reused) {
+        progress(1.0);  // a stop or abort meanwhile still cancels the run
+      } else {
+        make_plan(program, options, plan);
+      }
+    } catch (const PreparationCancelled&) {
+      program.summary["feedforward"]["planned"] = {
+          {"samples", 0}, {"why_not", "cancelled before the plan was done"}};
+      throw;
+    } catch (const std::exception& e) {
+      planned["why_not"] =
+          std::string("planning failed (") + e.what() + "): the previewed inverse follows it";
+    }
+    if (plan && plan->start_rms <= options.accept_start_rms) {
+      planned["why_not"] = "the previewed inverse already meets the targets on the model (" +
+                           std::to_string(plan->start_rms) +
+                           " um rms, within 0.1 % of the reference's span): it follows them";
+      plan.reset();
+    }
+    if (plan) {
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      adopt(program, *plan, reused, seconds, planned);
+    }
+    program.summary["feedforward"]["planned"] = planned;
+  }
+
+  // Plans the drive over the first planned_samples targets, continues a periodic plan over the
+  // rest and keeps the plan in the cache.
+  void make_plan(const RunProgram& program, const hc::DrivePlanOptions& options,
+                 std::optional<hc::DrivePlan>& plan) {
+    plan = hc::plan_drive(relaxed, u_now, program.excitation,
+                          std::span<const double>(targets).first(planned_samples), options);
+    if (planned_samples < targets.size()) {
+      plan = hc::continue_periodic_plan(std::move(*plan), period_samples, targets.size());
+    }
+    if (cache) {
+      keep_plan(*cache, generation, u_now, program.excitation, targets, planned_samples,
+                period_samples, *plan);
+    }
+  }
+
+  // Puts the plan in the program's compensator where it is better on the model than the
+  // previewed inverse; `planned` gets its figures, or why it does not play.
+  void adopt(RunProgram& program, hc::DrivePlan& plan, bool reused, double seconds, json& planned) {
+    planned = {{"samples", targets.size()}, {"optimised_samples", planned_samples},
+               {"seconds", seconds},        {"reused", reused},
+               {"model_rms_um", plan.rms},  {"previewed_model_rms_um", plan.start_rms}};
+    // The plan pays for its smoothness, and beyond the rates its model was identified
+    // at it plans on the continued law: where that leaves it worse on the model as it
+    // is, the previewed inverse plays.
+    if (plan.rms <= plan.start_rms) {
+      program.compensator.emplace(
+          kind, std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(plan)), pid,
+          linear);
+    } else {
+      planned["samples"] = 0;
+      planned["why_not"] = "on the model the plan's error (" + std::to_string(plan.rms) +
+                           " um rms) is not below the previewed inverse's (" +
+                           std::to_string(plan.start_rms) +
+                           " um): the previewed inverse follows it";
+    }
+  }
+};
+
+// The samples of the reference the planner plans, and its period in samples (0: planned
+// whole). A periodic reference too long to plan whole: its first four periods are planned and
+// the third repeats (the model's state repeats with the reference after one period; not with
+// creep, whose state drifts over the run).
+std::pair<std::uint64_t, double> planned_window(const hc::ActuatorModel& model,
+                                                std::uint64_t samples, double reference_hz,
+                                                double dt) {
+  if (hc::plan_drive_work(model, samples) > kMaxPlanWork && reference_hz > 0.0 && !model.creep()) {
+    const double period_samples = 1.0 / (reference_hz * dt);
+    return {std::min<std::uint64_t>(
+                samples, static_cast<std::uint64_t>(std::ceil(4.0 * period_samples)) + 1),
+            period_samples};
+  }
+  return {samples, 0.0};
+}
+
+// The feedforward planned over the whole known reference for a rate-dependent model
+// (compensation::plan_drive: the per-sample rate law leaves a tick-by-tick inverse no good
+// choice at a fast reference's tops), as the run's preparation: the bench plans on its
+// supervisor thread, with progress, and the plan replaces the previewed inverse the program was
+// built with (for `inverse_multiplicative` too: its one-tick loop through the model trails a law
+// that lags the drive). No preparation, with the reason in `feedforward`, where the previewed
+// inverse stays: another model kind, a reference too long to plan in
+// kMaxPlanWork (a periodic one: its first four periods are planned and the third repeats); a plan
+// that is not better on the model, or that fails, also leaves it and says why in the run's result.
+// The targets are the loop's (RunProgram::feedforward_target) without the tare, which the planned
+// inverse meets through the plan's gain once the prefix measured it.
+RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
+                                hc::CompensatorKind kind, std::uint64_t samples,
+                                double reference_hz, json& feedforward,
+                                const std::optional<hc::PidController>& pid,
+                                const hc::LinearMap& linear) {
+  if (!hc::can_plan_drive(ctx.model->model) || samples == 0) return {};
+  const auto& lim = ctx.settings.loop.limits;
+  const double dt = ctx.dt();
+  const auto [planned_samples, period_samples] =
+      planned_window(ctx.model->model, samples, reference_hz, dt);
+  if (hc::plan_drive_work(ctx.model->model, planned_samples) > kMaxPlanWork) {
+    const auto longest =
+        static_cast<std::uint64_t>(kMaxPlanWork / hc::plan_drive_work(ctx.model->model, 1));
+    feedforward["planned"] = {
+        {"samples", 0},
+        {"why_not", "the reference (" + std::to_string(samples) +
+                        " samples) is longer than the planner takes for this model (" +
+                        std::to_string(longest) + "): the previewed inverse follows it"}};
+    return {};
+  }
+  std::vector<double> targets(samples);
+  for (std::uint64_t k = 0; k < samples; ++k) {
+    targets[k] = p.feedforward_target(static_cast<double>(k) * dt, 0.0);
+  }
+  feedforward["planned"] = {{"samples", samples}, {"planning", true}};
+  return {
+      "planning the feedforward",
+      FeedforwardPlanning{model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt),
+                          ctx.u_now, std::move(targets), planned_samples, period_samples, kind, pid,
+                          linear, ctx.plans, ctx.model_generation}};
+}
+
+// The learner of a learning run: the trials' exchange from the first scored period on, the
+// active model (else the linear map of the limits) as its L, the drive limits of the loop.
+std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
+                                        const RunContext& ctx, const TrackReference& ref) {
+  const auto& lim = ctx.settings.loop.limits;
+  const std::optional<hc::ActuatorModel> model = predictor(ctx, ctx.u_now);
+  if (!model) throw CommandError("no_range", "learning needs a model or limits.y_min/y_max");
+  p.learning = std::make_unique<LearningExchange>(plan.period, p.metrics_from);
+  hc::LearningOptions o;
+  o.dt = ctx.dt();
+  o.u_min = lim.u_min;
+  o.u_max = lim.u_max;
+  o.cutoff_hz = plan.cutoff_hz;
+  o.fundamental_hz = ref.content_hz;
+  if (lim.slew_v_per_s > 0.0) o.max_step = lim.slew_v_per_s * o.dt;
+  LearningRequest r;
+  r.trials = plan.trials;
+  r.gain = plan.gain;
+  r.range_um = ref.max_um - ref.min_um;
+  r.frequency_hz = plan.frequency_hz;
+  r.reference = plan.reference;
+  r.rate_hz = ctx.settings.loop.rate_hz;
+  r.min_um = ref.min_um;
+  r.max_um = ref.max_um;
+  r.signature = ref.signature;
+  r.scored_from = plan.scored_from;
+  if (plan.start) {
+    check_learned_drive(*plan.start, learned_for(r, plan.period));
+    r.start_drive = plan.start->u;
+    r.start_compensator = plan.start->compensator;
+    r.start_name = plan.start->name;
+  }
+  try {
+    return std::make_unique<TrackLearning>(*model, *p.learning, r, o);
+  } catch (const std::invalid_argument& e) {
+    throw CommandError("bad_params", std::string("learning: ") + e.what());
+  }
+}
+
+// A learning run's plan, for the run's header and the start reply.
+json learning_summary(const LearningPlan& learn) {
+  json l = {{"trials", learn.trials},
+            {"gain", learn.gain},
+            {"frequency_hz", learn.frequency_hz},
+            {"period_samples", learn.period}};
+  if (learn.scored_from > 0) l["scored_from"] = learn.scored_from;
+  if (learn.start) l["started_from"] = learn.start->name;
+  return l;
+}
+
+}  // namespace
+
+BuiltRun make_track_program(const Request& request, const RunContext& ctx, const Upload* upload) {
+  const BenchSettings& s = ctx.settings;
+  const auto& lim = s.loop.limits;
+  const std::string comp_name = request.string("compensator", ctx.model ? "inverse" : "none");
+  const hc::CompensatorKind kind = compensator_kind(comp_name, ctx);
+  const ActuatorRange range = known_range(ctx);
+  std::optional<LearningPlan> learn = learning_plan(request, ctx, upload);
+  TrackReference ref = reference(request, ctx, range, upload, learn);
+
+  auto p = std::make_unique<RunProgram>();
+  p->kind = RunKind::kTrack;
+  p->response_delay_ticks = model_delay_ticks(ctx);
+  p->reference = std::move(ref.signal);
+  p->y_ref_min = range.y_bottom;
+  p->y_ref_max = range.y_top;
+  // Pre-conditioning: current output -> u_max -> u_min, open loop.
+  p->excitation = precondition_sweep(ctx.u_now, lim.u_min, lim.u_max,
+                                     request.number("precondition_s", s.precondition_s), ctx.dt());
+  const double gain = (range.y_top - range.y_bottom) / (lim.u_max - lim.u_min);
+  const hc::LinearMap linear{gain, range.y_bottom - gain * lim.u_min};
+  json feedforward = nullptr;
+  if (ctx.model != nullptr && hc::needs_model(kind)) feedforward = arm_feedforward(*p, ctx);
+  std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
+  json feedback = nullptr;
+  const std::optional<hc::PidController> pid =
+      feedback_controller(request, kind, ctx, linear.gain, ref.frequency_hz, feedback);
+  RunPreparation preparation;
+  if (inverse) {
+    preparation =
+        feedforward_plan(*p, ctx, kind, ref.samples, ref.frequency_hz, feedforward, pid, linear);
+  }
+  try {
+    p->compensator.emplace(kind, std::move(inverse), pid, linear);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
+  p->summary = {{"compensator", comp_name}, {"y_model", predictor_name(ctx)}};
+  if (!feedforward.is_null()) p->summary["feedforward"] = feedforward;
+  if (!feedback.is_null()) p->summary["feedback"] = feedback;
+
+  const std::uint64_t prefix = p->excitation.size();
+  p->total_samples = prefix + ref.samples;
+  p->metrics_from = prefix + ref.unscored;
+  // The feedback holds the reading to the reference from the scored part on: the run's start
+  // from rest (the first period of a periodic reference, an upload's approach) is a transient
+  // the feedforward predicts, which an integral loop would wind up on and pay back later.
+  if (pid) p->feedback_from = p->metrics_from;
+  allocate_records(*p);
+
+  BuiltRun run;
+  if (learn) run.learning = learning(*p, *learn, ctx, ref);
+  json run_header = {{"kind", "track"}};
+  run_header.update(ref.header);
+  run_header.update({{"compensator", comp_name},
+                     {"precondition_samples", prefix},
+                     {"metrics_from", p->metrics_from},
+                     {"rate_hz", s.loop.rate_hz},
+                     {"feedback", feedback}});
+  run.header = {{"run", run_header},
+                {"driver", s.driver_type},
+                {"y_model", predictor_name(ctx)},
+                {"model", ctx.model != nullptr ? hc::to_json(*ctx.model) : json(nullptr)}};
+  run.reply = {{"reference", ref.reply},
+               {"compensator", comp_name},
+               {"feedback", feedback},
+               {"feedforward", p->summary.value("feedforward", json(nullptr))}};
+  if (learn) {
+    const json l = learning_summary(*learn);
+    run.header["run"]["learning"] = l;
+    run.reply["learning"] = l;
+  }
+  run.status = {{"compensator", comp_name}};
+  run.program = std::move(p);
+  run.preparation = std::move(preparation);
+  return run;
+}
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,19 @@
+#pragma once
+// track's run: an open-loop precondition sweep, then a reference (built-in, or a user's
+// trajectory) through the compensator the request names (none, inverse,
+// inverse_multiplicative, inverse+pid, pid). Pure (no threads, no files); errors are
+// CommandError naming the cause (bad_params, no_model, no_range, not_invertible, bad_model,
+// out_of_range, slew_limit). Not real-time safe.
+#include "service/details/request_params.hpp"
+#include "hystbench/daemon/service/upload_store.hpp"
+#include "runs/details/run_context.hpp"
+
+namespace hystbench::daemon::details {
+
+/// The track program for a request checked against track's parameters; `reference_upload` is
+/// the complete upload the request names (reference_upload), else null for a built-in one.
+/// Units: the reference and its range in µm, the output in V, times in s.
+BuiltRun make_track_program(const Request& request, const RunContext& ctx,
+                            const Upload* reference_upload);
+
+}  // namespace hystbench::daemon::details

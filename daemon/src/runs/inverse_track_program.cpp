@@ -1,0 +1,143 @@
+#include "hystbench/daemon/runs/inverse_track_program.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "hystbench/compensation/dynamics_inversion.hpp"
+#include "hystbench/compensation/error_metrics.hpp"
+#include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/compensation/tracking_metrics.hpp"
+#include "hystbench/sim/signal_generator.hpp"
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+
+namespace {
+
+// Ramps linearly from a to b over n samples (b reached on the last one).
+void append_ramp(std::vector<double>& out, double a, double b, std::size_t n) {
+  for (std::size_t k = 1; k <= n; ++k) out.push_back(a + (b - a) * static_cast<double>(k) / n);
+}
+
+}  // namespace
+
+ModelOutputRange major_loop_range(const hc::ActuatorModel& model, double u_min, double u_max,
+                                  double dt_s) {
+  hc::ActuatorModel m = model;
+  m.configure(dt_s);
+  m.reset(u_min);
+  const std::size_t n = 2000;
+  ModelOutputRange r{INFINITY, -INFINITY};
+  for (std::size_t k = 0; k <= n; ++k)
+    r.y_top = std::max(r.y_top, m.step(u_min + (u_max - u_min) * k / n));
+  for (std::size_t k = 0; k <= n; ++k)
+    r.y_bottom = std::min(r.y_bottom, m.step(u_max - (u_max - u_min) * k / n));
+  return r;
+}
+
+std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
+                                       double precondition_s, double dt_s) {
+  std::vector<double> out;
+  const std::size_t half = static_cast<std::size_t>(std::ceil(0.5 * precondition_s / dt_s));
+  if (half > 0) {
+    out.reserve(2 * half);
+    append_ramp(out, u_now, u_max, half);
+    append_ramp(out, u_max, u_min, half);
+  }
+  return out;
+}
+
+void arm_tare(RunProgram& program, std::uint64_t model_exchange_ticks) {
+  const std::size_t half = program.excitation.size() / 2;
+  program.tare_from = half < 10 ? std::numeric_limits<std::uint64_t>::max()
+                                : half + half / 5;  // skip the turn's transient
+  program.model_exchange_ticks = model_exchange_ticks;
+}
+
+hc::ActuatorModel model_after(const hc::ActuatorModel& model, std::span<const double> prefix,
+                              double u_start, double u_min, double u_max, double dt_s) {
+  hc::ActuatorModel m = model;
+  m.configure(dt_s);
+  m.reset(prefix.empty() ? u_start : prefix.front());
+  for (const double u : prefix) m.step(u);
+  if (m.input_max <= m.input_min) {
+    m.input_min = u_min;
+    m.input_max = u_max;
+  }
+  m.input_min = std::max(m.input_min, u_min);
+  m.input_max = std::min(m.input_max, u_max);
+  return m;
+}
+
+std::unique_ptr<RunProgram> make_verification_program(const hc::ActuatorModel& model,
+                                                      const VerificationSpec& spec, double u_now,
+                                                      const OutputLimits& limits, double dt_s) {
+  if (!(spec.frequency_hz > 0.0) || !(spec.periods >= 1.0) ||
+      !(spec.range_fraction > 0.0 && spec.range_fraction <= 1.0) || !(spec.precondition_s >= 0.0)) {
+    throw std::invalid_argument("verification: bad segment specification");
+  }
+  const ModelOutputRange range = major_loop_range(model, limits.u_min, limits.u_max, dt_s);
+  const double span = range.y_top - range.y_bottom;
+  sim::SignalSpec ref;
+  ref.kind = spec.reference == VerificationSpec::Reference::kSine ? sim::SignalKind::kSine
+                                                                  : sim::SignalKind::kTriangle;
+  ref.frequency_hz = spec.frequency_hz;
+  ref.amplitude = 0.5 * spec.range_fraction * span;
+  ref.offset = 0.5 * (range.y_bottom + range.y_top);
+  ref.phase_rad = -M_PI / 2.0;  // start at the bottom of the range, rising, as `track` does
+  ref.duration_s = spec.periods / spec.frequency_hz;
+
+  auto p = std::make_unique<RunProgram>();
+  p->kind = RunKind::kTrack;
+  p->reference = sim::make_signal_generator(ref);
+  p->excitation = precondition_sweep(u_now, limits.u_min, limits.u_max, spec.precondition_s, dt_s);
+  const hc::ActuatorModel m =
+      model_after(model, p->excitation, u_now, limits.u_min, limits.u_max, dt_s);
+  const hc::LinearMap linear{span / (limits.u_max - limits.u_min),
+                             range.y_bottom - span / (limits.u_max - limits.u_min) * limits.u_min};
+  p->compensator.emplace(hc::CompensatorKind::kInverse, hc::make_inverse(m), std::nullopt, linear);
+  // As `track`: the model predicts y in every sample, and its delay and dynamics are inverted
+  // from the previewed reference.
+  hc::ActuatorModel predictor = model;
+  predictor.configure(dt_s);
+  predictor.reset(p->excitation.empty() ? u_now : p->excitation.front());
+  p->model = std::move(predictor);
+  const hc::DynamicsInversion inversion(model, dt_s, spec.feedforward_bandwidth_hz);
+  if (inversion.active()) p->preview = inversion;
+  arm_tare(*p, spec.model_exchange_ticks);
+  const std::uint64_t prefix = p->excitation.size();
+  const auto body = static_cast<std::uint64_t>(std::llround(ref.duration_s / dt_s));
+  const auto one_period = static_cast<std::uint64_t>(std::llround(1.0 / spec.frequency_hz / dt_s));
+  p->total_samples = prefix + body;
+  p->metrics_from = prefix + (body >= 2 * one_period ? one_period : 0);
+  p->y_ref_min = range.y_bottom;
+  p->y_ref_max = range.y_top;
+  p->record_capacity = p->total_samples - p->metrics_from;
+  p->rec_u.resize(p->record_capacity);
+  p->rec_y.resize(p->record_capacity);
+  p->rec_yr.resize(p->record_capacity);
+  return p;
+}
+
+nlohmann::json tracking_error_json(const RunProgram& run) {
+  nlohmann::json r = nlohmann::json::object();
+  const std::size_t n = run.recorded;
+  if (n <= 2) return r;
+  std::span<const double> yr(run.rec_yr.data(), n), y(run.rec_y.data(), n);
+  const hc::ErrorStats e = hc::error_stats(yr, y);  // range = reference span
+  const double rms = run.error_samples ? std::sqrt(run.error_sum2 / run.error_samples) : 0.0;
+  r["rms_error_um"] = rms;
+  r["max_error_um"] = run.error_max;
+  r["range_um"] = e.range;
+  r["rms_error_percent"] = e.range > 0 ? 100.0 * rms / e.range : 0.0;
+  r["max_error_percent"] = e.range > 0 ? 100.0 * run.error_max / e.range : 0.0;
+  r["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
+  r["error_samples"] = run.error_samples;
+  if (run.tare_samples > 0) r["tare_um"] = run.tare_um();
+  return r;
+}
+
+}  // namespace hystbench::daemon

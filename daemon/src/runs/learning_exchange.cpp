@@ -1,0 +1,148 @@
+#include "hystbench/daemon/runs/learning_exchange.hpp"
+
+#include <algorithm>
+
+namespace hystbench::daemon {
+
+LearningExchange::LearningExchange(std::size_t period_samples, std::uint64_t first)
+    : period(period_samples), first_tick(first) {
+  for (int i = 0; i < 2; ++i) {
+    drive_[i].assign(period, 0.0);
+    rec_u_[i].assign(period, 0.0);
+    rec_c_[i].assign(period, 0.0);
+    rec_e_[i].assign(period, 0.0);
+  }
+}
+
+void LearningExchange::start_recording(std::uint64_t trial) noexcept {
+  const std::size_t s = trial % 2;
+  int state = slot_[s].load(std::memory_order_acquire);
+  // A full slot the learner never took is written over (it fell behind); one it is reading is
+  // left alone and this trial goes unrecorded.
+  while ((state == kFree || state == kFull) &&
+         !slot_[s].compare_exchange_weak(state, kWriting, std::memory_order_acq_rel)) {
+  }
+  rec_slot_ = state == kFree || state == kFull ? static_cast<int>(s) : -1;
+}
+
+std::size_t LearningExchange::begin_tick(std::uint64_t k) noexcept {
+  const std::uint64_t since = k - first_tick;
+  const auto j = static_cast<std::size_t>(since % period);
+  if (j != 0) return j;
+  const int ready = ready_.exchange(-1, std::memory_order_acq_rel);
+  if (since == 0) {
+    playing_ = ready;  // the compensator's drive (-1), or one learned before
+    playing_started_ = ready >= 0;
+    last_ = ready >= 0 && ready_last_.load(std::memory_order_acquire);
+    trial_ = 0;
+    start_recording(0);
+    return j;
+  }
+  if (ready < 0) {
+    stale_.fetch_add(1, std::memory_order_acq_rel);
+    rec_slot_ = -1;
+    return j;
+  }
+  playing_ = ready;
+  playing_started_ = false;
+  last_ = ready_last_.load(std::memory_order_acquire);
+  start_recording(++trial_);
+  return j;
+}
+
+bool LearningExchange::learned(std::size_t j, double& u_ff) const noexcept {
+  if (playing_ < 0) return false;
+  const double moved =
+      playing_started_ && !started_compensator_.empty() ? u_ff - started_compensator_[j] : 0.0;
+  u_ff = drive_[static_cast<std::size_t>(playing_)][j] + moved;
+  return true;
+}
+
+bool LearningExchange::lead_in(std::uint64_t k, double& u_ff) const noexcept {
+  if (started_from_ == 0 || k >= first_tick || first_tick - k > period) return false;
+  // The drive start_from made ready: the learner writes the other buffer first.
+  const std::size_t j = period - (first_tick - k);
+  const double moved = started_compensator_.empty() ? 0.0 : u_ff - started_compensator_[j];
+  u_ff = drive_[0][j] + moved;
+  return true;
+}
+
+void LearningExchange::lead_in_error(std::uint64_t k, double error) noexcept {
+  if (started_from_ == 0 || k >= first_tick || 2 * (first_tick - k) > period) return;
+  lead_in_error_sum_ += error;  // its first half still leaves the rest the run started from
+  ++lead_in_samples_;
+}
+
+bool LearningExchange::end_tick(std::size_t j, double u_ff, double u_compensator,
+                                double error) noexcept {
+  if (rec_slot_ >= 0) {
+    const auto s = static_cast<std::size_t>(rec_slot_);
+    rec_u_[s][j] = u_ff;
+    rec_c_[s][j] = u_compensator;
+    rec_e_[s][j] = error;
+  }
+  if (j + 1 < period) return false;
+  if (rec_slot_ >= 0) {
+    const auto s = static_cast<std::size_t>(rec_slot_);
+    slot_trial_[s].store(trial_, std::memory_order_relaxed);
+    slot_[s].store(kFull, std::memory_order_release);
+    played_.fetch_add(1, std::memory_order_acq_rel);
+    rec_slot_ = -1;
+  }
+  return last_;
+}
+
+bool LearningExchange::owed(std::uint64_t k) const noexcept {
+  if (k < first_tick + period || (k - first_tick) % period != 0) return false;
+  return ready_.load(std::memory_order_acquire) < 0 &&
+         !final_offered_.load(std::memory_order_acquire) &&
+         offered_.load(std::memory_order_acquire) - started_from_ <
+             played_.load(std::memory_order_acquire);
+}
+
+bool LearningExchange::take_trial(std::vector<double>& u, std::vector<double>& c,
+                                  std::vector<double>& e, std::uint64_t& trial) {
+  int pick = -1;
+  for (int s = 0; s < 2; ++s) {
+    if (slot_[s].load(std::memory_order_acquire) != kFull) continue;
+    if (pick < 0 || slot_trial_[s].load(std::memory_order_relaxed) <
+                        slot_trial_[pick].load(std::memory_order_relaxed)) {
+      pick = s;
+    }
+  }
+  if (pick < 0) return false;
+  int state = kFull;
+  if (!slot_[pick].compare_exchange_strong(state, kReading, std::memory_order_acq_rel)) {
+    return false;  // the loop took it back to write over
+  }
+  u.assign(rec_u_[pick].begin(), rec_u_[pick].end());
+  c.assign(rec_c_[pick].begin(), rec_c_[pick].end());
+  e.assign(rec_e_[pick].begin(), rec_e_[pick].end());
+  trial = slot_trial_[pick].load(std::memory_order_relaxed);
+  slot_[pick].store(kFree, std::memory_order_release);
+  taken_.fetch_add(1, std::memory_order_acq_rel);
+  return true;
+}
+
+bool LearningExchange::start_from(const std::vector<double>& drive,
+                                  const std::vector<double>& compensator, bool last) {
+  if (!compensator.empty() && compensator.size() != period) return false;
+  if (offered_.load(std::memory_order_acquire) != 0 || !offer(drive, last)) return false;
+  started_compensator_ = compensator;
+  started_from_ = 1;
+  return true;
+}
+
+bool LearningExchange::offer(const std::vector<double>& drive, bool last) noexcept {
+  if (ready_.load(std::memory_order_acquire) >= 0 || drive.size() != period) return false;
+  // The loop took the drive offered before and plays it from the other buffer.
+  const auto idx = static_cast<int>(offered_.load(std::memory_order_acquire) % 2);
+  std::copy(drive.begin(), drive.end(), drive_[static_cast<std::size_t>(idx)].begin());
+  ready_last_.store(last, std::memory_order_release);
+  if (last) final_offered_.store(true, std::memory_order_release);
+  offered_.fetch_add(1, std::memory_order_acq_rel);
+  ready_.store(idx, std::memory_order_release);
+  return true;
+}
+
+}  // namespace hystbench::daemon

@@ -1,0 +1,645 @@
+#include "hystbench/daemon/service/bench.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+
+#include "service/details/command_table.hpp"
+#include "runs/details/excite_program.hpp"
+#include "runs/details/identify_program.hpp"
+#include "runs/details/identify_session.hpp"
+#include "runs/details/learned_drive.hpp"
+#include "service/details/model_folder.hpp"
+#include "runs/details/run_context.hpp"
+#include "runs/details/run_result.hpp"
+#include "runs/details/track_program.hpp"
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+namespace {
+
+const char* state_name(BenchLoop::State s) {
+  switch (s) {
+    case BenchLoop::State::kStopped:
+      return "stopped";
+    case BenchLoop::State::kIdle:
+      return "idle";
+    case BenchLoop::State::kRunning:
+      return "running";
+    case BenchLoop::State::kFault:
+      return "fault";
+  }
+  return "unknown";
+}
+
+}  // namespace
+
+Bench::Bench(BenchSettings settings)
+    : settings_(std::move(settings)), plans_(std::make_shared<details::PlanCache>()) {
+  dt_ = 1.0 / settings_.loop.rate_hz;
+  try {
+    driver_ = drivers::make_driver(settings_.driver_type);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+  if (auto r = driver_->configure(settings_.driver_params, settings_.loop.rate_hz); !r) {
+    throw std::runtime_error(r.message);
+  }
+  auto& lim = settings_.loop.limits;
+  if (lim.u_min < driver_->output_min_v() || lim.u_max > driver_->output_max_v()) {
+    throw std::runtime_error("limits.u_min/u_max [" + std::to_string(lim.u_min) + ", " +
+                             std::to_string(lim.u_max) + "] V exceed the driver's output range [" +
+                             std::to_string(driver_->output_min_v()) + ", " +
+                             std::to_string(driver_->output_max_v()) + "] V");
+  }
+  if (auto r = driver_->activate(); !r) throw std::runtime_error(r.message);
+  loop_ = std::make_unique<BenchLoop>(*driver_, settings_.loop);
+}
+
+Bench::~Bench() {
+  // A run that cannot be written out at exit (full disk) is logged, not rethrown from here.
+  try {
+    shutdown();
+  } catch (const std::exception& e) {
+    spdlog::error("bench shutdown: {}", e.what());
+  }
+}
+
+RealtimeReport Bench::start() {
+  realtime_ = loop_->start();
+  supervisor_ = std::thread([this] { supervise(); });
+  return realtime_;
+}
+
+void Bench::shutdown() {
+  if (quit_.exchange(true)) return;
+  if (loop_) {
+    loop_->request_abort();
+    // Give the loop a few ticks (at most 0.2 s) to end the run cleanly, then stop it.
+    loop_->wait_for([this] { return loop_->state() != BenchLoop::State::kRunning; },
+                    std::chrono::milliseconds(200));
+    loop_->shutdown();
+  }
+  if (supervisor_.joinable()) supervisor_.join();
+  if (preparation_queued()) {  // queued as the bench shut down: never prepared
+    std::unique_ptr<RunProgram> run;
+    {
+      std::lock_guard lock(mutex_);
+      run = std::move(preparing_);
+      preparation_.reset();
+    }
+    end_unplayed(std::move(run), RunEnd::kAborted, "the daemon shut down before the run started");
+  }
+  if (loop_) {
+    if (auto finished = loop_->take_finished()) finalize(std::move(finished));
+  }
+  if (driver_) {
+    driver_->safe_state();
+    driver_->deactivate();
+  }
+}
+
+void Bench::set_event_sink(EventSink sink) {
+  std::lock_guard lock(mutex_);
+  sink_ = std::move(sink);
+}
+
+void Bench::emit(const json& event) {
+  EventSink sink;
+  {
+    std::lock_guard lock(mutex_);
+    sink = sink_;
+  }
+  if (sink) sink(event);
+}
+
+bool Bench::loop_advanced() {
+  const std::uint64_t t = loop_->ticks();
+  const bool advanced = t != watchdog_ticks_;
+  watchdog_ticks_ = t;
+  return advanced;
+}
+
+bool Bench::wait_idle(std::chrono::milliseconds timeout) {
+  // The loop runs only what the bench submits: with no run in any phase it is not running.
+  std::unique_lock lock(mutex_);
+  return idle_cv_.wait_for(lock, timeout,
+                           [this] { return phase_ == RunPhase::kIdle && !delivering_result_; });
+}
+
+void Bench::set_phase(RunPhase phase) {
+  std::lock_guard lock(mutex_);
+  phase_ = phase;
+}
+
+std::string Bench::new_run_id(const char* kind) {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
+  // A daemon restarted within the second counts from 1 again: an id whose log is there
+  // already is taken by the run before the restart.
+  std::string id;
+  std::error_code ec;
+  do {
+    id = std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
+  } while (std::filesystem::exists(std::filesystem::path(settings_.log_dir) / (id + ".csv"), ec));
+  return id;
+}
+
+void Bench::open_log(RunProgram& p, json header) {
+  // The clock the samples are timed by, in the log's header and the run's result.
+  const char* clock = to_string(settings_.loop.clock);
+  if (header.contains("run") && header["run"].is_object()) header["run"]["clock"] = clock;
+  p.summary["clock"] = clock;
+  SampleLogOptions opt;
+  opt.log_dir = settings_.log_dir;
+  opt.run_id = p.run_id;
+  opt.header = std::move(header);
+  opt.ring_capacity = settings_.log_ring_capacity;
+  try {
+    p.log = std::make_unique<SampleLogWriter>(std::move(opt));
+  } catch (const std::exception& e) {
+    throw CommandError("log_error", std::string("cannot open the run log: ") + e.what());
+  }
+}
+
+json Bench::handle(const std::string& cmd, const json& params, std::uint64_t client) {
+  const details::Command& command = details::find_command(cmd, params);
+  const details::Request request(params, command.params);
+  return command.handle(*this, request, client);
+}
+
+json Bench::stop_run() {
+  {
+    std::lock_guard lock(mutex_);
+    if (phase_ == RunPhase::kPreparing) {  // ends unplayed once the preparation stops
+      if (cancel_preparation_ == RunEnd::kCompleted) cancel_preparation_ = RunEnd::kStopped;
+      return {{"stopping", true}};
+    }
+    // A run submitted but not yet picked up by the loop counts as active.
+    if (phase_ != RunPhase::kRunning) throw CommandError("no_run", "no run is active");
+  }
+  loop_->request_stop();
+  return {{"stopping", true}};
+}
+
+json Bench::abort_run() {
+  bool running = false;
+  {
+    std::lock_guard lock(mutex_);
+    running = phase_ == RunPhase::kRunning || phase_ == RunPhase::kPreparing;
+    if (phase_ == RunPhase::kPreparing) cancel_preparation_ = RunEnd::kAborted;
+  }
+  loop_->request_abort();
+  return {{"aborted", running}, {"output_v", driver_->safe_output_v()}};
+}
+
+json Bench::reset() {
+  const bool was_fault = loop_->state() == BenchLoop::State::kFault;
+  if (was_fault && !loop_->reset_fault()) {
+    throw CommandError("reset_failed", "the loop did not leave FAULT");
+  }
+  return {{"was_fault", was_fault}, {"state", state_name(loop_->state())}};
+}
+
+json Bench::model_get() const {
+  std::lock_guard lock(mutex_);
+  if (!model_) throw CommandError("no_model", "no active model (identify or model.load first)");
+  return {{"path", model_path_}, {"model", hc::to_json(*model_)}};
+}
+
+void Bench::client_closed(std::uint64_t client) { uploads_.drop_client(client); }
+
+json Bench::status() const {
+  json s;
+  const auto state = loop_->state();
+  std::lock_guard lock(mutex_);
+  const bool finalizing = phase_ == RunPhase::kFinalizing && state == BenchLoop::State::kIdle;
+  const bool preparing = phase_ == RunPhase::kPreparing && state == BenchLoop::State::kIdle;
+  s["state"] = finalizing ? "finalizing" : preparing ? "preparing" : state_name(state);
+  if (state == BenchLoop::State::kFault) s["fault_reason"] = loop_->fault_reason();
+  s["output_v"] = loop_->last_output();
+  s["position_um"] = loop_->last_measurement();
+  if (!active_run_.is_null()) {
+    s["run"] = active_run_;
+  } else {
+    s["run"] = nullptr;
+  }
+  if (model_) {
+    s["model"] = {{"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
+                  {"path", model_path_},
+                  {"operators", model_->model.hysteresis().operator_count()}};
+  } else {
+    s["model"] = nullptr;
+  }
+  s["loop"] = {{"rate_hz", settings_.loop.rate_hz},
+               {"clock", to_string(settings_.loop.clock)},
+               {"realtime", realtime_.summary(settings_.loop.realtime)},
+               {"degraded", realtime_.degraded()},
+               {"statistics", to_json(loop_->statistics())}};
+  s["driver"] = driver_->diagnostics();
+  s["uploads"] = {{"open", uploads_.open()},
+                  {"staged_samples", uploads_.staged_samples()},
+                  {"max_samples", uploads_.limits().max_samples}};
+  s["last_result"] = last_result_;
+  return s;
+}
+
+nlohmann::json Bench::load_model(const details::Request& request) {
+  const bool stored = request.has("stored");
+  const bool document = request.has("model");
+  if (stored == document) {
+    throw CommandError("bad_params",
+                       "give either 'model' (the model document) or 'stored' (a name from "
+                       "model.list)");
+  }
+  // Checked first: a refused request changes nothing (an upload is not kept either).
+  std::lock_guard lock(mutex_);
+  if (phase_ != RunPhase::kIdle) {
+    throw CommandError("busy", "a run is active; load the model after it");
+  }
+  details::FolderModel m =
+      stored ? details::load_stored_model(settings_.model_dir, request.string("stored", ""))
+             : details::keep_model_document(settings_.model_dir, request.string("name", "uploaded"),
+                                            request.params()["model"]);
+  const auto inv = m.file.model.hysteresis().invertibility();
+  model_ = std::move(m.file);
+  model_path_ = m.path;
+  ++model_generation_;
+  return {{"path", model_path_},
+          {"name", std::filesystem::path(m.path).filename().string()},
+          {"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
+          {"invertible", inv.invertible},
+          {"reason", inv.reason}};
+}
+
+nlohmann::json Bench::list_models() const {
+  std::lock_guard lock(mutex_);
+  return details::list_model_folder(settings_.model_dir, model_path_);
+}
+
+nlohmann::json Bench::delete_model(const details::Request& request) {
+  std::lock_guard lock(mutex_);
+  return details::delete_from_model_folder(settings_.model_dir, request.string("name", ""),
+                                           model_path_);
+}
+
+void Bench::require_idle() const {
+  if (loop_->state() == BenchLoop::State::kFault) {
+    throw CommandError("fault", std::string("the bench is in FAULT (") + loop_->fault_reason() +
+                                    "); send reset first");
+  }
+  if (phase_ != RunPhase::kIdle) throw CommandError("busy", "a run is active");
+}
+
+Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json& header) {
+  open_log(*p, header);
+  SubmittedRun s{p->run_id, p->log->path().string(), p->total_samples};
+  if (auto refused = loop_->submit(std::move(p))) {
+    refused->log->close();
+    throw CommandError("busy", "the loop did not accept the run");
+  }
+  return s;
+}
+
+details::RunContext Bench::run_context() const {
+  return {settings_, model_ ? &*model_ : nullptr, loop_->last_output(), model_generation_, plans_};
+}
+
+json Bench::launch(const char* kind, details::BuiltRun run) {
+  run.program->run_id = new_run_id(kind);
+  std::string run_id, log_path;
+  std::uint64_t total = 0;
+  if (run.preparation.work) {
+    // Prepared on the supervisor thread, then submitted: the reply does not wait for it.
+    RunProgram& p = *run.program;
+    open_log(p, run.header);
+    run_id = p.run_id;
+    log_path = p.log->path().string();
+    total = p.total_samples;
+    preparing_ = std::move(run.program);
+    preparation_ = std::make_unique<details::RunPreparation>(std::move(run.preparation));
+    cancel_preparation_ = RunEnd::kCompleted;
+    phase_ = RunPhase::kPreparing;
+    loop_->wake_control();
+  } else {
+    SubmittedRun r = submit_run(std::move(run.program), run.header);
+    run_id = std::move(r.run_id);
+    log_path = std::move(r.log_path);
+    total = r.total;
+    phase_ = RunPhase::kRunning;
+    loop_->wake_control();  // the supervisor announces the run
+  }
+  active_run_ = {{"run_id", run_id}, {"kind", kind}, {"total", total}, {"log", log_path}};
+  active_run_.update(run.status);
+  if (phase_ == RunPhase::kPreparing) active_run_["stage"] = preparation_->stage;
+  json reply = {{"run_id", run_id},
+                {"samples", total},
+                {"duration_s", static_cast<double>(total) * dt_},
+                {"log", log_path}};
+  reply.update(run.reply);
+  return reply;
+}
+
+json Bench::start_identify(const details::Request& request) {
+  const details::IdentifyRequest identify = details::parse_identify_request(request, settings_);
+  std::lock_guard lock(mutex_);
+  require_idle();
+  details::BuiltRun run = details::make_identify_program(identify, run_context());
+  json fit = std::move(run.fit);
+  json reply = launch("identify", std::move(run));
+  pending_fit_ = std::move(fit);
+  return reply;
+}
+
+json Bench::start_excite(const details::Request& request, std::uint64_t client) {
+  if (!request.has("drive_upload")) {
+    throw CommandError("bad_params", "drive_upload: missing (the name of a complete drive upload)");
+  }
+  const std::string upload_name = request.string("drive_upload", "");
+  std::lock_guard lock(mutex_);
+  require_idle();
+  const auto upload = uploads_.complete(upload_name, client, UploadKind::kDrive);
+  json reply = launch("excite", details::make_excite_program(*upload, run_context()));
+  uploads_.erase(upload_name, client);  // the run has it now
+  return reply;
+}
+
+json Bench::start_track(const details::Request& request, std::uint64_t client) {
+  std::lock_guard lock(mutex_);
+  require_idle();
+  std::string upload_name;
+  std::shared_ptr<const Upload> upload;
+  if (request.has("reference_upload")) {
+    upload_name = request.string("reference_upload", "");
+    upload = uploads_.complete(upload_name, client, UploadKind::kReference);
+  }
+  details::BuiltRun run = details::make_track_program(request, run_context(), upload.get());
+  std::unique_ptr<details::TrackLearning> learning = std::move(run.learning);
+  json reply = launch("track", std::move(run));
+  if (upload) uploads_.erase(upload_name, client);  // the run has it now
+  learning_ = std::move(learning);                  // the supervisor takes the lock before it looks
+  learning_run_id_ = learning_ ? reply["run_id"].get<std::string>() : std::string();
+  return reply;
+}
+
+void Bench::supervise() {
+  constexpr auto kProgressPeriod = std::chrono::milliseconds(500);
+  auto next_progress = std::chrono::steady_clock::now() + kProgressPeriod;
+  while (!quit_.load()) {
+    // Read before looking, so a run that ends in between wakes the wait at once.
+    const std::uint32_t seen = loop_->events();
+    if (preparation_queued()) {
+      prepare();
+      continue;
+    }
+    // Before a finished run is taken: on the simulated clock a run can end before the first
+    // periodic event, and a client still sees it (and each verification stage) start.
+    announce_run();
+    learn();
+    if (auto finished = loop_->take_finished()) {
+      finalize(std::move(finished));
+      continue;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= next_progress) {
+      next_progress = now + kProgressPeriod;
+      emit_progress();
+    }
+    loop_->wait_event(seen, next_progress - now);
+  }
+}
+
+void Bench::announce_run() {
+  std::string key;
+  {
+    std::lock_guard lock(mutex_);
+    if (active_run_.is_null() || phase_ != RunPhase::kRunning) return;
+    key = active_run_["run_id"].get<std::string>() + "/" + active_run_.value("stage", "");
+  }
+  if (key == announced_run_) return;
+  announced_run_ = key;
+  emit_progress(true);
+}
+
+void Bench::emit_progress(bool started) {
+  json run;
+  {
+    std::lock_guard lock(mutex_);
+    run = active_run_;
+  }
+  const RunProgram* p = loop_->active();
+  if (run.is_null() || (p == nullptr && !started)) return;
+  // A run that already ended (or is not picked up yet) is announced at its start.
+  const std::uint64_t done = p != nullptr ? p->done.load(std::memory_order_acquire) : 0;
+  const auto total = run["total"].get<std::uint64_t>();
+  json event = {
+      {"event", "run.progress"}, {"run_id", run["run_id"]},
+      {"kind", run["kind"]},     {"done", done},
+      {"total", total},          {"fraction", total ? static_cast<double>(done) / total : 0.0}};
+  if (run.contains("stage")) event["stage"] = run["stage"];  // identify's verification
+  emit(event);
+}
+
+void Bench::learn() {
+  details::TrackLearning* learning = nullptr;
+  std::string run_id;
+  {
+    std::lock_guard lock(mutex_);
+    if (!learning_ || phase_ != RunPhase::kRunning) return;
+    learning = learning_.get();
+    run_id = learning_run_id_;
+  }
+  // Its exchange lives in the program the loop plays (handed back to this thread when it ends).
+  const RunProgram* active = loop_->active();
+  if (active == nullptr || active->run_id != run_id) return;
+  announce_trials(*learning, run_id);
+}
+
+void Bench::announce_trials(details::TrackLearning& learning, const std::string& run_id) {
+  const std::size_t asked = learning.request().trials;
+  std::vector<details::TrackLearning::Trial> scored;
+  try {
+    scored = learning.poll();
+  } catch (const std::exception& e) {
+    learning.fail(e.what());  // the loop must not wait for a drive that will not come
+    spdlog::error("run {}: the learning failed: {}", run_id, e.what());
+  }
+  for (const details::TrackLearning::Trial& t : scored) {
+    char rms[32];
+    std::snprintf(rms, sizeof rms, "%.3f", t.rms_percent);
+    const std::string stage = "learning: trial " + std::to_string(t.trial) + " of " +
+                              std::to_string(asked) + ", rms " + rms + " %";
+    {
+      std::lock_guard lock(mutex_);
+      if (!active_run_.is_null()) active_run_["stage"] = stage;
+    }
+    emit({{"event", "run.progress"},
+          {"run_id", run_id},
+          {"kind", "track"},
+          {"stage", stage},
+          {"fraction", static_cast<double>(t.trial + 1) / static_cast<double>(asked + 1)},
+          {"learning",
+           {{"trial", t.trial},
+            {"trials", asked},
+            {"rms_error_percent", t.rms_percent},
+            {"max_error_percent", t.max_percent},
+            {"drive", t.drive}}}});
+  }
+}
+
+void Bench::finish_learning(const RunProgram& run, json& report) {
+  std::unique_ptr<details::TrackLearning> learning;
+  std::string model_path;  // the model the run played with (a run holds model.load off)
+  {
+    std::lock_guard lock(mutex_);
+    if (!learning_ || run.run_id != learning_run_id_) return;
+    learning = std::move(learning_);
+    learning_run_id_.clear();
+    model_path = model_path_;
+  }
+  announce_trials(*learning, run.run_id);  // the last trial, closed as the run ended
+  json l = learning->result();
+  if (const auto last = learning->last_trial()) {
+    // The run's figures are its last trial's (the log keeps every period).
+    report["rms_error_um"] = last->rms_um;
+    report["max_error_um"] = last->max_um;
+    report["rms_error_percent"] = last->rms_percent;
+    report["max_error_percent"] = last->max_percent;
+  }
+  const std::vector<double>& drive = learning->kept_drive();
+  const details::LearningRequest& r = learning->request();
+  // A replay (no trial learned) keeps nothing new: its drive is the one it started from.
+  if (!drive.empty() && r.trials > 0) {
+    try {
+      const json meta = {
+          {"range_um", r.range_um},
+          {"model", model_path.empty()
+                        ? json()
+                        : json(std::filesystem::path(model_path).filename().string())},
+          {"started_from", r.start_name.empty() ? json() : json(r.start_name)},
+          {"compensator_offset_um", learning->target_offset(report.value("tare_um", 0.0))},
+          {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
+      l["drive_file"] = details::save_learned_drive(settings_.model_dir, run.run_id, drive,
+                                                    learning->kept_compensator(), dt_,
+                                                    details::learned_for(r, drive.size()), meta);
+      l["drive"] = run.run_id + "-learned";
+    } catch (const std::exception& e) {
+      l["drive_file_error"] = e.what();
+    }
+  }
+  report["learning"] = std::move(l);
+}
+
+bool Bench::preparation_queued() const {
+  std::lock_guard lock(mutex_);
+  return preparing_ != nullptr;
+}
+
+void Bench::prepare() {
+  std::unique_ptr<RunProgram> run;
+  std::unique_ptr<details::RunPreparation> preparation;
+  {
+    std::lock_guard lock(mutex_);
+    run = std::move(preparing_);
+    preparation = std::move(preparation_);
+  }
+  const json progress = {{"event", "run.progress"},      {"run_id", run->run_id},
+                         {"kind", to_string(run->kind)}, {"done", 0},
+                         {"total", run->total_samples},  {"stage", preparation->stage}};
+  bool cancelled = false;
+  try {
+    preparation->work(*run, [&](double fraction) {
+      {
+        std::lock_guard lock(mutex_);
+        if (cancel_preparation_ != RunEnd::kCompleted || quit_.load()) {
+          throw details::PreparationCancelled{};
+        }
+      }
+      json event = progress;
+      event["fraction"] = fraction;
+      emit(event);
+    });
+  } catch (const details::PreparationCancelled&) {
+    cancelled = true;
+  }
+  RunEnd cancel = RunEnd::kCompleted;
+  {
+    std::lock_guard lock(mutex_);
+    cancel = cancel_preparation_;
+    if (quit_.load()) cancel = RunEnd::kAborted;
+    if (!cancelled && cancel == RunEnd::kCompleted) {
+      active_run_.erase("stage");
+      if (auto refused = loop_->submit(std::move(run))) {
+        run = std::move(refused);
+      } else {
+        phase_ = RunPhase::kRunning;
+        return;
+      }
+    }
+  }
+  if (cancel == RunEnd::kCompleted) {
+    end_unplayed(std::move(run), RunEnd::kAborted,
+                 loop_->state() == BenchLoop::State::kFault
+                     ? std::string("the loop went into FAULT (") + loop_->fault_reason() +
+                           ") while the run was prepared: nothing was played"
+                     : "the loop did not accept the run: nothing was played");
+    return;
+  }
+  end_unplayed(std::move(run), cancel,
+               std::string(cancel == RunEnd::kStopped ? "stopped" : "aborted") + " while " +
+                   preparation->stage + ": nothing was played");
+}
+
+void Bench::end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason) {
+  set_phase(RunPhase::kFinalizing);
+  run->end = end;
+  json report = details::collect_result(*run, loop_->last_output()).report;
+  finish_learning(*run, report);  // its learner goes with the program it holds
+  report["reason"] = reason;
+  deliver_result(std::move(report));
+}
+
+void Bench::finalize(std::unique_ptr<RunProgram> run) {
+  if (session_ && run->run_id == session_->program_id) {
+    verification_finished(std::move(run));
+    return;
+  }
+  set_phase(RunPhase::kFinalizing);
+  details::RunResult result = details::collect_result(*run, loop_->last_output());
+  finish_learning(*run, result.report);
+  if (result.wants_fit()) {
+    fit_identify(*run, std::move(result));  // delivers when the candidates are verified
+    return;
+  }
+  deliver_result(std::move(result.report));
+}
+
+void Bench::deliver_result(json result) {
+  {
+    std::lock_guard lock(mutex_);
+    last_result_ = result;
+    active_run_ = nullptr;
+    phase_ = RunPhase::kIdle;
+    delivering_result_ = true;
+  }
+  // Clients may start the next run as soon as they see this event, so the bench is idle before
+  // it goes out; wait_idle() still waits for it, or a caller could read the previous result.
+  emit({{"event", "run.finished"}, {"result", result}});
+  {
+    std::lock_guard lock(mutex_);
+    delivering_result_ = false;
+  }
+  idle_cv_.notify_all();
+}
+
+}  // namespace hystbench::daemon

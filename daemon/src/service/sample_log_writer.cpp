@@ -1,0 +1,264 @@
+#include "hystbench/daemon/service/sample_log_writer.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "service/details/posix_io.hpp"
+#include "hystbench/daemon/loop/realtime.hpp"
+
+namespace hystbench::daemon {
+
+namespace {
+
+constexpr std::array<std::string_view, 12> kColumns = {
+    "index", "t", "t_scheduled_ns", "t_wake_ns", "exec_ns", "yr", "u_ff", "u_fb",
+    "u",     "y", "y_model",        "flags"};
+constexpr std::array<std::string_view, 12> kUnits = {"1", "s", "ns", "ns", "ns", "um",
+                                                     "V", "V", "V",  "um", "um", "1"};
+constexpr std::size_t kBatch = 1024;
+constexpr std::size_t kWriteThreshold = std::size_t{256} << 10;
+constexpr std::size_t kMaxRowChars = std::size_t{12} * 32;
+
+bool valid_run_id(const std::string& id) {
+  if (id.empty() || id.size() > 128 || id.front() == '.' || id == "latest") return false;
+  for (const char c : id) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '.' || c == '_' || c == '-';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+std::string utc_now_iso8601() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string comment_line(const nlohmann::json& object) {
+  return "# " + object.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
+std::string make_header(const SampleLogOptions& o) {
+  std::string h = comment_line(
+      {{"schema", kSampleLogSchema}, {"run_id", o.run_id}, {"created", utc_now_iso8601()}});
+  for (const auto& [key, value] : o.header.items()) h += comment_line({{key, value}});
+  nlohmann::json units = nlohmann::json::object();
+  for (std::size_t i = 0; i < kColumns.size(); ++i) units[std::string(kColumns[i])] = kUnits[i];
+  h += comment_line({{"units", units}});
+  h += comment_line({{"flags",
+                      {{"output_clamped", kSampleOutputClamped},
+                       {"slew_limited", kSampleSlewLimited},
+                       {"reference_limited", kSampleReferenceLimited},
+                       {"feedback_saturated", kSampleFeedbackSaturated},
+                       {"overrun", kSampleOverrun},
+                       {"fault", kSampleFault},
+                       {"stale", kSampleStale}}}});
+  nlohmann::json columns = nlohmann::json::array();
+  for (const auto c : kColumns) columns.push_back(c);
+  h += comment_line({{"columns", columns}});
+  for (std::size_t i = 0; i < kColumns.size(); ++i) {
+    h += (i ? "," : "");
+    h += kColumns[i];
+  }
+  h += "\n";
+  return h;
+}
+
+SampleLogOptions validated(SampleLogOptions o) {
+  if (!valid_run_id(o.run_id)) {
+    throw std::invalid_argument("sample log: run id '" + o.run_id +
+                                "' must be 1-128 characters of [A-Za-z0-9._-], not starting "
+                                "with '.', and not 'latest'");
+  }
+  if (o.log_dir.empty()) throw std::invalid_argument("sample log: log_dir is empty");
+  if (!o.header.is_object()) throw std::invalid_argument("sample log: header must be an object");
+  for (const char* reserved : {"schema", "run_id", "created", "units", "flags", "columns"}) {
+    if (o.header.contains(reserved)) {
+      throw std::invalid_argument(std::string("sample log: header key '") + reserved +
+                                  "' is reserved");
+    }
+  }
+  if (o.poll_interval.count() <= 0 || o.flush_interval.count() <= 0) {
+    throw std::invalid_argument("sample log: poll and flush intervals must be > 0");
+  }
+  return o;
+}
+
+char* put(char* p, std::string_view s) {
+  for (const char c : s) *p++ = c;
+  return p;
+}
+
+char* put_int(char* p, std::int64_t v) { return std::to_chars(p, p + 24, v).ptr; }
+char* put_uint(char* p, std::uint64_t v) { return std::to_chars(p, p + 24, v).ptr; }
+
+// Shortest representation that reads back to the same double; NaN/Inf spelled the way pandas,
+// MATLAB and strtod all accept.
+char* put_double(char* p, double v) {
+  if (std::isnan(v)) return put(p, "NaN");
+  if (std::isinf(v)) return put(p, v > 0 ? "Inf" : "-Inf");
+  return std::to_chars(p, p + 32, v).ptr;
+}
+
+char* format_row(char* p, const SampleRecord& r) {
+  p = put_uint(p, r.index);
+  *p++ = ',';
+  p = put_double(p, static_cast<double>(r.scheduled_ns) / 1e9);
+  *p++ = ',';
+  p = put_int(p, r.scheduled_ns);
+  *p++ = ',';
+  p = put_int(p, r.wake_ns);
+  *p++ = ',';
+  p = put_int(p, r.exec_ns);
+  for (const double v : {r.reference, r.u_ff, r.u_fb, r.u_out, r.y_measured, r.y_model}) {
+    *p++ = ',';
+    p = put_double(p, v);
+  }
+  *p++ = ',';
+  p = put_uint(p, r.flags);
+  *p++ = '\n';
+  return p;
+}
+
+}  // namespace
+
+std::span<const std::string_view> sample_log_columns() noexcept { return kColumns; }
+
+SampleLogWriter::SampleLogWriter(SampleLogOptions options)
+    : options_(validated(std::move(options))), ring_(options_.ring_capacity) {
+  std::error_code ec;
+  std::filesystem::create_directories(options_.log_dir, ec);
+  if (ec) throw std::system_error(ec, "sample log: cannot create " + options_.log_dir.string());
+  path_ = options_.log_dir / (options_.run_id + ".csv");
+  fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd_ < 0) {
+    throw std::system_error(errno, std::generic_category(),
+                            "sample log: cannot create " + path_.string());
+  }
+  const std::string header = make_header(options_);
+  if (!details::write_all(fd_, header.data(), header.size())) {
+    const int err = errno;
+    ::close(fd_);
+    throw std::system_error(err, std::generic_category(),
+                            "sample log: cannot write " + path_.string());
+  }
+  if (options_.update_latest_link) {
+    try {
+      details::replace_symlink(options_.log_dir / "latest.csv", path_.filename());
+    } catch (...) {
+      ::close(fd_);
+      throw;
+    }
+  }
+  try {
+    out_.reserve(kWriteThreshold + kBatch * kMaxRowChars);
+    thread_ = std::thread([this] { run(); });
+  } catch (...) {
+    ::close(fd_);
+    throw;
+  }
+}
+
+SampleLogWriter::~SampleLogWriter() { close(); }
+
+bool SampleLogWriter::push(const SampleRecord& record) noexcept {
+  if (!closed_.load(std::memory_order_relaxed) && ring_.try_push(record)) return true;
+  dropped_.fetch_add(1, std::memory_order_relaxed);  // rare path: an atomic add is fine
+  return false;
+}
+
+void SampleLogWriter::run() {
+  set_normal_scheduling();
+  auto last_flush = std::chrono::steady_clock::now();
+  std::unique_lock lock(mutex_);
+  for (;;) {
+    const bool stopping = wake_.wait_for(lock, options_.poll_interval, [this] { return stop_; });
+    lock.unlock();
+    drain_and_format();
+    const auto now = std::chrono::steady_clock::now();
+    if (stopping || now - last_flush >= options_.flush_interval) {
+      write_out();
+      last_flush = now;
+    }
+    if (stopping) break;
+    lock.lock();
+  }
+  if (error_.empty() && ::fdatasync(fd_) != 0) error_ = details::errno_message("fdatasync");
+}
+
+void SampleLogWriter::drain_and_format() {
+  std::array<SampleRecord, kBatch> batch;
+  for (;;) {
+    const std::size_t n = ring_.pop_batch(batch);
+    if (n == 0) return;
+    const std::size_t old = out_.size();
+    out_.resize(old + n * kMaxRowChars);
+    char* p = out_.data() + old;
+    for (std::size_t i = 0; i < n; ++i) p = format_row(p, batch[i]);
+    out_.resize(static_cast<std::size_t>(p - out_.data()));
+    rows_in_out_ += n;
+    if (out_.size() >= kWriteThreshold) write_out();
+  }
+}
+
+void SampleLogWriter::write_out() {
+  if (rows_in_out_ == 0) return;
+  if (error_.empty() && !details::write_all(fd_, out_.data(), out_.size())) {
+    error_ = details::errno_message("write " + path_.string());
+  }
+  auto& counter = error_.empty() ? written_ : dropped_;
+  counter.fetch_add(rows_in_out_, std::memory_order_relaxed);
+  out_.clear();
+  rows_in_out_ = 0;
+}
+
+SampleLogCounts SampleLogWriter::close() {
+  std::lock_guard close_lock(close_mutex_);
+  if (!thread_.joinable()) return final_counts_;
+  closed_.store(true, std::memory_order_relaxed);
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
+  // Whatever raced into the ring after the last drain never reaches the file.
+  SampleRecord leftover;
+  while (ring_.try_pop(leftover)) dropped_.fetch_add(1, std::memory_order_relaxed);
+  if (::close(fd_) != 0 && error_.empty()) error_ = details::errno_message("close");
+  fd_ = -1;
+  final_counts_ = {written(), dropped(), error_};
+  return final_counts_;
+}
+
+nlohmann::json read_sample_log_header(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot open");
+  nlohmann::json header = nlohmann::json::object();
+  std::string line;
+  for (std::size_t line_no = 1; std::getline(in, line); ++line_no) {
+    if (line.empty() || line[0] != '#') break;
+    nlohmann::json part = nlohmann::json::parse(line.substr(1), nullptr, false);
+    if (!part.is_object()) {
+      throw std::runtime_error(path.string() + ":" + std::to_string(line_no) +
+                               ": comment is not a JSON object");
+    }
+    header.update(part);
+  }
+  return header;
+}
+
+}  // namespace hystbench::daemon

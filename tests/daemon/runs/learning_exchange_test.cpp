@@ -1,0 +1,162 @@
+// The hand-over between the loop and the learner, ticked by hand: trial 0 plays the
+// compensator's drive; a drive offered before a period begins is that period's trial; a period
+// with none replays the last drive and is not a trial; the drive offered as the last ends the
+// run after its period; the loop owes a wait only for a drive the learner owes.
+#include "hystbench/daemon/runs/learning_exchange.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace hd = hystbench::daemon;
+
+namespace {
+
+constexpr std::size_t kPeriod = 4;
+constexpr std::uint64_t kFirst = 10;
+
+// Ticks one period from tick k; the drive played (NaN where the compensator's) and whether the
+// run ends after it. The error recorded is 100 x period index + phase.
+struct Played {
+  std::vector<double> drive;
+  bool ends = false;
+};
+Played tick_period(hd::LearningExchange& x, std::uint64_t k) {
+  Played p;
+  for (std::size_t i = 0; i < kPeriod; ++i) {
+    const std::size_t j = x.begin_tick(k + i);
+    EXPECT_EQ(j, i);
+    double u = -1.0;
+    u = 1000.0 + static_cast<double>(j);  // the compensator's
+    (void)x.learned(j, u);
+    p.drive.push_back(u);
+    p.ends = x.end_tick(j, u, 1000.0 + static_cast<double>(j),
+                        100.0 * static_cast<double>((k - kFirst) / kPeriod) + j);
+  }
+  return p;
+}
+
+}  // namespace
+
+TEST(LearningExchange, TrialsAreThePeriodsThatBeginWithANewDrive) {
+  hd::LearningExchange x(kPeriod, kFirst);
+  std::vector<double> u, c, e;
+  std::uint64_t trial = 99;
+  EXPECT_FALSE(x.take_trial(u, c, e, trial));
+  // Trial 0: the compensator's drive, recorded.
+  Played p = tick_period(x, kFirst);
+  EXPECT_EQ(p.drive, std::vector<double>({1000, 1001, 1002, 1003}));
+  EXPECT_FALSE(p.ends);
+  EXPECT_EQ(x.trials_played(), 1u);
+  // The learner owes the next period a drive: on the simulated clock the loop waits.
+  EXPECT_TRUE(x.owed(kFirst + kPeriod));
+  EXPECT_FALSE(x.owed(kFirst + kPeriod + 1));  // only at a period's start
+  ASSERT_TRUE(x.take_trial(u, c, e, trial));
+  EXPECT_EQ(trial, 0u);
+  EXPECT_EQ(u, std::vector<double>({1000, 1001, 1002, 1003}));
+  EXPECT_EQ(e, std::vector<double>({0, 1, 2, 3}));
+  EXPECT_FALSE(x.take_trial(u, c, e, trial));  // taken once
+  ASSERT_TRUE(x.offer({1, 2, 3, 4}, false));
+  EXPECT_FALSE(x.offer({5, 6, 7, 8}, false));  // the loop has not taken the one before
+  EXPECT_FALSE(x.owed(kFirst + kPeriod));
+  // Trial 1 plays the offered drive.
+  p = tick_period(x, kFirst + kPeriod);
+  EXPECT_EQ(p.drive, std::vector<double>({1, 2, 3, 4}));
+  ASSERT_TRUE(x.take_trial(u, c, e, trial));
+  EXPECT_EQ(trial, 1u);
+  EXPECT_EQ(e, std::vector<double>({100, 101, 102, 103}));
+  // Nothing offered in time (the wall clock): the period replays the drive, is not a trial.
+  p = tick_period(x, kFirst + 2 * kPeriod);
+  EXPECT_EQ(p.drive, std::vector<double>({1, 2, 3, 4}));
+  EXPECT_EQ(x.stale_periods(), 1u);
+  EXPECT_FALSE(x.take_trial(u, c, e, trial));
+  // The last drive: its period is trial 2 and the run ends after it; nothing more is owed.
+  ASSERT_TRUE(x.offer({9, 9, 9, 9}, true));
+  p = tick_period(x, kFirst + 3 * kPeriod);
+  EXPECT_EQ(p.drive, std::vector<double>({9, 9, 9, 9}));
+  EXPECT_TRUE(p.ends);
+  ASSERT_TRUE(x.take_trial(u, c, e, trial));
+  EXPECT_EQ(trial, 2u);
+  EXPECT_FALSE(x.owed(kFirst + 4 * kPeriod));
+}
+
+// A learner that gives up owes nothing: the loop plays on with the last drive it took.
+TEST(LearningExchange, ALearnerThatGivesUpOwesNothing) {
+  hd::LearningExchange x(kPeriod, kFirst);
+  (void)tick_period(x, kFirst);
+  EXPECT_TRUE(x.owed(kFirst + kPeriod));
+  x.give_up();
+  EXPECT_FALSE(x.owed(kFirst + kPeriod));
+  const Played p = tick_period(x, kFirst + kPeriod);
+  EXPECT_EQ(p.drive, std::vector<double>({1000, 1001, 1002, 1003}));
+  EXPECT_FALSE(p.ends);
+}
+
+TEST(LearningExchange, ADriveLearnedBeforeIsTrialZeroAndTheLearnerOwesTheNext) {
+  hd::LearningExchange x(kPeriod, kFirst);
+  EXPECT_FALSE(x.start_from({1, 2, 3}, {}, false));  // another period's drive
+  ASSERT_TRUE(x.start_from({7, 8, 9, 10}, {}, false));
+  EXPECT_FALSE(x.start_from({7, 8, 9, 10}, {}, false));  // once, before the run
+  // It plays the period before trial 0 too, and nothing earlier.
+  double u = 0.0;
+  EXPECT_FALSE(x.lead_in(kFirst - kPeriod - 1, u));
+  std::vector<double> lead;
+  for (std::uint64_t k = kFirst - kPeriod; k < kFirst; ++k) {
+    ASSERT_TRUE(x.lead_in(k, u));
+    lead.push_back(u);
+  }
+  EXPECT_EQ(lead, std::vector<double>({7, 8, 9, 10}));
+  Played p = tick_period(x, kFirst);
+  EXPECT_EQ(p.drive, std::vector<double>({7, 8, 9, 10}));
+  EXPECT_FALSE(p.ends);
+  // Trial 0 was handed over and nothing offered for trial 1 yet.
+  EXPECT_TRUE(x.owed(kFirst + kPeriod));
+  std::vector<double> taken, c, e;
+  std::uint64_t trial = 99;
+  ASSERT_TRUE(x.take_trial(taken, c, e, trial));
+  EXPECT_EQ(trial, 0u);
+  EXPECT_EQ(taken, std::vector<double>({7, 8, 9, 10}));
+  ASSERT_TRUE(x.offer({1, 1, 1, 1}, true));
+  EXPECT_FALSE(x.owed(kFirst + kPeriod));
+  p = tick_period(x, kFirst + kPeriod);
+  EXPECT_EQ(p.drive, std::vector<double>({1, 1, 1, 1}));
+  EXPECT_TRUE(p.ends);
+}
+
+TEST(LearningExchange, AReplayOfALearnedDriveEndsAfterTrialZero) {
+  hd::LearningExchange x(kPeriod, kFirst);
+  double u = 0.0;
+  EXPECT_FALSE(x.lead_in(kFirst - 1, u));               // nothing learned before: the compensator's
+  EXPECT_DOUBLE_EQ(x.target_offset(kFirst, 3.0), 3.0);  // and the run's tare
+  ASSERT_TRUE(x.start_from({7, 8, 9, 10}, {}, true));
+  const Played p = tick_period(x, kFirst);
+  EXPECT_EQ(p.drive, std::vector<double>({7, 8, 9, 10}));
+  EXPECT_TRUE(p.ends);
+  EXPECT_FALSE(x.owed(kFirst + kPeriod));
+}
+
+// The compensator's feedforward moved by -0.5 since the drive was learned: the drive moves
+// with it, in the lead-in and in trial 0, and the trial hands the compensator's own over.
+TEST(LearningExchange, ADriveLearnedBeforeMovesWithTheCompensator) {
+  hd::LearningExchange x(kPeriod, kFirst);
+  EXPECT_FALSE(x.start_from({7, 8, 9, 10}, {1, 2}, true));  // another period's compensator
+  ASSERT_TRUE(x.start_from({7, 8, 9, 10}, {1000.5, 1001.5, 1002.5, 1003.5}, true));
+  double u = 1000.0;  // the compensator's at phase 0
+  ASSERT_TRUE(x.lead_in(kFirst - kPeriod, u));
+  EXPECT_DOUBLE_EQ(u, 6.5);
+  // The compensator's target takes off the run's tare; the lead-in's second half measures the
+  // reading 0.1 above the reference, which trial 0 on takes off too.
+  EXPECT_DOUBLE_EQ(x.target_offset(kFirst - kPeriod, 3.0), 3.0);
+  for (std::uint64_t k = kFirst - kPeriod; k < kFirst; ++k) {
+    x.lead_in_error(k, k < kFirst - kPeriod / 2 ? 5.0 : -0.1);  // the first half: the start
+  }
+  EXPECT_DOUBLE_EQ(x.target_offset(kFirst - 1, 3.0), 3.0);
+  EXPECT_DOUBLE_EQ(x.target_offset(kFirst, 3.0), 3.1);
+  const Played p = tick_period(x, kFirst);
+  EXPECT_EQ(p.drive, std::vector<double>({6.5, 7.5, 8.5, 9.5}));
+  std::vector<double> played, c, e;
+  std::uint64_t trial = 99;
+  ASSERT_TRUE(x.take_trial(played, c, e, trial));
+  EXPECT_EQ(played, p.drive);
+  EXPECT_EQ(c, std::vector<double>({1000, 1001, 1002, 1003}));
+}

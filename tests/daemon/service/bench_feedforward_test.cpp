@@ -1,0 +1,162 @@
+// The dynamic feedforward on the bench, as a user gets it: `identify` with the daemon's defaults
+// diagnoses its own record with the model it fitted, adds what the model misses (delay,
+// dynamics, ...) and keeps the extended model when it tracks better on the bench; `track` then
+// inverts the delay and the dynamics from the previewed reference. No manual step. Each test
+// also runs `identify --no-extend` in the same daemon (a bench has a history) and compares.
+// - On the modified-PI truth with its 0.2 ms input delay (its creep lags, 3 kHz resonance,
+//   noise and converters at their defaults) the diagnosis names the delay and the resonance:
+//   a 500 Hz sine within 1 % of range rms (measured 0.47 %, 15.8 % without the extension).
+// - On the default truth with the delay on (the Preisach loop, its creep, the 3 and 8 kHz
+//   modes, the 5 kHz sensor) the loop's shape hides the delay and the resonance in the record's
+//   held-out error; their tests are significant and the bench's fast sine judges them: kept when
+//   the mode is found near 3.4 kHz (500 Hz at 4.5 % against 10.6 %), refused when it is not (a
+//   mode at 0.7 kHz gained nothing at 180 Hz). The target (1 %) is missed: the models hold
+//   whole-tick delays, one mode, and not the sensor's lag (docs/measurements.md).
+// - With the modes replaced by one at 800 Hz the resonance is found (800 +- 80 Hz) and kept:
+//   a 500 Hz sine at 17.5 % against 31 % (the target of 2 % is missed: a few per cent off in
+//   the mode's frequency is tens of per cent of error that close to it).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "hystbench/cli/remote/remote_commands.hpp"
+#include "support/bench_fixture.hpp"
+
+namespace hd = hystbench::daemon;
+using nlohmann::json;
+
+namespace {
+
+class BenchFeedforwardTest : public hystbench::test::BenchFixture {
+ protected:
+  BenchFeedforwardTest() : BenchFixture("hystbench_feedforward_test") {}
+
+  /// A 20-period sine over the default amplitude, tracked with the inverse: rms % of range.
+  double sine_rms(double f) {
+    const json r = run_and_wait(
+        "track",
+        {{"reference", "sine"}, {"frequency_hz", f}, {"periods", 20}, {"compensator", "inverse"}});
+    EXPECT_EQ(r["end"], "completed") << r.dump(2);
+    return r.value("rms_error_percent", 100.0);
+  }
+
+  struct Figures {
+    json extension;                                                  ///< identify's model.extension
+    double plain_500 = 0.0, extended_200 = 0.0, extended_500 = 0.0;  ///< rms % of range
+  };
+
+  /// identify --no-extend, a 500 Hz sine; identify (defaults), 200 and 500 Hz sines.
+  Figures identify_both_ways(const char* toml) {
+    start(settings_from_toml(loopback_toml(toml)));
+    Figures f;
+    const json plain = run_and_wait("identify", {{"extend", false}});
+    EXPECT_EQ(plain["end"], "completed") << plain.dump(2);
+    EXPECT_FALSE(plain.contains("fit_error")) << plain.dump(2);
+    // Not asked: nothing diagnosed, nothing verified beyond the candidates.
+    EXPECT_FALSE(plain["model"]["extension"].value("adopted", true)) << plain["model"].dump(2);
+    EXPECT_FALSE(plain["model"]["extension"].contains("parts")) << plain["model"].dump(2);
+    f.plain_500 = sine_rms(500.0);
+    std::ostringstream plain_text;
+    hd::print_run_result(plain, plain_text);
+    EXPECT_NE(plain_text.str().find("extension       nothing added: not adopted, not asked"),
+              std::string::npos)
+        << plain_text.str();
+
+    const json id = run_and_wait("identify", json::object());
+    EXPECT_EQ(id["end"], "completed") << id.dump(2);
+    EXPECT_FALSE(id.contains("fit_error")) << id.dump(2);
+    f.extension = id["model"]["extension"];
+    // `hystbench identify` prints one line for the parts and one for the bench's check.
+    std::ostringstream text;
+    hd::print_run_result(id, text);
+    EXPECT_NE(text.str().find("extension check triangle max "), std::string::npos) << text.str();
+    std::cout << "extension: " << f.extension.dump() << "\n";
+    f.extended_200 = sine_rms(200.0);
+    f.extended_500 = sine_rms(500.0);
+    std::cout << "500 Hz: " << f.plain_500 << " % without the extension, " << f.extended_500
+              << " % with it (200 Hz: " << f.extended_200 << " %)\n";
+    // The adopted model is the active one, and the model file says what was added.
+    const json active = bench_->handle("model.get", json::object());
+    EXPECT_EQ(active["model"]["identification"]["extension"], f.extension);
+    return f;
+  }
+
+  static bool has_part(const json& extension, const std::string& cause) {
+    const json parts = extension.value("parts", json::array());
+    return std::any_of(parts.begin(), parts.end(),
+                       [&](const json& p) { return p.value("cause", "") == cause; });
+  }
+
+  /// An adopted extension: every figure of its parts and of its verification is there, and the
+  /// bench's fast sine is better by the adoption's margin.
+  static void expect_adopted(const json& e) {
+    ASSERT_TRUE(e.value("adopted", false)) << e.dump(2);
+    for (const json& p : e["parts"]) {
+      EXPECT_GT(p["heldout_gain"].get<double>(), 0.0) << p;
+      EXPECT_FALSE(p["extension"].get<std::string>().empty()) << p;
+    }
+    const json& v = e["verified"];
+    ASSERT_TRUE(v.contains("fast_hz")) << e.dump(2);
+    EXPECT_LE(v["fast_rms_percent"]["extended"].get<double>(),
+              0.95 * v["fast_rms_percent"]["model"].get<double>())
+        << e.dump(2);
+    EXPECT_GE(v["fast_gain"].get<double>(), 1.0 / 0.95) << e.dump(2);
+  }
+};
+
+constexpr const char* kDelayedModifiedPi =
+    "[actuator.hysteresis]\nkind = \"modified_pi\"\n[actuator.delay]\nenabled = true\n";
+constexpr const char* kDelayed = "[actuator.delay]\nenabled = true\n";
+// No delay; the structural modes replaced by one at 800 Hz.
+constexpr const char* kResonance800 =
+    "[actuator.dynamics]\nnatural_frequencies_hz = [800.0]\ndamping_ratios = [0.06]\n"
+    "mode_gains = [1.0]\nenabled = true\n";
+
+}  // namespace
+
+TEST_F(BenchFeedforwardTest, IdentifyAddsTheDelayAndResonanceAndTracksFiveHundredHertz) {
+  const Figures f = identify_both_ways(kDelayedModifiedPi);
+  EXPECT_TRUE(has_part(f.extension, "delay")) << f.extension.dump(2);
+  expect_adopted(f.extension);
+  EXPECT_LE(f.extended_200, 1.0);
+  EXPECT_LE(f.extended_500, 1.0);
+  EXPECT_LT(f.extended_500, 0.25 * f.plain_500);
+}
+
+TEST_F(BenchFeedforwardTest, OnTheDefaultTruthTheBenchJudgesWhatTheRecordHides) {
+  const Figures f = identify_both_ways(kDelayed);
+  const json& e = f.extension;
+  ASSERT_TRUE(has_part(e, "delay") || has_part(e, "dynamics")) << e.dump(2);
+  ASSERT_TRUE(e.contains("verified")) << e.dump(2);
+  if (e.value("adopted", false)) {
+    expect_adopted(e);
+    EXPECT_LT(f.extended_500, 0.95 * f.plain_500);
+  } else {
+    // Kept out because the bench says so: the fast sine did not gain 5 %, or the triangle lost.
+    EXPECT_EQ(e.value("why", ""), "it does not track better on the bench") << e.dump(2);
+    const json& v = e["verified"];
+    EXPECT_TRUE(v["fast_rms_percent"]["extended"].get<double>() >
+                    0.95 * v["fast_rms_percent"]["model"].get<double>() ||
+                v["triangle_rms_percent"]["extended"].get<double>() >
+                    1.1 * v["triangle_rms_percent"]["model"].get<double>() + 0.05)
+        << e.dump(2);
+  }
+}
+
+TEST_F(BenchFeedforwardTest, AnEightHundredHertzResonanceIsFoundAndKept) {
+  const Figures f = identify_both_ways(kResonance800);
+  const json parts = f.extension.value("parts", json::array());
+  const auto dynamics = std::find_if(parts.begin(), parts.end(),
+                                     [](const json& p) { return p["cause"] == "dynamics"; });
+  ASSERT_NE(dynamics, parts.end()) << f.extension.dump(2);
+  const std::string text = (*dynamics)["extension"];
+  const std::string::size_type at = text.find("natural frequency ");
+  ASSERT_NE(at, std::string::npos) << text;
+  EXPECT_NEAR(std::stod(text.substr(at + std::string("natural frequency ").size())), 800.0, 80.0)
+      << text;
+  expect_adopted(f.extension);
+  EXPECT_LT(f.extended_500, 0.7 * f.plain_500);
+}

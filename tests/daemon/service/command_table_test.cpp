@@ -1,0 +1,111 @@
+// The socket commands' table and its one validator, without a bench: every refusal is
+// bad_params naming the key (unknown, wrong type, out of range) before any handler runs.
+#include "service/details/command_table.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "hystbench/common/command_error.hpp"
+
+namespace hd = hystbench::daemon;
+namespace hdd = hystbench::daemon::details;
+using nlohmann::json;
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+namespace {
+
+// The refusal of `params` by the row of `cmd`, as "code: message" ("ok" when accepted).
+std::string refusal(const std::string& cmd, const json& params) {
+  try {
+    const hdd::Command& c = hdd::find_command(cmd, params);
+    hdd::Request request(params, c.params);
+  } catch (const hd::CommandError& e) {
+    return e.code() + ": " + e.what();
+  }
+  return "ok";
+}
+
+}  // namespace
+
+TEST(CommandTable, AnUnknownKeyIsNamedWithTheValidOnes) {
+  EXPECT_EQ(refusal("track", {{"bogus", 1}}),
+            "bad_params: unknown parameter 'bogus' (valid: reference, frequency_hz, periods, "
+            "duration_s, compensator, range_fraction, min_um, max_um, kp, ki, kd, "
+            "precondition_s, learn_trials, learn_gain, learn_cutoff_hz, learned)");
+  EXPECT_EQ(refusal("status", {{"verbose", true}}),
+            "bad_params: unknown parameter 'verbose' (valid: )");
+  // An uploaded reference has its own keys: the built-in reference's are unknown there.
+  EXPECT_THAT(refusal("track", {{"reference_upload", "r"}, {"frequency_hz", 2}}),
+              StartsWith("bad_params: unknown parameter 'frequency_hz' (valid: reference_upload, "
+                         "approach_s"));
+  EXPECT_THAT(refusal("track", {{"approach_s", 1.0}}),
+              StartsWith("bad_params: unknown parameter 'approach_s'"));
+}
+
+TEST(CommandTable, AWrongTypeIsNamedWithTheTypeExpected) {
+  EXPECT_EQ(refusal("track", {{"frequency_hz", "fast"}}),
+            "bad_params: frequency_hz: must be a number, got string");
+  EXPECT_EQ(refusal("identify", {{"operators", 2.5}}), "bad_params: operators: must be an integer");
+  EXPECT_EQ(refusal("identify", {{"model", 3}}), "bad_params: model: must be a string");
+  EXPECT_EQ(refusal("identify", {{"extend", "no"}}), "bad_params: extend: must be true or false");
+  EXPECT_EQ(refusal("model.load", {{"model", "text"}}),
+            "bad_params: model: must be the model file's JSON object");
+  EXPECT_EQ(refusal("upload.chunk", {{"values", 1.0}}), "bad_params: values: must be an array");
+  EXPECT_EQ(refusal("track", json::array({1, 2})), "bad_params: params must be an object");
+}
+
+TEST(CommandTable, AValueOutOfRangeIsNamedWithTheRange) {
+  EXPECT_THAT(refusal("track", {{"kp", -1.0}}),
+              StartsWith("bad_params: kp: -1.000000 is out of range [0.000000, 1000000.000000]"));
+  EXPECT_THAT(refusal("track", {{"range_fraction", 1.5}}),
+              StartsWith("bad_params: range_fraction: 1.500000 is out of range"));
+  EXPECT_THAT(refusal("identify", {{"dead_zones", -2}}),
+              StartsWith("bad_params: dead_zones: -2 is out of range [-1, 100]"));
+  EXPECT_THAT(refusal("identify", {{"operators", 18446744073709551615ull}}),
+              StartsWith("bad_params: operators: 18446744073709551615 is out of range"));
+  EXPECT_EQ(refusal("track", {{"kp", 2.0}, {"periods", 3}, {"min_um", -5.0}}), "ok");
+}
+
+TEST(CommandTable, ARefusedKeySaysWhy) {
+  EXPECT_THAT(refusal("model.load", {{"path", "/etc/passwd"}}),
+              AllOf(StartsWith("bad_params: path: model.load takes the model document"),
+                    HasSubstr("never opens a path")));
+  // A refused key is not offered among the valid ones.
+  EXPECT_THAT(refusal("model.load", {{"file", "x"}}), HasSubstr("(valid: model, name, stored)"));
+}
+
+TEST(CommandTable, AnUnknownCommandListsEveryCommandOnce) {
+  EXPECT_EQ(refusal("fly", json::object()),
+            "unknown_command: unknown command 'fly' (status, identify, track, excite, "
+            "upload.begin, upload.chunk, upload.cancel, stop, abort, reset, model.get, "
+            "model.load, model.delete, model.list, config.get)");
+  for (const hdd::Command& c : hdd::bench_commands()) {
+    ASSERT_NE(c.handle, nullptr) << c.name;
+    EXPECT_THAT(refusal(c.name, {{"no_such_key", 0}}),
+                StartsWith("bad_params: unknown parameter 'no_such_key'"))
+        << c.name;
+  }
+}
+
+TEST(CommandTable, RequestGettersGiveTheFallbackOrTheCheckedValue) {
+  const hdd::Command& track = hdd::find_command("track", json::object());
+  const json params = {{"frequency_hz", 40.0}, {"compensator", "pid"}};
+  const hdd::Request r(params, track.params);
+  EXPECT_TRUE(r.has("frequency_hz"));
+  EXPECT_FALSE(r.has("periods"));
+  EXPECT_DOUBLE_EQ(r.number("periods", 5.0), 5.0);
+  EXPECT_EQ(r.string("compensator", "none"), "pid");
+  // A range known at run time (a twentieth of a 500 Hz loop) names the key too.
+  try {
+    (void)r.number("frequency_hz", 1.0, 1e-3, 25.0);
+    ADD_FAILURE() << "40 Hz accepted above 25 Hz";
+  } catch (const hd::CommandError& e) {
+    EXPECT_EQ(e.code(), "bad_params");
+    EXPECT_THAT(e.what(), StartsWith("frequency_hz: 40.000000 is out of range"));
+  }
+  const hdd::Request none(json(), track.params);
+  EXPECT_DOUBLE_EQ(none.number("kp", 0.5), 0.5);
+}
