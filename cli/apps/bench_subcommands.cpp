@@ -6,19 +6,20 @@
 #include <optional>
 #include <string>
 
-#include "subcommands.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
-#include "hystbench/common/fit_families.hpp"
-#include "hystbench/common/model_file_io.hpp"
 #include "hystbench/cli/remote/remote_commands.hpp"
 #include "hystbench/cli/remote/sweep_command.hpp"
+#include "hystbench/common/fit_families.hpp"
+#include "hystbench/common/model_file_io.hpp"
+#include "subcommands.hpp"
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
+namespace common = hystbench::common;
 
 namespace {
 
 // --json, and --wait for a command that starts a run.
-void add_output_flags(CLI::App* c, hd::RemoteCommand& remote, bool waits) {
+void add_output_flags(CLI::App* c, cli::RemoteCommand& remote, bool waits) {
   c->add_flag("--json", remote.json_output, "Print the result as one JSON line");
   if (waits) {
     c->add_flag("--wait", remote.wait,
@@ -28,20 +29,20 @@ void add_output_flags(CLI::App* c, hd::RemoteCommand& remote, bool waits) {
 }
 
 // Sends the daemon `cmd` with `params`; returns the exit code of run_remote.
-int send_request(hd::RemoteCommand& remote, const std::string& cmd, nlohmann::json params) {
+int send_request(cli::RemoteCommand& remote, const std::string& cmd, nlohmann::json params) {
   remote.cmd = cmd;
   remote.params = std::move(params);
-  return hd::run_remote(remote, std::cout, std::cerr);
+  return cli::run_remote(remote, std::cout, std::cerr);
 }
 
-// hd::read_upload, or nullopt after printing why the file cannot be read.
-std::optional<hd::RemoteUpload> read_upload_or_report(const std::string& path,
-                                                      const std::string& kind,
-                                                      const std::string& t_column,
-                                                      const std::string& value_column, double scale,
-                                                      double rate_hz) {
+// cli::read_upload, or nullopt after printing why the file cannot be read.
+std::optional<cli::RemoteUpload> read_upload_or_report(const std::string& path,
+                                                       const std::string& kind,
+                                                       const std::string& t_column,
+                                                       const std::string& value_column,
+                                                       double scale, double rate_hz) {
   try {
-    return hd::read_upload(path, kind, t_column, value_column, scale, rate_hz);
+    return cli::read_upload(path, kind, t_column, value_column, scale, rate_hz);
   } catch (const std::exception& e) {
     std::cerr << "hystbench: error: " << e.what() << "\n";
     return std::nullopt;
@@ -50,7 +51,7 @@ std::optional<hd::RemoteUpload> read_upload_or_report(const std::string& path,
 
 }  // namespace
 
-CliCommand add_plain_request(CLI::App& parent, hd::RemoteCommand& remote, const std::string& name,
+CliCommand add_plain_request(CLI::App& parent, cli::RemoteCommand& remote, const std::string& name,
                              const std::string& description, const std::string& request) {
   auto* cmd = parent.add_subcommand(name, description);
   add_output_flags(cmd, remote, false);
@@ -69,7 +70,7 @@ struct IdentifyOptions {
 
 }  // namespace
 
-CliCommand add_identify(CLI::App& app, hd::RemoteCommand& remote) {
+CliCommand add_identify(CLI::App& app, cli::RemoteCommand& remote) {
   auto id = std::make_shared<IdentifyOptions>();
   auto* cmd = app.add_subcommand(
       "identify",
@@ -81,7 +82,7 @@ CliCommand add_identify(CLI::App& app, hd::RemoteCommand& remote) {
   cmd->add_option("--model", id->model,
                   "pi, mpi, cpi, rpi or auto (every family, the best verified tracking "
                   "kept; default: the config's)")
-      ->check(CLI::IsMember(hd::fit_family_name_list()));
+      ->check(CLI::IsMember(common::fit_family_name_list()));
   cmd->add_option("--operators", id->operators, "Number of plays (0 = by held-out error)");
   cmd->add_option("--deadzones", id->dead_zones, "Dead zones per side (-1 = by held-out error)");
   cmd->add_flag("--no-extend", id->no_extend,
@@ -214,7 +215,7 @@ bool add_learning(const TrackOptions& tr, nlohmann::json& p) {
 }
 
 // track --reference-file: uploads the trajectory, then starts the run on it.
-int track_reference_file(const TrackOptions& tr, hd::RemoteCommand& remote) {
+int track_reference_file(const TrackOptions& tr, cli::RemoteCommand& remote) {
   nlohmann::json p = nlohmann::json::object();
   if (!tr.compensator.empty()) p["compensator"] = tr.compensator;
   if (!std::isnan(tr.precondition)) p["precondition_s"] = tr.precondition;
@@ -226,7 +227,7 @@ int track_reference_file(const TrackOptions& tr, hd::RemoteCommand& remote) {
   return send_request(remote, "track", p);
 }
 
-int run_track(const TrackOptions& tr, hd::RemoteCommand& remote) {
+int run_track(const TrackOptions& tr, cli::RemoteCommand& remote) {
   if (!remote.plot_dir.empty() && !remote.wait) {
     std::cerr << "hystbench: error: track --plot needs --wait (the plots are drawn when the run "
                  "ends; or run `hystbench plot LOG` afterwards)\n";
@@ -254,7 +255,7 @@ int run_track(const TrackOptions& tr, hd::RemoteCommand& remote) {
 
 }  // namespace
 
-CliCommand add_track(CLI::App& app, hd::RemoteCommand& remote) {
+CliCommand add_track(CLI::App& app, cli::RemoteCommand& remote) {
   auto tr = std::make_shared<TrackOptions>();
   auto* cmd =
       app.add_subcommand("track", "Follow a reference with a compensator and report the error");
@@ -274,12 +275,12 @@ namespace {
 // excite: the drive file and its columns.
 struct ExciteOptions {
   std::string input_file;
-  hd::RecordColumns columns;
+  cli::RecordColumns columns;
 };
 
 }  // namespace
 
-CliCommand add_excite(CLI::App& app, hd::RemoteCommand& remote) {
+CliCommand add_excite(CLI::App& app, cli::RemoteCommand& remote) {
   auto ex = std::make_shared<ExciteOptions>();
   auto* cmd = app.add_subcommand(
       "excite",
@@ -299,7 +300,7 @@ CliCommand add_excite(CLI::App& app, hd::RemoteCommand& remote) {
       ->check(CLI::PositiveNumber);
   add_output_flags(cmd, remote, true);
   return {cmd, [ex, &remote] {
-            const hd::RecordColumns& c = ex->columns;
+            const cli::RecordColumns& c = ex->columns;
             remote.upload =
                 read_upload_or_report(ex->input_file, "drive", c.t, c.u, c.u_scale, c.rate_hz);
             if (!remote.upload) return 1;
@@ -307,8 +308,8 @@ CliCommand add_excite(CLI::App& app, hd::RemoteCommand& remote) {
           }};
 }
 
-CliCommand add_sweep(CLI::App& app, hd::RemoteCommand& remote) {
-  auto sweep = std::make_shared<hd::SweepCommand>();
+CliCommand add_sweep(CLI::App& app, cli::RemoteCommand& remote) {
+  auto sweep = std::make_shared<cli::SweepCommand>();
   auto* cmd = app.add_subcommand(
       "sweep",
       "Track a reference at each of a list of frequencies with each compensator and print one "
@@ -349,7 +350,7 @@ CliCommand add_sweep(CLI::App& app, hd::RemoteCommand& remote) {
   cmd->add_flag("--json", sweep->json_output, "Print one JSON object instead of the table");
   return {cmd, [sweep, &remote] {
             sweep->socket_path = remote.socket_path;
-            return hd::run_sweep(*sweep, std::cout, std::cerr);
+            return cli::run_sweep(*sweep, std::cout, std::cerr);
           }};
 }
 
@@ -357,7 +358,7 @@ namespace {
 
 // model load: a model file (read here, its document sent) or a model stored in the daemon's folder.
 int load_model(const std::string& model_path, const std::string& stored_model,
-               hd::RemoteCommand& remote) {
+               cli::RemoteCommand& remote) {
   if (!stored_model.empty()) return send_request(remote, "model.load", {{"stored", stored_model}});
   if (model_path.empty()) {
     std::cerr << "hystbench: error: model load: give a model file or --stored NAME\n";
@@ -367,7 +368,7 @@ int load_model(const std::string& model_path, const std::string& stored_model,
   // socket: the daemon (its own user, its own /tmp and no /home) never opens a client's path.
   nlohmann::json document;
   try {
-    document = hd::read_model_document(model_path);
+    document = common::read_model_document(model_path);
   } catch (const std::exception& e) {
     std::cerr << "hystbench: error: " << e.what() << "\n";
     return 1;
@@ -384,7 +385,7 @@ struct ModelOptions {
 
 }  // namespace
 
-CliCommand add_model(CLI::App& app, hd::RemoteCommand& remote) {
+CliCommand add_model(CLI::App& app, cli::RemoteCommand& remote) {
   auto model = std::make_shared<ModelOptions>();
   auto* cmd =
       app.add_subcommand("model", "Show, list, load or delete the models in the daemon's folder");

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "subcommands.hpp"
 #include "hystbench/cli/remote/remote_commands.hpp"
+#include "subcommands.hpp"
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -49,8 +49,8 @@ int main(int argc, char** argv) {
   commands.push_back(add_convert(app));
 
   // The bench commands' connection and output settings, shared by all of them.
-  hd::RemoteCommand remote;
-  remote.socket_path = hd::default_socket_path();
+  cli::RemoteCommand remote;
+  remote.socket_path = cli::default_socket_path();
   app.add_option("--socket", remote.socket_path,
                  "hystbenchd socket (default $HYSTBENCH_SOCKET or /run/hystbench/hystbench.sock)");
   commands.push_back(add_plain_request(

@@ -5,19 +5,20 @@
 #include <string>
 #include <vector>
 
-#include "subcommands.hpp"
 #include "hystbench/cli/offline/convert_command.hpp"
 #include "hystbench/cli/offline/diagnose_command.hpp"
-#include "hystbench/common/fit_families.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
 #include "hystbench/cli/report/plot_command.hpp"
+#include "hystbench/common/fit_families.hpp"
+#include "subcommands.hpp"
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
+namespace common = hystbench::common;
 
 namespace {
 
 // Column mapping shared by the commands that read a measured record.
-void add_column_options(CLI::App* c, hd::RecordColumns& columns, bool y_optional) {
+void add_column_options(CLI::App* c, cli::RecordColumns& columns, bool y_optional) {
   c->add_option("--t-column", columns.t, "Name of the time column [s]")->capture_default_str();
   c->add_option("--u-column", columns.u,
                 "Name of the input column; several, comma-separated (u1_V,u2_V,u3_V), for a "
@@ -62,21 +63,21 @@ void add_column_options(CLI::App* c, hd::RecordColumns& columns, bool y_optional
 }  // namespace
 
 CliCommand add_fit(CLI::App& app) {
-  auto fit = std::make_shared<hd::FitCommand>();
+  auto fit = std::make_shared<cli::FitCommand>();
   auto* cmd =
       app.add_subcommand("fit", "Identify a hysteresis model from a measured record (t,u,y)");
   cmd->add_option("data", fit->data_path, "CSV file with columns t, u, y")
       ->required()
       ->check(CLI::ExistingFile);
-  std::vector<std::string> fit_families = hd::fit_family_name_list();
-  fit_families.push_back("hammerstein");
+  std::vector<std::string> families = common::fit_family_name_list();
+  families.push_back("hammerstein");
   cmd->add_option("--model", fit->model_name,
                   "Model family: pi (classical), mpi (modified, asymmetric), cpi (coupled-play), "
                   "rpi (rate-dependent), auto (lowest held-out error); hammerstein (a play "
                   "model per input, then linear dynamics with shared poles: the family of "
                   "several inputs and outputs, which comma lists in --u-column / --y-column "
                   "choose)")
-      ->check(CLI::IsMember(fit_families))
+      ->check(CLI::IsMember(families))
       ->capture_default_str();
   cmd->add_option("--operators", fit->operators,
                   "Number of play operators (0 = choose by held-out error)")
@@ -108,11 +109,11 @@ CliCommand add_fit(CLI::App& app) {
   cmd->add_option("-o,--output", fit->output_path, "Model file to write (JSON)")->required();
   cmd->add_flag("--json", fit->json_output, "Print the result as one JSON line");
   add_column_options(cmd, fit->columns, false);
-  return {cmd, [fit] { return hd::run_fit(*fit, std::cout, std::cerr); }};
+  return {cmd, [fit] { return cli::run_fit(*fit, std::cout, std::cerr); }};
 }
 
 CliCommand add_simulate(CLI::App& app) {
-  auto sim = std::make_shared<hd::SimulateCommand>();
+  auto sim = std::make_shared<cli::SimulateCommand>();
   auto* cmd = app.add_subcommand(
       "simulate",
       "Run a model file over an input record; writes t,u,y_model[,y,residual] (one of each per "
@@ -131,11 +132,11 @@ CliCommand add_simulate(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--json", sim->json_output,
                 "Print {\"rmse\",\"max_abs\",\"range\",...} as one JSON line (when y is present)");
-  return {cmd, [sim] { return hd::run_simulate(*sim, std::cout, std::cerr); }};
+  return {cmd, [sim] { return cli::run_simulate(*sim, std::cout, std::cerr); }};
 }
 
 CliCommand add_invert(CLI::App& app) {
-  auto inv = std::make_shared<hd::InvertCommand>();
+  auto inv = std::make_shared<cli::InvertCommand>();
   auto* cmd = app.add_subcommand("invert",
                                  "Compute the drive u that makes the model follow a reference yr");
   cmd->add_option("model", inv->model_path, "Model file (JSON)")
@@ -163,11 +164,11 @@ CliCommand add_invert(CLI::App& app) {
       ->check(CLI::IsMember({"auto", "analytic", "numeric", "multiplicative"}))
       ->capture_default_str();
   cmd->add_flag("--json", inv->json_output, "Print the result as one JSON line");
-  return {cmd, [inv] { return hd::run_invert(*inv, std::cout, std::cerr); }};
+  return {cmd, [inv] { return cli::run_invert(*inv, std::cout, std::cerr); }};
 }
 
 CliCommand add_diagnose(CLI::App& app) {
-  auto diag = std::make_shared<hd::DiagnoseCommand>();
+  auto diag = std::make_shared<cli::DiagnoseCommand>();
   auto* cmd = app.add_subcommand(
       "diagnose",
       "Find what a model misses on records (t,u,y) of one device: asymmetry, rate_dependence, "
@@ -194,11 +195,11 @@ CliCommand add_diagnose(CLI::App& app) {
   cmd->add_option("--save-baseline", diag->save_baseline, "Write the baseline model file");
   cmd->add_option("--save-extended", diag->save_extended,
                   "Write the extended model file (the baseline plus the named effect)");
-  return {cmd, [diag] { return hd::run_diagnose(*diag, std::cout, std::cerr); }};
+  return {cmd, [diag] { return cli::run_diagnose(*diag, std::cout, std::cerr); }};
 }
 
 CliCommand add_convert(CLI::App& app) {
-  auto conv = std::make_shared<hd::ConvertCommand>();
+  auto conv = std::make_shared<cli::ConvertCommand>();
   auto* cmd = app.add_subcommand(
       "convert",
       "Write a record stored as NumPy arrays (inputs in one .npy, outputs in another; float64 "
@@ -230,11 +231,11 @@ CliCommand add_convert(CLI::App& app) {
                   "y1_m,y2_m,...)")
       ->delimiter(',');
   cmd->add_flag("--json", conv->json_output, "Print the result as one JSON line");
-  return {cmd, [conv] { return hd::run_convert(*conv, std::cout, std::cerr); }};
+  return {cmd, [conv] { return cli::run_convert(*conv, std::cout, std::cerr); }};
 }
 
 CliCommand add_plot(CLI::App& app) {
-  auto plot = std::make_shared<hd::PlotCommand>();
+  auto plot = std::make_shared<cli::PlotCommand>();
   auto* cmd = app.add_subcommand(
       "plot",
       "Draw a run log as PNGs (gnuplot): reference, measurement and model against time; the "
@@ -246,5 +247,5 @@ CliCommand add_plot(CLI::App& app) {
   cmd->add_option("-o,--output", plot->out_dir,
                   "Folder for the PNGs (default: the log's name with -plots, beside it)");
   cmd->add_flag("--json", plot->json_output, "Print the written files as one JSON line");
-  return {cmd, [plot] { return hd::run_plot(*plot, std::cout, std::cerr); }};
+  return {cmd, [plot] { return cli::run_plot(*plot, std::cout, std::cerr); }};
 }

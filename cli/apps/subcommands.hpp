@@ -25,11 +25,11 @@ CliCommand add_plot(CLI::App& app);
 // socket path and the output options --json, --wait and --plot.
 
 // A command that sends the daemon one request without parameters (status, stop, config ...).
-CliCommand add_plain_request(CLI::App& parent, hystbench::daemon::RemoteCommand& remote,
+CliCommand add_plain_request(CLI::App& parent, hystbench::cli::RemoteCommand& remote,
                              const std::string& name, const std::string& description,
                              const std::string& request);
-CliCommand add_identify(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
-CliCommand add_track(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
-CliCommand add_excite(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
-CliCommand add_sweep(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
-CliCommand add_model(CLI::App& app, hystbench::daemon::RemoteCommand& remote);
+CliCommand add_identify(CLI::App& app, hystbench::cli::RemoteCommand& remote);
+CliCommand add_track(CLI::App& app, hystbench::cli::RemoteCommand& remote);
+CliCommand add_excite(CLI::App& app, hystbench::cli::RemoteCommand& remote);
+CliCommand add_sweep(CLI::App& app, hystbench::cli::RemoteCommand& remote);
+CliCommand add_model(CLI::App& app, hystbench::cli::RemoteCommand& remote);

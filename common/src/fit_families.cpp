@@ -3,7 +3,7 @@
 #include <array>
 #include <stdexcept>
 
-namespace hystbench::daemon {
+namespace hystbench::common {
 
 namespace hc = compensation;
 
@@ -38,4 +38,4 @@ std::optional<hc::ModelKind> parse_fit_family(const std::string& name) {
   throw std::invalid_argument("unknown '" + name + "' (" + fit_family_names() + ")");
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::common

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace hystbench::daemon {
+namespace hystbench::common {
 
 namespace hc = compensation;
 using nlohmann::json;
@@ -94,4 +94,4 @@ void save_mimo_model_file(const std::string& path, const hc::MimoModelFile& file
   save_document(path, hc::to_json(file));
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::common

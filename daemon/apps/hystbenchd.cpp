@@ -10,12 +10,13 @@
 #include <iostream>
 #include <optional>
 
-#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/config/daemon_settings.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/daemon/service/socket_server.hpp"
 
 namespace hd = hystbench::daemon;
+namespace common = hystbench::common;
 
 namespace {
 
@@ -106,7 +107,7 @@ hd::SocketServer::Dispatcher bench_dispatcher(hd::Bench& bench) {
     try {
       spdlog::debug("client {}: {}", req.client, req.cmd);
       return hd::Reply::success(bench.handle(req.cmd, req.params, req.client));
-    } catch (const hd::CommandError& e) {
+    } catch (const common::CommandError& e) {
       spdlog::info("client {}: {} refused: {}", req.client, req.cmd, e.what());
       return hd::Reply::failure(e.code(), e.what(), e.detail());
     } catch (const std::exception& e) {

@@ -20,15 +20,15 @@
 #include <tuple>
 #include <utility>
 
+#include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/cli/remote/bench_client.hpp"
+#include "hystbench/cli/remote/remote_commands.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pi_model.hpp"
-#include "hystbench/cli/remote/bench_client.hpp"
-#include "hystbench/cli/offline/data_table.hpp"
-#include "hystbench/cli/remote/remote_commands.hpp"
 #include "support/daemon_process.hpp"
 #include "support/temp_dir_test.hpp"
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 using nlohmann::json;
 namespace fs = std::filesystem;
 
@@ -56,7 +56,7 @@ class HystbenchdTest : public hystbench::test::TempDirTest {
 }  // namespace
 
 TEST_F(HystbenchdTest, TrackRunFromStartToEndOverTheSocket) {
-  hd::BenchClient c(daemon_->socket());
+  cli::BenchClient c(daemon_->socket());
   EXPECT_EQ(c.greeting()["hello"], "hystbenchd");
   json r = c.request("track", {{"compensator", "none"}, {"periods", 2}, {"frequency_hz", 2}});
   ASSERT_TRUE(r["ok"]) << r.dump();
@@ -65,7 +65,7 @@ TEST_F(HystbenchdTest, TrackRunFromStartToEndOverTheSocket) {
   const json result = wait_finished(c, run_id);
   ASSERT_EQ(result["end"], "completed") << result.dump();
   EXPECT_EQ(result["dropped"], 0);
-  const auto log = hd::DataTable::read_csv(result["log"].get<std::string>());
+  const auto log = cli::DataTable::read_csv(result["log"].get<std::string>());
   EXPECT_EQ(log.rows(), result["samples"].get<std::size_t>());
   const json status = c.request("status")["result"];
   EXPECT_EQ(status["state"], "idle");
@@ -98,7 +98,7 @@ TEST_F(HystbenchdTest, BadInputGetsAClearErrorAndChangesNothing) {
   EXPECT_EQ(s["result"]["state"], "idle");
   EXPECT_TRUE(s["result"]["last_result"].is_null());
   // A run while one is active.
-  hd::BenchClient c(daemon_->socket());
+  cli::BenchClient c(daemon_->socket());
   ASSERT_TRUE(c.request("track", {{"compensator", "none"}, {"periods", 50}})["ok"]);
   const json busy = c.request("identify");
   EXPECT_FALSE(busy["ok"]);
@@ -111,7 +111,7 @@ TEST_F(HystbenchdTest, BadInputGetsAClearErrorAndChangesNothing) {
 // leaves nothing behind; a good file is tracked.
 TEST_F(HystbenchdTest, UploadedTrajectoriesOverTheSocket) {
   {
-    hd::BenchClient gone(daemon_->socket());
+    cli::BenchClient gone(daemon_->socket());
     ASSERT_TRUE(gone.request("upload.begin", {{"kind", "reference"}, {"samples", 100}})["ok"]);
     ASSERT_TRUE(gone.request("upload.chunk", {{"upload", "upload-1"},
                                               {"offset", 0},
@@ -119,7 +119,7 @@ TEST_F(HystbenchdTest, UploadedTrajectoriesOverTheSocket) {
                                               {"values", {10.0, 10.1}}})["ok"]);
     EXPECT_EQ(gone.request("status")["result"]["uploads"]["open"], 1);
   }  // disconnects mid-upload
-  hd::BenchClient c(daemon_->socket());
+  cli::BenchClient c(daemon_->socket());
   json status;
   for (int i = 0; i < 200; ++i) {
     status = c.request("status")["result"];
@@ -140,23 +140,23 @@ TEST_F(HystbenchdTest, UploadedTrajectoriesOverTheSocket) {
       g << k * 1e-3 << "," << 20.0 + 5.0 * std::sin(2.0 * M_PI * 2.0 * k * 1e-3) << "\n";
     }
   }
-  hd::RemoteCommand cmd;
+  cli::RemoteCommand cmd;
   cmd.socket_path = daemon_->socket();
   cmd.cmd = "track";
   cmd.params = {{"compensator", "none"}};
-  cmd.upload = hd::read_upload(bad.string(), "reference", "t", "yr", 1.0, 0.0);
+  cmd.upload = cli::read_upload(bad.string(), "reference", "t", "yr", 1.0, 0.0);
   std::ostringstream out, err;
-  EXPECT_EQ(hd::run_remote(cmd, out, err), 1);
+  EXPECT_EQ(cli::run_remote(cmd, out, err), 1);
   EXPECT_NE(err.str().find("[out_of_range]"), std::string::npos) << err.str();
   // Data row 852 (sample 851) is on line 854: a comment and the header come first.
   EXPECT_NE(err.str().find("bad.csv:854: the first offending row"), std::string::npos) << err.str();
   EXPECT_TRUE(c.request("status")["result"]["last_result"].is_null());  // nothing ran
 
-  cmd.upload = hd::read_upload(good.string(), "reference", "t", "yr", 1.0, 0.0);
+  cmd.upload = cli::read_upload(good.string(), "reference", "t", "yr", 1.0, 0.0);
   cmd.wait = true;
   cmd.json_output = true;
   out.str("");
-  ASSERT_EQ(hd::run_remote(cmd, out, err), 0) << err.str();
+  ASSERT_EQ(cli::run_remote(cmd, out, err), 0) << err.str();
   const json r = json::parse(out.str());
   EXPECT_EQ(r["end"], "completed");
   EXPECT_NEAR(r["range_um"].get<double>(), 10.0, 0.01);
@@ -172,7 +172,7 @@ TEST_F(HystbenchdTest, ClientKilledMidRunDoesNotDisturbTheRun) {
     const pid_t child = ::fork();
     if (child == 0) {
       ::close(fds[0]);
-      hd::BenchClient c(daemon_->socket());
+      cli::BenchClient c(daemon_->socket());
       const json r = c.request("track", {{"compensator", "none"}, {"periods", 3}});
       const std::string id = r["result"]["run_id"].get<std::string>() + "\n";
       (void)!::write(fds[1], id.data(), id.size());
@@ -188,7 +188,7 @@ TEST_F(HystbenchdTest, ClientKilledMidRunDoesNotDisturbTheRun) {
     ::kill(child, SIGKILL);
     ::waitpid(child, nullptr, 0);
   }
-  hd::BenchClient c(daemon_->socket());
+  cli::BenchClient c(daemon_->socket());
   json last;
   for (int i = 0; i < 200; ++i) {
     last = c.request("status")["result"]["last_result"];
@@ -201,7 +201,7 @@ TEST_F(HystbenchdTest, ClientKilledMidRunDoesNotDisturbTheRun) {
 }
 
 TEST_F(HystbenchdTest, SigtermMidRunGoesSafeClosesTheLogAndExitsZero) {
-  hd::BenchClient c(daemon_->socket());
+  cli::BenchClient c(daemon_->socket());
   json r = c.request("track", {{"compensator", "none"}, {"periods", 100}});
   ASSERT_TRUE(r["ok"]);
   const std::string log_path = r["result"]["log"];
@@ -213,7 +213,7 @@ TEST_F(HystbenchdTest, SigtermMidRunGoesSafeClosesTheLogAndExitsZero) {
     std::optional<json> e;
     try {
       e = c.next_event(std::chrono::milliseconds(200));
-    } catch (const hd::ClientError&) {
+    } catch (const cli::ClientError&) {
       break;  // the daemon closed the socket
     }
     if (!e) break;
@@ -223,7 +223,7 @@ TEST_F(HystbenchdTest, SigtermMidRunGoesSafeClosesTheLogAndExitsZero) {
   EXPECT_EQ(finished["end"], "aborted");
   EXPECT_EQ(finished["output_v_after"], 0.0);
   // The log is complete and readable: one row per sample, indices without gaps.
-  const auto log = hd::DataTable::read_csv(log_path);
+  const auto log = cli::DataTable::read_csv(log_path);
   EXPECT_EQ(log.rows(), finished["samples"].get<std::size_t>());
   const auto& index = log.column("index");
   for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
@@ -272,7 +272,7 @@ TEST(HystbenchdService, ModelLoadWorksWhenTheDaemonCannotSeeTheClientsFolder) {
     EXPECT_EQ(loaded["type"], "pi") << output;
     EXPECT_EQ(loaded["name"], "actuator.json") << output;
 
-    hd::BenchClient c(daemon.socket());
+    cli::BenchClient c(daemon.socket());
     const json by_path = c.request("model.load", {{"path", model.string()}});
     EXPECT_FALSE(by_path["ok"].get<bool>());
     EXPECT_EQ(by_path["error"]["code"], "bad_params") << by_path.dump();

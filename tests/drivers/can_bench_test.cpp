@@ -10,11 +10,12 @@
 #include <filesystem>
 #include <thread>
 
-#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "peer_process.hpp"
 
 namespace hdm = hystbench::daemon;
+namespace cli = hystbench::cli;
 namespace ht = hystbench::test;
 using nlohmann::json;
 using namespace std::chrono_literals;
@@ -80,7 +81,7 @@ class CanBenchTest : public ::testing::Test {
     const json st = bench_->handle("status", json::object());
     EXPECT_EQ(st["state"], "fault");
     EXPECT_EQ(st["driver"]["output_v"].get<double>(), bench_->driver().safe_output_v());
-    const auto table = hdm::DataTable::read_csv(r["log"].get<std::string>());
+    const auto table = cli::DataTable::read_csv(r["log"].get<std::string>());
     EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
     EXPECT_EQ(r["logged"], r["samples"]);
     return st["driver"]["last_fault"].get<std::string>();

@@ -7,12 +7,14 @@
 #include <filesystem>
 #include <thread>
 
-#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "peer_process.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hdm = hystbench::daemon;
+namespace cli = hystbench::cli;
+namespace common = hystbench::common;
 namespace ht = hystbench::test;
 using nlohmann::json;
 using namespace std::chrono_literals;
@@ -104,14 +106,14 @@ TEST_F(ModbusBenchTest, ServerKilledMidRunFaultsSafeKeepsTheLogAndRecoversAfterR
   EXPECT_EQ(st["state"], "fault");
   EXPECT_EQ(st["driver"]["output_v"].get<double>(), bench_->driver().safe_output_v());
   EXPECT_NE(st["driver"]["last_fault"].get<std::string>(), "") << st["driver"].dump(2);
-  const auto table = hdm::DataTable::read_csv(r["log"].get<std::string>());
+  const auto table = cli::DataTable::read_csv(r["log"].get<std::string>());
   EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
   EXPECT_EQ(r["logged"], r["samples"]);
   const auto& index = table.column("index");
   for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
 
   // Runs are refused while in FAULT; with the server back, a reset and runs work again.
-  EXPECT_THROW(bench_->handle("track", {{"compensator", "none"}}), hdm::CommandError);
+  EXPECT_THROW(bench_->handle("track", {{"compensator", "none"}}), common::CommandError);
   start_simdaq(port_);
   const auto back = std::chrono::steady_clock::now() + 10s;
   while (std::chrono::steady_clock::now() < back && !status()["driver"]["connected"].get<bool>()) {

@@ -15,14 +15,14 @@
 #include <iostream>
 #include <thread>
 
-#include "hystbench/compensation/model_file.hpp"
-#include "hystbench/compensation/pi_model.hpp"
-#include "hystbench/daemon/service/bench.hpp"
-#include "hystbench/daemon/config/config.hpp"
-#include "hystbench/daemon/config/daemon_settings.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/config/daemon_settings.hpp"
 #include "hystbench/daemon/loop/stuck_sensor_detector.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/drivers/driver.hpp"
 #include "hystbench/drivers/io_thread_driver.hpp"
 #include "hystbench/drivers/modbus_daq.hpp"
@@ -33,6 +33,8 @@
 namespace hc = hystbench::compensation;
 namespace hd = hystbench::drivers;
 namespace hdm = hystbench::daemon;
+namespace cli = hystbench::cli;
+namespace common = hystbench::common;
 namespace ht = hystbench::test;
 using nlohmann::json;
 using namespace std::chrono_literals;
@@ -90,7 +92,7 @@ class IndependentPeerTest : public ht::BenchFixture {
     m.input_min = 0.0;
     m.input_max = 150.0;
     const std::string path = (dir_ / "true_plant.json").string();
-    hdm::save_model_file(path, hc::ModelFile{m, json::object()});
+    common::save_model_file(path, hc::ModelFile{m, json::object()});
     return path;
   }
 
@@ -213,8 +215,8 @@ TEST_F(IndependentPeerTest, TrackACoarselyQuantisedPlantWithItsTrueModel) {
   // 0.25 um counts: about 180 codes over the 44 um range.
   start_peer({"--quantum-nm", "250"});
   start(settings());
-  bench_->handle("model.load",
-                 {{"model", hdm::read_model_document(true_model_file())}, {"name", "true_plant"}});
+  bench_->handle("model.load", {{"model", common::read_model_document(true_model_file())},
+                                {"name", "true_plant"}});
   const json none = run_and_wait("track", {{"compensator", "none"}, {"periods", 2}});
   ASSERT_EQ(none["end"], "completed") << none.dump(2);
   const json inv = run_and_wait("track", {{"compensator", "inverse"}, {"periods", 3}});
@@ -271,7 +273,7 @@ TEST_F(IndependentPeerTest, AFrozenRegisterFaultsTheWindowAfterTheOutputHasMoved
   // output has moved, plus the exchange's response latency (one tick; tens when the Python
   // server stalls on a loaded machine), never earlier.
   const auto f =
-      ht::find_frozen_reading(hdm::DataTable::read_csv(r["log"].get<std::string>()), 3.0);
+      ht::find_frozen_reading(cli::DataTable::read_csv(r["log"].get<std::string>()), 3.0);
   ASSERT_TRUE(f.output_moved());
   EXPECT_GE(f.fault_after_moved(), 20u);
   EXPECT_LE(f.fault_after_moved(), 20u + 50u);

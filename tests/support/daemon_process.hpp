@@ -55,9 +55,9 @@ class Daemon {
     for (int i = 0; i < 200 && pid_ > 0; ++i) {
       if (std::filesystem::exists(socket_)) {
         try {
-          daemon::BenchClient probe(socket_);
+          cli::BenchClient probe(socket_);
           return;
-        } catch (const daemon::ClientError&) {
+        } catch (const cli::ClientError&) {
         }
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(25));
@@ -138,7 +138,7 @@ class RawClient {
 };
 
 /// Waits for the run.finished event of `run_id` on `c`; its result, or null after `seconds`.
-inline nlohmann::json wait_finished(daemon::BenchClient& c, const std::string& run_id,
+inline nlohmann::json wait_finished(cli::BenchClient& c, const std::string& run_id,
                                     int seconds = 120) {
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
   while (std::chrono::steady_clock::now() < until) {

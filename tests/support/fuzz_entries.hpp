@@ -12,12 +12,13 @@
 #include <string>
 #include <string_view>
 
-#include "service/details/json_lines.hpp"
+#include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/model_file.hpp"
-#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/config/daemon_settings.hpp"
-#include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/daemon/service/bench.hpp"
+#include "service/details/json_lines.hpp"
 
 namespace hystbench::fuzz {
 
@@ -55,7 +56,7 @@ inline void request_line(const std::uint8_t* data, std::size_t size) {
       daemon::Reply reply;
       try {
         reply = daemon::Reply::success(bench->handle(request.cmd, request.params, client));
-      } catch (const daemon::CommandError& e) {
+      } catch (const common::CommandError& e) {
         reply = daemon::Reply::failure(e.code(), e.what(), e.detail());
       } catch (const std::exception& e) {
         reply = daemon::Reply::failure("internal", e.what());
@@ -99,14 +100,14 @@ inline void model_file_text(const std::uint8_t* data, std::size_t size) {
 inline bool csv_text(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
-    const auto table = daemon::DataTable::parse_csv(text, "fuzz.csv");
+    const auto table = cli::DataTable::parse_csv(text, "fuzz.csv");
     for (const auto& name : table.names()) (void)table.column(name);
     if (table.has("t")) {
       table.require_increasing("t");
       (void)table.sample_period();
     }
     return true;
-  } catch (const daemon::DataFileError&) {
+  } catch (const cli::DataFileError&) {
     return false;
   }
 }

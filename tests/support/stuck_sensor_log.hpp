@@ -17,7 +17,7 @@ struct FrozenReading {
   std::size_t fault_after_moved() const { return rows - 1 - moved; }
 };
 
-inline FrozenReading find_frozen_reading(const daemon::DataTable& log, double span_v) {
+inline FrozenReading find_frozen_reading(const cli::DataTable& log, double span_v) {
   const auto& y = log.column("y");
   const auto& u = log.column("u");
   FrozenReading f;

@@ -12,7 +12,7 @@
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/npy_file.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 namespace {
 
@@ -175,4 +175,4 @@ int run_convert(const ConvertCommand& cmd, std::ostream& out, std::ostream& err)
   }
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

@@ -12,7 +12,7 @@
 #include <string_view>
 #include <utility>
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 namespace {
 
@@ -503,4 +503,4 @@ void write_csv(const std::string& path, const std::vector<std::string>& names,
   if (std::fclose(f) != 0) throw DataFileError(path + ": write failed");
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

@@ -13,13 +13,13 @@
 #include <ostream>
 #include <sstream>
 
-#include "report/details/gnuplot.hpp"
-#include "hystbench/compensation/model_file.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
+#include "hystbench/compensation/model_file.hpp"
 #include "offline/details/mimo_commands.hpp"
+#include "report/details/gnuplot.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 namespace hc = compensation;
 using nlohmann::json;
@@ -435,7 +435,7 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
     std::string label;
     for (const std::string& path : cmd.data_paths) label += (label.empty() ? "" : " + ") + path;
     hc::DiagnosisOptions opt;
-    if (!cmd.model_path.empty()) opt.baseline = load_model_file(cmd.model_path).model;
+    if (!cmd.model_path.empty()) opt.baseline = common::load_model_file(cmd.model_path).model;
     opt.units = common_units(records, paths,
                              opt.baseline ? std::optional(opt.baseline->units) : std::nullopt);
     if (!cmd.json_output) {
@@ -462,12 +462,12 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
       }
     }
     if (!cmd.save_baseline.empty()) {
-      save_model_file(cmd.save_baseline,
-                      hc::ModelFile{d.baseline, identification_of(d, label, false)});
+      common::save_model_file(cmd.save_baseline,
+                              hc::ModelFile{d.baseline, identification_of(d, label, false)});
     }
     if (!cmd.save_extended.empty()) {
-      save_model_file(cmd.save_extended,
-                      hc::ModelFile{d.extended, identification_of(d, label, true)});
+      common::save_model_file(cmd.save_extended,
+                              hc::ModelFile{d.extended, identification_of(d, label, true)});
     }
     if (!cmd.report_dir.empty()) {
       // The records end to end, as the diagnosis saw them.
@@ -504,4 +504,4 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
   }
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

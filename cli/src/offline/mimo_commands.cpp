@@ -9,11 +9,11 @@
 #include <ostream>
 #include <sstream>
 
-#include "report/details/gnuplot.hpp"
-#include "hystbench/compensation/mimo_diagnosis.hpp"
 #include "hystbench/common/model_file_io.hpp"
+#include "hystbench/compensation/mimo_diagnosis.hpp"
+#include "report/details/gnuplot.hpp"
 
-namespace hystbench::daemon::details {
+namespace hystbench::cli::details {
 
 namespace hc = compensation;
 using nlohmann::json;
@@ -227,7 +227,7 @@ int run_fit_mimo(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
   file.outputs = channels(data.y_names, data.y_units, "um");
   file.identification = fitted;
   file.identification.update({{"data_file", cmd.data_path}, {"samples", data.rows}});
-  save_mimo_model_file(cmd.output_path, file);
+  common::save_mimo_model_file(cmd.output_path, file);
   const std::string y_unit = file.outputs.front().unit;
   if (cmd.json_output) {
     json result = fitted;
@@ -572,7 +572,7 @@ void save_every_input_model(const std::string& file_path, const hc::CouplingDiag
   file.outputs = channels(data.y_names, data.y_units, "um");
   file.identification = {
       {"data_file", path}, {"from", "diagnose: every input"}, {"order", d.extended_order}};
-  save_mimo_model_file(file_path, file);
+  common::save_mimo_model_file(file_path, file);
 }
 
 // The diagnosis as text: the record, then per output its errors from its own input and from
@@ -675,4 +675,4 @@ int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostrea
   return 0;
 }
 
-}  // namespace hystbench::daemon::details
+}  // namespace hystbench::cli::details

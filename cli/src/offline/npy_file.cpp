@@ -12,7 +12,7 @@
 
 #include "hystbench/cli/offline/data_table.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 namespace {
 
@@ -257,4 +257,4 @@ NpyArray read_npy(const std::string& path) {
   return array;
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

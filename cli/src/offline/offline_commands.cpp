@@ -8,13 +8,13 @@
 #include <ostream>
 #include <sstream>
 
-#include "hystbench/compensation/drive_planner.hpp"
-#include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/common/fit_families.hpp"
+#include "hystbench/compensation/drive_planner.hpp"
+#include "hystbench/compensation/inverse_model.hpp"
 #include "offline/details/mimo_commands.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 namespace hc = compensation;
 using nlohmann::json;
@@ -55,7 +55,7 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     const Record data = read_record(cmd.data_path, cmd.columns, true);
     hc::FitOptions opt;
     try {
-      opt.kind = parse_fit_family(cmd.model_name);
+      opt.kind = common::parse_fit_family(cmd.model_name);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(std::string("--model: ") + e.what());
     }
@@ -98,7 +98,7 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
                                 {"fit_samples", r.fit_samples},
                                 {"heldout_samples", r.heldout_samples},
                                 {"sample_period_s", data.sample_period_s}});
-    save_model_file(cmd.output_path, file);
+    common::save_model_file(cmd.output_path, file);
     const std::string type(hc::to_string(r.model.hysteresis().kind()));
     if (cmd.json_output) {
       json result = fitted;
@@ -120,13 +120,13 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
 
 int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& err) {
   return guarded(err, [&] {
-    if (const auto mimo = load_mimo_model_file(cmd.model_path)) {
+    if (const auto mimo = common::load_mimo_model_file(cmd.model_path)) {
       return details::run_simulate_mimo(cmd, *mimo, out, err);
     }
     if (cmd.skip_s) {
       throw std::invalid_argument("--skip: only for a model of several inputs (mimo_hammerstein)");
     }
-    hc::ModelFile file = load_model_file(cmd.model_path);
+    hc::ModelFile file = common::load_model_file(cmd.model_path);
     const Record data = read_record(cmd.data_path, cmd.columns, false);
     // The record's units, where it names them, must be the model's.
     const hc::Units units =
@@ -163,7 +163,7 @@ int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& er
 
 int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
   return guarded(err, [&] {
-    hc::ModelFile file = load_model_file(cmd.model_path);
+    hc::ModelFile file = common::load_model_file(cmd.model_path);
     // The reference goes through the record reader as its input column: same checks (finite,
     // t increasing, scale and rate valid), same messages naming file, column and line.
     if (!std::isfinite(cmd.yr_scale) || cmd.yr_scale == 0.0) {
@@ -228,4 +228,4 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
   });
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

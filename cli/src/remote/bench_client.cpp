@@ -8,7 +8,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 using nlohmann::json;
 
@@ -118,4 +118,4 @@ std::optional<json> BenchClient::next_event(std::chrono::milliseconds timeout) {
   }
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

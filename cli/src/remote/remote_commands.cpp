@@ -11,12 +11,12 @@
 #include <ostream>
 #include <sstream>
 
-#include "hystbench/cli/remote/bench_client.hpp"
-#include "hystbench/common/command_error.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/cli/remote/bench_client.hpp"
 #include "hystbench/cli/report/plot_command.hpp"
+#include "hystbench/common/command_error.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 using nlohmann::json;
 
@@ -285,7 +285,7 @@ json result_or_throw(const json& reply) {
   const std::string message = e.value("message", "?");
   e.erase("code");
   e.erase("message");
-  throw CommandError(code, message, e);
+  throw common::CommandError(code, message, e);
 }
 
 }  // namespace
@@ -337,7 +337,7 @@ json request_command(BenchClient& client, const RemoteCommand& cmd, bool tty, st
 }
 
 /// The daemon's refusal: as JSON, or as a message naming the first offending row of an upload.
-void report_refusal(const RemoteCommand& cmd, const CommandError& e, std::ostream& out,
+void report_refusal(const RemoteCommand& cmd, const common::CommandError& e, std::ostream& out,
                     std::ostream& err) {
   if (cmd.json_output) {
     json error = e.detail();
@@ -385,7 +385,7 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
     json reply;
     try {
       reply = request_command(client, cmd, tty, err);
-    } catch (const CommandError& e) {
+    } catch (const common::CommandError& e) {
       report_refusal(cmd, e, out, err);
       return 1;
     }
@@ -429,4 +429,4 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
   }
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

@@ -10,11 +10,11 @@
 #include <ostream>
 #include <sstream>
 
-#include "report/details/gnuplot.hpp"
 #include "hystbench/cli/remote/bench_client.hpp"
 #include "hystbench/cli/remote/remote_commands.hpp"
+#include "report/details/gnuplot.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 using nlohmann::json;
 
@@ -225,4 +225,4 @@ int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
   return status;
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

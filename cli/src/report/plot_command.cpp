@@ -8,10 +8,10 @@
 #include <ostream>
 #include <stdexcept>
 
-#include "report/details/gnuplot.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
+#include "report/details/gnuplot.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 namespace fs = std::filesystem;
 
@@ -197,4 +197,4 @@ int run_plot(const PlotCommand& cmd, std::ostream& out, std::ostream& err) {
   }
 }
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

@@ -252,7 +252,7 @@ void visit_limits(S& l, Visit&& visit) {
 /// The excitation's bounds depend on the limits, its top frequency on the loop rate.
 template <class S, class Visit>
 void visit_identify(S& id, Visit&& visit, const LoopSection& loop, const LimitsSection& limits) {
-  visit("model", id.model, fit_family_name_list());
+  visit("model", id.model, common::fit_family_name_list());
   visit("operators", id.operators, 0, 100);
   visit("dead_zones", id.dead_zones, -1, 50);
   visit("amplitude_v", id.amplitude_v, Bounds{0.0, limits.u_max - limits.u_min, true});

@@ -7,14 +7,14 @@
 #include <filesystem>
 #include <optional>
 
+#include "hystbench/common/fit_families.hpp"
+#include "hystbench/common/model_file_io.hpp"
 #include "hystbench/compensation/diagnosis.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
-#include "hystbench/common/fit_families.hpp"
 #include "hystbench/daemon/runs/identification_fit.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
-#include "hystbench/common/model_file_io.hpp"
 #include "runs/details/identify_session.hpp"
 #include "runs/details/run_result.hpp"
 
@@ -182,7 +182,7 @@ json identify_history_json(const json& fit_request) {
 hc::FitOptions identify_fit_options(const json& fit_request, const BenchSettings& settings,
                                     std::size_t block) {
   hc::FitOptions opt;
-  opt.kind = parse_fit_family(fit_request.value("model", ""));
+  opt.kind = common::parse_fit_family(fit_request.value("model", ""));
   opt.operators = fit_request.value("operators", 0);
   opt.dead_zones = fit_request.value("dead_zones", -1);
   opt.heldout_fraction = settings.identify.heldout_fraction;
@@ -376,7 +376,7 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
   if (options.kind) {
     kinds = {*options.kind};
   } else {
-    kinds.assign(fit_families().begin(), fit_families().end());
+    kinds.assign(common::fit_families().begin(), common::fit_families().end());
   }
   std::vector<IdentifyCandidate> out;
   std::string errors;
@@ -589,7 +589,7 @@ bool Bench::verify_next_candidate() {
                    {"model", hc::to_json(hc::ModelFile{c.fit.model, json::object()})}};
     try {
       open_log(*p, header);
-    } catch (const CommandError& e) {
+    } catch (const common::CommandError& e) {
       slot = {{"end", "not_run"}, {"reason", e.what()}};
       s.interrupted = true;
       return false;
@@ -779,7 +779,7 @@ void Bench::finish_identify() {
     const std::string path = (std::filesystem::path(settings_.model_dir) /
                               (result["run_id"].get<std::string>() + ".json"))
                                  .string();
-    save_model_file(path, file);
+    common::save_model_file(path, file);
     result["model"] = fit_description(fit, s.history, chosen_by, s.extension);
     result["model"].update({{"path", path}, {"type", type_name(fit)}});
     if (s.rate_free) result["model"]["rate_law"] = rate_law;

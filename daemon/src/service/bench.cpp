@@ -8,15 +8,15 @@
 #include <filesystem>
 #include <fstream>
 
-#include "service/details/command_table.hpp"
 #include "runs/details/excite_program.hpp"
 #include "runs/details/identify_program.hpp"
 #include "runs/details/identify_session.hpp"
 #include "runs/details/learned_drive.hpp"
-#include "service/details/model_folder.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/run_result.hpp"
 #include "runs/details/track_program.hpp"
+#include "service/details/command_table.hpp"
+#include "service/details/model_folder.hpp"
 
 namespace hystbench::daemon {
 
@@ -168,7 +168,7 @@ void Bench::open_log(RunProgram& p, json header) {
   try {
     p.log = std::make_unique<SampleLogWriter>(std::move(opt));
   } catch (const std::exception& e) {
-    throw CommandError("log_error", std::string("cannot open the run log: ") + e.what());
+    throw common::CommandError("log_error", std::string("cannot open the run log: ") + e.what());
   }
 }
 
@@ -186,7 +186,7 @@ json Bench::stop_run() {
       return {{"stopping", true}};
     }
     // A run submitted but not yet picked up by the loop counts as active.
-    if (phase_ != RunPhase::kRunning) throw CommandError("no_run", "no run is active");
+    if (phase_ != RunPhase::kRunning) throw common::CommandError("no_run", "no run is active");
   }
   loop_->request_stop();
   return {{"stopping", true}};
@@ -206,14 +206,15 @@ json Bench::abort_run() {
 json Bench::reset() {
   const bool was_fault = loop_->state() == BenchLoop::State::kFault;
   if (was_fault && !loop_->reset_fault()) {
-    throw CommandError("reset_failed", "the loop did not leave FAULT");
+    throw common::CommandError("reset_failed", "the loop did not leave FAULT");
   }
   return {{"was_fault", was_fault}, {"state", state_name(loop_->state())}};
 }
 
 json Bench::model_get() const {
   std::lock_guard lock(mutex_);
-  if (!model_) throw CommandError("no_model", "no active model (identify or model.load first)");
+  if (!model_)
+    throw common::CommandError("no_model", "no active model (identify or model.load first)");
   return {{"path", model_path_}, {"model", hc::to_json(*model_)}};
 }
 
@@ -258,14 +259,14 @@ nlohmann::json Bench::load_model(const details::Request& request) {
   const bool stored = request.has("stored");
   const bool document = request.has("model");
   if (stored == document) {
-    throw CommandError("bad_params",
-                       "give either 'model' (the model document) or 'stored' (a name from "
-                       "model.list)");
+    throw common::CommandError("bad_params",
+                               "give either 'model' (the model document) or 'stored' (a name from "
+                               "model.list)");
   }
   // Checked first: a refused request changes nothing (an upload is not kept either).
   std::lock_guard lock(mutex_);
   if (phase_ != RunPhase::kIdle) {
-    throw CommandError("busy", "a run is active; load the model after it");
+    throw common::CommandError("busy", "a run is active; load the model after it");
   }
   details::FolderModel m =
       stored ? details::load_stored_model(settings_.model_dir, request.string("stored", ""))
@@ -295,10 +296,10 @@ nlohmann::json Bench::delete_model(const details::Request& request) {
 
 void Bench::require_idle() const {
   if (loop_->state() == BenchLoop::State::kFault) {
-    throw CommandError("fault", std::string("the bench is in FAULT (") + loop_->fault_reason() +
-                                    "); send reset first");
+    throw common::CommandError("fault", std::string("the bench is in FAULT (") +
+                                            loop_->fault_reason() + "); send reset first");
   }
-  if (phase_ != RunPhase::kIdle) throw CommandError("busy", "a run is active");
+  if (phase_ != RunPhase::kIdle) throw common::CommandError("busy", "a run is active");
 }
 
 Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json& header) {
@@ -306,7 +307,7 @@ Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json&
   SubmittedRun s{p->run_id, p->log->path().string(), p->total_samples};
   if (auto refused = loop_->submit(std::move(p))) {
     refused->log->close();
-    throw CommandError("busy", "the loop did not accept the run");
+    throw common::CommandError("busy", "the loop did not accept the run");
   }
   return s;
 }
@@ -363,7 +364,8 @@ json Bench::start_identify(const details::Request& request) {
 
 json Bench::start_excite(const details::Request& request, std::uint64_t client) {
   if (!request.has("drive_upload")) {
-    throw CommandError("bad_params", "drive_upload: missing (the name of a complete drive upload)");
+    throw common::CommandError("bad_params",
+                               "drive_upload: missing (the name of a complete drive upload)");
   }
   const std::string upload_name = request.string("drive_upload", "");
   std::lock_guard lock(mutex_);

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "service/details/request_params.hpp"
 #include "hystbench/common/command_error.hpp"
+#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon {
 
@@ -62,9 +62,10 @@ UploadKind kind_param(const json& params) {
   const std::string kind = details::string_param(params, "kind", "");
   if (kind == "reference") return UploadKind::kReference;
   if (kind == "drive") return UploadKind::kDrive;
-  throw CommandError("bad_params",
-                     "kind: must be \"reference\" (um against time, for track) or \"drive\" (V "
-                     "against time, for excite)");
+  throw common::CommandError(
+      "bad_params",
+      "kind: must be \"reference\" (um against time, for track) or \"drive\" (V "
+      "against time, for excite)");
 }
 
 bool valid_name(const std::string& name) {
@@ -77,18 +78,19 @@ bool valid_name(const std::string& name) {
 /// A JSON array of finite numbers; `what` names it in errors.
 std::vector<double> numbers(const json& params, const char* key, std::size_t offset) {
   if (!params.contains(key)) {
-    throw CommandError("bad_params", std::string(key) + ": missing (an array of numbers)");
+    throw common::CommandError("bad_params", std::string(key) + ": missing (an array of numbers)");
   }
   const json& a = params[key];
-  if (!a.is_array()) throw CommandError("bad_params", std::string(key) + ": must be an array");
+  if (!a.is_array())
+    throw common::CommandError("bad_params", std::string(key) + ": must be an array");
   std::vector<double> out;
   out.reserve(a.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (!a[i].is_number() || !std::isfinite(a[i].get<double>())) {
-      throw CommandError("bad_params",
-                         std::string(key) + "[" + std::to_string(i) + "] (sample " +
-                             std::to_string(offset + i) + "): must be a finite number",
-                         {{"sample", offset + i}});
+      throw common::CommandError("bad_params",
+                                 std::string(key) + "[" + std::to_string(i) + "] (sample " +
+                                     std::to_string(offset + i) + "): must be a finite number",
+                                 {{"sample", offset + i}});
     }
     out.push_back(a[i].get<double>());
   }
@@ -101,21 +103,22 @@ json UploadStore::begin(const json& params, std::uint64_t client) {
   details::check_keys(params, {"kind", "samples", "rate_hz", "upload", "source"});
   const UploadKind kind = kind_param(params);
   if (!params.contains("samples")) {
-    throw CommandError("bad_params", "samples: missing (the number of samples to upload)");
+    throw common::CommandError("bad_params", "samples: missing (the number of samples to upload)");
   }
   const auto samples = static_cast<std::size_t>(
       details::integer_param(params, "samples", 0, 0, std::numeric_limits<long long>::max()));
-  if (samples < 2) throw CommandError("bad_params", "samples: at least 2 are needed");
+  if (samples < 2) throw common::CommandError("bad_params", "samples: at least 2 are needed");
   if (samples > limits_.max_samples) {
-    throw CommandError("upload_too_large", std::to_string(samples) +
-                                               " samples: an upload holds at most " +
-                                               std::to_string(limits_.max_samples) + " samples");
+    throw common::CommandError("upload_too_large",
+                               std::to_string(samples) + " samples: an upload holds at most " +
+                                   std::to_string(limits_.max_samples) + " samples");
   }
   const double rate = details::number_param(params, "rate_hz", 0.0, 1e-6, 1e9);
   std::string name = details::string_param(params, "upload", "");
   if (params.contains("upload") && !valid_name(name)) {
-    throw CommandError("bad_params", "upload: 1 to 64 letters, digits, '-', '_' or '.' (got '" +
-                                         name.substr(0, 64) + "')");
+    throw common::CommandError(
+        "bad_params",
+        "upload: 1 to 64 letters, digits, '-', '_' or '.' (got '" + name.substr(0, 64) + "')");
   }
   std::string source = details::string_param(params, "source", "");
   if (source.size() > 256) source.resize(256);
@@ -123,9 +126,10 @@ json UploadStore::begin(const json& params, std::uint64_t client) {
   std::lock_guard lock(mutex_);
   if (name.empty()) name = "upload-" + std::to_string(++counter_);
   if (uploads_.size() >= limits_.max_open && uploads_.count({client, name}) == 0) {
-    throw CommandError("too_many_uploads", "at most " + std::to_string(limits_.max_open) +
-                                               " uploads may be open at once; cancel one or "
-                                               "start the run that uses it");
+    throw common::CommandError("too_many_uploads",
+                               "at most " + std::to_string(limits_.max_open) +
+                                   " uploads may be open at once; cancel one or "
+                                   "start the run that uses it");
   }
   auto u = std::make_shared<Upload>();
   u->name = name;
@@ -149,60 +153,62 @@ json UploadStore::begin(const json& params, std::uint64_t client) {
 json UploadStore::chunk(const json& params, std::uint64_t client) {
   details::check_keys(params, {"upload", "offset", "values", "t"});
   const std::string name = details::string_param(params, "upload", "");
-  if (!params.contains("offset")) throw CommandError("bad_params", "offset: missing");
+  if (!params.contains("offset")) throw common::CommandError("bad_params", "offset: missing");
   const auto offset = static_cast<std::size_t>(
       details::integer_param(params, "offset", 0, 0, std::numeric_limits<long long>::max()));
   const std::vector<double> values = numbers(params, "values", offset);
-  if (values.empty()) throw CommandError("bad_params", "values: empty chunk");
+  if (values.empty()) throw common::CommandError("bad_params", "values: empty chunk");
   if (values.size() > limits_.max_chunk_samples) {
-    throw CommandError("upload_too_large", std::to_string(values.size()) +
-                                               " values in one chunk: at most " +
-                                               std::to_string(limits_.max_chunk_samples));
+    throw common::CommandError("upload_too_large", std::to_string(values.size()) +
+                                                       " values in one chunk: at most " +
+                                                       std::to_string(limits_.max_chunk_samples));
   }
 
   std::lock_guard lock(mutex_);
   const auto it = uploads_.find({client, name});
   if (it == uploads_.end()) {
-    throw CommandError("upload_unknown",
-                       "no upload '" + name + "' on this connection (upload.begin first)");
+    throw common::CommandError("upload_unknown",
+                               "no upload '" + name + "' on this connection (upload.begin first)");
   }
   Upload& u = *it->second;
   std::vector<double> t;
   if (u.rate_hz > 0.0) {
     if (params.contains("t")) {
-      throw CommandError("bad_params", "t: this upload is sampled at rate_hz; send values only");
+      throw common::CommandError("bad_params",
+                                 "t: this upload is sampled at rate_hz; send values only");
     }
   } else {
     t = numbers(params, "t", offset);
     if (t.size() != values.size()) {
-      throw CommandError("bad_params", "t and values: " + std::to_string(t.size()) + " and " +
-                                           std::to_string(values.size()) +
-                                           " entries; one time per value");
+      throw common::CommandError("bad_params", "t and values: " + std::to_string(t.size()) +
+                                                   " and " + std::to_string(values.size()) +
+                                                   " entries; one time per value");
     }
   }
   if (offset != u.values.size()) {
-    throw CommandError("bad_params", "offset: " + std::to_string(offset) + ", expected " +
-                                         std::to_string(u.values.size()) +
-                                         " (chunks in order, none repeated)");
+    throw common::CommandError("bad_params", "offset: " + std::to_string(offset) + ", expected " +
+                                                 std::to_string(u.values.size()) +
+                                                 " (chunks in order, none repeated)");
   }
   if (offset + values.size() > u.samples) {
-    throw CommandError("upload_too_large", "upload '" + name + "' declared " +
-                                               std::to_string(u.samples) +
-                                               " samples; this chunk would make " +
-                                               std::to_string(offset + values.size()));
+    throw common::CommandError("upload_too_large", "upload '" + name + "' declared " +
+                                                       std::to_string(u.samples) +
+                                                       " samples; this chunk would make " +
+                                                       std::to_string(offset + values.size()));
   }
   if (staged_ + values.size() > limits_.max_staged_samples) {
-    throw CommandError("upload_too_large",
-                       "the daemon holds at most " + std::to_string(limits_.max_staged_samples) +
-                           " uploaded samples at once; cancel an upload or start its run");
+    throw common::CommandError("upload_too_large",
+                               "the daemon holds at most " +
+                                   std::to_string(limits_.max_staged_samples) +
+                                   " uploaded samples at once; cancel an upload or start its run");
   }
   for (std::size_t i = 0; i < t.size(); ++i) {
     const double before = i > 0 ? t[i - 1] : (u.t.empty() ? -HUGE_VAL : u.t.back());
     if (!(t[i] > before)) {
-      throw CommandError("bad_params",
-                         "t[" + std::to_string(i) + "] (sample " + std::to_string(offset + i) +
-                             "): times must increase strictly",
-                         {{"sample", offset + i}});
+      throw common::CommandError("bad_params",
+                                 "t[" + std::to_string(i) + "] (sample " +
+                                     std::to_string(offset + i) + "): times must increase strictly",
+                                 {{"sample", offset + i}});
     }
   }
   u.t.insert(u.t.end(), t.begin(), t.end());
@@ -220,7 +226,7 @@ json UploadStore::cancel(const json& params, std::uint64_t client) {
   std::lock_guard lock(mutex_);
   const auto it = uploads_.find({client, name});
   if (it == uploads_.end()) {
-    throw CommandError("upload_unknown", "no upload '" + name + "' on this connection");
+    throw common::CommandError("upload_unknown", "no upload '" + name + "' on this connection");
   }
   staged_ -= it->second->values.size();
   uploads_.erase(it);
@@ -232,18 +238,18 @@ std::shared_ptr<const Upload> UploadStore::complete(const std::string& name, std
   std::lock_guard lock(mutex_);
   const auto it = uploads_.find({client, name});
   if (it == uploads_.end()) {
-    throw CommandError("upload_unknown",
-                       "no upload '" + name + "' on this connection (upload.begin first)");
+    throw common::CommandError("upload_unknown",
+                               "no upload '" + name + "' on this connection (upload.begin first)");
   }
   const Upload& u = *it->second;
   if (u.kind != kind) {
-    throw CommandError("bad_params", "upload '" + name + "' is a " + to_string(u.kind) +
-                                         ", this run needs a " + to_string(kind));
+    throw common::CommandError("bad_params", "upload '" + name + "' is a " + to_string(u.kind) +
+                                                 ", this run needs a " + to_string(kind));
   }
   if (!u.complete()) {
-    throw CommandError("upload_incomplete", "upload '" + name + "' has " +
-                                                std::to_string(u.values.size()) + " of " +
-                                                std::to_string(u.samples) + " samples");
+    throw common::CommandError("upload_incomplete", "upload '" + name + "' has " +
+                                                        std::to_string(u.values.size()) + " of " +
+                                                        std::to_string(u.samples) + " samples");
   }
   return it->second;
 }

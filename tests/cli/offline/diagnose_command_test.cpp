@@ -25,6 +25,7 @@
 #include "support/temp_dir_test.hpp"
 
 namespace hc = hystbench::compensation;
+namespace cli = hystbench::cli;
 namespace hd = hystbench::daemon;
 namespace hs = hystbench::sim;
 namespace fs = std::filesystem;
@@ -59,7 +60,7 @@ class DiagnoseCommandTest : public hystbench::test::TempDirTest {
   DiagnoseCommandTest() : TempDirTest("hystbench_diagnose_test") {}
 
   std::string write_record(const std::string& name, const Record& r) const {
-    hd::write_csv(path(name), {"t", "u", "y"}, {&r.t, &r.u, &r.y});
+    cli::write_csv(path(name), {"t", "u", "y"}, {&r.t, &r.u, &r.y});
     return path(name);
   }
 
@@ -69,9 +70,9 @@ class DiagnoseCommandTest : public hystbench::test::TempDirTest {
   }
 
   // Runs the command; returns the exit code, output in out_ / err_.
-  int run(const hd::DiagnoseCommand& cmd) {
+  int run(const cli::DiagnoseCommand& cmd) {
     std::ostringstream out, err;
-    const int code = hd::run_diagnose(cmd, out, err);
+    const int code = cli::run_diagnose(cmd, out, err);
     out_ = out.str();
     err_ = err.str();
     return code;
@@ -81,9 +82,9 @@ class DiagnoseCommandTest : public hystbench::test::TempDirTest {
 };
 
 // `diagnose DATA` of a file without a time column (t = row / rate_hz), output scaled by y_scale.
-hd::DiagnoseCommand command_for(const std::string& data, const std::string& u, const std::string& y,
-                                double y_scale, double rate_hz) {
-  hd::DiagnoseCommand cmd;
+cli::DiagnoseCommand command_for(const std::string& data, const std::string& u,
+                                 const std::string& y, double y_scale, double rate_hz) {
+  cli::DiagnoseCommand cmd;
   cmd.data_paths = {data};
   cmd.columns.u = u;
   cmd.columns.y = y;
@@ -94,9 +95,9 @@ hd::DiagnoseCommand command_for(const std::string& data, const std::string& u, c
 
 double rms_of_simulation(const std::string& model, const std::string& data,
                          const std::string& output) {
-  hd::SimulateCommand sim{model, data, output, true, {}, {}};
+  cli::SimulateCommand sim{model, data, output, true, {}, {}};
   std::ostringstream out, err;
-  EXPECT_EQ(hd::run_simulate(sim, out, err), 0) << err.str();
+  EXPECT_EQ(cli::run_simulate(sim, out, err), 0) << err.str();
   return json::parse(out.str()).at("rmse").get<double>();
 }
 
@@ -111,7 +112,7 @@ TEST_F(DiagnoseCommandTest, JsonNamesTheHiddenEffectAndSavedModelsPredictAnother
   const std::string data = write_record("first.csv", simulate(config, 1e-3, first, 11));
   const std::string other = write_record("second.csv", simulate(config, 1e-3, second, 12));
 
-  hd::DiagnoseCommand cmd;
+  cli::DiagnoseCommand cmd;
   cmd.data_paths = {data};
   cmd.json_output = true;
   cmd.save_baseline = path("baseline.json");
@@ -141,13 +142,13 @@ TEST_F(DiagnoseCommandTest, JsonNamesTheHiddenEffectAndSavedModelsPredictAnother
   const double base_other = rms_of_simulation(cmd.save_baseline, other, path("b.csv"));
   const double ext_other = rms_of_simulation(cmd.save_extended, other, path("e.csv"));
   EXPECT_LT(ext_other, 0.6 * base_other);
-  const hd::DataTable second_record = hd::DataTable::read_csv(other);
+  const cli::DataTable second_record = cli::DataTable::read_csv(other);
   const auto& t = second_record.column("t");
   const auto& y = second_record.column("y");
-  hd::write_csv(path("reference.csv"), {"t", "yr"}, {&t, &y});
-  hd::InvertCommand inv{cmd.save_extended, path("reference.csv"), path("drive.csv"), "auto", true};
+  cli::write_csv(path("reference.csv"), {"t", "yr"}, {&t, &y});
+  cli::InvertCommand inv{cmd.save_extended, path("reference.csv"), path("drive.csv"), "auto", true};
   std::ostringstream out, err;
-  EXPECT_EQ(hd::run_invert(inv, out, err), 0) << err.str();
+  EXPECT_EQ(cli::run_invert(inv, out, err), 0) << err.str();
 }
 
 // Creep and an input delay hidden at once on the symmetric PI: both are named, ranked by their
@@ -159,7 +160,7 @@ TEST(DiagnoseCommandCauses, NamesEveryCauseRankedByGain) {
   both.delay.delay_s = 3e-3;
   const Record r = simulate(both, 1e-3, {}, 41);
   const hc::Diagnosis d = hc::diagnose(r.t, r.u, r.y);
-  const json j = hd::diagnosis_to_json(d, "both.csv");
+  const json j = cli::diagnosis_to_json(d, "both.csv");
   SCOPED_TRACE(j.at("verdict").dump() + "\n" + j.at("candidates").dump());
   const json& causes = j.at("causes");
   ASSERT_EQ(causes.size(), 2u);
@@ -180,7 +181,7 @@ TEST(DiagnoseCommandCauses, NamesEveryCauseRankedByGain) {
     EXPECT_EQ(c.at("not_named").get<std::string>().empty(), listed) << c.dump();
   }
   std::ostringstream text;
-  hd::print_diagnosis(text, d, "both.csv");
+  cli::print_diagnosis(text, d, "both.csv");
   const std::string first = "named     1. " + causes[0].at("cause").get<std::string>();
   const std::string second = "named     2. " + causes[1].at("cause").get<std::string>();
   ASSERT_NE(text.str().find(first), std::string::npos) << text.str();
@@ -189,7 +190,7 @@ TEST(DiagnoseCommandCauses, NamesEveryCauseRankedByGain) {
 
   const Record creep = simulate(creep_actuator(), 1e-3, {}, 41);
   const hc::Diagnosis one = hc::diagnose(creep.t, creep.u, creep.y);
-  ASSERT_EQ(one.causes.size(), 1u) << hd::diagnosis_to_json(one, "creep.csv").at("candidates");
+  ASSERT_EQ(one.causes.size(), 1u) << cli::diagnosis_to_json(one, "creep.csv").at("candidates");
   EXPECT_EQ(one.causes[0].cause, hc::Cause::kCreep);
   EXPECT_EQ(one.cause, hc::Cause::kCreep);
 }
@@ -216,7 +217,7 @@ TEST_F(DiagnoseCommandTest, ReadsABenchRunLogAndTakesAGivenModelAsBaseline) {
     log = writer.path().string();
   }
   // First without a model (saving the PI it identifies), then with that model as the baseline.
-  hd::DiagnoseCommand cmd;
+  cli::DiagnoseCommand cmd;
   cmd.data_paths = {log};
   cmd.save_baseline = path("pi.json");
   ASSERT_EQ(run(cmd), 0) << err_;
@@ -235,7 +236,7 @@ TEST_F(DiagnoseCommandTest, ReportFolderHasTheTextTheJsonAndThePlots) {
   if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
     GTEST_SKIP() << "gnuplot is not installed";
   }
-  hd::DiagnoseCommand cmd;
+  cli::DiagnoseCommand cmd;
   cmd.data_paths = {write_record("run.csv", simulate(creep_actuator(), 2e-3, {}, 31))};
   cmd.report_dir = path("report");
   ASSERT_EQ(run(cmd), 0) << err_;
@@ -256,8 +257,8 @@ TEST_F(DiagnoseCommandTest, ReportFolderHasTheTextTheJsonAndThePlots) {
 // overrides the header, and a given model in other units than the record's is refused.
 TEST_F(DiagnoseCommandTest, UnitsComeFromTheRecordsHeaderOrTheOptions) {
   const Record r = simulate(creep_actuator(), 2e-3, {}, 51);
-  hd::write_csv(path("damper.csv"), {"t [s]", "F [N]", "x [mm]"}, {&r.t, &r.u, &r.y});
-  hd::DiagnoseCommand cmd;
+  cli::write_csv(path("damper.csv"), {"t [s]", "F [N]", "x [mm]"}, {&r.t, &r.u, &r.y});
+  cli::DiagnoseCommand cmd;
   cmd.data_paths = {path("damper.csv")};
   cmd.columns.u = "F";
   cmd.columns.y = "x";
@@ -266,7 +267,7 @@ TEST_F(DiagnoseCommandTest, UnitsComeFromTheRecordsHeaderOrTheOptions) {
   EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bum\b)"))) << out_;
   EXPECT_NE(out_.find("u in N, y in mm"), std::string::npos) << out_;
   EXPECT_TRUE(std::regex_search(out_, std::regex(R"(held-out rms [0-9.e+-]+ mm)"))) << out_;
-  const hc::ModelFile extended = hd::load_model_file(cmd.save_extended);
+  const hc::ModelFile extended = hystbench::common::load_model_file(cmd.save_extended);
   EXPECT_EQ(extended.model.units.input, "N");
   EXPECT_EQ(extended.model.units.output, "mm");
 
@@ -291,7 +292,7 @@ TEST_F(DiagnoseCommandTest, BadInputGivesAClearError) {
                 "," + (k == 17 ? std::string("nan") : std::to_string(0.3 * (50 + k % 7))) + "\n";
   }
   auto error_of = [&](const std::string& text) {
-    hd::DiagnoseCommand cmd;
+    cli::DiagnoseCommand cmd;
     cmd.data_paths = {write_text("bad.csv", text)};
     EXPECT_EQ(run(cmd), 1);
     return err_;
@@ -323,7 +324,7 @@ TEST_F(DiagnoseCommandTest, MeasuredPiezoRecords) {
   // displacement [um]; 200 Hz, no time column.
   const std::string identification = (folder / "Model_Vi_Do.dat").string();
   const std::string tracking = (folder / "Test_Vi_Do_Di.dat").string();
-  hd::DiagnoseCommand cmd = command_for(identification, "1", "5", 1.0, 200.0);
+  cli::DiagnoseCommand cmd = command_for(identification, "1", "5", 1.0, 200.0);
   cmd.json_output = true;
   ASSERT_EQ(run(cmd), 0) << err_;
   const json id = json::parse(out_);
@@ -336,12 +337,12 @@ TEST_F(DiagnoseCommandTest, MeasuredPiezoRecords) {
   }
   EXPECT_LE(id.at("extended").at("rmse").get<double>(), id.at("baseline").at("rmse").get<double>());
 
-  hd::FitCommand fit;
+  cli::FitCommand fit;
   fit.data_path = identification;
   fit.columns = cmd.columns;
   fit.output_path = path("identified.json");
   std::ostringstream fout, ferr;
-  ASSERT_EQ(hd::run_fit(fit, fout, ferr), 0) << ferr.str();
+  ASSERT_EQ(cli::run_fit(fit, fout, ferr), 0) << ferr.str();
   cmd.data_paths = {tracking};
   cmd.model_path = fit.output_path;
   ASSERT_EQ(run(cmd), 0) << err_;
@@ -384,7 +385,7 @@ TEST_F(DiagnoseCommandTest, MeasuredFineSteeringMirrorChannelDrivenByThreeInputs
   // README: k (t = k / 6400 s), u1_V..u3_V [V], y1_m..y3_m [m]; a random-phase multisine of
   // 8192 samples played twice on all three actuators at once. Output 1 against input 1, read
   // straight from the file through the column options.
-  hd::DiagnoseCommand cmd = command_for(csv.string(), "u1_V", "y1_m", 1e6, 6400.0);
+  cli::DiagnoseCommand cmd = command_for(csv.string(), "u1_V", "y1_m", 1e6, 6400.0);
   cmd.json_output = true;
   ASSERT_EQ(run(cmd), 0) << err_;
   const json d = json::parse(out_);
@@ -413,7 +414,7 @@ TEST_F(DiagnoseCommandTest, ForceDisplacementRecordInItsOwnUnits) {
     GTEST_SKIP() << "shared data set boucwen-benchmark not found under "
                  << HYSTBENCH_SHARED_DATA_DIR;
   }
-  hd::DiagnoseCommand cmd = command_for(csv.string(), "u_N", "y_m", 1e3, 750.0);
+  cli::DiagnoseCommand cmd = command_for(csv.string(), "u_N", "y_m", 1e3, 750.0);
   ASSERT_EQ(run(cmd), 0) << err_;
   EXPECT_NE(out_.find("u in N, y in mm"), std::string::npos) << out_;
   EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bum\b)"))) << out_;
@@ -448,7 +449,7 @@ TEST_F(DiagnoseCommandTest, SeveralRecordsAndAValidationRecord) {
     }
     return write_record("run_" + std::to_string(static_cast<int>(frequency_hz)) + "hz.csv", r);
   };
-  hd::DiagnoseCommand cmd;
+  cli::DiagnoseCommand cmd;
   cmd.data_paths = {sine_run(1.0, 1), sine_run(3.0, 2), sine_run(8.0, 3)};
   cmd.validate_paths = {sine_run(5.0, 4)};
   cmd.json_output = true;

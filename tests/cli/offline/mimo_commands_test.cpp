@@ -11,13 +11,13 @@
 #include <random>
 #include <sstream>
 
-#include "hystbench/compensation/hammerstein_mimo_model.hpp"
 #include "hystbench/cli/offline/convert_command.hpp"
 #include "hystbench/cli/offline/diagnose_command.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
+#include "hystbench/compensation/hammerstein_mimo_model.hpp"
 
 namespace hc = hystbench::compensation;
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -93,8 +93,8 @@ class MimoCommandsTest : public ::testing::Test {
     }
   }
 
-  hd::FitCommand fit_command(const std::string& data, const std::string& model) const {
-    hd::FitCommand fit;
+  cli::FitCommand fit_command(const std::string& data, const std::string& model) const {
+    cli::FitCommand fit;
     fit.data_path = data;
     fit.output_path = model;
     fit.columns.u = "u1_V,u2_V";
@@ -104,8 +104,8 @@ class MimoCommandsTest : public ::testing::Test {
     return fit;
   }
 
-  hd::SimulateCommand simulate_command(const std::string& model, const std::string& data) const {
-    hd::SimulateCommand sim;
+  cli::SimulateCommand simulate_command(const std::string& model, const std::string& data) const {
+    cli::SimulateCommand sim;
     sim.model_path = model;
     sim.data_path = data;
     sim.output_path = path("simulated.csv");
@@ -126,7 +126,7 @@ TEST_F(MimoCommandsTest, ACoupledSystemIsFittedAndPredictsARecordItDidNotSee) {
   json fit;
   ASSERT_EQ(run(
                 [&](auto& o, auto& e) {
-                  return hd::run_fit(fit_command(path("train.csv"), path("m.json")), o, e);
+                  return cli::run_fit(fit_command(path("train.csv"), path("m.json")), o, e);
                 },
                 &fit),
             0)
@@ -146,10 +146,10 @@ TEST_F(MimoCommandsTest, ACoupledSystemIsFittedAndPredictsARecordItDidNotSee) {
     EXPECT_GT(row[1].get<double>(), 0.05);
   }
   // Another record: simulated from rest with the model's own columns, the transient skipped.
-  hd::SimulateCommand sim = simulate_command(path("m.json"), path("test.csv"));
+  cli::SimulateCommand sim = simulate_command(path("m.json"), path("test.csv"));
   sim.skip_s = 0.1;
   json r;
-  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_simulate(sim, o, e); }, &r), 0) << err_;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return cli::run_simulate(sim, o, e); }, &r), 0) << err_;
   EXPECT_EQ(r["realizations"], 2);
   EXPECT_EQ(r["skip_samples"], 500);
   EXPECT_EQ(r["scored_samples"], 2 * (2048 - 500));
@@ -165,19 +165,19 @@ TEST_F(MimoCommandsTest, ACoupledSystemIsFittedAndPredictsARecordItDidNotSee) {
 TEST_F(MimoCommandsTest, RefusalsNameTheCause) {
   write_coupled_record(path("train.csv"), 2, 1, 256);
   ASSERT_EQ(run([&](auto& o, auto& e) {
-              return hd::run_fit(fit_command(path("train.csv"), path("m.json")), o, e);
+              return cli::run_fit(fit_command(path("train.csv"), path("m.json")), o, e);
             }),
             0)
       << err_;
   // The output in m where the model's is in um: the scale is named.
-  hd::SimulateCommand sim = simulate_command(path("m.json"), path("train.csv"));
+  cli::SimulateCommand sim = simulate_command(path("m.json"), path("train.csv"));
   sim.columns.y_scale = 1.0;
-  EXPECT_EQ(run([&](auto& o, auto& e) { return hd::run_simulate(sim, o, e); }), 1);
+  EXPECT_EQ(run([&](auto& o, auto& e) { return cli::run_simulate(sim, o, e); }), 1);
   EXPECT_NE(err_.find("--y-scale"), std::string::npos) << err_;
   // Another sample rate: the dynamics hold at their own.
   sim = simulate_command(path("m.json"), path("train.csv"));
   sim.columns.rate_hz = 1000.0;
-  EXPECT_EQ(run([&](auto& o, auto& e) { return hd::run_simulate(sim, o, e); }), 1);
+  EXPECT_EQ(run([&](auto& o, auto& e) { return cli::run_simulate(sim, o, e); }), 1);
   EXPECT_NE(err_.find("5000 Hz only"), std::string::npos) << err_;
   // A ragged period: the row is named.
   {
@@ -190,31 +190,31 @@ TEST_F(MimoCommandsTest, RefusalsNameTheCause) {
     }
   }
   EXPECT_EQ(run([&](auto& o, auto& e) {
-              return hd::run_fit(fit_command(path("ragged.csv"), path("r.json")), o, e);
+              return cli::run_fit(fit_command(path("ragged.csv"), path("r.json")), o, e);
             }),
             1);
   EXPECT_NE(err_.find("every period needs the same length"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(path("r.json")));
   // A family of one input with several columns.
-  hd::FitCommand pi = fit_command(path("train.csv"), path("p.json"));
+  cli::FitCommand pi = fit_command(path("train.csv"), path("p.json"));
   pi.model_name = "pi";
-  EXPECT_EQ(run([&](auto& o, auto& e) { return hd::run_fit(pi, o, e); }), 1);
+  EXPECT_EQ(run([&](auto& o, auto& e) { return cli::run_fit(pi, o, e); }), 1);
   EXPECT_NE(err_.find("--model hammerstein"), std::string::npos) << err_;
   // --skip means nothing to a model of one input.
-  hd::SimulateCommand siso = simulate_command(path("m.json"), path("train.csv"));
-  hd::FitCommand one = fit_command(path("train.csv"), path("one.json"));
+  cli::SimulateCommand siso = simulate_command(path("m.json"), path("train.csv"));
+  cli::FitCommand one = fit_command(path("train.csv"), path("one.json"));
   one.columns.u = "u1_V";
   one.columns.y = "y1_m";
   one.columns.rate_hz = 5000.0;
   one.columns.t = "";
   one.model_name = "pi";
-  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_fit(one, o, e); }), 0) << err_;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return cli::run_fit(one, o, e); }), 0) << err_;
   siso.model_path = path("one.json");
   siso.columns.u = "u1_V";
   siso.columns.y = "y1_m";
   siso.columns.rate_hz = 5000.0;
   siso.skip_s = 0.1;
-  EXPECT_EQ(run([&](auto& o, auto& e) { return hd::run_simulate(siso, o, e); }), 1);
+  EXPECT_EQ(run([&](auto& o, auto& e) { return cli::run_simulate(siso, o, e); }), 1);
   EXPECT_NE(err_.find("--skip: only for a model of several inputs"), std::string::npos) << err_;
 }
 
@@ -226,28 +226,28 @@ TEST_F(MimoCommandsTest, TheCubeSpecMirrorBeatsThePublishedLinearModelAtItsAmpli
     }
   }
   for (const char* set : {"300mV_train", "300mV_test"}) {
-    hd::ConvertCommand convert;
+    cli::ConvertCommand convert;
     convert.u_path = (kCubeSpec / (std::string("u_") + set + ".npy")).string();
     convert.y_path = (kCubeSpec / (std::string("y_") + set + ".npy")).string();
     convert.output_path = path(std::string(set) + ".csv");
     convert.rate_hz = 6400.0;
-    ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_convert(convert, o, e); }), 0) << err_;
+    ASSERT_EQ(run([&](auto& o, auto& e) { return cli::run_convert(convert, o, e); }), 0) << err_;
   }
-  hd::FitCommand fit = fit_command(path("300mV_train.csv"), path("mirror.json"));
+  cli::FitCommand fit = fit_command(path("300mV_train.csv"), path("mirror.json"));
   fit.columns.u = "u1_V,u2_V,u3_V";
   fit.columns.y = "y1_m,y2_m,y3_m";
   fit.columns.y_scales = {1e6, 1e6, 1e6};  // one per column, as --y-scale 1e6,1e6,1e6 gives
   json f;
-  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_fit(fit, o, e); }, &f), 0) << err_;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return cli::run_fit(fit, o, e); }, &f), 0) << err_;
   // Every output is reached by every input: the coupling is named, none is below a tenth.
   for (const auto& row : f["coupling"]) {
     for (const auto& share : row) EXPECT_GT(share.get<double>(), 0.1) << f["coupling"];
   }
   // The benchmark's metric: each realization from rest, its first 1000 samples not scored.
-  hd::SimulateCommand sim = simulate_command(path("mirror.json"), path("300mV_test.csv"));
+  cli::SimulateCommand sim = simulate_command(path("mirror.json"), path("300mV_test.csv"));
   sim.skip_s = 1000.0 / 6400.0;
   json r;
-  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_simulate(sim, o, e); }, &r), 0) << err_;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return cli::run_simulate(sim, o, e); }, &r), 0) << err_;
   // Published: 0.228 um for the linear model trained at 300 mV, 0.1686 for the nonlinear LFR.
   EXPECT_LT(r["rmse"].get<double>(), 0.228);
   EXPECT_LT(r["rmse"].get<double>(), 0.1686);
@@ -259,13 +259,13 @@ TEST_F(MimoCommandsTest, DiagnoseNamesEachMirrorOutputsCouplingWithTheOtherInput
       GTEST_SKIP() << "shared data set piezo-fsm-cubespec (" << f << ") is not in " << kCubeSpec;
     }
   }
-  hd::ConvertCommand convert;
+  cli::ConvertCommand convert;
   convert.u_path = (kCubeSpec / "u_300mV_test.npy").string();
   convert.y_path = (kCubeSpec / "y_300mV_test.npy").string();
   convert.output_path = path("test.csv");
   convert.rate_hz = 6400.0;
-  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_convert(convert, o, e); }), 0) << err_;
-  hd::DiagnoseCommand diag;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return cli::run_convert(convert, o, e); }), 0) << err_;
+  cli::DiagnoseCommand diag;
   diag.data_paths = {path("test.csv")};
   diag.columns.u = "u1_V,u2_V,u3_V";
   diag.columns.y = "y1_m,y2_m,y3_m";
@@ -274,7 +274,7 @@ TEST_F(MimoCommandsTest, DiagnoseNamesEachMirrorOutputsCouplingWithTheOtherInput
   diag.save_extended = path("extended.json");
   diag.report_dir = path("report");
   json d;
-  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_diagnose(diag, o, e); }, &d), 0) << err_;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return cli::run_diagnose(diag, o, e); }, &d), 0) << err_;
   EXPECT_EQ(d["cause"], "cross_coupling");
   const std::vector<std::vector<std::string>> others = {
       {"u2_V", "u3_V"}, {"u1_V", "u3_V"}, {"u1_V", "u2_V"}};
@@ -289,9 +289,9 @@ TEST_F(MimoCommandsTest, DiagnoseNamesEachMirrorOutputsCouplingWithTheOtherInput
     EXPECT_TRUE(fs::exists(fs::path(path("report")) / f)) << f;
   }
   // The extended model it saved predicts the record through simulate.
-  hd::SimulateCommand sim = simulate_command(path("extended.json"), path("test.csv"));
+  cli::SimulateCommand sim = simulate_command(path("extended.json"), path("test.csv"));
   sim.skip_s = 1000.0 / 6400.0;
   json r;
-  ASSERT_EQ(run([&](auto& o, auto& e) { return hd::run_simulate(sim, o, e); }, &r), 0) << err_;
+  ASSERT_EQ(run([&](auto& o, auto& e) { return cli::run_simulate(sim, o, e); }, &r), 0) << err_;
   EXPECT_LT(r["rmse"].get<double>(), 0.2);
 }

@@ -25,7 +25,7 @@
 #include "hystbench/cli/offline/data_table.hpp"
 #include "support/temp_dir_test.hpp"
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
@@ -82,8 +82,8 @@ bool cubespec_300mv_test_set_present() {
 // value differs from value(k, column name), or k is not period * 8192 + n_in_period.
 std::size_t rows_unlike_shipped_realization0(
     const std::function<double(std::size_t, const std::string&)>& value) {
-  const hd::DataTable shipped =
-      hd::DataTable::read_csv((kCubeSpec / "fsm_300mV_test_realization0.csv").string());
+  const cli::DataTable shipped =
+      cli::DataTable::read_csv((kCubeSpec / "fsm_300mV_test_realization0.csv").string());
   EXPECT_EQ(shipped.rows(), 2 * kCubeSpecSamples);
   std::size_t differing = 0;
   for (std::size_t k = 0; k < shipped.rows(); ++k) {
@@ -109,8 +109,8 @@ class NpyFileTest : public hystbench::test::TempDirTest {
   // The message of the DataFileError read_npy throws; empty when the file reads.
   static std::string read_error(const std::string& file) {
     try {
-      hd::read_npy(file);
-    } catch (const hd::DataFileError& e) {
+      cli::read_npy(file);
+    } catch (const cli::DataFileError& e) {
       return e.what();
     }
     return "";
@@ -124,8 +124,8 @@ TEST_F(NpyFileTest, ReadsShapeAndTheSameDoubles) {
                                       std::numeric_limits<double>::max(),
                                       -0.0,
                                       -2.359454981218617e-06};
-  const hd::NpyArray a =
-      hd::read_npy(write_file("a.npy", npy_bytes(float64_dict("(2, 3)"), float64_bytes(values))));
+  const cli::NpyArray a =
+      cli::read_npy(write_file("a.npy", npy_bytes(float64_dict("(2, 3)"), float64_bytes(values))));
   EXPECT_EQ(a.shape, (std::vector<std::size_t>{2, 3}));
   ASSERT_EQ(a.values.size(), values.size());
   for (std::size_t i = 0; i < values.size(); ++i) {
@@ -136,7 +136,7 @@ TEST_F(NpyFileTest, ReadsShapeAndTheSameDoubles) {
 
 TEST_F(NpyFileTest, ReadsFormat2AndFloat32) {
   const std::vector<float> values = {0.1F, -3.5F, 1e-30F};
-  const hd::NpyArray a = hd::read_npy(
+  const cli::NpyArray a = cli::read_npy(
       write_file("f4.npy", npy_bytes("{'descr': '<f4', 'fortran_order': False, 'shape': (3,), }",
                                      little_endian<std::uint32_t>(values), 2)));
   EXPECT_EQ(a.shape, (std::vector<std::size_t>{3}));
@@ -144,13 +144,13 @@ TEST_F(NpyFileTest, ReadsFormat2AndFloat32) {
 }
 
 TEST_F(NpyFileTest, ReadsKeysInAnyOrderAndAZeroDimensionalArray) {
-  const hd::NpyArray a = hd::read_npy(write_file(
+  const cli::NpyArray a = cli::read_npy(write_file(
       "scalar.npy", npy_bytes("{\"shape\": (), \"fortran_order\": False, \"descr\": \"<f8\"}",
                               float64_bytes({2.5}))));
   EXPECT_TRUE(a.shape.empty());
   EXPECT_EQ(a.values, std::vector<double>{2.5});
-  const hd::NpyArray empty =
-      hd::read_npy(write_file("empty.npy", npy_bytes(float64_dict("(0, 3)"), "")));
+  const cli::NpyArray empty =
+      cli::read_npy(write_file("empty.npy", npy_bytes(float64_dict("(0, 3)"), "")));
   EXPECT_EQ(empty.shape, (std::vector<std::size_t>{0, 3}));
   EXPECT_TRUE(empty.values.empty());
 }
@@ -224,8 +224,8 @@ TEST_F(NpyFileTest, MeasuredCubeSpecTestSetMatchesItsCsvConversion) {
                     "fsm_300mV_test_realization0.csv) not found under "
                  << HYSTBENCH_SHARED_DATA_DIR;
   }
-  const hd::NpyArray u = hd::read_npy((kCubeSpec / "u_300mV_test.npy").string());
-  const hd::NpyArray y = hd::read_npy((kCubeSpec / "y_300mV_test.npy").string());
+  const cli::NpyArray u = cli::read_npy((kCubeSpec / "u_300mV_test.npy").string());
+  const cli::NpyArray y = cli::read_npy((kCubeSpec / "y_300mV_test.npy").string());
   const std::vector<std::size_t> shape = {kCubeSpecSamples, 3, 3, 2};
   ASSERT_EQ(u.shape, shape);
   ASSERT_EQ(y.shape, shape);
@@ -242,15 +242,15 @@ TEST_F(NpyFileTest, MeasuredCubeSpecTestSetMatchesItsCsvConversion) {
 
 class ConvertCommandTest : public NpyFileTest {
  protected:
-  int run(const hd::ConvertCommand& cmd) {
+  int run(const cli::ConvertCommand& cmd) {
     std::ostringstream out, err;
-    const int code = hd::run_convert(cmd, out, err);
+    const int code = cli::run_convert(cmd, out, err);
     out_ = out.str();
     err_ = err.str();
     return code;
   }
-  hd::ConvertCommand command(const std::string& u, const std::string& y, double rate_hz) const {
-    hd::ConvertCommand cmd;
+  cli::ConvertCommand command(const std::string& u, const std::string& y, double rate_hz) const {
+    cli::ConvertCommand cmd;
     cmd.u_path = u;
     cmd.y_path = y;
     cmd.rate_hz = rate_hz;
@@ -270,8 +270,8 @@ class ConvertCommandTest : public NpyFileTest {
 
 TEST_F(ConvertCommandTest, WritesRowsInRealizationPeriodSampleOrder) {
   // (N=3, channel, realization=2, period=2): U with 2 channels, Y with 1.
-  hd::ConvertCommand cmd = command(write_counting("u.npy", "(3, 2, 2, 2)", 24, 0.0),
-                                   write_counting("y.npy", "(3, 1, 2, 2)", 12, 0.5), 4.0);
+  cli::ConvertCommand cmd = command(write_counting("u.npy", "(3, 2, 2, 2)", 24, 0.0),
+                                    write_counting("y.npy", "(3, 1, 2, 2)", 12, 0.5), 4.0);
   cmd.json_output = true;
   ASSERT_EQ(run(cmd), 0) << err_;
   const nlohmann::json result = nlohmann::json::parse(out_);
@@ -279,7 +279,7 @@ TEST_F(ConvertCommandTest, WritesRowsInRealizationPeriodSampleOrder) {
   EXPECT_EQ(result.at("realizations"), 2);
   EXPECT_EQ(result.at("periods"), 2);
   EXPECT_EQ(result.at("samples_per_period"), 3);
-  const hd::DataTable t = hd::DataTable::read_csv(cmd.output_path);
+  const cli::DataTable t = cli::DataTable::read_csv(cmd.output_path);
   EXPECT_EQ(t.names(), (std::vector<std::string>{"t", "realization", "period", "n_in_period",
                                                  "u1_V", "u2_V", "y1_m"}));
   ASSERT_EQ(t.rows(), 12U);
@@ -301,14 +301,14 @@ TEST_F(ConvertCommandTest, WritesRowsInRealizationPeriodSampleOrder) {
 
 TEST_F(ConvertCommandTest, TakesTwoAndThreeDimensionalArraysAndGivenNames) {
   // (N, channel): one realization, one period.
-  hd::ConvertCommand cmd = command(write_counting("u2.npy", "(4, 2)", 8, 0.0),
-                                   write_counting("y2.npy", "(4, 1)", 4, 0.0), 2.0);
+  cli::ConvertCommand cmd = command(write_counting("u2.npy", "(4, 2)", 8, 0.0),
+                                    write_counting("y2.npy", "(4, 1)", 4, 0.0), 2.0);
   cmd.u_names = {"V_a", "V_b"};
   cmd.y_names = {"x_um"};
   ASSERT_EQ(run(cmd), 0) << err_;
   EXPECT_THAT(out_, HasSubstr("4 rows, 2 input and 1 output channels, 1 realizations x 1 periods"));
   EXPECT_THAT(out_, HasSubstr(cmd.output_path));
-  hd::DataTable t = hd::DataTable::read_csv(cmd.output_path);
+  cli::DataTable t = cli::DataTable::read_csv(cmd.output_path);
   EXPECT_EQ(t.names(), (std::vector<std::string>{"t", "realization", "period", "n_in_period", "V_a",
                                                  "V_b", "x_um"}));
   EXPECT_EQ(t.column("t"), (std::vector<double>{0.0, 0.5, 1.0, 1.5}));
@@ -317,7 +317,7 @@ TEST_F(ConvertCommandTest, TakesTwoAndThreeDimensionalArraysAndGivenNames) {
   cmd = command(write_counting("u3.npy", "(2, 1, 3)", 6, 0.0),
                 write_counting("y3.npy", "(2, 1, 3)", 6, 0.25), 10.0);
   ASSERT_EQ(run(cmd), 0) << err_;
-  t = hd::DataTable::read_csv(cmd.output_path);
+  t = cli::DataTable::read_csv(cmd.output_path);
   EXPECT_EQ(t.column("t"), (std::vector<double>{0.0, 0.1, 0.0, 0.1, 0.0, 0.1}));
   EXPECT_EQ(t.column("realization"), (std::vector<double>{0, 0, 1, 1, 2, 2}));
   EXPECT_EQ(t.column("u1_V"), (std::vector<double>{0, 3, 1, 4, 2, 5}));
@@ -326,7 +326,7 @@ TEST_F(ConvertCommandTest, TakesTwoAndThreeDimensionalArraysAndGivenNames) {
 
 TEST_F(ConvertCommandTest, RefusesShapesThatDisagreeAndBadNamesWritingNothing) {
   const std::string u = write_counting("u.npy", "(4, 2, 3)", 24, 0.0);
-  hd::ConvertCommand cmd = command(u, write_counting("y.npy", "(4, 2, 2)", 16, 0.0), 1.0);
+  cli::ConvertCommand cmd = command(u, write_counting("y.npy", "(4, 2, 2)", 16, 0.0), 1.0);
   EXPECT_EQ(run(cmd), 1);
   EXPECT_THAT(err_, HasSubstr("u.npy has shape (4, 2, 3)"));
   EXPECT_THAT(err_, HasSubstr("y.npy has shape (4, 2, 2)"));
@@ -356,12 +356,12 @@ TEST_F(ConvertCommandTest, MeasuredCubeSpecPairConvertsToTheShippedValues) {
                     "fsm_300mV_test_realization0.csv) not found under "
                  << HYSTBENCH_SHARED_DATA_DIR;
   }
-  hd::ConvertCommand cmd = command((kCubeSpec / "u_300mV_test.npy").string(),
-                                   (kCubeSpec / "y_300mV_test.npy").string(), kCubeSpecRateHz);
+  cli::ConvertCommand cmd = command((kCubeSpec / "u_300mV_test.npy").string(),
+                                    (kCubeSpec / "y_300mV_test.npy").string(), kCubeSpecRateHz);
   ASSERT_EQ(run(cmd), 0) << err_;
   EXPECT_THAT(out_, HasSubstr("49152 rows, 3 input and 3 output channels, 3 realizations x 2 "
                               "periods x 8192 samples at 6400 Hz"));
-  const hd::DataTable t = hd::DataTable::read_csv(cmd.output_path);
+  const cli::DataTable t = cli::DataTable::read_csv(cmd.output_path);
   ASSERT_EQ(t.rows(), 3 * 2 * kCubeSpecSamples);
   // Realization 0 is the first 2 * 8192 rows; t = k / 6400 as the shipped CSV's README says.
   const auto value = [&](std::size_t k, const std::string& name) { return t.column(name)[k]; };

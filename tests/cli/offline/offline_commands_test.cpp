@@ -17,13 +17,13 @@
 #include <string>
 #include <vector>
 
-#include "hystbench/compensation/model_file.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/common/model_file_io.hpp"
+#include "hystbench/compensation/model_file.hpp"
 #include "support/simulated_record.hpp"
 #include "support/temp_dir_test.hpp"
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 namespace hs = hystbench::sim;
 namespace hc = hystbench::compensation;
 namespace fs = std::filesystem;
@@ -48,28 +48,28 @@ class OfflineCommandsTest : public hystbench::test::TempDirTest {
 
   // `fit DATA --model MODEL -o MODEL.json --json` with nothing else; its JSON.
   json fit_with_defaults(const std::string& data, const std::string& model) {
-    hd::FitCommand cmd;
+    cli::FitCommand cmd;
     cmd.data_path = data;
     cmd.model_name = model;
     cmd.output_path = path(model + ".json");
     cmd.json_output = true;
-    EXPECT_EQ(run(hd::run_fit, cmd), 0) << err_;
+    EXPECT_EQ(run(cli::run_fit, cmd), 0) << err_;
     return json::parse(out_);
   }
   std::string write_record(const std::string& name, const SimulatedRecord& r) const {
-    hd::write_csv(path(name), {"t", "u", "y"}, {&r.t, &r.u, &r.y});
+    cli::write_csv(path(name), {"t", "u", "y"}, {&r.t, &r.u, &r.y});
     return path(name);
   }
 
   /// Fits a modified PI on a simulated record; returns the model file's path.
   std::string fit_model() {
-    hd::FitCommand fit;
+    cli::FitCommand fit;
     fit.data_path =
         write_record("fit.csv", hystbench::test::simulate_record(static_actuator(), 1e-3, {}, 11));
     fit.model_name = "mpi";
     fit.output_path = path("model.json");
     fit.json_output = true;
-    EXPECT_EQ(run(hd::run_fit, fit), 0) << err_;
+    EXPECT_EQ(run(cli::run_fit, fit), 0) << err_;
     return fit.output_path;
   }
 
@@ -100,16 +100,16 @@ TEST_F(OfflineCommandsTest, FittedModelPredictsASecondRecordOfTheSameActuator) {
   other.rate_cycles = {3, 8};
   const SimulatedRecord second =
       hystbench::test::simulate_record(static_actuator(), 1e-3, other, 12);
-  hd::SimulateCommand sim;
+  cli::SimulateCommand sim;
   sim.model_path = model;
   sim.data_path = write_record("second.csv", second);
   sim.output_path = path("prediction.csv");
   sim.json_output = true;
-  ASSERT_EQ(run(hd::run_simulate, sim), 0) << err_;
+  ASSERT_EQ(run(cli::run_simulate, sim), 0) << err_;
   const json predicted = json::parse(out_);
   EXPECT_LT(predicted.at("rmse_percent").get<double>(), 1.0) << out_;
 
-  const hd::DataTable written = hd::DataTable::read_csv(sim.output_path);
+  const cli::DataTable written = cli::DataTable::read_csv(sim.output_path);
   EXPECT_EQ(written.names(), (std::vector<std::string>{"t", "u", "y_model", "y", "residual"}));
   ASSERT_EQ(written.rows(), second.t.size());
   const auto& residual = written.column("residual");
@@ -125,15 +125,15 @@ TEST_F(OfflineCommandsTest, FitDriftTakesASlowDriftOffTheRecord) {
   SimulatedRecord r = hystbench::test::simulate_record(static_actuator(), 1e-3, {}, 11);
   const double slope = 0.01;  // um/s: about 0.3 um over the record
   for (std::size_t k = 0; k < r.y.size(); ++k) r.y[k] += slope * r.t[k];
-  hd::FitCommand fit;
+  cli::FitCommand fit;
   fit.data_path = write_record("drifting.csv", r);
   fit.output_path = path("drifting.json");
   fit.json_output = true;
-  ASSERT_EQ(run(hd::run_fit, fit), 0) << err_;
+  ASSERT_EQ(run(cli::run_fit, fit), 0) << err_;
   const json plain = json::parse(out_);
   EXPECT_EQ(plain.at("drift_per_s").get<double>(), 0.0);
   fit.drift = true;
-  ASSERT_EQ(run(hd::run_fit, fit), 0) << err_;
+  ASSERT_EQ(run(cli::run_fit, fit), 0) << err_;
   const json drift = json::parse(out_);
   std::cout << "fit --drift: " << drift.at("drift_per_s") << " um/s of " << slope << ", held-out "
             << drift.at("heldout").at("rmse") << " um against " << plain.at("heldout").at("rmse")
@@ -146,7 +146,7 @@ TEST_F(OfflineCommandsTest, FitDriftTakesASlowDriftOffTheRecord) {
 
 TEST_F(OfflineCommandsTest, InverseDrivesTheModelOntoTheReferenceWhateverTheFileLayout) {
   const std::string model = fit_model();
-  hystbench::compensation::ModelFile file = hd::load_model_file(model);
+  hystbench::compensation::ModelFile file = hystbench::common::load_model_file(model);
 
   // A reference the model can reach: its own response to a decaying triangle from input_min.
   constexpr double kDt = 1e-3;
@@ -162,13 +162,13 @@ TEST_F(OfflineCommandsTest, InverseDrivesTheModelOntoTheReferenceWhateverTheFile
   const double range =
       *std::max_element(yr.begin(), yr.end()) - *std::min_element(yr.begin(), yr.end());
 
-  hd::InvertCommand inv;
+  cli::InvertCommand inv;
   inv.model_path = model;
   inv.reference_path = path("reference.csv");
   inv.output_path = path("drive.csv");
-  hd::write_csv(inv.reference_path, {"t", "yr"}, {&t, &yr});
-  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
-  const hd::DataTable drive = hd::DataTable::read_csv(inv.output_path);
+  cli::write_csv(inv.reference_path, {"t", "yr"}, {&t, &yr});
+  ASSERT_EQ(run(cli::run_invert, inv), 0) << err_;
+  const cli::DataTable drive = cli::DataTable::read_csv(inv.output_path);
   ASSERT_EQ(drive.names(), (std::vector<std::string>{"t", "yr", "u"}));
   const std::vector<double> u = drive.column("u");
   const std::vector<double> y = file.model.simulate(u, kDt);
@@ -182,19 +182,19 @@ TEST_F(OfflineCommandsTest, InverseDrivesTheModelOntoTheReferenceWhateverTheFile
   for (std::size_t k = 0; k < yr.size(); ++k) yr_m[k] = yr[k] * 1e-6;
   inv.reference_path = path("export.csv");
   inv.output_path = path("drive_export.csv");
-  hd::write_csv(inv.reference_path, {"time_s", "position_m"}, {&t, &yr_m});
+  cli::write_csv(inv.reference_path, {"time_s", "position_m"}, {&t, &yr_m});
   inv.t_column = "time_s";
   inv.yr_column = "position_m";
   inv.yr_scale = 1e6;
-  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
-  const std::vector<double> u_export = hd::DataTable::read_csv(inv.output_path).column("u");
+  ASSERT_EQ(run(cli::run_invert, inv), 0) << err_;
+  const std::vector<double> u_export = cli::DataTable::read_csv(inv.output_path).column("u");
 
   inv.reference_path = path("no_time.csv");
   inv.output_path = path("drive_no_time.csv");
-  hd::write_csv(inv.reference_path, {"position_m"}, {&yr_m});
+  cli::write_csv(inv.reference_path, {"position_m"}, {&yr_m});
   inv.rate_hz = 1.0 / kDt;
-  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
-  const std::vector<double> u_no_time = hd::DataTable::read_csv(inv.output_path).column("u");
+  ASSERT_EQ(run(cli::run_invert, inv), 0) << err_;
+  const std::vector<double> u_no_time = cli::DataTable::read_csv(inv.output_path).column("u");
 
   ASSERT_EQ(u_export.size(), u.size());
   ASSERT_EQ(u_no_time.size(), u.size());
@@ -210,49 +210,49 @@ TEST_F(OfflineCommandsTest, BadInputNamesTheCauseAndWritesNothing) {
     std::ofstream(path(name)) << text;
     return path(name);
   };
-  hd::InvertCommand inv;
+  cli::InvertCommand inv;
   inv.model_path = model;
   inv.output_path = path("drive.csv");
 
   inv.reference_path = write_text("no_yr.csv", "t,y\n0,1\n0.001,2\n");
-  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_EQ(run(cli::run_invert, inv), 1);
   EXPECT_NE(err_.find("yr"), std::string::npos) << err_;
   EXPECT_NE(err_.find("no_yr.csv"), std::string::npos) << err_;
 
   inv.reference_path = write_text("nan.csv", "t,yr\n0,1\n0.001,nan\n0.002,3\n");
-  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_EQ(run(cli::run_invert, inv), 1);
   EXPECT_NE(err_.find("nan.csv:3"), std::string::npos) << err_;
   EXPECT_NE(err_.find("not a finite number"), std::string::npos) << err_;
 
   inv.reference_path = write_text("backwards.csv", "t,yr\n0,1\n0.002,2\n0.001,3\n");
-  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_EQ(run(cli::run_invert, inv), 1);
   EXPECT_NE(err_.find("t"), std::string::npos) << err_;
 
   inv.reference_path = write_text("ok.csv", "t,yr\n0,1\n0.001,2\n");
   inv.yr_scale = 0.0;
-  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_EQ(run(cli::run_invert, inv), 1);
   EXPECT_NE(err_.find("--yr-scale"), std::string::npos) << err_;
   inv.yr_scale = 1.0;
   inv.inverse = "exact";
-  EXPECT_EQ(run(hd::run_invert, inv), 1);
+  EXPECT_EQ(run(cli::run_invert, inv), 1);
   EXPECT_NE(err_.find("--inverse"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(inv.output_path));
 
-  hd::FitCommand fit;
+  cli::FitCommand fit;
   fit.output_path = path("constant.json");
   std::string constant = "t,u,y\n";
   for (int k = 0; k < 2000; ++k)
     constant += std::to_string(k * 1e-3) + ",5," + std::to_string(k) + "\n";
   fit.data_path = write_text("constant.csv", constant);
-  EXPECT_EQ(run(hd::run_fit, fit), 1);
+  EXPECT_EQ(run(cli::run_fit, fit), 1);
   EXPECT_NE(err_.find("constant"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(fit.output_path));
 
-  hd::SimulateCommand sim;
+  cli::SimulateCommand sim;
   sim.model_path = write_text("broken.json", "{\"schema\":\"hystbench.model/1\",\"type\":\"pi\"}");
   sim.data_path = write_text("data.csv", "t,u\n0,1\n0.001,2\n");
   sim.output_path = path("out.csv");
-  EXPECT_EQ(run(hd::run_simulate, sim), 1);
+  EXPECT_EQ(run(cli::run_simulate, sim), 1);
   EXPECT_NE(err_.find("broken.json"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(sim.output_path));
 }
@@ -263,40 +263,40 @@ TEST_F(OfflineCommandsTest, BadInputNamesTheCauseAndWritesNothing) {
 // the header.
 TEST_F(OfflineCommandsTest, FitAndSimulateCarryTheRecordsUnits) {
   const SimulatedRecord r = hystbench::test::simulate_record(static_actuator(), 1e-3, {}, 11);
-  hd::write_csv(path("damper.csv"), {"t [s]", "F [N]", "x [mm]"}, {&r.t, &r.u, &r.y});
-  hd::FitCommand fit;
+  cli::write_csv(path("damper.csv"), {"t [s]", "F [N]", "x [mm]"}, {&r.t, &r.u, &r.y});
+  cli::FitCommand fit;
   fit.data_path = path("damper.csv");
   fit.columns.u = "F";
   fit.columns.y = "x";
   fit.output_path = path("damper.json");
-  ASSERT_EQ(run(hd::run_fit, fit), 0) << err_;
+  ASSERT_EQ(run(cli::run_fit, fit), 0) << err_;
   EXPECT_NE(out_.find(" mm ("), std::string::npos) << out_;
   EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bum\b)"))) << out_;
-  const hc::ModelFile model = hd::load_model_file(fit.output_path);
+  const hc::ModelFile model = hystbench::common::load_model_file(fit.output_path);
   EXPECT_EQ(model.model.units.input, "N");
   EXPECT_EQ(model.model.units.output, "mm");
 
-  hd::SimulateCommand sim;
+  cli::SimulateCommand sim;
   sim.model_path = fit.output_path;
   sim.data_path = fit.data_path;
   sim.columns = fit.columns;
   sim.output_path = path("damper_sim.csv");
-  ASSERT_EQ(run(hd::run_simulate, sim), 0) << err_;
+  ASSERT_EQ(run(cli::run_simulate, sim), 0) << err_;
   EXPECT_NE(out_.find(" mm ("), std::string::npos) << out_;
   EXPECT_FALSE(std::regex_search(out_, std::regex(R"(\bum\b)"))) << out_;
   sim.json_output = true;
-  ASSERT_EQ(run(hd::run_simulate, sim), 0) << err_;
+  ASSERT_EQ(run(cli::run_simulate, sim), 0) << err_;
   EXPECT_EQ(json::parse(out_).at("units"), (json{{"input", "N"}, {"output", "mm"}}));
   sim.columns.y_unit = "um";  // the option wins over the header, and disagrees with the model
-  EXPECT_EQ(run(hd::run_simulate, sim), 1);
+  EXPECT_EQ(run(cli::run_simulate, sim), 1);
   EXPECT_NE(err_.find("damper.csv: the output is in um, the model's in mm"), std::string::npos)
       << err_;
 
   fit.columns.y_unit = "cm";
   fit.json_output = true;
-  ASSERT_EQ(run(hd::run_fit, fit), 0) << err_;
+  ASSERT_EQ(run(cli::run_fit, fit), 0) << err_;
   EXPECT_EQ(json::parse(out_).at("units").at("output"), "cm");
-  EXPECT_EQ(hd::load_model_file(fit.output_path).model.units.output, "cm");
+  EXPECT_EQ(hystbench::common::load_model_file(fit.output_path).model.units.output, "cm");
 }
 
 // `fit --model rpi` on a record of the rate-dependent actuator is never worse on held-out data
@@ -380,31 +380,31 @@ TEST_F(OfflineCommandsTest, MeasuredNtuRecordsFitWithTheDefaults) {
   if (!fs::exists(folder / "Model_Vi_Do.dat") || !fs::exists(folder / "Test_Vi_Do_Di.dat")) {
     GTEST_SKIP() << "shared data set piezo-ntu-dbo not found under " << HYSTBENCH_SHARED_DATA_DIR;
   }
-  hd::RecordColumns columns;
+  cli::RecordColumns columns;
   columns.t = "t";
   columns.u = "1";
   columns.y = "5";
   columns.rate_hz = 200.0;
   constexpr std::size_t kSegments[3][2] = {{1200, 2800}, {7600, 9200}, {12400, 14000}};
   auto segment_errors = [&](const std::string& family) {
-    hd::FitCommand fit;
+    cli::FitCommand fit;
     fit.data_path = (folder / "Model_Vi_Do.dat").string();
     fit.columns = columns;
     if (!family.empty()) fit.model_name = family;
     fit.output_path = path("ntu-" + family + ".json");
     fit.json_output = true;
-    EXPECT_EQ(run(hd::run_fit, fit), 0) << err_;
+    EXPECT_EQ(run(cli::run_fit, fit), 0) << err_;
     const json fitted = json::parse(out_);
     // The record starts from an unknown state: the fit says it left that part out.
     EXPECT_GT(fitted.at("skipped_samples").get<std::size_t>(), 0u) << out_;
-    hd::SimulateCommand sim;
+    cli::SimulateCommand sim;
     sim.model_path = fit.output_path;
     sim.data_path = (folder / "Test_Vi_Do_Di.dat").string();
     sim.columns = columns;
     sim.output_path = path("ntu-" + family + ".csv");
     sim.json_output = true;
-    EXPECT_EQ(run(hd::run_simulate, sim), 0) << err_;
-    const hd::DataTable t = hd::DataTable::read_csv(sim.output_path);
+    EXPECT_EQ(run(cli::run_simulate, sim), 0) << err_;
+    const cli::DataTable t = cli::DataTable::read_csv(sim.output_path);
     const auto& residual = t.column("residual");
     std::vector<double> rms;
     for (const auto& [b, e] : kSegments) {
@@ -448,18 +448,18 @@ TEST_F(OfflineCommandsTest, InvertPlansARateDependentModelsDrive) {
   const double dt = 1e-4;
   hc::ModelFile file{hs::make_truth_model(c, dt), json::object()};
   const std::string model = path("rpi.json");
-  hd::save_model_file(model, file);
+  hystbench::common::save_model_file(model, file);
   std::vector<double> t, yr;
   for (int k = 0; k < 3000; ++k) {
     t.push_back(k * dt);
     yr.push_back(22.5 - 18.0 * std::cos(2.0 * M_PI * 10.0 * k * dt));
   }
-  hd::InvertCommand inv;
+  cli::InvertCommand inv;
   inv.model_path = model;
   inv.reference_path = path("sine.csv");
-  hd::write_csv(inv.reference_path, {"t", "yr"}, {&t, &yr});
+  cli::write_csv(inv.reference_path, {"t", "yr"}, {&t, &yr});
   const auto model_rms = [&](const std::string& drive_path) {
-    const std::vector<double> u = hd::DataTable::read_csv(drive_path).column("u");
+    const std::vector<double> u = cli::DataTable::read_csv(drive_path).column("u");
     // invert's drive starts from the actuator relaxed at the model's lowest input.
     hc::ActuatorModel m = file.model;
     m.configure(dt);
@@ -473,13 +473,13 @@ TEST_F(OfflineCommandsTest, InvertPlansARateDependentModelsDrive) {
   };
   inv.output_path = path("planned.csv");
   inv.json_output = true;
-  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
+  ASSERT_EQ(run(cli::run_invert, inv), 0) << err_;
   const json planned = json::parse(out_).at("planned");
   const double planned_rms = model_rms(inv.output_path);
   EXPECT_NEAR(planned_rms, planned["model_rms"].get<double>(), 1e-9);
   inv.inverse = "numeric";
   inv.output_path = path("numeric.csv");
-  ASSERT_EQ(run(hd::run_invert, inv), 0) << err_;
+  ASSERT_EQ(run(cli::run_invert, inv), 0) << err_;
   EXPECT_FALSE(json::parse(out_).contains("planned"));
   const double numeric_rms = model_rms(inv.output_path);
   std::cout << "10 Hz on the model: planned " << planned_rms << " um, numeric " << numeric_rms

@@ -12,7 +12,7 @@
 #include "support/daemon_process.hpp"
 #include "support/temp_dir_test.hpp"
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 using nlohmann::json;
 
 namespace {
@@ -34,14 +34,14 @@ const json* row(const json& rows, double f, const std::string& column) {
 TEST_F(SweepCommandTest, LearnAddsAColumnOfLearnedErrors) {
   hystbench::testing::Daemon daemon(dir_);
   ASSERT_TRUE(daemon.running()) << "hystbenchd did not start";
-  hd::SweepCommand cmd;
+  cli::SweepCommand cmd;
   cmd.socket_path = daemon.socket();
   cmd.frequencies_hz = {20.0, 50.0};
   cmd.compensators = {"none"};
   cmd.learn_trials = 4;
   cmd.json_output = true;
   std::ostringstream out, err;
-  ASSERT_EQ(hd::run_sweep(cmd, out, err), 0) << err.str();
+  ASSERT_EQ(cli::run_sweep(cmd, out, err), 0) << err.str();
   const json sweep = json::parse(out.str());
   EXPECT_EQ(sweep["learn_trials"], 4);
   for (const double f : cmd.frequencies_hz) {
@@ -64,6 +64,6 @@ TEST_F(SweepCommandTest, LearnAddsAColumnOfLearnedErrors) {
   cmd.json_output = false;
   cmd.frequencies_hz = {20.0};
   std::ostringstream table;
-  ASSERT_EQ(hd::run_sweep(cmd, table, err), 0) << err.str();
+  ASSERT_EQ(cli::run_sweep(cmd, table, err), 0) << err.str();
   EXPECT_NE(table.str().find("learned (4)"), std::string::npos) << table.str();
 }

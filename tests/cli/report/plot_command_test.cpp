@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 namespace fs = std::filesystem;
 
 namespace {
@@ -61,7 +61,7 @@ class PlotCommandTest : public ::testing::Test {
 TEST_F(PlotCommandTest, WritesTheThreePicturesOfARunLog) {
   const std::string log = write_log(true);
   std::ostringstream out, err;
-  ASSERT_EQ(hd::run_plot({log, (dir_ / "plots").string(), false}, out, err), 0) << err.str();
+  ASSERT_EQ(cli::run_plot({log, (dir_ / "plots").string(), false}, out, err), 0) << err.str();
   for (const char* name : {"time.png", "error.png", "loop.png"}) {
     const fs::path png = dir_ / "plots" / name;
     ASSERT_TRUE(fs::exists(png)) << name;
@@ -78,17 +78,17 @@ TEST_F(PlotCommandTest, WritesTheThreePicturesOfARunLog) {
 
 TEST_F(PlotCommandTest, ALogWithoutReferenceIsDrawnWithItsModelError) {
   const std::string log = write_log(false);
-  const auto pngs = hd::plot_run_log(log, dir_ / "p");
+  const auto pngs = cli::plot_run_log(log, dir_ / "p");
   ASSERT_EQ(pngs.size(), 3u);
   for (const auto& p : pngs) EXPECT_GT(fs::file_size(p), 2000u) << p;
-  EXPECT_EQ(hd::default_plot_dir(log), dir_ / "run-plots");
+  EXPECT_EQ(cli::default_plot_dir(log), dir_ / "run-plots");
 }
 
 TEST_F(PlotCommandTest, AFileThatIsNotARunLogIsRefusedByName) {
   const fs::path path = dir_ / "other.csv";
   std::ofstream(path) << "t,x\n0,1\n1,2\n";
   std::ostringstream out, err;
-  EXPECT_EQ(hd::run_plot({path.string(), (dir_ / "q").string(), false}, out, err), 1);
+  EXPECT_EQ(cli::run_plot({path.string(), (dir_ / "q").string(), false}, out, err), 1);
   EXPECT_NE(err.str().find("no 'u' column"), std::string::npos) << err.str();
   EXPECT_FALSE(fs::exists(dir_ / "q" / "time.png"));
 }
@@ -103,7 +103,7 @@ TEST_F(PlotCommandTest, ALearningRunDrawsItsTrialsAndItsLastTrial) {
                                   {"rms_error_percent", std::pow(0.3, k)},
                                   {"max_error_percent", 3.0 * std::pow(0.3, k)}});
   }
-  const fs::path png = hd::plot_learning(learning, log, dir_);
+  const fs::path png = cli::plot_learning(learning, log, dir_);
   EXPECT_EQ(png, dir_ / "learning.png");
   ASSERT_TRUE(fs::exists(png));
   EXPECT_GT(fs::file_size(png), 10000u);  // two panels drawn, not an empty canvas
@@ -122,8 +122,8 @@ TEST_F(PlotCommandTest, ALearningRunDrawsItsTrialsAndItsLastTrial) {
   // A learning without a trial, or a log shorter than one, is named.
   nlohmann::json none = learning;
   none["trials"] = nlohmann::json::array();
-  EXPECT_THROW(hd::plot_learning(none, log, dir_), std::runtime_error);
+  EXPECT_THROW(cli::plot_learning(none, log, dir_), std::runtime_error);
   nlohmann::json long_period = learning;
   long_period["period_samples"] = 100000;
-  EXPECT_THROW(hd::plot_learning(long_period, log, dir_), std::runtime_error);
+  EXPECT_THROW(cli::plot_learning(long_period, log, dir_), std::runtime_error);
 }

@@ -9,16 +9,17 @@
 #include <string>
 #include <vector>
 
-#include "service/details/command_table.hpp"
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "runs/details/excite_program.hpp"
 #include "runs/details/identify_program.hpp"
 #include "runs/details/track_program.hpp"
-#include "hystbench/compensation/pi_model.hpp"
-#include "hystbench/compensation/rate_dependent_pi_model.hpp"
-#include "hystbench/common/command_error.hpp"
-#include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "service/details/command_table.hpp"
 
 namespace hd = hystbench::daemon;
+namespace common = hystbench::common;
 namespace hdd = hystbench::daemon::details;
 namespace hc = hystbench::compensation;
 using nlohmann::json;
@@ -56,7 +57,7 @@ hdd::BuiltRun track(const json& params, const hdd::RunContext& ctx,
 std::string refusal(const json& params, const hdd::RunContext& ctx) {
   try {
     (void)track(params, ctx);
-  } catch (const hd::CommandError& e) {
+  } catch (const common::CommandError& e) {
     return e.code() + ": " + e.what();
   }
   return "ok";
@@ -257,7 +258,7 @@ TEST(TrackProgram, AnUploadedReferenceIsApproachedFromTheBottomOfTheRange) {
   try {
     (void)track({{"reference_upload", "r"}}, ctx, &up);
     ADD_FAILURE() << "a reference beyond the range was accepted";
-  } catch (const hd::CommandError& e) {
+  } catch (const common::CommandError& e) {
     EXPECT_EQ(e.code(), "out_of_range");
     EXPECT_EQ(e.detail()["sample"], 3);
   }
@@ -276,7 +277,7 @@ TEST(IdentifyProgram, TheRequestOverTheDefaultsWithinTheLimits) {
     try {
       const hdd::Request q(bad, hdd::find_command("identify", bad).params);
       (void)hdd::parse_identify_request(q, s);
-    } catch (const hd::CommandError& e) {
+    } catch (const common::CommandError& e) {
       return e.code() + ": " + e.what();
     }
     return std::string("ok");
@@ -352,7 +353,7 @@ TEST(ExciteProgram, ADriveIsRampedToWithinTheSlewLimitAndRecordedFromItsStart) {
   try {
     (void)hdd::make_excite_program(up, ctx);
     ADD_FAILURE() << "a drive beyond the output range was accepted";
-  } catch (const hd::CommandError& e) {
+  } catch (const common::CommandError& e) {
     EXPECT_EQ(e.code(), "out_of_range");
     EXPECT_THAT(e.what(), HasSubstr("sample 10"));
   }

@@ -18,7 +18,7 @@
 #include "support/daemon_process.hpp"
 #include "support/temp_dir_test.hpp"
 
-namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 using nlohmann::json;
 
 namespace {
@@ -56,17 +56,17 @@ class TrackLearningTest : public hystbench::test::TempDirTest {
   // --json. The result, or {"ok": false, "error": {code, message}} when the daemon refused it.
   json run(const std::string& socket, const std::string& cmd, json params,
            const std::string& reference_file = {}) {
-    hd::RemoteCommand c;
+    cli::RemoteCommand c;
     c.socket_path = socket;
     c.cmd = cmd;
     c.params = std::move(params);
     c.wait = true;
     c.json_output = true;
     if (!reference_file.empty()) {
-      c.upload = hd::read_upload(reference_file, "reference", "t", "yr", 1.0, 0.0);
+      c.upload = cli::read_upload(reference_file, "reference", "t", "yr", 1.0, 0.0);
     }
     std::ostringstream out, err;
-    (void)hd::run_remote(c, out, err);
+    (void)cli::run_remote(c, out, err);
     if (out.str().empty()) return {{"stderr", err.str()}};
     return json::parse(out.str());
   }

@@ -20,6 +20,7 @@
 #include "support/temp_dir_test.hpp"
 
 namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 namespace fs = std::filesystem;
 using hystbench::testing::Daemon;
 using hystbench::testing::RawClient;
@@ -73,12 +74,12 @@ double steal_share_since(const std::pair<double, double>& from) {
 }
 
 /// A run log cut off at any byte (kill -9): everything up to the last complete line.
-hd::DataTable read_complete_records(const std::string& path) {
+cli::DataTable read_complete_records(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const auto last_newline = text.rfind('\n');
   text.resize(last_newline == std::string::npos ? 0 : last_newline + 1);
-  return hd::DataTable::parse_csv(text, path);
+  return cli::DataTable::parse_csv(text, path);
 }
 
 class AbuseTest : public hystbench::test::TempDirTest {
@@ -95,9 +96,9 @@ class AbuseTest : public hystbench::test::TempDirTest {
   /// A status request answered on a fresh connection.
   bool responsive() {
     try {
-      hd::BenchClient c(daemon_->socket());
+      cli::BenchClient c(daemon_->socket());
       return c.request("status", json::object(), std::chrono::seconds(5))["ok"] == true;
-    } catch (const hd::ClientError&) {
+    } catch (const cli::ClientError&) {
       return false;
     }
   }
@@ -116,7 +117,7 @@ class AbuseTest : public hystbench::test::TempDirTest {
 // 10 %, and stolen time stalls any loop).
 TEST_F(AbuseTest, HundredConcurrentClientsDuringA10kHzRunAllGetReplies) {
   start(write_config(dir_, 10000));
-  hd::BenchClient c(daemon_->socket());
+  cli::BenchClient c(daemon_->socket());
   const json track = {{"compensator", "none"}, {"periods", 3}, {"frequency_hz", 1}};
   const char* pairs_env = std::getenv("HYSTBENCH_ABUSE_PAIRS");
   const int pairs = pairs_env ? std::max(1, std::atoi(pairs_env)) : 1;
@@ -283,7 +284,7 @@ TEST_F(AbuseTest, HostileClientsLeaveTheDaemonResponsiveAndBounded) {
   const long rss_after = rss_kb(daemon_->pid());
   std::cout << "VmRSS before " << rss_before << " kB, after " << rss_after << " kB\n";
   EXPECT_LT(rss_after, rss_before + 32 * 1024);
-  hd::BenchClient c(daemon_->socket());
+  cli::BenchClient c(daemon_->socket());
   EXPECT_EQ(c.request("status")["result"]["state"], "idle");
 }
 
@@ -321,7 +322,7 @@ TEST_F(AbuseTest, SensorFaultsGoSafeWithinTheTickAndEndTheRunWithTheReason) {
     fs::remove_all(dir_);
     start(write_config(dir_, 1000,
                        std::string("[driver.loopback]\nfaults = { ") + fc.key + " = 4000 }\n"));
-    hd::BenchClient c(daemon_->socket());
+    cli::BenchClient c(daemon_->socket());
     const json r =
         c.request("track", {{"compensator", "none"}, {"periods", 20}, {"frequency_hz", 1}});
     ASSERT_TRUE(r["ok"]) << r.dump();
@@ -333,7 +334,7 @@ TEST_F(AbuseTest, SensorFaultsGoSafeWithinTheTickAndEndTheRunWithTheReason) {
     EXPECT_EQ(result["output_v_after"], 0.0);  // the loopback's safe output
     EXPECT_EQ(result["dropped"], 0);
     // The log is intact and ends with the faulted tick.
-    const auto log = hd::DataTable::read_csv(result["log"].get<std::string>());
+    const auto log = cli::DataTable::read_csv(result["log"].get<std::string>());
     ASSERT_EQ(log.rows(), result["samples"].get<std::size_t>());
     const auto& index = log.column("index");
     const auto& flags = log.column("flags");
@@ -362,7 +363,7 @@ TEST_F(AbuseTest, KillNineMidRunLeavesAReadableLogAndTheNextStartRecovers) {
   start(config);
   std::string log_path;
   {
-    hd::BenchClient c(daemon_->socket());
+    cli::BenchClient c(daemon_->socket());
     const json r = c.request("track", {{"compensator", "none"}, {"periods", 100}});
     ASSERT_TRUE(r["ok"]) << r.dump();
     log_path = r["result"]["log"];
@@ -379,7 +380,7 @@ TEST_F(AbuseTest, KillNineMidRunLeavesAReadableLogAndTheNextStartRecovers) {
   // The next start is not blocked by the stale socket, and a run completes.
   daemon_.reset();
   start(config);
-  hd::BenchClient c(daemon_->socket());
+  cli::BenchClient c(daemon_->socket());
   EXPECT_EQ(c.request("status")["result"]["state"], "idle");
   const json r = c.request("track", {{"compensator", "none"}, {"periods", 1}, {"frequency_hz", 2}});
   ASSERT_TRUE(r["ok"]) << r.dump();
@@ -389,5 +390,5 @@ TEST_F(AbuseTest, KillNineMidRunLeavesAReadableLogAndTheNextStartRecovers) {
   const fs::path latest = dir_ / "logs" / "latest.csv";
   ASSERT_TRUE(fs::is_symlink(latest));
   EXPECT_EQ(fs::canonical(latest), fs::canonical(result["log"].get<std::string>()));
-  EXPECT_EQ(hd::DataTable::read_csv(latest.string()).rows(), result["samples"].get<std::size_t>());
+  EXPECT_EQ(cli::DataTable::read_csv(latest.string()).rows(), result["samples"].get<std::size_t>());
 }

@@ -26,6 +26,7 @@
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 using nlohmann::json;
 
 namespace {
@@ -60,7 +61,7 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     EXPECT_FALSE(plain["model"]["extension"].contains("parts")) << plain["model"].dump(2);
     f.plain_500 = sine_rms(500.0);
     std::ostringstream plain_text;
-    hd::print_run_result(plain, plain_text);
+    cli::print_run_result(plain, plain_text);
     EXPECT_NE(plain_text.str().find("extension       nothing added: not adopted, not asked"),
               std::string::npos)
         << plain_text.str();
@@ -71,7 +72,7 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     f.extension = id["model"]["extension"];
     // `hystbench identify` prints one line for the parts and one for the bench's check.
     std::ostringstream text;
-    hd::print_run_result(id, text);
+    cli::print_run_result(id, text);
     EXPECT_NE(text.str().find("extension check triangle max "), std::string::npos) << text.str();
     std::cout << "extension: " << f.extension.dump() << "\n";
     f.extended_200 = sine_rms(200.0);

@@ -15,11 +15,13 @@
 #include <string>
 #include <vector>
 
-#include "hystbench/common/command_error.hpp"
 #include "hystbench/cli/remote/remote_commands.hpp"
+#include "hystbench/common/command_error.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
+namespace common = hystbench::common;
 using nlohmann::json;
 
 namespace {
@@ -52,7 +54,7 @@ class BenchLearningTest : public hystbench::test::BenchFixture {
   std::string error_code(const json& params) {
     try {
       bench_->handle("track", params);
-    } catch (const hd::CommandError& e) {
+    } catch (const common::CommandError& e) {
       return e.code();
     }
     return "ok";
@@ -129,7 +131,7 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
     EXPECT_DOUBLE_EQ(meta["rate_hz"].get<double>(), 10000.0);
     // `hystbench track --learn` prints the trials.
     std::ostringstream text;
-    hd::print_run_result(r, text);
+    cli::print_run_result(r, text);
     EXPECT_NE(text.str().find("learning        11 trials of "), std::string::npos) << text.str();
     EXPECT_NE(text.str().find("learned drive   " + l["drive"].get<std::string>() + " (" + path),
               std::string::npos)
@@ -244,7 +246,7 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
     try {
       bench_->handle("track", params);
       ADD_FAILURE() << "accepted " << params;
-    } catch (const hd::CommandError& e) {
+    } catch (const common::CommandError& e) {
       EXPECT_EQ(e.code(), "bad_params");
       EXPECT_NE(std::string(e.what()).find("was learned for a 50 Hz sine"), std::string::npos)
           << e.what();
@@ -287,8 +289,8 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
   EXPECT_TRUE(std::filesystem::exists(r["learning"].value("drive_file", ""))) << r.dump(2);
 
   // The CSV replays open loop with excite (`hystbench excite --input-file`).
-  const hd::RemoteUpload drive =
-      hd::read_upload(learned["learning"]["drive_file"], "drive", "t", "u", 1.0, 0.0);
+  const cli::RemoteUpload drive =
+      cli::read_upload(learned["learning"]["drive_file"], "drive", "t", "u", 1.0, 0.0);
   const json begun =
       bench_->handle("upload.begin", {{"kind", "drive"}, {"samples", drive.values.size()}});
   bench_->handle(

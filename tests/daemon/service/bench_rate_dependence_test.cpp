@@ -21,17 +21,18 @@
 #include <sstream>
 #include <string>
 
+#include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/cli/remote/remote_commands.hpp"
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/config/daemon_settings.hpp"
-#include "hystbench/cli/offline/data_table.hpp"
-#include "hystbench/cli/remote/remote_commands.hpp"
 #include "hystbench/daemon/service/sample_log_writer.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hc = hystbench::compensation;
 namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 using nlohmann::json;
 
 namespace {
@@ -111,7 +112,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
   // identify` says so.
   EXPECT_TRUE(judged["kept"].get<bool>()) << judged;
   std::ostringstream text;
-  hd::print_run_result(id_rpi, text);
+  cli::print_run_result(id_rpi, text);
   EXPECT_NE(text.str().find("rate law        kept: 20 Hz sine rms "), std::string::npos)
       << text.str();
   if (rate["law"] == "thresholds") {
@@ -241,7 +242,7 @@ TEST_F(BenchRateDependenceTest, WithoutRateDependenceTodaysFiguresHoldAndEverySa
 
   // Every sample of the run log holds the model's output for the drive applied, and the result's
   // model error is the rms of y - y_model over the scored samples.
-  const auto table = hd::DataTable::read_csv(inv["log"].get<std::string>());
+  const auto table = cli::DataTable::read_csv(inv["log"].get<std::string>());
   const auto& y_model = table.column("y_model");
   const auto& y = table.column("y");
   ASSERT_EQ(y_model.size(), table.rows());

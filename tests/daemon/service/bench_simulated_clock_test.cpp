@@ -10,12 +10,13 @@
 #include <string>
 #include <thread>
 
-#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/daemon/service/sample_log_writer.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 using nlohmann::json;
 
 namespace {
@@ -63,7 +64,7 @@ TEST_F(BenchSimulatedClockTest, ARunLogsEverySampleOnTheExactTimeGridFasterThanI
 
   const std::string log = r["log"].get<std::string>();
   EXPECT_EQ(hd::read_sample_log_header(log)["run"]["clock"], "simulated");
-  const auto table = hd::DataTable::read_csv(log);
+  const auto table = cli::DataTable::read_csv(log);
   ASSERT_EQ(table.rows(), 100000u);
   const auto& index = table.column("index");
   const auto& scheduled = table.column("t_scheduled_ns");

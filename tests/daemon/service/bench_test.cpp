@@ -13,14 +13,16 @@
 #include <thread>
 #include <vector>
 
+#include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pi_model.hpp"
-#include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/daemon/service/sample_log_writer.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
+namespace common = hystbench::common;
 namespace hc = hystbench::compensation;
 namespace hs = hystbench::sim;
 namespace fs = std::filesystem;
@@ -59,7 +61,7 @@ class BenchTest : public hystbench::test::BenchFixture {
   std::string error_code(const std::string& cmd, const json& params) {
     try {
       bench_->handle(cmd, params);
-    } catch (const hd::CommandError& e) {
+    } catch (const common::CommandError& e) {
       return e.code();
     }
     return "ok";
@@ -78,7 +80,7 @@ TEST_F(BenchTest, TrackWithoutModelLogsEverySampleAndReportsHysteresis) {
   EXPECT_EQ(r["logged"], r["samples"]);
   // The default actuator has 15-20 % hysteresis; the linear map leaves it all in place.
   EXPECT_GT(r["hysteresis_percent"].get<double>(), 8.0);
-  const auto table = hd::DataTable::read_csv(r["log"].get<std::string>());
+  const auto table = cli::DataTable::read_csv(r["log"].get<std::string>());
   EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
   const auto& index = table.column("index");
   for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
@@ -125,7 +127,7 @@ TEST_F(BenchTest, ModelsTravelAsDocumentsAndLoadByNameFromTheModelFolder) {
   try {
     bench_->handle("model.load", {{"stored", "notes.json"}});
     ADD_FAILURE() << "a text file loaded as a model";
-  } catch (const hd::CommandError& e) {
+  } catch (const common::CommandError& e) {
     EXPECT_EQ(std::string(e.what()).find("hunter2"), std::string::npos) << e.what();
     EXPECT_EQ(std::string(e.what()).find("Secret"), std::string::npos) << e.what();
   }
@@ -204,7 +206,7 @@ TEST_F(BenchTest, DriverFaultGoesSafeAndStaysInFaultUntilReset) {
   EXPECT_DOUBLE_EQ(bench_->loop().last_output(), bench_->driver().safe_output_v());
   EXPECT_EQ(error_code("track", {{"compensator", "none"}}), "fault");
   // Log intact: every sample up to and including the faulted one.
-  const auto table = hd::DataTable::read_csv(r["log"].get<std::string>());
+  const auto table = cli::DataTable::read_csv(r["log"].get<std::string>());
   EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
 
   // reset leaves FAULT as soon as the loop acknowledges (the loop wakes the waiting command).
@@ -234,7 +236,7 @@ TEST_F(BenchTest, SixtySecondsAtTenKilohertzLogEverySample) {
   EXPECT_EQ(r["samples"], 600000);
   EXPECT_EQ(r["logged"], 600000);
   EXPECT_EQ(r["dropped"], 0);
-  const auto table = hd::DataTable::read_csv(r["log"].get<std::string>());
+  const auto table = cli::DataTable::read_csv(r["log"].get<std::string>());
   EXPECT_EQ(table.rows(), 600000u);
   std::cout << "60 s at 10 kHz: wake latency p99 " << r["loop"]["wake_latency_ns"]["p99"]
             << " ns, max " << r["loop"]["wake_latency_ns"]["max"] << " ns, overruns "

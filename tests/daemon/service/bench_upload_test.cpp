@@ -9,13 +9,15 @@
 #include <string>
 #include <vector>
 
-#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
+namespace common = hystbench::common;
 namespace hs = hystbench::sim;
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -56,7 +58,7 @@ class BenchUploadTest : public hystbench::test::BenchFixture {
                                        std::uint64_t client = 0) {
     try {
       bench_->handle(cmd, params, client);
-    } catch (const hd::CommandError& e) {
+    } catch (const common::CommandError& e) {
       return {e.code(), e.detail()};
     }
     return {"ok", json::object()};
@@ -71,12 +73,12 @@ class BenchUploadTest : public hystbench::test::BenchFixture {
   }
   /// The offline `fit` of a record, with its defaults; the result JSON.
   static json fit(const std::string& path, const fs::path& model_out) {
-    hd::FitCommand cmd;
+    cli::FitCommand cmd;
     cmd.data_path = path;
     cmd.output_path = model_out.string();
     cmd.json_output = true;
     std::ostringstream out, err;
-    EXPECT_EQ(hd::run_fit(cmd, out, err), 0) << err.str();
+    EXPECT_EQ(cli::run_fit(cmd, out, err), 0) << err.str();
     return json::parse(out.str());
   }
 };
@@ -218,7 +220,7 @@ TEST_F(BenchUploadTest, AnUploadedTrajectoryAndExcitationWorkAsTheBuiltInOnes) {
             1.5 * builtin["max_error_percent"].get<double>() + 0.1);
 
   // The identification's applied drive, played again as a user's excitation.
-  const auto id_log = hd::DataTable::read_csv(id["log"].get<std::string>());
+  const auto id_log = cli::DataTable::read_csv(id["log"].get<std::string>());
   const json excited = run_and_wait(
       "excite", {{"drive_upload", upload("drive", id_log.column("t"), id_log.column("u"))}}, 180);
   ASSERT_EQ(excited["end"], "completed") << excited.dump();

@@ -10,6 +10,7 @@
 #include "hystbench/common/command_error.hpp"
 
 namespace hd = hystbench::daemon;
+namespace common = hystbench::common;
 namespace hdd = hystbench::daemon::details;
 using nlohmann::json;
 using ::testing::HasSubstr;
@@ -22,7 +23,7 @@ std::string refusal(const std::string& cmd, const json& params) {
   try {
     const hdd::Command& c = hdd::find_command(cmd, params);
     hdd::Request request(params, c.params);
-  } catch (const hd::CommandError& e) {
+  } catch (const common::CommandError& e) {
     return e.code() + ": " + e.what();
   }
   return "ok";
@@ -102,7 +103,7 @@ TEST(CommandTable, RequestGettersGiveTheFallbackOrTheCheckedValue) {
   try {
     (void)r.number("frequency_hz", 1.0, 1e-3, 25.0);
     ADD_FAILURE() << "40 Hz accepted above 25 Hz";
-  } catch (const hd::CommandError& e) {
+  } catch (const common::CommandError& e) {
     EXPECT_EQ(e.code(), "bad_params");
     EXPECT_THAT(e.what(), StartsWith("frequency_hz: 40.000000 is out of range"));
   }

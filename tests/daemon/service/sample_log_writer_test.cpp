@@ -13,6 +13,7 @@
 #include "hystbench/cli/offline/data_table.hpp"
 
 namespace hd = hystbench::daemon;
+namespace cli = hystbench::cli;
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
@@ -83,7 +84,7 @@ TEST_F(SampleLogWriterTest, WritesEveryRecordExactlyAndTheFileReadsBack) {
   EXPECT_EQ(counts.dropped, 0u);
   EXPECT_TRUE(counts.error.empty()) << counts.error;
 
-  const auto table = hd::DataTable::read_csv(writer.path().string());
+  const auto table = cli::DataTable::read_csv(writer.path().string());
   ASSERT_EQ(table.rows(), kRecords);
   const auto columns = hd::sample_log_columns();
   ASSERT_EQ(table.names().size(), columns.size());
@@ -172,7 +173,7 @@ TEST_F(SampleLogWriterTest, CountsDropsWhenTheRingIsFull) {
   EXPECT_FALSE(writer.push(record(99)));  // after close: refused and counted
   EXPECT_EQ(writer.dropped(), 13u);
   EXPECT_EQ(writer.close().written, 8u);  // idempotent
-  const auto table = hd::DataTable::read_csv(writer.path().string());
+  const auto table = cli::DataTable::read_csv(writer.path().string());
   ASSERT_EQ(table.rows(), 8u);
   EXPECT_EQ(table.column("index").back(), 7.0);  // the oldest were kept
 }

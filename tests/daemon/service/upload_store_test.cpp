@@ -9,6 +9,7 @@
 #include "hystbench/common/command_error.hpp"
 
 namespace hd = hystbench::daemon;
+namespace common = hystbench::common;
 using nlohmann::json;
 
 namespace {
@@ -18,7 +19,7 @@ template <typename F>
 std::tuple<std::string, std::string, json> refusal(F&& f) {
   try {
     f();
-  } catch (const hd::CommandError& e) {
+  } catch (const common::CommandError& e) {
     return {e.code(), e.what(), e.detail()};
   }
   return {"ok", "", json::object()};

@@ -4,13 +4,13 @@
 // --model hammerstein).
 #include <iosfwd>
 
-#include "hystbench/compensation/mimo_identification.hpp"
-#include "hystbench/compensation/mimo_model_file.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/diagnose_command.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
+#include "hystbench/compensation/mimo_identification.hpp"
+#include "hystbench/compensation/mimo_model_file.hpp"
 
-namespace hystbench::daemon::details {
+namespace hystbench::cli::details {
 
 /// The record's realizations and periods from its `realization` and `period` columns (one
 /// realization, one period where absent). Rows of a realization, and of a period, are
@@ -24,4 +24,4 @@ int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostrea
 int run_simulate_mimo(const SimulateCommand& cmd, const compensation::MimoModelFile& file,
                       std::ostream& out, std::ostream& err);
 
-}  // namespace hystbench::daemon::details
+}  // namespace hystbench::cli::details

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace hystbench::daemon::details {
+namespace hystbench::cli::details {
 
 void run_gnuplot(const std::filesystem::path& script, const std::filesystem::path& log) {
   const pid_t pid = fork();
@@ -45,4 +45,4 @@ std::string gnuplot_quoted(const std::filesystem::path& p) {
   return q + "'";
 }
 
-}  // namespace hystbench::daemon::details
+}  // namespace hystbench::cli::details

@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <string>
 
-namespace hystbench::daemon::details {
+namespace hystbench::cli::details {
 
 /// Runs `gnuplot script` with its output into log. Throws std::runtime_error naming the cause:
 /// gnuplot missing (the script and its data are left for the user), or its error's tail.
@@ -12,4 +12,4 @@ void run_gnuplot(const std::filesystem::path& script, const std::filesystem::pat
 /// A path as a single-quoted gnuplot string.
 std::string gnuplot_quoted(const std::filesystem::path& p);
 
-}  // namespace hystbench::daemon::details
+}  // namespace hystbench::cli::details

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace hystbench::daemon {
+namespace hystbench::common {
 
 class CommandError : public std::runtime_error {
  public:
@@ -22,4 +22,4 @@ class CommandError : public std::runtime_error {
   nlohmann::json detail_;
 };
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::common

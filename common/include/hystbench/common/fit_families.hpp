@@ -9,7 +9,7 @@
 
 #include "hystbench/compensation/hysteresis_model.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::common {
 
 /// Every family, in the order "auto" fits and reports them.
 std::span<const compensation::ModelKind> fit_families() noexcept;
@@ -23,4 +23,4 @@ bool is_fit_family(const std::string& name) noexcept;
 /// "unknown 'name' (pi, mpi, cpi, rpi, auto)" for anything else.
 std::optional<compensation::ModelKind> parse_fit_family(const std::string& name);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::common

@@ -9,7 +9,7 @@
 #include "hystbench/compensation/mimo_model_file.hpp"
 #include "hystbench/compensation/model_file.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::common {
 
 /// Reads and validates a model file; throws std::runtime_error naming the file and field.
 compensation::ModelFile load_model_file(const std::string& path);
@@ -26,4 +26,4 @@ std::optional<compensation::MimoModelFile> load_mimo_model_file(const std::strin
 /// Writes one atomically.
 void save_mimo_model_file(const std::string& path, const compensation::MimoModelFile& file);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::common

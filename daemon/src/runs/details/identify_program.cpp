@@ -43,7 +43,7 @@ sim::Excitation excitation(const IdentifyRequest& request, const RunContext& ctx
     options.reversals_last = true;  // the held-out end of the record: loop shape, not creep
     return sim::identification_excitation(request.u_min, request.u_max, ctx.dt(), options);
   } catch (const std::exception& e) {
-    throw CommandError("bad_params", e.what());
+    throw common::CommandError("bad_params", e.what());
   }
 }
 
@@ -53,9 +53,9 @@ IdentifyRequest parse_identify_request(const Request& request, const BenchSettin
   const auto& lim = settings.loop.limits;
   IdentifyRequest r;
   r.model = request.string("model", settings.identify.model);
-  if (!is_fit_family(r.model)) {
-    throw CommandError("bad_params",
-                       "model: unknown '" + r.model + "' (" + fit_family_names() + ")");
+  if (!common::is_fit_family(r.model)) {
+    throw common::CommandError(
+        "bad_params", "model: unknown '" + r.model + "' (" + common::fit_family_names() + ")");
   }
   r.operators = request.integer("operators", settings.identify.operators);
   r.dead_zones = request.integer("dead_zones", settings.identify.dead_zones);
@@ -63,7 +63,8 @@ IdentifyRequest parse_identify_request(const Request& request, const BenchSettin
   const auto [u_min, u_max] = settings.identify.span_v(lim.u_min, lim.u_max);
   r.u_min = request.number("u_min", u_min, lim.u_min, lim.u_max);
   r.u_max = request.number("u_max", u_max, lim.u_min, lim.u_max);
-  if (!(r.u_max > r.u_min)) throw CommandError("bad_params", "u_max must be greater than u_min");
+  if (!(r.u_max > r.u_min))
+    throw common::CommandError("bad_params", "u_max must be greater than u_min");
   return r;
 }
 

@@ -27,10 +27,11 @@ bool ends_with(const std::string& s, const std::string& tail) {
 // RUN-learned from any of the names a client may give; never a path.
 std::string drive_name(const std::string& name) {
   if (!is_folder_name(name)) {
-    throw CommandError("bad_params",
-                       "learned: a learned drive's name (letters, digits, '.', '_', '-'; not a "
-                       "path): the run id of the learning run, as its result and `hystbench model "
-                       "list` show");
+    throw common::CommandError(
+        "bad_params",
+        "learned: a learned drive's name (letters, digits, '.', '_', '-'; not a "
+        "path): the run id of the learning run, as its result and `hystbench model "
+        "list` show");
   }
   std::string base = name;
   for (const char* ext : {".csv", ".json"}) {
@@ -98,9 +99,9 @@ std::string save_learned_drive(const std::string& dir, const std::string& run_id
                                const std::vector<double>& u, const std::vector<double>& compensator,
                                double dt_s, const LearnedFor& f, const json& meta) {
   if (compensator.size() != u.size()) {
-    throw CommandError("io_error", "cannot keep the learned drive: " + std::to_string(u.size()) +
-                                       " samples, " + std::to_string(compensator.size()) +
-                                       " of the compensator's");
+    throw common::CommandError(
+        "io_error", "cannot keep the learned drive: " + std::to_string(u.size()) + " samples, " +
+                        std::to_string(compensator.size()) + " of the compensator's");
   }
   const std::string name = run_id + kSuffix;
   const fs::path csv = fs::path(dir) / (name + ".csv");
@@ -127,7 +128,8 @@ std::string save_learned_drive(const std::string& dir, const std::string& run_id
     out << m.dump(2) << "\n";
     if (!out) throw std::runtime_error("cannot write " + name + ".json in " + dir);
   } catch (const std::exception& e) {
-    throw CommandError("io_error", std::string("cannot keep the learned drive: ") + e.what());
+    throw common::CommandError("io_error",
+                               std::string("cannot keep the learned drive: ") + e.what());
   }
   return csv.string();
 }
@@ -137,8 +139,9 @@ LearnedDrive load_learned_drive(const std::string& dir, const std::string& name)
   d.name = drive_name(name);
   const fs::path json_path = fs::path(dir) / (d.name + ".json");
   if (!fs::is_regular_file(fs::symlink_status(json_path))) {
-    throw CommandError("bad_params", "learned: no learned drive '" + d.name +
-                                         "' in the daemon's model folder (hystbench model list)");
+    throw common::CommandError("bad_params",
+                               "learned: no learned drive '" + d.name +
+                                   "' in the daemon's model folder (hystbench model list)");
   }
   try {
     std::ifstream in(json_path);
@@ -157,7 +160,8 @@ LearnedDrive load_learned_drive(const std::string& dir, const std::string& name)
                                " samples, its period " + std::to_string(f.period_samples));
     }
   } catch (const std::exception& e) {
-    throw CommandError("io_error", "learned: '" + d.name + "' is not a learned drive: " + e.what());
+    throw common::CommandError("io_error",
+                               "learned: '" + d.name + "' is not a learned drive: " + e.what());
   }
   return d;
 }
@@ -176,11 +180,12 @@ void check_learned_drive(const LearnedDrive& drive, const LearnedFor& run) {
           : "give its extremes (--min " + number(f.min_um) + " --max " + number(f.max_um) +
                 "), or load the model it was learned with, whose range they come from; or "
                 "learn this reference";
-  throw CommandError("bad_params", "learned: '" + drive.name + "' was learned for " + describe(f) +
-                                       "; this run asks for " + describe(run) +
-                                       ". A learned drive replays only its own reference at its "
-                                       "own loop rate: " +
-                                       how + " with --learn N");
+  throw common::CommandError("bad_params",
+                             "learned: '" + drive.name + "' was learned for " + describe(f) +
+                                 "; this run asks for " + describe(run) +
+                                 ". A learned drive replays only its own reference at its "
+                                 "own loop rate: " +
+                                 how + " with --learn N");
 }
 
 }  // namespace hystbench::daemon::details

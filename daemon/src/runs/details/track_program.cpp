@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
@@ -15,7 +16,6 @@
 #include "hystbench/compensation/pid_tuning.hpp"
 #include "hystbench/compensation/planned_inverse.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
-#include "hystbench/common/command_error.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "runs/details/learned_drive.hpp"
 #include "runs/details/track_reference.hpp"
@@ -66,12 +66,12 @@ constexpr double kGoodEnoughFraction = 1e-3;
 hc::CompensatorKind compensator_kind(const std::string& name, const RunContext& ctx) {
   const auto kind = hc::compensator_kind_from_string(name);
   if (!kind) {
-    throw CommandError("bad_params", "compensator: unknown '" + name +
-                                         "' (none, inverse, inverse_multiplicative, "
-                                         "inverse+pid, pid)");
+    throw common::CommandError("bad_params", "compensator: unknown '" + name +
+                                                 "' (none, inverse, inverse_multiplicative, "
+                                                 "inverse+pid, pid)");
   }
   if (hc::needs_model(*kind) && ctx.model == nullptr) {
-    throw CommandError(
+    throw common::CommandError(
         "no_model", "compensator '" + name + "' needs a model: run identify or model.load first");
   }
   return *kind;
@@ -79,9 +79,9 @@ hc::CompensatorKind compensator_kind(const std::string& name, const RunContext& 
 
 ActuatorRange known_range(const RunContext& ctx) {
   if (const auto range = actuator_range(ctx)) return *range;
-  throw CommandError("no_range",
-                     "the actuator range is unknown: identify or load a model, or set "
-                     "limits.y_min and limits.y_max");
+  throw common::CommandError("no_range",
+                             "the actuator range is unknown: identify or load a model, or set "
+                             "limits.y_min and limits.y_max");
 }
 
 // A learning run's trials (track --learn): each one period of a periodic reference, P whole
@@ -110,7 +110,7 @@ std::optional<LearningPlan> learning_plan(const Request& request, const RunConte
   if (!learns) {
     for (const char* key : {"learn_gain", "learn_cutoff_hz"}) {
       if (request.has(key)) {
-        throw CommandError("bad_params", std::string(key) + ": only with learn_trials > 0");
+        throw common::CommandError("bad_params", std::string(key) + ": only with learn_trials > 0");
       }
     }
     if (!request.has("learned")) return std::nullopt;
@@ -129,16 +129,18 @@ std::optional<LearningPlan> learning_plan(const Request& request, const RunConte
   }
   plan.reference = request.string("reference", "triangle");
   if (plan.reference != "sine" && plan.reference != "triangle" && plan.reference != "sawtooth") {
-    throw CommandError("bad_params", std::string(key) +
-                                         ": a trial is one period of a sine, triangle or "
-                                         "sawtooth, or one pass of an uploaded trajectory; '" +
-                                         plan.reference + "' does not repeat");
+    throw common::CommandError("bad_params",
+                               std::string(key) +
+                                   ": a trial is one period of a sine, triangle or "
+                                   "sawtooth, or one pass of an uploaded trajectory; '" +
+                                   plan.reference + "' does not repeat");
   }
   if (request.has("periods") || request.has("duration_s")) {
-    throw CommandError("bad_params", std::string(key) +
-                                         " sets the run's length (the start-up period, the "
-                                         "first trial and the learned ones): leave out periods "
-                                         "and duration_s");
+    throw common::CommandError("bad_params",
+                               std::string(key) +
+                                   " sets the run's length (the start-up period, the "
+                                   "first trial and the learned ones): leave out periods "
+                                   "and duration_s");
   }
   const double rate = ctx.settings.loop.rate_hz;
   const double f = request.number("frequency_hz", 1.0, 1e-3, rate / 20.0);
@@ -184,9 +186,9 @@ std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
                                    ? hc::InverseKind::kMultiplicative
                                    : hc::InverseKind::kAuto);
   } catch (const hc::NotInvertibleError& e) {
-    throw CommandError("not_invertible", e.what());
+    throw common::CommandError("not_invertible", e.what());
   } catch (const std::exception& e) {
-    throw CommandError("bad_model", e.what());
+    throw common::CommandError("bad_model", e.what());
   }
 }
 
@@ -232,7 +234,7 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
   try {
     pid.emplace(pp, ctx.dt());
   } catch (const std::exception& e) {
-    throw CommandError("bad_params", e.what());
+    throw common::CommandError("bad_params", e.what());
   }
   summary.update({{"kp", pp.kp},
                   {"ki", pp.ki},
@@ -435,7 +437,8 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
                                         const RunContext& ctx, const TrackReference& ref) {
   const auto& lim = ctx.settings.loop.limits;
   const std::optional<hc::ActuatorModel> model = predictor(ctx, ctx.u_now);
-  if (!model) throw CommandError("no_range", "learning needs a model or limits.y_min/y_max");
+  if (!model)
+    throw common::CommandError("no_range", "learning needs a model or limits.y_min/y_max");
   p.learning = std::make_unique<LearningExchange>(plan.period, p.metrics_from);
   hc::LearningOptions o;
   o.dt = ctx.dt();
@@ -464,7 +467,7 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   try {
     return std::make_unique<TrackLearning>(*model, *p.learning, r, o);
   } catch (const std::invalid_argument& e) {
-    throw CommandError("bad_params", std::string("learning: ") + e.what());
+    throw common::CommandError("bad_params", std::string("learning: ") + e.what());
   }
 }
 
@@ -515,7 +518,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   try {
     p->compensator.emplace(kind, std::move(inverse), pid, linear);
   } catch (const std::exception& e) {
-    throw CommandError("bad_params", e.what());
+    throw common::CommandError("bad_params", e.what());
   }
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
   p->summary = {{"compensator", comp_name}, {"y_model", predictor_name(ctx)}};

@@ -4,9 +4,9 @@
 // inverse_multiplicative, inverse+pid, pid). Pure (no threads, no files); errors are
 // CommandError naming the cause (bad_params, no_model, no_range, not_invertible, bad_model,
 // out_of_range, slew_limit). Not real-time safe.
-#include "service/details/request_params.hpp"
 #include "hystbench/daemon/service/upload_store.hpp"
 #include "runs/details/run_context.hpp"
+#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 

@@ -6,8 +6,8 @@
 #include <sstream>
 #include <string>
 
-#include "service/details/request_params.hpp"
 #include "hystbench/common/command_error.hpp"
+#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -33,11 +33,12 @@ void check_range(const Upload& u, double lo, double hi, const char* unit, const 
   for (std::size_t k = 0; k < u.values.size(); ++k) {
     const double v = u.values[k];
     if (v < lo - 1e-9 || v > hi + 1e-9) {
-      throw CommandError("out_of_range",
-                         std::string(what) + " " + sample_words(u, k) + ": " + num(v) + " " + unit +
-                             " is beyond the " + (unit[0] == 'V' ? "output" : "actuator") +
-                             " range [" + num(lo) + ", " + num(hi) + "] " + unit + "; nothing ran",
-                         {{"sample", k}, {"t_s", u.time_of(k)}});
+      throw common::CommandError("out_of_range",
+                                 std::string(what) + " " + sample_words(u, k) + ": " + num(v) +
+                                     " " + unit + " is beyond the " +
+                                     (unit[0] == 'V' ? "output" : "actuator") + " range [" +
+                                     num(lo) + ", " + num(hi) + "] " + unit + "; nothing ran",
+                                 {{"sample", k}, {"t_s", u.time_of(k)}});
     }
   }
 }
@@ -49,11 +50,12 @@ void check_slew(const Upload& u, const std::vector<double>& v, double max_step, 
     const double step = std::abs(v[k] - v[k - 1]);
     if (step > max_step * (1.0 + 1e-9) + 1e-12) {
       const std::size_t s = u.sample_from(static_cast<double>(k) * dt_s);
-      throw CommandError("slew_limit",
-                         std::string(what) + " " + sample_words(u, s) + ": moves " +
-                             num(step / dt_s) + " " + unit + "/s, faster than the slew limit " +
-                             num(limit_per_s) + " " + unit + "/s; nothing ran",
-                         {{"sample", s}, {"t_s", u.time_of(s)}});
+      throw common::CommandError("slew_limit",
+                                 std::string(what) + " " + sample_words(u, s) + ": moves " +
+                                     num(step / dt_s) + " " + unit +
+                                     "/s, faster than the slew limit " + num(limit_per_s) + " " +
+                                     unit + "/s; nothing ran",
+                                 {{"sample", s}, {"t_s", u.time_of(s)}});
     }
   }
 }
@@ -153,13 +155,14 @@ TrackReference builtin_reference(const Request& request, const ReferenceLimits& 
   try {
     spec.kind = sim::signal_kind_from_string(ref_name);
   } catch (const std::exception& e) {
-    throw CommandError("bad_params", std::string("reference: ") + e.what());
+    throw common::CommandError("bad_params", std::string("reference: ") + e.what());
   }
   if (spec.kind == sim::SignalKind::kSteps || spec.kind == sim::SignalKind::kSamples) {
-    throw CommandError("bad_params", "reference: '" + ref_name +
-                                         "' needs data; use sine, triangle, sawtooth, "
-                                         "decaying_sine, multi_frequency or chirp, or upload "
-                                         "a trajectory (reference_upload)");
+    throw common::CommandError("bad_params",
+                               "reference: '" + ref_name +
+                                   "' needs data; use sine, triangle, sawtooth, "
+                                   "decaying_sine, multi_frequency or chirp, or upload "
+                                   "a trajectory (reference_upload)");
   }
   spec.frequency_hz = frequency_hz > 0.0
                           ? frequency_hz
@@ -167,7 +170,8 @@ TrackReference builtin_reference(const Request& request, const ReferenceLimits& 
   const double periods = periods_given > 0.0 ? periods_given : request.number("periods", 5.0);
   double duration = periods_given > 0.0 ? 0.0 : request.number("duration_s", 0.0);
   if (duration <= 0.0) duration = periods / spec.frequency_hz;
-  if (!(duration > 0.0)) throw CommandError("bad_params", "periods or duration_s must be > 0");
+  if (!(duration > 0.0))
+    throw common::CommandError("bad_params", "periods or duration_s must be > 0");
 
   const double span = limits.y_top - limits.y_bottom;
   const double fraction = request.number("range_fraction", 0.8);
@@ -176,13 +180,14 @@ TrackReference builtin_reference(const Request& request, const ReferenceLimits& 
   if (request.has("min_um") || request.has("max_um")) {
     y_lo = request.number("min_um", y_lo);
     y_hi = request.number("max_um", y_hi);
-    if (!(y_hi > y_lo)) throw CommandError("bad_params", "max_um must be greater than min_um");
+    if (!(y_hi > y_lo))
+      throw common::CommandError("bad_params", "max_um must be greater than min_um");
     if (y_lo < limits.y_bottom - 1e-9 || y_hi > limits.y_top + 1e-9) {
-      throw CommandError("out_of_range", "reference [" + std::to_string(y_lo) + ", " +
-                                             std::to_string(y_hi) +
-                                             "] um is beyond the actuator range [" +
-                                             std::to_string(limits.y_bottom) + ", " +
-                                             std::to_string(limits.y_top) + "] um");
+      throw common::CommandError("out_of_range", "reference [" + std::to_string(y_lo) + ", " +
+                                                     std::to_string(y_hi) +
+                                                     "] um is beyond the actuator range [" +
+                                                     std::to_string(limits.y_bottom) + ", " +
+                                                     std::to_string(limits.y_top) + "] um");
     }
   }
   spec.amplitude = 0.5 * (y_hi - y_lo);
@@ -194,7 +199,7 @@ TrackReference builtin_reference(const Request& request, const ReferenceLimits& 
   try {
     r.signal = sim::make_signal_generator(spec);
   } catch (const std::exception& e) {
-    throw CommandError("bad_params", e.what());
+    throw common::CommandError("bad_params", e.what());
   }
   const double dt = 1.0 / limits.rate_hz;
   r.samples = static_cast<std::uint64_t>(std::llround(duration / dt));
@@ -222,9 +227,9 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
   check_range(upload, limits.y_bottom, limits.y_top, "um", "reference");
   std::vector<double> traj = upload.resampled(dt);
   if (traj.size() < 2) {
-    throw CommandError("bad_params", "reference upload '" + upload.name + "' lasts " +
-                                         num(upload.duration_s()) +
-                                         " s: shorter than two loop periods");
+    throw common::CommandError("bad_params", "reference upload '" + upload.name + "' lasts " +
+                                                 num(upload.duration_s()) +
+                                                 " s: shorter than two loop periods");
   }
   const double max_step = limits.slew_um_per_s * dt;
   check_slew(upload, traj, max_step, dt, limits.slew_um_per_s, "um", "reference");
@@ -302,9 +307,9 @@ std::vector<double> checked_drive(const Upload& upload, double u_min, double u_m
   check_range(upload, u_min, u_max, "V", "drive");
   std::vector<double> drive = upload.resampled(dt_s);
   if (drive.size() < 2) {
-    throw CommandError("bad_params", "drive upload '" + upload.name + "' lasts " +
-                                         num(upload.duration_s()) +
-                                         " s: shorter than two loop periods");
+    throw common::CommandError("bad_params", "drive upload '" + upload.name + "' lasts " +
+                                                 num(upload.duration_s()) +
+                                                 " s: shorter than two loop periods");
   }
   check_slew(upload, drive, slew_v_per_s * dt_s, dt_s, slew_v_per_s, "V", "drive");
   return drive;

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "service/details/request_params.hpp"
 #include "hystbench/daemon/service/upload_store.hpp"
 #include "hystbench/sim/signal_generator.hpp"
+#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 

@@ -128,7 +128,7 @@ const Command& find_command(const std::string& name, const json& params) {
     previous = c.name;
   }
   if (fallback != nullptr) return *fallback;
-  throw CommandError("unknown_command", "unknown command '" + name + "' (" + names + ")");
+  throw common::CommandError("unknown_command", "unknown command '" + name + "' (" + names + ")");
 }
 
 }  // namespace hystbench::daemon::details

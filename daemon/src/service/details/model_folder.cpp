@@ -20,9 +20,10 @@ namespace {
 // The file name of model `name` given as request key `key`; never a path.
 std::string model_file_name(const std::string& key, const std::string& name) {
   if (!is_folder_name(name)) {
-    throw CommandError("bad_params", key +
-                                         ": a model name (letters, digits, '.', '_', '-'; not a "
-                                         "path), as `hystbench model list` shows");
+    throw common::CommandError("bad_params",
+                               key +
+                                   ": a model name (letters, digits, '.', '_', '-'; not a "
+                                   "path), as `hystbench model list` shows");
   }
   const bool has_json = name.size() > 5 && name.compare(name.size() - 5, 5, ".json") == 0;
   return has_json ? name : name + ".json";
@@ -41,13 +42,14 @@ FolderModel load_stored_model(const std::string& dir, const std::string& name) {
   const std::string file_name = model_file_name("stored", name);
   const fs::path path = fs::path(dir) / file_name;
   if (!fs::is_regular_file(fs::symlink_status(path))) {
-    throw CommandError("bad_params", "stored: no model '" + file_name +
-                                         "' in the daemon's model folder (hystbench model list)");
+    throw common::CommandError(
+        "bad_params",
+        "stored: no model '" + file_name + "' in the daemon's model folder (hystbench model list)");
   }
   try {
-    return {load_model_file(path.string()), path.string()};
+    return {common::load_model_file(path.string()), path.string()};
   } catch (const std::exception& e) {
-    throw CommandError("bad_model", e.what());
+    throw common::CommandError("bad_model", e.what());
   }
 }
 
@@ -58,15 +60,15 @@ FolderModel keep_model_document(const std::string& dir, const std::string& name,
   try {
     m.file = hc::model_file_from_json(document);
   } catch (const std::exception& e) {
-    throw CommandError("bad_model", std::string("model: ") + e.what());
+    throw common::CommandError("bad_model", std::string("model: ") + e.what());
   }
   m.path = (fs::path(dir) / file_name).string();
   try {
     fs::create_directories(dir);
-    save_model_file(m.path, m.file);
+    common::save_model_file(m.path, m.file);
   } catch (const std::exception& e) {
-    throw CommandError("io_error",
-                       "cannot keep the model in the model folder: " + std::string(e.what()));
+    throw common::CommandError(
+        "io_error", "cannot keep the model in the model folder: " + std::string(e.what()));
   }
   return m;
 }
@@ -89,7 +91,7 @@ json list_model_folder(const std::string& dir, const std::string& active_path) {
       continue;
     }
     try {
-      const hc::ModelFile f = load_model_file(e.path().string());
+      const hc::ModelFile f = common::load_model_file(e.path().string());
       m["type"] = std::string(hc::to_string(f.model.hysteresis().kind()));
       m["operators"] = f.model.hysteresis().operator_count();
     } catch (const std::exception&) {
@@ -106,12 +108,13 @@ json delete_from_model_folder(const std::string& dir, const std::string& name,
   const std::string file_name = model_file_name("name", name);
   const fs::path path = fs::path(dir) / file_name;
   if (!fs::is_regular_file(fs::symlink_status(path))) {
-    throw CommandError("bad_params", "name: no model or learned drive '" + file_name +
-                                         "' in the daemon's model folder (hystbench model list)");
+    throw common::CommandError("bad_params",
+                               "name: no model or learned drive '" + file_name +
+                                   "' in the daemon's model folder (hystbench model list)");
   }
   if (path.string() == active_path) {
-    throw CommandError("bad_params",
-                       "name: '" + file_name + "' is the active model; load another one first");
+    throw common::CommandError(
+        "bad_params", "name: '" + file_name + "' is the active model; load another one first");
   }
   // A learned drive is its JSON and the CSV beside it.
   std::vector<fs::path> files{path};
@@ -120,9 +123,9 @@ json delete_from_model_folder(const std::string& dir, const std::string& name,
   for (const fs::path& f : files) {
     std::error_code ec;
     if (!fs::remove(f, ec) && ec) {
-      throw CommandError("io_error", "cannot delete " + f.filename().string() + ": " +
-                                         ec.message() +
-                                         (deleted.empty() ? "; nothing deleted" : ""));
+      throw common::CommandError("io_error", "cannot delete " + f.filename().string() + ": " +
+                                                 ec.message() +
+                                                 (deleted.empty() ? "; nothing deleted" : ""));
     }
     if (!ec) deleted.push_back(f.filename().string());
   }

@@ -15,12 +15,13 @@ namespace {
 
 void check_object(const json& params) {
   if (!params.is_null() && !params.is_object()) {
-    throw CommandError("bad_params", "params must be an object");
+    throw common::CommandError("bad_params", "params must be an object");
   }
 }
 
 [[noreturn]] void unknown_key(const std::string& key, const std::string& valid) {
-  throw CommandError("bad_params", "unknown parameter '" + key + "' (valid: " + valid + ")");
+  throw common::CommandError("bad_params",
+                             "unknown parameter '" + key + "' (valid: " + valid + ")");
 }
 
 long long integer_bound(double v) {
@@ -35,7 +36,7 @@ constexpr const char* kTypeWords[] = {"a number",  "an integer", "a string",
 // The value of params[spec.key] (present) against its spec.
 void check_value(const json& params, const ParamSpec& spec) {
   if (spec.refusal != nullptr) {
-    throw CommandError("bad_params", std::string(spec.key) + ": " + spec.refusal);
+    throw common::CommandError("bad_params", std::string(spec.key) + ": " + spec.refusal);
   }
   const json& v = params[spec.key];
   switch (spec.type) {
@@ -64,7 +65,7 @@ void check_value(const json& params, const ParamSpec& spec) {
       if (v.is_boolean()) return;
       break;
   }
-  throw CommandError(
+  throw common::CommandError(
       "bad_params",
       std::string(spec.key) + ": must be " +
           (spec.what != nullptr ? spec.what : kTypeWords[static_cast<int>(spec.type)]));
@@ -143,13 +144,14 @@ double number_param(const json& params, const char* key, double fallback, double
   if (params.is_null() || !params.contains(key)) return fallback;
   const json& v = params[key];
   if (!v.is_number()) {
-    throw CommandError("bad_params", std::string(key) + ": must be a number, got " + v.type_name());
+    throw common::CommandError("bad_params",
+                               std::string(key) + ": must be a number, got " + v.type_name());
   }
   const double d = v.get<double>();
   if (!std::isfinite(d) || d < lo || d > hi) {
-    throw CommandError("bad_params", std::string(key) + ": " + std::to_string(d) +
-                                         " is out of range [" + std::to_string(lo) + ", " +
-                                         std::to_string(hi) + "]");
+    throw common::CommandError("bad_params", std::string(key) + ": " + std::to_string(d) +
+                                                 " is out of range [" + std::to_string(lo) + ", " +
+                                                 std::to_string(hi) + "]");
   }
   return d;
 }
@@ -159,18 +161,19 @@ long long integer_param(const json& params, const char* key, long long fallback,
   if (params.is_null() || !params.contains(key)) return fallback;
   const json& v = params[key];
   if (!v.is_number_integer()) {
-    throw CommandError("bad_params", std::string(key) + ": must be an integer");
+    throw common::CommandError("bad_params", std::string(key) + ": must be an integer");
   }
   // Unsigned values beyond long long's range are out of range too, never wrapped.
   if (v.is_number_unsigned() && v.get<unsigned long long>() > static_cast<unsigned long long>(hi)) {
-    throw CommandError("bad_params", std::string(key) + ": " + v.dump() + " is out of range [" +
-                                         std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    throw common::CommandError("bad_params", std::string(key) + ": " + v.dump() +
+                                                 " is out of range [" + std::to_string(lo) + ", " +
+                                                 std::to_string(hi) + "]");
   }
   const auto d = v.get<long long>();
   if (d < lo || d > hi) {
-    throw CommandError("bad_params", std::string(key) + ": " + std::to_string(d) +
-                                         " is out of range [" + std::to_string(lo) + ", " +
-                                         std::to_string(hi) + "]");
+    throw common::CommandError("bad_params", std::string(key) + ": " + std::to_string(d) +
+                                                 " is out of range [" + std::to_string(lo) + ", " +
+                                                 std::to_string(hi) + "]");
   }
   return d;
 }
@@ -182,7 +185,7 @@ int int_param(const json& params, const char* key, int fallback, int lo, int hi)
 std::string string_param(const json& params, const char* key, const std::string& fallback) {
   if (params.is_null() || !params.contains(key)) return fallback;
   if (!params[key].is_string())
-    throw CommandError("bad_params", std::string(key) + ": must be a string");
+    throw common::CommandError("bad_params", std::string(key) + ": must be a string");
   return params[key].get<std::string>();
 }
 

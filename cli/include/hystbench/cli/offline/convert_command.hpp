@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 struct ConvertCommand {
   std::string u_path;  ///< inputs (.npy)
@@ -26,4 +26,4 @@ struct ConvertCommand {
 /// not positive (the message says which; nothing is written).
 int run_convert(const ConvertCommand& cmd, std::ostream& out, std::ostream& err);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

@@ -17,7 +17,7 @@
 
 #include "hystbench/compensation/actuator_model.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 class DataFileError : public std::runtime_error {
  public:
@@ -99,9 +99,10 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
 bool names_several(const RecordColumns& columns);
 
 /// A record of several inputs and outputs: the columns that RecordColumns' u and y name as comma
-/// lists, each scaled by its entry of u_scales / y_scales or else by u_scale / y_scale, and the record's layout where the file has
-/// `realization` and `period` columns (whole numbers; else empty): experiments that each start
-/// from rest, and the periods of a periodic excitation within them.
+/// lists, each scaled by its entry of u_scales / y_scales or else by u_scale / y_scale, and the
+/// record's layout where the file has `realization` and `period` columns (whole numbers; else
+/// empty): experiments that each start from rest, and the periods of a periodic excitation within
+/// them.
 struct MultiRecord {
   std::vector<std::string> u_names, y_names;
   std::vector<std::vector<double>> u, y;  ///< per column, scaled; y empty where optional and absent
@@ -131,4 +132,4 @@ void write_csv(const std::string& path, const std::vector<std::string>& names,
                const std::vector<const std::vector<double>*>& columns,
                const std::vector<std::string>& comments = {}, int significant_digits = 10);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

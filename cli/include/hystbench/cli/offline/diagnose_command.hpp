@@ -38,10 +38,10 @@
 #include <string>
 #include <vector>
 
-#include "hystbench/compensation/diagnosis.hpp"
 #include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/compensation/diagnosis.hpp"
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 struct DiagnoseCommand {
   std::vector<std::string> data_paths;      ///< one or more records of one device
@@ -69,4 +69,4 @@ void write_diagnosis_report(const std::string& dir, const compensation::Diagnosi
                             const std::string& data_path, std::span<const double> t,
                             std::span<const double> u, std::span<const double> y);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

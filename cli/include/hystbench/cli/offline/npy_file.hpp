@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 struct NpyArray {
   std::vector<std::size_t> shape;  ///< empty for a 0-d array (one value)
@@ -22,4 +22,4 @@ NpyArray read_npy(const std::string& path);
 /// A shape as NumPy prints it: "(8192, 3, 6, 2)", "(5,)", "()".
 std::string shape_text(std::span<const std::size_t> shape);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

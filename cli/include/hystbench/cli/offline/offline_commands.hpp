@@ -8,13 +8,13 @@
 #include <optional>
 #include <string>
 
+#include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/common/model_file_io.hpp"  // the model files the commands read and write
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/model_file.hpp"
-#include "hystbench/cli/offline/data_table.hpp"
-#include "hystbench/common/model_file_io.hpp"  // the model files the commands read and write
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 struct FitCommand {
   std::string data_path;
@@ -65,4 +65,4 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err);
 int run_simulate(const SimulateCommand& cmd, std::ostream& out, std::ostream& err);
 int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 class ClientError : public std::runtime_error {
  public:
@@ -45,4 +45,4 @@ class BenchClient {
   long long next_id_ = 1;
 };
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 class BenchClient;
 
@@ -66,4 +66,4 @@ void progress_bar(std::ostream& err, double fraction, const std::string& label);
 /// Human-readable summary of a run result (as in the run.finished event).
 void print_run_result(const nlohmann::json& result, std::ostream& out);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

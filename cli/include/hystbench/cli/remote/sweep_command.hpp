@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 struct SweepCommand {
   std::string socket_path;
@@ -28,4 +28,4 @@ struct SweepCommand {
 /// table so far is still printed), 2 the daemon cannot be reached or the plot cannot be written.
 int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli

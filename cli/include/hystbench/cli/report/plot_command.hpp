@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace hystbench::daemon {
+namespace hystbench::cli {
 
 struct PlotCommand {
   std::string log_path;
@@ -40,4 +40,4 @@ std::filesystem::path default_plot_dir(const std::string& log_path);
 /// Returns the exit code: 0 written, 1 the log or gnuplot failed (the message says which).
 int run_plot(const PlotCommand& cmd, std::ostream& out, std::ostream& err);
 
-}  // namespace hystbench::daemon
+}  // namespace hystbench::cli
