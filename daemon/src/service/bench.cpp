@@ -379,13 +379,14 @@ json Bench::start_excite(const details::Request& request, std::uint64_t client) 
 json Bench::start_track(const details::Request& request, std::uint64_t client) {
   std::lock_guard lock(mutex_);
   require_idle();
-  std::string upload_name;
+  const details::RunContext ctx = run_context();
+  const details::TrackRequest track = details::parse_track_request(request, ctx);
+  const std::string& upload_name = track.reference_upload;
   std::shared_ptr<const Upload> upload;
-  if (request.has("reference_upload")) {
-    upload_name = request.string("reference_upload", "");
+  if (!upload_name.empty()) {
     upload = uploads_.complete(upload_name, client, UploadKind::kReference);
   }
-  details::BuiltRun run = details::make_track_program(request, run_context(), upload.get());
+  details::BuiltRun run = details::make_track_program(track, ctx, upload.get());
   std::unique_ptr<details::TrackLearning> learning = std::move(run.learning);
   json reply = launch("track", std::move(run));
   if (upload) uploads_.erase(upload_name, client);  // the run has it now

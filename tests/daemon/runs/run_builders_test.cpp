@@ -16,6 +16,7 @@
 #include "runs/details/excite_program.hpp"
 #include "runs/details/identify_program.hpp"
 #include "runs/details/track_program.hpp"
+#include "runs/details/track_request.hpp"
 #include "service/details/command_table.hpp"
 
 namespace hd = hystbench::daemon;
@@ -51,7 +52,7 @@ hdd::BuiltRun track(const json& params, const hdd::RunContext& ctx,
                     const hd::Upload* up = nullptr) {
   const hdd::Command& c = hdd::find_command("track", params);
   const hdd::Request request(params, c.params);
-  return hdd::make_track_program(request, ctx, up);
+  return hdd::make_track_program(hdd::parse_track_request(request, ctx), ctx, up);
 }
 
 std::string refusal(const json& params, const hdd::RunContext& ctx) {
@@ -64,6 +65,52 @@ std::string refusal(const json& params, const hdd::RunContext& ctx) {
 }
 
 }  // namespace
+
+namespace {
+
+hdd::TrackRequest parsed(const json& params, const hdd::RunContext& ctx) {
+  const hdd::Command& c = hdd::find_command("track", params);
+  return hdd::parse_track_request(hdd::Request(params, c.params), ctx);
+}
+
+}  // namespace
+
+TEST(TrackRequest, EveryKeyIsReadOnceOverTheBenchsDefaults) {
+  const hd::BenchSettings s = settings();
+  const hc::ModelFile model = pi_model();
+  const hdd::TrackRequest none = parsed(json::object(), {s, nullptr, 0.0});
+  EXPECT_EQ(none.compensator, "none");  // no model: nothing to invert
+  EXPECT_EQ(none.reference.name, "triangle");
+  EXPECT_DOUBLE_EQ(none.precondition_s, s.precondition_s);
+  EXPECT_FALSE(none.gains.any());
+  EXPECT_FALSE(none.learning.any());
+
+  const hdd::TrackRequest r = parsed({{"reference", "sine"},
+                                      {"frequency_hz", 4.0},
+                                      {"min_um", 5.0},
+                                      {"kd", 0.01},
+                                      {"learn_trials", 3},
+                                      {"precondition_s", 0.1}},
+                                     {s, &model, 0.0});
+  EXPECT_EQ(r.compensator, "inverse");  // a model: its inverse
+  EXPECT_EQ(r.compensator_kind, hc::CompensatorKind::kInverse);
+  EXPECT_EQ(r.reference.kind, hystbench::sim::SignalKind::kSine);
+  EXPECT_DOUBLE_EQ(r.reference.frequency_hz, 4.0);
+  EXPECT_EQ(r.reference.min_um, 5.0);
+  EXPECT_FALSE(r.reference.max_um);
+  EXPECT_FALSE(r.gains.kp);
+  EXPECT_EQ(r.gains.kd, 0.01);
+  EXPECT_EQ(r.learning.trials, 3u);
+  EXPECT_DOUBLE_EQ(r.precondition_s, 0.1);
+
+  const hdd::TrackRequest up =
+      parsed({{"reference_upload", "r"}, {"approach_s", 0.5}}, {s, nullptr, 0.0});
+  EXPECT_EQ(up.reference_upload, "r");
+  EXPECT_DOUBLE_EQ(up.approach_s, 0.5);
+  // Beyond a twentieth of the 1 kHz loop rate, and an upload without a name.
+  EXPECT_THROW(parsed({{"frequency_hz", 60.0}}, {s, nullptr, 0.0}), common::CommandError);
+  EXPECT_THROW(parsed({{"reference_upload", ""}}, {s, nullptr, 0.0}), common::CommandError);
+}
 
 TEST(TrackProgram, ABuiltInTriangleWithoutAModelFollowsTheConfiguredRange) {
   const hd::BenchSettings s = settings();

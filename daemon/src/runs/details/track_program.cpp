@@ -63,20 +63,6 @@ constexpr double kMaxPlanWork = 1.0e6;
 // fraction of the reference's span.
 constexpr double kGoodEnoughFraction = 1e-3;
 
-hc::CompensatorKind compensator_kind(const std::string& name, const RunContext& ctx) {
-  const auto kind = hc::compensator_kind_from_string(name);
-  if (!kind) {
-    throw common::CommandError("bad_params", "compensator: unknown '" + name +
-                                                 "' (none, inverse, inverse_multiplicative, "
-                                                 "inverse+pid, pid)");
-  }
-  if (hc::needs_model(*kind) && ctx.model == nullptr) {
-    throw common::CommandError(
-        "no_model", "compensator '" + name + "' needs a model: run identify or model.load first");
-  }
-  return *kind;
-}
-
 ActuatorRange known_range(const RunContext& ctx) {
   if (const auto range = actuator_range(ctx)) return *range;
   throw common::CommandError("no_range",
@@ -98,71 +84,42 @@ struct LearningPlan {
   std::optional<LearnedDrive> start;  ///< the drive trial 0 plays (`learned`), else none
 };
 
-// The learning gain's default: half the error corrected per trial (a plant whose local slope is
-// half the model's still converges; twice it, at the edge).
-constexpr double kDefaultLearningGain = 0.5;
-
 // The plan of a learning run from its request; for an upload, reference() sets its period (a
 // pass) and its scored part from the trajectory.
-std::optional<LearningPlan> learning_plan(const Request& request, const RunContext& ctx,
-                                          const Upload* upload) {
-  const bool learns = request.has("learn_trials") && request.integer("learn_trials", 0) > 0;
-  if (!learns) {
-    for (const char* key : {"learn_gain", "learn_cutoff_hz"}) {
-      if (request.has(key)) {
-        throw common::CommandError("bad_params", std::string(key) + ": only with learn_trials > 0");
-      }
-    }
-    if (!request.has("learned")) return std::nullopt;
-  }
-  const char* key = learns ? "learn_trials" : "learned";
+std::optional<LearningPlan> learning_plan(const TrackRequest& request, const RunContext& ctx) {
+  const LearningKeys& keys = request.learning;
+  if (!keys.any()) return std::nullopt;
   LearningPlan plan;
-  plan.trials = static_cast<std::size_t>(request.integer("learn_trials", 0));
-  plan.gain = request.number("learn_gain", kDefaultLearningGain);
-  plan.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
-  if (request.has("learned")) {
-    plan.start = load_learned_drive(ctx.settings.model_dir, request.string("learned", ""));
-  }
-  if (upload != nullptr) {
+  plan.trials = keys.trials;
+  plan.gain = keys.gain;
+  plan.cutoff_hz = keys.cutoff_hz;
+  if (keys.learned) plan.start = load_learned_drive(ctx.settings.model_dir, *keys.learned);
+  if (!request.reference_upload.empty()) {
     plan.reference = "upload";
     return plan;
   }
-  plan.reference = request.string("reference", "triangle");
-  if (plan.reference != "sine" && plan.reference != "triangle" && plan.reference != "sawtooth") {
-    throw common::CommandError("bad_params",
-                               std::string(key) +
-                                   ": a trial is one period of a sine, triangle or "
-                                   "sawtooth, or one pass of an uploaded trajectory; '" +
-                                   plan.reference + "' does not repeat");
-  }
-  if (request.has("periods") || request.has("duration_s")) {
-    throw common::CommandError("bad_params",
-                               std::string(key) +
-                                   " sets the run's length (the start-up period, the "
-                                   "first trial and the learned ones): leave out periods "
-                                   "and duration_s");
-  }
+  plan.reference = request.reference.name;
   const double rate = ctx.settings.loop.rate_hz;
-  const double f = request.number("frequency_hz", 1.0, 1e-3, rate / 20.0);
-  plan.period = static_cast<std::size_t>(std::llround(rate / f));
+  plan.period = static_cast<std::size_t>(std::llround(rate / request.reference.frequency_hz));
   plan.frequency_hz = rate / static_cast<double>(plan.period);
   return plan;
 }
 
-TrackReference reference(const Request& request, const RunContext& ctx, const ActuatorRange& range,
-                         const Upload* upload, std::optional<LearningPlan>& learn) {
+TrackReference reference(const TrackRequest& request, const RunContext& ctx,
+                         const ActuatorRange& range, const Upload* upload,
+                         std::optional<LearningPlan>& learn) {
   const auto& lim = ctx.settings.loop.limits;
   const double span = range.y_top - range.y_bottom;
   const ReferenceLimits limits{range.y_bottom, range.y_top,
                                lim.slew_v_per_s * span / (lim.u_max - lim.u_min),
                                ctx.settings.loop.rate_hz};
   if (upload == nullptr) {
-    if (!learn) return builtin_reference(request, limits);
-    return builtin_reference(request, limits, learn->frequency_hz,
+    if (!learn) return builtin_reference(request.reference, limits);
+    return builtin_reference(request.reference, limits, learn->frequency_hz,
                              learning_periods(learn->trials, learn->frequency_hz));
   }
   // The precondition sweep leaves the output at the bottom of its range.
-  const double approach_s = request.number("approach_s", 0.2);
+  const double approach_s = request.approach_s;
   if (!learn) return uploaded_reference(*upload, limits, range.y_bottom, approach_s);
   TrackReference ref =
       uploaded_reference(*upload, limits, range.y_bottom, approach_s, learn->trials);
@@ -196,7 +153,7 @@ std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
 // which. Derived gains (always behind a feedforward: the inverse, or the linear map for `pid`)
 // average the error over the period of a periodic reference of reference_hz (0: none) where
 // tune_pid says so. nullopt for a compensator without feedback.
-std::optional<hc::PidController> feedback_controller(const Request& request,
+std::optional<hc::PidController> feedback_controller(const FeedbackGainsRequest& request,
                                                      hc::CompensatorKind kind,
                                                      const RunContext& ctx, double gain,
                                                      double reference_hz, json& summary) {
@@ -211,7 +168,7 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
                        c.u_fb_max,
                        c.output_filter_hz.value_or(0.0)};
   const bool derived = !c.kp && !c.ki && !c.kd;
-  const bool given = request.has("kp") || request.has("ki") || request.has("kd");
+  const bool given = request.any();
   if (derived && !given) {
     const hc::ActuatorModel* m = ctx.model != nullptr ? &ctx.model->model : nullptr;
     const hc::PidTuning t =
@@ -225,9 +182,9 @@ std::optional<hc::PidController> feedback_controller(const Request& request,
     pp.error_period_s = t.error_period_s;
     summary = {{"gains", "derived"}, {"basis", t.basis}};
   } else {
-    pp.kp = request.number("kp", pp.kp);
-    pp.ki = request.number("ki", pp.ki);
-    pp.kd = request.number("kd", pp.kd);
+    pp.kp = request.kp.value_or(pp.kp);
+    pp.ki = request.ki.value_or(pp.ki);
+    pp.kd = request.kd.value_or(pp.kd);
     summary = {{"gains", given ? "request" : "config"}};
   }
   std::optional<hc::PidController> pid;
@@ -484,13 +441,14 @@ json learning_summary(const LearningPlan& learn) {
 
 }  // namespace
 
-BuiltRun make_track_program(const Request& request, const RunContext& ctx, const Upload* upload) {
+BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
+                            const Upload* upload) {
   const BenchSettings& s = ctx.settings;
   const auto& lim = s.loop.limits;
-  const std::string comp_name = request.string("compensator", ctx.model ? "inverse" : "none");
-  const hc::CompensatorKind kind = compensator_kind(comp_name, ctx);
+  const std::string& comp_name = request.compensator;
+  const hc::CompensatorKind kind = request.compensator_kind;
   const ActuatorRange range = known_range(ctx);
-  std::optional<LearningPlan> learn = learning_plan(request, ctx, upload);
+  std::optional<LearningPlan> learn = learning_plan(request, ctx);
   TrackReference ref = reference(request, ctx, range, upload, learn);
 
   auto p = std::make_unique<RunProgram>();
@@ -500,8 +458,8 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   p->y_ref_min = range.y_bottom;
   p->y_ref_max = range.y_top;
   // Pre-conditioning: current output -> u_max -> u_min, open loop.
-  p->excitation = precondition_sweep(ctx.u_now, lim.u_min, lim.u_max,
-                                     request.number("precondition_s", s.precondition_s), ctx.dt());
+  p->excitation =
+      precondition_sweep(ctx.u_now, lim.u_min, lim.u_max, request.precondition_s, ctx.dt());
   const double gain = (range.y_top - range.y_bottom) / (lim.u_max - lim.u_min);
   const hc::LinearMap linear{gain, range.y_bottom - gain * lim.u_min};
   json feedforward = nullptr;
@@ -509,7 +467,7 @@ BuiltRun make_track_program(const Request& request, const RunContext& ctx, const
   std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
   json feedback = nullptr;
   const std::optional<hc::PidController> pid =
-      feedback_controller(request, kind, ctx, linear.gain, ref.frequency_hz, feedback);
+      feedback_controller(request.gains, kind, ctx, linear.gain, ref.frequency_hz, feedback);
   RunPreparation preparation;
   if (inverse) {
     preparation =

@@ -6,14 +6,14 @@
 // out_of_range, slew_limit). Not real-time safe.
 #include "hystbench/daemon/service/upload_store.hpp"
 #include "runs/details/run_context.hpp"
-#include "service/details/request_params.hpp"
+#include "runs/details/track_request.hpp"
 
 namespace hystbench::daemon::details {
 
-/// The track program for a request checked against track's parameters; `reference_upload` is
-/// the complete upload the request names (reference_upload), else null for a built-in one.
+/// The track program for a parsed request; `reference_upload` is the complete upload the
+/// request names (TrackRequest::reference_upload), else null for a built-in one.
 /// Units: the reference and its range in µm, the output in V, times in s.
-BuiltRun make_track_program(const Request& request, const RunContext& ctx,
+BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
                             const Upload* reference_upload);
 
 }  // namespace hystbench::daemon::details

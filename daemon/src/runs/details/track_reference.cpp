@@ -7,7 +7,6 @@
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
-#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -148,38 +147,27 @@ constexpr double kUpdateAllowanceS = 0.05;
 
 }  // namespace
 
-TrackReference builtin_reference(const Request& request, const ReferenceLimits& limits,
-                                 double frequency_hz, double periods_given) {
-  const std::string ref_name = request.string("reference", "triangle");
+TrackReference builtin_reference(const BuiltinReferenceRequest& request,
+                                 const ReferenceLimits& limits, double frequency_hz,
+                                 double periods_given) {
+  const std::string& ref_name = request.name;
   sim::SignalSpec spec;
-  try {
-    spec.kind = sim::signal_kind_from_string(ref_name);
-  } catch (const std::exception& e) {
-    throw common::CommandError("bad_params", std::string("reference: ") + e.what());
-  }
-  if (spec.kind == sim::SignalKind::kSteps || spec.kind == sim::SignalKind::kSamples) {
-    throw common::CommandError("bad_params",
-                               "reference: '" + ref_name +
-                                   "' needs data; use sine, triangle, sawtooth, "
-                                   "decaying_sine, multi_frequency or chirp, or upload "
-                                   "a trajectory (reference_upload)");
-  }
-  spec.frequency_hz = frequency_hz > 0.0
-                          ? frequency_hz
-                          : request.number("frequency_hz", 1.0, 1e-3, limits.rate_hz / 20.0);
-  const double periods = periods_given > 0.0 ? periods_given : request.number("periods", 5.0);
-  double duration = periods_given > 0.0 ? 0.0 : request.number("duration_s", 0.0);
+  spec.kind = request.kind;
+  spec.frequency_hz = frequency_hz > 0.0 ? frequency_hz : request.frequency_hz;
+  const double periods = periods_given > 0.0 ? periods_given : request.periods;
+  double duration = periods_given > 0.0 ? 0.0 : request.duration_s;
   if (duration <= 0.0) duration = periods / spec.frequency_hz;
-  if (!(duration > 0.0))
+  if (!(duration > 0.0)) {
     throw common::CommandError("bad_params", "periods or duration_s must be > 0");
+  }
 
   const double span = limits.y_top - limits.y_bottom;
-  const double fraction = request.number("range_fraction", 0.8);
+  const double fraction = request.range_fraction;
   double y_lo = limits.y_bottom + 0.5 * (1.0 - fraction) * span;
   double y_hi = limits.y_top - 0.5 * (1.0 - fraction) * span;
-  if (request.has("min_um") || request.has("max_um")) {
-    y_lo = request.number("min_um", y_lo);
-    y_hi = request.number("max_um", y_hi);
+  if (request.min_um || request.max_um) {
+    y_lo = request.min_um.value_or(y_lo);
+    y_hi = request.max_um.value_or(y_hi);
     if (!(y_hi > y_lo))
       throw common::CommandError("bad_params", "max_um must be greater than min_um");
     if (y_lo < limits.y_bottom - 1e-9 || y_hi > limits.y_top + 1e-9) {

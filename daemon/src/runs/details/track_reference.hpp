@@ -11,7 +11,7 @@
 
 #include "hystbench/daemon/service/upload_store.hpp"
 #include "hystbench/sim/signal_generator.hpp"
-#include "service/details/request_params.hpp"
+#include "runs/details/track_request.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -42,12 +42,13 @@ struct ReferenceLimits {
   double rate_hz = 0.0;        ///< the loop rate
 };
 
-/// A built-in periodic reference from a track request's keys (checked against its command):
-/// reference (kind), frequency_hz, periods or duration_s, range_fraction or min_um/max_um. The
-/// first period is unscored when the run has at least two.
+/// A built-in periodic reference from a track request's keys: its kind, frequency, periods or
+/// duration, range_fraction or min_um/max_um (refused beyond the actuator's range). The first
+/// period is unscored when the run has at least two.
 /// frequency_hz and periods > 0 take the place of the request's (a learning run's trials).
-TrackReference builtin_reference(const Request& request, const ReferenceLimits& limits,
-                                 double frequency_hz = 0.0, double periods = 0.0);
+TrackReference builtin_reference(const BuiltinReferenceRequest& request,
+                                 const ReferenceLimits& limits, double frequency_hz = 0.0,
+                                 double periods = 0.0);
 
 /// A user's trajectory, resampled to the loop rate, after an approach of approach_s (at least
 /// long enough for the slew limit) from y_start to its first value, which is unscored. Refused

@@ -1,0 +1,107 @@
+#include "runs/details/track_request.hpp"
+
+#include <string>
+
+#include "hystbench/common/command_error.hpp"
+
+namespace hystbench::daemon::details {
+
+namespace hc = compensation;
+using common::CommandError;
+
+namespace {
+
+void parse_compensator(const Request& request, const RunContext& ctx, TrackRequest& r) {
+  r.compensator = request.string("compensator", ctx.model ? "inverse" : "none");
+  const auto kind = hc::compensator_kind_from_string(r.compensator);
+  if (!kind) {
+    throw CommandError("bad_params", "compensator: unknown '" + r.compensator +
+                                         "' (none, inverse, inverse_multiplicative, "
+                                         "inverse+pid, pid)");
+  }
+  if (hc::needs_model(*kind) && ctx.model == nullptr) {
+    throw CommandError("no_model", "compensator '" + r.compensator +
+                                       "' needs a model: run identify or model.load first");
+  }
+  r.compensator_kind = *kind;
+}
+
+// A learning run's keys. Its trials are periods of the reference (or passes of an upload), so
+// the run's length is theirs and a built-in reference must repeat.
+void parse_learning(const Request& request, const RunContext& ctx, TrackRequest& r) {
+  LearningKeys& l = r.learning;
+  l.trials = static_cast<std::size_t>(request.integer("learn_trials", 0));
+  if (l.trials == 0) {
+    for (const char* key : {"learn_gain", "learn_cutoff_hz"}) {
+      if (request.has(key)) {
+        throw CommandError("bad_params", std::string(key) + ": only with learn_trials > 0");
+      }
+    }
+  }
+  l.gain = request.number("learn_gain", l.gain);
+  l.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
+  if (request.has("learned")) l.learned = request.string("learned", "");
+  if (!l.any() || !r.reference_upload.empty()) return;
+  const std::string key = l.trials > 0 ? "learn_trials" : "learned";
+  const std::string& name = r.reference.name;
+  if (name != "sine" && name != "triangle" && name != "sawtooth") {
+    throw CommandError("bad_params", key +
+                                         ": a trial is one period of a sine, triangle or "
+                                         "sawtooth, or one pass of an uploaded trajectory; '" +
+                                         name + "' does not repeat");
+  }
+  if (request.has("periods") || request.has("duration_s")) {
+    throw CommandError("bad_params", key +
+                                         " sets the run's length (the start-up period, the "
+                                         "first trial and the learned ones): leave out periods "
+                                         "and duration_s");
+  }
+}
+
+void parse_builtin_reference(const Request& request, const RunContext& ctx,
+                             BuiltinReferenceRequest& ref) {
+  try {
+    ref.kind = sim::signal_kind_from_string(ref.name);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", std::string("reference: ") + e.what());
+  }
+  if (ref.kind == sim::SignalKind::kSteps || ref.kind == sim::SignalKind::kSamples) {
+    throw CommandError("bad_params", "reference: '" + ref.name +
+                                         "' needs data; use sine, triangle, sawtooth, "
+                                         "decaying_sine, multi_frequency or chirp, or upload "
+                                         "a trajectory (reference_upload)");
+  }
+  const double rate = ctx.settings.loop.rate_hz;
+  ref.frequency_hz = request.number("frequency_hz", ref.frequency_hz, 1e-3, rate / 20.0);
+  ref.periods = request.number("periods", ref.periods);
+  ref.duration_s = request.number("duration_s", ref.duration_s);
+  ref.range_fraction = request.number("range_fraction", ref.range_fraction);
+  if (request.has("min_um")) ref.min_um = request.number("min_um", 0.0);
+  if (request.has("max_um")) ref.max_um = request.number("max_um", 0.0);
+}
+
+}  // namespace
+
+TrackRequest parse_track_request(const Request& request, const RunContext& ctx) {
+  TrackRequest r;
+  parse_compensator(request, ctx, r);
+  // track's two parameter rows: a built-in reference's keys, or an upload's (with approach_s).
+  if (request.has("reference_upload")) {
+    r.reference_upload = request.string("reference_upload", "");
+    if (r.reference_upload.empty()) {
+      throw CommandError("bad_params", "reference_upload: the name of a complete upload, not ''");
+    }
+    r.approach_s = request.number("approach_s", r.approach_s);
+  } else {
+    r.reference.name = request.string("reference", r.reference.name);
+  }
+  parse_learning(request, ctx, r);
+  if (r.reference_upload.empty()) parse_builtin_reference(request, ctx, r.reference);
+  r.precondition_s = request.number("precondition_s", ctx.settings.precondition_s);
+  if (request.has("kp")) r.gains.kp = request.number("kp", 0.0);
+  if (request.has("ki")) r.gains.ki = request.number("ki", 0.0);
+  if (request.has("kd")) r.gains.kd = request.number("kd", 0.0);
+  return r;
+}
+
+}  // namespace hystbench::daemon::details
