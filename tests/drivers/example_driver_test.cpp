@@ -115,10 +115,10 @@ TEST(ExampleDriver, RunsInTheBenchLoop) {
   p->kind = hdm::RunKind::kIdentify;
   p->excitation.assign(2000, 100.0);
   p->total_samples = 2000;
-  p->record_capacity = 2000;
-  p->rec_u.resize(2000);
-  p->rec_y.resize(2000);
-  p->rec_yr.resize(2000);
+  p->records.capacity = 2000;
+  p->records.u.resize(2000);
+  p->records.y.resize(2000);
+  p->records.yr.resize(2000);
   ASSERT_EQ(loop.submit(std::move(p)), nullptr);
   std::unique_ptr<hdm::RunProgram> done;
   for (int i = 0; i < 5000 && !done; ++i) {
@@ -127,10 +127,10 @@ TEST(ExampleDriver, RunsInTheBenchLoop) {
   }
   ASSERT_NE(done, nullptr);
   EXPECT_EQ(done->end, hdm::RunEnd::kCompleted);
-  EXPECT_GE(done->stale_reads, 990u);  // every second tick
-  ASSERT_EQ(done->recorded, 2000u);
-  EXPECT_GT(done->rec_u.back(), 50.0);
-  EXPECT_NEAR(done->rec_y.back(), 0.1 * done->rec_u.back(), 0.5);  // 0.1 um/V
+  EXPECT_GE(done->counters.stale_reads, 990u);  // every second tick
+  ASSERT_EQ(done->records.count, 2000u);
+  EXPECT_GT(done->records.u.back(), 50.0);
+  EXPECT_NEAR(done->records.y.back(), 0.1 * done->records.u.back(), 0.5);  // 0.1 um/V
   loop.shutdown();
   EXPECT_TRUE(d.deactivate().ok);
 }

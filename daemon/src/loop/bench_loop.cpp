@@ -6,8 +6,8 @@
 #include <limits>
 #include <thread>
 
-#include "loop/details/futex.hpp"
 #include "hystbench/daemon/loop/loop_timer.hpp"
+#include "loop/details/futex.hpp"
 
 namespace hystbench::daemon {
 
@@ -175,7 +175,7 @@ void BenchLoop::run_simulated() {
 void BenchLoop::log_sample(RunProgram& p, const SampleRecord& rec) noexcept {
   if (!p.log) return;
   if (!simulated_) {
-    if (!p.log->push(rec)) ++p.log_drops;
+    if (!p.log->push(rec)) ++p.counters.log_drops;
     return;
   }
   // Back-pressure: virtual time waits for the writer, nothing is dropped. Only a closed log or
@@ -183,7 +183,7 @@ void BenchLoop::log_sample(RunProgram& p, const SampleRecord& rec) noexcept {
   while (!p.log->try_push(rec)) {
     if (p.log->closed() || quit_.load(std::memory_order_acquire)) {
       (void)p.log->push(rec);
-      ++p.log_drops;
+      ++p.counters.log_drops;
       return;
     }
     std::this_thread::sleep_for(std::chrono::microseconds(200));
@@ -259,7 +259,7 @@ struct BenchLoop::TickDrive {
 /// What the exchange with the driver leaves for the stages after it.
 struct BenchLoop::TickExchange {
   const char* failure = nullptr;  ///< why the run faults at this tick; null when it does not
-  std::uint32_t response = RunProgram::kNoFreshReading;  ///< the fresh reading's response_ticks
+  std::uint32_t response = RunRecords::kNoFreshReading;  ///< the fresh reading's response_ticks
 };
 
 namespace {
@@ -267,12 +267,13 @@ namespace {
 /// for the output it answers (the reading answers the output of response_ticks ago, less the
 /// exchange latency the model's delay holds).
 void add_tare_sample(RunProgram& p, std::uint64_t k, const drivers::Measurement& m) noexcept {
-  const std::uint64_t lag =
-      m.response_ticks > p.model_exchange_ticks ? m.response_ticks - p.model_exchange_ticks : 0;
-  if (p.model && k >= p.tare_from && k < p.excitation.size() && lag < RunProgram::kModelHistory &&
+  const std::uint64_t lag = m.response_ticks > p.tare.model_exchange_ticks
+                                ? m.response_ticks - p.tare.model_exchange_ticks
+                                : 0;
+  if (p.model && k >= p.tare.from && k < p.excitation.size() && lag < TareWindow::kHistory &&
       lag <= k) {
-    p.tare_sum += m.position_um - p.y_model_history[(k - lag) % RunProgram::kModelHistory];
-    ++p.tare_samples;
+    p.tare.sum += m.position_um - p.tare.y_model_history[(k - lag) % TareWindow::kHistory];
+    ++p.tare.samples;
   }
 }
 }  // namespace
@@ -285,7 +286,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   rec.wake_ns = wake_ns - run_start_ns_;
   if (overran_) {
     rec.flags |= kSampleOverrun;
-    ++p.overruns;
+    ++p.counters.overruns;
   }
   const TickDrive d = drive(p, k, rec);
   const OutputLimiter::Applied lim = limit(p, k, d.u_request, rec);
@@ -322,14 +323,14 @@ void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
   if (d.y_ref < p.y_ref_min || d.y_ref > p.y_ref_max) {
     d.y_ref = std::min(std::max(d.y_ref, p.y_ref_min), p.y_ref_max);
     rec.flags |= kSampleReferenceLimited;
-    ++p.reference_clips;
+    ++p.counters.reference_clips;
   }
   // The feedforward's target at run time tt: the reference, or with a preview the static
   // target that inverts the model's delay and dynamics (the reference ahead by the delay).
   // Less the tare: the output offset the model did not predict on the open-loop prefix.
   // A drive learned before: the offset taken off when it was learned, and from trial 0 on
   // also the offset its lead-in measured.
-  const double tare = p.learning ? p.learning->target_offset(k, p.tare_um()) : p.tare_um();
+  const double tare = p.learning ? p.learning->target_offset(k, p.tare.um()) : p.tare.um();
   auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
   // The feedback's reference; before feedback_from NaN: the PID holds (RunProgram).
   const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : d.y_ref;
@@ -371,16 +372,16 @@ OutputLimiter::Applied BenchLoop::limit(RunProgram& p, std::uint64_t k, double u
   if (p.compensator) p.compensator->notify_saturation(lim.direction);
   if (lim.clamped) {
     rec.flags |= kSampleOutputClamped;
-    ++p.clamps;
+    ++p.counters.clamps;
   }
   if (lim.slew_limited) {
     rec.flags |= kSampleSlewLimited;
-    ++p.slew_limits;
+    ++p.counters.slew_limits;
   }
   rec.u_out = lim.u;
   if (p.model) {
     rec.y_model = p.model->step(lim.u);
-    p.y_model_history[k % RunProgram::kModelHistory] = rec.y_model;
+    p.tare.y_model_history[k % TareWindow::kHistory] = rec.y_model;
   }
   return lim;
 }
@@ -399,7 +400,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::uint64_t k,
     const auto st = driver_.read(m);
     if (st == drivers::DriverStatus::kStale) {
       rec.flags |= kSampleStale;
-      ++p.stale_reads;
+      ++p.counters.stale_reads;
       stuck_.stale(lim.u);
     } else if (st != drivers::DriverStatus::kOk) {
       x.failure =
@@ -414,7 +415,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::uint64_t k,
     rec.y_measured = m.position_um;
     if (st == drivers::DriverStatus::kOk) {
       x.response = static_cast<std::uint32_t>(
-          std::min<std::uint64_t>(m.response_ticks, RunProgram::kNoFreshReading - 1));
+          std::min<std::uint64_t>(m.response_ticks, RunRecords::kNoFreshReading - 1));
     }
     if (x.failure == nullptr) {
       y_prev_ = m.position_um;
@@ -422,7 +423,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::uint64_t k,
       if (st == drivers::DriverStatus::kOk) add_tare_sample(p, k, m);
     }
   }
-  if (x.failure == nullptr && p.overruns > options_.overrun_budget) {
+  if (x.failure == nullptr && p.counters.overruns > options_.overrun_budget) {
     x.failure = "overrun budget exceeded (loop.overrun_budget)";
   }
   if (x.failure != nullptr) rec.flags |= kSampleFault;
@@ -433,15 +434,15 @@ bool BenchLoop::score(RunProgram& p, std::uint64_t k, const TickDrive& d,
                       const SampleRecord& rec) noexcept {
   if (k >= p.metrics_from && !std::isnan(d.y_ref)) {
     const double e = rec.y_measured - d.y_ref;
-    p.error_sum2 += e * e;
-    p.error_max = std::max(p.error_max, std::abs(e));
-    ++p.error_samples;
+    p.error.sum2 += e * e;
+    p.error.max = std::max(p.error.max, std::abs(e));
+    ++p.error.samples;
   }
   if (k >= p.metrics_from && k >= p.model_metrics_from && p.model) {
     const double e = rec.y_measured - rec.y_model;
-    p.model_error_sum2 += e * e;
-    p.model_error_max = std::max(p.model_error_max, std::abs(e));
-    ++p.model_error_samples;
+    p.model_error.sum2 += e * e;
+    p.model_error.max = std::max(p.model_error.max, std::abs(e));
+    ++p.model_error.samples;
   }
   if (d.lead_in) p.learning->lead_in_error(k, d.y_ref - rec.y_measured);
   if (!d.learning) return false;
@@ -450,12 +451,12 @@ bool BenchLoop::score(RunProgram& p, std::uint64_t k, const TickDrive& d,
 
 void BenchLoop::record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::uint32_t response,
                        std::int64_t wake_latency_ns, SampleRecord& rec) noexcept {
-  if (p.recorded < p.record_capacity && k >= p.metrics_from) {
-    p.rec_u[p.recorded] = rec.u_out;
-    p.rec_y[p.recorded] = rec.y_measured;
-    p.rec_yr[p.recorded] = d.y_ref;
-    if (!p.rec_response.empty()) p.rec_response[p.recorded] = response;
-    ++p.recorded;
+  if (p.records.count < p.records.capacity && k >= p.metrics_from) {
+    p.records.u[p.records.count] = rec.u_out;
+    p.records.y[p.records.count] = rec.y_measured;
+    p.records.yr[p.records.count] = d.y_ref;
+    if (!p.records.response.empty()) p.records.response[p.records.count] = response;
+    ++p.records.count;
   }
   rec.exec_ns = now_ns() - exec_start_ns_;
   log_sample(p, rec);

@@ -493,9 +493,9 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
   // then any further delay by held-out error, chosen with the requested family (mpi for
   // auto). The model keeps it; the feedforward previews the reference by it.
   const std::size_t n = result.recorded;
-  const std::span<const double> u_rec(run.rec_u.data(), n), y_rec(run.rec_y.data(), n);
-  const std::span<const std::uint32_t> response(run.rec_response.data(),
-                                                std::min(n, run.rec_response.size()));
+  const std::span<const double> u_rec(run.records.u.data(), n), y_rec(run.records.y.data(), n);
+  const std::span<const std::uint32_t> response(run.records.response.data(),
+                                                std::min(n, run.records.response.size()));
   hc::FitOptions delay_opt = opt;
   if (!delay_opt.kind) {
     delay_opt.kind = hc::ModelKind::kModifiedPi;
@@ -636,8 +636,8 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   v["end"] = to_string(run->end);
   v["reason"] = run->end_reason;
   v["log"] = run->log ? run->log->path().string() : "";
-  v["dropped"] = counts.dropped + run->log_drops;
-  v["clamps"] = run->clamps;
+  v["dropped"] = counts.dropped + run->counters.log_drops;
+  v["clamps"] = run->counters.clamps;
   v["clock"] = run->summary.value("clock", "wall");
   if (job.sine_hz > 0.0) {
     v["reference"] = "sine";

@@ -52,9 +52,9 @@ std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
 
 void arm_tare(RunProgram& program, std::uint64_t model_exchange_ticks) {
   const std::size_t half = program.excitation.size() / 2;
-  program.tare_from = half < 10 ? std::numeric_limits<std::uint64_t>::max()
+  program.tare.from = half < 10 ? std::numeric_limits<std::uint64_t>::max()
                                 : half + half / 5;  // skip the turn's transient
-  program.model_exchange_ticks = model_exchange_ticks;
+  program.tare.model_exchange_ticks = model_exchange_ticks;
 }
 
 hc::ActuatorModel model_after(const hc::ActuatorModel& model, std::span<const double> prefix,
@@ -115,28 +115,28 @@ std::unique_ptr<RunProgram> make_verification_program(const hc::ActuatorModel& m
   p->metrics_from = prefix + (body >= 2 * one_period ? one_period : 0);
   p->y_ref_min = range.y_bottom;
   p->y_ref_max = range.y_top;
-  p->record_capacity = p->total_samples - p->metrics_from;
-  p->rec_u.resize(p->record_capacity);
-  p->rec_y.resize(p->record_capacity);
-  p->rec_yr.resize(p->record_capacity);
+  p->records.capacity = p->total_samples - p->metrics_from;
+  p->records.u.resize(p->records.capacity);
+  p->records.y.resize(p->records.capacity);
+  p->records.yr.resize(p->records.capacity);
   return p;
 }
 
 nlohmann::json tracking_error_json(const RunProgram& run) {
   nlohmann::json r = nlohmann::json::object();
-  const std::size_t n = run.recorded;
+  const std::size_t n = run.records.count;
   if (n <= 2) return r;
-  std::span<const double> yr(run.rec_yr.data(), n), y(run.rec_y.data(), n);
+  std::span<const double> yr(run.records.yr.data(), n), y(run.records.y.data(), n);
   const hc::ErrorStats e = hc::error_stats(yr, y);  // range = reference span
-  const double rms = run.error_samples ? std::sqrt(run.error_sum2 / run.error_samples) : 0.0;
+  const double rms = run.error.samples ? std::sqrt(run.error.sum2 / run.error.samples) : 0.0;
   r["rms_error_um"] = rms;
-  r["max_error_um"] = run.error_max;
+  r["max_error_um"] = run.error.max;
   r["range_um"] = e.range;
   r["rms_error_percent"] = e.range > 0 ? 100.0 * rms / e.range : 0.0;
-  r["max_error_percent"] = e.range > 0 ? 100.0 * run.error_max / e.range : 0.0;
+  r["max_error_percent"] = e.range > 0 ? 100.0 * run.error.max / e.range : 0.0;
   r["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
-  r["error_samples"] = run.error_samples;
-  if (run.tare_samples > 0) r["tare_um"] = run.tare_um();
+  r["error_samples"] = run.error.samples;
+  if (run.tare.samples > 0) r["tare_um"] = run.tare.um();
   return r;
 }
 

@@ -64,11 +64,11 @@ TEST(BenchLoop, StepsATrackRunTickByTickToTheSameResultEveryTime) {
     }
     EXPECT_EQ(done->end, hd::RunEnd::kCompleted);
     EXPECT_EQ(done->done.load(), total);
-    EXPECT_EQ(done->overruns, 0u);
+    EXPECT_EQ(done->counters.overruns, 0u);
     // The injected clock times each tick: 1 µs between its start and its end.
     const auto stats = loop.statistics();
     EXPECT_EQ(stats.ticks, total + 1);
-    return std::sqrt(done->error_sum2 / static_cast<double>(done->error_samples));
+    return std::sqrt(done->error.sum2 / static_cast<double>(done->error.samples));
   };
   const double first = run_once();
   // The truth's own inverse tracks its actuator, and the same ticks give the same figure.

@@ -81,8 +81,8 @@ long run_allocations(const Case& c, const std::filesystem::path& dir) {
   EXPECT_NE(done, nullptr);
   if (done) {
     EXPECT_EQ(done->end, hd::RunEnd::kCompleted) << done->end_reason;
-    EXPECT_EQ(done->log_drops, 0u);
-    EXPECT_EQ(done->error_samples, 1000u);  // the second period at 10 kHz
+    EXPECT_EQ(done->counters.log_drops, 0u);
+    EXPECT_EQ(done->error.samples, 1000u);  // the second period at 10 kHz
     done->log->close();
   }
   return n;

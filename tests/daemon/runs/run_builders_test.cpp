@@ -127,9 +127,9 @@ TEST(TrackProgram, ABuiltInTriangleWithoutAModelFollowsTheConfiguredRange) {
   // Three periods of 0.5 s; the first is left out of the figures.
   EXPECT_EQ(p.total_samples, prefix + 1500);
   EXPECT_EQ(p.metrics_from, prefix + 500);
-  EXPECT_EQ(p.record_capacity, 1000u);
-  EXPECT_EQ(p.rec_u.size(), 1000u);
-  EXPECT_TRUE(p.rec_response.empty());
+  EXPECT_EQ(p.records.capacity, 1000u);
+  EXPECT_EQ(p.records.u.size(), 1000u);
+  EXPECT_TRUE(p.records.response.empty());
   // 80 % of 0..45 um, starting at the bottom and rising.
   ASSERT_TRUE(p.reference);
   EXPECT_NEAR(p.reference->value(0.0), 4.5, 1e-9);
@@ -138,7 +138,7 @@ TEST(TrackProgram, ABuiltInTriangleWithoutAModelFollowsTheConfiguredRange) {
   EXPECT_DOUBLE_EQ(p.y_ref_max, 45.0);
   // No model: nothing to preview or tare; y_model is the range's straight line.
   EXPECT_FALSE(p.preview);
-  EXPECT_GE(p.tare_from, p.excitation.size());
+  EXPECT_GE(p.tare.from, p.excitation.size());
   ASSERT_TRUE(p.model);
   ASSERT_TRUE(p.compensator);
   EXPECT_DOUBLE_EQ(run.reply["reference"]["min_um"].get<double>(), 4.5);
@@ -165,7 +165,7 @@ TEST(TrackProgram, AModelsInverseIsPreviewedAndTaredOverTheModelsRange) {
   EXPECT_EQ(run.reply["feedforward"], p.summary["feedforward"]);
   // A static model has no delay or dynamics to preview, but the offset is tared on the sweep.
   EXPECT_FALSE(p.preview);
-  EXPECT_LT(p.tare_from, p.excitation.size());
+  EXPECT_LT(p.tare.from, p.excitation.size());
   EXPECT_EQ(run.header["model"], hc::to_json(model));
 }
 
@@ -346,8 +346,8 @@ TEST(IdentifyProgram, RampsFromThePresentOutputAndRecordsEverySampleForTheFit) {
   EXPECT_EQ(p.kind, hd::RunKind::kIdentify);
   EXPECT_EQ(p.total_samples, p.excitation.size());
   EXPECT_EQ(p.metrics_from, 0u);
-  EXPECT_EQ(p.record_capacity, p.total_samples);
-  EXPECT_EQ(p.rec_response.size(), p.record_capacity);
+  EXPECT_EQ(p.records.capacity, p.total_samples);
+  EXPECT_EQ(p.records.response.size(), p.records.capacity);
   // 0.1 s of ramp from 75 V, then the excitation.
   EXPECT_NEAR(p.excitation.front(), 75.0, 2.0);
   EXPECT_EQ(run.fit["model"], "mpi");

@@ -17,13 +17,13 @@ TEST(RunResult, ReportsTheOutcomeCountersSummaryAndTheModelsError) {
   p.done = 4;
   p.end = hd::RunEnd::kStopped;
   p.end_reason = "stopped by request";
-  p.clamps = 2;
+  p.counters.clamps = 2;
   p.summary = {{"compensator", "none"}};
-  p.rec_y = {0.0, 5.0, 10.0, 2.0};
-  p.recorded = 4;
-  p.model_error_sum2 = 4.0;  // rms 1 um over 4 samples
-  p.model_error_samples = 4;
-  p.model_error_max = 1.5;
+  p.records.y = {0.0, 5.0, 10.0, 2.0};
+  p.records.count = 4;
+  p.model_error.sum2 = 4.0;  // rms 1 um over 4 samples
+  p.model_error.samples = 4;
+  p.model_error.max = 1.5;
   const hdd::RunResult r = hdd::collect_result(p, 3.25);
   EXPECT_FALSE(r.wants_fit());
   EXPECT_TRUE(r.log_path.empty());
@@ -47,11 +47,11 @@ TEST(RunResult, ReportsTheOutcomeCountersSummaryAndTheModelsError) {
 TEST(RunResult, OnlyACompletedIdentifyWithARecordWantsAFit) {
   hd::RunProgram p;
   p.kind = hd::RunKind::kIdentify;
-  p.recorded = 101;
+  p.records.count = 101;
   EXPECT_TRUE(hdd::collect_result(p, 0.0).wants_fit());
   p.end = hd::RunEnd::kAborted;
   EXPECT_FALSE(hdd::collect_result(p, 0.0).wants_fit());
   p.end = hd::RunEnd::kCompleted;
-  p.recorded = 100;
+  p.records.count = 100;
   EXPECT_FALSE(hdd::collect_result(p, 0.0).wants_fit());
 }

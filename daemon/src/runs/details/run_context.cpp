@@ -68,12 +68,12 @@ void append_ramp(std::vector<double>& out, double a, double b, std::size_t n) {
 }
 
 void allocate_records(RunProgram& p, bool responses) {
-  p.record_capacity =
+  p.records.capacity =
       std::min<std::uint64_t>(p.total_samples - p.metrics_from, kMaxRecordedSamples);
-  p.rec_u.resize(p.record_capacity);
-  p.rec_y.resize(p.record_capacity);
-  p.rec_yr.resize(p.record_capacity);
-  if (responses) p.rec_response.resize(p.record_capacity);
+  p.records.u.resize(p.records.capacity);
+  p.records.y.resize(p.records.capacity);
+  p.records.yr.resize(p.records.capacity);
+  if (responses) p.records.response.resize(p.records.capacity);
 }
 
 }  // namespace hystbench::daemon::details

@@ -14,15 +14,15 @@ namespace {
 // The simulation's error on the bench: y - y_model over the scored samples, in µm and in % of
 // the output range the run covered (the reference's for a tracking run).
 void add_model_error(const RunProgram& run, json& report) {
-  const std::size_t n = run.recorded;
-  if (run.model_error_samples == 0 || n <= 2) return;
-  const auto [lo, hi] = std::minmax_element(run.rec_y.begin(), run.rec_y.begin() + n);
+  const std::size_t n = run.records.count;
+  if (run.model_error.samples == 0 || n <= 2) return;
+  const auto [lo, hi] = std::minmax_element(run.records.y.begin(), run.records.y.begin() + n);
   const double range = report.contains("range_um") ? report["range_um"].get<double>() : *hi - *lo;
-  const double rms = std::sqrt(run.model_error_sum2 / run.model_error_samples);
+  const double rms = std::sqrt(run.model_error.sum2 / run.model_error.samples);
   report["model_rms_error_um"] = rms;
-  report["model_max_error_um"] = run.model_error_max;
+  report["model_max_error_um"] = run.model_error.max;
   report["model_rms_error_percent"] = range > 0 ? 100.0 * rms / range : 0.0;
-  report["model_max_error_percent"] = range > 0 ? 100.0 * run.model_error_max / range : 0.0;
+  report["model_max_error_percent"] = range > 0 ? 100.0 * run.model_error.max / range : 0.0;
 }
 
 }  // namespace
@@ -31,7 +31,7 @@ RunResult collect_result(RunProgram& run, double output_v_after) {
   RunResult r;
   r.kind = run.kind;
   r.end = run.end;
-  r.recorded = run.recorded;
+  r.recorded = run.records.count;
   SampleLogCounts counts;
   if (run.log) {
     r.log_path = run.log->path().string();
@@ -44,14 +44,14 @@ RunResult collect_result(RunProgram& run, double output_v_after) {
               {"samples", run.done.load()},
               {"planned_samples", run.total_samples},
               {"logged", counts.written},
-              {"dropped", counts.dropped + run.log_drops},
+              {"dropped", counts.dropped + run.counters.log_drops},
               {"log", r.log_path},
               {"loop", to_json(run.stats.snapshot())},
-              {"overruns", run.overruns},
-              {"clamps", run.clamps},
-              {"slew_limits", run.slew_limits},
-              {"reference_clips", run.reference_clips},
-              {"stale_reads", run.stale_reads},
+              {"overruns", run.counters.overruns},
+              {"clamps", run.counters.clamps},
+              {"slew_limits", run.counters.slew_limits},
+              {"reference_clips", run.counters.reference_clips},
+              {"stale_reads", run.counters.stale_reads},
               {"output_v_after", output_v_after}};
   if (!counts.error.empty()) r.report["log_error"] = counts.error;
   r.report.update(run.summary);

@@ -13,7 +13,7 @@ namespace hystbench::daemon::details {
 struct RunResult {
   RunKind kind = RunKind::kTrack;
   RunEnd end = RunEnd::kCompleted;
-  std::size_t recorded = 0;  ///< samples in the program's record (rec_u, rec_y)
+  std::size_t recorded = 0;  ///< samples in the program's record (records.u, records.y)
   std::string log_path;      ///< empty without a log
   nlohmann::json report;     ///< run.finished's "result"
 

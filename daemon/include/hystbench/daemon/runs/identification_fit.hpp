@@ -31,7 +31,7 @@ AveragedRecord block_average(std::span<const double> u, std::span<const double> 
                              std::size_t block, std::size_t shift);
 
 /// No fresh reading in that tick.
-inline constexpr std::uint32_t kNoAnswer = RunProgram::kNoFreshReading;
+inline constexpr std::uint32_t kNoAnswer = RunRecords::kNoFreshReading;
 
 /// y aligned to the output it answers: a fresh reading at k with response r is the answer to
 /// u[k - r]. Outputs whose answer never came (stale ticks, an answer overtaken by the next one)

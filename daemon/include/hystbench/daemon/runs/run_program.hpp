@@ -15,10 +15,10 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
-#include "hystbench/daemon/runs/learning_exchange.hpp"
 #include "hystbench/daemon/loop/loop_statistics.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/runs/learning_exchange.hpp"
 #include "hystbench/daemon/runs/target_window.hpp"
+#include "hystbench/daemon/service/sample_log_writer.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 
 namespace hystbench::daemon {
@@ -29,6 +29,49 @@ enum class RunKind { kIdentify, kTrack, kExcite };
 enum class RunEnd { kCompleted, kStopped, kAborted, kFault };
 const char* to_string(RunKind kind) noexcept;
 const char* to_string(RunEnd end) noexcept;
+
+/// The samples a run keeps for its fit and result, preallocated before the run to `capacity`;
+/// the loop fills [0, count). Units: u [V], y and yr [µm].
+struct RunRecords {
+  std::vector<double> u, y, yr;
+  /// identify: per kept sample, the fresh reading's response_ticks, or kNoFreshReading (empty =
+  /// not kept).
+  std::vector<std::uint32_t> response;
+  static constexpr std::uint32_t kNoFreshReading = 0xffffffffu;
+  std::uint64_t capacity = 0;
+  std::uint64_t count = 0;  ///< written by the loop
+};
+
+/// What the loop counted going wrong or being limited during the run (written by the loop).
+struct RunCounters {
+  std::uint64_t overruns = 0, clamps = 0, slew_limits = 0, reference_clips = 0;
+  std::uint64_t stale_reads = 0, log_drops = 0;
+};
+
+/// An error's running figures over its scored samples [µm] (written by the loop).
+struct ErrorFigures {
+  double sum2 = 0.0, max = 0.0;
+  std::uint64_t samples = 0;
+};
+
+/// track: the output offset the model does not predict (slow creep, a sensor offset): the mean
+/// of y - y_model over the open-loop prefix samples [from, excitation.size()) is subtracted from
+/// the feedforward's target (not from the reference the error and the PID see).
+struct TareWindow {
+  /// The window's first tick; >= excitation.size() = no tare.
+  std::uint64_t from = std::numeric_limits<std::uint64_t>::max();
+  /// The driver exchange latency that the model's delay already holds [ticks]: an identified
+  /// model's exchange_ticks, 0 for a model made elsewhere. A reading that answers the output of
+  /// response_ticks ago is compared with y_model of (response_ticks - this) ago.
+  std::uint64_t model_exchange_ticks = 0;
+  // ---- written by the loop ----
+  static constexpr std::size_t kHistory = 64;      ///< y_model ticks kept
+  std::array<double, kHistory> y_model_history{};  ///< y_model of tick k at k % kHistory
+  double sum = 0.0;                                ///< of y - y_model over the window [µm]
+  std::uint64_t samples = 0;
+  /// The tare the feedforward applies [µm] (0 until the window has a sample).
+  double um() const noexcept { return samples > 0 ? sum / static_cast<double>(samples) : 0.0; }
+};
 
 struct RunProgram {
   // ---- set by the control thread before submit() ----
@@ -70,49 +113,23 @@ struct RunProgram {
   /// The active model's identified input delay [ticks]: the stuck-sensor detector waits this
   /// much longer for the reading to answer the output.
   std::uint64_t response_delay_ticks = 0;
-  /// track: the output offset the model does not predict (slow creep, a sensor offset): the mean
-  /// of y - y_model over the open-loop prefix samples [tare_from, excitation.size()) is subtracted
-  /// from the feedforward's target (not from the reference the error and the PID see).
-  /// tare_from >= excitation.size() = no tare.
-  std::uint64_t tare_from = std::numeric_limits<std::uint64_t>::max();
-  /// The driver exchange latency that the model's delay already holds [ticks]: an identified
-  /// model's exchange_ticks, 0 for a model made elsewhere. For the tare a reading that answers
-  /// the output of response_ticks ago is compared with y_model of (response_ticks - this) ago.
-  std::uint64_t model_exchange_ticks = 0;
+  TareWindow tare;
   /// track --learn: the trials' hand-over with the learner (null for a run that does not learn).
   /// From its first_tick on, a period that plays a learned drive plays it in place of the
   /// compensator's feedforward (its feedback stays on).
   std::unique_ptr<LearningExchange> learning;
   /// The per-run log (may be null in unit tests).
   std::unique_ptr<SampleLogWriter> log;
-  /// Recorded samples, preallocated to record_capacity; the loop fills [0, recorded).
-  std::vector<double> rec_u, rec_y, rec_yr;
-  /// identify: per recorded sample, the fresh reading's response_ticks, or kNoFreshReading
-  /// (preallocated like rec_u; empty = not recorded).
-  std::vector<std::uint32_t> rec_response;
-  static constexpr std::uint32_t kNoFreshReading = 0xffffffffu;
-  std::uint64_t record_capacity = 0;
+  RunRecords records;
 
   // ---- written by the loop thread ----
   std::atomic<std::uint64_t> done{0};  ///< samples completed (any thread may read)
-  std::uint64_t recorded = 0;
   RunEnd end = RunEnd::kCompleted;
   const char* end_reason = "";  ///< static string, set when the run did not complete
-  std::uint64_t overruns = 0, clamps = 0, slew_limits = 0, reference_clips = 0;
-  std::uint64_t stale_reads = 0, log_drops = 0;
-  double error_sum2 = 0.0, error_max = 0.0;  ///< tracking error from metrics_from on [µm]
-  std::uint64_t error_samples = 0;
-  double model_error_sum2 = 0.0, model_error_max = 0.0;  ///< y - y_model, see model_metrics_from
-  std::uint64_t model_error_samples = 0;
-  static constexpr std::size_t kModelHistory = 64;      ///< y_model ticks kept for the tare
-  std::array<double, kModelHistory> y_model_history{};  ///< y_model of tick k at k % size
-  double tare_sum = 0.0;  ///< sum of y - y_model over the tare window [µm]
-  std::uint64_t tare_samples = 0;
-  /// The tare the feedforward applies [µm] (0 until the window has a sample).
-  double tare_um() const noexcept {
-    return tare_samples > 0 ? tare_sum / static_cast<double>(tare_samples) : 0.0;
-  }
-  LoopStatistics stats;  ///< this run's loop timing
+  RunCounters counters;
+  ErrorFigures error;        ///< tracking error, from metrics_from on
+  ErrorFigures model_error;  ///< y - y_model, from model_metrics_from on (see there)
+  LoopStatistics stats;      ///< this run's loop timing
 
   /// track: the feedforward's target at run time t_s [s] (0 = the reference's first sample): the
   /// reference clipped to [y_ref_min, y_ref_max], or with a preview the static target that
