@@ -32,6 +32,7 @@ CouplingDiagnosis diagnose_cross_coupling(
   };
   // Baselines first (each a block of one input), then the extension: 40 % and 40 %, folds 20 %.
   CouplingDiagnosis d;
+  std::vector<PeriodicSpectra> own;  // each output with its own input only
   std::vector<MimoFitResult> baselines;
   for (std::size_t i = 0; i < p; ++i) {
     MimoFitOptions o;
@@ -39,7 +40,8 @@ CouplingDiagnosis diagnose_cross_coupling(
       report(0.4 * (static_cast<double>(i) + f) / static_cast<double>(p),
              "output " + std::to_string(i + 1) + " from its own input: " + what);
     };
-    baselines.push_back(identify_mimo_linear(subset(spectra, {own_input[i]}, {i}), o));
+    own.push_back(subset(spectra, {own_input[i]}, {i}));
+    baselines.push_back(identify_mimo_linear(own.back(), o));
   }
   MimoFitOptions o;
   o.progress = [&](double f, const std::string& what) {
@@ -51,6 +53,12 @@ CouplingDiagnosis diagnose_cross_coupling(
   d.extended = ext.model;
   // Shares of each output's power per input, through the extension fitted on all of it.
   const Eigen::MatrixXd shares = coupling_shares(ext.model, spectra);
+  // One realization: the extension's held-out error on the odd bins, fitted on the even (one
+  // figure for all outputs together).
+  double one_realization_rms = ext.scores.empty() ? 0.0 : ext.scores.back().heldout_rms;
+  for (const auto& s : ext.scores) {
+    if (s.order == ext.order) one_realization_rms = s.heldout_rms;
+  }
   for (std::size_t i = 0; i < p; ++i) {
     OutputCoupling c;
     c.output = i;
@@ -60,13 +68,7 @@ CouplingDiagnosis diagnose_cross_coupling(
     for (const auto& s : baselines[i].scores) {
       if (s.order == baselines[i].order) c.baseline_heldout_rms = s.heldout_rms;
     }
-    if (nr < 2) {
-      // One realization: the extension's held-out error on the odd bins, fitted on the even.
-      c.extended_heldout_rms = ext.scores.empty() ? 0.0 : ext.scores.back().heldout_rms;
-      for (const auto& s : ext.scores) {
-        if (s.order == ext.order) c.extended_heldout_rms = s.heldout_rms;
-      }
-    }
+    if (nr < 2) c.extended_heldout_rms = one_realization_rms;
     for (std::size_t j = 0; j < m; ++j) {
       c.shares.push_back(shares(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
       if (j != own_input[i] && c.shares.back() >= kCouplingNamedShare) c.named_inputs.push_back(j);
@@ -82,9 +84,8 @@ CouplingDiagnosis diagnose_cross_coupling(
     const Eigen::VectorXd e =
         steady_state_rms(fit_mimo_linear(spectra, ext.order, train), spectra, {r});
     for (std::size_t i = 0; i < p; ++i) {
-      const PeriodicSpectra own = subset(spectra, {own_input[i]}, {i});
       const double b =
-          steady_state_rms(fit_mimo_linear(own, baselines[i].order, train), own, {r})(0);
+          steady_state_rms(fit_mimo_linear(own[i], baselines[i].order, train), own[i], {r})(0);
       const double x = e(static_cast<Eigen::Index>(i));
       if (r + 1 == nr) d.outputs[i].extended_heldout_rms = x;
       d.outputs[i].left_out_gains.push_back(x > 0.0 ? b / x : 0.0);
