@@ -11,6 +11,7 @@
 
 #include "hystbench/common/model_file_io.hpp"
 #include "hystbench/compensation/mimo_diagnosis.hpp"
+#include "offline/details/progress_line.hpp"
 #include "report/details/gnuplot.hpp"
 
 namespace hystbench::cli::details {
@@ -48,11 +49,6 @@ std::vector<hc::MimoChannel> channels(const std::vector<std::string>& names,
 
 std::vector<double> to_vector(const Eigen::VectorXd& v) {
   return std::vector<double>(v.data(), v.data() + v.size());
-}
-
-void progress_line(std::ostream& err, double fraction, const std::string& what) {
-  err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction) << " %] " << what << "\x1b[K"
-      << std::flush;
 }
 
 }  // namespace
@@ -209,7 +205,7 @@ int run_fit_mimo(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
   if (cmd.operators > 0) options.operators = static_cast<std::size_t>(cmd.operators);
   if (!cmd.json_output) {
     options.linear.progress = [&err](double f, const std::string& what) {
-      progress_line(err, f, what);
+      details::progress_line(err, f, what);
     };
   }
   const hc::HammersteinFitResult r = hc::identify_mimo_hammerstein(rec, options);
@@ -639,7 +635,7 @@ int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostrea
   const hc::PeriodicSpectra spectra = hc::periodic_spectra(rec);
   std::function<void(double, const std::string&)> progress;
   if (!cmd.json_output)
-    progress = [&err](double f, const std::string& w) { progress_line(err, f, w); };
+    progress = [&err](double f, const std::string& w) { details::progress_line(err, f, w); };
   const hc::CouplingDiagnosis d = hc::diagnose_cross_coupling(spectra, own, progress);
   if (!cmd.json_output) err << "\n";
   const std::string unit = data.y_units.front().value_or("um");

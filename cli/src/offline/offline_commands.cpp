@@ -13,6 +13,7 @@
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
 #include "offline/details/mimo_commands.hpp"
+#include "offline/details/progress_line.hpp"
 
 namespace hystbench::cli {
 
@@ -75,8 +76,7 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     opt.units = data.units();
     if (!cmd.json_output) {
       opt.progress = [&err](double fraction, const std::string& what) {
-        err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction) << " %] " << what
-            << "\x1b[K" << std::flush;
+        details::progress_line(err, fraction, what);
       };
     }
     const hc::FitResult r = hc::fit_model(data.t, data.u, data.y, opt);
@@ -201,8 +201,7 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
       hc::DrivePlanOptions options;
       if (!cmd.json_output) {
         options.progress = [&err](double fraction) {
-          err << "\r[" << std::setw(3) << static_cast<int>(100.0 * fraction)
-              << " %] planning the drive\x1b[K" << std::flush;
+          details::progress_line(err, fraction, "planning the drive");
         };
       }
       hc::DrivePlan plan = hc::plan_drive(file.model, u0, {}, yr, options);
