@@ -13,7 +13,7 @@ bool fail(ProtocolError& error, const char* code, std::string message, nlohmann:
 
 }  // namespace
 
-bool parse_request(std::string_view line, Request& request, ProtocolError& error) {
+bool parse_request(std::string_view line, daemon::Request& request, ProtocolError& error) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(line.begin(), line.end());

@@ -18,7 +18,7 @@ struct ProtocolError {
 };
 
 /// Validates one line (without '\n'). Returns false and fills `error` for a protocol error.
-bool parse_request(std::string_view line, Request& request, ProtocolError& error);
+bool parse_request(std::string_view line, daemon::Request& request, ProtocolError& error);
 
 /// One JSON value as a single line; invalid UTF-8 in strings is replaced, never thrown.
 std::string json_line(const nlohmann::json& value);
