@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ -f build/compile_commands.json ] || bash scripts/build.sh >&2
-filter=${1:-'(compensation|sim|drivers|daemon)/(src|apps)/'}
+filter=${1:-'(compensation|sim|drivers|common|daemon|cli)/(src|apps)/'}
 out=$(mktemp)
 run-clang-tidy -p build -quiet "$filter" >"$out" 2>&1 || true
 if grep -E "warning: .*\[[a-z-]+(\.[a-z-]+)*\]" "$out" | sed -E 's/\x1b\[[0-9;]*m//g' | sort -u; then
