@@ -17,10 +17,10 @@
 #include <memory>
 #include <string>
 
+#include "hystbench/common/run_main.hpp"
 #include "hystbench/drivers/can_bus.hpp"
 #include "hystbench/drivers/can_protocol.hpp"
 #include "realtime_plant.hpp"
-#include "run_main.hpp"
 
 namespace hd = hystbench::drivers;
 using hystbench::apps::RealtimePlant;
@@ -194,5 +194,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return hystbench::apps::run_main("hystbench-simamp", run, argc, argv);
+  return hystbench::common::run_main("hystbench-simamp", run, argc, argv);
 }
