@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # clang-tidy with the project's checks (.clang-tidy, among them no function over 80 lines) on the
 # production sources of every library and app; fails on any warning. Needs the compile commands
-# of build/ (scripts/build.sh makes them). About 10 minutes on 2 cores.
+# of build/ (scripts/build.sh makes them). About 6 minutes on 2 cores.
 #   scripts/tidy.sh                 every source
 #   scripts/tidy.sh daemon/src      the sources under a folder
 set -euo pipefail
