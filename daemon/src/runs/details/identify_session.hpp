@@ -2,7 +2,10 @@
 // identify after its excitation: the fitted candidates (one per family; several with
 // `--model auto`), each verified on the loop by a short tracking segment through its inverse;
 // then the record diagnosed with the best one and its extension verified against it, before
-// the bench adopts one and reports run.finished. Supervisor thread only.
+// the bench adopts one and reports run.finished. Supervisor thread only. In runs/:
+// identify_candidates.cpp (the fits), bench_verification.cpp (the segments on the loop),
+// identify_extension.cpp (the diagnosis and the extended candidate), identify_choice.cpp (the
+// choice, the model file and the result).
 #include <cstddef>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -28,6 +31,9 @@ struct IdentifyCandidate {
   std::map<double, nlohmann::json> sines;
 };
 
+/// The family of a fit's hysteresis model, as model files name it ("mpi", "rpi", ...).
+std::string model_type_name(const compensation::FitResult& fit);
+
 /// A family's fit as a candidate not yet verified, labelled with the family.
 IdentifyCandidate family_candidate(compensation::FitResult fit);
 
@@ -37,6 +43,17 @@ IdentifyCandidate family_candidate(compensation::FitResult fit);
 /// error, best first. Candidates in `left_out` are skipped; none verified: the first.
 std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
                           const std::vector<std::size_t>& left_out);
+
+/// The candidates best_verified() leaves out: the extension `extended` (judged against its base
+/// instead), and the loser of a rate law (candidate 0) and its rate-free self `rate_free` on the
+/// sine at `sine_hz`; a law that loses takes its dead-zone neighbour along.
+std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>& candidates,
+                                            std::optional<std::size_t> extended,
+                                            std::optional<std::size_t> rate_free, double sine_hz);
+
+/// The sine a rate law is judged on [Hz]: the fastest the rate bench tracks, at most a twentieth
+/// of the loop rate.
+double rate_sine_frequency(double loop_rate_hz);
 
 /// One verification segment: a candidate's standard triangle, or a sine.
 struct VerificationJob {
