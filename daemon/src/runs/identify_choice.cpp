@@ -22,8 +22,8 @@ using nlohmann::json;
 
 namespace {
 
-// Verified max errors within this factor of each other are one figure: two triangles on the
-// same model differ by about 1 % with the bench's history (creep, noise) before them.
+// Verified max errors within this factor of each other are one figure: it lies above the spread
+// of two triangles on one model, which the bench's history (creep, noise) moves.
 constexpr double kVerifiedTie = 1.03;
 
 // Verified max error [% of the reference span]; +inf when not verified to the end.
@@ -74,9 +74,9 @@ double triangle_rms(const IdentifyCandidate& c) {
 
 // The extended model is adopted when it tracks better by more than the spread between two runs:
 // on the fast sine (when one ran) by at least 5 % without losing more than 10 % + 0.05 % of range
-// on the triangle's rms (its max moves by a tenth of itself between runs; 0.05 % is a few times
-// the sensor noise, and a delay or a resonance inverted at the triangle's corners costs about
-// that), else on the triangle's max by 10 % without a higher rms.
+// on the triangle's rms (10 %: the spread of the triangle between two runs; 0.05 %: a few times
+// the sensor noise, room for a delay or a resonance inverted at the triangle's corners), else on
+// the triangle's max by 10 % without a higher rms.
 bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
                              double fast_hz) {
   if (!std::isfinite(verified_max(ext))) return false;

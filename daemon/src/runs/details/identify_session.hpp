@@ -38,9 +38,9 @@ std::string model_type_name(const compensation::FitResult& fit);
 IdentifyCandidate family_candidate(compensation::FitResult fit);
 
 /// The candidate that tracks best: the lowest verified max error on the standard triangle,
-/// figures within 3 % of the lowest counting as equal (two triangles on one model differ by
-/// about 1 % with the bench's history) and the first of them taken: candidates come by held-out
-/// error, best first. Candidates in `left_out` are skipped; none verified: the first.
+/// figures within 3 % of the lowest counting as equal (a margin above the spread of two triangles
+/// on one model, which the bench's history moves) and the first of them taken: candidates come
+/// by held-out error, best first. Candidates in `left_out` are skipped; none verified: the first.
 std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
                           const std::vector<std::size_t>& left_out);
 
@@ -101,9 +101,9 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
 
 /// One family with its dead zones chosen by held-out error (options.dead_zones < 0): the same
 /// family with one dead zone per side fewer, fitted on the same shifted record, appended as a
-/// candidate for the verification to judge. The held-out error hardly tells m from m - 1 (on
-/// the loopback 0.085 against 0.087 %), the tracking does: the outermost dead zone fits the
-/// record's end of range and the inverse overshoots there (0.33-0.43 % max against 0.21 %).
+/// candidate for the verification to judge. The held-out error hardly tells m from m - 1, the
+/// tracking does: the outermost dead zone fits the record's end of range, and the inverse can
+/// overshoot there.
 /// Nothing is appended for auto, fixed dead zones, none fitted, or a neighbour fit that fails.
 void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
                              std::span<const double> u, std::span<const double> y,
@@ -113,9 +113,9 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
 /// law (its nested modified PI refitted, as an rpi with zero rate coefficients), appended as a
 /// candidate for the verification to judge on the triangle and on the rate sine. A law that
 /// gains on the held-out record can still track worse than none where the actuator follows
-/// another law (on a switching front, 2.4 % against 0.7 % at 1 Hz); on the slow triangle a law
-/// that helps and its rate-free self differ by no more than two runs of one model. Nothing is
-/// appended for another family, a rate-free fit, or a refit that fails.
+/// another law (a switching front: docs/measurements.md, "Rate dependence on"); on the slow
+/// triangle a law that helps and its rate-free self differ by no more than two runs of one model.
+/// Nothing is appended for another family, a rate-free fit, or a refit that fails.
 void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
                              std::span<const double> u, std::span<const double> y,
                              const compensation::FitOptions& options);
