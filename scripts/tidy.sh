@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # clang-tidy with the project's checks (.clang-tidy, among them no function over 80 lines) on the
 # production sources of every library and app; fails on any warning. Needs the compile commands
-# of build/ (scripts/build.sh makes them). About 10 minutes on 2 cores.
+# of build/ (scripts/build.sh makes them). About 6 minutes on 2 cores.
 #   scripts/tidy.sh                 every source
 #   scripts/tidy.sh daemon/src      the sources under a folder
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ -f build/compile_commands.json ] || bash scripts/build.sh >&2
-filter=${1:-'(compensation|sim|drivers|daemon)/(src|apps)/'}
+filter=${1:-'(compensation|sim|drivers|common|daemon|cli)/(src|apps)/'}
 out=$(mktemp)
 run-clang-tidy -p build -quiet "$filter" >"$out" 2>&1 || true
 if grep -E "warning: .*\[[a-z-]+(\.[a-z-]+)*\]" "$out" | sed -E 's/\x1b\[[0-9;]*m//g' | sort -u; then

@@ -188,16 +188,10 @@ void add_track_file_options(CLI::App* cmd, TrackOptions& tr) {
                             "--range-fraction", "--min", "--max"}) {
     file_opt->excludes(cmd->get_option(other));
   }
-  cmd->add_option("--t-column", tr.t_column, "--reference-file: time column [s]")
-      ->capture_default_str();
-  cmd->add_option("--yr-column", tr.yr_column, "--reference-file: reference column")
-      ->capture_default_str();
-  cmd->add_option("--yr-scale", tr.yr_scale,
-                  "--reference-file: multiply the reference by this (m -> um: 1e6)")
-      ->capture_default_str();
-  cmd->add_option("--rate", tr.rate,
-                  "--reference-file: sample rate [Hz] of a file without a time column")
-      ->check(CLI::PositiveNumber);
+  add_record_columns(cmd, "yr", tr.t_column, tr.yr_column, tr.yr_scale, tr.rate,
+                     {"--reference-file: time column [s]", "--reference-file: reference column",
+                      "--reference-file: multiply the reference by this (m -> um: 1e6)",
+                      "--reference-file: sample rate [Hz] of a file without a time column"});
   cmd->add_option("--approach", tr.approach,
                   "--reference-file: unscored move from the precondition's end to the "
                   "first value [s] (default 0.2, longer when the slew limit needs it)");
@@ -291,13 +285,11 @@ CliCommand add_excite(CLI::App& app, cli::RemoteCommand& remote) {
                   "when it leaves [u_min, u_max] or moves faster than the slew limit")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--t-column", ex->columns.t, "Time column [s]")->capture_default_str();
-  cmd->add_option("--u-column", ex->columns.u, "Drive column")->capture_default_str();
-  cmd->add_option("--u-scale", ex->columns.u_scale, "Multiply the drive by this (mV -> V: 1e-3)")
-      ->capture_default_str();
-  cmd->add_option("--rate", ex->columns.rate_hz,
-                  "Sample rate [Hz] of a file without a time column (t = row / rate)")
-      ->check(CLI::PositiveNumber);
+  cli::RecordColumns& drive = ex->columns;
+  add_record_columns(
+      cmd, "u", drive.t, drive.u, drive.u_scale, drive.rate_hz,
+      {"Time column [s]", "Drive column", "Multiply the drive by this (mV -> V: 1e-3)",
+       "Sample rate [Hz] of a file without a time column (t = row / rate)"});
   add_output_flags(cmd, remote, true);
   return {cmd, [ex, &remote] {
             const cli::RecordColumns& c = ex->columns;

@@ -7,11 +7,14 @@
 #include <vector>
 
 #include "hystbench/cli/remote/remote_commands.hpp"
+#include "hystbench/common/run_main.hpp"
 #include "subcommands.hpp"
 
 namespace cli = hystbench::cli;
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{
       "hystbench - identify, simulate and compensate piezo hysteresis (Prandtl-Ishlinskii family)\n"
       "\n"
@@ -76,4 +79,10 @@ int main(int argc, char** argv) {
     if (*command.app) return command.run();
   }
   return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return hystbench::common::run_main("hystbench", run, argc, argv);
 }

@@ -62,6 +62,15 @@ void add_column_options(CLI::App* c, cli::RecordColumns& columns, bool y_optiona
 
 }  // namespace
 
+void add_record_columns(CLI::App* cmd, const std::string& signal, std::string& t_column,
+                        std::string& column, double& scale, double& rate_hz,
+                        const RecordColumnsHelp& help) {
+  cmd->add_option("--t-column", t_column, help.t)->capture_default_str();
+  cmd->add_option("--" + signal + "-column", column, help.column)->capture_default_str();
+  cmd->add_option("--" + signal + "-scale", scale, help.scale)->capture_default_str();
+  cmd->add_option("--rate", rate_hz, help.rate)->check(CLI::PositiveNumber);
+}
+
 CliCommand add_fit(CLI::App& app) {
   auto fit = std::make_shared<cli::FitCommand>();
   auto* cmd =
@@ -145,16 +154,11 @@ CliCommand add_invert(CLI::App& app) {
   cmd->add_option("reference", inv->reference_path, "CSV with columns t, yr")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--t-column", inv->t_column, "Name of the time column [s]")
-      ->capture_default_str();
-  cmd->add_option("--yr-column", inv->yr_column,
-                  "Name of the reference column (the model's output unit after --yr-scale)")
-      ->capture_default_str();
-  cmd->add_option("--yr-scale", inv->yr_scale, "Multiply the reference by this (m -> um: 1e6)")
-      ->capture_default_str();
-  cmd->add_option("--rate", inv->rate_hz,
-                  "Sample rate [Hz] of a file without a time column (t = row / rate)")
-      ->check(CLI::PositiveNumber);
+  add_record_columns(cmd, "yr", inv->t_column, inv->yr_column, inv->yr_scale, inv->rate_hz,
+                     {"Name of the time column [s]",
+                      "Name of the reference column (the model's output unit after --yr-scale)",
+                      "Multiply the reference by this (m -> um: 1e6)",
+                      "Sample rate [Hz] of a file without a time column (t = row / rate)"});
   cmd->add_option("-o,--output", inv->output_path, "CSV file to write (t,yr,u)")->required();
   cmd->add_option("--inverse", inv->inverse,
                   "auto (analytic where a closed form exists, else numeric; for a rate-dependent "

@@ -13,6 +13,20 @@ struct CliCommand {
   std::function<int()> run;
 };
 
+// The options of a record file of one signal (invert's reference, track's --reference-file,
+// excite's drive): --t-column, the signal's column and scale (`signal` "yr" names them
+// --yr-column and --yr-scale), and --rate for a file without a time column, in that order. Each
+// command words their help itself (`help`, in the same order).
+struct RecordColumnsHelp {
+  const char* t;
+  const char* column;
+  const char* scale;
+  const char* rate;
+};
+void add_record_columns(CLI::App* cmd, const std::string& signal, std::string& t_column,
+                        std::string& column, double& scale, double& rate_hz,
+                        const RecordColumnsHelp& help);
+
 // Offline commands, no daemon needed (offline_subcommands.cpp).
 CliCommand add_fit(CLI::App& app);
 CliCommand add_simulate(CLI::App& app);

@@ -23,6 +23,7 @@ std::string fit_family_names() {
 
 std::vector<std::string> fit_family_name_list() {
   std::vector<std::string> names;
+  names.reserve(kFamilies.size() + 1);
   for (const hc::ModelKind k : kFamilies) names.emplace_back(hc::to_string(k));
   names.emplace_back(kAuto);
   return names;

@@ -43,7 +43,7 @@ bool uses_feedback(CompensatorKind kind) noexcept {
 
 Compensator::Compensator(CompensatorKind kind, std::unique_ptr<InverseModel> inverse,
                          std::optional<PidController> pid, LinearMap linear)
-    : kind_(kind), inverse_(std::move(inverse)), pid_(pid), linear_(linear) {
+    : kind_(kind), inverse_(std::move(inverse)), pid_(std::move(pid)), linear_(linear) {
   details::require(!needs_model(kind_) || inverse_ != nullptr,
                    std::string("compensator '") + std::string(to_string(kind_)) +
                        "' needs a model (identify or load one first)");

@@ -270,6 +270,7 @@ std::string left_out_summary(const CandidateReport& c) {
 
 std::vector<std::size_t> starts_of(const std::vector<details::RecordPart>& parts) {
   std::vector<std::size_t> starts;
+  starts.reserve(parts.size());
   for (const details::RecordPart& p : parts) starts.push_back(p.begin);
   return starts;
 }
@@ -950,7 +951,7 @@ void extend_by_nothing(Diagnosis& d) {
 
 Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                         std::span<const double> y, const DiagnosisOptions& options,
-                        std::vector<details::RecordPart> parts) {
+                        const std::vector<details::RecordPart>& parts) {
   report(options, 0.0, "checking the record");
   const std::vector<std::size_t> starts = starts_of(parts);
   const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options, starts);

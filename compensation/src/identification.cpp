@@ -455,8 +455,8 @@ Candidate Identifier::search_cpi() {
     }
   }
   // Unit scales first: asymmetry must beat the plain plays by the parsimony margin, as a larger
-  // order must. On the loopback (a modified PI) the scales gained < 1 % held-out by chance, chose
-  // a different asymmetry each time and tracked 0.25 or 0.49 % max.
+  // order must. On a symmetric actuator scales chosen on a gain within the noise change from one
+  // record to the next, and the tracking with them.
   grid.insert(grid.begin(), {1.0, 1.0, 1.0});
   std::size_t done = 0;
   const std::array<double, 3> cp = pick(grid, [&](const std::array<double, 3>& k) {
@@ -472,8 +472,8 @@ Candidate Identifier::search_rpi() {
   Candidate best = rpi_over(mpi);
   // The dead zones (and plays) the modified PI chose are a poor guide on a record with rate
   // dependence: the rate-free model bends to the fast segments, and its held-out error is about
-  // equal at every order (on the rate-dependent loopback's identify log, 0.72-0.98 um at 0-2
-  // dead zones), so it keeps the smallest. With the rate law each order is judged on its own.
+  // equal at every order, so it keeps the smallest. With the rate law each order is judged on
+  // its own.
   // Judged before refinement and creep, which can reorder close candidates: run() finishes the
   // one the modified PI's order gives too and keeps the better.
   const std::vector<int> ms = dead_zone_grid();
@@ -823,8 +823,8 @@ void Identifier::check_nesting(Candidate& best) {
   if (best_kind == ModelKind::kCoupledPlayPi && best.structure.has_dead_zones() &&
       best.structure.cp_scale != std::array<double, 3>{1.0, 1.0, 1.0}) {
     // Nesting, as for the order: the asymmetry must beat the modified PI it extends (refined
-    // and with creep alike) by the parsimony margin. On the loopback (a modified PI) it gained
-    // nothing held-out once both were refined, and tracked 0.27 to 0.48 % max as it varied.
+    // and with creep alike) by the parsimony margin. An asymmetry that gains nothing once both
+    // are refined varies from record to record, and the tracking with it.
     progress(0.93, "checking the asymmetry against the modified PI it extends");
     Candidate mpi = search_mpi();
     finish(mpi);

@@ -380,10 +380,10 @@ InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const Actuato
 double InverseMultiplicativeCompensator::step(double y_ref) noexcept {
   double u = u_prev_ + (y_ref - y_prev_) / gain_;
   // The structure's equation u = u + (y_ref - H[u]) / g is implicit; one pass a tick, as the
-  // delayed loop, leaves a lag of (g / s) ticks where the local slope s is low (on the loopback
-  // worse than no compensation at 200 Hz). A rate-independent model is peeked without advancing
-  // it, so the same equation is iterated to its fixed point within the tick (each pass shrinks
-  // the error by 1 - s/g in [0, 1)); so is a thresholds law (see the constructor). A weight
+  // delayed loop, leaves a lag of (g / s) ticks where the local slope s is low, which on a fast
+  // reference costs more than the compensation gains. A rate-independent model is peeked without
+  // advancing it, so the same equation is iterated to its fixed point within the tick (each pass
+  // shrinks the error by 1 - s/g in [0, 1)); so is a thresholds law (see the constructor). A weight
   // rate law keeps one pass: its output moves with u's own rate, and an iteration through that
   // rate does not contract.
   if (iterate_) {

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <optional>
 
+#include "hystbench/common/run_main.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/config/daemon_settings.hpp"
 #include "hystbench/daemon/service/bench.hpp"
@@ -185,9 +186,7 @@ int run_daemon(const hd::DaemonConfig& config, const hd::BenchSettings& settings
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{
       "hystbenchd - hystbench bench daemon: fixed-rate loop, every-sample logs, command socket\n"
       "\n"
@@ -215,4 +214,10 @@ int main(int argc, char** argv) {
     return 0;
   }
   return run_daemon(*config, settings, block_stop_signals());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return hystbench::common::run_main("hystbenchd", run, argc, argv);
 }

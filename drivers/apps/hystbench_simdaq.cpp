@@ -19,9 +19,9 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "hystbench/common/run_main.hpp"
 #include "hystbench/drivers/simdaq_register_map.hpp"
 #include "realtime_plant.hpp"
-#include "run_main.hpp"
 
 namespace map = hystbench::drivers::simdaq;
 using hystbench::apps::RealtimePlant;
@@ -265,5 +265,5 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return hystbench::apps::run_main("hystbench-simdaq", run, argc, argv);
+  return hystbench::common::run_main("hystbench-simdaq", run, argc, argv);
 }

@@ -320,14 +320,16 @@ void decode_section(const json& j, const std::string& path, Section& section) {
     // Not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
     const std::string& key = item.key();
     const json& value = item.value();
+    std::string key_path = path;
+    key_path.append(".").append(key);
     bool known = false;
     visit_fields(section, [&](const char* name, auto& field) {
       if (key != name) return;
       known = true;
-      decode(value, path + "." + key, field);
+      decode(value, key_path, field);
     });
     if (!known) {
-      fail(path + "." + key,
+      fail(key_path,
            "unknown key (valid: " + key_list([&](auto&& v) { visit_fields(section, v); }) + ")");
     }
   }

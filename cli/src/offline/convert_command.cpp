@@ -1,5 +1,6 @@
 #include "hystbench/cli/offline/convert_command.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <iomanip>
@@ -50,18 +51,20 @@ std::vector<std::string> channel_names(const std::vector<std::string>& given, st
                                        const std::string& prefix, const std::string& unit,
                                        const std::string& option, const std::string& path) {
   if (given.empty()) {
-    std::vector<std::string> names;
-    for (std::size_t c = 1; c <= channels; ++c) names.push_back(prefix + std::to_string(c) + unit);
+    std::vector<std::string> names(channels, prefix);
+    for (std::size_t c = 1; c <= channels; ++c) names[c - 1].append(std::to_string(c)).append(unit);
     return names;
   }
   if (given.size() != channels) {
     throw std::invalid_argument(option + " gives " + std::to_string(given.size()) + " names, " +
                                 path + " has " + std::to_string(channels) + " channels");
   }
-  for (const std::string& name : given) {
-    if (name.empty() || name.front() == '#' || name.find_first_of(",\"\r\n") != std::string::npos) {
-      throw std::invalid_argument(option + ": '" + name + "' cannot be a CSV column name");
-    }
+  const auto unusable = std::find_if(given.begin(), given.end(), [](const std::string& name) {
+    return name.empty() || name.front() == '#' ||
+           name.find_first_of(",\"\r\n") != std::string::npos;
+  });
+  if (unusable != given.end()) {
+    throw std::invalid_argument(option + ": '" + *unusable + "' cannot be a CSV column name");
   }
   return given;
 }
@@ -142,6 +145,7 @@ int run_convert(const ConvertCommand& cmd, std::ostream& out, std::ostream& err)
     const std::vector<std::vector<double>> columns =
         record_columns(u, u_layout, y, y_layout, cmd.rate_hz, names.size());
     std::vector<const std::vector<double>*> column_pointers;
+    column_pointers.reserve(columns.size());
     for (const auto& column : columns) column_pointers.push_back(&column);
     std::ostringstream rate;
     rate << std::setprecision(10) << cmd.rate_hz;

@@ -106,6 +106,20 @@ bool same_unit(const std::string& a, const std::string& b) {
   return plain(a) == plain(b);
 }
 
+// The number a data cell holds; throws DataFileError naming the file, line and column when it
+// holds none, or one out of double's range.
+double cell_value(const std::string& cell, const std::string& origin, std::size_t line_no,
+                  const std::string& column) {
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(cell.c_str(), &end);
+  if (cell.empty() || end != cell.c_str() + cell.size() || errno == ERANGE) {
+    throw DataFileError(origin + ":" + std::to_string(line_no) + ": column '" + column + "': '" +
+                        cell + "' is not a number");
+  }
+  return v;
+}
+
 }  // namespace
 
 DataTable DataTable::parse_csv(const std::string& text, const std::string& origin) {
@@ -166,15 +180,7 @@ DataTable DataTable::parse_csv(const std::string& text, const std::string& origi
                           std::to_string(cells.size()));
     }
     for (std::size_t i = 0; i < cells.size(); ++i) {
-      const std::string& c = cells[i];
-      char* end = nullptr;
-      errno = 0;
-      const double v = std::strtod(c.c_str(), &end);
-      if (c.empty() || end != c.c_str() + c.size() || errno == ERANGE) {
-        throw DataFileError(origin + ":" + std::to_string(line_no) + ": column '" + t.names_[i] +
-                            "': '" + c + "' is not a number");
-      }
-      t.columns_[i].push_back(v);
+      t.columns_[i].push_back(cell_value(cells[i], origin, line_no, t.names_[i]));
     }
     t.line_of_row_.push_back(line_no);
   }
@@ -287,14 +293,14 @@ void require_column(const DataTable& data, const std::string& path, const std::s
 std::vector<double> scaled_column(const DataTable& data, const std::string& path,
                                   const std::string& name, double scale) {
   std::vector<double> v = data.column(name);
-  for (std::size_t k = 0; k < v.size(); ++k) {
-    if (!std::isfinite(v[k])) {
-      throw DataFileError(path + ":" + std::to_string(data.line_of_row(k)) + ": column '" + name +
-                          "', data row " + std::to_string(k + 1) + ": " + std::to_string(v[k]) +
-                          " is not a finite number");
-    }
-    v[k] *= scale;
+  const auto bad = std::find_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); });
+  if (bad != v.end()) {
+    const auto k = static_cast<std::size_t>(bad - v.begin());
+    throw DataFileError(path + ":" + std::to_string(data.line_of_row(k)) + ": column '" + name +
+                        "', data row " + std::to_string(k + 1) + ": " + std::to_string(*bad) +
+                        " is not a finite number");
   }
+  for (double& x : v) x *= scale;
   return v;
 }
 

@@ -431,6 +431,7 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
     std::vector<Record> records;
     std::vector<std::string> paths = cmd.data_paths;
     paths.insert(paths.end(), cmd.validate_paths.begin(), cmd.validate_paths.end());
+    records.reserve(paths.size());
     for (const std::string& path : paths) records.push_back(read_record(path, cmd.columns, true));
     std::string label;
     for (const std::string& path : cmd.data_paths) label += (label.empty() ? "" : " + ") + path;

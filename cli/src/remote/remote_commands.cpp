@@ -298,7 +298,7 @@ std::string send_upload(BenchClient& client, const RemoteUpload& upload,
                 {"source", std::filesystem::path(upload.source).filename().string()}};
   if (upload.rate_hz > 0.0) begin["rate_hz"] = upload.rate_hz;
   const json started = result_or_throw(client.request("upload.begin", begin));
-  const std::string name = started.value("upload", "");
+  std::string name = started.value("upload", "");  // returned: not const, so it moves
   // Below the daemon's bound and well inside the 64 KiB request line with t and values.
   const std::size_t chunk =
       std::clamp<std::size_t>(started.value("max_chunk_samples", std::size_t{1000}), 1, 1000);

@@ -89,7 +89,7 @@ std::vector<fs::path> plot_run_log(const std::string& log_path, const fs::path& 
 
   const std::string data = details::gnuplot_quoted(dat);
   const std::string name = fs::path(log_path).filename().string();
-  const std::vector<fs::path> pngs = {dir / "time.png", dir / "error.png", dir / "loop.png"};
+  std::vector<fs::path> pngs = {dir / "time.png", dir / "error.png", dir / "loop.png"};
   const fs::path script = dir / "plot.gp";
   std::ofstream gp(script, std::ios::trunc);
   if (!gp) throw std::runtime_error(script.string() + ": cannot write");
@@ -159,7 +159,8 @@ fs::path plot_learning(const nlohmann::json& learning, const std::string& log_pa
   }
   d.close();
   const std::string data = details::gnuplot_quoted(dat);
-  const fs::path png = dir / "learning.png", script = dir / "learning.gp";
+  fs::path png = dir / "learning.png";
+  const fs::path script = dir / "learning.gp";
   std::ofstream gp(script, std::ios::trunc);
   if (!gp) throw std::runtime_error(script.string() + ": cannot write");
   gp << "# hystbench learning plot of " << log_path << ": gnuplot "

@@ -198,57 +198,78 @@ SocketServerCounters SocketServer::counters() const noexcept {
 
 void SocketServer::run() noexcept {
   std::vector<pollfd> fds;
-  while (!stopping_.load()) {
-    fds.clear();
-    fds.push_back({wake_fd_, POLLIN, 0});
-    fds.push_back({listen_fd_, POLLIN, 0});
-    for (const auto& c : clients_) {
-      short events = 0;
-      // Back-pressure: read no more requests while the replies pile up.
-      if (!c->eof && c->pending() <= options_.max_output_bytes / 2) events |= POLLIN;
-      if (c->pending() > 0) events |= POLLOUT;
-      fds.push_back({c->fd, events, 0});
+  bool serving = true;
+  while (serving && !stopping_.load()) {
+    // Only an allocation can fail here (std::bad_alloc, std::length_error): the dispatcher's
+    // exceptions are its replies. A round that fails may have handled part of a client's lines,
+    // so every connection closes rather than serve a line twice; the server goes on listening.
+    try {
+      serving = serve_round(fds);
+    } catch (const std::exception& e) {
+      spdlog::error("socket server: {}: closing every connection", e.what());
+      close_all();
+    } catch (...) {
+      spdlog::error("socket server: unknown exception: closing every connection");
+      close_all();
     }
-    if (::poll(fds.data(), fds.size(), -1) < 0) {
-      if (errno == EINTR) continue;
-      spdlog::error("socket server: poll failed: {}", std::strerror(errno));
-      break;
-    }
-    if (fds[0].revents & POLLIN) {
-      std::uint64_t count = 0;
-      [[maybe_unused]] const auto n = ::read(wake_fd_, &count, sizeof count);
-      deliver_events();
-    }
-    if (fds[1].revents & POLLIN) accept_clients();
-    // fds[2 + i] belongs to clients_[i]: clients accepted just now come after them.
-    for (std::size_t i = 0; i + 2 < fds.size(); ++i) {
-      Client& c = *clients_[i];
-      const short revents = fds[i + 2].revents;
-      if (c.dead) continue;
-      if (revents & (POLLIN | POLLHUP | POLLERR)) read_client(c);
-      if (!c.dead && (revents & POLLOUT)) flush(c);
-      // Output drained below the mark: handle the lines that were held back.
-      if (!c.dead && !c.in.empty() && c.pending() <= options_.max_output_bytes / 2) {
-        process_lines(c);
-      }
-      if (!c.dead && c.eof && c.pending() == 0 && c.in.empty()) c.dead = true;
-    }
-    std::erase_if(clients_, [this](const std::unique_ptr<Client>& c) {
-      if (!c->dead) return false;
-      ::close(c->fd);
-      counters_.clients.fetch_sub(1, std::memory_order_relaxed);
-      spdlog::debug("socket client {} closed", c->id);
-      disconnected(c->id);
-      return true;
-    });
   }
   // Last words: events broadcast before stop() (e.g. the result of the run a shutdown ended)
   // still reach the clients that read them; one non-blocking attempt each, never waiting.
-  deliver_events();
-  for (const auto& c : clients_) {
-    if (!c->dead) flush(*c);
+  try {
+    deliver_events();
+    for (const auto& c : clients_) {
+      if (!c->dead) flush(*c);
+    }
+  } catch (...) {
+    spdlog::warn("socket server: the last events could not be sent");
   }
   close_all();
+}
+
+bool SocketServer::serve_round(std::vector<pollfd>& fds) {
+  fds.clear();
+  fds.push_back({wake_fd_, POLLIN, 0});
+  fds.push_back({listen_fd_, POLLIN, 0});
+  for (const auto& c : clients_) {
+    short events = 0;
+    // Back-pressure: read no more requests while the replies pile up.
+    if (!c->eof && c->pending() <= options_.max_output_bytes / 2) events |= POLLIN;
+    if (c->pending() > 0) events |= POLLOUT;
+    fds.push_back({c->fd, events, 0});
+  }
+  if (::poll(fds.data(), fds.size(), -1) < 0) {
+    if (errno == EINTR) return true;
+    spdlog::error("socket server: poll failed: {}", std::strerror(errno));
+    return false;
+  }
+  if (fds[0].revents & POLLIN) {
+    std::uint64_t count = 0;
+    [[maybe_unused]] const auto n = ::read(wake_fd_, &count, sizeof count);
+    deliver_events();
+  }
+  if (fds[1].revents & POLLIN) accept_clients();
+  // fds[2 + i] belongs to clients_[i]: clients accepted just now come after them.
+  for (std::size_t i = 0; i + 2 < fds.size(); ++i) {
+    Client& c = *clients_[i];
+    const short revents = fds[i + 2].revents;
+    if (c.dead) continue;
+    if (revents & (POLLIN | POLLHUP | POLLERR)) read_client(c);
+    if (!c.dead && (revents & POLLOUT)) flush(c);
+    // Output drained below the mark: handle the lines that were held back.
+    if (!c.dead && !c.in.empty() && c.pending() <= options_.max_output_bytes / 2) {
+      process_lines(c);
+    }
+    if (!c.dead && c.eof && c.pending() == 0 && c.in.empty()) c.dead = true;
+  }
+  std::erase_if(clients_, [this](const std::unique_ptr<Client>& c) {
+    if (!c->dead) return false;
+    ::close(c->fd);
+    counters_.clients.fetch_sub(1, std::memory_order_relaxed);
+    spdlog::debug("socket client {} closed", c->id);
+    disconnected(c->id);
+    return true;
+  });
+  return true;
 }
 
 void SocketServer::disconnected(std::uint64_t client) noexcept {

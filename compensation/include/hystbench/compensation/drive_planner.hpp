@@ -10,8 +10,8 @@
 // gradients, starting from the previewed inverse's drive. Long references are planned in chunks
 // that overlap, each from the state the committed drive leaves.
 // Units: drive in the model's input unit, targets and errors in its output unit, s.
-// Control thread only: allocates and takes time (plan_drive_work(): about 10 us per sample and
-// play on one core).
+// Control thread only: allocates and takes time, in proportion to plan_drive_work() (the time
+// per unit: the benchmark plan_drive_10hz).
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -69,8 +69,8 @@ struct DrivePlan {
 /// models the previewed inverse is already exact where the target is reachable).
 bool can_plan_drive(const ActuatorModel& model) noexcept;
 
-/// The work of plan_drive() for `samples` targets in sample-operators, samples x (plays + 2):
-/// about 10 us each on one core (bench `plan_drive_10hz`); 0 when can_plan_drive() is false.
+/// The work of plan_drive() for `samples` targets in sample-operators, samples x (plays + 2)
+/// (the time each takes: bench `plan_drive_10hz`); 0 when can_plan_drive() is false.
 double plan_drive_work(const ActuatorModel& model, std::size_t samples) noexcept;
 
 /// The drive that makes `model` (relaxed at u_start, then driven through `prefix`) give the

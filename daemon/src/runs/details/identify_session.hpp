@@ -2,7 +2,10 @@
 // identify after its excitation: the fitted candidates (one per family; several with
 // `--model auto`), each verified on the loop by a short tracking segment through its inverse;
 // then the record diagnosed with the best one and its extension verified against it, before
-// the bench adopts one and reports run.finished. Supervisor thread only.
+// the bench adopts one and reports run.finished. Supervisor thread only. In runs/:
+// identify_candidates.cpp (the fits), bench_verification.cpp (the segments on the loop),
+// identify_extension.cpp (the diagnosis and the extended candidate), identify_choice.cpp (the
+// choice, the model file and the result).
 #include <cstddef>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -28,15 +31,29 @@ struct IdentifyCandidate {
   std::map<double, nlohmann::json> sines;
 };
 
+/// The family of a fit's hysteresis model, as model files name it ("mpi", "rpi", ...).
+std::string model_type_name(const compensation::FitResult& fit);
+
 /// A family's fit as a candidate not yet verified, labelled with the family.
 IdentifyCandidate family_candidate(compensation::FitResult fit);
 
 /// The candidate that tracks best: the lowest verified max error on the standard triangle,
-/// figures within 3 % of the lowest counting as equal (two triangles on one model differ by
-/// about 1 % with the bench's history) and the first of them taken: candidates come by held-out
-/// error, best first. Candidates in `left_out` are skipped; none verified: the first.
+/// figures within 3 % of the lowest counting as equal (a margin above the spread of two triangles
+/// on one model, which the bench's history moves) and the first of them taken: candidates come
+/// by held-out error, best first. Candidates in `left_out` are skipped; none verified: the first.
 std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
                           const std::vector<std::size_t>& left_out);
+
+/// The candidates best_verified() leaves out: the extension `extended` (judged against its base
+/// instead), and the loser of a rate law (candidate 0) and its rate-free self `rate_free` on the
+/// sine at `sine_hz`; a law that loses takes its dead-zone neighbour along.
+std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>& candidates,
+                                            std::optional<std::size_t> extended,
+                                            std::optional<std::size_t> rate_free, double sine_hz);
+
+/// The sine a rate law is judged on [Hz]: the fastest the rate bench tracks, at most a twentieth
+/// of the loop rate.
+double rate_sine_frequency(double loop_rate_hz);
 
 /// One verification segment: a candidate's standard triangle, or a sine.
 struct VerificationJob {
@@ -84,9 +101,9 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
 
 /// One family with its dead zones chosen by held-out error (options.dead_zones < 0): the same
 /// family with one dead zone per side fewer, fitted on the same shifted record, appended as a
-/// candidate for the verification to judge. The held-out error hardly tells m from m - 1 (on
-/// the loopback 0.085 against 0.087 %), the tracking does: the outermost dead zone fits the
-/// record's end of range and the inverse overshoots there (0.33-0.43 % max against 0.21 %).
+/// candidate for the verification to judge. The held-out error hardly tells m from m - 1, the
+/// tracking does: the outermost dead zone fits the record's end of range, and the inverse can
+/// overshoot there.
 /// Nothing is appended for auto, fixed dead zones, none fitted, or a neighbour fit that fails.
 void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
                              std::span<const double> u, std::span<const double> y,
@@ -96,9 +113,9 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
 /// law (its nested modified PI refitted, as an rpi with zero rate coefficients), appended as a
 /// candidate for the verification to judge on the triangle and on the rate sine. A law that
 /// gains on the held-out record can still track worse than none where the actuator follows
-/// another law (on a switching front, 2.4 % against 0.7 % at 1 Hz); on the slow triangle a law
-/// that helps and its rate-free self differ by no more than two runs of one model. Nothing is
-/// appended for another family, a rate-free fit, or a refit that fails.
+/// another law (a switching front: docs/measurements.md, "Rate dependence on"); on the slow
+/// triangle a law that helps and its rate-free self differ by no more than two runs of one model.
+/// Nothing is appended for another family, a rate-free fit, or a refit that fails.
 void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
                              std::span<const double> u, std::span<const double> y,
                              const compensation::FitOptions& options);

@@ -2,9 +2,10 @@
 // The truth of a simulated piezo actuator: one plain struct, one nested struct per effect, each
 // with an `enabled` flag. Units: input in V, displacement in µm, time in s, frequency in Hz.
 // The defaults resemble a 150 V stack, in physics that no model family of the bench contains
-// (docs/simulator.md): Preisach hysteresis with a continuous relay density (about 45 µm periodic
-// major-loop range, about 17 % hysteresis, a saturating top), logarithmic creep of 1 % per
-// decade, modes at 3 and 8 kHz, a 5 kHz sensor, 16-bit DAC and ADC, 5 nm rms sensor noise.
+// (docs/simulator.md): Preisach hysteresis with a continuous relay density (a periodic major loop
+// over about 0..45 µm with a saturating top; its measured range and width: docs/measurements.md),
+// logarithmic creep of 1 % per decade, modes at 3 and 8 kHz, a 5 kHz sensor, 16-bit DAC and ADC,
+// 5 nm rms sensor noise.
 // Plain data; validate() and the JSON conversions allocate and throw, so call them off the
 // real-time path.
 #include <cstdint>
@@ -113,7 +114,7 @@ struct SimulatedActuatorConfig {
     bool enabled = false;
     RateMechanism mechanism = RateMechanism::kSwitchingFront;
     /// switching_front: the front's lag behind a 1 kV/s ramp [V], > 0. The default widens the
-    /// full-range loop from 17.6 % at 1 Hz to 21.5 % at 19 Hz and 26.8 % at 100 Hz.
+    /// full-range loop with frequency (by how much: docs/measurements.md, "Rate dependence on").
     double switching_lag_v = 2.5;
     /// switching_front: n of the front's speed |u - u_s|^n, [1, 4]; 2: the lag grows with the
     /// square root of the rate; 1: a first-order lag (SwitchingFront).

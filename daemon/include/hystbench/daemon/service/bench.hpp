@@ -16,12 +16,12 @@
 #include <string>
 #include <thread>
 
+#include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pid_controller.hpp"
-#include "hystbench/daemon/loop/bench_loop.hpp"
-#include "hystbench/common/command_error.hpp"
 #include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/loop/bench_loop.hpp"
 #include "hystbench/daemon/service/upload_store.hpp"
 #include "hystbench/drivers/driver.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
@@ -170,7 +170,8 @@ class Bench {
   void finalize(std::unique_ptr<RunProgram> run);
   /// Sets the last result, leaves the bench idle and emits run.finished.
   void deliver_result(nlohmann::json result);
-  // identify's verification (bench_verification.cpp, identify_session.hpp).
+  // identify after its excitation (identify_session.hpp: runs/identify_candidates.cpp,
+  // bench_verification.cpp, identify_extension.cpp, identify_choice.cpp).
   struct IdentifySession;
   /// Submits the next verification segment; false when none is left or it failed.
   bool verify_next_candidate();

@@ -33,6 +33,8 @@
 #include <thread>
 #include <vector>
 
+struct pollfd;
+
 namespace hystbench::daemon {
 
 inline constexpr int kProtocolVersion = 1;
@@ -115,6 +117,8 @@ class SocketServer {
  private:
   struct Client;
   void run() noexcept;
+  /// One poll() and what it reports; false when poll() fails (the event thread ends).
+  bool serve_round(std::vector<pollfd>& fds);
   void accept_clients();
   void read_client(Client& c);
   void process_lines(Client& c);

@@ -1,0 +1,262 @@
+// identify's candidates: the identify record brought to the fit rate with the measurement delay
+// chosen in ticks, one fit per family (every family for auto), the neighbours the verification
+// judges (one dead zone fewer, a rate law without its law), and the jobs that verify them
+// (Bench members on the supervisor thread; identify_session.hpp).
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "hystbench/common/fit_families.hpp"
+#include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "hystbench/daemon/runs/identification_fit.hpp"
+#include "runs/details/identify_session.hpp"
+#include "runs/details/run_result.hpp"
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+namespace {
+
+// Largest measurement delay identify looks for [ticks].
+constexpr int kMaxDelayTicks = 4;
+
+// What identify did so that the model does not depend on earlier runs (for the result).
+json identify_history_json(const json& fit_request) {
+  return {{"precondition_sweep_s", fit_request.value("precondition_s", 0.0)},
+          {"settle_s", fit_request.value("settle_s", 0.0)},
+          {"unscored_samples", fit_request.value("skip_samples", 0)},
+          {"note",
+           "hold at mid-range (creep), sweep to u_max and u_min (hysteresis memory) before the "
+           "excitation; the fit simulates both from the output's last value and scores from "
+           "the first major loop on"}};
+}
+
+// The fit's options for identify's request (details::BuiltRun::fit), at the fit rate: records
+// are block-averaged by `block` ticks.
+hc::FitOptions identify_fit_options(const json& fit_request, const BenchSettings& settings,
+                                    std::size_t block) {
+  hc::FitOptions opt;
+  opt.kind = common::parse_fit_family(fit_request.value("model", ""));
+  opt.operators = fit_request.value("operators", 0);
+  opt.dead_zones = fit_request.value("dead_zones", -1);
+  opt.heldout_fraction = settings.identify.heldout_fraction;
+  // A bench has a history: the creep of earlier runs still settles during the record (tens of
+  // seconds), as a slow drift the fit would otherwise bend the hysteresis to.
+  opt.drift = true;
+  // The ramp, the settle hold and the precondition sweep are simulated, not scored.
+  const std::size_t skip = fit_request.value("skip_samples", std::size_t{0});
+  opt.skip_samples = (skip + block - 1) / block;
+  return opt;
+}
+
+// The options of a neighbour's fit on the identify record: that record is already shifted by the
+// delay chosen in ticks, and the neighbour's progress is prefixed with what it leaves out.
+// `options` must outlive the result (its progress callback is called through it).
+hc::FitOptions neighbour_options(const hc::FitOptions& options, std::string prefix) {
+  hc::FitOptions o = options;
+  o.delay_samples = 0;
+  if (options.progress) {
+    o.progress = [&options, prefix = std::move(prefix)](double f, const std::string& what) {
+      options.progress(f, prefix + what);
+    };
+  }
+  return o;
+}
+
+}  // namespace
+
+std::string model_type_name(const hc::FitResult& f) {
+  return std::string(hc::to_string(f.model.hysteresis().kind()));
+}
+
+IdentifyCandidate family_candidate(hc::FitResult fit) {
+  std::string label = model_type_name(fit);
+  return {std::move(fit), json(), std::move(label), {}};
+}
+
+std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t,
+                                                       std::span<const double> u,
+                                                       std::span<const double> y,
+                                                       const hc::FitOptions& options) {
+  std::vector<hc::ModelKind> kinds;
+  if (options.kind) {
+    kinds = {*options.kind};
+  } else {
+    kinds.assign(common::fit_families().begin(), common::fit_families().end());
+  }
+  std::vector<IdentifyCandidate> out;
+  std::string errors;
+  for (std::size_t i = 0; i < kinds.size(); ++i) {
+    hc::FitOptions o = options;
+    o.kind = kinds[i];
+    o.delay_samples = 0;  // the record is already shifted by the delay chosen in ticks
+    if (options.progress) {
+      const double begin = static_cast<double>(i) / kinds.size(), span = 1.0 / kinds.size();
+      o.progress = [&options, begin, span, kind = kinds[i]](double f, const std::string& what) {
+        options.progress(begin + span * f, std::string(hc::to_string(kind)) + ": " + what);
+      };
+    }
+    try {
+      out.push_back(family_candidate(hc::fit_model(t, u, y, o)));
+    } catch (const std::exception& e) {
+      if (kinds.size() == 1) throw;
+      errors += std::string(errors.empty() ? "" : "; ") + std::string(hc::to_string(kinds[i])) +
+                ": " + e.what();
+    }
+  }
+  if (out.empty()) throw std::runtime_error("no family could be fitted: " + errors);
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    return a.fit.heldout.rmse < b.fit.heldout.rmse;
+  });
+  return out;
+}
+
+void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
+                             std::span<const double> u, std::span<const double> y,
+                             const hc::FitOptions& options) {
+  if (!options.kind || options.dead_zones >= 0 || candidates.size() != 1) return;
+  const hc::FitResult& chosen = candidates.front().fit;
+  if (chosen.dead_zones < 1) return;
+  hc::FitOptions o =
+      neighbour_options(options, std::to_string(chosen.dead_zones - 1) + " dead zones: ");
+  o.dead_zones = chosen.dead_zones - 1;
+  try {
+    hc::FitResult fit = hc::fit_model(t, u, y, o);
+    if (fit.dead_zones != o.dead_zones) return;  // e.g. a fall-back to the classical PI
+    const std::string label = model_type_name(fit) + "-" + std::to_string(fit.dead_zones) + "dz";
+    candidates.push_back({std::move(fit), json(), label, {}});
+  } catch (const std::exception&) {
+    // The chosen order stands alone; its own fit succeeded.
+  }
+}
+
+void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
+                             std::span<const double> u, std::span<const double> y,
+                             const hc::FitOptions& options) {
+  if (candidates.empty()) return;
+  const hc::FitResult& chosen = candidates.front().fit;
+  const auto* rpi = dynamic_cast<const hc::RateDependentPiModel*>(&chosen.model.hysteresis());
+  if (rpi == nullptr) return;
+  const hc::RateDependentPiParameters& law = rpi->parameters();
+  if (rpi->rate_free()) return;
+  hc::FitOptions o = neighbour_options(options, "without the rate law: ");
+  o.kind = hc::ModelKind::kModifiedPi;
+  o.play_thresholds = law.base.play.thresholds;
+  o.dead_zones = chosen.dead_zones;
+  try {
+    hc::FitResult fit = hc::fit_model(t, u, y, o);
+    const auto* mpi = dynamic_cast<const hc::ModifiedPiModel*>(&fit.model.hysteresis());
+    if (mpi == nullptr) return;  // e.g. a fall-back to the classical PI
+    hc::RateDependentPiParameters free = law;
+    free.base = mpi->parameters();
+    free.rate_coefficients.assign(free.base.play.thresholds.size(), 0.0);
+    free.threshold_rate_s = 0.0;
+    hc::ActuatorModel model(
+        std::make_unique<hc::RateDependentPiModel>(std::move(free), fit.model.sample_period()));
+    model.set_creep(fit.model.creep());
+    model.set_dynamics(fit.model.dynamics());
+    model.configure(fit.model.sample_period());
+    model.units = fit.model.units;
+    model.input_min = fit.model.input_min;
+    model.input_max = fit.model.input_max;
+    fit.model = std::move(model);
+    fit.notes.push_back("the rate law left out: the modified PI it contains, refitted");
+    candidates.push_back({std::move(fit), json(), "rpi-rate-free", {}});
+  } catch (const std::exception&) {
+    // The rate law stands alone; its own fit succeeded.
+  }
+}
+
+void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
+  json fit_request;
+  {
+    std::lock_guard lock(mutex_);
+    fit_request = pending_fit_;
+  }
+  try {
+    session_ = fit_candidates(run, result, fit_request);
+    continue_identify();
+    return;
+  } catch (const std::exception& e) {
+    result.report["fit_error"] = e.what();
+  }
+  deliver_result(std::move(result.report));
+}
+
+std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& run,
+                                                              const details::RunResult& result,
+                                                              const json& fit_request) {
+  // Block-average down to the fit rate: the hysteresis is rate independent and the fit's
+  // cost grows with the sample count. The input delay is chosen in ticks before averaging.
+  const std::size_t block = std::max<std::size_t>(
+      1, static_cast<std::size_t>(
+             std::floor(settings_.loop.rate_hz / settings_.identify.fit_rate_hz)));
+  hc::FitOptions opt = identify_fit_options(fit_request, settings_, block);
+  opt.progress = [this, run_id = run.run_id](double f, const std::string& what) {
+    emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});
+  };
+  // The measurement delay in whole ticks: the driver's exchange latency from the readings,
+  // then any further delay by held-out error, chosen with the requested family (mpi for
+  // auto). The model keeps it; the feedforward previews the reference by it.
+  const std::size_t n = result.recorded;
+  const std::span<const double> u_rec(run.records.u.data(), n), y_rec(run.records.y.data(), n);
+  const std::span<const std::uint32_t> response(run.records.response.data(),
+                                                std::min(n, run.records.response.size()));
+  hc::FitOptions delay_opt = opt;
+  if (!delay_opt.kind) {
+    delay_opt.kind = hc::ModelKind::kModifiedPi;
+    delay_opt.progress = nullptr;  // auto: the candidates' fits report progress
+  }
+  const IdentificationFit id =
+      fit_identification_record(u_rec, y_rec, response, dt_, block, delay_opt, kMaxDelayTicks);
+  const std::vector<double> aligned = response.empty()
+                                          ? std::vector<double>(y_rec.begin(), y_rec.end())
+                                          : align_to_outputs(u_rec, y_rec, response);
+  const AveragedRecord rec = block_average(
+      u_rec, aligned, dt_, block, static_cast<std::size_t>(id.delay_ticks - id.exchange_ticks));
+  // Each candidate (one family, or every family for auto) is verified on the loop by a
+  // tracking segment through its inverse before one is adopted and run.finished goes out.
+  auto session = std::make_unique<IdentifySession>();
+  if (opt.kind) {
+    // One family: the delay search's fit at the chosen delay is that family's fit.
+    session->candidates.push_back(family_candidate(id.fit));
+    add_dead_zone_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
+    const std::size_t before = session->candidates.size();
+    add_rate_free_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
+    if (session->candidates.size() > before) session->rate_free = before;
+  } else {
+    session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
+  }
+  for (std::size_t i = 0; i < session->candidates.size(); ++i) {
+    IdentifyCandidate& c = session->candidates[i];
+    c.fit.delay_samples = id.delay_ticks;
+    c.fit.model.set_delay(static_cast<double>(id.delay_ticks) * dt_);
+    session->jobs.push_back({i});
+  }
+  if (session->rate_free) {
+    session->rate_sine_hz = rate_sine_frequency(settings_.loop.rate_hz);
+    session->jobs.push_back({0, session->rate_sine_hz});
+    session->jobs.push_back({*session->rate_free, session->rate_sine_hz});
+  }
+  session->u.assign(u_rec.begin(), u_rec.end());
+  session->y = aligned;
+  session->unscored = fit_request.value("skip_samples", std::size_t{0});
+  session->extend = fit_request.value("extend", true);
+  session->log_path = result.log_path;
+  session->samples = n;
+  session->fit_sample_period_s = static_cast<double>(block) * dt_;
+  session->history = identify_history_json(fit_request);
+  session->history["delay_ticks"] = id.delay_ticks;
+  session->history["exchange_ticks"] = id.exchange_ticks;
+  session->history["delay_note"] = id.delay_note;
+  session->result = result.report;
+  return session;
+}
+
+}  // namespace hystbench::daemon

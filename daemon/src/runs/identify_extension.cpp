@@ -1,0 +1,203 @@
+// identify's extension: the record diagnosed with the best verified candidate, and what the
+// diagnosis finds it misses added to that model as one more candidate, with the sines that judge
+// it (Bench members on the supervisor thread; identify_session.hpp).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/diagnosis.hpp"
+#include "runs/details/identify_session.hpp"
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+namespace {
+
+// The fast sine that judges an extension [Hz], 0 for none: a delay or dynamics show at a
+// twentieth of the loop rate (the fastest `track` plays; a quarter of a mode's frequency below
+// it), a rate law at the identify record's fastest rate segment; creep and asymmetry show on the
+// standard triangle.
+double fast_frequency(const std::vector<std::string>& parts, const hc::ActuatorModel& extended,
+                      double loop_rate_hz) {
+  const auto has = [&](const char* p) {
+    return std::find(parts.begin(), parts.end(), p) != parts.end();
+  };
+  double f = 0.0;
+  if (has("delay") || has("dynamics")) {
+    f = loop_rate_hz / 20.0;
+    if (extended.dynamics()) f = std::min(f, extended.dynamics()->natural_frequency_hz / 4.0);
+  }
+  if (has("rate_dependence")) f = std::max(f, rate_sine_frequency(loop_rate_hz));
+  return f;
+}
+
+// The model identify tries as the extension of the model the diagnosis was given: the
+// diagnosis's extended model when it names a cause. Otherwise, when the dynamics or the delay
+// test is significant and carries over but the record does not show a held-out gain (its
+// excitation is slow against them: on a loop whose shape the model misses, that error hides
+// theirs), the given model with that resonance and delay grafted on; the fast sine on the
+// bench judges what the record cannot.
+struct ExtensionDraft {
+  hc::ActuatorModel model;
+  std::vector<std::string> parts;
+  bool named = false;  ///< the diagnosis's extended model (else grafted)
+};
+std::optional<ExtensionDraft> extension_draft(const hc::Diagnosis& d) {
+  if (d.cause != hc::Cause::kNone && !d.extended_parts.empty()) {
+    return ExtensionDraft{d.extended, d.extended_parts, true};
+  }
+  const auto usable = [&d](hc::Cause cause) {
+    const hc::CandidateReport* c = d.candidate(cause);
+    return c != nullptr && c->significant && c->carries_over ? c : nullptr;
+  };
+  const hc::CandidateReport* dynamics = usable(hc::Cause::kDynamics);
+  const hc::CandidateReport* delay = usable(hc::Cause::kDelay);
+  if (dynamics == nullptr && delay == nullptr) return std::nullopt;
+  ExtensionDraft draft{d.baseline, {}, false};
+  if (dynamics != nullptr && dynamics->model.dynamics()) {
+    draft.model.set_dynamics(dynamics->model.dynamics());
+    draft.parts.emplace_back("dynamics");
+  }
+  if (delay != nullptr) {
+    draft.model.set_delay(delay->model.delay_s());
+    draft.parts.emplace_back("delay");
+  }
+  if (draft.parts.empty()) return std::nullopt;
+  return draft;
+}
+
+// What the diagnosis of identify's record found: each part added with its held-out gain alone
+// on the diagnosis's blocks (the given model's held-out rms / with the part), and the verdict.
+json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& added) {
+  json parts = json::array();
+  for (const std::string& name : added) {
+    const auto cause = hc::cause_from_string(name);
+    const hc::CandidateReport* c = cause ? d.candidate(*cause) : nullptr;
+    parts.push_back({{"cause", name},
+                     {"heldout_gain", c != nullptr ? c->gain : 1.0},
+                     {"extension", c != nullptr ? c->extension : std::string()}});
+  }
+  return {{"parts", parts}, {"verdict", d.verdict}};
+}
+
+// identify's record at the loop rate, and how the candidates are scored on it.
+struct ScoredRecord {
+  std::span<const double> t, u, y;
+  double heldout_fraction = 0.0;
+  std::size_t unscored = 0;  ///< samples simulated but not scored
+};
+
+// The extension as a candidate: the draft's model with the exchange latency back in its delay,
+// the base's units and input range, configured for the loop and scored as the candidates are
+// (at the loop rate: the dynamics need it). `extension` gets both held-out errors and the gain.
+IdentifyCandidate extended_candidate(const IdentifyCandidate& base, hc::ActuatorModel model,
+                                     double exchange_s, double dt, const ScoredRecord& record,
+                                     json& extension) {
+  IdentifyCandidate ext{base.fit, json(), base.label, {}};
+  model.set_delay(model.delay_s() + exchange_s);
+  model.units = base.fit.model.units;
+  model.input_min = base.fit.model.input_min;
+  model.input_max = base.fit.model.input_max;
+  model.configure(dt);
+  ext.fit.model = std::move(model);
+  ext.fit.delay_samples = static_cast<int>(std::lround(ext.fit.model.delay_s() / dt));
+  const hc::ModelScore score = hc::score_model(ext.fit.model, record.t, record.u, record.y,
+                                               record.heldout_fraction, record.unscored);
+  ext.fit.fit = score.fit;
+  ext.fit.heldout = score.heldout;
+  hc::ActuatorModel given = base.fit.model;
+  given.configure(dt);
+  const double before = hc::score_model(std::move(given), record.t, record.u, record.y,
+                                        record.heldout_fraction, record.unscored)
+                            .heldout.rmse;
+  extension["heldout_rms_um"] = {{"model", before}, {"extended", score.heldout.rmse}};
+  extension["heldout_gain"] = score.heldout.rmse > 0.0 ? before / score.heldout.rmse : 1.0;
+  return ext;
+}
+
+// What the extension adds: the diagnosis's extended model's description, or the parts grafted.
+std::string extension_added(const hc::Diagnosis& d, bool named, const json& parts) {
+  if (named) return d.extended_description;
+  std::string added = "grafted";
+  for (const json& part : parts) added += "; " + part["extension"].get<std::string>();
+  return added;
+}
+
+}  // namespace
+
+bool Bench::extend_identified_model() {
+  IdentifySession& s = *session_;
+  s.extension_tried = true;
+  s.base = best_verified(
+      s.candidates, left_out_of_choice(s.candidates, std::nullopt, s.rate_free, s.rate_sine_hz));
+  const IdentifyCandidate& base = s.candidates[s.base];
+  const std::string run_id = s.result["run_id"].get<std::string>();
+  {
+    std::lock_guard lock(mutex_);
+    active_run_["stage"] = "diagnosing the record with " + base.label;
+  }
+  const auto started = std::chrono::steady_clock::now();
+  const auto seconds = [&started] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
+  // The record holds the outputs matched to the inputs they answer: the model's delay there is
+  // its delay less the driver's exchange latency, which the extended model gets back.
+  const double exchange_s = s.history.value("exchange_ticks", 0) * dt_;
+  try {
+    std::vector<double> t(s.u.size());
+    for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) * dt_;
+    hc::DiagnosisOptions options;
+    hc::ActuatorModel baseline = base.fit.model;
+    baseline.set_delay(std::max(0.0, baseline.delay_s() - exchange_s));
+    options.baseline = std::move(baseline);
+    options.units = {"V", "um"};
+    options.progress = [this, &run_id](double f, const std::string& what) {
+      emit({{"event", "fit.progress"},
+            {"run_id", run_id},
+            {"fraction", f},
+            {"stage", "extension: " + what}});
+    };
+    const hc::Diagnosis d = hc::diagnose(t, s.u, s.y, options);
+    std::optional<ExtensionDraft> draft = extension_draft(d);
+    s.extension = extension_json(d, draft ? draft->parts : std::vector<std::string>{});
+    if (!draft) {
+      s.extension["adopted"] = false;
+      s.extension["why"] = "the diagnosis finds nothing the model misses";
+      s.extension["diagnosis_s"] = seconds();
+      return false;
+    }
+    s.extension["from"] = draft->named ? "the diagnosis's extended model (named causes)"
+                                       : "significant tests below the naming gain, grafted on the "
+                                         "model for the bench to judge";
+    const ScoredRecord record{t, s.u, s.y, settings_.identify.heldout_fraction, s.unscored};
+    IdentifyCandidate ext =
+        extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
+    const std::string added = extension_added(d, draft->named, s.extension["parts"]);
+    ext.fit.notes.push_back("extended by the diagnosis of its record: " + added);
+    s.extension["description"] = added;
+    ext.label += "-extended";
+    s.candidates.push_back(std::move(ext));
+    s.extended = s.candidates.size() - 1;
+    s.fast_hz = fast_frequency(draft->parts, s.candidates.back().fit.model, settings_.loop.rate_hz);
+    s.jobs.push_back({*s.extended, false});
+    if (s.fast_hz > 0.0) {
+      if (!s.candidates[s.base].sines.contains(s.fast_hz)) s.jobs.push_back({s.base, s.fast_hz});
+      s.jobs.push_back({*s.extended, s.fast_hz});
+    }
+    s.extension["diagnosis_s"] = seconds();
+    return true;
+  } catch (const std::exception& e) {
+    s.extension = {{"adopted", false},
+                   {"why", std::string("the diagnosis failed: ") + e.what()},
+                   {"diagnosis_s", seconds()}};
+    return false;
+  }
+}
+
+}  // namespace hystbench::daemon
