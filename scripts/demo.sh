@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 # Only what the demo runs (the CLI and the daemon, optimised without debug info, in build-demo/):
 # the first output comes minutes sooner on a fresh machine. scripts/build.sh builds everything,
 # with debug info, in build/.
-bash scripts/deps.sh build >&2
+bash scripts/deps.sh demo >&2
 cmake --preset demo >/dev/null
 echo "hystbench: building hystbench and hystbenchd in build-demo/ (the tests: scripts/test.sh)" >&2
 cmake --build --preset demo -j "$(nproc)" >&2
@@ -41,16 +41,19 @@ grep -m1 "real-time" "$work/hystbenchd.log" || true
 echo
 echo "== identify: play the identification excitation, fit a modified-PI model"
 "$bin/hystbench" identify --wait
+declare -A logs
 for comp in none inverse inverse+pid; do
   echo
   echo "== track: 1 Hz triangle over 80 % of the range, 5 periods, compensator '$comp'"
   "$bin/hystbench" track --reference triangle --frequency 1 --periods 5 --compensator "$comp" \
     --wait --plot "$work/plots/$comp"
+  # The run's log, from its result: `status --json` keeps the result of the run just finished as
+  # last_result (track --json would print that object instead of the human result above).
+  logs[$comp]=$("$bin/hystbench" status --json | jq -r '.last_result.log')
 done
 # One picture of the loop before and after compensation: output against reference, the scored
 # periods of the runs without compensation and with the inverse (the README shows it).
-run_log() { ls "$work"/logs/*-track-"$1".csv; }
-gnuplot -e "none='$(run_log 2)'; inverse='$(run_log 3)'; out='$work/tracking.png'" \
+gnuplot -e "none='${logs[none]}'; inverse='${logs[inverse]}'; out='$work/tracking.png'" \
   scripts/lib/demo-tracking.gp 2>/dev/null && echo && echo "picture: $work/tracking.png" || true
 echo
 echo "logs, models and plots: $work"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages hystbench needs, only those that are missing.
-# Usage: scripts/deps.sh [build|test|fuzz|measure|all]   (default: build)
+# Usage: scripts/deps.sh [build|demo|test|fuzz|measure|all]   (default: build)
 # Sourced by scripts/demo.sh and scripts/test.sh; safe to run again (no-op when all present).
 set -euo pipefail
 
@@ -17,15 +17,18 @@ TEST_PKGS=(python3 python3-pip python3-setuptools python3-wheel socat python3-py
 FUZZ_PKGS=(clang libclang-rt-14-dev)
 # JSON and arithmetic on the command line, for the measurement scripts only.
 MEASURE_PKGS=(jq bc)
+# JSON on the command line, for scripts/demo.sh (the run logs from the results).
+DEMO_PKGS=(jq)
 
 want=("${BUILD_PKGS[@]}")
 case "${1:-build}" in
   build) ;;
+  demo) want+=("${DEMO_PKGS[@]}") ;;
   test) want+=("${TEST_PKGS[@]}") ;;
   fuzz) want+=("${FUZZ_PKGS[@]}") ;;
   measure) want+=("${MEASURE_PKGS[@]}") ;;
   all) want+=("${TEST_PKGS[@]}" "${FUZZ_PKGS[@]}" "${MEASURE_PKGS[@]}") ;;
-  *) echo "usage: $0 [build|test|fuzz|measure|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [build|demo|test|fuzz|measure|all]" >&2; exit 2 ;;
 esac
 
 missing=()
