@@ -56,8 +56,9 @@ void keep_plan(PlanCache& cache, std::uint64_t generation, double u_now,
   cache.plan = plan;
 }
 
-// The most planning a track run waits for before it starts (compensation::plan_drive_work:
-// about 10 s on one core; 120 000 samples, 12 s at 10 kHz, for a model of 6 plays).
+// The most planning a track run waits for before it starts, in compensation::plan_drive_work's
+// units (120 000 samples, 12 s at 10 kHz, for a model of 6 plays); what that costs in seconds,
+// hystbench-bench --benchmark_filter=plan_drive measures.
 constexpr double kMaxPlanWork = 1.0e6;
 // The previewed inverse's error on the model below which a plan is not worth its time, as a
 // fraction of the reference's span.
@@ -255,7 +256,7 @@ struct FeedforwardPlanning {
     hc::DrivePlanOptions options;
     options.progress = progress;
     // Below 0.1 % of the reference's span on the model the previewed inverse is kept:
-    // the model's own mismatch is larger (a slow reference; 1 Hz on the loopback).
+    // the model's own mismatch with the actuator is larger than that (a slow reference).
     const auto [lo, hi] = std::minmax_element(targets.begin(), targets.end());
     options.accept_start_rms = kGoodEnoughFraction * (*hi - *lo);
     const auto start = std::chrono::steady_clock::now();
