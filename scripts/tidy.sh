@@ -10,8 +10,10 @@ cd "$(dirname "$0")/.."
 filter=${1:-'(compensation|sim|drivers|common|daemon|cli)/(src|apps)/'}
 out=$(mktemp)
 run-clang-tidy -p build -quiet "$filter" >"$out" 2>&1 || true
-if grep -E "warning: .*\[[a-z-]+(\.[a-z-]+)*\]" "$out" | sed -E 's/\x1b\[[0-9;]*m//g' | sort -u; then
-  echo "clang-tidy: the warnings above" >&2
+# A finding of a check, or a source clang-tidy could not compile (then it checked nothing there).
+if sed -E 's/\x1b\[[0-9;]*m//g' "$out" |
+  grep -E "(warning: .*\[[a-z-]+(\.[a-z-]+)*\]|error: )" | sort -u; then
+  echo "clang-tidy: the findings above" >&2
   exit 1
 fi
 echo "clang-tidy: clean"
