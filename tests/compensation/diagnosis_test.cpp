@@ -501,7 +501,9 @@ void expect_ranked(const hc::Diagnosis& d) {
     EXPECT_GE(std::max(n.gain, n.added_gain), 1.2);
     if (i == 0) continue;
     EXPECT_GE(n.added_rms, d.noise_allowance_rms);
-    if (n.against == d.causes[i - 1].against) EXPECT_LE(n.gain, d.causes[i - 1].gain);
+    if (n.against == d.causes[i - 1].against) {
+      EXPECT_LE(n.gain, d.causes[i - 1].gain);
+    }
   }
   for (const hc::CandidateReport& c : d.candidates) {
     const bool listed = std::any_of(d.causes.begin(), d.causes.end(),
