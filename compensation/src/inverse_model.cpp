@@ -24,18 +24,23 @@ constexpr double kOwnRateMonotoneMargin = 0.8;
 
 // ---------------------------------------------------------------- PiInverse
 
-PiInverse::PiInverse(const PiModel& model)
-    : model_(model.parameters()), inv_(compensation::inverse_parameters(model.parameters())) {
+PiInverse::PiInverse(const PiModel& model, InputRange range)
+    : model_(model.parameters()),
+      inv_(compensation::inverse_parameters(model.parameters())),
+      reach_(model, range) {
   inv_.set_state(inverse_state(model_, model.state()));
 }
 
-double PiInverse::step(double y_ref) noexcept { return inv_.step(y_ref - model_.offset); }
+double PiInverse::step(double y_ref) noexcept {
+  return reach_.step(y_ref, [this](double y) { return inv_.step(y - model_.offset); });
+}
 
 void PiInverse::reset(double u0) noexcept {
   // Model plays all at u0 => inverse plays p'_i = W_n * u0 (see inverse_state()).
   double total = 0.0;
   for (const double w : model_.weights) total += w;
   inv_.reset(total * u0);
+  reach_.reset(u0);
 }
 
 std::unique_ptr<InverseModel> PiInverse::clone() const {
@@ -44,16 +49,21 @@ std::unique_ptr<InverseModel> PiInverse::clone() const {
 
 // ---------------------------------------------------------------- ModifiedPiInverse
 
-ModifiedPiInverse::ModifiedPiInverse(const ModifiedPiModel& model)
+ModifiedPiInverse::ModifiedPiInverse(const ModifiedPiModel& model, InputRange range)
     : center_(model.parameters().center),
       dz_inv_(model.dead_zone_part().inverse()),
-      pi_inv_(model.play_part()) {}
+      pi_inv_(model.play_part()),
+      reach_(model, range) {}
 
 double ModifiedPiInverse::step(double y_ref) noexcept {
-  return pi_inv_.step(center_ + dz_inv_.apply(y_ref - center_));
+  return reach_.step(
+      y_ref, [this](double y) { return pi_inv_.step(center_ + dz_inv_.apply(y - center_)); });
 }
 
-void ModifiedPiInverse::reset(double u0) noexcept { pi_inv_.reset(u0); }
+void ModifiedPiInverse::reset(double u0) noexcept {
+  pi_inv_.reset(u0);
+  reach_.reset(u0);
+}
 
 std::unique_ptr<InverseModel> ModifiedPiInverse::clone() const {
   return std::make_unique<ModifiedPiInverse>(*this);
@@ -452,10 +462,12 @@ std::unique_ptr<InverseModel> make_inverse(const ActuatorModel& model, InverseKi
                                               (model.creep() ? " model with creep" : " model") +
                                               "; use the numeric inverse");
       if (mk == ModelKind::kPi) {
-        return std::make_unique<PiInverse>(static_cast<const PiModel&>(model.hysteresis()));
+        return std::make_unique<PiInverse>(static_cast<const PiModel&>(model.hysteresis()),
+                                           InputRange{model.input_min, model.input_max});
       }
       return std::make_unique<ModifiedPiInverse>(
-          static_cast<const ModifiedPiModel&>(model.hysteresis()));
+          static_cast<const ModifiedPiModel&>(model.hysteresis()),
+          InputRange{model.input_min, model.input_max});
     case InverseKind::kNumeric:
       return std::make_unique<NumericInverse>(model);
     case InverseKind::kMultiplicative:

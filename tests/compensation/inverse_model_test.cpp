@@ -186,6 +186,43 @@ TEST(NumericInverse, SaturatesAtTheInputBoundForUnreachableTargets) {
   EXPECT_DOUBLE_EQ(inverse.step(-1e6), 0.0);
 }
 
+// A branch end nearly flat (cumulative weight 1e-4 after 120 V of travel): a target just below
+// what 0 V reaches asks the unbounded inverse for hundreds of volts. The analytic inverses of a
+// model with an input range give the bound instead, and their memory stays the actuator's:
+// back within reach, the model composes to the reference again.
+TEST(MakeInverse, AnalyticInversesSaturateAtTheInputRangeWithoutWindingUp) {
+  const hc::PiParameters play{{0.0, 20.0, 60.0}, {0.3, 0.1, -0.3999}, 0.0};
+  std::vector<std::unique_ptr<hc::HysteresisModel>> families;
+  families.push_back(std::make_unique<hc::PiModel>(play));
+  families.push_back(std::make_unique<hc::ModifiedPiModel>(
+      hc::ModifiedPiParameters{play, {{-5.0, 0.0, 5.0}, {0.1, 1.0, 0.2}}, 20.0}));
+  for (auto& family : families) {
+    SCOPED_TRACE(std::string(hc::to_string(family->kind())));
+    hc::ActuatorModel model(family->clone());
+    model.input_min = 0.0;
+    model.input_max = 150.0;
+    model.reset(150.0);
+    for (int k = 0; k <= 150; ++k) model.step(150.0 - k);  // the full sweep down to 0 V
+    auto plant = model.hysteresis().clone();               // the actuator, in the same state
+    const double y_floor = plant->peek(0.0);
+    auto unbounded = family->clone();
+    unbounded->reset(150.0);
+    for (int k = 0; k <= 150; ++k) unbounded->step(150.0 - k);
+    const auto raw = hc::make_inverse(hc::ActuatorModel(std::move(unbounded)));
+    EXPECT_LT(raw->clone()->step(y_floor - 0.05), -100.0) << "the flat end's unbounded inverse";
+
+    const auto inverse = hc::make_inverse(model);
+    EXPECT_DOUBLE_EQ(inverse->step(y_floor - 0.05), 0.0);
+    EXPECT_DOUBLE_EQ(inverse->step(1e6), 150.0);
+    EXPECT_DOUBLE_EQ(inverse->step(-1e6), 0.0);
+    plant->step(150.0);
+    plant->step(0.0);
+    std::vector<double> y_ref;
+    for (int k = 0; k <= 400; ++k) y_ref.push_back(plant->peek(0.0) + 0.05 * k);  // reachable
+    EXPECT_LE(composition_error(*plant, *inverse, y_ref), 1e-9 * range_of(y_ref));
+  }
+}
+
 namespace {
 // A random 15-play PI over 0-150 V, relaxed at 0.
 hc::ActuatorModel relaxed_random_pi(std::uint64_t seed) {

@@ -3,6 +3,7 @@
 // Every inverse starts from the state the model is in when the inverse is built (so simulate the
 // model through the actuator's known history first), or from reset(u0).
 // step() is real-time safe (no allocation, no exceptions, bounded work).
+#include <algorithm>
 #include <memory>
 #include <span>
 
@@ -31,10 +32,56 @@ class InverseModel {
   virtual std::unique_ptr<InverseModel> clone() const = 0;
 };
 
+/// An input range [min, max] for an analytic inverse; empty (min >= max) when unbounded.
+struct InputRange {
+  double min = 0.0;  ///< [input unit]
+  double max = 0.0;  ///< [input unit]
+  bool bounded() const noexcept { return min < max; }
+};
+
+namespace details {
+/// The forward model beside an analytic inverse, stepped with every drive the inverse gives.
+/// A target beyond what the input range reaches from the present state becomes the output at
+/// the bound, so the inverse saturates there instead of winding its state up beyond the range
+/// (where a branch is nearly flat its inverse's slope is huge: a target just below reach asks
+/// for hundreds of volts, and the inverse's memory then no longer matches the actuator's).
+template <typename Model>
+class ReachableTarget {
+ public:
+  ReachableTarget(const Model& model, InputRange range) : forward_(model), range_(range) {}
+  /// The drive invert(y) gives for y_ref limited to [output at range.min, output at
+  /// range.max] from the present state (a target at or beyond one gives that bound exactly),
+  /// applied to the forward model.
+  template <typename Invert>
+  double step(double y_ref, Invert invert) noexcept {
+    double u = 0.0;
+    if (!range_.bounded()) {
+      u = invert(y_ref);
+    } else if (const double lo = forward_.peek(range_.min); y_ref <= lo) {
+      invert(lo);
+      u = range_.min;
+    } else if (const double hi = forward_.peek(range_.max); y_ref >= hi) {
+      invert(hi);
+      u = range_.max;
+    } else {
+      u = std::clamp(invert(y_ref), range_.min, range_.max);
+    }
+    forward_.step(u);
+    return u;
+  }
+  void reset(double u0) noexcept { forward_.reset(u0); }
+
+ private:
+  Model forward_;
+  InputRange range_;
+};
+}  // namespace details
+
 /// Analytic inverse of a classical PI (itself a PI on y - offset). Throws NotInvertibleError.
+/// With a bounded `range` the drive saturates at its bounds (details::ReachableTarget).
 class PiInverse final : public InverseModel {
  public:
-  explicit PiInverse(const PiModel& model);
+  explicit PiInverse(const PiModel& model, InputRange range = {});
   double step(double y_ref) noexcept override;
   void reset(double u0) noexcept override;
   std::unique_ptr<InverseModel> clone() const override;
@@ -43,12 +90,14 @@ class PiInverse final : public InverseModel {
  private:
   PiParameters model_;
   PiModel inv_;
+  details::ReachableTarget<PiModel> reach_;
 };
 
 /// Analytic inverse of a modified PI: u = PI^-1[ S^-1[y - center] + center ].
+/// With a bounded `range` the drive saturates at its bounds (details::ReachableTarget).
 class ModifiedPiInverse final : public InverseModel {
  public:
-  explicit ModifiedPiInverse(const ModifiedPiModel& model);
+  explicit ModifiedPiInverse(const ModifiedPiModel& model, InputRange range = {});
   double step(double y_ref) noexcept override;
   void reset(double u0) noexcept override;
   std::unique_ptr<InverseModel> clone() const override;
@@ -57,6 +106,7 @@ class ModifiedPiInverse final : public InverseModel {
   double center_;
   DeadZoneSuperposition dz_inv_;
   PiInverse pi_inv_;
+  details::ReachableTarget<ModifiedPiModel> reach_;
 };
 
 /// Numeric inverse for any static model (hysteresis + creep): per sample, brackets the input
@@ -171,7 +221,8 @@ class InverseMultiplicativeCompensator final : public InverseModel {
 enum class InverseKind { kAnalytic, kNumeric, kMultiplicative, kAuto };
 
 /// Builds the inverse for a model: kAuto picks analytic for PI / modified PI without creep,
-/// numeric otherwise. Dynamics and delay are not inverted (quasi-static feedforward).
+/// numeric otherwise. Dynamics and delay are not inverted (quasi-static feedforward). The
+/// analytic and numeric inverses saturate at the model's input range when it has one.
 /// Throws NotInvertibleError naming the offending index, or std::invalid_argument.
 /// The drive for a whole known target sequence, stepping `inverse` on from its present state:
 /// each tick sees the targets ahead it can use (preview_samples()), fewer near the end.
