@@ -12,6 +12,8 @@
 #   delay      the delay on (default and modified-PI truths) and one mode at 800 Hz:
 #              identify --no-extend and identify, each followed by 200 / 500 Hz sines (inverse)
 #   campaign   wall time of identify + a 7-frequency sweep (inverse)
+#   identify-time  on the wall clock, the delay on: identify --no-extend and identify, three
+#              times each in one daemon; the wall time of each and how its diagnosis ran
 #   learning   rate dependence, the delay and thermal drift on: identify, a sweep 1-500 Hz with
 #              none / inverse / inverse+pid, then track --learn 10 at each frequency, each drive
 #              replayed, and a raster line (--reference-file) learned over 10 passes
@@ -23,7 +25,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign learning learning-delay)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -37,14 +39,18 @@ stop_daemon() {
   daemon_pid=
 }
 trap stop_daemon EXIT
-# start_daemon NAME CONFIG [EXTRA_TOML]: a daemon of its own folder on the simulated clock.
+# start_daemon NAME CONFIG [EXTRA_TOML]: a daemon of its own folder on the simulated clock
+# (on the wall clock with clock=wall).
+clock=simulated
 start_daemon() {
   local dir="$work/$1"
   mkdir -p "$dir"
   cp "$2" "$dir/config.toml"
   [ -z "${3:-}" ] || printf '%s\n' "$3" >>"$dir/config.toml"
   sock="$dir/s.sock"
-  "$bin/hystbenchd" --config "$dir/config.toml" --clock simulated --socket "$sock" \
+  local clock_args=(--clock simulated)
+  [ "$clock" = simulated ] || clock_args=()
+  "$bin/hystbenchd" --config "$dir/config.toml" "${clock_args[@]}" --socket "$sock" \
     --log-dir "$dir/logs" --model-dir "$dir/models" >"$dir/daemon.log" 2>&1 &
   daemon_pid=$!
   for _ in $(seq 200); do
@@ -222,8 +228,28 @@ for section in "${sections[@]}"; do
       printf 'identify + sweep: %.1f s of wall time\n\n' "$(echo "$end - $start" | bc -l)"
       stop_daemon
       ;;
+    identify-time)
+      clock=wall
+      start_daemon identify-time config/loopback.toml $'[actuator.delay]\nenabled = true'
+      clock=simulated
+      echo "### Wall time of identify on the wall clock, the delay on"
+      echo "| identify | wall s | parts | adopted | diagnosis ran | diagnosis s after the verification |"
+      echo "| --- | --- | --- | --- | --- | --- |"
+      for _ in 1 2 3; do
+        for how in --no-extend ""; do
+          start=$(date +%s.%N)
+          id=$(hb identify $how --wait --json || true)
+          end=$(date +%s.%N)
+          jq -rn --argjson id "$id" --arg how "${how:-extend}" \
+            --arg s "$(echo "$end - $start" | bc -l)" "$f3"'
+            "| \($how) | \($s | tonumber | f) | \([$id.model.extension.parts[]?.cause] | join("+")) | \($id.model.extension.adopted // "-") | \($id.model.extension.diagnosis_ran // "-") | \($id.model.extension.diagnosis_s | f) |"'
+        done
+      done
+      echo
+      stop_daemon
+      ;;
     *)
-      echo "measure-loopback: unknown section '$section' (default repeat rate delay campaign)" >&2
+      echo "measure-loopback: unknown section '$section' (default repeat rate thresholds delay campaign identify-time learning learning-delay)" >&2
       exit 2
       ;;
   esac

@@ -181,6 +181,16 @@ void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
   }
   try {
     session_ = fit_candidates(run, result, fit_request);
+    if (session_->extend) {
+      // Every candidate may become the base: diagnosed in the order the choice prefers them.
+      std::vector<std::size_t> order(session_->candidates.size());
+      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+      session_->ahead = std::make_unique<details::DiagnosisAhead>(
+          identify_diagnosis(session_->candidates,
+                             session_->history.value("exchange_ticks", 0) * dt_, session_->u,
+                             session_->y, dt_),
+          std::move(order));
+    }
     continue_identify();
     return;
   } catch (const std::exception& e) {

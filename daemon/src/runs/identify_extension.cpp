@@ -129,7 +129,34 @@ std::string extension_added(const hc::Diagnosis& d, bool named, const json& part
   return added;
 }
 
+// The times of identify's record at the loop rate [s].
+std::vector<double> record_times(std::size_t n, double dt) {
+  std::vector<double> t(n);
+  for (std::size_t k = 0; k < n; ++k) t[k] = static_cast<double>(k) * dt;
+  return t;
+}
+
 }  // namespace
+
+details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandidate>& candidates,
+                                                 double exchange_s, std::span<const double> u,
+                                                 std::span<const double> y, double dt) {
+  std::vector<hc::ActuatorModel> baselines;
+  baselines.reserve(candidates.size());
+  for (const IdentifyCandidate& c : candidates) {
+    baselines.push_back(c.fit.model);
+    baselines.back().set_delay(std::max(0.0, baselines.back().delay_s() - exchange_s));
+  }
+  return [baselines = std::move(baselines), t = record_times(u.size(), dt),
+          u = std::vector<double>(u.begin(), u.end()), y = std::vector<double>(y.begin(), y.end())](
+             std::size_t candidate, const details::DiagnosisAhead::Progress& progress) {
+    hc::DiagnosisOptions options;
+    options.baseline = baselines.at(candidate);
+    options.units = {"V", "um"};
+    options.progress = progress;
+    return hc::diagnose(t, u, y, options);
+  };
+}
 
 bool Bench::extend_identified_model() {
   IdentifySession& s = *session_;
@@ -146,26 +173,27 @@ bool Bench::extend_identified_model() {
   const auto seconds = [&started] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   };
-  // The record holds the outputs matched to the inputs they answer: the model's delay there is
-  // its delay less the driver's exchange latency, which the extended model gets back.
+  // The extended model gets the driver's exchange latency back in its delay.
   const double exchange_s = s.history.value("exchange_ticks", 0) * dt_;
   try {
-    std::vector<double> t(s.u.size());
-    for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) * dt_;
-    hc::DiagnosisOptions options;
-    hc::ActuatorModel baseline = base.fit.model;
-    baseline.set_delay(std::max(0.0, baseline.delay_s() - exchange_s));
-    options.baseline = std::move(baseline);
-    options.units = {"V", "um"};
-    options.progress = [this, &run_id](double f, const std::string& what) {
+    const std::vector<double> t = record_times(s.u.size(), dt_);
+    const details::DiagnosisAhead::Progress progress = [this, &run_id](double f,
+                                                                       const std::string& what) {
       emit({{"event", "fit.progress"},
             {"run_id", run_id},
             {"fraction", f},
             {"stage", "extension: " + what}});
     };
-    const hc::Diagnosis d = hc::diagnose(t, s.u, s.y, options);
+    if (!s.ahead) {
+      s.ahead = std::make_unique<details::DiagnosisAhead>(
+          identify_diagnosis(s.candidates, exchange_s, s.u, s.y, dt_), std::vector<std::size_t>{});
+    }
+    details::DiagnosisAhead::Taken taken = s.ahead->take(s.base, progress);
+    s.ahead.reset();
+    const hc::Diagnosis& d = taken.diagnosis;
     std::optional<ExtensionDraft> draft = extension_draft(d);
     s.extension = extension_json(d, draft ? draft->parts : std::vector<std::string>{});
+    s.extension["diagnosis_ran"] = taken.how;
     if (!draft) {
       s.extension["adopted"] = false;
       s.extension["why"] = "the diagnosis finds nothing the model misses";

@@ -1,13 +1,15 @@
 #pragma once
 // identify after its excitation: the fitted candidates (one per family; several with
 // `--model auto`), each verified on the loop by a short tracking segment through its inverse;
-// then the record diagnosed with the best one and its extension verified against it, before
-// the bench adopts one and reports run.finished. Supervisor thread only. In runs/:
+// then the record diagnosed with the best one (the candidates' diagnoses run on a worker while
+// the loop verifies them) and its extension verified against it, before the bench adopts one
+// and reports run.finished. Supervisor thread only. In runs/:
 // identify_candidates.cpp (the fits), bench_verification.cpp (the segments on the loop),
 // identify_extension.cpp (the diagnosis and the extended candidate), identify_choice.cpp (the
 // choice, the model file and the result).
 #include <cstddef>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -16,6 +18,7 @@
 
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/daemon/service/bench.hpp"
+#include "runs/details/diagnosis_ahead.hpp"
 
 namespace hystbench::daemon {
 
@@ -87,7 +90,17 @@ struct Bench::IdentifySession {
   nlohmann::json extension;   ///< what the extension found, added and verified
   std::string program_id;     ///< run id of the verification on the loop
   bool interrupted = false;   ///< stop, abort or fault during a verification
+  /// The candidates' diagnoses, run while the loop verifies them (with the extension on);
+  /// last, so that it stops before the record it reads goes.
+  std::unique_ptr<details::DiagnosisAhead> ahead;
 };
+
+/// The diagnosis of identify's record (u, y at the loop's period dt) with candidate i as the
+/// baseline, its delay less the driver's exchange latency (the record holds the outputs matched
+/// to the inputs they answer); the models and the record are copied: it runs beside the session.
+details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandidate>& candidates,
+                                                 double exchange_s, std::span<const double> u,
+                                                 std::span<const double> y, double dt);
 
 /// Fits the requested family, or with options.kind unset ("auto") each of pi, mpi, cpi and rpi
 /// (a family that fails is left out); sorted by held-out error. Throws when none fits.

@@ -1,0 +1,59 @@
+#pragma once
+// The diagnoses of identify's candidates, run on a worker thread while the loop plays their
+// verification segments (wall time the supervisor spends waiting): one candidate after another,
+// in the order given, each kept until taken. Not real-time code; the supervisor thread owns it.
+#include <condition_variable>
+#include <cstddef>
+#include <exception>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hystbench/compensation/diagnosis.hpp"
+
+namespace hystbench::daemon::details {
+
+class DiagnosisAhead {
+ public:
+  using Progress = std::function<void(double, const std::string&)>;
+  /// Diagnoses candidate i, reporting through the given progress (which may throw to cancel).
+  using Task = std::function<compensation::Diagnosis(std::size_t, const Progress&)>;
+
+  /// Starts the worker on the candidates in `order`.
+  DiagnosisAhead(Task task, std::vector<std::size_t> order);
+  /// Cancels what is running (at its next progress report) and joins.
+  ~DiagnosisAhead();
+  DiagnosisAhead(const DiagnosisAhead&) = delete;
+  DiagnosisAhead& operator=(const DiagnosisAhead&) = delete;
+
+  /// Candidate i's diagnosis, and when it ran: during the verification, partly (waited for),
+  /// or after it, on the calling thread (reporting to `progress`) when it was not ahead. Stops the
+  /// worker: only one is taken. Throws what the diagnosis threw.
+  struct Taken {
+    compensation::Diagnosis diagnosis;
+    std::string how;  ///< "during the verification", "partly ..." or "after the verification"
+  };
+  Taken take(std::size_t candidate, const Progress& progress);
+
+ private:
+  struct Cancelled {};
+  void run();
+  void stop_and_join();
+
+  Task task_;
+  std::vector<std::size_t> order_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::map<std::size_t, compensation::Diagnosis> done_;
+  std::map<std::size_t, std::exception_ptr> failed_;
+  std::optional<std::size_t> running_;
+  bool stop_after_running_ = false;  ///< take() waits for the one running: no further one
+  bool cancel_ = false;              ///< abandon the one running
+  std::thread worker_;
+};
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,153 @@
+// identify's diagnoses run beside the verification: the one taken is the one computed ahead
+// when it is ready, waited for when it is running, run on the caller's thread otherwise; the
+// rest stop, and a diagnosis that throws reaches the caller.
+#include "runs/details/diagnosis_ahead.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+namespace hd = hystbench::daemon::details;
+namespace hc = hystbench::compensation;
+
+namespace {
+
+// A diagnosis that names the candidate it was made for.
+hc::Diagnosis marked(std::size_t candidate) {
+  hc::Diagnosis d;
+  d.verdict = "candidate " + std::to_string(candidate);
+  return d;
+}
+
+// A diagnosis that reports progress until it is cancelled, which it notes.
+[[noreturn]] void work_until_cancelled(const hd::DiagnosisAhead::Progress& progress,
+                                       std::atomic<bool>& cancelled) {
+  try {
+    for (;;) {
+      progress(0.5, "working");
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  } catch (...) {
+    cancelled = true;
+    throw;
+  }
+}
+
+void wait_until(const std::function<bool()>& done) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!done() && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(done());
+}
+
+}  // namespace
+
+TEST(DiagnosisAhead, TheOneReadyIsTakenWithoutRunningItAgain) {
+  std::atomic<int> runs[3] = {0, 0, 0};
+  hd::DiagnosisAhead ahead(
+      [&](std::size_t i, const hd::DiagnosisAhead::Progress&) {
+        ++runs[i];
+        return marked(i);
+      },
+      {0, 1, 2});
+  wait_until([&] { return runs[2].load() == 1; });
+  const auto taken = ahead.take(1, nullptr);
+  EXPECT_EQ(taken.diagnosis.verdict, "candidate 1");
+  EXPECT_EQ(taken.how, "during the verification");
+  EXPECT_EQ(runs[0].load() + runs[1].load() + runs[2].load(), 3);
+}
+
+// The worker is inside candidate 0's diagnosis, which reports progress until cancelled;
+// taking candidate 1 cancels it and diagnoses 1 on the caller's thread, with the caller's
+// progress.
+TEST(DiagnosisAhead, ACandidateNotReachedRunsOnTheCallersThreadAndTheWorkerStops) {
+  std::atomic<bool> zero_started{false};
+  std::atomic<bool> zero_cancelled{false};
+  std::thread::id ran_on;
+  hd::DiagnosisAhead ahead(
+      [&](std::size_t i, const hd::DiagnosisAhead::Progress& progress) {
+        if (i == 0) {
+          zero_started = true;
+          work_until_cancelled(progress, zero_cancelled);
+        }
+        ran_on = std::this_thread::get_id();
+        progress(1.0, "done");
+        return marked(i);
+      },
+      {0, 1});
+  wait_until([&] { return zero_started.load(); });
+  int reports = 0;
+  const auto taken = ahead.take(1, [&](double, const std::string&) { ++reports; });
+  EXPECT_TRUE(zero_cancelled.load());
+  EXPECT_EQ(taken.diagnosis.verdict, "candidate 1");
+  EXPECT_EQ(taken.how, "after the verification");
+  EXPECT_EQ(ran_on, std::this_thread::get_id());
+  EXPECT_EQ(reports, 1);
+}
+
+// Taken while it runs: waited for, not started again, and nothing after it starts.
+TEST(DiagnosisAhead, TheOneRunningIsWaitedForAndTheNextNeverStarts) {
+  std::atomic<bool> release{false};
+  std::atomic<bool> started{false};
+  std::atomic<int> second{0};
+  hd::DiagnosisAhead ahead(
+      [&](std::size_t i, const hd::DiagnosisAhead::Progress&) {
+        if (i == 1) ++second;
+        started = true;
+        while (i == 0 && !release.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        return marked(i);
+      },
+      {0, 1});
+  wait_until([&] { return started.load(); });
+  std::thread releaser([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    release = true;
+  });
+  const auto taken = ahead.take(0, nullptr);
+  releaser.join();
+  EXPECT_EQ(taken.diagnosis.verdict, "candidate 0");
+  EXPECT_EQ(taken.how, "partly during the verification");
+  EXPECT_EQ(second.load(), 0);
+}
+
+TEST(DiagnosisAhead, AFailedDiagnosisReachesTheCaller) {
+  std::atomic<bool> done{false};
+  hd::DiagnosisAhead ahead(
+      [&](std::size_t, const hd::DiagnosisAhead::Progress&) -> hc::Diagnosis {
+        done = true;
+        throw std::runtime_error("the record is too short");
+      },
+      {0});
+  wait_until([&] { return done.load(); });
+  EXPECT_THROW(
+      {
+        try {
+          (void)ahead.take(0, nullptr);
+        } catch (const std::runtime_error& e) {
+          EXPECT_STREQ(e.what(), "the record is too short");
+          throw;
+        }
+      },
+      std::runtime_error);
+}
+
+// A session that ends before anything is taken (stop, shutdown) cancels the one running.
+TEST(DiagnosisAhead, DestroyingItCancelsTheOneRunning) {
+  std::atomic<bool> started{false};
+  std::atomic<bool> cancelled{false};
+  {
+    hd::DiagnosisAhead ahead(
+        [&](std::size_t, const hd::DiagnosisAhead::Progress& progress) -> hc::Diagnosis {
+          started = true;
+          work_until_cancelled(progress, cancelled);
+        },
+        {0});
+    wait_until([&] { return started.load(); });
+  }
+  EXPECT_TRUE(cancelled.load());
+}
