@@ -375,7 +375,7 @@ Record read_record(const std::string& path, const RecordColumns& columns, bool y
     if (r.t.size() < 2) throw DataFileError(path + ": need at least 2 rows");
     r.sample_period_s = median_step(r.t);
   }
-  require_column(data, path, columns.u, "input", "--u-column");
+  require_column(data, path, columns.u, columns.u_role.c_str(), columns.u_option.c_str());
   r.u = scaled_column(data, path, columns.u, columns.u_scale);
   r.u_unit = unit_of(data, path, columns, columns.u, columns.u_scale, columns.u_unit, "--u-unit",
                      "--u-scale");

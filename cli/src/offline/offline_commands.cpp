@@ -176,6 +176,8 @@ int run_invert(const InvertCommand& cmd, std::ostream& out, std::ostream& err) {
     columns.u_scale = cmd.yr_scale;
     columns.rate_hz = cmd.rate_hz;
     columns.read_units = false;  // the reference is in the model's output unit
+    columns.u_role = "reference";
+    columns.u_option = "--yr-column";
     const Record reference = read_record(cmd.reference_path, columns, false);
     const auto& t = reference.t;
     const auto& yr = reference.u;

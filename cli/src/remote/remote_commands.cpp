@@ -263,6 +263,8 @@ RemoteUpload read_upload(const std::string& path, const std::string& kind,
   columns.u_scale = scale;
   columns.rate_hz = rate_hz;
   columns.read_units = false;  // a drive in V, a reference in um: what the daemon takes
+  columns.u_role = kind;
+  columns.u_option = kind == "drive" ? "--u-column" : "--yr-column";
   Record r = read_record(path, columns, false);
   RemoteUpload u;
   u.kind = kind;

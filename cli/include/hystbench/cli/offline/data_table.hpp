@@ -74,6 +74,9 @@ struct RecordColumns {
   /// False for a reader that takes the values in units it knows (a reference in the model's
   /// output unit, a drive in V): the record's units stay unset and are not checked.
   bool read_units = true;
+  /// What the u column holds and the option that names it, for messages (a reference read
+  /// as the input column: "reference", "--yr-column").
+  std::string u_role = "input", u_option = "--u-column";
 };
 
 /// A record read through RecordColumns: t [s] strictly increasing, u and y finite (y empty when

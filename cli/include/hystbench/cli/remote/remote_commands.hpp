@@ -26,7 +26,8 @@ struct RemoteUpload {
 };
 
 /// Reads `path`'s time column and one value column (scaled; t = row / rate_hz when rate_hz > 0)
-/// as an upload of `kind`. Throws DataFileError naming the file, column and line.
+/// as an upload of `kind` ("reference" or "drive"). Throws DataFileError naming the file, column,
+/// line and the option that names the column (--yr-column, --u-column).
 RemoteUpload read_upload(const std::string& path, const std::string& kind,
                          const std::string& t_column, const std::string& value_column, double scale,
                          double rate_hz);

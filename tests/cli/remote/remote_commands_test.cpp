@@ -1,0 +1,53 @@
+// A user's trajectory or drive read from a file for upload: a missing column is named with the
+// option of the command that reads it.
+#include "hystbench/cli/remote/remote_commands.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "hystbench/cli/offline/data_table.hpp"
+#include "support/temp_dir_test.hpp"
+
+namespace cli = hystbench::cli;
+
+namespace {
+
+class ReadUploadTest : public hystbench::test::TempDirTest {
+ protected:
+  ReadUploadTest() : TempDirTest("hystbench_read_upload_test") {}
+  std::string file() {
+    const std::string p = path("line.csv");
+    std::ofstream(p) << "t,pos\n0,1\n0.001,2\n0.002,3\n";
+    return p;
+  }
+  std::string error_of(const std::string& kind, const std::string& column) {
+    try {
+      (void)cli::read_upload(file(), kind, "t", column, 1.0, 0.0);
+    } catch (const cli::DataFileError& e) {
+      return e.what();
+    }
+    return "no error";
+  }
+};
+
+}  // namespace
+
+TEST_F(ReadUploadTest, AMissingColumnIsNamedWithTheCommandsOption) {
+  EXPECT_NE(error_of("reference", "yr")
+                .find("no reference column 'yr' (columns: t, pos); name "
+                      "it with --yr-column"),
+            std::string::npos)
+      << error_of("reference", "yr");
+  EXPECT_NE(error_of("drive", "u")
+                .find("no drive column 'u' (columns: t, pos); name it with "
+                      "--u-column"),
+            std::string::npos)
+      << error_of("drive", "u");
+  const cli::RemoteUpload read = cli::read_upload(file(), "reference", "t", "pos", 2.0, 0.0);
+  ASSERT_EQ(read.values.size(), 3u);
+  EXPECT_DOUBLE_EQ(read.values[2], 6.0);
+  EXPECT_EQ(read.param, "reference_upload");
+}
