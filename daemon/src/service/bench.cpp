@@ -174,7 +174,7 @@ void Bench::open_log(RunProgram& p, json header) {
 
 json Bench::handle(const std::string& cmd, const json& params, std::uint64_t client) {
   const details::Command& command = details::find_command(cmd, params);
-  const details::Request request(params, command.params);
+  const details::RequestParams request(params, command.params);
   return command.handle(*this, request, client);
 }
 
@@ -255,7 +255,7 @@ json Bench::status() const {
   return s;
 }
 
-nlohmann::json Bench::load_model(const details::Request& request) {
+nlohmann::json Bench::load_model(const details::RequestParams& request) {
   const bool stored = request.has("stored");
   const bool document = request.has("model");
   if (stored == document) {
@@ -288,7 +288,7 @@ nlohmann::json Bench::list_models() const {
   return details::list_model_folder(settings_.model_dir, model_path_);
 }
 
-nlohmann::json Bench::delete_model(const details::Request& request) {
+nlohmann::json Bench::delete_model(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
   return details::delete_from_model_folder(settings_.model_dir, request.string("name", ""),
                                            model_path_);
@@ -351,7 +351,7 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
   return reply;
 }
 
-json Bench::start_identify(const details::Request& request) {
+json Bench::start_identify(const details::RequestParams& request) {
   const details::IdentifyRequest identify = details::parse_identify_request(request, settings_);
   std::lock_guard lock(mutex_);
   require_idle();
@@ -362,7 +362,7 @@ json Bench::start_identify(const details::Request& request) {
   return reply;
 }
 
-json Bench::start_excite(const details::Request& request, std::uint64_t client) {
+json Bench::start_excite(const details::RequestParams& request, std::uint64_t client) {
   if (!request.has("drive_upload")) {
     throw common::CommandError("bad_params",
                                "drive_upload: missing (the name of a complete drive upload)");
@@ -376,7 +376,7 @@ json Bench::start_excite(const details::Request& request, std::uint64_t client) 
   return reply;
 }
 
-json Bench::start_track(const details::Request& request, std::uint64_t client) {
+json Bench::start_track(const details::RequestParams& request, std::uint64_t client) {
   std::lock_guard lock(mutex_);
   require_idle();
   const details::RunContext ctx = run_context();

@@ -51,7 +51,7 @@ hc::ModelFile pi_model() {
 hdd::BuiltRun track(const json& params, const hdd::RunContext& ctx,
                     const hd::Upload* up = nullptr) {
   const hdd::Command& c = hdd::find_command("track", params);
-  const hdd::Request request(params, c.params);
+  const hdd::RequestParams request(params, c.params);
   return hdd::make_track_program(hdd::parse_track_request(request, ctx), ctx, up);
 }
 
@@ -70,7 +70,7 @@ namespace {
 
 hdd::TrackRequest parsed(const json& params, const hdd::RunContext& ctx) {
   const hdd::Command& c = hdd::find_command("track", params);
-  return hdd::parse_track_request(hdd::Request(params, c.params), ctx);
+  return hdd::parse_track_request(hdd::RequestParams(params, c.params), ctx);
 }
 
 }  // namespace
@@ -314,7 +314,7 @@ TEST(TrackProgram, AnUploadedReferenceIsApproachedFromTheBottomOfTheRange) {
 TEST(IdentifyProgram, TheRequestOverTheDefaultsWithinTheLimits) {
   hd::BenchSettings s = settings();
   const json params = {{"model", "cpi"}, {"u_max", 120.0}};
-  const hdd::Request request(params, hdd::find_command("identify", params).params);
+  const hdd::RequestParams request(params, hdd::find_command("identify", params).params);
   const hdd::IdentifyRequest r = hdd::parse_identify_request(request, s);
   EXPECT_EQ(r.model, "cpi");
   EXPECT_EQ(r.operators, s.identify.operators);
@@ -322,7 +322,7 @@ TEST(IdentifyProgram, TheRequestOverTheDefaultsWithinTheLimits) {
   EXPECT_DOUBLE_EQ(r.u_max, 120.0);
   const auto refused = [&](const json& bad) {
     try {
-      const hdd::Request q(bad, hdd::find_command("identify", bad).params);
+      const hdd::RequestParams q(bad, hdd::find_command("identify", bad).params);
       (void)hdd::parse_identify_request(q, s);
     } catch (const common::CommandError& e) {
       return e.code() + ": " + e.what();

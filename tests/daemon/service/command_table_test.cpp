@@ -22,7 +22,7 @@ namespace {
 std::string refusal(const std::string& cmd, const json& params) {
   try {
     const hdd::Command& c = hdd::find_command(cmd, params);
-    hdd::Request request(params, c.params);
+    hdd::RequestParams request(params, c.params);
   } catch (const common::CommandError& e) {
     return e.code() + ": " + e.what();
   }
@@ -94,7 +94,7 @@ TEST(CommandTable, AnUnknownCommandListsEveryCommandOnce) {
 TEST(CommandTable, RequestGettersGiveTheFallbackOrTheCheckedValue) {
   const hdd::Command& track = hdd::find_command("track", json::object());
   const json params = {{"frequency_hz", 40.0}, {"compensator", "pid"}};
-  const hdd::Request r(params, track.params);
+  const hdd::RequestParams r(params, track.params);
   EXPECT_TRUE(r.has("frequency_hz"));
   EXPECT_FALSE(r.has("periods"));
   EXPECT_DOUBLE_EQ(r.number("periods", 5.0), 5.0);
@@ -107,6 +107,6 @@ TEST(CommandTable, RequestGettersGiveTheFallbackOrTheCheckedValue) {
     EXPECT_EQ(e.code(), "bad_params");
     EXPECT_THAT(e.what(), StartsWith("frequency_hz: 40.000000 is out of range"));
   }
-  const hdd::Request none(json(), track.params);
+  const hdd::RequestParams none(json(), track.params);
   EXPECT_DOUBLE_EQ(none.number("kp", 0.5), 0.5);
 }

@@ -49,7 +49,8 @@ sim::Excitation excitation(const IdentifyRequest& request, const RunContext& ctx
 
 }  // namespace
 
-IdentifyRequest parse_identify_request(const Request& request, const BenchSettings& settings) {
+IdentifyRequest parse_identify_request(const RequestParams& request,
+                                       const BenchSettings& settings) {
   const auto& lim = settings.loop.limits;
   IdentifyRequest r;
   r.model = request.string("model", settings.identify.model);

@@ -5,8 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "service/details/request_params.hpp"
 #include "runs/details/run_context.hpp"
+#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -23,7 +23,7 @@ struct IdentifyRequest {
 
 /// The request's keys over settings' identify defaults; bad_params naming the key when the
 /// model is unknown or the span is not inside the output limits.
-IdentifyRequest parse_identify_request(const Request& request, const BenchSettings& settings);
+IdentifyRequest parse_identify_request(const RequestParams& request, const BenchSettings& settings);
 
 /// The identify program, with what its fit needs (BuiltRun::fit).
 BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext& ctx);

@@ -11,7 +11,7 @@ using common::CommandError;
 
 namespace {
 
-void parse_compensator(const Request& request, const RunContext& ctx, TrackRequest& r) {
+void parse_compensator(const RequestParams& request, const RunContext& ctx, TrackRequest& r) {
   r.compensator = request.string("compensator", ctx.model ? "inverse" : "none");
   const auto kind = hc::compensator_kind_from_string(r.compensator);
   if (!kind) {
@@ -28,7 +28,7 @@ void parse_compensator(const Request& request, const RunContext& ctx, TrackReque
 
 // A learning run's keys. Its trials are periods of the reference (or passes of an upload), so
 // the run's length is theirs and a built-in reference must repeat.
-void parse_learning(const Request& request, const RunContext& ctx, TrackRequest& r) {
+void parse_learning(const RequestParams& request, const RunContext& ctx, TrackRequest& r) {
   LearningKeys& l = r.learning;
   l.trials = static_cast<std::size_t>(request.integer("learn_trials", 0));
   if (l.trials == 0) {
@@ -58,7 +58,7 @@ void parse_learning(const Request& request, const RunContext& ctx, TrackRequest&
   }
 }
 
-void parse_builtin_reference(const Request& request, const RunContext& ctx,
+void parse_builtin_reference(const RequestParams& request, const RunContext& ctx,
                              BuiltinReferenceRequest& ref) {
   try {
     ref.kind = sim::signal_kind_from_string(ref.name);
@@ -82,7 +82,7 @@ void parse_builtin_reference(const Request& request, const RunContext& ctx,
 
 }  // namespace
 
-TrackRequest parse_track_request(const Request& request, const RunContext& ctx) {
+TrackRequest parse_track_request(const RequestParams& request, const RunContext& ctx) {
   TrackRequest r;
   parse_compensator(request, ctx, r);
   // track's two parameter rows: a built-in reference's keys, or an upload's (with approach_s).

@@ -57,6 +57,6 @@ struct TrackRequest {
 };
 
 /// The request (checked against track's parameters) over the bench's defaults.
-TrackRequest parse_track_request(const Request& request, const RunContext& ctx);
+TrackRequest parse_track_request(const RequestParams& request, const RunContext& ctx);
 
 }  // namespace hystbench::daemon::details

@@ -8,8 +8,8 @@
 #include <span>
 #include <string>
 
-#include "service/details/request_params.hpp"
 #include "hystbench/daemon/service/bench.hpp"
+#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -19,7 +19,7 @@ struct Command {
   /// two rows, e.g. track with a built-in or an uploaded reference).
   const char* when_key;
   std::span<const ParamSpec> params;
-  nlohmann::json (*handle)(Bench& bench, const Request& request, std::uint64_t client);
+  nlohmann::json (*handle)(Bench& bench, const RequestParams& request, std::uint64_t client);
 };
 
 /// Every command, in the order unknown_command lists them.

@@ -88,40 +88,40 @@ void check_params(const json& params, std::span<const ParamSpec> specs) {
   }
 }
 
-Request::Request(const json& params, std::span<const ParamSpec> specs)
+RequestParams::RequestParams(const json& params, std::span<const ParamSpec> specs)
     : params_(params), specs_(specs) {
   check_params(params_, specs_);
 }
 
-const ParamSpec& Request::spec(const char* key) const {
+const ParamSpec& RequestParams::spec(const char* key) const {
   for (const ParamSpec& s : specs_) {
     if (std::string_view(s.key) == key) return s;
   }
   throw std::logic_error(std::string("request parameter '") + key + "' is not in its command");
 }
 
-double Request::number(const char* key, double fallback) const {
+double RequestParams::number(const char* key, double fallback) const {
   const ParamSpec& s = spec(key);
   return number_param(params_, key, fallback, s.lo, s.hi);
 }
 
-double Request::number(const char* key, double fallback, double lo, double hi) const {
+double RequestParams::number(const char* key, double fallback, double lo, double hi) const {
   (void)spec(key);
   return number_param(params_, key, fallback, lo, hi);
 }
 
-int Request::integer(const char* key, int fallback) const {
+int RequestParams::integer(const char* key, int fallback) const {
   const ParamSpec& s = spec(key);
   return static_cast<int>(
       integer_param(params_, key, fallback, integer_bound(s.lo), integer_bound(s.hi)));
 }
 
-std::string Request::string(const char* key, const std::string& fallback) const {
+std::string RequestParams::string(const char* key, const std::string& fallback) const {
   (void)spec(key);
   return string_param(params_, key, fallback);
 }
 
-bool Request::boolean(const char* key, bool fallback) const {
+bool RequestParams::boolean(const char* key, bool fallback) const {
   (void)spec(key);
   return has(key) ? params_[key].get<bool>() : fallback;
 }

@@ -14,7 +14,7 @@ namespace hystbench::daemon::details {
 enum class ParamType { kNumber, kInteger, kString, kObject, kArray, kBoolean };
 
 /// One parameter of a command: key, type and the range a number or integer must lie in (a
-/// range known only at run time, such as the loop rate's, is checked by Request::number's
+/// range known only at run time, such as the loop rate's, is checked by RequestParams::number's
 /// overload). `what` names the expected value in errors ("a number" and so on by default);
 /// `refusal` refuses the key with that reason (a key a client might expect, never accepted).
 struct ParamSpec {
@@ -31,9 +31,9 @@ void check_params(const nlohmann::json& params, std::span<const ParamSpec> specs
 
 /// A request checked against its command's parameters at construction; the getters give a
 /// key's value or the fallback when the key is absent. Keeps a reference to `params`.
-class Request {
+class RequestParams {
  public:
-  Request(const nlohmann::json& params, std::span<const ParamSpec> specs);
+  RequestParams(const nlohmann::json& params, std::span<const ParamSpec> specs);
   bool has(const char* key) const { return params_.is_object() && params_.contains(key); }
   double number(const char* key, double fallback) const;
   /// Also within [lo, hi], a range that depends on the bench (limits, loop rate).

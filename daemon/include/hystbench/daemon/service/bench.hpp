@@ -29,7 +29,7 @@
 namespace hystbench::daemon {
 
 namespace details {
-class Request;
+class RequestParams;
 struct Command;
 struct RunContext;
 struct BuiltRun;
@@ -107,10 +107,10 @@ class Bench {
   // already checked against the row's parameters.
   friend std::span<const details::Command> details::bench_commands();
   nlohmann::json status() const;
-  nlohmann::json start_identify(const details::Request& request);
-  nlohmann::json start_track(const details::Request& request, std::uint64_t client);
+  nlohmann::json start_identify(const details::RequestParams& request);
+  nlohmann::json start_track(const details::RequestParams& request, std::uint64_t client);
   /// excite: a complete drive upload played open loop after a ramp from the present output.
-  nlohmann::json start_excite(const details::Request& request, std::uint64_t client);
+  nlohmann::json start_excite(const details::RequestParams& request, std::uint64_t client);
   nlohmann::json stop_run();
   nlohmann::json abort_run();
   /// reset: leaves FAULT (reset_failed when the loop does not).
@@ -118,11 +118,11 @@ class Bench {
   nlohmann::json model_get() const;
   /// model.load: {"model": document, "name": file name} (kept in the model folder) or
   /// {"stored": name in the model folder}; never a path.
-  nlohmann::json load_model(const details::Request& request);
+  nlohmann::json load_model(const details::RequestParams& request);
   /// model.list: the model folder's *.json files (name, bytes, type, active).
   nlohmann::json list_models() const;
   /// model.delete: a model or learned drive out of the model folder (not the active model).
-  nlohmann::json delete_model(const details::Request& request);
+  nlohmann::json delete_model(const details::RequestParams& request);
   /// Throws CommandError fault or busy unless a run may start. Caller holds mutex_.
   void require_idle() const;
   struct SubmittedRun {
