@@ -54,6 +54,14 @@ Compensator::Compensator(CompensatorKind kind, std::unique_ptr<InverseModel> inv
                    "linear map gain must be > 0");
 }
 
+Compensator::Compensator(const Compensator& other)
+    : kind_(other.kind_),
+      inverse_(other.inverse_ ? other.inverse_->clone() : nullptr),
+      pid_(other.pid_),
+      linear_(other.linear_),
+      y_ref_prev_(other.y_ref_prev_),
+      have_prev_(other.have_prev_) {}
+
 CompensatorOutput Compensator::step(double y_ref, double y_measured,
                                     std::span<const double> ff_targets) noexcept {
   CompensatorOutput out;

@@ -71,6 +71,30 @@ TEST(Compensator, InverseRemovesTheHysteresisOfAnExactModel) {
   EXPECT_LT(pid.max_error, 0.01);
 }
 
+// A copy plays ahead what the compensator would do from the same state (its inverse's memory,
+// its PID's integral) without moving the original.
+TEST(Compensator, ACopyPlaysAheadFromTheSameStateAndLeavesTheOriginal) {
+  std::mt19937_64 rng(10);
+  hc::ActuatorModel model(
+      std::make_unique<hc::ModifiedPiModel>(hystbench::testing::random_mpi(rng, 12, 2, 150.0)));
+  model.input_min = 0.0;
+  model.input_max = 150.0;
+  model.configure(1e-4);
+  const double y0 = model.peek_static(0.0), y1 = model.peek_static(150.0);
+  hc::Compensator original(hc::CompensatorKind::kInversePid, hc::make_inverse(model),
+                           hc::PidController(hc::PidParameters{0.05, 200.0, 0.0, 0.0, -5, 5}, 1e-4),
+                           {(y1 - y0) / 150.0, y0});
+  original.reset(0.0);
+  const auto reference = [&](int k) { return y0 + (y1 - y0) * (0.5 + 0.4 * std::sin(k * 1e-3)); };
+  for (int k = 0; k < 3000; ++k) (void)original.step(reference(k), reference(k) - 0.1);
+  hc::Compensator copy = original;
+  std::vector<double> ahead;
+  for (int k = 3000; k < 6000; ++k) ahead.push_back(copy.step(reference(k), reference(k)).u);
+  for (int k = 3000; k < 6000; ++k) {
+    ASSERT_DOUBLE_EQ(original.step(reference(k), reference(k)).u, ahead[k - 3000]) << k;
+  }
+}
+
 TEST(Compensator, PidAloneFollowsASlowReferenceOnAMismatchedPlant) {
   std::mt19937_64 rng(9);
   hc::ActuatorModel truth(

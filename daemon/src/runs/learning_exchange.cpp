@@ -133,6 +133,14 @@ bool LearningExchange::start_from(const std::vector<double>& drive,
   return true;
 }
 
+bool LearningExchange::rebase_start(const std::vector<double>& compensator) {
+  if (started_from_ == 0 || started_compensator_.empty() || compensator.size() != period) {
+    return false;
+  }
+  started_compensator_ = compensator;
+  return true;
+}
+
 bool LearningExchange::offer(const std::vector<double>& drive, bool last) noexcept {
   if (ready_.load(std::memory_order_acquire) >= 0 || drive.size() != period) return false;
   // The loop took the drive offered before and plays it from the other buffer.

@@ -47,6 +47,11 @@ class Compensator {
   /// std::invalid_argument naming what is missing.
   Compensator(CompensatorKind kind, std::unique_ptr<InverseModel> inverse,
               std::optional<PidController> pid, LinearMap linear);
+  /// A copy in the same state (the inverse cloned): to play ahead what this one would do.
+  Compensator(const Compensator& other);
+  Compensator& operator=(const Compensator&) = delete;
+  Compensator(Compensator&&) noexcept = default;
+  Compensator& operator=(Compensator&&) noexcept = default;
 
   /// y_measured is the measurement of the previous tick (NaN before the first one).
   CompensatorOutput step(double y_ref, double y_measured) noexcept {

@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -9,6 +13,7 @@
 #include <utility>
 
 #include "hystbench/common/command_error.hpp"
+#include "hystbench/common/model_file_io.hpp"
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
@@ -429,6 +434,97 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   }
 }
 
+// The compensator's feedforward over the first trial (P ticks from the learning's first tick),
+// played ahead on a copy from the reference's start as the loop plays it, its target less
+// `offset_um` throughout.
+std::vector<double> feedforward_period(const RunProgram& p, double offset_um, double dt) {
+  hc::Compensator c = *p.compensator;
+  const std::uint64_t start = p.excitation.size(), first = p.learning->first_tick;
+  const std::size_t period = p.learning->period, ahead = c.preview_samples();
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> window(std::max<std::size_t>(ahead, 1)), out(period);
+  for (std::uint64_t k = start; k < first + period; ++k) {
+    const double t = static_cast<double>(k - start) * dt;
+    for (std::size_t j = 0; j < window.size(); ++j) {
+      window[j] = p.feedforward_target(t + static_cast<double>(j) * dt, offset_um);
+    }
+    const double u_ff = c.step(none, none, window).u_ff;
+    if (k >= first) out[k - first] = u_ff;
+  }
+  return out;
+}
+
+// The mean output `model` predicts over the tare's window of the run's precondition sweep
+// (relaxed at the sweep's first drive, as the loop's predictor is); nullopt without a window.
+std::optional<double> tare_window_prediction(hc::ActuatorModel model, const RunProgram& p,
+                                             double dt) {
+  const std::vector<double>& sweep = p.excitation;
+  if (sweep.empty() || p.tare.from >= sweep.size()) return std::nullopt;
+  model.configure(dt);
+  model.reset(sweep.front());
+  double sum = 0.0;
+  for (std::size_t k = 0; k < sweep.size(); ++k) {
+    const double y = model.step(sweep[k]);
+    if (k >= p.tare.from) sum += y;
+  }
+  return sum / static_cast<double>(sweep.size() - p.tare.from);
+}
+
+// The target offset a drive learned before is moved from, in the active model's terms. The
+// drive moves by how far the compensator's feedforward moves from the one it was learned
+// beside; saved, that one is the model's of then, and after the model changed (a second
+// identify, another model loaded) the difference would hold the models' difference too, which
+// the drive has already learned away. So the active compensator plays the reference ahead at
+// the offset the drive was learned with (preparation below), and as the tare is the actuator's
+// output less a model's prediction on the precondition sweep, that offset is moved by how far
+// the two models' predictions there differ. nullopt: the drive moves as saved (saved without its
+// offset, or no compensator to play ahead).
+std::optional<double> learned_start_offset(const LearnedDrive& start, const RunProgram& p,
+                                           const RunContext& ctx) {
+  const double offset = start.meta.value("compensator_offset_um", std::nan(""));
+  if (start.compensator.empty() || !std::isfinite(offset) || !p.compensator) return std::nullopt;
+  const json then_model = start.meta.value("model", json());
+  if (ctx.model == nullptr || !then_model.is_string()) return offset;
+  const std::string name = then_model.get<std::string>();
+  if (name.empty() || name.find('/') != std::string::npos) return offset;
+  try {
+    const hc::ModelFile then =
+        common::load_model_file((std::filesystem::path(ctx.settings.model_dir) / name).string());
+    const auto before = tare_window_prediction(then.model, p, ctx.dt());
+    const auto now = tare_window_prediction(ctx.model->model, p, ctx.dt());
+    if (before && now) return offset + (*before - *now);
+  } catch (const std::exception&) {
+    // The model of then is gone or unreadable: the offset stays in its terms.
+  }
+  return offset;
+}
+
+// After the feedforward's own preparation: the compensator's feedforward over the first trial
+// at the learned drive's offset (learned_start_offset), which the drive then moves from.
+RunPreparation with_learned_start(RunPreparation preparation, double offset, double dt) {
+  if (preparation.stage.empty()) preparation.stage = "playing the compensator ahead";
+  preparation.work = [before = std::move(preparation.work), offset, dt](
+                         RunProgram& p, const std::function<void(double)>& progress) {
+    if (before) before(p, progress);
+    if (p.compensator && p.learning) p.learning->rebase_start(feedforward_period(p, offset, dt));
+  };
+  return preparation;
+}
+
+// A learning run's learner; a drive learned before moves from the active compensator's
+// feedforward at its offset, played ahead after the run's `preparation`.
+std::unique_ptr<TrackLearning> arm_learning(RunProgram& p, const LearningPlan& plan,
+                                            const RunContext& ctx, const TrackReference& ref,
+                                            RunPreparation& preparation) {
+  std::unique_ptr<TrackLearning> learner = learning(p, plan, ctx, ref);
+  if (plan.start) {
+    if (const auto offset = learned_start_offset(*plan.start, p, ctx)) {
+      preparation = with_learned_start(std::move(preparation), *offset, ctx.dt());
+    }
+  }
+  return learner;
+}
+
 // A learning run's plan, for the run's header and the start reply.
 json learning_summary(const LearningPlan& learn) {
   json l = {{"trials", learn.trials},
@@ -494,7 +590,7 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
   allocate_records(*p);
 
   BuiltRun run;
-  if (learn) run.learning = learning(*p, *learn, ctx, ref);
+  if (learn) run.learning = arm_learning(*p, *learn, ctx, ref, preparation);
   json run_header = {{"kind", "track"}};
   run_header.update(ref.header);
   run_header.update({{"compensator", comp_name},
