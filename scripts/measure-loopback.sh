@@ -19,13 +19,15 @@
 #              replayed, and a raster line (--reference-file) learned over 10 passes
 #   learning-delay  the same effects, the model identified with the delay off: track --learn 20
 #              at each frequency
+#   learning-raster  the same effects: identify, the raster line learned over 10 passes and
+#              replayed twice; then all of it again in the same daemon (a second identify)
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -171,6 +173,28 @@ for section in "${sections[@]}"; do
       echo
       stop_daemon
       ;;
+    learning-raster)
+      start_daemon learning-raster config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      raster="$work/learning-raster/raster.csv"
+      awk 'BEGIN { print "t,yr"; for (k = 0; k <= 10000; k++) { t = k / 5000; p = 2.5 * t - int(2.5 * t);
+        printf "%.6f,%.6f\n", t, 8 + 28 * (p < 0.5 ? 2 * p : 2 - 2 * p) } }' >"$raster"
+      echo "### A raster line learned over 10 passes after identify, replayed twice; twice in one daemon"
+      echo "| identify | passes (rms %) | replays (rms %) |"
+      echo "| --- | --- | --- |"
+      for round in first second; do
+        hb identify --wait --json >/dev/null || true
+        out=$(hb track --reference-file "$raster" --learn 10 --wait --json || true)
+        name=$(jq -r '.learning.drive // empty' <<<"$out")
+        replays=""
+        for _ in 1 2; do
+          [ -z "$name" ] || replays="$replays $(hb track --reference-file "$raster" --learned "$name" \
+            --wait --json | jq -r "$f3"' .rms_error_percent | f' || true)"
+        done
+        jq -r --arg r "$round" --arg p "$replays" "$f3"'"| \($r) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \($p) |"' <<<"$out" || true
+      done
+      echo
+      stop_daemon
+      ;;
     learning-delay)
       start_daemon learning-delay-off config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
       model=$(hb identify --wait --json | jq -r '.model.path')
@@ -249,7 +273,7 @@ for section in "${sections[@]}"; do
       stop_daemon
       ;;
     *)
-      echo "measure-loopback: unknown section '$section' (default repeat rate thresholds delay campaign identify-time learning learning-delay)" >&2
+      echo "measure-loopback: unknown section '$section' (default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster)" >&2
       exit 2
       ;;
   esac
