@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "details/diagnosis_signals.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
@@ -38,12 +39,6 @@ class DriftBasis {
   std::size_t knots_;
   std::size_t origin_;
 };
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 1.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 }  // namespace
 
@@ -103,7 +98,7 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
           kb.push_back(p.rb[i] / p.r[i]);
           kc.push_back(p.rc[i] / p.r[i]);
         }
-        s.cp_scale = {median(ka), median(kb), median(kc)};
+        s.cp_scale = {median(ka, 1.0), median(kb, 1.0), median(kc, 1.0)};
         if (p.has_dead_zones()) {
           s.center = p.center;
           s.dead_zone_thresholds =

@@ -5,6 +5,7 @@
 #include <complex>
 #include <limits>
 #include <numbers>
+#include <utility>
 #include <unsupported/Eigen/FFT>
 
 namespace hystbench::compensation::details {
@@ -18,13 +19,6 @@ constexpr double kStepFraction = 0.01;  // of the input span
 constexpr double kStepContrast = 3.0;   // against the neighbouring increments
 constexpr double kMinCoherence = 0.5;
 constexpr double kMinSignalToNoise = 10.0;
-
-double median_of(std::vector<double>& v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 // du/dt over about 1 ms (at least one sample) [u/s]; 0 at the first sample.
 std::vector<double> input_rate(std::span<const double> u, double dt) {
@@ -131,6 +125,13 @@ void mark_since_events(std::span<const double> u, double dt, double hold_band,
 
 }  // namespace
 
+double median(std::vector<double> v, double if_empty) {
+  if (v.empty()) return if_empty;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
 std::vector<std::size_t> find_steps(std::span<const double> u) {
   std::vector<std::size_t> steps;
   if (u.size() < 2) return steps;
@@ -173,10 +174,10 @@ double noise_rms(std::span<const double> e) {
   if (e.size() < 3) return 0.0;
   std::vector<double> d(e.size() - 2);
   for (std::size_t k = 1; k + 1 < e.size(); ++k) d[k - 1] = e[k + 1] - 2.0 * e[k] + e[k - 1];
-  const double med = median_of(d);
+  const double med = median(d, 0.0);
   for (double& v : d) v = std::abs(v - med);
   // MAD -> sigma for a Gaussian; the second difference of white noise has variance 6 sigma^2.
-  return 1.4826 * median_of(d) / std::sqrt(6.0);
+  return 1.4826 * median(std::move(d), 0.0) / std::sqrt(6.0);
 }
 
 std::size_t input_period(std::span<const double> u) {

@@ -34,6 +34,9 @@ std::vector<std::size_t> find_steps(std::span<const double> u);
 /// jump of more than 1 % of the span and three times the neighbouring increments.
 InputEvents find_input_events(std::span<const double> u, double dt);
 
+/// The median of v (the upper of the two middle values for an even count), `if_empty` for none.
+double median(std::vector<double> v, double if_empty);
+
 /// Noise rms of a residual from its second differences (robust: median absolute deviation),
 /// so slow model errors and isolated transients hardly count.
 double noise_rms(std::span<const double> residual);
