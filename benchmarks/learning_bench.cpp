@@ -19,10 +19,7 @@ namespace {
 void learning_update(benchmark::State& state) {
   const auto n = static_cast<std::size_t>(state.range(0));
   std::mt19937_64 rng(7);
-  hc::ActuatorModel model(
-      std::make_unique<hc::ModifiedPiModel>(hystbench::testing::random_mpi(rng, 20, 2, 150.0)));
-  model.input_min = 0.0;
-  model.input_max = 150.0;
+  hc::ActuatorModel model = hystbench::testing::random_mpi_actuator(rng, 20, 2, 150.0, 1e-4);
   model.set_delay(2e-4);
   model.configure(1e-4);
   std::vector<double> drive(n), error(n), next(n);

@@ -54,11 +54,7 @@ TrackFigures track(hc::CompensatorKind kind, const hc::ActuatorModel& model,
 
 TEST(Compensator, InverseRemovesTheHysteresisOfAnExactModel) {
   std::mt19937_64 rng(8);
-  hc::ActuatorModel model(
-      std::make_unique<hc::ModifiedPiModel>(hystbench::testing::random_mpi(rng, 12, 2, 150.0)));
-  model.input_min = 0.0;
-  model.input_max = 150.0;
-  model.configure(1e-4);
+  const hc::ActuatorModel model = hystbench::testing::random_mpi_actuator(rng, 12, 2, 150.0, 1e-4);
   const TrackFigures none = track(hc::CompensatorKind::kNone, model, model);
   const TrackFigures inverse = track(hc::CompensatorKind::kInverse, model, model);
   const TrackFigures multiplicative =
@@ -75,11 +71,7 @@ TEST(Compensator, InverseRemovesTheHysteresisOfAnExactModel) {
 // its PID's integral) without moving the original.
 TEST(Compensator, ACopyPlaysAheadFromTheSameStateAndLeavesTheOriginal) {
   std::mt19937_64 rng(10);
-  hc::ActuatorModel model(
-      std::make_unique<hc::ModifiedPiModel>(hystbench::testing::random_mpi(rng, 12, 2, 150.0)));
-  model.input_min = 0.0;
-  model.input_max = 150.0;
-  model.configure(1e-4);
+  const hc::ActuatorModel model = hystbench::testing::random_mpi_actuator(rng, 12, 2, 150.0, 1e-4);
   const double y0 = model.peek_static(0.0), y1 = model.peek_static(150.0);
   hc::Compensator original(hc::CompensatorKind::kInversePid, hc::make_inverse(model),
                            hc::PidController(hc::PidParameters{0.05, 200.0, 0.0, 0.0, -5, 5}, 1e-4),

@@ -1,9 +1,11 @@
 #pragma once
 // Randomised invertible PI-family models and rich input signals for property tests.
 #include <algorithm>
+#include <memory>
 #include <random>
 #include <vector>
 
+#include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 
@@ -65,6 +67,17 @@ inline compensation::ModifiedPiParameters random_mpi(std::mt19937_64& rng, int n
   }
   p.dead_zone = {d, w};
   return p;
+}
+
+/// A random_mpi actuator model on the input range [0, span], configured at the sample period dt.
+inline compensation::ActuatorModel random_mpi_actuator(std::mt19937_64& rng, int n, int m,
+                                                       double span, double dt) {
+  compensation::ActuatorModel model(
+      std::make_unique<compensation::ModifiedPiModel>(random_mpi(rng, n, m, span)));
+  model.input_min = 0.0;
+  model.input_max = span;
+  model.configure(dt);
+  return model;
 }
 
 /// A signal in [lo, hi] with random reversals, nested minor loops and occasional jumps.
