@@ -40,7 +40,8 @@ struct InputRange {
 };
 
 namespace details {
-/// The forward model beside an analytic inverse, stepped with every drive the inverse gives.
+/// The forward model beside an analytic inverse with a bounded range, stepped with every drive
+/// the inverse gives (unbounded: not stepped, the drive is the inverse's).
 /// A target beyond what the input range reaches from the present state becomes the output at
 /// the bound, so the inverse saturates there instead of winding its state up beyond the range
 /// (where a branch is nearly flat its inverse's slope is huge: a target just below reach asks
@@ -54,10 +55,9 @@ class ReachableTarget {
   /// applied to the forward model.
   template <typename Invert>
   double step(double y_ref, Invert invert) noexcept {
+    if (!range_.bounded()) return invert(y_ref);
     double u = 0.0;
-    if (!range_.bounded()) {
-      u = invert(y_ref);
-    } else if (const double lo = forward_.peek(range_.min); y_ref <= lo) {
+    if (const double lo = forward_.peek(range_.min); y_ref <= lo) {
       invert(lo);
       u = range_.min;
     } else if (const double hi = forward_.peek(range_.max); y_ref >= hi) {
@@ -69,7 +69,9 @@ class ReachableTarget {
     forward_.step(u);
     return u;
   }
-  void reset(double u0) noexcept { forward_.reset(u0); }
+  void reset(double u0) noexcept {
+    if (range_.bounded()) forward_.reset(u0);
+  }
 
  private:
   Model forward_;
