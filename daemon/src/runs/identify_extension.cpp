@@ -184,11 +184,12 @@ bool Bench::extend_identified_model() {
             {"fraction", f},
             {"stage", "extension: " + what}});
     };
-    if (!s.ahead) {
-      s.ahead = std::make_unique<details::DiagnosisAhead>(
-          identify_diagnosis(s.candidates, exchange_s, s.u, s.y, dt_), std::vector<std::size_t>{});
-    }
-    details::DiagnosisAhead::Taken taken = s.ahead->take(s.base, progress);
+    // The worker started with the session's extension; without it, the diagnosis runs here.
+    details::DiagnosisAhead::Taken taken =
+        s.ahead ? s.ahead->take(s.base, progress)
+                : details::DiagnosisAhead::Taken{
+                      identify_diagnosis(s.candidates, exchange_s, s.u, s.y, dt_)(s.base, progress),
+                      "after the verification"};
     s.ahead.reset();
     const hc::Diagnosis& d = taken.diagnosis;
     std::optional<ExtensionDraft> draft = extension_draft(d);

@@ -41,9 +41,7 @@ void DiagnosisAhead::run() {
       std::lock_guard lock(mutex_);
       done_.emplace(i, std::move(d));
     } catch (const Cancelled&) {
-      std::lock_guard lock(mutex_);
-      running_.reset();
-      break;
+      break;  // running_ is reset below
     } catch (...) {
       std::lock_guard lock(mutex_);
       failed_.emplace(i, std::current_exception());
