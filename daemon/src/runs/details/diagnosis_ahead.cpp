@@ -1,8 +1,5 @@
 #include "runs/details/diagnosis_ahead.hpp"
 
-#include <pthread.h>
-#include <sched.h>
-
 #include <algorithm>
 #include <utility>
 
@@ -22,10 +19,6 @@ void DiagnosisAhead::stop_and_join() {
 }
 
 void DiagnosisAhead::run() {
-  // Only where a CPU would otherwise idle: the loop's thread wakes every tick beside it, and on
-  // a 2-core machine a diagnosis at the normal policy made it late about ten times as often.
-  sched_param idle{};
-  (void)pthread_setschedparam(pthread_self(), SCHED_IDLE, &idle);
   for (const std::size_t i : order_) {
     {
       std::lock_guard lock(mutex_);

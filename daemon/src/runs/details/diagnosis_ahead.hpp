@@ -1,8 +1,9 @@
 #pragma once
 // The diagnoses of identify's candidates, run on a worker thread while the loop plays their
 // verification segments (wall time the supervisor spends waiting): one candidate after another,
-// in the order given, each kept until taken. The worker runs at SCHED_IDLE (only on a CPU that
-// would otherwise idle). Not real-time code; the supervisor thread owns it.
+// in the order given, each kept until taken. The worker runs at the normal policy: at SCHED_IDLE
+// another busy process starves it, and taking or cancelling it then waits for as long. Not
+// real-time code; the supervisor thread owns it.
 #include <condition_variable>
 #include <cstddef>
 #include <exception>
