@@ -49,7 +49,7 @@ void ActuatorModel::set_dynamics(std::optional<DynamicsParameters> dynamics) {
 void ActuatorModel::set_delay(double delay_s) {
   details::require(std::isfinite(delay_s) && delay_s >= 0.0, "delay_s must be >= 0");
   delay_s_ = delay_s;
-  delay_ = DelayLine(static_cast<std::size_t>(std::lround(delay_s_ / dt_)));
+  delay_ = DelayLine::of(delay_s_ / dt_);
 }
 
 void ActuatorModel::configure(double dt_s) {
@@ -59,7 +59,7 @@ void ActuatorModel::configure(double dt_s) {
   creep_ = creep_params_ ? CreepOperatorBank(*creep_params_, dt_s) : CreepOperatorBank();
   dynamics_.reset();
   if (dyn_params_) dynamics_.emplace(*dyn_params_, dt_s);
-  delay_ = DelayLine(static_cast<std::size_t>(std::lround(delay_s_ / dt_s)));
+  delay_ = DelayLine::of(delay_s_ / dt_s);
 }
 
 double ActuatorModel::step(double u) noexcept {

@@ -11,7 +11,7 @@ namespace hystbench::compensation {
 DynamicsInversion::DynamicsInversion(const ActuatorModel& model, double dt_s, double bandwidth_hz)
     : dt_(dt_s) {
   details::require(std::isfinite(dt_s) && dt_s > 0.0, "dynamics inversion needs a period > 0");
-  delay_samples_ = std::round(model.delay_s() / dt_s);
+  delay_samples_ = model.delay_s() / dt_s;  // a fraction of a sample is previewed too
   lead_s_ = delay_samples_ * dt_s;
   if (model.dynamics()) {
     p_ = *model.dynamics();

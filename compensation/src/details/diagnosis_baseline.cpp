@@ -63,7 +63,7 @@ ExtensionSpec spec_of_model(const ActuatorModel& model, const DiagnosisRecord& r
   }
   spec.structure.dt = r.dt;
   spec.dynamics = model.dynamics();
-  spec.delay_samples = static_cast<std::size_t>(std::lround(model.delay_s() / r.dt));
+  spec.delay_samples = model.delay_s() / r.dt;
   return spec;
 }
 
@@ -102,7 +102,7 @@ std::string describe_model(const ActuatorModel& model) {
          num(model.dynamics()->damping_ratio);
   }
   if (model.delay_s() > 0.0) {
-    s += ", delay " + std::to_string(model.delay_samples()) + " samples (" +
+    s += ", delay " + num(model.delay_s() / model.sample_period()) + " samples (" +
          num(model.delay_s() * 1e3) + " ms)";
   }
   return s;

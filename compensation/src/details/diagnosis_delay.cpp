@@ -35,7 +35,7 @@ double shifted_mse(const DiagnosisRecord& r, std::span<const double> x, long s) 
 CandidateOutcome test_delay(const CandidateContext& c) {
   CandidateOutcome out;
   const DiagnosisRecord& r = c.record;
-  const auto d0 = static_cast<long>(c.base.delay_samples);
+  const auto d0 = std::lround(c.base.delay_samples);
   const long max_shift = std::min<long>(
       static_cast<long>(r.n / 20), std::clamp<long>(std::lround(kMaxDelaySeconds / r.dt), 5, 500));
   // Best shift of a prediction, over -current .. max_shift.
@@ -56,7 +56,7 @@ CandidateOutcome test_delay(const CandidateContext& c) {
   long delay = d0 + first_shift;
   ExtensionSpec spec = c.base;
   for (int iteration = 0; iteration < 6 && delay != d0; ++iteration) {
-    spec.delay_samples = static_cast<std::size_t>(delay);
+    spec.delay_samples = static_cast<double>(delay);
     const ExtensionFit fit = fit_extension(r, spec, FitRows::kSearch);
     double mse = 0.0;
     const long s = best_shift_of(fit.prediction, delay, mse);
@@ -67,11 +67,11 @@ CandidateOutcome test_delay(const CandidateContext& c) {
   double best_rmse = std::numeric_limits<double>::infinity();
   for (long d = delay - 1; d <= delay + 1; ++d) {
     if (d < 0) continue;
-    spec.delay_samples = static_cast<std::size_t>(d);
+    spec.delay_samples = static_cast<double>(d);
     ExtensionFit fit = fit_extension(r, spec);
     if (fit.fit.rmse < best_rmse) best_rmse = fit.fit.rmse, out.fit = std::move(fit);
   }
-  const auto d = static_cast<long>(out.fit.spec.delay_samples);
+  const auto d = std::lround(out.fit.spec.delay_samples);
   out.statistic = static_cast<double>(std::abs(d - d0));
   out.threshold = kThreshold;
   out.evidence = "the output matches the baseline prediction best " +

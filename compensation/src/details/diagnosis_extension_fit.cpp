@@ -6,6 +6,7 @@
 
 #include "details/diagnosis_signals.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
+#include "hystbench/compensation/delay_line.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
@@ -42,9 +43,12 @@ class DriftBasis {
 
 }  // namespace
 
-std::vector<double> delayed(std::span<const double> u, std::size_t d) {
+std::vector<double> delayed(std::span<const double> u, double d) {
   std::vector<double> out(u.size());
-  for (std::size_t k = 0; k < u.size(); ++k) out[k] = k >= d ? u[k - d] : u[0];
+  if (u.empty()) return out;
+  DelayLine line = DelayLine::of(d);
+  line.reset(u[0]);
+  for (std::size_t k = 0; k < u.size(); ++k) out[k] = line.push(u[k]);
   return out;
 }
 
@@ -185,7 +189,7 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
   out.model = design.build(x.head(nd));
   if (spec.dynamics) out.model.set_dynamics(*spec.dynamics);
   out.model.configure(r.dt);
-  out.model.set_delay(static_cast<double>(spec.delay_samples) * r.dt);
+  out.model.set_delay(spec.delay_samples * r.dt);
   if (nb > 0) {
     out.drift.resize(r.n);
     std::vector<double> a(drift.size());

@@ -21,7 +21,7 @@ namespace hystbench::compensation::details {
 
 struct ExtensionSpec {
   ModelStructure structure;
-  std::size_t delay_samples = 0;
+  double delay_samples = 0.0;  ///< >= 0; a fraction interpolates the input (DelayLine)
   std::optional<DynamicsParameters> dynamics;
   bool drift = false;  ///< hat functions with knots at the split's block edges
 };
@@ -49,8 +49,9 @@ ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec,
 /// Classical PI structure: `plays` thresholds uniform on half the input span.
 ModelStructure pi_structure(const DiagnosisRecord& r, int plays);
 
-/// u delayed by d samples (u[0] before the start).
-std::vector<double> delayed(std::span<const double> u, std::size_t d);
+/// u delayed by d >= 0 samples, a fraction interpolated as the model's DelayLine does (u[0]
+/// before the start).
+std::vector<double> delayed(std::span<const double> u, double d);
 
 /// The hysteresis of `model` as a structure the designs can refit (its thresholds, dead zones,
 /// asymmetry scales, rate range and creep lags); the parameters that are not thresholds are

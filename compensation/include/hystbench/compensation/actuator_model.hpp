@@ -1,9 +1,12 @@
 #pragma once
 // A complete actuator model: delay -> (hysteresis + creep) -> second-order dynamics.
 //   y(k) = D[ H[u(k - n_d)] + C[u(k - n_d)] ]
+// n_d need not be whole: a fraction of a sample interpolates the input linearly between the two
+// samples around it (DelayLine).
 // Every part but the hysteresis is optional. This is what model files hold, what the simulator
 // and the diagnosis extend, and what inverses are built from.
 // configure() allocates; step()/peek()/reset() are real-time safe.
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -32,7 +35,7 @@ class ActuatorModel {
   // --- structure (not real-time safe) ---
   void set_creep(std::optional<CreepParameters> creep);
   void set_dynamics(std::optional<DynamicsParameters> dynamics);
-  void set_delay(double delay_s);  ///< >= 0 [s]; rounded to whole samples at configure()
+  void set_delay(double delay_s);  ///< >= 0 [s]; any fraction of a sample is kept
   /// Sample period for every part that depends on time; allocates the delay line. Resets the
   /// state of creep, dynamics and delay (not of the hysteresis).
   void configure(double dt_s);
@@ -55,7 +58,10 @@ class ActuatorModel {
   const std::optional<CreepParameters>& creep() const noexcept { return creep_params_; }
   const std::optional<DynamicsParameters>& dynamics() const noexcept { return dyn_params_; }
   double delay_s() const noexcept { return delay_s_; }
-  std::size_t delay_samples() const noexcept { return delay_.samples(); }
+  /// The delay in whole samples, rounded to the nearest (delay_s() holds any fraction).
+  std::size_t delay_samples() const noexcept {
+    return static_cast<std::size_t>(std::lround(delay_s_ / dt_));
+  }
   double sample_period() const noexcept { return dt_; }
   /// The input of the last step() (or reset()).
   double last_input() const noexcept { return last_input_; }

@@ -3,14 +3,14 @@
 // time (inversion-based feedforward, Croft, Shan and Devasia 2001): the static target the
 // hysteresis inverse must produce at sample k is
 //   v(k) = r(t) + (2 zeta / wn) r'(t) + r''(t) / wn^2,   t = t_k + lead,
-// with lead = the delay (whole samples), less half a sample when the model has dynamics (they are
-// discretised for a zero-order-held input and report the position at the end of the sample), and
-// r', r'' central differences over +-h. h = max(dt, 1 / (pi f_b)) rolls
-// the inversion off above the bandwidth f_b (their gain falls as sinc and sinc^2 beyond it), so
-// noise and unmodelled modes are not amplified and a step reference gives a bounded target.
-// What is inverted: the delay (by preview) and the dynamics (by the reference's derivatives);
-// hysteresis, creep and rate dependence are the static inverse's (make_inverse) part.
-// target() is real-time safe; the caller samples the reference at the three times.
+// with lead = the delay (any fraction of a sample included), less half a sample when the model has
+// dynamics (they are discretised for a zero-order-held input and report the position at the end of
+// the sample), and r', r'' central differences over +-h. h = max(dt, 1 / (pi f_b)) rolls the
+// inversion off above the bandwidth f_b (their gain falls as sinc and sinc^2 beyond it), so noise
+// and unmodelled modes are not amplified and a step reference gives a bounded target. What is
+// inverted: the delay (by preview) and the dynamics (by the reference's derivatives); hysteresis,
+// creep and rate dependence are the static inverse's (make_inverse) part. target() is real-time
+// safe; the caller samples the reference at the three times.
 #include <string>
 
 #include "hystbench/compensation/actuator_model.hpp"
