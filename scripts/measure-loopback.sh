@@ -236,7 +236,7 @@ for section in "${sections[@]}"; do
             --wait --json | jq -r "$f3"' .rms_error_percent | f' || true)
           jq -rn --argjson id "$id" --arg how "${how:-extend}" --arg r200 "$r200" \
             --arg r500 "$r500" --arg s "$(echo "$end - $start" | bc -l)" "$f3"'
-            "| \($how) (\($s | tonumber | f) s) | \([$id.model.extension.parts[]?.cause] | join("+")) | \($id.model.extension.adopted) | \($id.model.extension.diagnosis_s | f) | \($r200) | \($r500) |"'
+            "| \($how) (\($s | tonumber | f) s) | \([$id.model.extension.parts[]?.cause] | join("+"))\($id.model.extension.timing // null | if . then "; timed \(.natural_frequency_hz | f) Hz, ζ \(.damping_ratio | f), \(.delay_samples | f) samples" else "" end) | \($id.model.extension.adopted) | \($id.model.extension.diagnosis_s | f) | \($r200) | \($r500) |"'
         done
         echo
         stop_daemon

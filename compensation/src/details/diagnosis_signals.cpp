@@ -5,8 +5,8 @@
 #include <complex>
 #include <limits>
 #include <numbers>
-#include <utility>
 #include <unsupported/Eigen/FFT>
+#include <utility>
 
 namespace hystbench::compensation::details {
 

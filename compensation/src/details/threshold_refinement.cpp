@@ -5,6 +5,8 @@
 #include <exception>
 #include <unsupported/Eigen/LevenbergMarquardt>
 
+#include "details/forward_difference.hpp"
+
 namespace hystbench::compensation::details {
 
 namespace {
@@ -137,16 +139,7 @@ struct Residuals : Eigen::DenseFunctor<double> {
   // Forward differences; the plays are piecewise linear in their thresholds, so a small
   // fixed step in log-increment space is well inside one linear piece most of the time.
   int df(const InputType& theta, JacobianType& jac) const {
-    constexpr double kStep = 1e-4;
-    ValueType f0(values()), f1(values());
-    (*this)(theta, f0);
-    InputType t = theta;
-    for (Eigen::Index j = 0; j < theta.size(); ++j) {
-      t[j] = theta[j] + kStep;
-      (*this)(t, f1);
-      jac.col(j) = (f1 - f0) / kStep;
-      t[j] = theta[j];
-    }
+    forward_difference_jacobian(*this, theta, jac, 1e-4);
     return 0;
   }
 
