@@ -58,12 +58,22 @@ void print_extension(std::ostream& out, const json& e) {
     out << "  extension check triangle max "
         << fixed_or_dash(v["triangle_max_percent"].value("model", json()), 3) << " -> "
         << fixed_or_dash(v["triangle_max_percent"].value("extended", json()), 3) << " %";
-    if (v.contains("fast_hz")) {
-      out << ", " << fixed(v["fast_hz"].get<double>(), 0) << " Hz sine rms "
-          << fixed_or_dash(v["fast_rms_percent"].value("model", json()), 3) << " -> "
-          << fixed_or_dash(v["fast_rms_percent"].value("extended", json()), 3) << " %";
+    for (const char* sine : {"fast", "mid"}) {
+      const std::string hz = std::string(sine) + "_hz";
+      if (!v.contains(hz)) continue;
+      const json& rms = v[std::string(sine) + "_rms_percent"];
+      out << ", " << fixed(v[hz].get<double>(), 0) << " Hz sine rms "
+          << fixed_or_dash(rms.value("model", json()), 3) << " -> "
+          << fixed_or_dash(rms.value("extended", json()), 3) << " %";
     }
     out << "\n";
+    if (e.contains("timing")) {
+      const json& t = e["timing"];
+      out << "  extension timed on " << t.value("steps", 0)
+          << " step responses: " << fixed_or_dash(t.value("natural_frequency_hz", json()), 0)
+          << " Hz, damping " << fixed_or_dash(t.value("damping_ratio", json()), 3) << ", delay "
+          << fixed_or_dash(t.value("delay_samples", json()), 2) << " samples\n";
+    }
   }
 }
 

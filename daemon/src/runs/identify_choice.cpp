@@ -72,20 +72,25 @@ double triangle_rms(const IdentifyCandidate& c) {
                                         : INFINITY;
 }
 
+// Not worse than the base by more than the spread between two runs: 10 % + 0.05 % of range (a few
+// times the sensor noise, room for a delay or a resonance inverted at the triangle's corners).
+bool within_spread(double ext, double base) { return ext <= 1.1 * base + 0.05; }
+
 // The extended model is adopted when it tracks better by more than the spread between two runs:
-// on the fast sine (when one ran) by at least 5 % without losing more than 10 % + 0.05 % of range
-// on the triangle's rms (10 %: the spread of the triangle between two runs; 0.05 %: a few times
-// the sensor noise, room for a delay or a resonance inverted at the triangle's corners), else on
-// the triangle's max by 10 % without a higher rms.
+// on the fast sine (when one ran) by at least 5 % without losing more than the spread on the
+// triangle's rms, nor on the middle sine's (when one ran: a delay that stood for a lag the model
+// misses, which grows with the rate, helped below the fast sine), else on the triangle's max by
+// 10 % without a higher rms.
 bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
-                             double fast_hz) {
+                             double fast_hz, double mid_hz = 0.0) {
   if (!std::isfinite(verified_max(ext))) return false;
   if (!(fast_hz > 0.0)) {
     return verified_max(ext) <= 0.9 * verified_max(base) && triangle_rms(ext) <= triangle_rms(base);
   }
   const double bf = sine_rms(base, fast_hz), ef = sine_rms(ext, fast_hz);
   return std::isfinite(ef) && ef <= 0.95 * bf &&
-         triangle_rms(ext) <= 1.1 * triangle_rms(base) + 0.05;
+         within_spread(triangle_rms(ext), triangle_rms(base)) &&
+         (!(mid_hz > 0.0) || within_spread(sine_rms(ext, mid_hz), sine_rms(base, mid_hz)));
 }
 
 // A rate law (candidate 0) against its rate-free self: the law is an extension of it, kept when
@@ -133,8 +138,8 @@ json fit_description(const hc::FitResult& fit, const json& history, const std::s
 
 // The extension's verified gains against the model it extends: the triangle's max error and
 // the fast sine's rms error (base / extended; > 1 is better).
-json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& ext,
-                        double fast_hz) {
+json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& ext, double fast_hz,
+                        double mid_hz) {
   const auto ratio = [](double b, double e) {
     return std::isfinite(b) && std::isfinite(e) && e > 0.0 ? json(b / e) : json();
   };
@@ -150,6 +155,11 @@ json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& 
     v["fast_rms_percent"] = {{"model", sine_field(base, fast_hz, "rms_error_percent")},
                              {"extended", sine_field(ext, fast_hz, "rms_error_percent")}};
     v["fast_gain"] = ratio(sine_rms(base, fast_hz), sine_rms(ext, fast_hz));
+  }
+  if (mid_hz > 0.0) {
+    v["mid_hz"] = mid_hz;
+    v["mid_rms_percent"] = {{"model", sine_field(base, mid_hz, "rms_error_percent")},
+                            {"extended", sine_field(ext, mid_hz, "rms_error_percent")}};
   }
   return v;
 }
@@ -206,8 +216,8 @@ void Bench::finish_identify() {
   bool extended = false;
   if (s.extended) {
     const IdentifyCandidate &base = s.candidates[s.base], &ext = s.candidates[*s.extended];
-    extended = chosen == s.base && extension_tracks_better(base, ext, s.fast_hz);
-    s.extension["verified"] = verified_gain_json(base, ext, s.fast_hz);
+    extended = chosen == s.base && extension_tracks_better(base, ext, s.fast_hz, s.mid_hz);
+    s.extension["verified"] = verified_gain_json(base, ext, s.fast_hz, s.mid_hz);
     s.extension["adopted"] = extended;
     s.extension["why"] =
         extended ? "it tracks better on the bench" : "it does not track better on the bench";

@@ -21,6 +21,9 @@ using nlohmann::json;
 
 namespace {
 
+// The middle sine that guards an extension: the fast one's frequency over this.
+constexpr double kMidFraction = 2.5;
+
 // The fast sine that judges an extension [Hz], 0 for none: a delay or dynamics show at a
 // twentieth of the loop rate (the fastest `track` plays; a quarter of a mode's frequency below
 // it), a rate law at the identify record's fastest rate segment; creep and asymmetry show on the
@@ -264,8 +267,12 @@ bool Bench::extend_identified_model() {
     s.fast_hz = fast_frequency(draft->parts, s.candidates.back().fit.model, settings_.loop.rate_hz);
     s.jobs.push_back({*s.extended, false});
     if (s.fast_hz > 0.0) {
-      if (!s.candidates[s.base].sines.contains(s.fast_hz)) s.jobs.push_back({s.base, s.fast_hz});
-      s.jobs.push_back({*s.extended, s.fast_hz});
+      // A middle sine too: what the extension gives up below the fast one.
+      s.mid_hz = s.fast_hz / kMidFraction;
+      for (const double hz : {s.fast_hz, s.mid_hz}) {
+        if (!s.candidates[s.base].sines.contains(hz)) s.jobs.push_back({s.base, hz});
+        s.jobs.push_back({*s.extended, hz});
+      }
     }
     s.extension["diagnosis_s"] = seconds();
     return true;
