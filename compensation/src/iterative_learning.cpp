@@ -29,6 +29,10 @@ constexpr double kCutoffFloorOfRate = 0.3;
 // pair of trials whose changes correlate at least this well at it.
 constexpr std::size_t kDelaySearch = 50;
 constexpr double kDelayClear = 0.5;
+// Each pair of trials moves the drift's estimate this far toward what it showed; estimated over
+// trials of at least kDriftSeconds.
+constexpr double kDriftBlend = 0.5;
+constexpr double kDriftSeconds = 0.5;
 // The circular run of a section starts this many of its slowest time constants early.
 constexpr double kWarmupTimeConstants = 20.0;
 
@@ -209,6 +213,17 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
     throw std::invalid_argument("iterative learning: drive, error and next need one trial each");
   }
   if (updates_ > 0) measure_delay(drive, error);
+  // The drift over a trial: how far the trial's mean error moved beyond what the last correction's
+  // mean should have moved it. Creep settling or a thermal drift moves the offset every trial,
+  // which a correction of the last error alone trails by drift / gain.
+  double mean_error = 0.0;
+  for (const double v : error) mean_error += v;
+  mean_error /= static_cast<double>(n);
+  // Over a trial shorter than kDriftSeconds the drift is below what the mean shows of it beside
+  // the loop's nonlinearity and a wrong model's gain on the last correction: not estimated.
+  if (updates_ > 0 && static_cast<double>(n) * o_.dt >= kDriftSeconds) {
+    drift_ += kDriftBlend * (mean_error - (last_mean_error_ - last_mean_step_) - drift_);
+  }
   last_drive_.assign(drive.begin(), drive.end());
   last_error_.assign(error.begin(), error.end());
   local_slope(drive);
@@ -223,7 +238,9 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
     const double v0 = c[(j + whole) % n], v1 = c[(j + whole + 1) % n];
     e[j] = v0 + frac * (v1 - v0);
   }
-  for (std::size_t j = 0; j < n; ++j) c[j] = gain * e[j] / slope_[j];
+  for (std::size_t j = 0; j < n; ++j) c[j] = (gain * e[j] + drift_) / slope_[j];
+  last_mean_error_ = mean_error;
+  last_mean_step_ = gain * mean_error + drift_;
   low_pass(c);
   // The first trial's drive (the compensator's) goes through Q itself: above Q a correction
   // cannot reach it, and what the model put there (its harmonics through modes it does not

@@ -1,8 +1,13 @@
 #pragma once
 // Iterative learning control over a periodic trial: the next trial's drive from this trial's drive
 // and its measured error,
-//   u_{k+1}(j) = u_k(j) + gamma Q[ Q[e_k](j + d) / s_k(j) ]   (u_0 through Q first),
-// circular over the trial's P samples. L comes from the active model: d its input delay (the
+//   u_{k+1}(j) = u_k(j) + Q[ (gamma Q[e_k](j + d) + r_k) / s_k(j) ]   (u_0 through Q first),
+// circular over the trial's P samples, r_k the offset's drift over a trial (creep settling, a
+// thermal drift), which a correction of the last error alone would trail by r / gamma: what the
+// trial's mean error moved beyond what the last mean correction should have moved it, each pair
+// moving the estimate half-way; only over trials of 0.5 s or more (over a shorter one the drift
+// is below what its mean shows beside the loop's nonlinearity and a wrong model's gain on the
+// correction). L comes from the active model: d its input delay (the
 // error is read d ahead of the drive that caused it; from the second update on, the delay the
 // bench shows: where the output's change between two trials best follows the drive's, the median
 // over the pairs where that is clear), s_k(j) the local slope of its static map along the trial's
@@ -83,6 +88,9 @@ class IterativeLearning {
   std::size_t warmup_periods_ = 1;
   std::vector<double> slope_, work_, shifted_;
   std::size_t updates_ = 0;
+  // The offset's drift over a trial [output unit], estimated from the trials' mean errors and the
+  // mean corrections that followed them, and added to each correction.
+  double drift_ = 0.0, last_mean_error_ = 0.0, last_mean_step_ = 0.0;
 };
 
 }  // namespace hystbench::compensation
