@@ -144,10 +144,10 @@ void add_track_learning_options(CLI::App* cmd, TrackOptions& tr) {
                       "trajectory, scored on the trajectory): after a start-up period and one "
                       "with the compensator's drive, each plays the one before's drive "
                       "corrected by its measured error "
-                      "(iterative learning through the model's inverse slope, delay and "
-                      "dynamics). The frequency moves to the loop rate over a whole number of "
-                      "ticks. The result lists every trial; the run's errors are the last "
-                      "trial's; the learned drive is saved in the model folder (t,u)")
+                      "(iterative learning through the model's inverse slope and delay, "
+                      "below its mode). The frequency moves to the loop rate over a whole "
+                      "number of ticks. The result lists every trial; the run's errors are "
+                      "the last trial's; the learned drive is saved in the model folder (t,u)")
           ->check(CLI::Range(1, 1000));
   cmd->add_option("--learn-gain", tr.learn_gain,
                   "--learn: share of the error corrected per trial at the start (default 0.5); "
