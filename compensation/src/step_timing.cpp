@@ -31,7 +31,7 @@ constexpr double kZetaMin = 0.003, kZetaMax = 1.0;
 constexpr int kMaxEvaluations = 200;
 
 struct Window {
-  std::size_t begin = 0, step = 0, end = 0;
+  std::size_t begin = 0, end = 0;  ///< from 5 samples before the step to the window's end
 };
 
 // The record's steps with the input held around them, each window up to `window` samples after.
@@ -41,7 +41,7 @@ std::vector<Window> step_windows(std::span<const double> u, std::size_t window) 
   const double tolerance = 1e-6 * std::max(1e-12, *hi - *lo);
   for (const std::size_t k : details::find_steps(u)) {
     if (k < kBefore) continue;
-    Window w{k - kBefore, k, k};
+    Window w{k - kBefore, k};
     bool held = true;
     for (std::size_t j = w.begin; j < k && held; ++j)
       held = std::abs(u[j] - u[w.begin]) <= tolerance;
@@ -61,6 +61,7 @@ class TimingObjective {
       : u_(u), y_(y), dt_(dt), windows_(std::move(windows)) {
     for (const Window& w : windows_) rows_ += w.end - w.begin;
     x_.resize(rows_);
+    e_.resize(static_cast<Eigen::Index>(rows_));
   }
   bool empty() const noexcept { return windows_.empty(); }
   std::size_t size() const noexcept { return windows_.size(); }
@@ -91,9 +92,8 @@ class TimingObjective {
   /// Mean square of the residuals.
   double operator()(double fn, double zeta, double delay) const {
     if (rows_ == 0) return std::numeric_limits<double>::infinity();
-    Eigen::VectorXd e(static_cast<Eigen::Index>(rows_));
-    residuals(fn, zeta, delay, e.data());
-    return e.squaredNorm() / static_cast<double>(rows_);
+    residuals(fn, zeta, delay, e_.data());
+    return e_.squaredNorm() / static_cast<double>(rows_);
   }
 
  private:
@@ -101,7 +101,8 @@ class TimingObjective {
   double dt_;
   std::vector<Window> windows_;
   std::size_t rows_ = 0;
-  mutable std::vector<double> x_;
+  mutable std::vector<double> x_;  // the input through the delay and dynamics, per row
+  mutable Eigen::VectorXd e_;      // the residuals, per row
 };
 
 // The residuals in (delay [samples], log natural frequency, log damping) for Eigen's

@@ -66,13 +66,10 @@ std::optional<ExtensionDraft> extension_draft(const hc::Diagnosis& d) {
   if (dynamics == nullptr && delay == nullptr) return std::nullopt;
   ExtensionDraft draft{d.baseline, {}, false};
   if (dynamics != nullptr && dynamics->model.dynamics()) {
-    // The dynamics come with the delay fitted beside them (to a fraction of a sample, part of
-    // their description), which the delay's own test, fitted without the mode, does not
-    // improve on.
     draft.model.set_dynamics(dynamics->model.dynamics());
-    draft.model.set_delay(dynamics->model.delay_s());
     draft.parts.emplace_back("dynamics");
-  } else if (delay != nullptr) {
+  }
+  if (delay != nullptr) {
     draft.model.set_delay(delay->model.delay_s());
     draft.parts.emplace_back("delay");
   }
