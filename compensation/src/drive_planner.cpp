@@ -363,6 +363,21 @@ std::vector<double> smoothed(const std::vector<double>& x, std::size_t window) {
   return out;
 }
 
+// The least gain a correction divides by, as a fraction of the plan's mean slope (the
+// targets' span over the drive's): where the model's local slope is near zero (a dead zone's
+// flat side, weights that fall with the rate) a small target offset, such as the tare's, would
+// otherwise move the drive to its limit.
+constexpr double kGainFloorFraction = 0.1;
+
+void floor_gain(std::vector<double>& gain, std::span<const double> targets,
+                std::span<const double> u) {
+  const auto [t_lo, t_hi] = std::minmax_element(targets.begin(), targets.end());
+  const auto [u_lo, u_hi] = std::minmax_element(u.begin(), u.end());
+  const double mean_slope = (*t_hi - *t_lo) / (*u_hi - *u_lo);
+  if (!(std::isfinite(mean_slope) && mean_slope > 0.0)) return;
+  for (double& g : gain) g = std::max(g, kGainFloorFraction * mean_slope);
+}
+
 }  // namespace
 
 bool can_plan_drive(const ActuatorModel& model) noexcept {
@@ -372,7 +387,12 @@ bool can_plan_drive(const ActuatorModel& model) noexcept {
   // A signed rate law whose weights grow with the rate is inverted exactly, forward in time, by
   // the previewed inverse (its drive at its own rate): nothing is left to plan. The plan's
   // Jacobian is that of the weight laws; the thresholds law is inverted tick by tick.
-  return !h->grows_with_signed_rate() && h->parameters().rate_law != RateLaw::kThresholds;
+  // Rate coefficients that are all zero (the rate-free model nested in the family) leave the
+  // previewed inverse exact too.
+  const auto& c = h->parameters().rate_coefficients;
+  const bool rate_free = std::all_of(c.begin(), c.end(), [](double x) { return x == 0.0; });
+  return !rate_free && !h->grows_with_signed_rate() &&
+         h->parameters().rate_law != RateLaw::kThresholds;
 }
 
 double plan_drive_work(const ActuatorModel& model, std::size_t samples) noexcept {
@@ -447,6 +467,7 @@ DrivePlan plan_drive(const ActuatorModel& model, double u_start, std::span<const
   Chunk whole(model_path, targets);
   plan.rms = std::sqrt(whole.forward(plan.u, after_prefix, false, &gain) / static_cast<double>(n));
   plan.gain = smoothed(gain, static_cast<std::size_t>(std::lround(kGainSmoothingS / s.dt)));
+  floor_gain(plan.gain, targets, plan.u);
   if (options.progress) options.progress(1.0);
   return plan;
 }

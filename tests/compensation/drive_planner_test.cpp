@@ -39,8 +39,8 @@ hc::ModifiedPiParameters loopback_hysteresis() {
 // falling with the rate (the loopback's now), sign < 0; sign > 0 with the signed law: growing.
 hc::ActuatorModel loopback_rpi(bool with_creep, double max_rate = 1e4, double record_max_rate = 0.0,
                                hc::RateLaw law = hc::RateLaw::kMagnitude, double sign = 1.0) {
-  std::vector<double> c;
-  for (int i = 0; i < 10; ++i) c.push_back(sign * 2e-6 * i);
+  std::vector<double> c(10);
+  for (int i = 0; i < 10; ++i) c[i] = sign * 2e-6 * i;
   hc::RateDependentPiParameters p{loopback_hysteresis(), c, max_rate, 0.0, record_max_rate};
   p.rate_law = law;
   hc::ActuatorModel m(std::make_unique<hc::RateDependentPiModel>(p, kDt));
@@ -55,8 +55,9 @@ hc::ActuatorModel loopback_rpi(bool with_creep, double max_rate = 1e4, double re
 
 // A sine over 80 % of the loopback's 0-44 um range, `periods` long.
 std::vector<double> sine(double f, double periods) {
-  std::vector<double> y;
   const int n = static_cast<int>(std::lround(periods / f / kDt));
+  std::vector<double> y;
+  y.reserve(static_cast<std::size_t>(n));
   for (int k = 0; k < n; ++k)
     y.push_back(22.5 - 18.0 * std::cos(2.0 * std::numbers::pi * f * k * kDt));
   return y;
@@ -102,6 +103,7 @@ std::vector<double> rate_free_drive(const std::vector<double>& targets) {
   m.reset(0.0);
   auto inverse = hc::make_inverse(m);
   std::vector<double> u;
+  u.reserve(targets.size());
   for (const double y : targets) u.push_back(inverse->step(y));
   return u;
 }
@@ -116,7 +118,6 @@ std::vector<double> rate_free_drive(const std::vector<double>& targets) {
 TEST(DrivePlanner, PlansBelowThePreviewedInverseOnTheRateLaw) {
   for (const bool creep : {false, true}) {
     const hc::ActuatorModel model = loopback_rpi(creep);
-    hc::ActuatorModel rate_free = model;
     for (const double f : {5.0, 10.0, 19.0}) {
       const std::vector<double> targets = sine(f, 2.0);
       const std::size_t period = static_cast<std::size_t>(std::lround(1.0 / f / kDt));
@@ -221,6 +222,9 @@ TEST(DrivePlanner, RefusesWhatItCannotPlan) {
   mpi.configure(kDt);
   EXPECT_FALSE(hc::can_plan_drive(mpi));
   EXPECT_THROW(hc::plan_drive(mpi, 0.0, {}, sine(5.0, 1.0)), std::invalid_argument);
+  // The family's nested rate-free model: its previewed inverse is exact.
+  const hc::ActuatorModel rate_free = loopback_rpi(false, 1e4, 0.0, hc::RateLaw::kMagnitude, 0.0);
+  EXPECT_FALSE(hc::can_plan_drive(rate_free));
   const hc::ActuatorModel rpi = loopback_rpi(false);
   EXPECT_TRUE(hc::can_plan_drive(rpi));
   EXPECT_THROW(hc::plan_drive(rpi, 0.0, {}, {}), std::invalid_argument);
@@ -310,10 +314,47 @@ TEST(PlannedInverse, PlaysThePlanAndCorrectsAnOffsetTarget) {
     const double e = m.step(inverse.step(targets[k] - 0.3)) - (targets[k] - 0.3);
     if (k > targets.size() / 2) sum2 += e * e;
   }
-  const double rms = std::sqrt(sum2 / (targets.size() - targets.size() / 2 - 1));
+  const std::size_t scored = targets.size() - targets.size() / 2 - 1;  // the samples after half
+  const double rms = std::sqrt(sum2 / static_cast<double>(scored));
   std::cout << "offset by 0.3 um: rms " << rms << " um, planned " << plan.rms << " um\n";
   EXPECT_LT(rms, plan.rms + 0.1);
   EXPECT_THROW(hc::PlannedInverse({1.0}, plan), std::invalid_argument);
+}
+
+// Near a flat side of the loop (here a top whose dead zones leave a slope of 0.002 of the
+// model's) the model's own gain is near zero. A target a little off the plan, such as the
+// tare's offset of the output, moves the drive by at most a tenth of the plan's mean slope's
+// worth: not to the drive's limit.
+TEST(PlannedInverse, AnOffsetTargetNearAFlatTopMovesTheDriveALittle) {
+  hc::ModifiedPiParameters h = loopback_hysteresis();
+  h.dead_zone.weights.back() = -0.998;  // above its threshold the slope is 0.002 of the middle's
+  std::vector<double> c(10);
+  for (int i = 0; i < 10; ++i) c[i] = 2e-6 * i;
+  hc::ActuatorModel model(
+      std::make_unique<hc::RateDependentPiModel>(hc::RateDependentPiParameters{h, c, 1e4}, kDt));
+  model.input_min = 0.0;
+  model.input_max = 150.0;
+  model.configure(kDt);
+  model.reset(0.0);
+  std::vector<double> targets = sine(5.0, 1.0);
+  hc::ActuatorModel ramp = model;  // the output at the drive's top, reached slowly
+  double top = 0.0;
+  for (int k = 0; k <= 100000; ++k) top = ramp.step(150.0 * k / 100000.0);
+  top -= 0.1;  // the sine's top inside the flat part's reach
+  for (double& t : targets) t = std::min(t, top);
+  const hc::DrivePlan plan = hc::plan_drive(model, 0.0, {}, targets);
+  const auto [u_lo, u_hi] = std::minmax_element(plan.u.begin(), plan.u.end());
+  const double mean_slope =
+      (top - *std::min_element(targets.begin(), targets.end())) / (*u_hi - *u_lo);
+  const double least = *std::min_element(plan.gain.begin(), plan.gain.end());
+  std::cout << "least gain " << least << " um/V, mean slope " << mean_slope << " um/V\n";
+  EXPECT_GE(least, 0.1 * mean_slope * (1.0 - 1e-9));
+  hc::PlannedInverse inverse(targets, plan);
+  double largest = 0.0;
+  for (std::size_t k = 0; k < targets.size(); ++k) {
+    largest = std::max(largest, std::abs(inverse.step(targets[k] + 0.06) - plan.u[k]));
+  }
+  EXPECT_LE(largest, 0.06 / (0.1 * mean_slope) * (1.0 + 1e-9));
 }
 
 // What no plan can avoid on this law: falling from a top only the threshold-0 play moves, and

@@ -55,8 +55,9 @@ struct DrivePlanOptions {
 struct DrivePlan {
   std::vector<double> u;  ///< one drive sample per target [input unit]
   /// The model's output change per input change when the whole drive shifts, along the plan,
-  /// averaged over 5 ms (> 0) [output unit / input unit]: a target that differs from the planned
-  /// one by dy is met to first order by u + dy / gain.
+  /// averaged over 5 ms, and at least a tenth of the plan's mean slope (the targets' span over
+  /// the drive's) [output unit / input unit]: a target that differs from the planned one by dy
+  /// is met to first order by u + dy / gain.
   std::vector<double> gain;
   /// rms of the model's output less the targets [output unit], the model as it is (its rate law
   /// held beyond max_rate): the previewed inverse's drive, and the plan.
@@ -65,8 +66,9 @@ struct DrivePlan {
 };
 
 /// True when plan_drive() plans for this model: a rate-dependent PI hysteresis of a weight law
-/// that is not inverted exactly forward in time (for rate-free
-/// models the previewed inverse is already exact where the target is reachable).
+/// that is not inverted exactly forward in time (for rate-free models, the family's nested one
+/// with every rate coefficient zero included, the previewed inverse is already exact where the
+/// target is reachable).
 bool can_plan_drive(const ActuatorModel& model) noexcept;
 
 /// The work of plan_drive() for `samples` targets in sample-operators, samples x (plays + 2)
