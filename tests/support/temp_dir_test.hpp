@@ -1,10 +1,13 @@
 #pragma once
 // A GoogleTest fixture with a fresh folder per test, <temp>/<prefix>_<pid>_<test name>, created
-// before the test and removed after it (a fixture that overrides TearDown calls this one last).
+// before the test and removed after it, unless the test failed: then its logs and models stay
+// for a look, and the test's output names the folder (a fixture that overrides TearDown calls
+// this one last).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
+#include <iostream>
 #include <string>
 #include <utility>
 
@@ -21,7 +24,13 @@ class TempDirTest : public ::testing::Test {
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
+  void TearDown() override {
+    if (HasFailure()) {
+      std::cout << "kept for a look: " << dir_.string() << "\n";
+    } else {
+      std::filesystem::remove_all(dir_);
+    }
+  }
 
   /// `name` inside the test's folder.
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
