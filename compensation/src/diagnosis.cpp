@@ -309,6 +309,16 @@ std::vector<double> align_offsets(std::span<const double> t, std::span<const dou
   return total;
 }
 
+/// The order causes are named in: by gain, but creep before drift. Both explain a slow change
+/// of the output; creep is the part the input explains, the drift what is left, and a drift's
+/// pieces, fitted across the held-out blocks between them, follow a slow creep at least as well
+/// as the creep lags that predict it.
+bool ranks_before(Cause a, double gain_a, Cause b, double gain_b) {
+  if (a == Cause::kCreep && b == Cause::kDrift) return true;
+  if (a == Cause::kDrift && b == Cause::kCreep) return false;
+  return gain_a > gain_b;
+}
+
 /// A cause tested again on top of the loop's shape (the asymmetry extension).
 struct OnTopOfShape {
   Cause cause = Cause::kNone;
@@ -495,8 +505,9 @@ std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
     const double gain = s ? s->gain : c.heldout.rmse > 0.0 ? x.reference / c.heldout.rmse : 0.0;
     if (contender || joins) order.push_back({i, gain, contender});
   }
-  std::sort(order.begin(), order.end(),
-            [](const Next& a, const Next& b) { return a.gain > b.gain; });
+  std::sort(order.begin(), order.end(), [&d](const Next& a, const Next& b) {
+    return ranks_before(d.candidates[a.index].cause, a.gain, d.candidates[b.index].cause, b.gain);
+  });
   return order;
 }
 
@@ -790,7 +801,9 @@ void test_on_shape(Diagnosis& d, const details::DiagnosisRecord& r,
   report(options, 0.955, "testing the other causes on top of the loop's shape");
   decision.on_shape = beyond_shape(d, r, fits, ev, d.notes);
   for (const OnTopOfShape& o : decision.on_shape) {
-    if (o.counts(options) && (!decision.beyond || o.gain > decision.beyond->gain)) {
+    if (o.counts(options) &&
+        (!decision.beyond ||
+         ranks_before(o.cause, o.gain, decision.beyond->cause, decision.beyond->gain))) {
       decision.beyond = &o;
     }
   }

@@ -2,8 +2,10 @@
 // the input holds. Statistic: share of the variance of the residual signed by the last move
 // that the (log) time since the last step or reversal explains, over the holds from 50 ms on
 // (over all samples when the record has no holds: weak evidence). Extension: creep lags
-// (CreepOperatorBank) log-spaced from max(50 ms, 5 samples) to half the record, about two per
-// decade, fitted jointly with the baseline's weights.
+// (CreepOperatorBank) log-spaced from max(50 ms, 5 samples) to a hundred times the record, about
+// two per decade (at most ten), fitted jointly with the baseline's weights: a logarithmic creep
+// goes on far beyond any record, and its lags longer than the record (near ramps of the input's
+// integral) are what a drift would otherwise take for its own.
 #include <algorithm>
 #include <cmath>
 
@@ -19,9 +21,9 @@ constexpr double kMinHoldSeconds = 0.5;  // in all, for the holds to count as ev
 
 std::vector<double> creep_time_constants(const DiagnosisRecord& r) {
   const double lo = std::max(kSettleSeconds, 5.0 * r.dt);
-  const double hi = std::max(2.0 * lo, 0.5 * r.duration());
+  const double hi = std::max(2.0 * lo, 100.0 * r.duration());
   const auto count =
-      static_cast<std::size_t>(std::clamp(std::round(2.0 * std::log10(hi / lo)) + 1.0, 3.0, 8.0));
+      static_cast<std::size_t>(std::clamp(std::round(2.0 * std::log10(hi / lo)) + 1.0, 3.0, 10.0));
   return log_spaced_time_constants(count, lo, hi);
 }
 

@@ -243,7 +243,22 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
     }
     const Eigen::VectorXd inf = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(unknowns),
                                                           std::numeric_limits<double>::infinity());
-    coef = solve_bounded_lsq(ne.gram(), ne.rhs(), -inf, inf).x;
+    if (nc > 0 && nb > 0) {
+      // Creep first, then the drift on what it leaves: lags longer than the record are near
+      // ramps, as the drift's pieces are, and fitted together the two cancel in large opposite
+      // gains that a record without this drift then shows. Creep is the device's, the drift
+      // what its input does not explain.
+      const auto c = static_cast<Eigen::Index>(nc), b = static_cast<Eigen::Index>(nb);
+      const Eigen::MatrixXd& g = ne.gram();
+      coef.head(c) =
+          solve_bounded_lsq(g.topLeftCorner(c, c), ne.rhs().head(c), -inf.head(c), inf.head(c)).x;
+      coef.tail(b) = solve_bounded_lsq(g.bottomRightCorner(b, b),
+                                       ne.rhs().tail(b) - g.bottomLeftCorner(b, c) * coef.head(c),
+                                       -inf.tail(b), inf.tail(b))
+                         .x;
+    } else {
+      coef = solve_bounded_lsq(ne.gram(), ne.rhs(), -inf, inf).x;
+    }
     const double rss =
         ne.target_square_sum() - 2.0 * ne.rhs().dot(coef) + coef.dot(ne.gram() * coef);
     out.regression_mse =
