@@ -237,6 +237,11 @@ void print_run_result(const json& r, std::ostream& out) {
         << " um: the offset the model missed on the precondition sweep, taken off the "
            "feedforward\n";
   }
+  if (r.contains("startup_offset_um")) {
+    out << "  start-up        " << fixed(r["startup_offset_um"], 4)
+        << " um: the mean error of the second, unscored period, taken off the feedforward "
+           "from the first scored tick\n";
+  }
   if (const auto ff = r.find("feedforward"); ff != r.end() && ff->contains("planned")) {
     print_planned_feedforward(out, (*ff)["planned"]);
   }

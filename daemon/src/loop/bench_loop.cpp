@@ -327,10 +327,11 @@ void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
   }
   // The feedforward's target at run time tt: the reference, or with a preview the static
   // target that inverts the model's delay and dynamics (the reference ahead by the delay).
-  // Less the tare: the output offset the model did not predict on the open-loop prefix.
+  // Less the tare: the output offset the model did not predict on the open-loop prefix, and
+  // from the first scored tick of a periodic reference the mean error of its start-up period.
   // A drive learned before: the offset taken off when it was learned, and from trial 0 on
   // also the offset its lead-in measured.
-  const double tare = p.learning ? p.learning->target_offset(k, p.tare.um()) : p.tare.um();
+  const double tare = p.learning ? p.learning->target_offset(k, p.tare.um()) : p.tare.um_at(k);
   auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
   // The feedback's reference; before feedback_from NaN: the PID holds (RunProgram).
   const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : d.y_ref;
@@ -443,6 +444,11 @@ bool BenchLoop::score(RunProgram& p, std::uint64_t k, const TickDrive& d,
     p.model_error.sum2 += e * e;
     p.model_error.max = std::max(p.model_error.max, std::abs(e));
     ++p.model_error.samples;
+  }
+  if (k >= p.tare.startup_from && k < p.tare.startup_to && std::isfinite(d.y_ref) &&
+      std::isfinite(rec.y_measured)) {
+    p.tare.startup_sum += rec.y_measured - d.y_ref;
+    ++p.tare.startup_samples;
   }
   if (d.lead_in) p.learning->lead_in_error(k, d.y_ref - rec.y_measured);
   if (!d.learning) return false;

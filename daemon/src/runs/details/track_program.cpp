@@ -536,6 +536,15 @@ json learning_summary(const LearningPlan& learn) {
   return l;
 }
 
+// A periodic reference re-tares the feedforward on a second start-up period (a learning run
+// has its own lead-in; an upload's approach is not the trajectory; a feedback answers the mean
+// itself, and would start a period later).
+void arm_periodic_startup(RunProgram& p, const TrackReference& ref, bool learning, bool feedback) {
+  if (ref.frequency_hz > 0.0 && !learning && ref.pass_samples == 0 && !feedback) {
+    arm_startup_tare(p, ref.unscored);
+  }
+}
+
 }  // namespace
 
 BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
@@ -583,6 +592,7 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
   const std::uint64_t prefix = p->excitation.size();
   p->total_samples = prefix + ref.samples;
   p->metrics_from = prefix + ref.unscored;
+  arm_periodic_startup(*p, ref, learn.has_value(), pid.has_value());
   // The feedback holds the reading to the reference from the scored part on: the run's start
   // from rest (the first period of a periodic reference, an upload's approach) is a transient
   // the feedforward predicts, which an integral loop would wind up on and pay back later.

@@ -71,6 +71,24 @@ struct TareWindow {
   std::uint64_t samples = 0;
   /// The tare the feedforward applies [µm] (0 until the window has a sample).
   double um() const noexcept { return samples > 0 ? sum / static_cast<double>(samples) : 0.0; }
+
+  /// A periodic reference: the mean of y - y_ref over the second half of its unscored start-up
+  /// period, [startup_from, startup_to), is added to the tare from startup_to on: the offset of
+  /// the periodic motion that the prefix's slow sweep does not show (a fast drive moves a loop's
+  /// mean differently from the model's). startup_from >= startup_to: none.
+  std::uint64_t startup_from = std::numeric_limits<std::uint64_t>::max();
+  std::uint64_t startup_to = 0;
+  // ---- written by the loop ----
+  double startup_sum = 0.0;  ///< of y - y_ref over the start-up window [µm]
+  std::uint64_t startup_samples = 0;
+  /// The start-up's offset [µm] (0 without a sample).
+  double startup_um() const noexcept {
+    return startup_samples > 0 ? startup_sum / static_cast<double>(startup_samples) : 0.0;
+  }
+  /// The tare the feedforward applies at tick k [µm]. Real-time safe.
+  double um_at(std::uint64_t k) const noexcept {
+    return um() + (k >= startup_to ? startup_um() : 0.0);
+  }
 };
 
 struct RunProgram {
