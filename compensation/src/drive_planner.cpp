@@ -387,11 +387,9 @@ bool can_plan_drive(const ActuatorModel& model) noexcept {
   // A signed rate law whose weights grow with the rate is inverted exactly, forward in time, by
   // the previewed inverse (its drive at its own rate): nothing is left to plan. The plan's
   // Jacobian is that of the weight laws; the thresholds law is inverted tick by tick.
-  // Rate coefficients that are all zero (the rate-free model nested in the family) leave the
+  // A law that changes nothing with the rate (the modified PI nested in the family) leaves the
   // previewed inverse exact too.
-  const auto& c = h->parameters().rate_coefficients;
-  const bool rate_free = std::all_of(c.begin(), c.end(), [](double x) { return x == 0.0; });
-  return !rate_free && !h->grows_with_signed_rate() &&
+  return !h->rate_free() && !h->grows_with_signed_rate() &&
          h->parameters().rate_law != RateLaw::kThresholds;
 }
 
