@@ -57,19 +57,6 @@ void arm_tare(RunProgram& program, std::uint64_t model_exchange_ticks) {
   program.tare.model_exchange_ticks = model_exchange_ticks;
 }
 
-void arm_startup_tare(RunProgram& program, std::uint64_t period) {
-  // Only beside the prefix's tare (a feedforward that inverts the model), after one unscored
-  // period, with at least two scored ones left.
-  const std::uint64_t prefix = program.excitation.size();
-  if (period < 4 || program.tare.from >= prefix || program.metrics_from != prefix + period ||
-      program.total_samples < program.metrics_from + 3 * period) {
-    return;
-  }
-  program.tare.startup_from = program.metrics_from;
-  program.metrics_from += period;
-  program.tare.startup_to = program.metrics_from;
-}
-
 hc::ActuatorModel model_after(const hc::ActuatorModel& model, std::span<const double> prefix,
                               double u_start, double u_min, double u_max, double dt_s) {
   hc::ActuatorModel m = model;

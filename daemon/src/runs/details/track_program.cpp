@@ -536,13 +536,23 @@ json learning_summary(const LearningPlan& learn) {
   return l;
 }
 
-// A periodic reference re-tares the feedforward on a second start-up period (a learning run
-// has its own lead-in; an upload's approach is not the trajectory; a feedback answers the mean
-// itself, and would start a period later).
+// A periodic reference (one unscored period, metrics_from = prefix + period) re-tares the
+// feedforward on a second unscored period: its mean error moves the target from the first scored
+// tick on (TareWindow::startup_um). The first period is the start from rest, whose mean is not
+// the periodic motion's. Only beside the prefix's tare (a feedforward that inverts the model)
+// and with two scored periods left; not for a learning run (it has its own lead-in), an upload
+// (its approach is not the trajectory) or a feedback (it answers the mean itself, and would
+// start a period later). Call with total_samples and metrics_from set.
 void arm_periodic_startup(RunProgram& p, const TrackReference& ref, bool learning, bool feedback) {
-  if (ref.frequency_hz > 0.0 && !learning && ref.pass_samples == 0 && !feedback) {
-    arm_startup_tare(p, ref.unscored);
+  const std::uint64_t prefix = p.excitation.size(), period = ref.unscored;
+  if (ref.frequency_hz <= 0.0 || learning || ref.pass_samples != 0 || feedback || period < 4 ||
+      p.tare.from >= prefix || p.metrics_from != prefix + period ||
+      p.total_samples < p.metrics_from + 3 * period) {
+    return;
   }
+  p.tare.startup_from = p.metrics_from;
+  p.metrics_from += period;
+  p.tare.startup_to = p.metrics_from;
 }
 
 }  // namespace

@@ -37,15 +37,6 @@ std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
 /// readings matched to the outputs they answer less `model_exchange_ticks`.
 void arm_tare(RunProgram& program, std::uint64_t model_exchange_ticks);
 
-/// Arms the start-up tare of a program whose periodic reference (`period` ticks) starts with
-/// one unscored period (metrics_from = prefix + period): a second period is left unscored, and
-/// its mean error moves the feedforward's target from the first scored tick on
-/// (TareWindow::startup_um). The first period is the start from rest, whose mean is not the
-/// periodic motion's. Call after arm_tare() and with total_samples and metrics_from set; nothing
-/// without the prefix's tare, for a period under 4 ticks, or where fewer than two scored periods
-/// would be left.
-void arm_startup_tare(RunProgram& program, std::uint64_t period);
-
 /// A copy of `model` configured for dt_s, relaxed at u_start, simulated through `prefix`, its
 /// input range narrowed to [u_min, u_max] (or set to it when the model has none): the model an
 /// inverse should start from after the prefix.

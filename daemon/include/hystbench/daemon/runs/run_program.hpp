@@ -72,9 +72,9 @@ struct TareWindow {
   /// The tare the feedforward applies [µm] (0 until the window has a sample).
   double um() const noexcept { return samples > 0 ? sum / static_cast<double>(samples) : 0.0; }
 
-  /// A periodic reference: the mean of y - y_ref over the second half of its unscored start-up
-  /// period, [startup_from, startup_to), is added to the tare from startup_to on: the offset of
-  /// the periodic motion that the prefix's slow sweep does not show (a fast drive moves a loop's
+  /// A periodic reference: the mean of y - y_ref over its second unscored period,
+  /// [startup_from, startup_to), is added to the tare from startup_to on: the offset of the
+  /// periodic motion that the prefix's slow sweep does not show (a fast drive moves a loop's
   /// mean differently from the model's). startup_from >= startup_to: none.
   std::uint64_t startup_from = std::numeric_limits<std::uint64_t>::max();
   std::uint64_t startup_to = 0;
