@@ -33,6 +33,10 @@ constexpr double kDelayClear = 0.5;
 // trials of at least kDriftSeconds.
 constexpr double kDriftBlend = 0.5;
 constexpr double kDriftSeconds = 0.5;
+// The drive the learning goes on from reaches at most this fraction of the drive's span beyond
+// its limits (a reference the actuator cannot reach there would otherwise wind it up without
+// bound; within it the first trials' overshoot unwinds without a cut).
+constexpr double kBeyondLimits = 0.2;
 // The circular run of a section starts this many of its slowest time constants early.
 constexpr double kWarmupTimeConstants = 20.0;
 
@@ -242,12 +246,29 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
   last_mean_error_ = mean_error;
   last_mean_step_ = gain * mean_error + drift_;
   low_pass(c);
-  // The first trial's drive (the compensator's) goes through Q itself: above Q a correction
+  // The drive the correction adds to: the one the last update made before the drive limits cut
+  // it, where the trial played what that update offered. Cut sample by sample, a drive holds
+  // harmonics above Q that no later correction reaches (and that a mode above Q lifts); kept out
+  // of what is learned, the cut lasts only while the learned drive is beyond the limits (a
+  // transient of the first trials, or a reference the actuator cannot reach there). Otherwise
+  // the trial's drive, the first (the compensator's) through Q itself: above Q a correction
   // cannot reach it, and what the model put there (its harmonics through modes it does not
   // know, a wrap that was not periodic) would stay.
-  std::vector<double> base(drive.begin(), drive.end());
-  if (updates_++ == 0) low_pass(base);
-  for (std::size_t j = 0; j < n; ++j) next[j] = std::clamp(base[j] + c[j], o_.u_min, o_.u_max);
+  std::vector<double> base;
+  if (!unlimited_.empty() && std::equal(drive.begin(), drive.end(), offered_.begin())) {
+    base = unlimited_;
+  } else {
+    base.assign(drive.begin(), drive.end());
+    if (updates_ == 0) low_pass(base);
+  }
+  ++updates_;
+  const double span = o_.u_max - o_.u_min;
+  const double reach = std::isfinite(span) ? kBeyondLimits * span : 0.0;
+  unlimited_.resize(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    unlimited_[j] = std::clamp(base[j] + c[j], o_.u_min - reach, o_.u_max + reach);
+    next[j] = std::clamp(unlimited_[j], o_.u_min, o_.u_max);
+  }
   // The slew limit, around the trial: each sample within max_step of the one before.
   for (int round = 0; round < 2; ++round) {
     for (std::size_t j = 0; j < n; ++j) {
@@ -255,6 +276,7 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
       next[j] = std::clamp(next[j], before - o_.max_step, before + o_.max_step);
     }
   }
+  offered_.assign(next.begin(), next.end());
 }
 
 }  // namespace hystbench::compensation

@@ -38,6 +38,7 @@ struct Trials {
   double delay_samples = 0.0;  // the delay the learner read the error ahead by, at the end
   std::size_t delay_measurements = 0;
   double last_mean = 0.0;  // the last trial's mean error
+  int at_limits = 0;       // trials whose drive reached a drive limit
 };
 
 // Plays `trials` trials of a sine over 10-90 % of the model's range (1 / (hz dt) samples) on
@@ -79,6 +80,8 @@ Trials learn(hc::ActuatorModel plant, const hc::ActuatorModel& model, double hz,
       sum2 += error[j] * error[j];
     }
     out.rms.push_back(std::sqrt(sum2 / static_cast<double>(n)));
+    const auto [lo_u, hi_u] = std::minmax_element(drive.begin(), drive.end());
+    out.at_limits += *lo_u <= o.u_min || *hi_u >= o.u_max ? 1 : 0;
     double sum = 0.0;
     for (std::size_t j = 0; j < n; ++j) sum += error[j];
     out.last_mean = sum / static_cast<double>(n);
@@ -169,6 +172,47 @@ TEST(IterativeLearning, TheLearnedDriveKeepsItsLimits) {
     step = std::max(step, std::abs(r.last_drive[j] - before));
   }
   EXPECT_LE(step, 0.01 + 1e-12);
+}
+
+// A 500 Hz trial (20 samples) whose first corrections overshoot (a gain of 1, the plant's delay
+// of 3 ticks unknown to the model) into drive limits 5 % of the swing beyond the first learned
+// drive's: what the limits cut off there holds harmonics above Q, which no correction reaches
+// (kept, 6 % of the fundamental). Back within the limits, the learned drive holds none of them.
+TEST(IterativeLearning, ADriveCutByItsLimitsKeepsNothingAboveQ) {
+  std::mt19937_64 rng(5);
+  const hc::ModifiedPiParameters p = hystbench::testing::random_mpi(rng, 8, 2, 10.0);
+  hc::ActuatorModel plant = mpi_model(p);
+  plant.set_delay(3 * kDt);
+  const hc::ActuatorModel model = mpi_model(p);
+  hc::LearningOptions o;
+  o.cutoff_hz = 1500.0;  // Q keeps the trial's first two harmonics, a 60th of its fifth
+  const Trials free = learn(plant, model, 500.0, 2, 0.5, o);
+  const auto [lo, hi] = std::minmax_element(free.last_drive.begin(), free.last_drive.end());
+  o.u_min = *lo - 0.05 * (*hi - *lo);
+  o.u_max = *hi + 0.05 * (*hi - *lo);
+  const Trials r = learn(plant, model, 500.0, 30, 1.0, o);
+  const std::size_t n = r.last_drive.size();
+  // The drive's amplitude at harmonic h of the trial.
+  const auto amplitude = [&](std::size_t h) {
+    double re = 0.0, im = 0.0;
+    for (std::size_t j = 0; j < n; ++j) {
+      const double a = 2.0 * std::numbers::pi * static_cast<double>(h * j) / static_cast<double>(n);
+      re += r.last_drive[j] * std::cos(a);
+      im += r.last_drive[j] * std::sin(a);
+    }
+    return 2.0 * std::hypot(re, im) / static_cast<double>(n);
+  };
+  double above = 0.0;
+  for (std::size_t h = 5; h < n / 2; ++h) above = std::max(above, amplitude(h));
+  std::cout << r.at_limits << " trials at a limit; rms first " << r.rms.front() << ", last "
+            << r.rms.back() << "; harmonics 5-9 of the last drive at most " << above
+            << " (the fundamental " << amplitude(1) << ")\n";
+  EXPECT_GE(r.at_limits, 1);  // the limits did cut
+  const auto [last_lo, last_hi] = std::minmax_element(r.last_drive.begin(), r.last_drive.end());
+  EXPECT_GT(*last_lo, o.u_min);
+  EXPECT_LT(*last_hi, o.u_max);
+  EXPECT_LT(above, 1e-3 * amplitude(1));
+  EXPECT_LT(r.rms.back(), 0.2 * r.rms.front());
 }
 
 // The guard: a trial 20 % above the best halves the gain, two in a row stop the learning at the

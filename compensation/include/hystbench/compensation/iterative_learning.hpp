@@ -2,26 +2,28 @@
 // Iterative learning control over a periodic trial: the next trial's drive from this trial's drive
 // and its measured error,
 //   u_{k+1}(j) = u_k(j) + Q[ (gamma Q[e_k](j + d) + r_k) / s_k(j) ]   (u_0 through Q first),
-// circular over the trial's P samples, r_k the offset's drift over a trial (creep settling, a
-// thermal drift), which a correction of the last error alone would trail by r / gamma: what the
-// trial's mean error moved beyond what the last mean correction should have moved it, each pair
-// moving the estimate half-way; only over trials of 0.5 s or more (over a shorter one the drift
-// is below what its mean shows beside the loop's nonlinearity and a wrong model's gain on the
-// correction). L comes from the active model: d its input delay (the
-// error is read d ahead of the drive that caused it; from the second update on, the delay the
-// bench shows: where the output's change between two trials best follows the drive's, the median
-// over the pairs where that is clear), s_k(j) the local slope of its static map along the trial's
-// drive (the inverse's slope there), kept within [1/4, 4] x its mean along the trial. The
-// model's second-order dynamics are not inverted on the error: they bound Q below 0.9 of their
-// natural frequency, and within that band the bench's gain, which a fitted mode's damping and a
-// rate-dependent loop move, is what a learning of gain 1/2 meets either way (inverted by the
-// error's differences, a fast trial's few samples a period approximate the mode poorly near it;
-// docs/measurements.md compares the two). Q is a zero-phase low-pass (a fourth-order Butterworth
-// run forward and backward around the trial), cut off at the lowest of a fifth of the sample rate
-// and the 300th harmonic of the trial's fundamental (above it a slow trial's error is mostly sensor
-// noise), but past its fifth harmonic within 0.3 of the sample rate (a fast trial's error is mostly
-// its odd harmonics), and below 0.9 of the model's natural frequency (a mode it misses would grow
-// from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
+// circular over the trial's P samples, u_k the drive as learned before the drive limits cut it
+// (at most a fifth of their span beyond them; the trial plays it within the limits, and what they
+// cut, which holds harmonics above Q, stays out of what is learned), r_k the offset's drift over a
+// trial (creep settling, a thermal drift), which a correction of the last error alone would trail
+// by r / gamma: what the trial's mean error moved beyond what the last mean correction should have
+// moved it, each pair moving the estimate half-way; only over trials of 0.5 s or more (over a
+// shorter one the drift is below what its mean shows beside the loop's nonlinearity and a wrong
+// model's gain on the correction). L comes from the active model: d its input delay (the error is
+// read d ahead of the drive that caused it; from the second update on, the delay the bench shows:
+// where the output's change between two trials best follows the drive's, the median over the pairs
+// where that is clear), s_k(j) the local slope of its static map along the trial's drive (the
+// inverse's slope there), kept within [1/4, 4] x its mean along the trial. The model's second-order
+// dynamics are not inverted on the error: they bound Q below 0.9 of their natural frequency, and
+// within that band the bench's gain, which a fitted mode's damping and a rate-dependent loop move,
+// is what a learning of gain 1/2 meets either way (inverted by the error's differences, a fast
+// trial's few samples a period approximate the mode poorly near it; docs/measurements.md compares
+// the two). Q is a zero-phase low-pass (a fourth-order Butterworth run forward and backward around
+// the trial), cut off at the lowest of a fifth of the sample rate and the 300th harmonic of the
+// trial's fundamental (above it a slow trial's error is mostly sensor noise), but past its fifth
+// harmonic within 0.3 of the sample rate (a fast trial's error is mostly its odd harmonics), and
+// below 0.9 of the model's natural frequency (a mode it misses would grow from trial to trial).
+// Pure maths, no I/O; allocates: off the real-time path.
 #include <array>
 #include <cstddef>
 #include <span>
@@ -87,6 +89,9 @@ class IterativeLearning {
   std::vector<std::array<double, 5>> sections_;
   std::size_t warmup_periods_ = 1;
   std::vector<double> slope_, work_, shifted_;
+  // The last drive offered (limits held), and the same before the drive limits cut it: the next
+  // correction adds to it when the trial played the one offered.
+  std::vector<double> offered_, unlimited_;
   std::size_t updates_ = 0;
   // The offset's drift over a trial [output unit], estimated from the trials' mean errors and the
   // mean corrections that followed them, and added to each correction.
