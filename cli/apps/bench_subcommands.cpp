@@ -164,9 +164,10 @@ void add_track_learning_options(CLI::App* cmd, TrackOptions& tr) {
   auto* learned_opt = cmd->add_option(
       "--learned", tr.learned,
       "Start from a drive learned before (the learning run's id, as its result and "
-      "`hystbench model list` show; also after a restart of the daemon): after the start-up "
-      "period its drive plays instead of the compensator's, for one scored period, or as "
-      "the first trial with --learn. Only for the reference, range and loop rate it was "
+      "`hystbench model list` show; also after a restart of the daemon): its drive plays "
+      "instead of the compensator's through the start-up (one period, or 20 ms of a fast "
+      "sine), then for one scored period, or as the first trial with --learn. Only for the "
+      "reference, range and loop rate it was "
       "learned for: give the same --reference, --frequency and range (or the same "
       "--reference-file), with the model it was learned with loaded");
   for (const char* other : {"--periods", "--duration"}) {

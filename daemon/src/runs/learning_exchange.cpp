@@ -4,8 +4,11 @@
 
 namespace hystbench::daemon {
 
-LearningExchange::LearningExchange(std::size_t period_samples, std::uint64_t first)
-    : period(period_samples), first_tick(first) {
+LearningExchange::LearningExchange(std::size_t period_samples, std::uint64_t first,
+                                   std::size_t lead_in)
+    : period(period_samples),
+      first_tick(first),
+      lead_in_periods(std::max<std::size_t>(lead_in, 1)) {
   for (int i = 0; i < 2; ++i) {
     drive_[i].assign(period, 0.0);
     rec_u_[i].assign(period, 0.0);
@@ -59,17 +62,21 @@ bool LearningExchange::learned(std::size_t j, double& u_ff) const noexcept {
 }
 
 bool LearningExchange::lead_in(std::uint64_t k, double& u_ff) const noexcept {
-  if (started_from_ == 0 || k >= first_tick || first_tick - k > period) return false;
+  const std::uint64_t span = lead_in_periods * period;
+  if (started_from_ == 0 || k >= first_tick || first_tick - k > span) return false;
   // The drive start_from made ready: the learner writes the other buffer first.
-  const std::size_t j = period - (first_tick - k);
+  const auto j = static_cast<std::size_t>((span - (first_tick - k)) % period);
   const double moved = started_compensator_.empty() ? 0.0 : u_ff - started_compensator_[j];
   u_ff = drive_[0][j] + moved;
   return true;
 }
 
 void LearningExchange::lead_in_error(std::uint64_t k, double error) noexcept {
-  if (started_from_ == 0 || k >= first_tick || 2 * (first_tick - k) > period) return;
-  lead_in_error_sum_ += error;  // its first half still leaves the rest the run started from
+  // A single lead-in period's first half still leaves the rest the run started from; after
+  // more, the last period is whole (its mean, not half of it, is the offset).
+  const std::uint64_t window = lead_in_periods > 1 ? period : period / 2;
+  if (started_from_ == 0 || k >= first_tick || first_tick - k > window) return;
+  lead_in_error_sum_ += error;
   ++lead_in_samples_;
 }
 

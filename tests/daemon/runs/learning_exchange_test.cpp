@@ -30,8 +30,9 @@ Played tick_period(hd::LearningExchange& x, std::uint64_t k) {
     u = 1000.0 + static_cast<double>(j);  // the compensator's
     (void)x.learned(j, u);
     p.drive.push_back(u);
+    const std::uint64_t trial = (k - kFirst) / kPeriod;  // the error names its trial
     p.ends = x.end_tick(j, u, 1000.0 + static_cast<double>(j),
-                        100.0 * static_cast<double>((k - kFirst) / kPeriod) + j);
+                        100.0 * static_cast<double>(trial) + static_cast<double>(j));
   }
   return p;
 }
@@ -159,6 +160,26 @@ TEST(LearningExchange, ADriveLearnedBeforeMovesWithTheCompensator) {
   ASSERT_TRUE(x.take_trial(played, c, e, trial));
   EXPECT_EQ(played, p.drive);
   EXPECT_EQ(c, std::vector<double>({1000, 1001, 1002, 1003}));
+}
+
+// A lead-in of three periods (a fast sine's): the drive learned before plays each at its phase,
+// and the offset is the last period's mean error, whole; the periods before it are the start.
+TEST(LearningExchange, ALeadInOfSeveralPeriodsMeasuresTheOffsetOnItsLastWhole) {
+  constexpr std::uint64_t first = 100;
+  hd::LearningExchange x(kPeriod, first, 3);
+  ASSERT_TRUE(x.start_from({7, 8, 9, 10}, {}, true));
+  double u = 0.0;
+  EXPECT_FALSE(x.lead_in(first - 3 * kPeriod - 1, u));  // before the lead-in
+  int played = 0;
+  for (std::uint64_t k = first - 3 * kPeriod; k < first; ++k) {
+    ASSERT_TRUE(x.lead_in(k, u)) << k;
+    EXPECT_DOUBLE_EQ(u, 7.0 + static_cast<double>(k % kPeriod)) << k;  // 100 is phase 0
+    x.lead_in_error(k, k < first - kPeriod ? 5.0 : (k % 2 == 0 ? -0.3 : 0.1));
+    ++played;
+  }
+  EXPECT_EQ(played, 12);
+  EXPECT_DOUBLE_EQ(x.lead_in_offset(), 0.1);
+  EXPECT_DOUBLE_EQ(x.target_offset(first, 3.0), 3.1);
 }
 
 // The feedforward the drive moves from can be replaced before the run (the active model's, at

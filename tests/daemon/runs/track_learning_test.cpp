@@ -29,7 +29,7 @@ class TrackLearningTest : public hystbench::test::TempDirTest {
 
   // The loopback of config/loopback.toml on the simulated clock, every effect on.
   std::string config() const {
-    const std::string file = path("loopback.toml");
+    std::string file = path("loopback.toml");
     std::ofstream(file) << "[loop]\nrate_hz = 10000\nclock = \"simulated\"\n"
                         << "[limits]\ny_min = 0.0\ny_max = 44.0\n[driver]\ntype = \"loopback\"\n"
                         << "[actuator.rate_dependence]\nenabled = true\n"
@@ -40,7 +40,7 @@ class TrackLearningTest : public hystbench::test::TempDirTest {
 
   // A raster line: a triangle between lo and hi at 2.5 Hz, 2 s at 5 kHz (t [s], yr [um]).
   std::string raster(const std::string& name, double lo, double hi) const {
-    const std::string file = path(name);
+    std::string file = path(name);
     std::ofstream out(file);
     out << "t,yr\n";
     out.precision(9);

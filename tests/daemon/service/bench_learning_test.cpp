@@ -185,6 +185,16 @@ TEST_F(BenchLearningTest, AFastSineLearnsBesideTheModeIdentifyAdded) {
     EXPECT_LT(r["learning"]["cutoff_hz"].get<double>(),
               0.9 * active["dynamics"]["natural_frequency_hz"].get<double>() + 1.0);
   }
+  // Replayed, the drive plays 20 ms (ten periods) ahead of its scored period: one period of
+  // 2 ms leaves the actuator settling from rest.
+  const json replay = run_and_wait(
+      "track",
+      {{"reference", "sine"}, {"frequency_hz", 500.0}, {"learned", r["learning"]["drive"]}});
+  ASSERT_EQ(replay["end"], "completed") << replay.dump(2);
+  EXPECT_EQ(replay["learning"]["lead_in_periods"], 10) << replay["learning"].dump(2);
+  std::cout << "replayed: " << replay["rms_error_percent"] << " % (the last trial " << rms.back()
+            << " %)\n";
+  EXPECT_LE(replay["rms_error_percent"].get<double>(), 1.5 * rms.back());
 }
 
 // A gain 20x the default overshoots at once: the guard halves it, then stops on the best trial's

@@ -142,6 +142,7 @@ json TrackLearning::result() const {
                       : "the run ended before the trials asked for were played"},
           {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
           {"lead_in_offset_um", exchange_.lead_in_offset()},
+          {"lead_in_periods", exchange_.lead_in_periods},
           {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
           {"stale_periods", exchange_.stale_periods()},
           {"update_ms",

@@ -68,6 +68,10 @@ constexpr double kMaxPlanWork = 1.0e6;
 // The previewed inverse's error on the model below which a plan is not worth its time, as a
 // fraction of the reference's span.
 constexpr double kGoodEnoughFraction = 1e-3;
+// A drive learned before plays at least this long ahead of its first scored period: a fast
+// sine's single period leaves the actuator settling from rest (its fast creep, its modes) where
+// the drive was learned on a periodic state.
+constexpr double kLeadInS = 0.02;
 
 ActuatorRange known_range(const RunContext& ctx) {
   if (const auto range = actuator_range(ctx)) return *range;
@@ -88,6 +92,9 @@ struct LearningPlan {
   std::string reference;              ///< sine, triangle, sawtooth, or upload
   std::size_t scored_from = 0;        ///< a trial's first scored phase (an upload's approach: not)
   std::optional<LearnedDrive> start;  ///< the drive trial 0 plays (`learned`), else none
+  /// The periods a drive learned before plays ahead of trial 0, unscored (a sine's, at least
+  /// kLeadInS long; an upload's pass, one).
+  std::size_t lead_in = 1;
 };
 
 // The plan of a learning run from its request; for an upload, reference() sets its period (a
@@ -108,6 +115,10 @@ std::optional<LearningPlan> learning_plan(const TrackRequest& request, const Run
   const double rate = ctx.settings.loop.rate_hz;
   plan.period = static_cast<std::size_t>(std::llround(rate / request.reference.frequency_hz));
   plan.frequency_hz = rate / static_cast<double>(plan.period);
+  if (plan.start) {
+    plan.lead_in = std::max<std::size_t>(
+        1, static_cast<std::size_t>(std::ceil(kLeadInS * plan.frequency_hz - 1e-9)));
+  }
   return plan;
 }
 
@@ -121,8 +132,13 @@ TrackReference reference(const TrackRequest& request, const RunContext& ctx,
                                ctx.settings.loop.rate_hz};
   if (upload == nullptr) {
     if (!learn) return builtin_reference(request.reference, limits);
-    return builtin_reference(request.reference, limits, learn->frequency_hz,
-                             learning_periods(learn->trials, learn->frequency_hz));
+    // A drive learned before plays its lead-in periods unscored, the first the start from rest.
+    const auto extra = static_cast<double>(learn->lead_in - 1);
+    TrackReference ref =
+        builtin_reference(request.reference, limits, learn->frequency_hz,
+                          learning_periods(learn->trials, learn->frequency_hz) + extra);
+    ref.unscored = learn->lead_in * learn->period;
+    return ref;
   }
   // The precondition sweep leaves the output at the bottom of its range.
   const double approach_s = request.approach_s;
@@ -402,7 +418,7 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   const std::optional<hc::ActuatorModel> model = predictor(ctx, ctx.u_now);
   if (!model)
     throw common::CommandError("no_range", "learning needs a model or limits.y_min/y_max");
-  p.learning = std::make_unique<LearningExchange>(plan.period, p.metrics_from);
+  p.learning = std::make_unique<LearningExchange>(plan.period, p.metrics_from, plan.lead_in);
   hc::LearningOptions o;
   o.dt = ctx.dt();
   o.u_min = lim.u_min;
@@ -532,7 +548,10 @@ json learning_summary(const LearningPlan& learn) {
             {"frequency_hz", learn.frequency_hz},
             {"period_samples", learn.period}};
   if (learn.scored_from > 0) l["scored_from"] = learn.scored_from;
-  if (learn.start) l["started_from"] = learn.start->name;
+  if (learn.start) {
+    l["started_from"] = learn.start->name;
+    l["lead_in_periods"] = learn.lead_in;
+  }
   return l;
 }
 

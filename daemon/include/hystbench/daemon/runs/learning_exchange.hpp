@@ -15,11 +15,14 @@
 namespace hystbench::daemon {
 
 struct LearningExchange {
-  /// P samples >= 4, and the run tick of trial 0's first sample.
-  LearningExchange(std::size_t period_samples, std::uint64_t first_tick);
+  /// P samples >= 4, the run tick of trial 0's first sample, and how many periods before it a
+  /// drive learned before plays as its lead-in (>= 1; the run leaves them unscored).
+  LearningExchange(std::size_t period_samples, std::uint64_t first_tick,
+                   std::size_t lead_in_periods = 1);
 
   const std::size_t period;
   const std::uint64_t first_tick;
+  const std::size_t lead_in_periods;
 
   // ---- loop side (loop thread only) ----
   /// The phase j in [0, P) of tick k >= first_tick; at j = 0 takes the drive made ready (if any)
@@ -31,11 +34,11 @@ struct LearningExchange {
   /// it (the output offset the run measured, through the model's inverse).
   bool learned(std::size_t j, double& u_ff) const noexcept;
   /// Before first_tick: as learned() for tick k, true when a drive learned before plays the
-  /// period before trial 0 too, so that trial 0 follows its own drive as a learned trial
-  /// follows the one before.
+  /// lead_in_periods before trial 0 too, so that trial 0 follows its own drive as a learned
+  /// trial follows the one before.
   bool lead_in(std::uint64_t k, double& u_ff) const noexcept;
-  /// The error (reference - reading) of lead-in tick k: its second half measures the output
-  /// offset the drive learned before now plays at.
+  /// The error (reference - reading) of lead-in tick k: its last period (the second half of a
+  /// single one) measures the output offset the drive learned before now plays at.
   void lead_in_error(std::uint64_t k, double error) noexcept;
   /// That offset [output unit] (0 without a lead-in).
   double lead_in_offset() const noexcept {
