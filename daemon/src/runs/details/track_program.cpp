@@ -559,12 +559,12 @@ json learning_summary(const LearningPlan& learn) {
 // feedforward on a second unscored period: its mean error moves the target from the first scored
 // tick on (TareWindow::startup_um). The first period is the start from rest, whose mean is not
 // the periodic motion's. Only beside the prefix's tare (a feedforward that inverts the model)
-// and with two scored periods left; not for a learning run (it has its own lead-in), an upload
-// (its approach is not the trajectory) or a feedback (it answers the mean itself, and would
-// start a period later). Call with total_samples and metrics_from set.
-void arm_periodic_startup(RunProgram& p, const TrackReference& ref, bool learning, bool feedback) {
+// and with two scored periods left; not for a learning run (it has its own lead-in) or an upload
+// (its approach is not the trajectory). A feedback holds from the first scored tick on, so the
+// start-up's mean error is the feedforward's own. Call with total_samples and metrics_from set.
+void arm_periodic_startup(RunProgram& p, const TrackReference& ref, bool learning) {
   const std::uint64_t prefix = p.excitation.size(), period = ref.unscored;
-  if (ref.frequency_hz <= 0.0 || learning || ref.pass_samples != 0 || feedback || period < 4 ||
+  if (ref.frequency_hz <= 0.0 || learning || ref.pass_samples != 0 || period < 4 ||
       p.tare.from >= prefix || p.metrics_from != prefix + period ||
       p.total_samples < p.metrics_from + 3 * period) {
     return;
@@ -621,7 +621,7 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
   const std::uint64_t prefix = p->excitation.size();
   p->total_samples = prefix + ref.samples;
   p->metrics_from = prefix + ref.unscored;
-  arm_periodic_startup(*p, ref, learn.has_value(), pid.has_value());
+  arm_periodic_startup(*p, ref, learn.has_value());
   // The feedback holds the reading to the reference from the scored part on: the run's start
   // from rest (the first period of a periodic reference, an upload's approach) is a transient
   // the feedforward predicts, which an integral loop would wind up on and pay back later.
