@@ -53,3 +53,36 @@ TEST(BestVerified, NoneVerifiedTakesTheFirstNotLeftOut) {
   EXPECT_EQ(hd::best_verified(c, {}), 0U);
   EXPECT_EQ(hd::best_verified(c, {0}), 1U);
 }
+
+namespace {
+
+// A candidate verified at `triangle_rms` % on the triangle and `fast` / `mid` % on the sines.
+hd::IdentifyCandidate on_sines(double triangle_rms, double fast, double mid) {
+  hd::IdentifyCandidate c;
+  c.verification = {{"end", "completed"},
+                    {"max_error_percent", 2.0 * triangle_rms},
+                    {"rms_error_percent", triangle_rms}};
+  c.sines[500.0] = {{"end", "completed"}, {"rms_error_percent", fast}};
+  c.sines[200.0] = {{"end", "completed"}, {"rms_error_percent", mid}};
+  return c;
+}
+
+}  // namespace
+
+// An extension that gains on the fast sine is adopted unless the triangle or the middle sine
+// loses more than two runs spread apart. Where every sine gains 2x (a delay the model missed:
+// 22.6 -> 1.02 % at 500 Hz, 8.9 -> 0.91 % at 200 Hz in one run), the triangle's rms may lose as
+// much as runs apart in the bench's history do (0.75 -> 0.89 % in that run).
+TEST(ExtensionTracksBetter, ADecisiveGainOnEverySineOutweighsTheTrianglesHistory) {
+  const hd::IdentifyCandidate base = on_sines(0.747, 22.56, 8.89);
+  EXPECT_TRUE(hd::extension_tracks_better(base, on_sines(0.889, 1.02, 0.91), 500.0, 200.0));
+  EXPECT_FALSE(hd::extension_tracks_better(base, on_sines(1.05, 1.02, 0.91), 500.0, 200.0));
+  // A gain of 1.1x on the fast sine is within reach of the runs' spread: the triangle's holds.
+  const hd::IdentifyCandidate slow = on_sines(0.747, 8.5, 4.0);
+  EXPECT_FALSE(hd::extension_tracks_better(slow, on_sines(0.889, 7.6, 3.9), 500.0, 200.0));
+  EXPECT_TRUE(hd::extension_tracks_better(slow, on_sines(0.85, 7.6, 3.9), 500.0, 200.0));
+  // Decisive on the fast sine but not on the middle one: the triangle's spread holds too.
+  EXPECT_FALSE(hd::extension_tracks_better(base, on_sines(0.889, 1.02, 8.0), 500.0, 200.0));
+  // The middle sine may not lose beyond the spread, however the fast one gains.
+  EXPECT_FALSE(hd::extension_tracks_better(slow, on_sines(0.75, 1.0, 4.9), 500.0, 200.0));
+}

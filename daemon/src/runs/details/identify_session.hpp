@@ -54,6 +54,12 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
                                             std::optional<std::size_t> extended,
                                             std::optional<std::size_t> rate_free, double sine_hz);
 
+/// Whether identify adopts the extended model `ext` over the model it extends, `base`, from their
+/// verification segments: the fast sine at fast_hz (0: none ran) and the middle one at mid_hz
+/// (0: none).
+bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
+                             double fast_hz, double mid_hz = 0.0);
+
 /// The sine a rate law is judged on [Hz]: the fastest the rate bench tracks, at most a twentieth
 /// of the loop rate.
 double rate_sine_frequency(double loop_rate_hz);
