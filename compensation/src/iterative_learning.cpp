@@ -228,6 +228,9 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
   if (updates_ > 0 && static_cast<double>(n) * o_.dt >= kDriftSeconds) {
     drift_ += kDriftBlend * (mean_error - (last_mean_error_ - last_mean_step_) - drift_);
   }
+  // The drive the trial before played: the one before this trial's start (the loop plays each
+  // drive until the next is offered).
+  std::vector<double> before(std::move(last_drive_));
   last_drive_.assign(drive.begin(), drive.end());
   last_error_.assign(error.begin(), error.end());
   local_slope(drive);
@@ -241,6 +244,17 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
   for (std::size_t j = 0; j < n; ++j) {
     const double v0 = c[(j + whole) % n], v1 = c[(j + whole + 1) % n];
     e[j] = v0 + frac * (v1 - v0);
+  }
+  // Where the advanced error wraps round to the trial's start, it answered the drive the trial
+  // before played there; the next trial's start answers this trial's drive. What this trial
+  // changed there is taken off the error (as the model's slope predicts it), or each change would
+  // be learned twice, a trial late, and the trial's start would swing from trial to trial.
+  if (before.size() == n) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const double wraps =
+          std::clamp(static_cast<double>(j) + a - static_cast<double>(n - 1), 0.0, 1.0);
+      e[j] -= wraps * slope_[j] * (drive[j] - before[j]);
+    }
   }
   for (std::size_t j = 0; j < n; ++j) c[j] = (gain * e[j] + drift_) / slope_[j];
   last_mean_error_ = mean_error;

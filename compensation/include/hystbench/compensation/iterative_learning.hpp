@@ -13,17 +13,20 @@
 // read d ahead of the drive that caused it; from the second update on, the delay the bench shows:
 // where the output's change between two trials best follows the drive's, the median over the pairs
 // where that is clear), s_k(j) the local slope of its static map along the trial's drive (the
-// inverse's slope there), kept within [1/4, 4] x its mean along the trial. The model's second-order
-// dynamics are not inverted on the error: they bound Q below 0.9 of their natural frequency, and
-// within that band the bench's gain, which a fitted mode's damping and a rate-dependent loop move,
-// is what a learning of gain 1/2 meets either way (inverted by the error's differences, a fast
-// trial's few samples a period approximate the mode poorly near it; docs/measurements.md compares
-// the two). Q is a zero-phase low-pass (a fourth-order Butterworth run forward and backward around
-// the trial), cut off at the lowest of a fifth of the sample rate and the 300th harmonic of the
-// trial's fundamental (above it a slow trial's error is mostly sensor noise), but past its fifth
-// harmonic within 0.3 of the sample rate (a fast trial's error is mostly its odd harmonics), and
-// below 0.9 of the model's natural frequency (a mode it misses would grow from trial to trial).
-// Pure maths, no I/O; allocates: off the real-time path.
+// inverse's slope there), kept within [1/4, 4] x its mean along the trial. Where j + d wraps past
+// the trial's end, e_k there answered the drive u_{k-1} ended with, and the next trial's start
+// answers u_k's: s_k(j) (u_k(j) - u_{k-1}(j)) is taken off it first (the change made there a
+// trial before, else learned twice and the start swings from trial to trial). The model's
+// second-order dynamics are not inverted on the error: they bound Q below 0.9 of their natural
+// frequency, and within that band the bench's gain, which a fitted mode's damping and a
+// rate-dependent loop move, is what a learning of gain 1/2 meets either way (inverted by the
+// error's differences, a fast trial's few samples a period approximate the mode poorly near it;
+// docs/measurements.md compares the two). Q is a zero-phase low-pass (a fourth-order Butterworth
+// run forward and backward around the trial), cut off at the lowest of a fifth of the sample rate
+// and the 300th harmonic of the trial's fundamental (above it a slow trial's error is mostly sensor
+// noise), but past its fifth harmonic within 0.3 of the sample rate (a fast trial's error is mostly
+// its odd harmonics), and below 0.9 of the model's natural frequency (a mode it misses would grow
+// from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
 #include <array>
 #include <cstddef>
 #include <span>
