@@ -21,13 +21,15 @@
 #              at each frequency
 #   learning-raster  the same effects: identify, the raster line learned over 10 passes and
 #              replayed twice; then all of it again in the same daemon (a second identify)
+#   learning-restart  the same effects: identify, track --learn 10 at 50 / 200 / 500 Hz, each
+#              drive replayed; then a restarted daemon (its model loaded) replays them again
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -191,6 +193,34 @@ for section in "${sections[@]}"; do
             --wait --json | jq -r "$f3"' .rms_error_percent | f' || true)"
         done
         jq -r --arg r "$round" --arg p "$replays" "$f3"'"| \($r) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \($p) |"' <<<"$out" || true
+      done
+      echo
+      stop_daemon
+      ;;
+    learning-restart)
+      effects=$'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      start_daemon learning-restart config/loopback.toml "$effects"
+      model=$(hb identify --wait --json | jq -r '.model.path')
+      echo "### Learned drives replayed on the same bench and after a restart (rms % of range)"
+      echo
+      echo "| f [Hz] | last trial | same bench | after a restart | its lead-in |"
+      echo "| --- | --- | --- | --- | --- |"
+      declare -A last=() same=() names=()
+      for f in 50 200 500; do
+        out=$(hb track --reference sine --frequency "$f" --learn 10 --wait --json || true)
+        names[$f]=$(jq -r '.learning.drive // empty' <<<"$out")
+        last[$f]=$(jq -r "$f3"' .rms_error_percent | f' <<<"$out" || true)
+        [ -z "${names[$f]}" ] || same[$f]=$(hb track --reference sine --frequency "$f" \
+          --learned "${names[$f]}" --wait --json | jq -r "$f3"' .rms_error_percent | f' || true)
+      done
+      stop_daemon
+      start_daemon learning-restart config/loopback.toml "$effects"
+      hb model load --stored "$(basename "$model")" >/dev/null
+      for f in 50 200 500; do
+        [ -n "${names[$f]:-}" ] || continue
+        hb track --reference sine --frequency "$f" --learned "${names[$f]}" --wait --json |
+          jq -r --arg f "$f" --arg l "${last[$f]}" --arg s "${same[$f]:-}" "$f3"'
+          "| \($f) | \($l) | \($s) | \(.rms_error_percent | f) | \(.learning.lead_in_periods / .learning.frequency_hz | f) s: \(.learning.lead_in_end) |"' || true
       done
       echo
       stop_daemon

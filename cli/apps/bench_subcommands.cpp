@@ -107,7 +107,7 @@ struct TrackOptions {
   double frequency = 1.0, periods = 5.0, duration = 0.0, fraction = 0.8;
   double min = NAN, max = NAN, precondition = NAN;
   int learn = 0;
-  double learn_gain = NAN, learn_cutoff = NAN;
+  double learn_gain = NAN, learn_cutoff = NAN, lead_in_max = NAN;
   std::string learned;
   // A user's trajectory instead of a built-in reference: read here, uploaded over the socket.
   std::string file, t_column = "t", yr_column = "yr";
@@ -170,6 +170,15 @@ void add_track_learning_options(CLI::App* cmd, TrackOptions& tr) {
       "reference, range and loop rate it was "
       "learned for: give the same --reference, --frequency and range (or the same "
       "--reference-file), with the model it was learned with loaded");
+  cmd->add_option("--lead-in-max", tr.lead_in_max,
+                  "--learned, a sine, triangle or sawtooth: where the actuator's offset is not "
+                  "the one the drive was learned at (its creep after a rest, or after a long "
+                  "run), the lead-in goes on while the offset moves toward it, following it, "
+                  "until it is within 5x the last trial's rms or stops moving; at most this "
+                  "long [s] (default 60; 0: the shortest lead-in). The result says how long "
+                  "(learning.lead_in_periods) and why it ended (learning.lead_in_end)")
+      ->check(CLI::Range(0.0, 600.0))
+      ->needs(learned_opt);
   for (const char* other : {"--periods", "--duration"}) {
     learn_opt->excludes(cmd->get_option(other));
     learned_opt->excludes(cmd->get_option(other));
@@ -201,6 +210,7 @@ void add_track_file_options(CLI::App* cmd, TrackOptions& tr) {
 // --learn and --learned into the request; false when neither is given.
 bool add_learning(const TrackOptions& tr, nlohmann::json& p) {
   if (!tr.learned.empty()) p["learned"] = tr.learned;
+  if (!std::isnan(tr.lead_in_max)) p["lead_in_max_s"] = tr.lead_in_max;
   if (tr.learn > 0) {
     p["learn_trials"] = tr.learn;
     if (!std::isnan(tr.learn_gain)) p["learn_gain"] = tr.learn_gain;

@@ -135,6 +135,15 @@ void print_learning(std::ostream& out, const json& l) {
         << " periods replayed while the update was computed";
   }
   out << "\n";
+  if (from.is_string() && l.value("lead_in_periods", 0) > 0) {
+    const double period_s =
+        l.value("frequency_hz", 0.0) > 0.0 ? 1.0 / l["frequency_hz"].get<double>() : 0.0;
+    out << "  lead-in         " << l["lead_in_periods"].get<int>() << " periods";
+    if (period_s > 0.0)
+      out << " (" << fixed(l["lead_in_periods"].get<double>() * period_s, 2) << " s)";
+    out << ", offset followed " << fixed(l.value("lead_in_followed_um", 0.0), 3)
+        << " um: " << l.value("lead_in_end", std::string()) << "\n";
+  }
   if (l.contains("drive_file")) {
     out << "  learned drive   " << l.value("drive", std::string()) << " ("
         << l["drive_file"].get<std::string>() << "): track --learned "

@@ -351,7 +351,7 @@ void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
   d.u_compensator = out.u_ff;
   if (out.feedback_saturated) rec.flags |= kSampleFeedbackSaturated;
   d.u_request = out.u;
-  if (p.learning && k >= p.learning->first_tick) {
+  if (p.learning && k >= p.learning->first_scored_tick()) {
     // A learning run: from trial 1 on the learned feedforward, with the feedback on it.
     if (simulated_) await_learned_drive(*p.learning, k);
     d.phase = p.learning->begin_tick(k);
@@ -450,7 +450,14 @@ bool BenchLoop::score(RunProgram& p, std::uint64_t k, const TickDrive& d,
     p.tare.startup_sum += rec.y_measured - d.y_ref;
     ++p.tare.startup_samples;
   }
-  if (d.lead_in) p.learning->lead_in_error(k, d.y_ref - rec.y_measured);
+  if (d.lead_in) {
+    p.learning->lead_in_error(k, d.y_ref - rec.y_measured, p.tare.um());
+    // A lead-in that ends early moves the scored part (and the feedback's start) up with it.
+    if (const std::uint64_t first = p.learning->first_scored_tick(); first < p.metrics_from) {
+      if (p.feedback_from == p.metrics_from) p.feedback_from = first;
+      p.metrics_from = first;
+    }
+  }
   if (!d.learning) return false;
   return p.learning->end_tick(d.phase, rec.u_ff, d.u_compensator, d.y_ref - rec.y_measured);
 }

@@ -1,6 +1,7 @@
 #include "hystbench/daemon/runs/learning_exchange.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace hystbench::daemon {
 
@@ -8,7 +9,10 @@ LearningExchange::LearningExchange(std::size_t period_samples, std::uint64_t fir
                                    std::size_t lead_in)
     : period(period_samples),
       first_tick(first),
-      lead_in_periods(std::max<std::size_t>(lead_in, 1)) {
+      lead_in_periods(std::max<std::size_t>(lead_in, 1)),
+      lead_start_(first - std::min<std::uint64_t>(first, lead_in_periods * period_samples)),
+      start_(first),
+      min_periods_(lead_in_periods) {
   for (int i = 0; i < 2; ++i) {
     drive_[i].assign(period, 0.0);
     rec_u_[i].assign(period, 0.0);
@@ -29,7 +33,7 @@ void LearningExchange::start_recording(std::uint64_t trial) noexcept {
 }
 
 std::size_t LearningExchange::begin_tick(std::uint64_t k) noexcept {
-  const std::uint64_t since = k - first_tick;
+  const std::uint64_t since = k - start_;
   const auto j = static_cast<std::size_t>(since % period);
   if (j != 0) return j;
   const int ready = ready_.exchange(-1, std::memory_order_acq_rel);
@@ -61,23 +65,77 @@ bool LearningExchange::learned(std::size_t j, double& u_ff) const noexcept {
   return true;
 }
 
+void LearningExchange::follow_offset(std::size_t min_periods,
+                                     const LearningLeadIn& lead_in) noexcept {
+  min_periods_ = std::clamp<std::size_t>(min_periods, 1, lead_in_periods);
+  follow_ = lead_in;
+}
+
 bool LearningExchange::lead_in(std::uint64_t k, double& u_ff) const noexcept {
-  const std::uint64_t span = lead_in_periods * period;
-  if (started_from_ == 0 || k >= first_tick || first_tick - k > span) return false;
+  if (started_from_ == 0 || k >= start_ || k < lead_start_) return false;
   // The drive start_from made ready: the learner writes the other buffer first.
-  const auto j = static_cast<std::size_t>((span - (first_tick - k)) % period);
+  const auto j = static_cast<std::size_t>((k - lead_start_) % period);
   const double moved = started_compensator_.empty() ? 0.0 : u_ff - started_compensator_[j];
   u_ff = drive_[0][j] + moved;
   return true;
 }
 
-void LearningExchange::lead_in_error(std::uint64_t k, double error) noexcept {
+void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, double tare) noexcept {
+  if (begun + 1 < min_periods_) return;  // the last period begins at the minimum's last
+  const bool longer = follow_.follow_periods > 0 && std::isfinite(follow_.learned_offset) &&
+                      follow_.tolerance > 0.0;
+  const double gap = std::abs(tare + followed_ - follow_.learned_offset);
+  if (std::isnan(checkpoint_gap_)) checkpoint_gap_ = gap;
+  if (!longer) {
+    end_ = LeadInEnd::kMinimum;
+  } else if (gap <= follow_.tolerance) {
+    end_ = begun + 1 == min_periods_ ? LeadInEnd::kMinimum : LeadInEnd::kOffsetReached;
+  } else if (begun + 1 >= lead_in_periods) {
+    end_ = LeadInEnd::kLongest;
+  } else if (stalled_) {
+    end_ = LeadInEnd::kOffsetStalled;
+  } else {
+    return;
+  }
+  decided_ = true;
+  start_ = k + period;
   // A single lead-in period's first half still leaves the rest the run started from; after
   // more, the last period is whole (its mean, not half of it, is the offset).
-  const std::uint64_t window = lead_in_periods > 1 ? period : period / 2;
-  if (started_from_ == 0 || k >= first_tick || first_tick - k > window) return;
-  lead_in_error_sum_ += error;
-  ++lead_in_samples_;
+  window_ = begun > 0 ? period : period / 2;
+}
+
+void LearningExchange::lead_in_error(std::uint64_t k, double error, double tare) noexcept {
+  if (started_from_ == 0 || k >= start_ || k < lead_start_) return;
+  const std::uint64_t since = k - lead_start_;
+  if (!decided_ && since % period == 0) decide_lead_in(k, since / period, tare);
+  if (decided_) {
+    if (start_ - k <= window_) {
+      lead_in_error_sum_ += error;
+      ++lead_in_samples_;
+    }
+    return;
+  }
+  // Following: each step's mean error moves the offset the target takes off, the first step
+  // (the start from rest) left out; every stall_steps the gap must have closed by the tolerance.
+  const std::uint64_t step = follow_.follow_periods * period;
+  if (step == 0 || since < step) return;
+  follow_sum_ += error;
+  ++follow_samples_;
+  if ((since + 1) % step != 0) return;
+  followed_ -= follow_sum_ / static_cast<double>(follow_samples_);
+  follow_sum_ = 0.0;
+  follow_samples_ = 0;
+  const std::size_t checked = std::max<std::size_t>(follow_.stall_steps, 1);
+  if (++follow_steps_ % checked == 0) {
+    // At the pace the gap closed since the last check, it would not reach the tolerance before
+    // the longest lead-in: waiting on would not bring the drive back where it was learned.
+    const double gap = std::abs(tare + followed_ - follow_.learned_offset);
+    const double closed = checkpoint_gap_ - gap;
+    const double left = static_cast<double>(lead_in_periods * period - (since + 1)) /
+                        static_cast<double>(checked * step);
+    stalled_ = closed <= 0.0 || gap - follow_.tolerance > closed * left;
+    checkpoint_gap_ = gap;
+  }
 }
 
 bool LearningExchange::end_tick(std::size_t j, double u_ff, double u_compensator,
@@ -100,7 +158,7 @@ bool LearningExchange::end_tick(std::size_t j, double u_ff, double u_compensator
 }
 
 bool LearningExchange::owed(std::uint64_t k) const noexcept {
-  if (k < first_tick + period || (k - first_tick) % period != 0) return false;
+  if (k < start_ + period || (k - start_) % period != 0) return false;
   return ready_.load(std::memory_order_acquire) < 0 &&
          !final_offered_.load(std::memory_order_acquire) &&
          offered_.load(std::memory_order_acquire) - started_from_ <

@@ -19,7 +19,7 @@ class ReadUploadTest : public hystbench::test::TempDirTest {
  protected:
   ReadUploadTest() : TempDirTest("hystbench_read_upload_test") {}
   std::string file() {
-    const std::string p = path("line.csv");
+    std::string p = path("line.csv");
     std::ofstream(p) << "t,pos\n0,1\n0.001,2\n0.002,3\n";
     return p;
   }

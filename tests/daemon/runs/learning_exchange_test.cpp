@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 namespace hd = hystbench::daemon;
@@ -149,7 +150,7 @@ TEST(LearningExchange, ADriveLearnedBeforeMovesWithTheCompensator) {
   // reading 0.1 above the reference, which trial 0 on takes off too.
   EXPECT_DOUBLE_EQ(x.target_offset(kFirst - kPeriod, 3.0), 3.0);
   for (std::uint64_t k = kFirst - kPeriod; k < kFirst; ++k) {
-    x.lead_in_error(k, k < kFirst - kPeriod / 2 ? 5.0 : -0.1);  // the first half: the start
+    x.lead_in_error(k, k < kFirst - kPeriod / 2 ? 5.0 : -0.1, 0.0);  // the first half: the start
   }
   EXPECT_DOUBLE_EQ(x.target_offset(kFirst - 1, 3.0), 3.0);
   EXPECT_DOUBLE_EQ(x.target_offset(kFirst, 3.0), 3.1);
@@ -174,12 +175,99 @@ TEST(LearningExchange, ALeadInOfSeveralPeriodsMeasuresTheOffsetOnItsLastWhole) {
   for (std::uint64_t k = first - 3 * kPeriod; k < first; ++k) {
     ASSERT_TRUE(x.lead_in(k, u)) << k;
     EXPECT_DOUBLE_EQ(u, 7.0 + static_cast<double>(k % kPeriod)) << k;  // 100 is phase 0
-    x.lead_in_error(k, k < first - kPeriod ? 5.0 : (k % 2 == 0 ? -0.3 : 0.1));
+    x.lead_in_error(k, k < first - kPeriod ? 5.0 : (k % 2 == 0 ? -0.3 : 0.1), 0.0);
     ++played;
   }
   EXPECT_EQ(played, 12);
   EXPECT_DOUBLE_EQ(x.lead_in_offset(), 0.1);
   EXPECT_DOUBLE_EQ(x.target_offset(first, 3.0), 3.1);
+}
+
+// A lead-in that may last 200 periods, following the output's offset every 2 periods, ending
+// within 0.05 of the offset 1.0 the drive was learned at, or when at the pace it came closer
+// over the last `stall_steps` follow steps it would not come within it before the longest. The
+// actuator's offset is `offset(k)`; the target takes off the tare (the offset at the run's start)
+// and what the lead-in followed, so a lead-in tick's error (reference - reading) is what the
+// target takes off less the offset.
+struct LeadInRun {
+  std::uint64_t played = 0;
+  std::uint64_t first_scored = 0;
+  hd::LearningExchange::LeadInEnd end{};
+  double target_at_first = 0.0;
+};
+template <typename Offset>
+LeadInRun run_lead_in(Offset offset, std::size_t stall_steps = 5) {
+  constexpr std::uint64_t first = 1000;
+  hd::LearningExchange x(kPeriod, first, 200);
+  hd::LearningLeadIn l;
+  l.learned_offset = 1.0;
+  l.tolerance = 0.05;
+  l.follow_periods = 2;
+  l.stall_steps = stall_steps;
+  x.follow_offset(3, l);
+  EXPECT_TRUE(x.start_from({7, 8, 9, 10}, {}, true));
+  const double tare = offset(first - 200 * kPeriod);
+  LeadInRun r;
+  double u = 0.0;
+  for (std::uint64_t k = first - 200 * kPeriod; x.lead_in(k, u); ++k) {
+    EXPECT_DOUBLE_EQ(u, 7.0 + static_cast<double>(k % kPeriod)) << k;
+    x.lead_in_error(k, x.target_offset(k, tare) - offset(k), tare);
+    ++r.played;
+  }
+  r.first_scored = x.first_scored_tick();
+  r.end = x.lead_in_end();
+  r.target_at_first = x.target_offset(r.first_scored, tare);
+  EXPECT_EQ(x.lead_in_played() * kPeriod, r.played);
+  return r;
+}
+
+// The offset is the learned one: the lead-in is its minimum, as without following.
+TEST(LearningExchange, ALeadInAtTheLearnedOffsetIsItsShortest) {
+  const LeadInRun r = run_lead_in([](std::uint64_t) { return 1.02; });
+  EXPECT_EQ(r.played, 3 * kPeriod);
+  EXPECT_EQ(r.end, hd::LearningExchange::LeadInEnd::kMinimum);
+  EXPECT_EQ(r.first_scored, 1000 - 197 * kPeriod);
+  EXPECT_NEAR(r.target_at_first, 1.02, 1e-12);
+}
+
+// The offset starts 0.5 off and creeps toward the learned one: the lead-in follows it and ends
+// once it is within the tolerance, its target the actuator's offset.
+TEST(LearningExchange, ALeadInFollowsTheOffsetUntilItReachesTheLearnedOne) {
+  const auto creep = [](std::uint64_t k) {
+    return 1.0 - 0.5 * std::exp(-static_cast<double>(k - 200) / 30.0);
+  };
+  const LeadInRun r = run_lead_in(creep);
+  EXPECT_EQ(r.end, hd::LearningExchange::LeadInEnd::kOffsetReached);
+  EXPECT_GT(r.played, 3 * kPeriod);
+  EXPECT_LT(r.played, 200 * kPeriod);
+  EXPECT_EQ(r.played % kPeriod, 0u);
+  EXPECT_NEAR(creep(200 + r.played - kPeriod), 1.0, 0.05 + 1e-9);  // a period before its end
+  EXPECT_NEAR(r.target_at_first, creep(200 + r.played), 0.01);
+}
+
+// An offset that stays 0.5 off (a drift, not creep): the lead-in stops once following it
+// brings it no closer.
+TEST(LearningExchange, ALeadInStopsWhenTheOffsetComesNoCloser) {
+  const LeadInRun r = run_lead_in([](std::uint64_t) { return 0.5; });
+  EXPECT_EQ(r.end, hd::LearningExchange::LeadInEnd::kOffsetStalled);
+  EXPECT_LE(r.played, (3 + 2 * 5 + 1) * kPeriod);
+  EXPECT_NEAR(r.target_at_first, 0.5, 1e-12);
+}
+
+// An offset 2 off that moves toward the learned one at a pace that would reach it only after
+// the longest lead-in: it ends when its pace shows that. Where the pace is not checked, the
+// lead-in is its longest.
+TEST(LearningExchange, ALeadInEndsAtItsLongest) {
+  const auto slow = [](std::uint64_t k) {
+    return -1.0 + 0.006 * static_cast<double>(k - 200) / kPeriod;
+  };
+  const LeadInRun paced = run_lead_in(slow);
+  EXPECT_EQ(paced.end, hd::LearningExchange::LeadInEnd::kOffsetStalled);
+  EXPECT_LE(paced.played, (3 + 2 * 5 + 1) * kPeriod);
+  const LeadInRun r = run_lead_in(slow, 1000);
+  EXPECT_EQ(r.end, hd::LearningExchange::LeadInEnd::kLongest);
+  EXPECT_EQ(r.played, 200 * kPeriod);
+  EXPECT_EQ(r.first_scored, 1000u);
 }
 
 // The feedforward the drive moves from can be replaced before the run (the active model's, at

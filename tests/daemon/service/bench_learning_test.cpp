@@ -239,11 +239,11 @@ TEST_F(BenchLearningTest, RefusesWhatItCannotLearn) {
 // What is learned is kept: `track --learned NAME` plays the saved drive from the start-up period
 // on, moved with the output offset the run measures; on the same bench within 1.5x of the last
 // trial, without a new trial. A restart of the loopback daemon restarts its simulated actuator
-// too (creep relaxed, drift from its start), a history the drive was not learned on: there the
-// replay keeps most of what was learned (measured 0.10 % against the compensator's 1.0 % and the
-// last trial's 0.018 %), and `--learn` goes on from it. Another reference, range or name is
-// refused, naming what the drive was learned for. The saved CSV replays open loop through
-// `excite`.
+// too (creep relaxed, drift from its start): its offset is 0.46 um off the one the drive was
+// learned at, and met by moving the drive through the model it replayed at 6x; the lead-in now
+// plays on while the creep brings the offset back, following it (about 25 s), and the replay is
+// within 1.5x again. `--learn` goes on from it. Another reference, range or name is refused,
+// naming what the drive was learned for. The saved CSV replays open loop through `excite`.
 // A drive learned on one model replays after a second identify has made another the active
 // model: it moves by the offset the actuator shows, not by the two models' difference, which it
 // has already learned away (moved by that difference it replayed at 11x its last trial). What is
@@ -294,7 +294,8 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
     EXPECT_FALSE(l.contains("drive_file")) << when << l.dump(2);  // nothing new to keep
     EXPECT_LE(r["rms_error_percent"].get<double>(), bound) << when << l.dump(2);
     std::cout << when << ": " << r["rms_error_percent"] << " % (learned from " << first << " to "
-              << last << " %)\n";
+              << last << " %), lead-in " << l["lead_in_periods"] << " periods: " << l["lead_in_end"]
+              << "\n";
   };
   replay("on the same bench", 1.5 * last);
 
@@ -335,9 +336,12 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
   const std::string model =
       std::filesystem::path(id["model"]["path"].get<std::string>()).filename().string();
   bench_->handle("model.load", {{"stored", model}});
-  replay("after a restart", 0.1 * first);
+  replay("after a restart", 1.5 * last);
 
-  // Learning goes on from it.
+  // Learning goes on from it: its first trial is the saved drive's, within 1.5x of the last
+  // trial again. Near the noise floor the trials after it meet the creep recovering from the
+  // precondition sweep and the idle before it (the mean error moves by 0.01 um over four
+  // trials, 3x the last trial's rms), which the guard stops on.
   json more = replay_params;
   more["learn_trials"] = 4;
   const json r = run_and_wait("track", more);
@@ -345,7 +349,7 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
   const std::vector<double> resumed = trial_rms(r);
   ASSERT_EQ(resumed.size(), 5u) << r["learning"].dump(2);
   EXPECT_EQ(r["learning"]["trials"][0]["drive"], "saved");
-  EXPECT_LE(resumed.back(), 0.5 * resumed.front()) << r["learning"].dump(2);
+  EXPECT_LE(resumed.front(), 1.5 * last) << r["learning"].dump(2);
   EXPECT_TRUE(std::filesystem::exists(r["learning"].value("drive_file", ""))) << r.dump(2);
 
   // The CSV replays open loop with excite (`hystbench excite --input-file`).

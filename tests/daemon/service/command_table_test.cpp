@@ -35,7 +35,7 @@ TEST(CommandTable, AnUnknownKeyIsNamedWithTheValidOnes) {
   EXPECT_EQ(refusal("track", {{"bogus", 1}}),
             "bad_params: unknown parameter 'bogus' (valid: reference, frequency_hz, periods, "
             "duration_s, compensator, range_fraction, min_um, max_um, kp, ki, kd, "
-            "precondition_s, learn_trials, learn_gain, learn_cutoff_hz, learned)");
+            "precondition_s, learn_trials, learn_gain, learn_cutoff_hz, learned, lead_in_max_s)");
   EXPECT_EQ(refusal("status", {{"verbose", true}}),
             "bad_params: unknown parameter 'verbose' (valid: )");
   // An uploaded reference has its own keys: the built-in reference's are unknown there.

@@ -809,7 +809,9 @@ class Bench:
                 ``learn``. Only for the waveform, range and loop rate it was learned for, or
                 the same uploaded trajectory (``bad_params`` names both otherwise).
             **params: further request parameters, sent as given (``kp``, ``ki``, ``kd``,
-                ``learn_cutoff_hz``).
+                ``learn_cutoff_hz``; ``lead_in_max_s``: with ``learned``, the longest lead-in
+                [s] while the actuator's offset moves toward the one the drive was learned at,
+                daemon default 60, 0 the shortest).
             wait, progress, timeout: as for ``identify``; ``progress`` also sees the upload
                 (label ``"upload"``).
         """

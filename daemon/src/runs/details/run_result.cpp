@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 
@@ -25,6 +26,18 @@ void add_model_error(const RunProgram& run, json& report) {
   report["model_max_error_percent"] = range > 0 ? 100.0 * run.model_error.max / range : 0.0;
 }
 
+// A drive learned before whose lead-in ended before its longest: the header's metrics_from is
+// the latest the scored part could begin; a last comment line gives where it began.
+void append_lead_in_end(const RunProgram& run, const std::string& path) {
+  if (!run.learning || run.learning->first_scored_tick() >= run.learning->first_tick) return;
+  std::ofstream out(path, std::ios::app);
+  out << "# "
+      << nlohmann::json{{"scored_from", run.learning->first_scored_tick()},
+                        {"lead_in_periods", run.learning->lead_in_played()}}
+             .dump()
+      << "\n";
+}
+
 }  // namespace
 
 RunResult collect_result(RunProgram& run, double output_v_after) {
@@ -36,6 +49,7 @@ RunResult collect_result(RunProgram& run, double output_v_after) {
   if (run.log) {
     r.log_path = run.log->path().string();
     counts = run.log->close();
+    append_lead_in_end(run, r.log_path);
   }
   r.report = {{"run_id", run.run_id},
               {"kind", to_string(run.kind)},

@@ -95,6 +95,26 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
   return scored;
 }
 
+namespace {
+
+// Why a drive learned before began its scored period where it did.
+std::string lead_in_end(const LearningExchange& x) {
+  switch (x.lead_in_end()) {
+    case LearningExchange::LeadInEnd::kMinimum:
+      return "the shortest lead-in: the offset is the one the drive was learned at";
+    case LearningExchange::LeadInEnd::kOffsetReached:
+      return "the offset, followed, came within the tolerance of the one the drive was learned at";
+    case LearningExchange::LeadInEnd::kOffsetStalled:
+      return "the offset, followed, stopped moving toward the one the drive was learned at";
+    case LearningExchange::LeadInEnd::kLongest:
+      return "the longest lead-in (lead_in_max_s): the offset is still off the one the drive was "
+             "learned at";
+  }
+  return "";
+}
+
+}  // namespace
+
 void TrackLearning::fail(const std::string& why) {
   exchange_.give_up();
   done_ = true;
@@ -108,6 +128,7 @@ std::optional<TrackLearning::Trial> TrackLearning::last_trial() const {
 }
 
 json TrackLearning::result() const {
+  const bool started = !request_.start_drive.empty();
   json trials = json::array();
   for (const Trial& t : trials_) {
     trials.push_back({{"trial", t.trial},
@@ -142,7 +163,9 @@ json TrackLearning::result() const {
                       : "the run ended before the trials asked for were played"},
           {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
           {"lead_in_offset_um", exchange_.lead_in_offset()},
-          {"lead_in_periods", exchange_.lead_in_periods},
+          {"lead_in_periods", started ? exchange_.lead_in_played() : 0},
+          {"lead_in_followed_um", exchange_.lead_in_followed()},
+          {"lead_in_end", started ? lead_in_end(exchange_) : "none: no drive learned before"},
           {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
           {"stale_periods", exchange_.stale_periods()},
           {"update_ms",

@@ -72,6 +72,14 @@ constexpr double kGoodEnoughFraction = 1e-3;
 // sine's single period leaves the actuator settling from rest (its fast creep, its modes) where
 // the drive was learned on a periodic state.
 constexpr double kLeadInS = 0.02;
+// Where the actuator's offset is not the one the drive was learned at, the lead-in goes on while
+// the offset moves toward it (creep), following it every kFollowS, until it is within
+// kLeadInTolerance x the last trial's rms (the move the drive makes through the model to meet
+// the rest has the model's shape, off the actuator's by a fraction of the move), or it came
+// no closer by that over kStallS.
+constexpr double kFollowS = 0.1;
+constexpr double kLeadInTolerance = 5.0;
+constexpr double kStallS = 5.0;
 
 ActuatorRange known_range(const RunContext& ctx) {
   if (const auto range = actuator_range(ctx)) return *range;
@@ -93,8 +101,9 @@ struct LearningPlan {
   std::size_t scored_from = 0;        ///< a trial's first scored phase (an upload's approach: not)
   std::optional<LearnedDrive> start;  ///< the drive trial 0 plays (`learned`), else none
   /// The periods a drive learned before plays ahead of trial 0, unscored (a sine's, at least
-  /// kLeadInS long; an upload's pass, one).
+  /// kLeadInS long; an upload's pass, one), and at most (LearningKeys::lead_in_max_s).
   std::size_t lead_in = 1;
+  std::size_t lead_in_max = 1;
 };
 
 // The plan of a learning run from its request; for an upload, reference() sets its period (a
@@ -118,6 +127,9 @@ std::optional<LearningPlan> learning_plan(const TrackRequest& request, const Run
   if (plan.start) {
     plan.lead_in = std::max<std::size_t>(
         1, static_cast<std::size_t>(std::ceil(kLeadInS * plan.frequency_hz - 1e-9)));
+    plan.lead_in_max = std::max<std::size_t>(
+        plan.lead_in,
+        static_cast<std::size_t>(std::ceil(keys.lead_in_max_s * plan.frequency_hz - 1e-9)));
   }
   return plan;
 }
@@ -133,11 +145,11 @@ TrackReference reference(const TrackRequest& request, const RunContext& ctx,
   if (upload == nullptr) {
     if (!learn) return builtin_reference(request.reference, limits);
     // A drive learned before plays its lead-in periods unscored, the first the start from rest.
-    const auto extra = static_cast<double>(learn->lead_in - 1);
+    const auto extra = static_cast<double>(learn->lead_in_max - 1);
     TrackReference ref =
         builtin_reference(request.reference, limits, learn->frequency_hz,
                           learning_periods(learn->trials, learn->frequency_hz) + extra);
-    ref.unscored = learn->lead_in * learn->period;
+    ref.unscored = learn->lead_in_max * learn->period;
     return ref;
   }
   // The precondition sweep leaves the output at the bottom of its range.
@@ -418,7 +430,8 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   const std::optional<hc::ActuatorModel> model = predictor(ctx, ctx.u_now);
   if (!model)
     throw common::CommandError("no_range", "learning needs a model or limits.y_min/y_max");
-  p.learning = std::make_unique<LearningExchange>(plan.period, p.metrics_from, plan.lead_in);
+  p.learning = std::make_unique<LearningExchange>(plan.period, p.metrics_from, plan.lead_in_max);
+  p.learning->follow_offset(plan.lead_in, {});
   hc::LearningOptions o;
   o.dt = ctx.dt();
   o.u_min = lim.u_min;
@@ -455,7 +468,7 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
 // `offset_um` throughout.
 std::vector<double> feedforward_period(const RunProgram& p, double offset_um, double dt) {
   hc::Compensator c = *p.compensator;
-  const std::uint64_t start = p.excitation.size(), first = p.learning->first_tick;
+  const std::uint64_t start = p.excitation.size(), first = p.learning->earliest_first_tick();
   const std::size_t period = p.learning->period, ahead = c.preview_samples();
   const double none = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> window(std::max<std::size_t>(ahead, 1)), out(period);
@@ -527,6 +540,23 @@ RunPreparation with_learned_start(RunPreparation preparation, double offset, dou
   return preparation;
 }
 
+// How the lead-in of `start`, learned at `offset`, follows the actuator's offset beyond its
+// minimum (none when the drive's last trial is not known).
+LearningLeadIn lead_in_following(const LearnedDrive& start, const LearningPlan& plan, double offset,
+                                 double rate_hz) {
+  LearningLeadIn l;
+  const json last = start.meta.value("last_trial", json());
+  const double rms = last.is_object() ? last.value("rms_error_um", 0.0) : 0.0;
+  if (!(rms > 0.0) || plan.lead_in_max <= plan.lead_in) return l;
+  const double period_s = static_cast<double>(plan.period) / rate_hz;
+  l.learned_offset = offset;
+  l.tolerance = kLeadInTolerance * rms;
+  l.follow_periods = static_cast<std::size_t>(std::max(1.0, std::ceil(kFollowS / period_s)));
+  l.stall_steps = static_cast<std::size_t>(
+      std::max(1.0, std::ceil(kStallS / (static_cast<double>(l.follow_periods) * period_s))));
+  return l;
+}
+
 // A learning run's learner; a drive learned before moves from the active compensator's
 // feedforward at its offset, played ahead after the run's `preparation`.
 std::unique_ptr<TrackLearning> arm_learning(RunProgram& p, const LearningPlan& plan,
@@ -536,6 +566,8 @@ std::unique_ptr<TrackLearning> arm_learning(RunProgram& p, const LearningPlan& p
   if (plan.start) {
     if (const auto offset = learned_start_offset(*plan.start, p, ctx)) {
       preparation = with_learned_start(std::move(preparation), *offset, ctx.dt());
+      p.learning->follow_offset(
+          plan.lead_in, lead_in_following(*plan.start, plan, *offset, ctx.settings.loop.rate_hz));
     }
   }
   return learner;
@@ -551,6 +583,7 @@ json learning_summary(const LearningPlan& learn) {
   if (learn.start) {
     l["started_from"] = learn.start->name;
     l["lead_in_periods"] = learn.lead_in;
+    if (learn.lead_in_max > learn.lead_in) l["lead_in_max_periods"] = learn.lead_in_max;
   }
   return l;
 }

@@ -41,6 +41,9 @@ struct LearningKeys {
   double gain = 0.5;
   double cutoff_hz = 0.0;              ///< the learner's low-pass; 0: its default
   std::optional<std::string> learned;  ///< a saved drive's name
+  /// With `learned`, a sine's, triangle's or sawtooth's: the longest lead-in [s] while the
+  /// actuator's offset moves toward the one the drive was learned at; 0: its minimum.
+  double lead_in_max_s = 60.0;
   bool any() const { return trials > 0 || learned.has_value(); }
 };
 

@@ -47,7 +47,8 @@ constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"learn_trials", T::kInteger, 0, 1000},
                                        {"learn_gain", T::kNumber, 1e-3, 20.0},
                                        {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9},
-                                       {"learned", T::kString}};
+                                       {"learned", T::kString},
+                                       {"lead_in_max_s", T::kNumber, 0.0, 600.0}};
 constexpr ParamSpec kExcite[] = {{"drive_upload", T::kString}};
 // The upload store checks the ranges (and what is missing) itself, with the same validator.
 constexpr ParamSpec kUploadBegin[] = {{"kind", T::kString},

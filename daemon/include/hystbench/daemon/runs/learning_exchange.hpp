@@ -10,19 +10,57 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace hystbench::daemon {
 
+/// How a drive learned before plays its lead-in when the actuator's output offset is not the one
+/// it was learned at (creep of an actuator that rested, or that has run for a long time since):
+/// the drive moves to meet that offset through the model, whose shape of the move is the model's,
+/// so the lead-in goes on while the offset moves toward the learned one, following it.
+struct LearningLeadIn {
+  /// The offset the drive was learned at [output unit]; NaN: not known, no longer lead-in.
+  double learned_offset = std::numeric_limits<double>::quiet_NaN();
+  /// The lead-in ends once the offset (the tare and what it followed) is within this of the
+  /// learned one [output unit, > 0].
+  double tolerance = 0.0;
+  /// It follows the offset every this many periods (the first of them, the start from rest, not;
+  /// 0: never longer than its minimum).
+  std::size_t follow_periods = 0;
+  /// ... and ends when, at the pace the offset came closer over the last this many follow
+  /// steps, it would not come within the tolerance before the longest lead-in.
+  std::size_t stall_steps = 50;
+};
+
 struct LearningExchange {
   /// P samples >= 4, the run tick of trial 0's first sample, and how many periods before it a
-  /// drive learned before plays as its lead-in (>= 1; the run leaves them unscored).
+  /// drive learned before plays as its lead-in (>= 1; the run leaves them unscored). With
+  /// follow_offset(), first_tick and lead_in_periods are the latest and the longest.
   LearningExchange(std::size_t period_samples, std::uint64_t first_tick,
                    std::size_t lead_in_periods = 1);
 
   const std::size_t period;
   const std::uint64_t first_tick;
   const std::size_t lead_in_periods;
+
+  /// Before the run: the lead-in plays at least `min_periods` (<= lead_in_periods), and longer
+  /// as `lead_in` says, up to lead_in_periods.
+  void follow_offset(std::size_t min_periods, const LearningLeadIn& lead_in) noexcept;
+  /// Why the lead-in ended where it did.
+  enum class LeadInEnd { kMinimum, kOffsetReached, kOffsetStalled, kLongest };
+  /// The tick trial 0 begins at: first_tick, or earlier where the lead-in ended early (the loop
+  /// decides it, a period ahead).
+  std::uint64_t first_scored_tick() const noexcept { return start_; }
+  /// The earliest it can be (the minimum lead-in).
+  std::uint64_t earliest_first_tick() const noexcept { return lead_start_ + min_periods_ * period; }
+  /// The periods the lead-in played (after the run), why it ended there, and the offset it
+  /// followed beyond the tare [output unit].
+  std::size_t lead_in_played() const noexcept {
+    return static_cast<std::size_t>((start_ - lead_start_) / period);
+  }
+  LeadInEnd lead_in_end() const noexcept { return end_; }
+  double lead_in_followed() const noexcept { return followed_; }
 
   // ---- loop side (loop thread only) ----
   /// The phase j in [0, P) of tick k >= first_tick; at j = 0 takes the drive made ready (if any)
@@ -37,9 +75,11 @@ struct LearningExchange {
   /// lead_in_periods before trial 0 too, so that trial 0 follows its own drive as a learned
   /// trial follows the one before.
   bool lead_in(std::uint64_t k, double& u_ff) const noexcept;
-  /// The error (reference - reading) of lead-in tick k: its last period (the second half of a
-  /// single one) measures the output offset the drive learned before now plays at.
-  void lead_in_error(std::uint64_t k, double error) noexcept;
+  /// The error (reference - reading) of lead-in tick k, `tare` the run's: its last period (the
+  /// second half of a single one) measures the output offset the drive learned before now plays
+  /// at; a longer lead-in follows the offset, and each period's first tick decides whether the
+  /// period is the lead-in's last.
+  void lead_in_error(std::uint64_t k, double error, double tare) noexcept;
   /// That offset [output unit] (0 without a lead-in).
   double lead_in_offset() const noexcept {
     return lead_in_samples_ > 0 ? -lead_in_error_sum_ / static_cast<double>(lead_in_samples_) : 0.0;
@@ -48,7 +88,7 @@ struct LearningExchange {
   /// offset measured on the precondition sweep), and with a drive learned before, from trial 0
   /// on, the offset its lead-in measured too; the drive moves with the compensator.
   double target_offset(std::uint64_t k, double tare) const noexcept {
-    return tare + (started_from_ != 0 && k >= first_tick ? lead_in_offset() : 0.0);
+    return tare + followed_ + (started_from_ != 0 && k >= start_ ? lead_in_offset() : 0.0);
   }
   /// Records the feedforward played, the compensator's own and the error (reference -
   /// reading) at phase j; at the period's last sample closes the trial. True when that trial
@@ -108,6 +148,21 @@ struct LearningExchange {
   std::uint64_t trial_ = 0;
   double lead_in_error_sum_ = 0.0;
   std::uint64_t lead_in_samples_ = 0;
+  // The lead-in (loop only during the run).
+  void decide_lead_in(std::uint64_t k, std::uint64_t begun, double tare) noexcept;
+  std::uint64_t lead_start_ = 0;  // its first tick
+  std::uint64_t start_ = 0;       // trial 0's first tick
+  std::size_t min_periods_ = 1;
+  LearningLeadIn follow_{};
+  bool decided_ = false;
+  std::uint64_t window_ = 0;  // the last period's samples that measure the offset
+  LeadInEnd end_ = LeadInEnd::kLongest;
+  double followed_ = 0.0;
+  double follow_sum_ = 0.0;
+  std::uint64_t follow_samples_ = 0;
+  std::size_t follow_steps_ = 0;
+  double checkpoint_gap_ = std::numeric_limits<double>::quiet_NaN();
+  bool stalled_ = false;
 };
 
 }  // namespace hystbench::daemon

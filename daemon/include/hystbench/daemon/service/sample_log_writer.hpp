@@ -11,7 +11,9 @@
 //   # {"columns": ["index", "t", ...]}
 //   index,t,t_scheduled_ns,t_wake_ns,exec_ns,yr,u_ff,u_fb,u,y,y_model,flags
 //   0,0,0,1520,8300,0,0,0,0,0.0123,NaN,0
-// Every '#' line is one JSON object; merging them gives the header (read_sample_log_header()).
+// Every '#' line is one JSON object; merging the leading ones gives the header
+// (read_sample_log_header()). A run may append one after the rows: a replay of a learned drive
+// whose lead-in ended early gives where its scored part began (# {"scored_from": k, ...}).
 // Doubles are written in the shortest form that reads back to the same bits (std::to_chars),
 // NaN / infinities as NaN / Inf / -Inf. Column `t` is t_scheduled_ns in seconds.
 // `<log_dir>/latest.csv` is a relative symlink to the newest run's file, replaced atomically
