@@ -171,7 +171,7 @@ void add_track_learning_options(CLI::App* cmd, TrackOptions& tr) {
       "learned for: give the same --reference, --frequency and range (or the same "
       "--reference-file), with the model it was learned with loaded");
   cmd->add_option("--lead-in-max", tr.lead_in_max,
-                  "--learned, a sine, triangle or sawtooth: where the actuator's offset is not "
+                  "--learned: where the actuator's offset is not "
                   "the one the drive was learned at (its creep after a rest, or after a long "
                   "run), the lead-in goes on while the offset moves toward it, following it, "
                   "until it is within 5x the last trial's rms or stops moving; at most this "

@@ -107,14 +107,18 @@ TEST_F(TrackLearningTest, AnUploadedTrajectoryIsLearnedPassByPass) {
   EXPECT_DOUBLE_EQ(r["rms_error_percent"].get<double>(), rms.back());
   ASSERT_TRUE(std::filesystem::exists(l.value("drive_file", ""))) << l.dump(2);
 
-  // It replays for the same file, as trial 0 of a run that learns on from it.
+  // It replays for the same file, as trial 0 of a run that learns on from it: within 1.5x of
+  // the last pass, its lead-in following the actuator's offset where identify's excitation left
+  // it settling (with a single pass of lead-in, `scripts/measure-loopback.sh learning-raster`
+  // replayed at 2.1x).
   const std::string drive = l["drive"];
   const json more = run(daemon.socket(), "track", {{"learned", drive}, {"learn_trials", 2}}, line);
   ASSERT_EQ(more.value("end", ""), "completed") << more.dump(2);
   EXPECT_EQ(more["learning"]["trials"][0]["drive"], "saved");
-  EXPECT_LT(trial_rms(more).front(), 0.3 * rms.front()) << more["learning"].dump(2);
+  EXPECT_LT(trial_rms(more).front(), 1.5 * rms.back()) << more["learning"].dump(2);
   std::cout << "replayed: " << trial_rms(more).front() << " %, then " << trial_rms(more).back()
-            << " %\n";
+            << " % (lead-in " << more["learning"]["lead_in_periods"] << " passes: "
+            << more["learning"]["lead_in_end"] << ")\n";
 
   // Another trajectory (the same line over a shorter span) is refused, naming both.
   const json other =

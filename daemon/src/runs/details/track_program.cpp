@@ -104,6 +104,7 @@ struct LearningPlan {
   /// kLeadInS long; an upload's pass, one), and at most (LearningKeys::lead_in_max_s).
   std::size_t lead_in = 1;
   std::size_t lead_in_max = 1;
+  double lead_in_max_s = 0.0;  ///< LearningKeys::lead_in_max_s (an upload's passes: reference())
 };
 
 // The plan of a learning run from its request; for an upload, reference() sets its period (a
@@ -116,6 +117,7 @@ std::optional<LearningPlan> learning_plan(const TrackRequest& request, const Run
   plan.gain = keys.gain;
   plan.cutoff_hz = keys.cutoff_hz;
   if (keys.learned) plan.start = load_learned_drive(ctx.settings.model_dir, *keys.learned);
+  plan.lead_in_max_s = keys.lead_in_max_s;
   if (!request.reference_upload.empty()) {
     plan.reference = "upload";
     return plan;
@@ -155,11 +157,12 @@ TrackReference reference(const TrackRequest& request, const RunContext& ctx,
   // The precondition sweep leaves the output at the bottom of its range.
   const double approach_s = request.approach_s;
   if (!learn) return uploaded_reference(*upload, limits, range.y_bottom, approach_s);
-  TrackReference ref =
-      uploaded_reference(*upload, limits, range.y_bottom, approach_s, learn->trials);
+  TrackReference ref = uploaded_reference(*upload, limits, range.y_bottom, approach_s,
+                                          learn->trials, learn->start ? learn->lead_in_max_s : 0.0);
   learn->period = ref.pass_samples;
   learn->frequency_hz = ref.frequency_hz;
   learn->scored_from = ref.pass_approach;
+  learn->lead_in_max = ref.lead_in_passes;
   return ref;
 }
 

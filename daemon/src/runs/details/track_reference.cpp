@@ -210,7 +210,7 @@ TrackReference builtin_reference(const BuiltinReferenceRequest& request,
 
 TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& limits,
                                   double y_start, double approach_s,
-                                  std::optional<std::size_t> learned_trials) {
+                                  std::optional<std::size_t> learned_trials, double lead_in_max_s) {
   const double dt = 1.0 / limits.rate_hz;
   check_range(upload, limits.y_bottom, limits.y_top, "um", "reference");
   std::vector<double> traj = upload.resampled(dt);
@@ -243,7 +243,11 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
   first.insert(first.end(), traj.begin(), traj.end());
   double passes = 1.0;
   if (learned_trials) {
-    passes = learning_periods(*learned_trials, limits.rate_hz / static_cast<double>(pass));
+    const double pass_s = static_cast<double>(pass) * dt;
+    r.lead_in_passes = std::max<std::size_t>(
+        1, static_cast<std::size_t>(std::ceil(lead_in_max_s / pass_s - 1e-9)));
+    passes = learning_periods(*learned_trials, limits.rate_hz / static_cast<double>(pass)) +
+             static_cast<double>(r.lead_in_passes - 1);
     std::vector<double> later = approach(traj.back(), traj.front(), n_a);
     later.insert(later.end(), traj.begin(), traj.end());
     traj = {};
@@ -251,7 +255,7 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
     r.pass_approach = n_a;
     r.frequency_hz = limits.rate_hz / static_cast<double>(pass);
     r.samples = static_cast<std::uint64_t>(passes) * pass;
-    r.unscored = pass;
+    r.unscored = r.lead_in_passes * pass;
     r.signal = std::make_unique<RepeatedPasses>(std::move(first), std::move(later),
                                                 static_cast<std::size_t>(passes), dt);
   } else {

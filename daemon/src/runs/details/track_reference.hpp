@@ -25,7 +25,8 @@ struct TrackReference {
   /// A trajectory played over and over (learned): ticks per pass (its approach and itself);
   /// 0 otherwise.
   std::size_t pass_samples = 0;
-  std::size_t pass_approach = 0;  ///< its leading ticks, the approach (unscored in every pass)
+  std::size_t pass_approach = 0;   ///< its leading ticks, the approach (unscored in every pass)
+  std::size_t lead_in_passes = 1;  ///< the unscored passes ahead of the first trial, at most
   /// A trajectory's fundamental [Hz] estimated from its reversals (a raster's line rate); 0 for
   /// a built-in one.
   double content_hz = 0.0;
@@ -57,10 +58,13 @@ TrackReference builtin_reference(const BuiltinReferenceRequest& request,
 /// With learned_trials (a learning run, track --learn N): played in passes of pass_samples
 /// ticks, each an approach then the trajectory, as many as learning_periods(N) asks; the first
 /// approaches from y_start and is unscored whole (the start-up), each later one from the
-/// trajectory's end, in as many ticks as the first.
+/// trajectory's end, in as many ticks as the first. lead_in_max_s > 0: as many passes more,
+/// unscored, as fill that long after the first (a learned drive's longest lead-in,
+/// lead_in_passes in all).
 TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& limits,
                                   double y_start, double approach_s,
-                                  std::optional<std::size_t> learned_trials = std::nullopt);
+                                  std::optional<std::size_t> learned_trials = std::nullopt,
+                                  double lead_in_max_s = 0.0);
 
 /// How many periods (passes) a learning run over `trials` trials of frequency_hz [Hz] plays at
 /// most: the start-up, the first trial, the learned ones, and time for the learner's update

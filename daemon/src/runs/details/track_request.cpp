@@ -41,12 +41,11 @@ void parse_learning(const RequestParams& request, const RunContext& ctx, TrackRe
   l.gain = request.number("learn_gain", l.gain);
   l.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
   if (request.has("learned")) l.learned = request.string("learned", "");
-  if (!r.reference_upload.empty()) return;  // an upload's lead-in is one pass
   if (request.has("lead_in_max_s") && !l.learned) {
     throw CommandError("bad_params", "lead_in_max_s: only with learned");
   }
   l.lead_in_max_s = request.number("lead_in_max_s", l.lead_in_max_s, 0.0, 600.0);
-  if (!l.any()) return;
+  if (!l.any() || !r.reference_upload.empty()) return;
   const std::string key = l.trials > 0 ? "learn_trials" : "learned";
   const std::string& name = r.reference.name;
   if (name != "sine" && name != "triangle" && name != "sawtooth") {

@@ -31,7 +31,8 @@ constexpr ParamSpec kTrackUploaded[] = {{"reference_upload", T::kString},
                                         {"learn_trials", T::kInteger, 0, 1000},
                                         {"learn_gain", T::kNumber, 1e-3, 20.0},
                                         {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9},
-                                        {"learned", T::kString}};
+                                        {"learned", T::kString},
+                                        {"lead_in_max_s", T::kNumber, 0.0, 600.0}};
 constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"frequency_hz", T::kNumber, 1e-3},
                                        {"periods", T::kNumber, 0.0, 1e7},
