@@ -117,8 +117,8 @@ TEST_F(TrackLearningTest, AnUploadedTrajectoryIsLearnedPassByPass) {
   EXPECT_EQ(more["learning"]["trials"][0]["drive"], "saved");
   EXPECT_LT(trial_rms(more).front(), 1.5 * rms.back()) << more["learning"].dump(2);
   std::cout << "replayed: " << trial_rms(more).front() << " %, then " << trial_rms(more).back()
-            << " % (lead-in " << more["learning"]["lead_in_periods"] << " passes: "
-            << more["learning"]["lead_in_end"] << ")\n";
+            << " % (lead-in " << more["learning"]["lead_in_periods"]
+            << " passes: " << more["learning"]["lead_in_end"] << ")\n";
 
   // Another trajectory (the same line over a shorter span) is refused, naming both.
   const json other =
