@@ -15,8 +15,9 @@
 // where that is clear), s_k(j) the local slope of its static map along the trial's drive (the
 // inverse's slope there), kept within [1/4, 4] x its mean along the trial. Where j + d wraps past
 // the trial's end, e_k there answered the drive u_{k-1} ended with, and the next trial's start
-// answers u_k's: s_k(j) (u_k(j) - u_{k-1}(j)) is taken off it first (the change made there a
-// trial before, else learned twice and the start swings from trial to trial). The model's
+// answers u_k's: half of s_k(j) (u_k(j) - u_{k-1}(j)) is taken off it first (the change made
+// there a trial before, else learned twice and the start swings from trial to trial; half, as the
+// bench may answer with less than the slope there). The model's
 // second-order dynamics are not inverted on the error: they bound Q below 0.9 of their natural
 // frequency, and within that band the bench's gain, which a fitted mode's damping and a
 // rate-dependent loop move, is what a learning of gain 1/2 meets either way (inverted by the
@@ -79,6 +80,10 @@ class IterativeLearning {
   void measure_delay(std::span<const double> drive, std::span<const double> error);
   // Q: zero-phase low-pass in place, circular over the trial.
   void low_pass(std::vector<double>& x);
+  // The error filtered by Q, read advance_samples_ ahead of the drive that caused it, less
+  // (where that wraps to the trial's start) a share of what the trial changed since `before`.
+  std::vector<double> advanced_error(std::span<const double> error, std::span<const double> drive,
+                                     const std::vector<double>& before);
 
   ActuatorModel model_;  // static: its slope along the trial
   std::size_t period_;
