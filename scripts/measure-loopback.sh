@@ -23,13 +23,15 @@
 #              replayed twice; then all of it again in the same daemon (a second identify)
 #   learning-restart  the same effects: identify, track --learn 10 at 50 / 200 / 500 Hz, each
 #              drive replayed; then a restarted daemon (its model loaded) replays them again
+#   learning-scaled  the same effects: identify, its model's dead-zone weights x1.3 loaded,
+#              track --learn 20 at each frequency over the identified model's reference range
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -221,6 +223,27 @@ for section in "${sections[@]}"; do
         hb track --reference sine --frequency "$f" --learned "${names[$f]}" --wait --json |
           jq -r --arg f "$f" --arg l "${last[$f]}" --arg s "${same[$f]:-}" "$f3"'
           "| \($f) | \($l) | \($s) | \(.rms_error_percent | f) | \(.learning.lead_in_periods / .learning.frequency_hz | f) s: \(.learning.lead_in_end) |"' || true
+      done
+      echo
+      stop_daemon
+      ;;
+    learning-scaled)
+      start_daemon learning-scaled config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      model=$(hb identify --wait --json | jq -r '.model.path')
+      # The identified model's reference range: the scaled model's own range is 1.3x wider.
+      log=$(hb track --reference sine --frequency 10 --periods 2 --wait --json | jq -r '.log')
+      range=$(grep -m1 '^# {"run"' "$log" | cut -c3- | jq -r '.run | "\(.min_um) \(.max_um)"')
+      read -r ymin ymax <<<"$range"
+      jq '.deadzone.weights |= map(. * 1.3)' "$model" >"$work/learning-scaled/scaled.json"
+      hb model load "$work/learning-scaled/scaled.json" >/dev/null
+      echo "### The model's output map 1.3x too steep, learning over the identified model's range"
+      echo
+      echo "| f [Hz] | trials (rms %, the first the inverse's) | last rms % | last max % |"
+      echo "| --- | --- | --- | --- |"
+      for f in 1 10 50 200 500; do
+        hb track --reference sine --frequency "$f" --min "$ymin" --max "$ymax" --learn 20 \
+          --wait --json | jq -r --arg f "$f" "$f3"'
+          "| \($f) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f) |"' || true
       done
       echo
       stop_daemon
