@@ -89,7 +89,7 @@ void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, doub
   if (!longer) {
     end_ = LeadInEnd::kMinimum;
   } else if (gap <= follow_.tolerance) {
-    end_ = begun + 1 == min_periods_ ? LeadInEnd::kMinimum : LeadInEnd::kOffsetReached;
+    end_ = LeadInEnd::kOffsetReached;
   } else if (begun + 1 >= lead_in_periods) {
     end_ = LeadInEnd::kLongest;
   } else if (stalled_) {

@@ -225,7 +225,7 @@ LeadInRun run_lead_in(Offset offset, std::size_t stall_steps = 5) {
 TEST(LearningExchange, ALeadInAtTheLearnedOffsetIsItsShortest) {
   const LeadInRun r = run_lead_in([](std::uint64_t) { return 1.02; });
   EXPECT_EQ(r.played, 3 * kPeriod);
-  EXPECT_EQ(r.end, hd::LearningExchange::LeadInEnd::kMinimum);
+  EXPECT_EQ(r.end, hd::LearningExchange::LeadInEnd::kOffsetReached);
   EXPECT_EQ(r.first_scored, 1000 - 197 * kPeriod);
   EXPECT_NEAR(r.target_at_first, 1.02, 1e-12);
 }

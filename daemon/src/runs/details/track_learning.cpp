@@ -101,11 +101,16 @@ namespace {
 std::string lead_in_end(const LearningExchange& x) {
   switch (x.lead_in_end()) {
     case LearningExchange::LeadInEnd::kMinimum:
-      return "the shortest lead-in: the offset is the one the drive was learned at";
+      return "the shortest lead-in, the offset not followed (lead_in_max_s no longer than it, or "
+             "the offset the drive was learned at or its last trial not saved with it)";
     case LearningExchange::LeadInEnd::kOffsetReached:
-      return "the offset, followed, came within the tolerance of the one the drive was learned at";
+      return x.lead_in_followed() != 0.0
+                 ? "the offset, followed, came within the tolerance of the one the drive was "
+                   "learned at"
+                 : "the offset is within the tolerance of the one the drive was learned at";
     case LearningExchange::LeadInEnd::kOffsetStalled:
-      return "the offset, followed, stopped moving toward the one the drive was learned at";
+      return "the offset, followed, would not come within the tolerance of the one the drive was "
+             "learned at before the longest lead-in (lead_in_max_s)";
     case LearningExchange::LeadInEnd::kLongest:
       return "the longest lead-in (lead_in_max_s): the offset is still off the one the drive was "
              "learned at";

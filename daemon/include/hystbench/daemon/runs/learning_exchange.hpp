@@ -47,7 +47,9 @@ struct LearningExchange {
   /// Before the run: the lead-in plays at least `min_periods` (<= lead_in_periods), and longer
   /// as `lead_in` says, up to lead_in_periods.
   void follow_offset(std::size_t min_periods, const LearningLeadIn& lead_in) noexcept;
-  /// Why the lead-in ended where it did.
+  /// Why the lead-in ended where it did: its minimum, with no following (none asked for or the
+  /// learned offset not known); the offset within the tolerance (at once, or followed there);
+  /// followed, it would not get there before the longest; the longest.
   enum class LeadInEnd { kMinimum, kOffsetReached, kOffsetStalled, kLongest };
   /// The tick trial 0 begins at: first_tick, or earlier where the lead-in ended early (the loop
   /// decides it, a period ahead).
