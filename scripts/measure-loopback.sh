@@ -68,6 +68,10 @@ start_daemon() {
 }
 hb() { "$bin/hystbench" --socket "$sock" "$@"; }
 f3='def f: if . == null then "-" else (. * 1000 | round / 1000 | tostring) end;'
+# A learning run's row cells: every trial's rms, the last trial's rms and max (jq, after $f3).
+trials_cells='\([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f)'
+# Rate dependence, the delay and thermal drift on: the learning sections' truth.
+every_effect=$'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
 
 identify_row() {  # identify_row LABEL JSON
   jq -rn --argjson id "$2" --arg l "$1" "$f3"'
@@ -136,7 +140,7 @@ for section in "${sections[@]}"; do
       stop_daemon
       ;;
     learning)
-      start_daemon learning config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      start_daemon learning config/loopback.toml "$every_effect"
       echo "### Every effect on: identify, then sines without and with learning (rms % of range)"
       echo
       echo "identify: $(identify_row default "$(hb identify --wait --json || true)")"
@@ -150,7 +154,7 @@ for section in "${sections[@]}"; do
         out=$(hb track --reference sine --frequency "$f" --learn 10 --wait --json || true)
         drives[$f]=$(jq -r '.learning.drive // empty' <<<"$out")
         jq -r --arg f "$f" "$f3"'
-          "| \($f) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f) | \(.learning.update_ms.mean | f) |"' <<<"$out" || true
+          "| \($f) | '"$trials_cells"' | \(.learning.update_ms.mean | f) |"' <<<"$out" || true
       done
       echo
       echo "Each learned drive replayed (track --learned NAME, no new trial):"
@@ -178,7 +182,7 @@ for section in "${sections[@]}"; do
       stop_daemon
       ;;
     learning-raster)
-      start_daemon learning-raster config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      start_daemon learning-raster config/loopback.toml "$every_effect"
       raster="$work/learning-raster/raster.csv"
       awk 'BEGIN { print "t,yr"; for (k = 0; k <= 10000; k++) { t = k / 5000; p = 2.5 * t - int(2.5 * t);
         printf "%.6f,%.6f\n", t, 8 + 28 * (p < 0.5 ? 2 * p : 2 - 2 * p) } }' >"$raster"
@@ -200,8 +204,7 @@ for section in "${sections[@]}"; do
       stop_daemon
       ;;
     learning-restart)
-      effects=$'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
-      start_daemon learning-restart config/loopback.toml "$effects"
+      start_daemon learning-restart config/loopback.toml "$every_effect"
       model=$(hb identify --wait --json | jq -r '.model.path')
       echo "### Learned drives replayed on the same bench and after a restart (rms % of range)"
       echo
@@ -216,7 +219,7 @@ for section in "${sections[@]}"; do
           --learned "${names[$f]}" --wait --json | jq -r "$f3"' .rms_error_percent | f' || true)
       done
       stop_daemon
-      start_daemon learning-restart config/loopback.toml "$effects"
+      start_daemon learning-restart config/loopback.toml "$every_effect"
       hb model load --stored "$(basename "$model")" >/dev/null
       for f in 50 200 500; do
         [ -n "${names[$f]:-}" ] || continue
@@ -228,7 +231,7 @@ for section in "${sections[@]}"; do
       stop_daemon
       ;;
     learning-scaled)
-      start_daemon learning-scaled config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      start_daemon learning-scaled config/loopback.toml "$every_effect"
       model=$(hb identify --wait --json | jq -r '.model.path')
       # The identified model's reference range: the scaled model's own range is 1.3x wider.
       log=$(hb track --reference sine --frequency 10 --periods 2 --wait --json | jq -r '.log')
@@ -243,7 +246,7 @@ for section in "${sections[@]}"; do
       for f in 1 10 50 200 500; do
         hb track --reference sine --frequency "$f" --min "$ymin" --max "$ymax" --learn 20 \
           --wait --json | jq -r --arg f "$f" "$f3"'
-          "| \($f) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f) |"' || true
+          "| \($f) | '"$trials_cells"' |"' || true
       done
       echo
       stop_daemon
@@ -252,7 +255,7 @@ for section in "${sections[@]}"; do
       start_daemon learning-delay-off config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
       model=$(hb identify --wait --json | jq -r '.model.path')
       stop_daemon
-      start_daemon learning-delay-on config/loopback.toml $'[actuator.rate_dependence]\nenabled = true\n[actuator.delay]\nenabled = true\n[actuator.thermal_drift]\nenabled = true'
+      start_daemon learning-delay-on config/loopback.toml "$every_effect"
       hb model load "$model" >/dev/null
       echo "### The model identified with the delay off, learning with it on (rms % of range)"
       echo
@@ -261,7 +264,7 @@ for section in "${sections[@]}"; do
       for f in 1 10 50 200 500; do
         hb track --reference sine --frequency "$f" --learn 20 --wait --json |
           jq -r --arg f "$f" "$f3"'
-          "| \($f) | \([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f) | \(.learning.delay_ticks.model | f), \(.learning.delay_ticks.used | f) |"' || true
+          "| \($f) | '"$trials_cells"' | \(.learning.delay_ticks.model | f), \(.learning.delay_ticks.used | f) |"' || true
       done
       echo
       stop_daemon

@@ -84,11 +84,10 @@ void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, doub
   if (begun + 1 < min_periods_) return;  // the last period begins at the minimum's last
   const bool longer = follow_.follow_periods > 0 && std::isfinite(follow_.learned_offset) &&
                       follow_.tolerance > 0.0;
-  const double gap = std::abs(tare + followed_ - follow_.learned_offset);
-  if (std::isnan(checkpoint_gap_)) checkpoint_gap_ = gap;
+  if (std::isnan(checkpoint_gap_)) checkpoint_gap_ = gap(tare);
   if (!longer) {
     end_ = LeadInEnd::kMinimum;
-  } else if (gap <= follow_.tolerance) {
+  } else if (gap(tare) <= follow_.tolerance) {
     end_ = LeadInEnd::kOffsetReached;
   } else if (begun + 1 >= lead_in_periods) {
     end_ = LeadInEnd::kLongest;
@@ -129,12 +128,12 @@ void LearningExchange::lead_in_error(std::uint64_t k, double error, double tare)
   if (++follow_steps_ % checked == 0) {
     // At the pace the gap closed since the last check, it would not reach the tolerance before
     // the longest lead-in: waiting on would not bring the drive back where it was learned.
-    const double gap = std::abs(tare + followed_ - follow_.learned_offset);
-    const double closed = checkpoint_gap_ - gap;
+    const double now = gap(tare);
+    const double closed = checkpoint_gap_ - now;
     const double left = static_cast<double>(lead_in_periods * period - (since + 1)) /
                         static_cast<double>(checked * step);
-    stalled_ = closed <= 0.0 || gap - follow_.tolerance > closed * left;
-    checkpoint_gap_ = gap;
+    stalled_ = closed <= 0.0 || now - follow_.tolerance > closed * left;
+    checkpoint_gap_ = now;
   }
 }
 

@@ -127,11 +127,9 @@ std::optional<LearningPlan> learning_plan(const TrackRequest& request, const Run
   plan.period = static_cast<std::size_t>(std::llround(rate / request.reference.frequency_hz));
   plan.frequency_hz = rate / static_cast<double>(plan.period);
   if (plan.start) {
-    plan.lead_in = std::max<std::size_t>(
-        1, static_cast<std::size_t>(std::ceil(kLeadInS * plan.frequency_hz - 1e-9)));
-    plan.lead_in_max = std::max<std::size_t>(
-        plan.lead_in,
-        static_cast<std::size_t>(std::ceil(keys.lead_in_max_s * plan.frequency_hz - 1e-9)));
+    plan.lead_in = periods_filling(kLeadInS, plan.frequency_hz);
+    plan.lead_in_max =
+        std::max(plan.lead_in, periods_filling(keys.lead_in_max_s, plan.frequency_hz));
   }
   return plan;
 }

@@ -243,9 +243,7 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
   first.insert(first.end(), traj.begin(), traj.end());
   double passes = 1.0;
   if (learned_trials) {
-    const double pass_s = static_cast<double>(pass) * dt;
-    r.lead_in_passes = std::max<std::size_t>(
-        1, static_cast<std::size_t>(std::ceil(lead_in_max_s / pass_s - 1e-9)));
+    r.lead_in_passes = periods_filling(lead_in_max_s, limits.rate_hz / static_cast<double>(pass));
     passes = learning_periods(*learned_trials, limits.rate_hz / static_cast<double>(pass)) +
              static_cast<double>(r.lead_in_passes - 1);
     std::vector<double> later = approach(traj.back(), traj.front(), n_a);
@@ -292,6 +290,11 @@ double learning_periods(std::size_t trials, double frequency_hz) {
   const double allowance =
       std::ceil(kUpdateAllowanceS * frequency_hz) * static_cast<double>(trials + 1);
   return static_cast<double>(trials + 2) + allowance;
+}
+
+std::size_t periods_filling(double seconds, double frequency_hz) {
+  return std::max<std::size_t>(1,
+                               static_cast<std::size_t>(std::ceil(seconds * frequency_hz - 1e-9)));
 }
 
 std::vector<double> checked_drive(const Upload& upload, double u_min, double u_max,

@@ -72,6 +72,9 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
 /// run ends after its last trial.
 double learning_periods(std::size_t trials, double frequency_hz);
 
+/// The whole periods of frequency_hz [Hz] that fill seconds [s] (at least one).
+std::size_t periods_filling(double seconds, double frequency_hz);
+
 /// A user's drive resampled to the loop period dt_s, checked against the output range and the
 /// slew limit in the same way [V].
 std::vector<double> checked_drive(const Upload& upload, double u_min, double u_max,

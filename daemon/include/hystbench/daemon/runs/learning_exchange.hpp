@@ -8,6 +8,7 @@
 // real-time safe (no allocation, no locks: atomics only).
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -152,6 +153,10 @@ struct LearningExchange {
   std::uint64_t lead_in_samples_ = 0;
   // The lead-in (loop only during the run).
   void decide_lead_in(std::uint64_t k, std::uint64_t begun, double tare) noexcept;
+  // How far the offset the target takes off is from the one the drive was learned at.
+  double gap(double tare) const noexcept {
+    return std::abs(tare + followed_ - follow_.learned_offset);
+  }
   std::uint64_t lead_start_ = 0;  // its first tick
   std::uint64_t start_ = 0;       // trial 0's first tick
   std::size_t min_periods_ = 1;
