@@ -68,6 +68,8 @@ start_daemon() {
 }
 hb() { "$bin/hystbench" --socket "$sock" "$@"; }
 f3='def f: if . == null then "-" else (. * 1000 | round / 1000 | tostring) end;'
+# The rate law a model file holds, with the thresholds law's power of the rate.
+rate_law='.model.rate | if . == null then "-" elif .law == "thresholds" then "thresholds, |du/dt|^\(.threshold_exponent // 1)" else .law end'
 # A learning run's row cells: every trial's rms, the last trial's rms and max (jq, after $f3).
 trials_cells='\([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f)'
 # Rate dependence, the delay and thermal drift on: the learning sections' truth.
@@ -116,8 +118,9 @@ for section in "${sections[@]}"; do
       echo "### Rate dependence on: identify --model M, then a sweep (rms % of range)"
       for m in mpi rpi auto; do
         id=$(hb identify --model "$m" --wait --json || true)
+        law=$(hb model get --json | jq -r "$rate_law" || true)
         echo
-        echo "identify --model $m: $(identify_row "$m" "$id")"
+        echo "identify --model $m (rate law $law): $(identify_row "$m" "$id")"
         echo
         hb sweep --frequencies 1,5,10,19,50,100,200 --compensators inverse,inverse+pid || true
       done
@@ -130,7 +133,7 @@ for section in "${sections[@]}"; do
       echo "### Widening thresholds: identify --model M, then a sweep (rms % of range)"
       for m in mpi rpi auto; do
         id=$(hb identify --model "$m" --wait --json || true)
-        law=$(hb model get --json | jq -r '.model.rate.law // "-"' || true)
+        law=$(hb model get --json | jq -r "$rate_law" || true)
         echo
         echo "identify --model $m (rate law $law): $(identify_row "$m" "$id")"
         echo

@@ -309,13 +309,18 @@ std::vector<double> align_offsets(std::span<const double> t, std::span<const dou
   return total;
 }
 
-/// The order causes are named in: by gain, but creep before drift. Both explain a slow change
-/// of the output; creep is the part the input explains, the drift what is left, and a drift's
-/// pieces, fitted across the held-out blocks between them, follow a slow creep at least as well
-/// as the creep lags that predict it.
+/// The order causes are named in: by gain, but creep before drift and before rate dependence.
+/// Creep and drift both explain a slow change of the output; creep is the part the input
+/// explains, the drift what is left, and a drift's pieces, fitted across the held-out blocks
+/// between them, follow a slow creep at least as well as the creep lags that predict it. A rate
+/// law's widening, where the filtered rate decays after a change, trails it as creep does; its
+/// own gain beside a stronger cause (a delay) is mostly that cause's, so it would be tried
+/// first and take the creep's share.
 bool ranks_before(Cause a, double gain_a, Cause b, double gain_b) {
-  if (a == Cause::kCreep && b == Cause::kDrift) return true;
-  if (a == Cause::kDrift && b == Cause::kCreep) return false;
+  for (const Cause later : {Cause::kDrift, Cause::kRateDependence}) {
+    if (a == Cause::kCreep && b == later) return true;
+    if (a == later && b == Cause::kCreep) return false;
+  }
   return gain_a > gain_b;
 }
 

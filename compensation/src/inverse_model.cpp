@@ -115,9 +115,11 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
       // Widening thresholds: on a branch the output is u - r_i - beta rate(u) per play, and the
       // rate moves with the drive by a / dt per unit of it. While beta a / dt < 1 the output
       // still grows with the drive at its own rate and each tick inverts exactly; beyond, the
-      // drive is solved at the rate the rate-free inverse's drive predicts.
+      // drive is solved at the rate the rate-free inverse's drive predicts. A widening that
+      // grows as a power p < 1 of the rate grows without bound near rate 0: solved so always.
       const double a = RateEstimator(p.rate_filter_s, rpi.sample_period()).coefficient();
-      own_rate_ = p.threshold_rate_s * a / rpi.sample_period() < kOwnRateMonotoneMargin;
+      own_rate_ = p.threshold_rate_exponent == 1.0 &&
+                  p.threshold_rate_s * a / rpi.sample_period() < kOwnRateMonotoneMargin;
     } else if (signed_) {
       // Weights that grow with the signed rate: the output grows with u and with its own rate
       // on both branches, so the own-rate solution is exact and stable forward in time.
@@ -372,7 +374,8 @@ InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const Actuato
       iterate_ = true;
       const double dt = rpi.sample_period();
       const double a = RateEstimator(p.rate_filter_s, dt).coefficient();
-      if (p.threshold_rate_s * a / dt >= kOwnRateMonotoneMargin) {
+      if (p.threshold_rate_exponent < 1.0 ||
+          p.threshold_rate_s * a / dt >= kOwnRateMonotoneMargin) {
         ActuatorModel rate_free(std::make_unique<ModifiedPiModel>(p.base));
         rate_free.set_creep(model_.creep());
         rate_free.input_min = model_.input_min;

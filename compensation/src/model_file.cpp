@@ -39,8 +39,8 @@ double number_member(const json& obj, const std::string& parent, const char* key
   return number(member(obj, parent, key), parent + "." + key);
 }
 
-// rate.law: "signed", "magnitude" or "thresholds" (with rate.threshold_s); absent (files written
-// before it was a choice): magnitude.
+// rate.law: "signed", "magnitude" or "thresholds" (with rate.threshold_s and, 1 when absent,
+// rate.threshold_exponent); absent (files written before it was a choice): magnitude.
 RateLaw rate_law_from_json(const json& rate) {
   const auto it = rate.find("law");
   if (it == rate.end()) return RateLaw::kMagnitude;
@@ -140,6 +140,7 @@ std::unique_ptr<HysteresisModel> hysteresis_from_json(const json& j, ModelKind k
           number_member(r, "rate", "record_max_rate", 0.0)};
       p.rate_law = rate_law_from_json(r);
       p.threshold_rate_s = number_member(r, "rate", "threshold_s", 0.0);
+      p.threshold_rate_exponent = number_member(r, "rate", "threshold_exponent", 1.0);
       h = std::make_unique<RateDependentPiModel>(std::move(p));
       break;
     }
@@ -205,7 +206,10 @@ json to_json(const ModelFile& file) {
                    {"filter_s", p.rate_filter_s},
                    {"record_max_rate", p.record_max_rate},
                    {"law", to_string(p.rate_law)}};
-      if (p.rate_law == RateLaw::kThresholds) j["rate"]["threshold_s"] = p.threshold_rate_s;
+      if (p.rate_law == RateLaw::kThresholds) {
+        j["rate"]["threshold_s"] = p.threshold_rate_s;
+        j["rate"]["threshold_exponent"] = p.threshold_rate_exponent;
+      }
       break;
     }
     case ModelKind::kCoupledPlayPi: {

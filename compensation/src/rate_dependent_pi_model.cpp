@@ -28,6 +28,13 @@ RateDependentPiModel::RateDependentPiModel(RateDependentPiParameters p, double d
   details::require_finite(p_.base.center, "deadzone.center");
   details::require_finite(p_.threshold_rate_s, "rate.threshold_s");
   details::require(p_.threshold_rate_s >= 0.0, "rate.threshold_s must be >= 0");
+  details::require_finite(p_.threshold_rate_exponent, "rate.threshold_exponent");
+  details::require(p_.threshold_rate_exponent > 0.0 && p_.threshold_rate_exponent <= 1.0,
+                   "rate.threshold_exponent must be in (0, 1]");
+  details::require(p_.threshold_rate_exponent == 1.0 ||
+                       (p_.rate_law == RateLaw::kThresholds && p_.max_rate > 0.0),
+                   "rate.threshold_exponent below 1 is only for the thresholds law "
+                   "(rate.law = \"thresholds\") with rate.max_rate > 0");
   if (p_.rate_law == RateLaw::kThresholds) {
     details::require(std::all_of(p_.rate_coefficients.begin(), p_.rate_coefficients.end(),
                                  [](double c) { return c == 0.0; }),
@@ -63,7 +70,9 @@ double RateDependentPiModel::evaluate(double u, double rate, double* state_out) 
   const auto& w = p_.base.play.weights;
   const double* s = pi_.state().data();
   double y = p_.base.play.offset;
-  const double widen = p_.threshold_rate_s * rate;  // 0 unless the thresholds law
+  // 0 unless the thresholds law.
+  const double widen =
+      threshold_widening(p_.threshold_rate_s, p_.threshold_rate_exponent, p_.max_rate, rate);
   for (std::size_t i = 0; i < r.size(); ++i) {
     const double ri = r[i] > 0.0 ? r[i] + widen : 0.0;  // the linear term does not lag
     const double pl = std::max(u - ri, std::min(u + ri, s[i]));

@@ -1,5 +1,5 @@
-// The rate-dependent PI's thresholds law: plays whose thresholds widen with |du/dt|, their
-// model file, their inverse and their fit.
+// The rate-dependent PI's thresholds law: plays whose thresholds widen with |du/dt| (or its
+// square root), their model file, their inverse and their fit.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -128,19 +128,52 @@ TEST(RateThresholdsLaw, TheLoopWidensWithTheRateAndItsTipsStayAtTheReversal) {
   EXPECT_LT(slow.tip_shortfall, 1e-9);
 }
 
+// With the exponent 1/2 a ramp sees its thresholds wider by threshold_rate_s * max_rate *
+// sqrt(rate / max_rate): at max_rate as the linear law, at a quarter of it half as wide.
+TEST(RateThresholdsLaw, ASquareRootLawWidensWithTheSquareRootOfTheRate) {
+  std::mt19937_64 rng(5);
+  hc::RateDependentPiParameters p = thresholds_law(rng, 2e-3, 0.0);
+  p.max_rate = 400.0;
+  p.threshold_rate_exponent = 0.5;
+  for (const double rate : {400.0, 100.0}) {
+    hc::RateDependentPiModel model(p, kDt);
+    hc::RateDependentPiParameters wide = p;
+    wide.rate_law = hc::RateLaw::kMagnitude;
+    wide.threshold_rate_s = 0.0;
+    wide.threshold_rate_exponent = 1.0;
+    const double widening = p.threshold_rate_s * p.max_rate * std::sqrt(rate / p.max_rate);
+    EXPECT_DOUBLE_EQ(hc::threshold_widening(p.threshold_rate_s, 0.5, p.max_rate, rate), widening);
+    for (double& r : wide.base.play.thresholds) {
+      if (r > 0.0) r += widening;
+    }
+    hc::ModifiedPiModel widened(wide.base);
+    model.reset(0.0);
+    widened.reset(0.0);
+    for (int k = 1; k <= 20; ++k) {
+      const double u = rate * kDt * k;
+      EXPECT_NEAR(model.step(u), widened.step(u), 1e-12) << rate << " " << k;
+    }
+  }
+  EXPECT_DOUBLE_EQ(hc::threshold_widening(p.threshold_rate_s, 0.5, p.max_rate, 100.0),
+                   0.5 * hc::threshold_widening(p.threshold_rate_s, 0.5, p.max_rate, 400.0));
+}
+
 TEST(RateThresholdsLaw, RoundTripsThroughTheModelFileAndOlderFilesStillLoad) {
   std::mt19937_64 rng(3);
   hc::RateDependentPiParameters p = thresholds_law(rng, 1.5e-3, 2e-3);
   p.max_rate = 400.0;
+  p.threshold_rate_exponent = 0.5;
   hc::ModelFile f;
   f.model = hc::ActuatorModel(std::make_unique<hc::RateDependentPiModel>(p, kDt));
   nlohmann::json j = hc::to_json(f);
   EXPECT_EQ(j["rate"]["law"], "thresholds");
+  EXPECT_EQ(j["rate"]["threshold_exponent"], 0.5);
   const hc::ModelFile back = hc::model_file_from_json(j);
   const auto& got =
       dynamic_cast<const hc::RateDependentPiModel&>(back.model.hysteresis()).parameters();
   EXPECT_EQ(got.rate_law, hc::RateLaw::kThresholds);
   EXPECT_DOUBLE_EQ(got.threshold_rate_s, p.threshold_rate_s);
+  EXPECT_DOUBLE_EQ(got.threshold_rate_exponent, p.threshold_rate_exponent);
   EXPECT_DOUBLE_EQ(got.rate_filter_s, p.rate_filter_s);
   // The same outputs on a fast sine.
   hc::ActuatorModel a = f.model, b = back.model;
@@ -149,10 +182,31 @@ TEST(RateThresholdsLaw, RoundTripsThroughTheModelFileAndOlderFilesStillLoad) {
   a.reset(0.0);
   b.reset(0.0);
   for (const double u : sine(7.0, 0.5)) ASSERT_DOUBLE_EQ(a.step(u), b.step(u));
+  // A thresholds file without the exponent (an older one) is linear in the rate; an exponent out
+  // of (0, 1] is refused naming the field.
+  nlohmann::json older = j;
+  older["rate"].erase("threshold_exponent");
+  EXPECT_EQ(dynamic_cast<const hc::RateDependentPiModel&>(
+                hc::model_file_from_json(older).model.hysteresis())
+                .parameters()
+                .threshold_rate_exponent,
+            1.0);
+  for (const double bad : {0.0, 1.5}) {
+    nlohmann::json wrong = j;
+    wrong["rate"]["threshold_exponent"] = bad;
+    try {
+      hc::model_file_from_json(wrong);
+      ADD_FAILURE() << "exponent " << bad << " loaded";
+    } catch (const hc::ModelFileError& e) {
+      EXPECT_NE(std::string(e.what()).find("rate.threshold_exponent"), std::string::npos)
+          << e.what();
+    }
+  }
   // A weight-law file without threshold_s loads as before; a widening on a weight law is refused
   // naming the field.
   j["rate"]["law"] = "magnitude";
   j["rate"].erase("threshold_s");
+  j["rate"].erase("threshold_exponent");
   EXPECT_NO_THROW(hc::model_file_from_json(j));
   j["rate"]["threshold_s"] = 1e-3;
   try {
@@ -170,9 +224,16 @@ TEST(RateThresholdsLaw, RoundTripsThroughTheModelFileAndOlderFilesStillLoad) {
 // keep the output growing); one pass a tick through the widening chattered.
 TEST(RateThresholdsLaw, TheInverseComposesWithTheModel) {
   for (const hc::InverseKind kind : {hc::InverseKind::kAuto, hc::InverseKind::kMultiplicative}) {
-    for (const double filter_s : {5e-3, 0.0}) {
+    for (const double filter_s : {5e-3, 0.0, -1.0}) {
       std::mt19937_64 rng(11);
-      hc::RateDependentPiParameters p = thresholds_law(rng, 1e-3, filter_s);
+      // -1: the square-root law (its widening's slope is unbounded at rate 0: never solved at
+      // the drive's own rate), filtered.
+      const bool square_root = filter_s < 0.0;
+      hc::RateDependentPiParameters p = thresholds_law(rng, 1e-3, square_root ? 5e-3 : filter_s);
+      if (square_root) {
+        p.max_rate = 300.0;
+        p.threshold_rate_exponent = 0.5;
+      }
       hc::ActuatorModel model(std::make_unique<hc::RateDependentPiModel>(p, kDt));
       model.configure(kDt);
       model.input_min = -2.0;
@@ -195,8 +256,9 @@ TEST(RateThresholdsLaw, TheInverseComposesWithTheModel) {
         span = std::max(span, std::abs(ref[k] - ref[0]));
       }
       const double bound = filter_s > 0.0 ? 1e-6 : 0.02;
-      std::cout << (kind == hc::InverseKind::kAuto ? "inverse" : "multiplicative") << ", filter "
-                << filter_s << " s: worst " << worst / span << " of the span\n";
+      std::cout << (kind == hc::InverseKind::kAuto ? "inverse" : "multiplicative")
+                << (square_root ? ", square root" : "") << ", filter " << filter_s << " s: worst "
+                << worst / span << " of the span\n";
       EXPECT_LT(worst, bound * span) << "filter " << filter_s;
     }
   }

@@ -108,7 +108,10 @@ double Design::row(double u, double y, double* a) noexcept {
   const double rho = s_.kind == ModelKind::kRateDependentPi
                          ? std::clamp(rate_.step(u) * inv_max_rate_, -1.0, 1.0)
                          : 0.0;
-  step_operators(u, thresholds_law() ? s_.threshold_rate_s * rho * s_.max_rate : 0.0);
+  step_operators(u, thresholds_law()
+                        ? threshold_widening(s_.threshold_rate_s, s_.threshold_rate_exponent,
+                                             s_.max_rate, std::abs(rho) * s_.max_rate)
+                        : 0.0);
   // Cumulative-weight regressors: sum_i w_i (p_i - u_ref) = sum_i W_i (p_i - p_{i+1}).
   const double* z = z_.data();
   if (thresholds_law()) {
@@ -232,7 +235,10 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
     rpi.rate_coefficients[i] = rate_part[k] * inv_max_rate_;
   }
   rpi.rate_law = s_.rate_law;
-  if (thresholds_law()) rpi.threshold_rate_s = s_.threshold_rate_s;
+  if (thresholds_law()) {
+    rpi.threshold_rate_s = s_.threshold_rate_s;
+    rpi.threshold_rate_exponent = s_.threshold_rate_exponent;
+  }
   rpi.max_rate = s_.max_rate;
   rpi.record_max_rate = s_.record_max_rate;
   rpi.rate_filter_s = s_.rate_filter_s;

@@ -17,7 +17,8 @@
 //              slope -e_j <= 0 (the loop widens with rate, as with |du/dt|; invertible on
 //              [-max_rate, max_rate]).
 //              thresholds law: as MPI, every play's threshold r_i > 0 + threshold_rate_s * rate
-//              (rate = min(|rate|, max_rate)); no rate columns.
+//              (rate = min(|rate|, max_rate); with an exponent p < 1, + threshold_rate_s *
+//              max_rate * |rho|^p); no rate columns.
 // Creep lags, when present, are extra unconstrained columns; so is the drift column (time from
 // drift_t0_s), which estimates a record's slow drift and is no part of the built model.
 #include <Eigen/Dense>
@@ -48,6 +49,7 @@ struct ModelStructure {
   double rate_filter_s = 0.0;    ///< RPI: the rate's low-pass time constant (RateEstimator) [s]
   RateLaw rate_law = RateLaw::kMagnitude;  ///< RPI: du/dt or |du/dt|, on weights or thresholds
   double threshold_rate_s = 0.0;           ///< RPI thresholds law: widening per rate [s]
+  double threshold_rate_exponent = 1.0;    ///< RPI thresholds law: the widening's power, (0, 1]
   double dt = 1e-3;                        ///< sample period [s]
   double min_play_slope = 0.0;             ///< lower bound on cumulative play weights
   double min_dead_zone_slope = 0.0;        ///< lower bound on cumulative inverse dead-zone weights

@@ -89,6 +89,8 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
         s.max_rate = p.max_rate;
         s.rate_filter_s = p.rate_filter_s;
         s.rate_law = p.rate_law;
+        s.threshold_rate_s = p.threshold_rate_s;
+        s.threshold_rate_exponent = p.threshold_rate_exponent;
         if (!(s.max_rate > 0.0)) return std::nullopt;
         break;
       }

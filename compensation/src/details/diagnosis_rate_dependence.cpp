@@ -11,6 +11,7 @@
 
 #include "details/diagnosis_candidates.hpp"
 #include "details/rate_groups.hpp"
+#include "hystbench/compensation/rate_dependent_pi_model.hpp"
 
 namespace hystbench::compensation::details {
 
@@ -23,6 +24,64 @@ constexpr double kRateQuantile = 0.999;
 // samples.
 constexpr double kWideningFractions[] = {0.005, 0.01, 0.02, 0.04, 0.08, 0.16};
 constexpr double kWideningFilterSamples[] = {0.0, 3.0};
+// Powers of the rate the widening grows with: linear (the identification's), and the square root.
+constexpr double kWideningExponents[] = {1.0, 0.5};
+
+// The other mechanism: thresholds that widen with |du/dt| (or its square root), the widening
+// searched on a grid of the input span at max_rate (and the rate filter) by the regression's
+// residual on the search rows; returns the best point, whose neighbours the caller refits on every
+// row and simulates. It has fewer unknowns than the weight laws, so the fit error chooses fairly
+// between them. `spec`: the rate-dependent structure with max_rate the smooth rates' quantile.
+ExtensionSpec best_thresholds_law(const DiagnosisRecord& r, const ExtensionSpec& spec) {
+  const ModelStructure& s = spec.structure;
+  ExtensionSpec widened = spec;
+  ModelStructure& w = widened.structure;
+  w.rate_law = RateLaw::kThresholds;
+  const double span = r.u_hi - r.u_lo;
+  double best_search = std::numeric_limits<double>::infinity();
+  ExtensionSpec best_widened = widened;
+  for (const double samples : kWideningFilterSamples) {
+    // Linear: not capped inside the record (as the identification), a step's rate holds the
+    // switching. The square root capped at the smooth rates: after a step its filtered rate
+    // decays at half the filter's pace, a tail that would stand in for creep.
+    const std::vector<double> filtered = sample_rates(r.u, r.dt, samples * r.dt);
+    const double uncapped =
+        std::max(s.max_rate, *std::max_element(filtered.begin(), filtered.end()));
+    for (const double exponent : kWideningExponents) {
+      w.max_rate = exponent == 1.0 ? uncapped : s.max_rate;
+      w.record_max_rate = uncapped;
+      for (const double fraction : kWideningFractions) {
+        w.rate_filter_s = samples * r.dt;
+        w.threshold_rate_exponent = exponent;
+        // The widening at s.max_rate is `fraction` of the span.
+        w.threshold_rate_s = fraction * span / s.max_rate;
+        // Ranked by the regression's residual, as the dynamics search: no simulation per point.
+        const double mse = fit_extension(r, widened, FitRows::kSearch, false).regression_mse;
+        if (mse < best_search) best_search = mse, best_widened = widened;
+      }
+    }
+  }
+  return best_widened;
+}
+
+// What the chosen rate law adds, in the input unit; s: the structure with the smooth rates' max.
+std::string describe_rate_law(const ModelStructure& chosen, const ModelStructure& s,
+                              const std::string& unit) {
+  std::string text = "rate-dependent PI on " + std::to_string(s.plays()) + " plays, ";
+  if (chosen.rate_law == RateLaw::kThresholds && chosen.threshold_rate_exponent != 1.0) {
+    return text + "thresholds widening with |du/dt|^" + num(chosen.threshold_rate_exponent) +
+           ", by " +
+           num(threshold_widening(chosen.threshold_rate_s, chosen.threshold_rate_exponent,
+                                  chosen.max_rate, s.max_rate)) +
+           " " + unit + " at " + num(s.max_rate) + " " + unit + "/s";
+  }
+  if (chosen.rate_law == RateLaw::kThresholds) {
+    return text + "thresholds widening by " + num(chosen.threshold_rate_s * 1e3) + " " + unit +
+           " per " + unit + "/ms of |du/dt|";
+  }
+  return text + "weights linear in " + (chosen.rate_law == RateLaw::kSigned ? "du/dt" : "|du/dt|") +
+         " up to " + num(s.max_rate) + " " + unit + "/s";
+}
 
 }  // namespace
 
@@ -65,45 +124,14 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     ExtensionFit f = fit_extension(r, spec);
     if (law == RateLaw::kSigned || f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
   }
-  // The other mechanism: thresholds that widen with |du/dt|, the widening searched on a grid
-  // of the input span at max_rate (and the rate filter) by the regression's residual on the
-  // search rows, the best and its neighbours refitted on every row and simulated. It has
-  // fewer unknowns than the weight laws, so the fit error chooses fairly between them.
-  ExtensionSpec widened = spec;
-  ModelStructure& w = widened.structure;
-  w.rate_law = RateLaw::kThresholds;
-  const double span = r.u_hi - r.u_lo;
-  double best_search = std::numeric_limits<double>::infinity();
-  ExtensionSpec best_widened = widened;
-  for (const double samples : kWideningFilterSamples) {
-    // Not capped inside the record (as the identification): a step's rate holds the switching.
-    const std::vector<double> filtered = sample_rates(r.u, r.dt, samples * r.dt);
-    w.max_rate = std::max(s.max_rate, *std::max_element(filtered.begin(), filtered.end()));
-    w.record_max_rate = w.max_rate;
-    for (const double fraction : kWideningFractions) {
-      w.rate_filter_s = samples * r.dt;
-      w.threshold_rate_s = fraction * span / s.max_rate;
-      // Ranked by the regression's residual, as the dynamics search: no simulation per point.
-      const double mse = fit_extension(r, widened, FitRows::kSearch, false).regression_mse;
-      if (mse < best_search) best_search = mse, best_widened = widened;
-    }
-  }
+  const ExtensionSpec best_widened = best_thresholds_law(r, spec);
   for (const double step : {1.0, std::sqrt(2.0), 1.0 / std::sqrt(2.0)}) {
     ExtensionSpec t = best_widened;
     t.structure.threshold_rate_s *= step;
     ExtensionFit f = fit_extension(r, t);
     if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
   }
-  const ModelStructure& chosen = out.fit.spec.structure;
-  out.extension = "rate-dependent PI on " + std::to_string(s.plays()) + " plays, ";
-  if (chosen.rate_law == RateLaw::kThresholds) {
-    out.extension += "thresholds widening by " + num(chosen.threshold_rate_s * 1e3) + " " +
-                     r.units.input + " per " + r.units.input + "/ms of |du/dt|";
-  } else {
-    out.extension += std::string("weights linear in ") +
-                     (chosen.rate_law == RateLaw::kSigned ? "du/dt" : "|du/dt|") + " up to " +
-                     num(s.max_rate) + " " + r.units.input + "/s";
-  }
+  out.extension = describe_rate_law(out.fit.spec.structure, s, r.units.input);
   return out;
 }
 

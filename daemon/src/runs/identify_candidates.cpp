@@ -157,6 +157,7 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     free.base = mpi->parameters();
     free.rate_coefficients.assign(free.base.play.thresholds.size(), 0.0);
     free.threshold_rate_s = 0.0;
+    free.threshold_rate_exponent = 1.0;
     hc::ActuatorModel model(
         std::make_unique<hc::RateDependentPiModel>(std::move(free), fit.model.sample_period()));
     model.set_creep(fit.model.creep());

@@ -23,7 +23,8 @@
 //
 // Candidates and their extensions:
 //   asymmetry        modified PI (dead zones) or coupled-play PI
-//   rate_dependence  rate-dependent PI (cumulative weights linear in |du/dt|)
+//   rate_dependence  rate-dependent PI (cumulative weights linear in du/dt or |du/dt|, or
+//                    thresholds widening with |du/dt| or its square root)
 //   creep            creep lags (CreepOperatorBank), time constants log-spaced
 //   dynamics         second-order dynamics (natural frequency, damping) after the hysteresis
 //   delay            pure input delay in whole samples

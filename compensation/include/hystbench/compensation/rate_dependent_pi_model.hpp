@@ -7,11 +7,15 @@
 //   play's threshold widens with |du/dt|, r_i(rate) = r_i + threshold_rate_s * rate for
 //   r_i > 0 (the r_0 = 0 play is the paper's linear term p_0 u and stays one); the weights are
 //   rate-free. The loop's tips stay where the input reverses (the rate is 0 there),
-//   where a delay would carry the output past them.
+//   where a delay would carry the output past them. With an exponent p < 1 the widening grows
+//   as a power of the rate, threshold_rate_s * max_rate * (rate / max_rate)^p (the same at
+//   max_rate): a loop whose width grows with the square root of the rate (p = 1/2) as the
+//   domain walls of a piezoceramic move with the field's overdrive.
 // The rate is capped at max_rate (when > 0) and low-passed with time constant rate_filter_s
 // (RateEstimator; 0 = the per-sample difference (u(k) - u(k-1)) / dt, the paper's form).
 // Dead zones are rate-independent.
 // Needs set_sample_period(). Real-time safe step()/peek()/peek_at_rate().
+#include <cmath>
 #include <optional>
 #include <span>
 #include <vector>
@@ -37,9 +41,25 @@ struct RateDependentPiParameters {
   /// key are kMagnitude.
   RateLaw rate_law = RateLaw::kMagnitude;
   /// kThresholds: how far every play's threshold widens per unit of rate [s] (input unit per
-  /// input unit / s), >= 0; the rate coefficients are then all 0. Other laws: 0.
+  /// input unit / s), >= 0; the rate coefficients are then all 0. Other laws: 0. With an
+  /// exponent below 1: the widening at max_rate divided by max_rate.
   double threshold_rate_s = 0.0;
+  /// kThresholds: p of the widening's power of the rate, in (0, 1]; 1 = linear in the rate.
+  /// Below 1 needs max_rate > 0. Other laws: 1. Model files without the key are 1.
+  double threshold_rate_exponent = 1.0;
 };
+
+/// The thresholds law's widening [input unit] at rate (>= 0, capped at max_rate > 0 when
+/// exponent < 1): threshold_rate_s * rate, or threshold_rate_s * max_rate * (rate /
+/// max_rate)^exponent. Real-time safe.
+inline double threshold_widening(double threshold_rate_s, double exponent, double max_rate,
+                                 double rate) noexcept {
+  if (exponent == 1.0 || !(max_rate > 0.0) || threshold_rate_s == 0.0) {
+    return threshold_rate_s * rate;
+  }
+  const double rho = std::abs(rate) / max_rate;
+  return threshold_rate_s * max_rate * (exponent == 0.5 ? std::sqrt(rho) : std::pow(rho, exponent));
+}
 
 class RateDependentPiModel final : public HysteresisModel {
  public:
