@@ -20,6 +20,17 @@ constexpr double kSignedSettleRateFraction = 0.01;
 // Thresholds law: inverted at the drive's own rate while beta a / dt stays below this (the
 // output then grows with the drive by at least 1 - this per unit on every branch).
 constexpr double kOwnRateMonotoneMargin = 0.8;
+
+// Thresholds law: on a branch the output is u - r_i - widening(rate(u)) per play, and the rate
+// moves with the drive by a / dt per unit of it. A linear widening beta * rate keeps the output
+// growing with the drive at its own rate while beta a / dt stays below the margin; a widening
+// that grows as a power p < 1 of the rate grows without bound near rate 0, so never.
+bool thresholds_grow_at_own_rate(const RateDependentPiModel& rpi) {
+  const RateDependentPiParameters& p = rpi.parameters();
+  const double a = RateEstimator(p.rate_filter_s, rpi.sample_period()).coefficient();
+  return p.threshold_rate_exponent == 1.0 &&
+         p.threshold_rate_s * a / rpi.sample_period() < kOwnRateMonotoneMargin;
+}
 }  // namespace
 
 // ---------------------------------------------------------------- PiInverse
@@ -112,14 +123,10 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
     max_rate_ = p.max_rate;
     signed_ = p.rate_law == RateLaw::kSigned;
     if (p.rate_law == RateLaw::kThresholds) {
-      // Widening thresholds: on a branch the output is u - r_i - beta rate(u) per play, and the
-      // rate moves with the drive by a / dt per unit of it. While beta a / dt < 1 the output
-      // still grows with the drive at its own rate and each tick inverts exactly; beyond, the
-      // drive is solved at the rate the rate-free inverse's drive predicts. A widening that
-      // grows as a power p < 1 of the rate grows without bound near rate 0: solved so always.
-      const double a = RateEstimator(p.rate_filter_s, rpi.sample_period()).coefficient();
-      own_rate_ = p.threshold_rate_exponent == 1.0 &&
-                  p.threshold_rate_s * a / rpi.sample_period() < kOwnRateMonotoneMargin;
+      // Widening thresholds: where the output still grows with the drive at its own rate each
+      // tick inverts exactly; else the drive is solved at the rate the rate-free inverse's drive
+      // predicts.
+      own_rate_ = thresholds_grow_at_own_rate(rpi);
     } else if (signed_) {
       // Weights that grow with the signed rate: the output grows with u and with its own rate
       // on both branches, so the own-rate solution is exact and stable forward in time.
@@ -368,14 +375,12 @@ InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const Actuato
     const auto& rpi = static_cast<const RateDependentPiModel&>(model_.hysteresis());
     const RateDependentPiParameters& p = rpi.parameters();
     if (p.rate_law == RateLaw::kThresholds) {
-      // The thresholds widen with |du/dt|: at the drive's own rate the output still grows with
-      // it while beta a / dt < 1 (NumericInverse), and the iteration contracts as for a static
-      // map; beyond, each tick is solved at the rate the rate-free structure's drive predicts.
+      // The thresholds widen with |du/dt|: where the output still grows with the drive at its
+      // own rate, the iteration contracts as for a static map; else each tick is solved at the
+      // rate the rate-free structure's drive predicts.
       iterate_ = true;
       const double dt = rpi.sample_period();
-      const double a = RateEstimator(p.rate_filter_s, dt).coefficient();
-      if (p.threshold_rate_exponent < 1.0 ||
-          p.threshold_rate_s * a / dt >= kOwnRateMonotoneMargin) {
+      if (!thresholds_grow_at_own_rate(rpi)) {
         ActuatorModel rate_free(std::make_unique<ModifiedPiModel>(p.base));
         rate_free.set_creep(model_.creep());
         rate_free.input_min = model_.input_min;

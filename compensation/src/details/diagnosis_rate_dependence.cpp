@@ -47,12 +47,12 @@ ExtensionSpec best_thresholds_law(const DiagnosisRecord& r, const ExtensionSpec&
     const std::vector<double> filtered = sample_rates(r.u, r.dt, samples * r.dt);
     const double uncapped =
         std::max(s.max_rate, *std::max_element(filtered.begin(), filtered.end()));
+    w.rate_filter_s = samples * r.dt;
+    w.record_max_rate = uncapped;
     for (const double exponent : kWideningExponents) {
+      w.threshold_rate_exponent = exponent;
       w.max_rate = exponent == 1.0 ? uncapped : s.max_rate;
-      w.record_max_rate = uncapped;
       for (const double fraction : kWideningFractions) {
-        w.rate_filter_s = samples * r.dt;
-        w.threshold_rate_exponent = exponent;
         // The widening at s.max_rate is `fraction` of the span.
         w.threshold_rate_s = fraction * span / s.max_rate;
         // Ranked by the regression's residual, as the dynamics search: no simulation per point.
