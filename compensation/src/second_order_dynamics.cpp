@@ -29,14 +29,6 @@ SecondOrderDynamics::SecondOrderDynamics(DynamicsParameters p, double dt_s) : p_
   }
 }
 
-double SecondOrderDynamics::step(double x) noexcept {
-  const double y0 = phi_[0][0] * s_[0] + phi_[0][1] * s_[1] + gam_[0] * x;
-  const double y1 = phi_[1][0] * s_[0] + phi_[1][1] * s_[1] + gam_[1] * x;
-  s_[0] = y0;
-  s_[1] = y1;
-  return y0;
-}
-
 void SecondOrderDynamics::reset(double x0) noexcept {
   s_[0] = x0;
   s_[1] = 0.0;

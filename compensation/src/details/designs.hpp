@@ -57,6 +57,7 @@ struct ModelStructure {
   bool drift = false;       ///< a drift column: time since sample 0 less drift_t0_s [s]
   double drift_t0_s = 0.0;  ///< the time the drift column is zero at [s]
 
+  bool operator==(const ModelStructure&) const = default;
   std::size_t plays() const noexcept { return play_thresholds.size(); }
   /// The drift column's value at sample k: its time from drift_t0_s [s].
   double drift_time_s(std::size_t k) const noexcept {

@@ -102,15 +102,17 @@ Resonance search(const DiagnosisRecord& r, std::span<const double> x, double f_l
 // have already absorbed part of the resonance, which biases fn low and zeta high).
 class JointObjective {
  public:
-  JointObjective(const DiagnosisRecord& r, const ExtensionSpec& base) : r_(r), spec_(base) {}
+  JointObjective(const DiagnosisRecord& r, const ExtensionSpec& base, const DesignRows& rows)
+      : r_(r), spec_(base), rows_(rows) {}
   double operator()(double fn, double zeta) {
     spec_.dynamics = DynamicsParameters{fn, zeta};
-    return fit_extension(r_, spec_, FitRows::kSearch, false).regression_mse;
+    return fit_extension(r_, spec_, FitRows::kSearch, false, &rows_).regression_mse;
   }
 
  private:
   const DiagnosisRecord& r_;
   ExtensionSpec spec_;
+  const DesignRows& rows_;
 };
 
 Resonance project(JointObjective& j, Resonance start, double f_lo, double f_hi) {
@@ -166,18 +168,20 @@ CandidateOutcome test_dynamics(const CandidateContext& c) {
 
   std::vector<double> x = static_prediction(c.base_fit, r);
   Resonance res = search(r, x, f_lo, f_hi, std::nullopt);
+  // Every fit below differs from the base only in its dynamics: the design is stepped once.
+  const DesignRows rows(r, c.base);
   ExtensionSpec spec = c.base;
   spec.dynamics = DynamicsParameters{res.fn, res.zeta};
-  ExtensionFit fit = fit_extension(r, spec);
+  ExtensionFit fit = fit_extension(r, spec, FitRows::kAll, true, &rows);
   // Once more from the jointly refitted hysteresis.
   x = static_prediction(fit, r);
   const Resonance again = search(r, x, f_lo, f_hi, res);
   ExtensionSpec spec2 = c.base;
   spec2.dynamics = DynamicsParameters{again.fn, again.zeta};
-  ExtensionFit fit2 = fit_extension(r, spec2);
+  ExtensionFit fit2 = fit_extension(r, spec2, FitRows::kAll, true, &rows);
   if (fit2.fit.rmse < fit.fit.rmse) fit = std::move(fit2), res = again;
   // Then jointly with the weights, from the better of that estimate and the spectral peak.
-  JointObjective joint(r, c.base);
+  JointObjective joint(r, c.base, rows);
   Resonance start = res;
   start.mse = joint(res.fn, res.zeta);
   if (const auto peak = spectral_peak(c.response, f_lo, f_hi)) {
@@ -187,7 +191,7 @@ CandidateOutcome test_dynamics(const CandidateContext& c) {
   const Resonance projected = project(joint, start, f_lo, f_hi);
   ExtensionSpec spec3 = c.base;
   spec3.dynamics = DynamicsParameters{projected.fn, projected.zeta};
-  ExtensionFit fit3 = fit_extension(r, spec3);
+  ExtensionFit fit3 = fit_extension(r, spec3, FitRows::kAll, true, &rows);
   if (fit3.fit.rmse < fit.fit.rmse) fit = std::move(fit3), res = projected;
   out.fit = std::move(fit);
   out.extension =

@@ -1,10 +1,13 @@
 #include "details/diagnosis_extension_fit.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "details/diagnosis_signals.hpp"
+#include "details/second_order_bank.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/delay_line.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
@@ -131,8 +134,43 @@ struct Joint {
   double regression_mse = 0.0;
 };
 
+// The dynamics applied to the regressor columns that pass through them: plays (and rate
+// columns), creep lags. The offset is constant (unit DC gain keeps it) and the dead-zone columns
+// act on the measured output.
+class FilteredColumns {
+ public:
+  FilteredColumns(const Design& design, const std::optional<DynamicsParameters>& dynamics,
+                  double dt)
+      : columns_{Columns{0, static_cast<std::size_t>(design.offset_column())},
+                 Columns{static_cast<std::size_t>(design.creep_column()),
+                         static_cast<std::size_t>(design.unknowns() - design.creep_column())}} {
+    if (dynamics) {
+      bank_.emplace(SecondOrderDynamics(*dynamics, dt), columns_[0].count + columns_[1].count);
+    }
+  }
+  bool active() const noexcept { return bank_.has_value(); }
+  /// Sample k's row through the dynamics into `a` (the filtered columns only; `row` may be `a`);
+  /// sample 0 settles them at its values. Nothing without dynamics.
+  void apply(std::size_t k, const double* row, double* a) noexcept {
+    if (!bank_) return;
+    std::size_t signal = 0;
+    for (const Columns& c : columns_) {
+      if (k == 0) bank_->reset(signal, row + c.first, c.count);
+      bank_->step(signal, row + c.first, a + c.first, c.count);
+      signal += c.count;
+    }
+  }
+
+ private:
+  struct Columns {
+    std::size_t first, count;
+  };
+  std::array<Columns, 2> columns_;
+  std::optional<SecondOrderBank> bank_;
+};
+
 Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const ExtensionSpec& spec,
-                FitRows rows) {
+                FitRows rows, const DesignRows* cached) {
   Design design(spec.structure);
   const Eigen::Index nd = design.unknowns();
   const DriftBasis drift(r.drift_knot_samples(), spec.drift ? r.drift_knots() : 0,
@@ -141,13 +179,7 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
   const Eigen::Index unknowns = nd + nb;
   const std::vector<double> ud = delayed(r.u, spec.delay_samples);
 
-  // Columns that pass through the dynamics: plays (and rate columns), creep lags. The offset is
-  // constant (unit DC gain keeps it) and the dead-zone columns act on the measured output.
-  std::vector<Eigen::Index> filtered;
-  for (Eigen::Index j = 0; j < design.offset_column(); ++j) filtered.push_back(j);
-  for (Eigen::Index j = design.creep_column(); j < nd; ++j) filtered.push_back(j);
-  std::vector<SecondOrderDynamics> filters;
-  if (spec.dynamics) filters.assign(filtered.size(), SecondOrderDynamics(*spec.dynamics, r.dt));
+  FilteredColumns filters(design, spec.dynamics, r.dt);
 
   // Rate-dependent rows above the model's rate cap (input steps) are not fitted: the model
   // caps the rate there, the design does not.
@@ -164,14 +196,17 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
     if (use) use = fit_index++ % stride == 0;
     if (use && rate_cap && k > 0 && std::abs(ud[k] - ud[k - 1]) > max_step) use = false;
     double* a = use ? ne.row() : scratch.data();
-    const double target = design.row(ud[k], y[k], a);
-    if (spec.dynamics) {
-      for (std::size_t c = 0; c < filtered.size(); ++c) {
-        const Eigen::Index j = filtered[c];
-        if (k == 0) filters[c].reset(a[j]);
-        a[j] = filters[c].step(a[j]);
-      }
+    // The row: cached (copied only where it is used; the filters read it in place) or stepped.
+    const double* row = a;
+    double target = 0.0;
+    if (cached != nullptr) {
+      row = cached->row(k);
+      if (use || !filters.active()) std::copy_n(row, nd, a);
+      target = cached->target(k);
+    } else {
+      target = design.row(ud[k], y[k], a);
     }
+    filters.apply(k, row, a);
     if (nb > 0) drift.row(k, a + nd);
     if (use) ne.push(target);
   }
@@ -232,7 +267,7 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
   Eigen::VectorXd coef = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(unknowns));
   std::vector<double> a(unknowns);
   for (int iteration = 0; iteration < 4; ++iteration) {
-    out = fit_joint(r, target, hysteresis_only, rows);
+    out = fit_joint(r, target, hysteresis_only, rows, nullptr);
     const std::vector<double> h = ActuatorModel(out.model).simulate(r.u, r.dt);
     NormalEquations ne(static_cast<Eigen::Index>(unknowns));
     std::size_t fit_index = 0;
@@ -290,11 +325,40 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
 
 }  // namespace
 
-ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows,
-                           bool predict) {
+namespace {
+
+// Dead-zone kinds with additive terms alternate the fit over a moving target.
+bool alternates(const ExtensionSpec& spec) noexcept {
   const bool additive = !spec.structure.creep_time_constants.empty() || spec.drift;
-  Joint j = spec.structure.has_dead_zones() && additive ? fit_alternating(r, spec, rows)
-                                                        : fit_joint(r, r.y, spec, rows);
+  return spec.structure.has_dead_zones() && additive;
+}
+
+}  // namespace
+
+DesignRows::DesignRows(const DiagnosisRecord& r, const ExtensionSpec& spec)
+    : record_(&r), spec_(spec) {
+  if (alternates(spec)) return;  // never served
+  Design design(spec.structure);
+  columns_ = static_cast<std::size_t>(design.unknowns());
+  rows_.resize(r.n * columns_);
+  targets_.resize(r.n);
+  const std::vector<double> ud = delayed(r.u, spec.delay_samples);
+  design.reset(ud[0]);
+  for (std::size_t k = 0; k < r.n; ++k) {
+    targets_[k] = design.row(ud[k], r.y[k], rows_.data() + k * columns_);
+  }
+}
+
+bool DesignRows::serves(const DiagnosisRecord& r, const ExtensionSpec& spec) const noexcept {
+  return &r == record_ && spec.structure == spec_.structure &&
+         spec.delay_samples == spec_.delay_samples && !alternates(spec);
+}
+
+ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows,
+                           bool predict, const DesignRows* cached) {
+  if (cached != nullptr && !cached->serves(r, spec)) cached = nullptr;
+  Joint j =
+      alternates(spec) ? fit_alternating(r, spec, rows) : fit_joint(r, r.y, spec, rows, cached);
   ExtensionFit out;
   out.spec = spec;
   out.model = std::move(j.model);

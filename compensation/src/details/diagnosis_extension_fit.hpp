@@ -40,11 +40,36 @@ enum class FitRows {
   kSearch,  ///< every record.search_stride-th fit row (cheaper, for searches)
 };
 
+/// A spec's design rows and regression targets through the whole record, stepped once: the fits
+/// of a search that varies only the dynamics filter these instead of stepping the operators again
+/// (the same arithmetic, so the same fits). Holds record samples x design unknowns doubles.
+class DesignRows {
+ public:
+  /// Steps the spec's design (its structure at its delay; the dynamics and drift are not part of
+  /// it) through the record against its measured output; nothing for a spec it cannot serve.
+  DesignRows(const DiagnosisRecord& r, const ExtensionSpec& spec);
+  /// True when fits of `spec` on `r` may use these rows: the same structure and delay, fitted
+  /// in one pass (no creep or drift alternating with dead zones, which regress a moving target).
+  bool serves(const DiagnosisRecord& r, const ExtensionSpec& spec) const noexcept;
+  /// Sample k's row (`columns()` values) and target.
+  const double* row(std::size_t k) const noexcept { return rows_.data() + k * columns_; }
+  double target(std::size_t k) const noexcept { return targets_[k]; }
+  std::size_t columns() const noexcept { return columns_; }
+
+ private:
+  const DiagnosisRecord* record_;
+  ExtensionSpec spec_;
+  std::size_t columns_ = 0;
+  std::vector<double> rows_, targets_;
+};
+
 /// Fits the spec's linear unknowns; with `predict` also simulates the model through the record
 /// and scores it on both parts. For PI / CPI kinds regression_mse is the output error on the
-/// rows used, so searches over delay and dynamics can skip the simulation.
+/// rows used, so searches over delay and dynamics can skip the simulation. `cached` rows, when
+/// given and they serve the spec, stand for stepping its design.
 ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec,
-                           FitRows rows = FitRows::kAll, bool predict = true);
+                           FitRows rows = FitRows::kAll, bool predict = true,
+                           const DesignRows* cached = nullptr);
 
 /// Classical PI structure: `plays` thresholds uniform on half the input span.
 ModelStructure pi_structure(const DiagnosisRecord& r, int plays);

@@ -18,10 +18,19 @@ class SecondOrderDynamics {
   SecondOrderDynamics(DynamicsParameters p, double dt_s);
 
   /// Holds x for one sample period; returns the output at the end of that period.
-  double step(double x) noexcept;
+  double step(double x) noexcept {
+    const double y0 = phi_[0][0] * s_[0] + phi_[0][1] * s_[1] + gam_[0] * x;
+    const double y1 = phi_[1][0] * s_[0] + phi_[1][1] * s_[1] + gam_[1] * x;
+    s_[0] = y0;
+    s_[1] = y1;
+    return y0;
+  }
   /// Settled at input (= output) x0.
   void reset(double x0) noexcept;
   const DynamicsParameters& parameters() const noexcept { return p_; }
+  /// The exact discretisation over one sample, state [y, ydot]: x(k+1) = Phi x(k) + Gam u(k).
+  double phi(int i, int j) const noexcept { return phi_[i][j]; }
+  double gam(int i) const noexcept { return gam_[i]; }
 
  private:
   DynamicsParameters p_;
