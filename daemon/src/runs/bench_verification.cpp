@@ -4,6 +4,7 @@
 // identify_session.hpp).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -15,6 +16,17 @@ namespace hystbench::daemon {
 
 namespace hc = compensation;
 using nlohmann::json;
+
+namespace {
+
+// A sine's frequency in a run id and a stage: "500", "200.027".
+std::string frequency_text(double hz) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", hz);
+  return text;
+}
+
+}  // namespace
 
 bool Bench::verify_next_candidate() {
   IdentifySession& s = *session_;
@@ -42,8 +54,10 @@ bool Bench::verify_next_candidate() {
       ++s.next;
       continue;
     }
-    const std::string sine_label =
-        sine ? "-sine-" + std::to_string(std::lround(job.sine_hz)) + "hz" : "";
+    // Six digits: a mode's quarter (200.027 Hz) and a twentieth of the loop rate (200 Hz) are
+    // two segments, two logs.
+    const std::string hz = sine ? frequency_text(job.sine_hz) : "";
+    const std::string sine_label = sine ? "-sine-" + hz + "hz" : "";
     p->run_id = s.result["run_id"].get<std::string>() + "-verify-" + c.label + sine_label;
     json header = {{"run",
                     {{"kind", "verify"},
@@ -80,9 +94,7 @@ bool Bench::verify_next_candidate() {
       return false;
     }
     s.program_id = program_id;
-    active_run_["stage"] =
-        "verify " + c.label +
-        (sine ? " (" + std::to_string(std::lround(job.sine_hz)) + " Hz sine)" : "");
+    active_run_["stage"] = "verify " + c.label + (sine ? " (" + hz + " Hz sine)" : "");
     active_run_["total"] = total;
     active_run_["verification_log"] = log;
     phase_ = RunPhase::kRunning;  // stop and abort now act on the verification
@@ -127,9 +139,9 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
 void Bench::continue_identify() {
   if (verify_next_candidate()) return;
   IdentifySession& s = *session_;
-  if (s.extend && !s.extension_tried && !s.interrupted && !quit_.load() &&
-      extend_identified_model() && verify_next_candidate()) {
-    return;
+  if (s.extend && !s.extension_tried && !s.interrupted && !quit_.load()) {
+    if (play_while_diagnosing() && verify_next_candidate()) return;
+    if (extend_identified_model() && verify_next_candidate()) return;
   }
   finish_identify();
 }

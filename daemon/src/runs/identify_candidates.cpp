@@ -182,8 +182,11 @@ void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
   }
   try {
     session_ = fit_candidates(run, result, fit_request);
-    if (session_->extend) {
-      // Every candidate may become the base: diagnosed in the order the choice prefers them.
+    continue_identify();
+    // The diagnoses start once the first segment is on the loop (building its drive does not
+    // share the second core with them). Every candidate may become the base: diagnosed in the
+    // order the choice prefers them until the verification has chosen.
+    if (session_ && session_->extend && !session_->extension_tried) {
       std::vector<std::size_t> order(session_->candidates.size());
       for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
       session_->ahead = std::make_unique<details::DiagnosisAhead>(
@@ -192,7 +195,6 @@ void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
                              session_->y, dt_),
           std::move(order));
     }
-    continue_identify();
     return;
   } catch (const std::exception& e) {
     result.report["fit_error"] = e.what();

@@ -24,10 +24,13 @@ namespace {
 // The middle sine that guards an extension: the fast one's frequency over this.
 constexpr double kMidFraction = 2.5;
 
-// The fast sine that judges an extension [Hz], 0 for none: a delay or dynamics show at a
-// twentieth of the loop rate (the fastest `track` plays; a quarter of a mode's frequency below
-// it), a rate law at the identify record's fastest rate segment; creep and asymmetry show on the
-// standard triangle.
+// The fast sine a delay or dynamics show at [Hz]: a twentieth of the loop rate, the fastest
+// `track` plays.
+double delay_sine_frequency(double loop_rate_hz) { return loop_rate_hz / 20.0; }
+
+// The fast sine that judges an extension [Hz], 0 for none: a delay or dynamics show at
+// delay_sine_frequency() (a quarter of a mode's frequency below it), a rate law at the identify
+// record's fastest rate segment; creep and asymmetry show on the standard triangle.
 double fast_frequency(const std::vector<std::string>& parts, const hc::ActuatorModel& extended,
                       double loop_rate_hz) {
   const auto has = [&](const char* p) {
@@ -35,7 +38,7 @@ double fast_frequency(const std::vector<std::string>& parts, const hc::ActuatorM
   };
   double f = 0.0;
   if (has("delay") || has("dynamics")) {
-    f = loop_rate_hz / 20.0;
+    f = delay_sine_frequency(loop_rate_hz);
     if (extended.dynamics()) f = std::min(f, extended.dynamics()->natural_frequency_hz / 4.0);
   }
   if (has("rate_dependence")) f = std::max(f, rate_sine_frequency(loop_rate_hz));
@@ -174,6 +177,14 @@ std::string extension_added(const hc::Diagnosis& d, bool named, const json& part
   return added;
 }
 
+// The candidate the extension extends: the best verified one, a rate law judged against its
+// rate-free self on the rate sine.
+std::size_t extension_base(const std::vector<IdentifyCandidate>& candidates,
+                           std::optional<std::size_t> rate_free, double rate_sine_hz) {
+  return best_verified(candidates,
+                       left_out_of_choice(candidates, std::nullopt, rate_free, rate_sine_hz));
+}
+
 // The times of identify's record at the loop rate [s].
 std::vector<double> record_times(std::size_t n, double dt) {
   std::vector<double> t(n);
@@ -203,11 +214,26 @@ details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandi
   };
 }
 
+bool Bench::play_while_diagnosing() {
+  IdentifySession& s = *session_;
+  if (!s.ahead) return false;
+  const std::size_t base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
+  s.ahead->focus(base);
+  if (s.ahead->ready(base)) return false;
+  const double fast = delay_sine_frequency(settings_.loop.rate_hz);
+  for (const double hz : {fast, fast / kMidFraction}) {
+    if (s.candidates[base].sines.contains(hz)) continue;
+    s.jobs.push_back({base, hz});
+    s.sines_while_diagnosing.push_back(hz);
+    return true;
+  }
+  return false;
+}
+
 bool Bench::extend_identified_model() {
   IdentifySession& s = *session_;
   s.extension_tried = true;
-  s.base = best_verified(
-      s.candidates, left_out_of_choice(s.candidates, std::nullopt, s.rate_free, s.rate_sine_hz));
+  s.base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
   const IdentifyCandidate& base = s.candidates[s.base];
   const std::string run_id = s.result["run_id"].get<std::string>();
   {
@@ -240,6 +266,7 @@ bool Bench::extend_identified_model() {
     std::optional<ExtensionDraft> draft = extension_draft(d);
     s.extension = extension_json(d, draft ? draft->parts : std::vector<std::string>{});
     s.extension["diagnosis_ran"] = taken.how;
+    s.extension["sines_while_diagnosing_hz"] = s.sines_while_diagnosing;
     if (!draft) {
       s.extension["adopted"] = false;
       s.extension["why"] = "the diagnosis finds nothing the model misses";

@@ -1,6 +1,7 @@
 // identify's diagnoses run beside the verification: the one taken is the one computed ahead
 // when it is ready, waited for when it is running, run on the caller's thread otherwise; the
-// rest stop, and a diagnosis that throws reaches the caller.
+// rest stop, once the verification has chosen (focus) only the chosen one runs, and a diagnosis
+// that throws reaches the caller.
 #include "runs/details/diagnosis_ahead.hpp"
 
 #include <gtest/gtest.h>
@@ -88,6 +89,61 @@ TEST(DiagnosisAhead, ACandidateNotReachedRunsOnTheCallersThreadAndTheWorkerStops
   EXPECT_EQ(taken.how, "after the verification");
   EXPECT_EQ(ran_on, std::this_thread::get_id());
   EXPECT_EQ(reports, 1);
+}
+
+// Once the verification has chosen candidate 2, the worker abandons candidate 0, skips 1 and
+// diagnoses 2 on its own thread, ready to be taken.
+TEST(DiagnosisAhead, FocusAbandonsTheOneRunningForTheChosenOne) {
+  std::atomic<bool> zero_started{false};
+  std::atomic<bool> zero_cancelled{false};
+  std::atomic<int> one_runs{0};
+  std::thread::id two_ran_on;
+  hd::DiagnosisAhead ahead(
+      [&](std::size_t i, const hd::DiagnosisAhead::Progress& progress) {
+        if (i == 0) {
+          zero_started = true;
+          work_until_cancelled(progress, zero_cancelled);
+        }
+        if (i == 1) ++one_runs;
+        if (i == 2) two_ran_on = std::this_thread::get_id();
+        return marked(i);
+      },
+      {0, 1, 2});
+  wait_until([&] { return zero_started.load(); });
+  EXPECT_FALSE(ahead.ready(2));
+  ahead.focus(2);
+  wait_until([&] { return ahead.ready(2); });
+  EXPECT_TRUE(zero_cancelled.load());
+  EXPECT_FALSE(ahead.ready(0));
+  const auto taken = ahead.take(2, nullptr);
+  EXPECT_EQ(taken.diagnosis.verdict, "candidate 2");
+  EXPECT_EQ(taken.how, "during the verification");
+  EXPECT_NE(two_ran_on, std::this_thread::get_id());
+  EXPECT_EQ(one_runs.load(), 0);
+}
+
+// Focused on the one running: it goes on, and nothing starts after it.
+TEST(DiagnosisAhead, FocusOnTheOneRunningLetsItFinishAndStartsNoOther) {
+  std::atomic<bool> release{false};
+  std::atomic<int> runs[2] = {0, 0};
+  hd::DiagnosisAhead ahead(
+      [&](std::size_t i, const hd::DiagnosisAhead::Progress& progress) {
+        ++runs[i];
+        while (i == 0 && !release.load()) {
+          progress(0.5, "working");
+          std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        }
+        return marked(i);
+      },
+      {0, 1});
+  wait_until([&] { return runs[0].load() == 1; });
+  ahead.focus(0);
+  release = true;
+  wait_until([&] { return ahead.ready(0); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // room for a wrong start of 1
+  const auto taken = ahead.take(0, nullptr);
+  EXPECT_EQ(taken.diagnosis.verdict, "candidate 0");
+  EXPECT_EQ(runs[1].load(), 0);
 }
 
 // Taken while it runs: waited for, not started again, and nothing after it starts.

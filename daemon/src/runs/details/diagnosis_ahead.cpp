@@ -6,7 +6,7 @@
 namespace hystbench::daemon::details {
 
 DiagnosisAhead::DiagnosisAhead(Task task, std::vector<std::size_t> order)
-    : task_(std::move(task)), order_(std::move(order)), worker_([this] { run(); }) {}
+    : task_(std::move(task)), queue_(order.begin(), order.end()), worker_([this] { run(); }) {}
 
 DiagnosisAhead::~DiagnosisAhead() { stop_and_join(); }
 
@@ -18,23 +18,40 @@ void DiagnosisAhead::stop_and_join() {
   if (worker_.joinable()) worker_.join();
 }
 
+void DiagnosisAhead::focus(std::size_t candidate) {
+  std::lock_guard lock(mutex_);
+  queue_.clear();
+  if (done_.contains(candidate) || failed_.contains(candidate) || running_ == candidate) return;
+  queue_.push_back(candidate);
+  abandon_ = running_.has_value();
+}
+
+bool DiagnosisAhead::ready(std::size_t candidate) {
+  std::lock_guard lock(mutex_);
+  return done_.contains(candidate) || failed_.contains(candidate);
+}
+
 void DiagnosisAhead::run() {
-  for (const std::size_t i : order_) {
+  for (;;) {
+    std::size_t i = 0;
     {
       std::lock_guard lock(mutex_);
-      if (cancel_ || stop_after_running_) break;
+      if (cancel_ || stop_after_running_ || queue_.empty()) break;
+      i = queue_.front();
+      queue_.pop_front();
       running_ = i;
+      abandon_ = false;
     }
     const Progress cancellable = [this](double, const std::string&) {
       std::lock_guard lock(mutex_);
-      if (cancel_) throw Cancelled{};
+      if (cancel_ || abandon_) throw Cancelled{};
     };
     try {
       compensation::Diagnosis d = task_(i, cancellable);
       std::lock_guard lock(mutex_);
       done_.emplace(i, std::move(d));
     } catch (const Cancelled&) {
-      break;  // running_ is reset below
+      // Abandoned for the one focused on (next in the queue), or cancelled: the loop stops.
     } catch (...) {
       std::lock_guard lock(mutex_);
       failed_.emplace(i, std::current_exception());

@@ -1,11 +1,13 @@
 #pragma once
 // The diagnoses of identify's candidates, run on a worker thread while the loop plays their
 // verification segments (wall time the supervisor spends waiting): one candidate after another,
-// in the order given, each kept until taken. The worker runs at the normal policy: at SCHED_IDLE
+// in the order given, each kept until taken; once the verification has chosen, only the chosen
+// one (focus). The worker runs at the normal policy: at SCHED_IDLE
 // another busy process starves it, and taking or cancelling it then waits for as long. Not
 // real-time code; the supervisor thread owns it.
 #include <condition_variable>
 #include <cstddef>
+#include <deque>
 #include <exception>
 #include <functional>
 #include <map>
@@ -29,6 +31,11 @@ class DiagnosisAhead {
   DiagnosisAhead(Task task, std::vector<std::size_t> order);
   /// Cancels what is running (at its next progress report) and joins.
   ~DiagnosisAhead();
+  /// Only candidate i is wanted from now on: another one running is abandoned (at its next
+  /// progress report) and none but i starts.
+  void focus(std::size_t candidate);
+  /// True once candidate i's diagnosis has finished (or failed).
+  bool ready(std::size_t candidate);
   DiagnosisAhead(const DiagnosisAhead&) = delete;
   DiagnosisAhead& operator=(const DiagnosisAhead&) = delete;
 
@@ -47,14 +54,15 @@ class DiagnosisAhead {
   void stop_and_join();
 
   Task task_;
-  std::vector<std::size_t> order_;
+  std::deque<std::size_t> queue_;  ///< the candidates still to start, in order
   std::mutex mutex_;
   std::condition_variable changed_;
   std::map<std::size_t, compensation::Diagnosis> done_;
   std::map<std::size_t, std::exception_ptr> failed_;
   std::optional<std::size_t> running_;
   bool stop_after_running_ = false;  ///< take() waits for the one running: no further one
-  bool cancel_ = false;              ///< abandon the one running
+  bool cancel_ = false;              ///< abandon the one running and stop
+  bool abandon_ = false;             ///< abandon the one running, go on with the queue
   std::thread worker_;
 };
 

@@ -89,6 +89,8 @@ struct Bench::IdentifySession {
   std::optional<std::size_t> extended;  ///< the extended candidate, when there is one
   double fast_hz = 0.0;                 ///< the fast sine's frequency [Hz]; 0 = none
   double mid_hz = 0.0;                  ///< the middle sine's (fast / 2.5) [Hz]; 0 = none
+  /// The base's sines played while its diagnosis ran [Hz] (play_while_diagnosing()).
+  std::vector<double> sines_while_diagnosing;
   /// The rate-free neighbour of a rate law (candidate 0), when there is one: the two are judged
   /// against each other on the rate sine; a law that loses is not adopted (nor its dead-zone
   /// neighbour), a law that wins leaves its rate-free self out.

@@ -178,6 +178,11 @@ class Bench {
   void verification_finished(std::unique_ptr<RunProgram> run);
   /// The next segment, else the extension (once), else finish_identify().
   void continue_identify();
+  /// While the best verified candidate's diagnosis still runs (on its own from now on), queues
+  /// one of that candidate's sines an extension of delay or dynamics is judged against, not yet
+  /// played: the wait plays what the extension would play after it. False when it is ready or
+  /// both sines have played.
+  bool play_while_diagnosing();
   /// Diagnoses the record with the best verified candidate and queues its extension's
   /// verification; false when nothing is added (the reason in the session's extension).
   bool extend_identified_model();
