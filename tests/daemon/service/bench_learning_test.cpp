@@ -279,7 +279,12 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
   const json learned = learn(50.0, 10);
   ASSERT_EQ(learned["end"], "completed") << learned.dump(2);
   const std::vector<double> rms = trial_rms(learned);
-  const double first = rms.front(), last = rms.back();
+  ASSERT_GE(rms.size(), 3u);
+  // The level the last trial stands for: near the sensor's noise floor one trial's rms scatters
+  // by 15 % or more (0.014-0.018 % here), so the quadratic mean of the last three.
+  double square_sum = 0.0;
+  for (std::size_t i = rms.size() - 3; i < rms.size(); ++i) square_sum += rms[i] * rms[i];
+  const double first = rms.front(), last = std::sqrt(square_sum / 3.0);
   const std::string name = learned["learning"]["drive"];
   const json replay_params = {{"reference", "sine"}, {"frequency_hz", 50.0}, {"learned", name}};
 
