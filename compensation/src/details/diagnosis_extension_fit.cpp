@@ -350,7 +350,7 @@ DesignRows::DesignRows(const DiagnosisRecord& r, const ExtensionSpec& spec)
 }
 
 bool DesignRows::serves(const DiagnosisRecord& r, const ExtensionSpec& spec) const noexcept {
-  return &r == record_ && spec.structure == spec_.structure &&
+  return columns_ > 0 && &r == record_ && spec.structure == spec_.structure &&
          spec.delay_samples == spec_.delay_samples && !alternates(spec);
 }
 

@@ -59,7 +59,7 @@ class DesignRows {
  private:
   const DiagnosisRecord* record_;
   ExtensionSpec spec_;
-  std::size_t columns_ = 0;
+  std::size_t columns_ = 0;  ///< 0 when not stepped (a spec it cannot serve)
   std::vector<double> rows_, targets_;
 };
 

@@ -38,6 +38,14 @@ hc::Diagnosis marked(std::size_t candidate) {
   }
 }
 
+// Candidate 0's diagnosis notes that it started, then works until cancelled; the others pass.
+void zero_works_until_cancelled(std::size_t candidate, const hd::DiagnosisAhead::Progress& progress,
+                                std::atomic<bool>& started, std::atomic<bool>& cancelled) {
+  if (candidate != 0) return;
+  started = true;
+  work_until_cancelled(progress, cancelled);
+}
+
 void wait_until(const std::function<bool()>& done) {
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (!done() && std::chrono::steady_clock::now() < until) {
@@ -72,10 +80,7 @@ TEST(DiagnosisAhead, ACandidateNotReachedRunsOnTheCallersThreadAndTheWorkerStops
   std::thread::id ran_on;
   hd::DiagnosisAhead ahead(
       [&](std::size_t i, const hd::DiagnosisAhead::Progress& progress) {
-        if (i == 0) {
-          zero_started = true;
-          work_until_cancelled(progress, zero_cancelled);
-        }
+        zero_works_until_cancelled(i, progress, zero_started, zero_cancelled);
         ran_on = std::this_thread::get_id();
         progress(1.0, "done");
         return marked(i);
@@ -100,10 +105,7 @@ TEST(DiagnosisAhead, FocusAbandonsTheOneRunningForTheChosenOne) {
   std::thread::id two_ran_on;
   hd::DiagnosisAhead ahead(
       [&](std::size_t i, const hd::DiagnosisAhead::Progress& progress) {
-        if (i == 0) {
-          zero_started = true;
-          work_until_cancelled(progress, zero_cancelled);
-        }
+        zero_works_until_cancelled(i, progress, zero_started, zero_cancelled);
         if (i == 1) ++one_runs;
         if (i == 2) two_ran_on = std::this_thread::get_id();
         return marked(i);
