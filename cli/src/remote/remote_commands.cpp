@@ -130,6 +130,12 @@ void print_learning(std::ostream& out, const json& l) {
   for (const json& t : trials) out << " " << fixed(t["rms_error_percent"], 3);
   out << "\n                  " << l.value("why", std::string()) << "; best trial "
       << l.value("best_trial", json()).dump() << ", cut-off " << fixed(l["cutoff_hz"], 0) << " Hz";
+  const json above = l.value("above_cutoff", json::object());
+  if (above.value("updates", 0) > 0) {
+    out << ", above it through a " << fixed(above["mode_hz"], 0) << " Hz mode ("
+        << above.value("mode_from", std::string()) << ") in " << above["updates"].get<int>()
+        << " updates";
+  }
   if (l.value("stale_periods", 0) > 0) {
     out << ", " << l["stale_periods"].get<int>()
         << " periods replayed while the update was computed";

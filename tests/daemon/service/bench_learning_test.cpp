@@ -45,7 +45,7 @@ class BenchLearningTest : public hystbench::test::BenchFixture {
     bench_->start();
   }
 
-  json learn(double hz, int trials, json extra = json::object()) {
+  json learn(double hz, int trials, const json& extra = json::object()) {
     json params = {{"reference", "sine"}, {"frequency_hz", hz}, {"learn_trials", trials}};
     params.update(extra);
     return run_and_wait("track", params);
@@ -64,6 +64,21 @@ class BenchLearningTest : public hystbench::test::BenchFixture {
     std::vector<double> out;
     for (const json& t : r["learning"]["trials"]) out.push_back(t["rms_error_percent"]);
     return out;
+  }
+
+  // A learning run that completed its trials, none above the first, the last within `bound`
+  // [% of range]: its trials' rms (empty when it did not complete).
+  static std::vector<double> converged(const json& r, std::size_t trials, double bound) {
+    EXPECT_EQ(r["end"], "completed") << r.dump(2);
+    if (r["end"] != "completed") return {};
+    print(r);
+    std::vector<double> rms = trial_rms(r);
+    EXPECT_EQ(rms.size(), trials + 1);
+    for (const double v : rms) EXPECT_LE(v, rms.front()) << r["learning"].dump(2);
+    if (!rms.empty()) {
+      EXPECT_LE(rms.back(), bound) << r["learning"].dump(2);
+    }
+    return rms;
   }
 
   static void print(const json& r) {
@@ -162,28 +177,48 @@ TEST_F(BenchLearningTest, AWrongModelStillConverges) {
   ASSERT_EQ(rms.size(), 21u);
   for (const double v : rms) EXPECT_LE(v, rms.front());
   EXPECT_LE(rms.back(), 0.03);
+
+  // The model without the delay (as an identify with the delay off keeps it) at 500 Hz, 20
+  // trials: its error is mostly the sixth harmonic, on the truth's 3 kHz mode, which the model
+  // does not hold and Q cuts; the learner meets it through the mode identify timed on its
+  // record's steps: 0.06-0.14 %. With Q set by hand (the same cut-off), learned below it alone:
+  // 0.21-0.22 % (a model identified with the delay off stalled at 0.39-0.43 % that way).
+  model = json::parse(std::ifstream(id["model"]["path"].get<std::string>()));
+  model["delay_s"] = 0.0;
+  ASSERT_TRUE(model["identification"]["extension"].contains("timing")) << model.dump(2);
+  bench_->handle("model.load", {{"model", model}, {"name", "no-delay.json"}});
+  const json fast = learn(500.0, 20);
+  const std::vector<double> fast_rms = converged(fast, 20, 0.3);
+  ASSERT_FALSE(fast_rms.empty());
+  const json& above = fast["learning"]["above_cutoff"];
+  EXPECT_EQ(above.value("mode_from", ""), "the steps its identify timed") << above.dump();
+  EXPECT_GT(above.value("updates", 0), 0) << above.dump();
+  const json by_hand = learn(500.0, 20, {{"learn_cutoff_hz", fast["learning"]["cutoff_hz"]}});
+  ASSERT_EQ(by_hand["end"], "completed") << by_hand.dump(2);
+  print(by_hand);
+  EXPECT_EQ(by_hand["learning"]["above_cutoff"].value("updates", -1), 0);
+  EXPECT_LE(fast_rms.back(), 0.75 * trial_rms(by_hand).back());
 }
 
 // The default truth with the delay on: identify's extension usually adds the 3 kHz mode it times
 // on its record's steps, and a 500 Hz sine, whose fifth harmonic sits at 0.83 of the mode,
-// learns beside it (Q passes up to 0.9 of the mode; L does not invert it): below 0.3 % within
-// ten trials, none above the first. (When the extension adds no mode, the same holds.)
+// learns beside it (Q passes up to 0.9 of the mode, and the harmonics above Q go through the
+// mode): 0.063-0.067 % within ten trials (0.20 % below Q alone; target 0.3 %), none above the
+// first. (When the extension adds no mode, the same holds.)
 TEST_F(BenchLearningTest, AFastSineLearnsBesideTheModeIdentifyAdded) {
   start(settings_from_toml(loopback_toml("[actuator.delay]\nenabled = true\n")));
   const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   const json r = learn(500.0, 10);
-  ASSERT_EQ(r["end"], "completed") << r.dump(2);
-  print(r);
-  const std::vector<double> rms = trial_rms(r);
-  ASSERT_EQ(rms.size(), 11u);
-  for (const double v : rms) EXPECT_LE(v, rms.front());
-  EXPECT_LE(rms.back(), 0.3);
+  const std::vector<double> rms = converged(r, 10, 0.3);
+  ASSERT_FALSE(rms.empty());
   const json active = bench_->handle("model.get", json::object())["model"];
   std::cout << "extension: " << id["model"].value("extension", json()).dump() << "\n";
   if (active.contains("dynamics") && active["dynamics"].is_object()) {
     EXPECT_LT(r["learning"]["cutoff_hz"].get<double>(),
               0.9 * active["dynamics"]["natural_frequency_hz"].get<double>() + 1.0);
+    EXPECT_EQ(r["learning"]["above_cutoff"].value("mode_from", ""), "the model")
+        << r["learning"].dump(2);
   }
   // Replayed, the drive plays 20 ms (ten periods) ahead of its scored period: one period of
   // 2 ms leaves the actuator settling from rest.

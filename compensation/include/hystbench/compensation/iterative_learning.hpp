@@ -27,19 +27,28 @@
 // and the 300th harmonic of the trial's fundamental (above it a slow trial's error is mostly sensor
 // noise), but past its fifth harmonic within 0.3 of the sample rate (a fast trial's error is mostly
 // its odd harmonics), and below 0.9 of the model's natural frequency (a mode it misses would grow
-// from trial to trial). Pure maths, no I/O; allocates: off the real-time path.
+// from trial to trial). A fast trial (that floor sets Q) also learns its harmonics above Q, to
+// 0.45 of the sample rate, where a mode is known (the model's, else the one the bench's step
+// responses timed, LearningOptions::bench_mode), the bench's delay measured (three trial pairs),
+// and the error Q leaves out at least half of what it passes: each harmonic of that error,
+// divided by the mode's exact response there and the delay, through s_k (the error of a 500 Hz
+// trial beside a 3 kHz mode is mostly its sixth harmonic, which the mode lifts and Q cuts).
+// Pure maths, no I/O; allocates: off the real-time path.
 #include <array>
+#include <complex>
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/second_order_dynamics.hpp"
 
 namespace hystbench::compensation {
 
 struct LearningOptions {
   double dt = 1e-4;        ///< sample period [s], > 0
-  double cutoff_hz = 0.0;  ///< Q's cut-off [Hz]; 0 = the default above
+  double cutoff_hz = 0.0;  ///< Q's cut-off [Hz]; 0 = the default above (set: nothing above it)
   /// The trial's fundamental for the harmonic bound [Hz]; 0 = its repetition rate (a trial
   /// that holds several cycles, a raster's lines in one pass, gives theirs).
   double fundamental_hz = 0.0;
@@ -48,6 +57,9 @@ struct LearningOptions {
   double max_step = 1e300;  ///< largest change between samples [input unit] (slew x dt)
   double min_slope = 0.25;  ///< local slope floor, a fraction of its mean along the trial
   double max_slope = 4.0;   ///< local slope cap, a multiple of that mean
+  /// The bench's mode where the model has none (its identify's step timing): a fast trial
+  /// learns its harmonics above Q through it. Unused where the model has dynamics.
+  std::optional<DynamicsParameters> bench_mode;
 };
 
 class IterativeLearning {
@@ -73,6 +85,13 @@ class IterativeLearning {
   /// The bench's delay [samples] from each trial pair that showed it clearly, in order.
   const std::vector<double>& delay_measurements() const noexcept { return delays_; }
   std::size_t period_samples() const noexcept { return period_; }
+  /// A fast trial's: the harmonics above Q are learned through this mode (none otherwise).
+  std::optional<DynamicsParameters> high_band_mode() const {
+    return mode_ ? std::optional(mode_->parameters()) : std::nullopt;
+  }
+  bool fast_trial() const noexcept { return fast_trial_; }
+  /// The updates that learned the harmonics above Q.
+  std::size_t high_band_updates() const noexcept { return high_band_updates_; }
 
  private:
   void local_slope(std::span<const double> drive);
@@ -84,8 +103,18 @@ class IterativeLearning {
   // (where that wraps to the trial's start) a share of what the trial changed since `before`.
   std::vector<double> advanced_error(std::span<const double> error, std::span<const double> drive,
                                      const std::vector<double>& before);
+  // A fast trial's harmonics above Q: each through the mode and the bench's delay.
+  void add_high_band(std::span<const double> error, double gain, std::vector<double>& correction);
+  bool in_high_band(std::size_t h) const;
+  // x's h-th harmonic over the trial (unscaled DFT).
+  std::complex<double> harmonic(std::span<const double> x, std::size_t h) const;
+  // The model's mode at w [rad / sample]: its discrete response, output over input.
+  std::complex<double> mode_response(double w) const;
 
-  ActuatorModel model_;  // static: its slope along the trial
+  ActuatorModel model_;                      // static: its slope along the trial
+  std::optional<SecondOrderDynamics> mode_;  // a fast trial's high band's mode
+  bool fast_trial_ = false;
+  std::size_t high_band_updates_ = 0;
   std::size_t period_;
   LearningOptions o_;
   double cutoff_hz_ = 0.0;

@@ -18,6 +18,8 @@ TrackLearning::TrackLearning(const hc::ActuatorModel& model, LearningExchange& e
     : exchange_(exchange),
       request_(std::move(request)),
       learner_(model, exchange.period, options),
+      mode_in_model_(model.dynamics().has_value()),
+      cutoff_by_hand_(options.cutoff_hz > 0.0),
       guard_(request_.gain) {
   if (request_.start_drive.empty()) return;
   if (!exchange.start_from(request_.start_drive, request_.start_compensator,
@@ -132,6 +134,24 @@ std::optional<TrackLearning::Trial> TrackLearning::last_trial() const {
   return trials_.back();
 }
 
+json TrackLearning::above_cutoff() const {
+  if (!learner_.fast_trial()) {
+    return {{"updates", 0}, {"why", "none: Q reaches the trial's fifth harmonic and more"}};
+  }
+  if (cutoff_by_hand_) {
+    return {{"updates", 0}, {"why", "none: Q's cut-off was set (learn_cutoff_hz)"}};
+  }
+  const auto mode = learner_.high_band_mode();
+  if (!mode) {
+    return {{"updates", 0},
+            {"why", "none: no mode known (the model holds none and its identify timed none)"}};
+  }
+  return {{"updates", learner_.high_band_updates()},
+          {"mode_hz", mode->natural_frequency_hz},
+          {"damping_ratio", mode->damping_ratio},
+          {"mode_from", mode_in_model_ ? "the model" : "the steps its identify timed"}};
+}
+
 json TrackLearning::result() const {
   const bool started = !request_.start_drive.empty();
   json trials = json::array();
@@ -153,6 +173,7 @@ json TrackLearning::result() const {
           {"trials_requested", request_.trials},
           {"gain", request_.gain},
           {"cutoff_hz", learner_.cutoff_hz()},
+          {"above_cutoff", above_cutoff()},
           {"delay_ticks",
            {{"model", learner_.model_delay_samples()},
             {"used", learner_.delay_samples()},

@@ -82,7 +82,12 @@ class TrackLearning {
  private:
   LearningExchange& exchange_;
   LearningRequest request_;
+  // The `above_cutoff` object: how a fast trial learned its harmonics above Q, or why not.
+  nlohmann::json above_cutoff() const;
+
   compensation::IterativeLearning learner_;
+  bool mode_in_model_ = false;   ///< the model holds a mode (else the identify's timed one)
+  bool cutoff_by_hand_ = false;  ///< learn_cutoff_hz set Q (nothing is learned above it)
   compensation::LearningGuard guard_;
   std::vector<Trial> trials_;
   std::vector<double> u_, c_, e_, next_, best_drive_, kept_;

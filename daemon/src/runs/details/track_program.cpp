@@ -423,6 +423,22 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
                           linear, ctx.plans, ctx.model_generation}};
 }
 
+// The mode the active model's identify timed on its record's steps, where it kept none in the
+// model (the extension not adopted): a fast trial's learning meets it above Q.
+std::optional<hc::DynamicsParameters> timed_mode(const RunContext& ctx) {
+  if (ctx.model == nullptr) return std::nullopt;
+  const nlohmann::json& id = ctx.model->identification;
+  const nlohmann::json timing =
+      id.value("extension", nlohmann::json::object()).value("timing", nlohmann::json::object());
+  const double hz = timing.value("natural_frequency_hz", 0.0);
+  const double zeta = timing.value("damping_ratio", 0.0);
+  if (!(std::isfinite(hz) && hz > 0.0 && std::isfinite(zeta) && zeta > 0.0)) return std::nullopt;
+  hc::DynamicsParameters mode;
+  mode.natural_frequency_hz = hz;
+  mode.damping_ratio = zeta;
+  return mode;
+}
+
 // The learner of a learning run: the trials' exchange from the first scored period on, the
 // active model (else the linear map of the limits) as its L, the drive limits of the loop.
 std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
@@ -439,6 +455,7 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   o.u_max = lim.u_max;
   o.cutoff_hz = plan.cutoff_hz;
   o.fundamental_hz = ref.content_hz;
+  o.bench_mode = timed_mode(ctx);
   if (lim.slew_v_per_s > 0.0) o.max_step = lim.slew_v_per_s * o.dt;
   LearningRequest r;
   r.trials = plan.trials;
