@@ -18,7 +18,7 @@
 #              none / inverse / inverse+pid, then track --learn 10 at each frequency, each drive
 #              replayed, and a raster line (--reference-file) learned over 10 passes
 #   learning-delay  the same effects, the model identified with the delay off: track --learn 20
-#              at each frequency
+#              at each frequency; then 500 Hz alone on a fresh daemon, with its delay and without
 #   learning-raster  the same effects: identify, the raster line learned over 10 passes and
 #              replayed twice; then all of it again in the same daemon (a second identify)
 #   learning-restart  the same effects: identify, track --learn 10 at 50 / 200 / 500 Hz, each
@@ -271,6 +271,22 @@ for section in "${sections[@]}"; do
       done
       echo
       stop_daemon
+      # 500 Hz alone on a fresh daemon, with the model as identify kept it and without any tick
+      # of delay (an identify with the delay off keeps one or none).
+      echo "500 Hz alone, 20 trials (the model's delay: trials rms %, last rms / max %, above Q):"
+      for ticks in kept none; do
+        start_daemon "learning-delay-alone-$ticks" config/loopback.toml "$every_effect"
+        if [ "$ticks" = none ]; then
+          jq '.delay_s = 0' "$model" >"$work/learning-delay-alone-none/no-delay.json"
+          hb model load "$work/learning-delay-alone-none/no-delay.json" >/dev/null
+        else
+          hb model load "$model" >/dev/null
+        fi
+        hb track --reference sine --frequency 500 --learn 20 --wait --json |
+          jq -r --arg t "$ticks" "$f3"'"- \($t) (\(.learning.delay_ticks.model | f) ticks): '"$trials_cells"' | \(.learning.above_cutoff.updates) updates through \(.learning.above_cutoff.mode_hz // 0 | round) Hz"' || true
+        stop_daemon
+      done
+      echo
       ;;
     delay)
       # identify extends its model itself; --no-extend is the model without it. Three truths:
