@@ -198,7 +198,8 @@ CliCommand add_diagnose(CLI::App& app) {
                   "Folder for report.txt, diagnosis.json and gnuplot PNGs");
   cmd->add_option("--save-baseline", diag->save_baseline, "Write the baseline model file");
   cmd->add_option("--save-extended", diag->save_extended,
-                  "Write the extended model file (the baseline plus the named effect)");
+                  "Write the extended model file (the baseline plus the named effects; its "
+                  "mode and delay timed on the first record's step responses)");
   return {cmd, [diag] { return cli::run_diagnose(*diag, std::cout, std::cerr); }};
 }
 

@@ -15,6 +15,7 @@
 
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
+#include "hystbench/common/step_timed_model.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "offline/details/mimo_commands.hpp"
 #include "report/details/gnuplot.hpp"
@@ -423,6 +424,23 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
   details::run_gnuplot(dir / "report.gp", dir / "gnuplot.log");
 }
 
+// --save-baseline and --save-extended: the extended model's dynamics and delay timed on the first
+// record's step responses, as identify times its extension. Returns that timing (null: none).
+json save_models(const DiagnoseCommand& cmd, const hc::Diagnosis& d, const std::string& label,
+                 const Record& first) {
+  if (!cmd.save_baseline.empty()) {
+    common::save_model_file(cmd.save_baseline,
+                            hc::ModelFile{d.baseline, identification_of(d, label, false)});
+  }
+  if (cmd.save_extended.empty()) return nullptr;
+  hc::ActuatorModel saved = d.extended;
+  json timing = common::time_on_steps(saved, first.u, first.y, first.sample_period_s, 0.0);
+  json identification = identification_of(d, label, true);
+  if (!timing.is_null()) identification["timing"] = timing;
+  common::save_model_file(cmd.save_extended, hc::ModelFile{saved, identification});
+  return timing;
+}
+
 int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
     if (cmd.data_paths.empty()) throw std::invalid_argument("no record to diagnose");
@@ -462,14 +480,7 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
         throw std::invalid_argument(paths[i] + ": " + e.what());
       }
     }
-    if (!cmd.save_baseline.empty()) {
-      common::save_model_file(cmd.save_baseline,
-                              hc::ModelFile{d.baseline, identification_of(d, label, false)});
-    }
-    if (!cmd.save_extended.empty()) {
-      common::save_model_file(cmd.save_extended,
-                              hc::ModelFile{d.extended, identification_of(d, label, true)});
-    }
+    const json saved_timing = save_models(cmd, d, label, records[0]);
     if (!cmd.report_dir.empty()) {
       // The records end to end, as the diagnosis saw them.
       std::vector<double> t, u, y;
@@ -495,7 +506,13 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
       print_diagnosis(out, d, label);
       for (const Validation& x : validations) print_validation(out, x, d.baseline.units.output);
       if (!cmd.save_baseline.empty()) out << "saved     baseline " << cmd.save_baseline << "\n";
-      if (!cmd.save_extended.empty()) out << "saved     extended " << cmd.save_extended << "\n";
+      if (!cmd.save_extended.empty()) {
+        out << "saved     extended " << cmd.save_extended;
+        if (!saved_timing.is_null()) {
+          out << " (its dynamics and delay " << common::timing_text(saved_timing) << ")";
+        }
+        out << "\n";
+      }
       if (!cmd.report_dir.empty()) out << "report    " << cmd.report_dir << "\n";
     }
     return 0;

@@ -4,14 +4,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "hystbench/common/step_timed_model.hpp"
 #include "hystbench/compensation/diagnosis.hpp"
-#include "hystbench/compensation/step_timing.hpp"
 #include "runs/details/identify_session.hpp"
 
 namespace hystbench::daemon {
@@ -78,46 +77,6 @@ std::optional<ExtensionDraft> extension_draft(const hc::Diagnosis& d) {
   }
   if (draft.parts.empty()) return std::nullopt;
   return draft;
-}
-
-// The draft's dynamics and delay timed again on the record's step responses, where the loop's
-// shape does not bias them (step_timing.hpp): the diagnosis fits them over the whole record,
-// where a delay partly stands for the shape the model misses, and in whole samples, where a
-// fast reference's feedforward needs a fraction. The record's delay holds the driver's exchange
-// latency, which the draft's does not. Returns what changed (null when the record has no step
-// or the draft no dynamics).
-json time_on_steps(hc::ActuatorModel& draft, std::span<const double> u, std::span<const double> y,
-                   double dt, double exchange_s) {
-  if (!draft.dynamics()) return nullptr;
-  const hc::DynamicsParameters before = *draft.dynamics();
-  const double delay_before = (draft.delay_s() + exchange_s) / dt;
-  const auto timing = hc::fit_step_timing(
-      u, y, dt, {before.natural_frequency_hz, before.damping_ratio, delay_before});
-  if (!timing) return nullptr;
-  hc::DynamicsParameters after = before;
-  after.natural_frequency_hz = timing->natural_frequency_hz;
-  after.damping_ratio = timing->damping_ratio;
-  draft.set_dynamics(after);
-  draft.set_delay(std::max(0.0, timing->delay_samples * dt - exchange_s));
-  return {{"steps", timing->steps},
-          {"rms_um", timing->rms},
-          {"natural_frequency_hz", after.natural_frequency_hz},
-          {"damping_ratio", after.damping_ratio},
-          {"delay_samples", timing->delay_samples},
-          {"from_record",
-           {{"natural_frequency_hz", before.natural_frequency_hz},
-            {"damping_ratio", before.damping_ratio},
-            {"delay_samples", delay_before}}}};
-}
-
-// "timed on 2 step responses: 802 Hz, damping 0.0591, delay 0.515 samples".
-std::string timing_text(const json& t) {
-  char text[160];
-  std::snprintf(text, sizeof text,
-                "timed on %zu step responses: %.4g Hz, damping %.3g, delay %.3g samples",
-                t["steps"].get<std::size_t>(), t["natural_frequency_hz"].get<double>(),
-                t["damping_ratio"].get<double>(), t["delay_samples"].get<double>());
-  return text;
 }
 
 // What the diagnosis of identify's record found: each part added with its held-out gain alone
@@ -276,13 +235,13 @@ bool Bench::extend_identified_model() {
     s.extension["from"] = draft->named ? "the diagnosis's extended model (named causes)"
                                        : "significant tests below the naming gain, grafted on the "
                                          "model for the bench to judge";
-    const json timing = time_on_steps(draft->model, s.u, s.y, dt_, exchange_s);
+    const json timing = common::time_on_steps(draft->model, s.u, s.y, dt_, exchange_s);
     if (!timing.is_null()) s.extension["timing"] = timing;
     const ScoredRecord record{t, s.u, s.y, settings_.identify.heldout_fraction, s.unscored};
     IdentifyCandidate ext =
         extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
     std::string added = extension_added(d, draft->named, s.extension["parts"]);
-    if (!timing.is_null()) added += "; " + timing_text(timing);
+    if (!timing.is_null()) added += "; " + common::timing_text(timing);
     ext.fit.notes.push_back("extended by the diagnosis of its record: " + added);
     s.extension["description"] = added;
     ext.label += "-extended";
