@@ -2,7 +2,8 @@
 # One command for the performance figures: builds the benchmark targets (build dir: $BUILD,
 # default build/) and prints one table:
 #   - ns per sample of every model and inverse at 10 / 50 / 200 operators (hystbench-bench)
-#   - identification time on 100 000 samples
+#   - identification time on 100 000 samples, and the diagnosis of a mode and a delay on as many
+#   - the learning's update for a trial of 10 000 and of 200 samples
 #   - sample log writer throughput
 #   - loop wake-up latency p50 / p99 / max and overruns of hystbenchd (loopback, a `hystbench
 #     track --duration` run) at 1, 10 and 20 kHz, SCHED_OTHER and SCHED_FIFO, next to a bare
@@ -27,8 +28,8 @@ tmp=$bench_tmp
 . scripts/lib/daemon.sh
 trap stop_daemon_and_clean EXIT
 
-echo "running benchmarks (models, inverses, identification, log writer) ..." >&2
-"$bin/hystbench-bench" --benchmark_filter='model_step|inverse_step|BM_IdentifyMpiFixedOrder/|BM_SampleLogWriterRows' \
+echo "running benchmarks (models, inverses, identification, diagnosis, learning, log writer) ..." >&2
+"$bin/hystbench-bench" --benchmark_filter='model_step|inverse_step|BM_IdentifyMpiFixedOrder/|BM_DiagnoseModeAndDelay|learning_update|BM_SampleLogWriterRows' \
   --benchmark_format=json >"$tmp/bench.json" 2>/dev/null
 
 latency_rows=()
@@ -79,10 +80,15 @@ print("| step | model | 10 ops | 50 ops | 200 ops |\n| --- | --- | ---: | ---: |
 for (kind, name), v in table.items():
     cells = " | ".join(f"{v[n]:.1f}" if n in v else "-" for n in (10, 50, 200))
     print(f"| {kind.split('_')[0]} | {name} | {cells} |")
-print("\n## Identification and logging\n\n| benchmark | figure |\n| --- | --- |")
+print("\n## Identification, diagnosis, learning and logging\n\n| benchmark | figure |\n| --- | --- |")
 for b in bench:
     if b["name"].startswith("BM_IdentifyMpiFixedOrder"):
         print(f"| {b['name']} (100 000 samples) | {b['real_time']:.0f} {b['time_unit']} |")
+    if b["name"].startswith("BM_DiagnoseModeAndDelay"):
+        print(f"| diagnose: a 3 kHz mode and a 2-sample delay (100 000 samples) | {b['real_time']:.0f} {b['time_unit']} |")
+    if b["name"].startswith("learning_update/"):
+        n = b["name"].split("/")[1]
+        print(f"| learning update, a trial of {n} samples | {b['real_time']:.3f} {b['time_unit']} |")
     if b["name"].startswith("BM_SampleLogWriterRows"):
         print(f"| sample log writer (1 M rows to CSV, real time) | {b.get('items_per_second', 0)/1e6:.2f} M rows/s |")
 print("\n## Loop wake-up latency [us] (daemon track run vs bare clock_nanosleep loop)\n")
