@@ -68,3 +68,14 @@ TEST(StepTiming, NothingWithoutSteps) {
   EXPECT_FALSE(hc::fit_step_timing(r.u, r.y, kDt, {1100.0, 0.2, 1.0}).has_value());
   EXPECT_FALSE(hc::fit_step_timing(r.u, std::vector<double>(3), kDt, {1100.0, 0.2, 1.0}));
 }
+
+// A record-wide fit can put the mode far below the one the steps show: started at a quarter of
+// it, the mode is still found.
+TEST(StepTiming, FindsAModeFarAboveTheStart) {
+  const Record r = record(3000.0, 0.06, 2.5, 2.0, true);
+  const auto t = hc::fit_step_timing(r.u, r.y, kDt, {720.0, 0.56, 2.0});
+  ASSERT_TRUE(t.has_value());
+  EXPECT_NEAR(t->natural_frequency_hz, 3000.0, 15.0);
+  EXPECT_NEAR(t->damping_ratio, 0.06, 0.004);
+  EXPECT_NEAR(t->delay_samples, 2.5, 0.03);
+}

@@ -24,8 +24,8 @@ struct StepTiming {
 /// of more than 1 % of the input's span and three times the neighbouring increments) with the
 /// input held from 5 samples before it to at least 20 after, each up to 30 ms or, for a slow
 /// mode, 12 periods of start's frequency / 4. Fits the delay within +-2.5 samples of start's,
-/// the natural frequency within a factor 4 of start's (below 0.45 of the sample rate), any
-/// damping. std::nullopt when there is no such step.
+/// the natural frequency from a quarter of start's to 0.45 of the sample rate, any damping.
+/// std::nullopt when there is no such step.
 std::optional<StepTiming> fit_step_timing(std::span<const double> u, std::span<const double> y,
                                           double dt_s, const StepTiming& start);
 
