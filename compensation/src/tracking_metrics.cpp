@@ -55,4 +55,19 @@ double hysteresis_percent(std::span<const double> y_ref, std::span<const double>
   return range > 0.0 ? 100.0 * hysteresis_width(y_ref, y) / range : 0.0;
 }
 
+double output_lag_samples(std::span<const double> y_ref, std::span<const double> y) {
+  const std::size_t n = std::min(y_ref.size(), y.size());
+  if (n < 3) return 0.0;
+  double mean = 0.0;
+  for (std::size_t k = 1; k + 1 < n; ++k) mean += y[k] - y_ref[k];
+  mean /= static_cast<double>(n - 2);
+  double eg = 0.0, gg = 0.0;
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    const double slope = 0.5 * (y_ref[k + 1] - y_ref[k - 1]);
+    eg += (y[k] - y_ref[k] - mean) * slope;
+    gg += slope * slope;
+  }
+  return gg > 0.0 ? -eg / gg : 0.0;
+}
+
 }  // namespace hystbench::compensation

@@ -42,6 +42,21 @@ std::string fixed_or_dash(const json& v, int digits) {
   return v.is_number() ? fixed(v.get<double>(), digits) : "-";
 }
 
+// The extension's delay trimmed on its fast sine: the lag measured, and what the bench kept.
+void print_delay_trim(std::ostream& out, const json& t) {
+  const double delay = t.value("delay_samples", 0.0), lag = t.value("lag_samples", 0.0);
+  out << "  extension delay " << fixed(delay, 2) << " samples; the "
+      << fixed(t.value("sine_hz", 0.0), 0) << " Hz sine lags by " << fixed(lag, 3);
+  if (t.contains("fast_rms_percent")) {
+    const json& rms = t["fast_rms_percent"];
+    out << ", trimmed to " << fixed(delay + lag, 2) << " samples: rms "
+        << fixed_or_dash(rms.value("timed", json()), 3) << " -> "
+        << fixed_or_dash(rms.value("trimmed", json()), 3) << " %";
+  }
+  out << ": " << (t.value("kept", false) ? "kept" : "not kept") << ", " << t.value("why", "")
+      << "\n";
+}
+
 // identify's extension: each part with its held-out gain, the verified figures, the decision.
 void print_extension(std::ostream& out, const json& e) {
   out << "  extension       ";
@@ -74,6 +89,7 @@ void print_extension(std::ostream& out, const json& e) {
           << " Hz, damping " << fixed_or_dash(t.value("damping_ratio", json()), 3) << ", delay "
           << fixed_or_dash(t.value("delay_samples", json()), 2) << " samples\n";
     }
+    if (e.contains("delay_trim")) print_delay_trim(out, e["delay_trim"]);
   }
 }
 

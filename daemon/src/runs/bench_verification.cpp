@@ -7,8 +7,10 @@
 #include <cstdio>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 
+#include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "runs/details/identify_session.hpp"
 
@@ -123,6 +125,9 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   if (job.sine_hz > 0.0) {
     v["reference"] = "sine";
     v["frequency_hz"] = job.sine_hz;
+    const std::size_t n = std::min<std::size_t>(run->records.count, run->records.y.size());
+    v["lag_samples"] = hc::output_lag_samples(std::span<const double>(run->records.yr.data(), n),
+                                              std::span<const double>(run->records.y.data(), n));
     c.sines[job.sine_hz] = std::move(v);
   } else {
     c.verification = std::move(v);
@@ -137,6 +142,8 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
 }
 
 void Bench::continue_identify() {
+  settle_delay_trim();
+  queue_delay_trim();
   if (verify_next_candidate()) return;
   IdentifySession& s = *session_;
   if (s.extend && !s.extension_tried && !s.interrupted && !quit_.load()) {

@@ -51,15 +51,6 @@ json candidate_summary(const IdentifyCandidate& c) {
   return j;
 }
 
-// Verified rms error of the sine at hz [% of the reference span]; +inf when it did not complete.
-double sine_rms(const IdentifyCandidate& c, double hz) {
-  const auto it = c.sines.find(hz);
-  if (it == c.sines.end()) return INFINITY;
-  const json& v = it->second;
-  if (v.value("end", "") != "completed" || !v.contains("rms_error_percent")) return INFINITY;
-  return v["rms_error_percent"].get<double>();
-}
-
 // v[key] of the sine at hz, or null when it did not run.
 json sine_field(const IdentifyCandidate& c, double hz, const char* key) {
   const auto it = c.sines.find(hz);
@@ -85,6 +76,14 @@ bool within_history_spread(double ext, double base) { return ext <= 1.25 * base 
 
 }  // namespace
 
+double verified_sine_rms(const IdentifyCandidate& c, double hz) {
+  const auto it = c.sines.find(hz);
+  if (it == c.sines.end()) return INFINITY;
+  const json& v = it->second;
+  if (v.value("end", "") != "completed" || !v.contains("rms_error_percent")) return INFINITY;
+  return v["rms_error_percent"].get<double>();
+}
+
 // The extended model is adopted when it tracks better by more than the spread between two runs:
 // on the fast sine (when one ran) by at least 5 % without losing more than the spread on the
 // triangle's rms (the history's spread where every sine gains 2x), nor on the middle sine's (when
@@ -96,9 +95,10 @@ bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandid
   if (!(fast_hz > 0.0)) {
     return verified_max(ext) <= 0.9 * verified_max(base) && triangle_rms(ext) <= triangle_rms(base);
   }
-  const double bf = sine_rms(base, fast_hz), ef = sine_rms(ext, fast_hz);
+  const double bf = verified_sine_rms(base, fast_hz), ef = verified_sine_rms(ext, fast_hz);
   const bool mid = mid_hz > 0.0;
-  const double bm = mid ? sine_rms(base, mid_hz) : 0.0, em = mid ? sine_rms(ext, mid_hz) : 0.0;
+  const double bm = mid ? verified_sine_rms(base, mid_hz) : 0.0,
+               em = mid ? verified_sine_rms(ext, mid_hz) : 0.0;
   const bool decisive =
       ef * kDecisiveSineGain <= bf && (!mid || (std::isfinite(em) && em * kDecisiveSineGain <= bm));
   const bool triangle = decisive ? within_history_spread(triangle_rms(ext), triangle_rms(base))
@@ -169,7 +169,7 @@ json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& 
     v["fast_hz"] = fast_hz;
     v["fast_rms_percent"] = {{"model", sine_field(base, fast_hz, "rms_error_percent")},
                              {"extended", sine_field(ext, fast_hz, "rms_error_percent")}};
-    v["fast_gain"] = ratio(sine_rms(base, fast_hz), sine_rms(ext, fast_hz));
+    v["fast_gain"] = ratio(verified_sine_rms(base, fast_hz), verified_sine_rms(ext, fast_hz));
   }
   if (mid_hz > 0.0) {
     v["mid_hz"] = mid_hz;
@@ -222,6 +222,7 @@ std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
 }
 
 void Bench::finish_identify() {
+  settle_delay_trim();  // a trial cut short is no candidate
   std::unique_ptr<IdentifySession> session = std::move(session_);
   IdentifySession& s = *session;
   json result = std::move(s.result);

@@ -248,6 +248,10 @@ bool Bench::extend_identified_model() {
     s.candidates.push_back(std::move(ext));
     s.extended = s.candidates.size() - 1;
     s.fast_hz = fast_frequency(draft->parts, s.candidates.back().fit.model, settings_.loop.rate_hz);
+    s.trim_delay = s.fast_hz > 0.0 &&
+                   std::any_of(draft->parts.begin(), draft->parts.end(), [](const std::string& p) {
+                     return p == "delay" || p == "dynamics";
+                   });
     s.jobs.push_back({*s.extended, false});
     if (s.fast_hz > 0.0) {
       // A middle sine too: what the extension gives up below the fast one.

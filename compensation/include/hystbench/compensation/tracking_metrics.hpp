@@ -13,4 +13,12 @@ double hysteresis_percent(std::span<const double> y_ref, std::span<const double>
 /// The same width in output units.
 double hysteresis_width(std::span<const double> y_ref, std::span<const double> y);
 
+/// How many samples y lags y_ref, to a fraction of one: the shift of the reference that best
+/// explains the error in least squares, to first order (y - y_ref - mean against the reference's
+/// slope per sample; positive: y lags). On a sine over whole periods it is the fundamental's phase
+/// error over its angular frequency per sample; the loop's shape, whose error is in phase with
+/// the reference or in its harmonics, does not move it. 0 when y_ref does not move. Allocates
+/// nothing; O(n).
+double output_lag_samples(std::span<const double> y_ref, std::span<const double> y);
+
 }  // namespace hystbench::compensation

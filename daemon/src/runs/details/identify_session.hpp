@@ -60,6 +60,10 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
 bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
                              double fast_hz, double mid_hz = 0.0);
 
+/// The verified rms error of candidate c's sine at hz [% of the reference span]; +inf when it did
+/// not run to the end.
+double verified_sine_rms(const IdentifyCandidate& c, double hz);
+
 /// The sine a rate law is judged on [Hz]: the fastest the rate bench tracks, at most a twentieth
 /// of the loop rate.
 double rate_sine_frequency(double loop_rate_hz);
@@ -89,6 +93,10 @@ struct Bench::IdentifySession {
   std::optional<std::size_t> extended;  ///< the extended candidate, when there is one
   double fast_hz = 0.0;                 ///< the fast sine's frequency [Hz]; 0 = none
   double mid_hz = 0.0;                  ///< the middle sine's (fast / 2.5) [Hz]; 0 = none
+  /// The fast sine judges a delay or dynamics: its output lag trims the extension's delay.
+  bool trim_delay = false;
+  bool trim_tried = false;          ///< the trim was measured (once)
+  std::optional<std::size_t> trim;  ///< the trimmed extension on trial (the last candidate)
   /// The base's sines played while its diagnosis ran [Hz] (play_while_diagnosing()).
   std::vector<double> sines_while_diagnosing;
   /// The rate-free neighbour of a rate law (candidate 0), when there is one: the two are judged
