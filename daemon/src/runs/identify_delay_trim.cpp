@@ -2,9 +2,10 @@
 // the one mode the model has stands also for the sensor's lag and the modes above it; what a
 // fast sine needs is the delay that matches the plant's phase at that sine. The extension's
 // fast sine measures its output's lag behind the reference (its fundamental's phase error, to a
-// fraction of a sample); the model with that lag added to its delay plays the same sine, and
-// the extension takes the trimmed delay when it tracks the sine better. The middle sine then
-// plays the model kept (Bench members on the supervisor thread; identify_session.hpp).
+// fraction of a sample); the model with that lag added to its delay and the model as timed play
+// the same sine, and the extension takes the trimmed delay when it tracks the sine better. The
+// middle sine then plays the model kept (Bench members on the supervisor thread;
+// identify_session.hpp).
 #include <cmath>
 #include <string>
 
@@ -24,6 +25,12 @@ constexpr double kMaxTrimSamples = 1.0;
 // The trimmed delay is kept when the fast sine's rms falls by more than the spread between two
 // runs of one model.
 constexpr double kTrimGain = 0.97;
+
+// The log of candidate c's sine at hz ("" when it did not run).
+std::string sine_log(const IdentifyCandidate& c, double hz) {
+  const auto it = c.sines.find(hz);
+  return it != c.sines.end() ? it->second.value("log", std::string()) : std::string();
+}
 
 }  // namespace
 
@@ -47,12 +54,18 @@ void Bench::queue_delay_trim() {
     trim["kept"] = false;
     trim["why"] = "the fast sine's lag is more than a sample: the timing, not a trim";
   } else {
-    IdentifyCandidate trial{ext.fit, json(), ext.label + "-trimmed", {}};
-    trial.fit.model.set_delay((delay + lag) * dt_);
-    trial.fit.model.configure(dt_);
-    s.candidates.push_back(std::move(trial));
-    s.trim = s.candidates.size() - 1;
-    s.jobs.insert(s.jobs.begin() + static_cast<std::ptrdiff_t>(s.next), {*s.trim, s.fast_hz});
+    // The trimmed model, then the timed one again, each after the same short precondition
+    // sweep (the daemon's would add a second to each 40 ms segment): the two are judged on the
+    // same footing.
+    IdentifyCandidate trimmed{ext.fit, json(), ext.label + "-trimmed", {}};
+    trimmed.fit.model.set_delay((delay + lag) * dt_);
+    trimmed.fit.model.configure(dt_);
+    IdentifyCandidate again{ext.fit, json(), ext.label + "-again", {}};
+    s.candidates.push_back(std::move(trimmed));
+    s.candidates.push_back(std::move(again));
+    s.trim = s.candidates.size() - 2;
+    const auto at = s.jobs.begin() + static_cast<std::ptrdiff_t>(s.next);
+    s.jobs.insert(at, {{*s.trim, s.fast_hz, true}, {*s.trim + 1, s.fast_hz, true}});
   }
   s.extension["delay_trim"] = std::move(trim);
 }
@@ -60,27 +73,30 @@ void Bench::queue_delay_trim() {
 void Bench::settle_delay_trim() {
   if (!session_ || !session_->trim) return;
   IdentifySession& s = *session_;
-  IdentifyCandidate& trial = s.candidates[*s.trim];
-  if (!s.interrupted && !trial.sines.contains(s.fast_hz)) return;  // still to play
+  IdentifyCandidate& trimmed = s.candidates[*s.trim];
+  const IdentifyCandidate& again = s.candidates[*s.trim + 1];
+  if (!s.interrupted && !again.sines.contains(s.fast_hz)) return;  // still to play
   IdentifyCandidate& ext = s.candidates[*s.extended];
-  const double before = verified_sine_rms(ext, s.fast_hz);
-  const double after = verified_sine_rms(trial, s.fast_hz);
+  const double before = verified_sine_rms(again, s.fast_hz);
+  const double after = verified_sine_rms(trimmed, s.fast_hz);
+  const auto figure = [](double v) { return std::isfinite(v) ? json(v) : json(); };
   json& trim = s.extension["delay_trim"];
-  const bool kept = std::isfinite(after) && after <= kTrimGain * before;
-  trim["fast_rms_percent"] = {{"timed", before},
-                              {"trimmed", std::isfinite(after) ? json(after) : json()}};
+  const bool kept = std::isfinite(before) && after <= kTrimGain * before;
+  trim["fast_rms_percent"] = {{"timed", figure(before)}, {"trimmed", figure(after)}};
+  trim["logs"] = {{"timed", sine_log(again, s.fast_hz)}, {"trimmed", sine_log(trimmed, s.fast_hz)}};
   trim["kept"] = kept;
   trim["why"] = kept ? "the trimmed delay tracks the fast sine better"
                      : "the trimmed delay does not track the fast sine 3 % better";
   if (kept) {
-    const double samples = trial.fit.model.delay_s() / dt_;
-    ext.fit.model = std::move(trial.fit.model);
+    // The extension's verified fast sine stays the timed delay's, played as the base's was;
+    // the middle sine plays the trimmed model.
+    const double samples = trimmed.fit.model.delay_s() / dt_;
+    ext.fit.model = std::move(trimmed.fit.model);
     ext.fit.delay_samples = static_cast<int>(std::lround(samples));
     ext.fit.notes.push_back("delay trimmed on the bench's " + std::to_string(s.fast_hz) +
                             " Hz sine to " + std::to_string(samples) + " samples");
-    ext.sines[s.fast_hz] = std::move(trial.sines[s.fast_hz]);
   }
-  s.candidates.pop_back();
+  s.candidates.resize(*s.trim);
   s.trim.reset();
 }
 

@@ -121,16 +121,25 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
               1.1 * v["mid_rms_percent"]["model"].get<double>() + 0.05)
         << e.dump(2);
     // The fast sine judges a delay or a mode: its output's lag was measured, and a trimmed
-    // delay, when kept, is what the fast sine's figure was verified with.
+    // delay, when kept, tracked that sine better than the timed one, both after the same short
+    // precondition; the timed model's second run of the sine is its first's, within the spread
+    // of the precondition's length.
     ASSERT_TRUE(e.contains("delay_trim")) << e.dump(2);
     const json& trim = e["delay_trim"];
     EXPECT_TRUE(std::isfinite(trim["lag_samples"].get<double>())) << trim;
     EXPECT_EQ(trim["sine_hz"], v["fast_hz"]) << trim;
+    if (trim.contains("fast_rms_percent")) {
+      EXPECT_LE(trim["fast_rms_percent"]["timed"].get<double>(),
+                1.5 * v["fast_rms_percent"]["extended"].get<double>())
+          << e;
+    }
     if (trim.value("kept", false)) {
       EXPECT_LE(trim["fast_rms_percent"]["trimmed"].get<double>(),
                 0.97 * trim["fast_rms_percent"]["timed"].get<double>())
           << trim;
-      EXPECT_EQ(trim["fast_rms_percent"]["trimmed"], v["fast_rms_percent"]["extended"]) << e;
+      EXPECT_NE(trim["logs"]["trimmed"].get<std::string>().find("-trimmed-sine-"),
+                std::string::npos)
+          << trim;
     }
   }
 };

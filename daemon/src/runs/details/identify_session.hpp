@@ -72,6 +72,9 @@ double rate_sine_frequency(double loop_rate_hz);
 struct VerificationJob {
   std::size_t candidate = 0;
   double sine_hz = 0.0;  ///< the sine's frequency [Hz]; 0 = the standard triangle
+  /// A precondition sweep of 0.1 s instead of the daemon's (the two halves of a trial that
+  /// differ in one parameter; the sweep sets the same state for both).
+  bool short_precondition = false;
 };
 
 struct Bench::IdentifySession {
@@ -95,8 +98,10 @@ struct Bench::IdentifySession {
   double mid_hz = 0.0;                  ///< the middle sine's (fast / 2.5) [Hz]; 0 = none
   /// The fast sine judges a delay or dynamics: its output lag trims the extension's delay.
   bool trim_delay = false;
-  bool trim_tried = false;          ///< the trim was measured (once)
-  std::optional<std::size_t> trim;  ///< the trimmed extension on trial (the last candidate)
+  bool trim_tried = false;  ///< the trim was measured (once)
+  /// On trial, the last two candidates: the extension with its delay trimmed (this one), and as
+  /// timed, played again.
+  std::optional<std::size_t> trim;
   /// The base's sines played while its diagnosis ran [Hz] (play_while_diagnosing()).
   std::vector<double> sines_while_diagnosing;
   /// The rate-free neighbour of a rate law (candidate 0), when there is one: the two are judged

@@ -187,11 +187,11 @@ class Bench {
   /// verification; false when nothing is added (the reason in the session's extension).
   bool extend_identified_model();
   /// Once the extension's fast sine has played: its model with the delay the sine's output lag
-  /// measures queued on that sine, ahead of the segments left (nothing when the lag is within
-  /// the trim's bounds or the sine judges no delay or dynamics).
+  /// measures, and the model as timed, queued on that sine ahead of the segments left (nothing
+  /// when the lag is outside the trim's bounds or the sine judges no delay or dynamics).
   void queue_delay_trim();
-  /// Once the trimmed model's fast sine has played: the extension takes its delay when it
-  /// tracks that sine better; the trial candidate is dropped either way.
+  /// Once both have played: the extension takes the trimmed delay when it tracks that sine
+  /// better; the two trial candidates are dropped either way.
   void settle_delay_trim();
   /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
   /// when the fit fails).
