@@ -7,6 +7,7 @@
 // middle sine then plays the model kept (Bench members on the supervisor thread;
 // identify_session.hpp).
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "runs/details/identify_session.hpp"
@@ -86,15 +87,19 @@ void Bench::settle_delay_trim() {
   trim["logs"] = {{"timed", sine_log(again, s.fast_hz)}, {"trimmed", sine_log(trimmed, s.fast_hz)}};
   trim["kept"] = kept;
   trim["why"] = kept ? "the trimmed delay tracks the fast sine better"
-                     : "the trimmed delay does not track the fast sine 3 % better";
+                : !std::isfinite(before) || !std::isfinite(after)
+                    ? "the trial did not run to the end"
+                    : "the trimmed delay does not track the fast sine 3 % better";
   if (kept) {
     // The extension's verified fast sine stays the timed delay's, played as the base's was;
     // the middle sine plays the trimmed model.
     const double samples = trimmed.fit.model.delay_s() / dt_;
     ext.fit.model = std::move(trimmed.fit.model);
     ext.fit.delay_samples = static_cast<int>(std::lround(samples));
-    ext.fit.notes.push_back("delay trimmed on the bench's " + std::to_string(s.fast_hz) +
-                            " Hz sine to " + std::to_string(samples) + " samples");
+    char note[96];
+    std::snprintf(note, sizeof note, "delay trimmed on the bench's %.6g Hz sine to %.3f samples",
+                  s.fast_hz, samples);
+    ext.fit.notes.emplace_back(note);
   }
   s.candidates.resize(*s.trim);
   s.trim.reset();
