@@ -51,12 +51,6 @@ json candidate_summary(const IdentifyCandidate& c) {
   return j;
 }
 
-// v[key] of the sine at hz, or null when it did not run.
-json sine_field(const IdentifyCandidate& c, double hz, const char* key) {
-  const auto it = c.sines.find(hz);
-  return it != c.sines.end() && it->second.contains(key) ? it->second[key] : json();
-}
-
 // Verified rms error of the standard triangle [% of the reference span]; +inf when not verified.
 double triangle_rms(const IdentifyCandidate& c) {
   return std::isfinite(verified_max(c)) ? c.verification.value("rms_error_percent", INFINITY)
@@ -75,6 +69,11 @@ constexpr double kDecisiveSineGain = 2.0;
 bool within_history_spread(double ext, double base) { return ext <= 1.25 * base + 0.05; }
 
 }  // namespace
+
+json sine_field(const IdentifyCandidate& c, double hz, const char* key) {
+  const auto it = c.sines.find(hz);
+  return it != c.sines.end() && it->second.contains(key) ? it->second[key] : json();
+}
 
 double verified_sine_rms(const IdentifyCandidate& c, double hz) {
   const auto it = c.sines.find(hz);

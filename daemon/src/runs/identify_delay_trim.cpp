@@ -27,12 +27,6 @@ constexpr double kMaxTrimSamples = 1.0;
 // runs of one model.
 constexpr double kTrimGain = 0.97;
 
-// The log of candidate c's sine at hz ("" when it did not run).
-std::string sine_log(const IdentifyCandidate& c, double hz) {
-  const auto it = c.sines.find(hz);
-  return it != c.sines.end() ? it->second.value("log", std::string()) : std::string();
-}
-
 }  // namespace
 
 void Bench::queue_delay_trim() {
@@ -84,7 +78,8 @@ void Bench::settle_delay_trim() {
   json& trim = s.extension["delay_trim"];
   const bool kept = std::isfinite(before) && after <= kTrimGain * before;
   trim["fast_rms_percent"] = {{"timed", figure(before)}, {"trimmed", figure(after)}};
-  trim["logs"] = {{"timed", sine_log(again, s.fast_hz)}, {"trimmed", sine_log(trimmed, s.fast_hz)}};
+  trim["logs"] = {{"timed", sine_field(again, s.fast_hz, "log")},
+                  {"trimmed", sine_field(trimmed, s.fast_hz, "log")}};
   trim["kept"] = kept;
   trim["why"] = kept ? "the trimmed delay tracks the fast sine better"
                 : !std::isfinite(before) || !std::isfinite(after)

@@ -60,6 +60,9 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
 bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
                              double fast_hz, double mid_hz = 0.0);
 
+/// v[key] of candidate c's sine at hz, or null when it did not run.
+nlohmann::json sine_field(const IdentifyCandidate& c, double hz, const char* key);
+
 /// The verified rms error of candidate c's sine at hz [% of the reference span]; +inf when it did
 /// not run to the end.
 double verified_sine_rms(const IdentifyCandidate& c, double hz);
