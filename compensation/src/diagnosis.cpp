@@ -37,7 +37,9 @@ constexpr double kMaxLeftOutLoss = 0.95;
 // A significant extension joins the named one when it lowers the joint model's held-out rms by
 // at least 2 %.
 constexpr double kMinJoinGain = 1.02;
-// A cause named after stronger ones on its own gain must still gain this much added to them.
+// A cause after stronger ones is named when, added to them, it gains this much (or min_gain
+// when lower): an effect beside a larger one gains little over the baseline on its own, and one
+// whose own gain was mostly theirs (a rate law widening the loop as a delay does) adds little.
 constexpr double kMinAddedGain = 1.1;
 // The baseline family "does not fit the device" when, fitted on the others, it predicts some
 // record this many times worse than it predicts its own held-out blocks.
@@ -517,8 +519,8 @@ std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
 }
 
 // Names a contender whose outcome `o` on top of the joint model (held-out rms joint_rms, holding
-// `before`) reaches min_gain on its own or added to the stronger causes (an effect beside a
-// larger one gains little over the baseline), and is not within their noise; else says why not.
+// `before`) gains kMinAddedGain (or min_gain when lower) added to the stronger causes and is not
+// within their noise; else says why not.
 void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
                      const details::CandidateOutcome& o, double joint_rms,
                      const std::string& before) {
@@ -528,19 +530,20 @@ void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
   const double rms = o.fit.heldout.rmse;
   const double added_rms = quadrature_difference(joint_rms, rms);
   const double added_gain = rms > 0.0 ? joint_rms / rms : 0.0;
+  const double needed = std::min(options.min_gain, kMinAddedGain);
   const OnTopOfShape* s = x.beyond ? on_shape_of(x, c.cause) : nullptr;
   if (added_rms < d.noise_allowance_rms) {
     c.not_named = within_noise(before, added_rms, d.noise_allowance_rms, unit);
-  } else if (next.gain < options.min_gain && added_gain < options.min_gain) {
-    c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") + ", and " +
-                  num(added_gain) + " added to the model holding " + before + ", are below " +
-                  num(options.min_gain);
-  } else if (added_gain < options.min_gain && added_gain < kMinAddedGain) {
+  } else if (next.gain < options.min_gain && added_gain < needed) {
+    c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
+                  " is below " + num(options.min_gain) + ", and added to the model holding " +
+                  before + " it gains " + num(added_gain) + ", below " + num(needed);
+  } else if (added_gain < needed) {
     // Its own gain was mostly the stronger causes' (a rate law widening the loop as a delay
     // does): added to them it explains little.
     c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
                   " is mostly that of " + before + ": added to the model holding it, " +
-                  num(added_gain) + ", below " + num(kMinAddedGain);
+                  num(added_gain) + ", below " + num(needed);
   } else {
     d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
                         s ? shape_name() : x.reference_name, added_gain, added_rms,

@@ -18,8 +18,8 @@
 // The named cause is the significant candidate with the largest gain above `min_gain`;
 // `none` when there is none, or when the baseline's held-out error is at the noise floor
 // (estimated from the second differences of the residual). Every other significant candidate
-// that carries over and reaches `min_gain` is named too, unless it is within the noise of the
-// stronger named causes (see Diagnosis::causes).
+// that carries over and, added to the stronger named causes, lowers the held-out error by 1.1x
+// (or min_gain when lower) is named too, unless it is within their noise (see Diagnosis::causes).
 //
 // Candidates and their extensions:
 //   asymmetry        modified PI (dead zones) or coupled-play PI
@@ -185,13 +185,13 @@ struct Diagnosis {
   /// Every named cause, largest held-out gain first; empty when the cause is none. After the
   /// first (`cause`, chosen as the verdict says), the candidates that are significant and carry
   /// over are tested again, strongest first, on top of the extended model built so far (the
-  /// causes before them and any extension that lowered its error); one is named when it reaches
-  /// min_gain (its gain, or its added_gain: an effect beside a larger one gains little over the
-  /// baseline) and is not within the noise of the causes before it: it must explain at least
-  /// `noise_allowance_rms` of held-out rms beyond them (added_rms). When the first is named beyond
-  /// the loop's shape (asymmetry), the other causes are judged on top of the shape (significant
-  /// there, gain over the shape's extension); they come first, ranked by that gain, and the shape
-  /// last, itself judged on top of the first.
+  /// causes before them and any extension that lowered its error); one is named when its
+  /// added_gain reaches 1.1 (or min_gain when lower: an effect beside a larger one gains little
+  /// over the baseline on its own) and it is not within the noise of the causes before it: it
+  /// must explain at least `noise_allowance_rms` of held-out rms beyond them (added_rms). When
+  /// the first is named beyond the loop's shape (asymmetry), the other causes are judged on top
+  /// of the shape (significant there, gain over the shape's extension); they come first, ranked
+  /// by that gain, and the shape last, itself judged on top of the first.
   std::vector<NamedCause> causes;
   /// The held-out rms [output unit] an effect must explain beyond the stronger named causes to
   /// be told apart from them: sqrt(noise_floor_factor^2 - 1) x noise_rms, what a model at the
