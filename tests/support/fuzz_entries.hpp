@@ -7,10 +7,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/common/command_error.hpp"
@@ -29,10 +31,15 @@ namespace hystbench::fuzz {
 /// that closes at the end, so upload sequences (begin, chunks, a run that uses the upload,
 /// cancel) are fuzzed together with the disconnect that discards them.
 inline void request_line(const std::uint8_t* data, std::size_t size) {
+  static const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("hystbench_fuzz_" + std::to_string(::getpid()));
   static daemon::Bench* bench = [] {
-    const auto dir =
-        std::filesystem::temp_directory_path() / ("hystbench_fuzz_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
+    // The bench is never destroyed (its loop is never started); its folder goes at exit.
+    std::atexit([] {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    });
     daemon::BenchSettings s;
     s.log_dir = (dir / "logs").string();
     s.model_dir = (dir / "models").string();
