@@ -403,6 +403,9 @@ struct Next {
   std::size_t index;  ///< in Diagnosis::candidates
   double gain;        ///< over the reference (or the shape): the gain it is ranked by
   bool contender;     ///< it may be named; else it may only join the extended model
+  /// Not significant on the reference's residual: its statistic is read again on the joint
+  /// model's, and it is a contender when significant there.
+  bool retest = false;
 };
 
 double quadrature_difference(double before, double after) {
@@ -509,8 +512,13 @@ std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
                              num(s->gain) + ")";
     }
     const bool joins = c.significant && c.carries_over && c.cause != Cause::kDrift;
+    // A drift's statistic is the residual's time profile, which a stronger cause the reference
+    // (or the shape) misses swamps, a delay or a resonance erring on every move: read again on
+    // what the causes before it leave.
+    const bool retest =
+        c.cause == Cause::kDrift && c.carries_over && !contender && (!x.beyond || s != nullptr);
     const double gain = s ? s->gain : c.heldout.rmse > 0.0 ? x.reference / c.heldout.rmse : 0.0;
-    if (contender || joins) order.push_back({i, gain, contender});
+    if (contender || joins || retest) order.push_back({i, gain, contender, retest});
   }
   std::sort(order.begin(), order.end(), [&d](const Next& a, const Next& b) {
     return ranks_before(d.candidates[a.index].cause, a.gain, d.candidates[b.index].cause, b.gain);
@@ -547,7 +555,8 @@ void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
   } else {
     d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
                         s ? shape_name() : x.reference_name, added_gain, added_rms,
-                        s ? s->outcome.evidence : c.evidence,
+                        // A retested cause's evidence is read on the joint model's residual.
+                        s && !next.retest ? s->outcome.evidence : c.evidence,
                         s ? s->outcome.extension : c.extension});
     c.named = true;
     c.not_named.clear();
@@ -562,11 +571,28 @@ void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& join
   const std::string before = joined(d.extended_parts);
   std::vector<double> joint_residual(x.r.n);
   for (std::size_t k = 0; k < x.r.n; ++k) joint_residual[k] = x.r.y[k] - joint.fit.prediction[k];
-  const details::CandidateContext jc{
-      x.r,  joint.fit.spec, joint.fit,  joint.fit.prediction, joint_residual,
-      x.ev, x.profiles,     x.response, d.noise_rms};
+  const std::vector<ResidualProfile> joint_profiles =
+      next.retest ? residual_profiles(x.r, joint_residual, x.ev) : std::vector<ResidualProfile>{};
+  const details::CandidateContext jc{x.r,
+                                     joint.fit.spec,
+                                     joint.fit,
+                                     joint.fit.prediction,
+                                     joint_residual,
+                                     x.ev,
+                                     next.retest ? joint_profiles : x.profiles,
+                                     x.response,
+                                     d.noise_rms};
+  // The drift's statistic, read before its fit: not significant there either, it is not tried.
+  if (next.retest && jc.profile("time").explained < c.threshold) return;
   try {
     details::CandidateOutcome o = test_of(c.cause)(jc);
+    if (next.retest && o.statistic >= o.threshold) {
+      // Significant on what the causes before it leave: judged on that statistic.
+      c.statistic = o.statistic;
+      c.significant = true;
+      c.evidence = o.evidence + ", on what the model holding " + before + " leaves";
+      judge_contender(d, x, {next.index, next.gain, true, true}, o, joint.fit.heldout.rmse, before);
+    }
     if (next.contender) judge_contender(d, x, next, o, joint.fit.heldout.rmse, before);
     // Less than kMinJoinGain only adds parameters, which the inverse extrapolates (a rate law
     // beyond the record's rates).

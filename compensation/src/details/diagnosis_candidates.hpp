@@ -2,6 +2,7 @@
 // The candidate causes of the diagnosis (internals), one file each: every candidate computes
 // a statistic from the baseline residual (with a significance threshold) and fits its extended
 // model (the baseline structure plus the effect) on the fit part of the record.
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -42,6 +43,15 @@ CandidateOutcome test_creep(const CandidateContext& c);
 CandidateOutcome test_dynamics(const CandidateContext& c);
 CandidateOutcome test_delay(const CandidateContext& c);
 CandidateOutcome test_drift(const CandidateContext& c);
+
+/// The resonance of `spec` (which has dynamics) found again with the hysteresis weights free,
+/// projected from the better of its own and the peak of the measured `response`, when it lies
+/// off that peak (15 % in frequency, 2x in damping): a lag its phase stood in for pulled it
+/// there, and the part joined after it (a delay) takes that lag. std::nullopt on the
+/// peak, or without one.
+std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
+                                                  const ExtensionSpec& spec,
+                                                  const FrequencyResponse& response);
 
 /// printf-style %.3g / %.4g helpers for evidence lines.
 std::string num(double v, int digits = 3);

@@ -14,6 +14,7 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <utility>
 
 #include "details/diagnosis_candidates.hpp"
 
@@ -25,6 +26,10 @@ constexpr double kThreshold = 0.15;
 constexpr double kZetaGrid[] = {0.02, 0.07, 0.2, 0.5};
 constexpr double kZetaMin = 0.003, kZetaMax = 1.0;
 constexpr int kFrequenciesPerDecade = 8;
+// A fitted resonance this far (ratio) in frequency, or in damping, from the measured response's
+// peak was pulled off it: by a lag its phase stood in for. The peak's damping is read from its
+// height, a coarse estimate: hence the wide ratio.
+constexpr double kOffPeak = 1.15, kOffPeakDamping = 2.0;
 
 // Mean square error of y ~ D[x] + b over the search rows (unit DC gain, as in the model).
 double filtered_mse(const DiagnosisRecord& r, std::span<const double> x, double fn, double zeta) {
@@ -158,13 +163,42 @@ std::vector<double> static_prediction(const ExtensionFit& f, const DiagnosisReco
   return x;
 }
 
+// The band the resonance is searched in: up to 0.45 fs, from 20 periods over the record.
+std::pair<double, double> resonance_band(const DiagnosisRecord& r) {
+  const double f_hi = 0.45 / r.dt;
+  return {std::min(0.1 * f_hi, std::max(0.5, 20.0 / r.duration())), f_hi};
+}
+
 }  // namespace
+
+std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
+                                                  const ExtensionSpec& spec,
+                                                  const FrequencyResponse& response) {
+  const auto [f_lo, f_hi] = resonance_band(r);
+  const auto peak = spectral_peak(response, f_lo, f_hi);
+  if (!peak) return std::nullopt;
+  const bool on_peak =
+      std::abs(std::log(spec.dynamics->natural_frequency_hz / peak->fn)) < std::log(kOffPeak) &&
+      std::abs(std::log(spec.dynamics->damping_ratio / peak->zeta)) < std::log(kOffPeakDamping);
+  if (on_peak) return std::nullopt;
+  const DesignRows rows(r, spec);
+  JointObjective joint(r, spec, rows);
+  Resonance start{spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio, 0.0};
+  start.mse = joint(start.fn, start.zeta);
+  if (const double mse = joint(peak->fn, peak->zeta); mse < start.mse) {
+    start = {peak->fn, peak->zeta, mse};
+  }
+  const Resonance best = project(joint, start, f_lo, f_hi);
+  DynamicsParameters found = *spec.dynamics;
+  found.natural_frequency_hz = best.fn;
+  found.damping_ratio = best.zeta;
+  return found;
+}
 
 CandidateOutcome test_dynamics(const CandidateContext& c) {
   CandidateOutcome out;
   const DiagnosisRecord& r = c.record;
-  const double f_hi = 0.45 / r.dt;
-  const double f_lo = std::min(0.1 * f_hi, std::max(0.5, 20.0 / r.duration()));
+  const auto [f_lo, f_hi] = resonance_band(r);
 
   std::vector<double> x = static_prediction(c.base_fit, r);
   Resonance res = search(r, x, f_lo, f_hi, std::nullopt);
