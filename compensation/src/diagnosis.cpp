@@ -398,6 +398,12 @@ struct Joint {
   std::vector<std::string> added;  ///< what each part joined after it adds
 };
 
+/// The statistic of a cause that is read again on a joint model's residual (drift: the time
+/// profile; creep: the hold profile), without its fit.
+double retest_statistic(Cause cause, const details::CandidateContext& c) {
+  return cause == Cause::kCreep ? details::creep_statistic(c) : c.profile("time").explained;
+}
+
 /// A cause after the first, tried on top of the joint model.
 struct Next {
   std::size_t index;  ///< in Diagnosis::candidates
@@ -512,11 +518,11 @@ std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
                              num(s->gain) + ")";
     }
     const bool joins = c.significant && c.carries_over && c.cause != Cause::kDrift;
-    // A drift's statistic is the residual's time profile, which a stronger cause the reference
-    // (or the shape) misses swamps, a delay or a resonance erring on every move: read again on
-    // what the causes before it leave.
-    const bool retest =
-        c.cause == Cause::kDrift && c.carries_over && !contender && (!x.beyond || s != nullptr);
+    // A drift's and a creep's statistics (the residual's time and hold profiles) are swamped by a
+    // stronger cause the reference (or the shape) misses, a delay or a resonance erring on every
+    // move: read again on what the causes before them leave.
+    const bool slow = c.cause == Cause::kDrift || c.cause == Cause::kCreep;
+    const bool retest = slow && c.carries_over && !contender && (!x.beyond || s != nullptr);
     const double gain = s ? s->gain : c.heldout.rmse > 0.0 ? x.reference / c.heldout.rmse : 0.0;
     if (contender || joins || retest) order.push_back({i, gain, contender, retest});
   }
@@ -582,18 +588,20 @@ void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& join
                                      next.retest ? joint_profiles : x.profiles,
                                      x.response,
                                      d.noise_rms};
-  // The drift's statistic, read before its fit: not significant there either, it is not tried.
-  if (next.retest && jc.profile("time").explained < c.threshold) return;
+  // A retested statistic, read before the fit: not significant there either, it is not tried.
+  if (next.retest && retest_statistic(c.cause, jc) < c.threshold) return;
   try {
     details::CandidateOutcome o = test_of(c.cause)(jc);
-    if (next.retest && o.statistic >= o.threshold) {
+    if (next.retest) {
+      if (o.statistic < o.threshold) return;
       // Significant on what the causes before it leave: judged on that statistic.
       c.statistic = o.statistic;
       c.significant = true;
       c.evidence = o.evidence + ", on what the model holding " + before + " leaves";
       judge_contender(d, x, {next.index, next.gain, true, true}, o, joint.fit.heldout.rmse, before);
+    } else if (next.contender) {
+      judge_contender(d, x, next, o, joint.fit.heldout.rmse, before);
     }
-    if (next.contender) judge_contender(d, x, next, o, joint.fit.heldout.rmse, before);
     // Less than kMinJoinGain only adds parameters, which the inverse extrapolates (a rate law
     // beyond the record's rates).
     if (c.cause != Cause::kDrift && o.fit.heldout.rmse * kMinJoinGain < joint.fit.heldout.rmse) {

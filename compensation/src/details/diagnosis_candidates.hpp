@@ -44,6 +44,9 @@ CandidateOutcome test_dynamics(const CandidateContext& c);
 CandidateOutcome test_delay(const CandidateContext& c);
 CandidateOutcome test_drift(const CandidateContext& c);
 
+/// test_creep's statistic alone (no fit): read again on a joint model's residual.
+double creep_statistic(const CandidateContext& c);
+
 /// The resonance of `spec` (which has dynamics) found again with the hysteresis weights free,
 /// projected from the better of its own and the peak of the measured `response`, when it lies
 /// off that peak (15 % in frequency, 2x in damping): a lag its phase stood in for pulled it

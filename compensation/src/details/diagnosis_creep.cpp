@@ -8,6 +8,8 @@
 // integral) are what a drift would otherwise take for its own.
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <vector>
 
 #include "details/diagnosis_candidates.hpp"
 
@@ -27,34 +29,57 @@ std::vector<double> creep_time_constants(const DiagnosisRecord& r) {
   return log_spaced_time_constants(count, lo, hi);
 }
 
+// The residual signed by the last move, profiled against the log time since it over the holds
+// (all samples after a move when the record has too few); `holds`: whether the holds count.
+struct HoldProfile {
+  bool holds = false;
+  double longest = 0.0;  ///< [s] the longest time since a move among the samples used
+  std::optional<ResidualProfile> profile;  ///< none when the input never rests long enough
+};
+
+HoldProfile hold_profile(const CandidateContext& c) {
+  const DiagnosisRecord& r = c.record;
+  const InputEvents& ev = c.events;
+  HoldProfile h;
+  h.holds = ev.hold_seconds >= kMinHoldSeconds;
+  std::vector<unsigned char> use(r.n, 0);
+  std::vector<double> signed_residual(r.n, 0.0);
+  for (std::size_t k = 0; k < r.n; ++k) {
+    signed_residual[k] = c.residual[k] * ev.last_move[k];
+    use[k] = ev.last_move[k] != 0 && ev.since_event_s[k] >= kSettleSeconds &&
+             (!h.holds || ev.holding[k]);
+    if (use[k]) h.longest = std::max(h.longest, ev.since_event_s[k]);
+  }
+  if (h.longest > kSettleSeconds) {
+    h.profile =
+        binned_profile("since_event", "time since the last step or reversal [s]", ev.since_event_s,
+                       signed_residual, use, log_edges(kSettleSeconds, h.longest, 12));
+  }
+  return h;
+}
+
 }  // namespace
+
+double creep_statistic(const CandidateContext& c) {
+  const HoldProfile h = hold_profile(c);
+  return h.profile ? h.profile->explained : 0.0;
+}
 
 CandidateOutcome test_creep(const CandidateContext& c) {
   CandidateOutcome out;
   const DiagnosisRecord& r = c.record;
   const InputEvents& ev = c.events;
-  const bool holds = ev.hold_seconds >= kMinHoldSeconds;
-  std::vector<unsigned char> use(r.n, 0);
-  std::vector<double> signed_residual(r.n, 0.0);
-  double longest = 0.0;
-  for (std::size_t k = 0; k < r.n; ++k) {
-    signed_residual[k] = c.residual[k] * ev.last_move[k];
-    use[k] =
-        ev.last_move[k] != 0 && ev.since_event_s[k] >= kSettleSeconds && (!holds || ev.holding[k]);
-    if (use[k]) longest = std::max(longest, ev.since_event_s[k]);
-  }
-  if (longest > kSettleSeconds) {
-    const ResidualProfile p =
-        binned_profile("since_event", "time since the last step or reversal [s]", ev.since_event_s,
-                       signed_residual, use, log_edges(kSettleSeconds, longest, 12));
+  const HoldProfile h = hold_profile(c);
+  if (h.profile) {
+    const ResidualProfile& p = *h.profile;
     out.statistic = p.explained;
     const double moved = p.means.empty() ? 0.0 : p.means.back() - p.means.front();
     out.evidence =
-        (holds ? "over " + std::to_string(ev.holds) + " holds (" + num(ev.hold_seconds) + " s)"
-               : std::string("the record has no holds (weak evidence): after reversals")) +
+        (h.holds ? "over " + std::to_string(ev.holds) + " holds (" + num(ev.hold_seconds) + " s)"
+                 : std::string("the record has no holds (weak evidence): after reversals")) +
         " the residual moves " + num(moved) + " " + r.units.output +
         " in the direction of the last input change between " + num(kSettleSeconds) + " and " +
-        num(longest) + " s; log time explains " + percent(p.explained) + " of its variance";
+        num(h.longest) + " s; log time explains " + percent(p.explained) + " of its variance";
   } else {
     out.evidence = "the input never rests long enough to show creep";
   }

@@ -20,7 +20,7 @@
 // (estimated from the second differences of the residual). Every other significant candidate
 // that carries over and, added to the stronger named causes, lowers the held-out error by 1.1x
 // (or min_gain when lower) is named too, unless it is within their noise (see Diagnosis::causes);
-// a drift not significant on the baseline's residual is read again on theirs.
+// a drift or a creep not significant on the baseline's residual is read again on theirs.
 //
 // Candidates and their extensions:
 //   asymmetry        modified PI (dead zones) or coupled-play PI
