@@ -163,6 +163,18 @@ std::vector<double> static_prediction(const ExtensionFit& f, const DiagnosisReco
   return x;
 }
 
+// The joint projection from the better (by the joint objective) of `estimate` and the measured
+// response's `peak`.
+Resonance project_from(JointObjective& joint, Resonance estimate,
+                       const std::optional<Resonance>& peak, double f_lo, double f_hi) {
+  estimate.mse = joint(estimate.fn, estimate.zeta);
+  if (peak) {
+    const double mse = joint(peak->fn, peak->zeta);
+    if (mse < estimate.mse) estimate = {peak->fn, peak->zeta, mse};
+  }
+  return project(joint, estimate, f_lo, f_hi);
+}
+
 // The band the resonance is searched in: up to 0.45 fs, from 20 periods over the record.
 std::pair<double, double> resonance_band(const DiagnosisRecord& r) {
   const double f_hi = 0.45 / r.dt;
@@ -183,12 +195,8 @@ std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
   if (on_peak) return std::nullopt;
   const DesignRows rows(r, spec);
   JointObjective joint(r, spec, rows);
-  Resonance start{spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio, 0.0};
-  start.mse = joint(start.fn, start.zeta);
-  if (const double mse = joint(peak->fn, peak->zeta); mse < start.mse) {
-    start = {peak->fn, peak->zeta, mse};
-  }
-  const Resonance best = project(joint, start, f_lo, f_hi);
+  const Resonance best = project_from(
+      joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio}, peak, f_lo, f_hi);
   DynamicsParameters found = *spec.dynamics;
   found.natural_frequency_hz = best.fn;
   found.damping_ratio = best.zeta;
@@ -216,13 +224,8 @@ CandidateOutcome test_dynamics(const CandidateContext& c) {
   if (fit2.fit.rmse < fit.fit.rmse) fit = std::move(fit2), res = again;
   // Then jointly with the weights, from the better of that estimate and the spectral peak.
   JointObjective joint(r, c.base, rows);
-  Resonance start = res;
-  start.mse = joint(res.fn, res.zeta);
-  if (const auto peak = spectral_peak(c.response, f_lo, f_hi)) {
-    const double mse = joint(peak->fn, peak->zeta);
-    if (mse < start.mse) start = {peak->fn, peak->zeta, mse};
-  }
-  const Resonance projected = project(joint, start, f_lo, f_hi);
+  const Resonance projected =
+      project_from(joint, res, spectral_peak(c.response, f_lo, f_hi), f_lo, f_hi);
   ExtensionSpec spec3 = c.base;
   spec3.dynamics = DynamicsParameters{projected.fn, projected.zeta};
   ExtensionFit fit3 = fit_extension(r, spec3, FitRows::kAll, true, &rows);
