@@ -20,7 +20,8 @@
 // (estimated from the second differences of the residual). Every other significant candidate
 // that carries over and, added to the stronger named causes, lowers the held-out error by 1.1x
 // (or min_gain when lower) is named too, unless it is within their noise (see Diagnosis::causes);
-// a drift or a creep not significant on the baseline's residual is read again on theirs.
+// a drift or a creep not significant on the baseline's residual is read again on theirs, and so
+// is the shape behind a delay or a resonance.
 //
 // Candidates and their extensions:
 //   asymmetry        modified PI (dead zones) or coupled-play PI
@@ -192,7 +193,12 @@ struct Diagnosis {
   /// must explain at least `noise_allowance_rms` of held-out rms beyond them (added_rms). When
   /// the first is named beyond the loop's shape (asymmetry), the other causes are judged on top
   /// of the shape (significant there, gain over the shape's extension); they come first, ranked
-  /// by that gain, and the shape last, itself judged on top of the first.
+  /// by that gain, and the shape last, itself judged on top of the first. A drift or a creep not
+  /// significant on the baseline's residual, which a stronger cause's error on every move swamps,
+  /// is read again on what the causes before it leave, and so is the shape behind a delay or a
+  /// resonance named first: gaining min_gain there, it joins right after the first (a delay
+  /// first is found again on top of it), the others are judged on top of it, and it is listed
+  /// last.
   std::vector<NamedCause> causes;
   /// The held-out rms [output unit] an effect must explain beyond the stronger named causes to
   /// be told apart from them: sqrt(noise_floor_factor^2 - 1) x noise_rms, what a model at the
