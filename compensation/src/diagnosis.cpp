@@ -338,6 +338,14 @@ struct OnTopOfShape {
   }
 };
 
+/// y - prediction over the record [output unit].
+std::vector<double> residual_of(const details::DiagnosisRecord& r,
+                                std::span<const double> prediction) {
+  std::vector<double> e(r.n);
+  for (std::size_t k = 0; k < r.n; ++k) e[k] = r.y[k] - prediction[k];
+  return e;
+}
+
 /// Every other candidate that carries over, tested again with the asymmetry extension's fit as
 /// its baseline (its statistic read from that fit's residual), in candidate order; a candidate
 /// the designs cannot fit together with the shape is left out.
@@ -348,8 +356,7 @@ std::vector<OnTopOfShape> beyond_shape(const Diagnosis& d, const details::Diagno
   std::size_t shape = 0;
   while (d.candidates[shape].cause != Cause::kAsymmetry) ++shape;
   const details::ExtensionFit& base = fits[shape];
-  std::vector<double> residual(r.n);
-  for (std::size_t k = 0; k < r.n; ++k) residual[k] = r.y[k] - base.prediction[k];
+  const std::vector<double> residual = residual_of(r, base.prediction);
   const std::vector<ResidualProfile> profiles = residual_profiles(r, residual, ev);
   const FrequencyResponse response =
       details::frequency_response(base.prediction, r.y, r.dt, d.noise_rms);
@@ -588,8 +595,7 @@ void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
 void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& joint) {
   CandidateReport& c = d.candidates[next.index];
   const std::string before = joined(d.extended_parts);
-  std::vector<double> joint_residual(x.r.n);
-  for (std::size_t k = 0; k < x.r.n; ++k) joint_residual[k] = x.r.y[k] - joint.fit.prediction[k];
+  const std::vector<double> joint_residual = residual_of(x.r, joint.fit.prediction);
   const std::vector<ResidualProfile> joint_profiles =
       next.retest ? residual_profiles(x.r, joint_residual, x.ev) : std::vector<ResidualProfile>{};
   const details::CandidateContext jc{x.r,
@@ -644,8 +650,7 @@ void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& join
 // sample at 20 kHz, the lag left is what a rate law then takes (1.46x added, none hidden). With
 // the shape joined, the delay is found again on top of both and kept where it predicts better.
 void find_delay_again(const Diagnosis& d, const Naming& x, Joint& joint) {
-  std::vector<double> residual(x.r.n);
-  for (std::size_t k = 0; k < x.r.n; ++k) residual[k] = x.r.y[k] - joint.fit.prediction[k];
+  const std::vector<double> residual = residual_of(x.r, joint.fit.prediction);
   const details::CandidateContext jc{x.r,        joint.fit.spec, joint.fit,  joint.fit.prediction,
                                      residual,   x.ev,           x.profiles, x.response,
                                      d.noise_rms};
@@ -764,8 +769,7 @@ Baseline fit_baseline(Diagnosis& d, const details::DiagnosisRecord& r,
 // The baseline's residual y - prediction [output unit]; sets d's noise rms, how it was
 // estimated and the input's period.
 std::vector<double> residual_and_noise(Diagnosis& d, const details::DiagnosisRecord& r) {
-  std::vector<double> e(r.n);
-  for (std::size_t k = 0; k < r.n; ++k) e[k] = r.y[k] - d.baseline_prediction[k];
+  std::vector<double> e = residual_of(r, d.baseline_prediction);
   d.noise_rms = details::noise_rms(e);
   d.noise_source = "second differences of the baseline residual";
   d.input_period = details::input_period(r.u);
@@ -812,7 +816,7 @@ Reference reference_of(const Diagnosis& d, const details::DiagnosisRecord& r,
                        std::vector<double> e, const DiagnosisOptions& options) {
   Reference ref{std::move(e), d.profiles, d.frequency_response, d.baseline_prediction};
   if (given_model_stale(d, options)) {
-    for (std::size_t k = 0; k < r.n; ++k) ref.residual[k] = r.y[k] - base_fit.prediction[k];
+    ref.residual = residual_of(r, base_fit.prediction);
     ref.profiles = residual_profiles(r, ref.residual, ev);
     ref.response = details::frequency_response(base_fit.prediction, r.y, r.dt, d.noise_rms);
     ref.prediction = base_fit.prediction;
