@@ -86,3 +86,17 @@ TEST(ExtensionTracksBetter, ADecisiveGainOnEverySineOutweighsTheTrianglesHistory
   // The middle sine may not lose beyond the spread, however the fast one gains.
   EXPECT_FALSE(hd::extension_tracks_better(slow, on_sines(0.75, 1.0, 4.9), 500.0, 200.0));
 }
+
+// Each loss within the spread, yet together worse: a delay grafted on a rate law that already
+// followed the actuator's lag gained 13 % on the fast sine and gave back 10 % on the middle one
+// and 7 % on the triangle (one identify on the rate-dependent truth). Not adopted; the same
+// gain with the losses halved is.
+TEST(ExtensionTracksBetter, LossesWithinTheSpreadMayNotOutweighTheFastGain) {
+  const hd::IdentifyCandidate base = on_sines(0.976, 8.557, 4.022);
+  EXPECT_FALSE(hd::extension_tracks_better(base, on_sines(1.043, 7.559, 4.453), 500.0, 200.0));
+  EXPECT_TRUE(hd::extension_tracks_better(base, on_sines(1.009, 7.559, 4.237), 500.0, 200.0));
+  // A rate law against its rate-free self (no middle sine): the triangle may not give back what
+  // the rate sine gains.
+  EXPECT_FALSE(hd::extension_tracks_better(base, on_sines(1.09, 7.9, 4.0), 500.0));
+  EXPECT_TRUE(hd::extension_tracks_better(base, on_sines(1.0, 7.9, 4.0), 500.0));
+}
