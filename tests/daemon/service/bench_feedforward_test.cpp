@@ -104,6 +104,12 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     return product;
   }
 
+  /// The fast sine gains 5 %, or the three references together gain 5 % with it no worse.
+  static bool gains(const json& verified) {
+    const double fast = verified["fast_gain"].get<double>();
+    return fast >= 1.0 / 0.95 || (fast > 1.0 && balance(verified) >= 1.0 / 0.95);
+  }
+
   static bool has_part(const json& extension, const std::string& cause) {
     const json parts = extension.value("parts", json::array());
     return std::any_of(parts.begin(), parts.end(),
@@ -111,7 +117,7 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
   }
 
   /// An adopted extension: every figure of its parts and of its verification is there, and the
-  /// bench's fast sine is better by the adoption's margin.
+  /// bench's references are better by the adoption's margin.
   static void expect_adopted(const json& e) {
     ASSERT_TRUE(e.value("adopted", false)) << e.dump(2);
     for (const json& p : e["parts"]) {
@@ -120,10 +126,7 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     }
     const json& v = e["verified"];
     ASSERT_TRUE(v.contains("fast_hz")) << e.dump(2);
-    EXPECT_LE(v["fast_rms_percent"]["extended"].get<double>(),
-              0.95 * v["fast_rms_percent"]["model"].get<double>())
-        << e.dump(2);
-    EXPECT_GE(v["fast_gain"].get<double>(), 1.0 / 0.95) << e.dump(2);
+    EXPECT_TRUE(gains(v)) << e.dump(2);
     // Guarded by the middle sine: not worse there than the spread between two runs.
     ASSERT_TRUE(v.contains("mid_hz")) << e.dump(2);
     EXPECT_NEAR(v["mid_hz"].get<double>(), v["fast_hz"].get<double>() / 2.5, 1e-9);
@@ -190,12 +193,11 @@ TEST_F(BenchFeedforwardTest, OnTheDefaultTruthTheBenchJudgesWhatTheRecordHides) 
     EXPECT_LE(f.extended_200, 1.0);
     EXPECT_LE(f.extended_500, 1.0);
   } else {
-    // Kept out because the bench says so: the fast sine did not gain 5 %, or the triangle or the
-    // middle sine lost, beyond the spread or on balance.
+    // Kept out because the bench says so: the fast sine (or the three references together) did
+    // not gain 5 %, or the triangle or the middle sine lost, beyond the spread or on balance.
     EXPECT_EQ(e.value("why", ""), "it does not track better on the bench") << e.dump(2);
     const json& v = e["verified"];
-    EXPECT_TRUE(v["fast_rms_percent"]["extended"].get<double>() >
-                    0.95 * v["fast_rms_percent"]["model"].get<double>() ||
+    EXPECT_TRUE(!gains(v) ||
                 v["triangle_rms_percent"]["extended"].get<double>() >
                     1.1 * v["triangle_rms_percent"]["model"].get<double>() + 0.05 ||
                 v["mid_rms_percent"]["extended"].get<double>() >
