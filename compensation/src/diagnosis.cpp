@@ -589,30 +589,33 @@ void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
   }
 }
 
+// A test's context with the joint model so far as its baseline: `residual` is y - its
+// prediction, `profiles` the residual profiles the statistic is read from.
+details::CandidateContext on_joint(const Diagnosis& d, const Naming& x, const Joint& joint,
+                                   std::span<const double> residual,
+                                   const std::vector<ResidualProfile>& profiles) {
+  return {x.r,  joint.fit.spec, joint.fit,  joint.fit.prediction, residual,
+          x.ev, profiles,       x.response, d.noise_rms};
+}
+
 // The next cause's test again, its baseline the joint model so far (its parameters, a
 // resonance, a delay, are found on what the joint model leaves): a contender is judged for
 // naming, and its part joins the joint model when it lowers the held-out rms by kMinJoinGain.
-void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& joint) {
+// True when it joined.
+bool try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& joint) {
   CandidateReport& c = d.candidates[next.index];
   const std::string before = joined(d.extended_parts);
   const std::vector<double> joint_residual = residual_of(x.r, joint.fit.prediction);
   const std::vector<ResidualProfile> joint_profiles =
       next.retest ? residual_profiles(x.r, joint_residual, x.ev) : std::vector<ResidualProfile>{};
-  const details::CandidateContext jc{x.r,
-                                     joint.fit.spec,
-                                     joint.fit,
-                                     joint.fit.prediction,
-                                     joint_residual,
-                                     x.ev,
-                                     next.retest ? joint_profiles : x.profiles,
-                                     x.response,
-                                     d.noise_rms};
+  const details::CandidateContext jc =
+      on_joint(d, x, joint, joint_residual, next.retest ? joint_profiles : x.profiles);
   // A retested statistic, read before the fit: not significant there either, it is not tried.
-  if (next.retest && retest_statistic(c.cause, jc) < c.threshold) return;
+  if (next.retest && retest_statistic(c.cause, jc) < c.threshold) return false;
   try {
     details::CandidateOutcome o = test_of(c.cause)(jc);
     if (next.retest) {
-      if (o.statistic < o.threshold) return;
+      if (o.statistic < o.threshold) return false;
       // The shape read again changes the family every later cause is judged in: it must gain
       // min_gain on what the first leaves, as the first must over the reference (beside a creep
       // and a delay on a symmetric PI, a level profile of 0.17 gained 1.12x, and a rate law then
@@ -623,7 +626,7 @@ void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& join
         c.not_named = "read again on what the model holding " + before + " leaves, its statistic " +
                       num(o.statistic) + " is significant, but it gains " + num(added) +
                       " added to it, below " + num(x.options.min_gain);
-        return;
+        return false;
       }
       // Significant on what the causes before it leave: judged on that statistic.
       c.statistic = o.statistic;
@@ -639,11 +642,13 @@ void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& join
       joint.fit = std::move(o.fit);
       joint.added.push_back(o.extension);
       d.extended_parts.push_back(std::string(to_string(c.cause)));
+      return true;
     }
   } catch (const std::exception&) {
     // A combination the designs cannot fit is left out.
     if (next.contender) c.not_named = "it could not be fitted on top of " + before;
   }
+  return false;
 }
 
 // A delay named first was found on the baseline, which misses the loop's shape: off by a
@@ -651,11 +656,8 @@ void try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& join
 // the shape joined, the delay is found again on top of both and kept where it predicts better.
 void find_delay_again(const Diagnosis& d, const Naming& x, Joint& joint) {
   const std::vector<double> residual = residual_of(x.r, joint.fit.prediction);
-  const details::CandidateContext jc{x.r,        joint.fit.spec, joint.fit,  joint.fit.prediction,
-                                     residual,   x.ev,           x.profiles, x.response,
-                                     d.noise_rms};
   try {
-    details::CandidateOutcome o = details::test_delay(jc);
+    details::CandidateOutcome o = details::test_delay(on_joint(d, x, joint, residual, x.profiles));
     if (o.statistic < o.threshold || !(o.fit.heldout.rmse < joint.fit.heldout.rmse)) return;
     joint.fit = std::move(o.fit);
     joint.added.push_back(o.extension + ", found again on top of the loop's shape");
@@ -708,10 +710,11 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x) {
   const std::vector<Next> order = next_causes(d, x);
   report(x.options, 0.97, "naming the other causes and joining the significant extensions");
   for (const Next& next : order) {
-    try_next_cause(d, x, next, joint);
-    const bool shape_joined = d.candidates[next.index].cause == Cause::kAsymmetry &&
-                              d.extended_parts.back() == to_string(Cause::kAsymmetry);
-    if (shape_joined && d.cause == Cause::kDelay) find_delay_again(d, x, joint);
+    const bool part_joined = try_next_cause(d, x, next, joint);
+    if (part_joined && d.candidates[next.index].cause == Cause::kAsymmetry &&
+        d.cause == Cause::kDelay) {
+      find_delay_again(d, x, joint);
+    }
   }
   // The shape read again joined first, on top of the first cause alone; it is listed last, as
   // when the first cause is named beyond it (alone, beside the cause that hid it, it gains little
