@@ -6,8 +6,9 @@
 // one, is at most 40 % worse at any frequency (a law linear in the rate fitted to a front
 // whose lag grows with its square root gives up some of the slow sines for the fast ones; which
 // law identify keeps varies between runs, and so does the mpi's slow sine: over 20 runs the rpi
-// inverse tracked 1 Hz at 0.71-0.94 % and the mpi's at 0.70-0.86 %; identify keeps a law only
-// when it tracks a 20 Hz sine better than its rate-free self) and stays within 1.5 % of range, also
+// inverse tracked 1 Hz at 0.71-0.94 % and the mpi's at 0.70-0.86 %; identify keeps a law when it
+// tracks a 20 Hz sine better than its rate-free self, or adds one back from the diagnosis of its
+// own record when that tracks better on the bench) and stays within 1.5 % of range, also
 // over a reference too long to plan whole. The targets (1 % at every frequency, 85 % below the
 // rate-independent inverse on average) are missed: most of what both leave is the Preisach
 // loop's shape, and no rate law follows a switching front (docs/measurements.md). No compensator
@@ -15,6 +16,7 @@
 // prediction, and a second identify reports the previous model's error where it is known.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -109,12 +111,23 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
     EXPECT_TRUE(judged["sine_rms_percent"][who].is_number()) << judged;
     EXPECT_TRUE(judged["triangle_rms_percent"][who].is_number()) << judged;
   }
-  // On this truth the law tracks the rate sine 20 % better: it is kept, and `hystbench
-  // identify` says so.
-  EXPECT_TRUE(judged["kept"].get<bool>()) << judged;
+  // The law reaches the model by one of two routes, and `hystbench identify` says which: kept
+  // because it tracks the rate sine better than its rate-free self (on this truth by about 20 %),
+  // or, where it lost on the triangle, left out and added again by the diagnosis of identify's
+  // own record (a thresholds law with creep tracked 20 Hz at 0.92 % against 1.48 % without).
+  const json& extension = id_rpi["model"].value("extension", json::object());
+  bool extended_by_rate = false;
+  if (extension.value("adopted", false)) {
+    for (const auto& part : extension["parts"]) {
+      extended_by_rate = extended_by_rate || part["cause"] == "rate_dependence";
+    }
+  }
+  EXPECT_TRUE(judged["kept"].get<bool>() || extended_by_rate) << judged << extension;
   std::ostringstream text;
   cli::print_run_result(id_rpi, text);
-  EXPECT_NE(text.str().find("rate law        kept: 20 Hz sine rms "), std::string::npos)
+  EXPECT_NE(text.str().find(judged["kept"].get<bool>() ? "rate law        kept: 20 Hz sine rms "
+                                                       : "extension       rate_dependence"),
+            std::string::npos)
       << text.str();
   if (rate["law"] == "thresholds") {
     EXPECT_GT(rate.value("threshold_s", 0.0), 0.0) << rate;
@@ -130,7 +143,10 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
     // The model's own prediction is in the result.
     ASSERT_TRUE(inv.contains("model_rms_error_percent")) << inv.dump(2);
     EXPECT_TRUE(std::isfinite(inv["model_rms_error_percent"].get<double>()));
-    EXPECT_EQ(inv["feedforward"]["inverted"][1], "rate") << inv.dump(2);
+    // Hysteresis first; the rate law after it (a creep part, where one was added, between).
+    const json& inverted = inv["feedforward"]["inverted"];
+    EXPECT_EQ(inverted[0], "hysteresis") << inv.dump(2);
+    EXPECT_NE(std::find(inverted.begin(), inverted.end(), "rate"), inverted.end()) << inv.dump(2);
     // A law that lags the drive is planned over the known reference, unless the previewed
     // inverse already meets the targets on the model; the result says which, and a plan that
     // plays beats the previewed inverse on the model. The signed law with weights growing with
