@@ -5,6 +5,7 @@
 // run.finished results collected, and run_and_wait().
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <memory>
@@ -14,9 +15,9 @@
 #include <thread>
 #include <vector>
 
-#include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/config/daemon_settings.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "support/temp_dir_test.hpp"
 
 namespace hystbench::test {
@@ -120,6 +121,13 @@ class BenchFixture : public TempDirTest {
   }
 
   nlohmann::json status() { return bench_->handle("status", nlohmann::json::object()); }
+
+  /// Whether identify's `model.extension` lists a part for `cause` ("delay", "rate_dependence").
+  static bool has_part(const nlohmann::json& extension, const std::string& cause) {
+    const nlohmann::json parts = extension.value("parts", nlohmann::json::array());
+    return std::any_of(parts.begin(), parts.end(),
+                       [&](const nlohmann::json& p) { return p.value("cause", "") == cause; });
+  }
 
   /// Waits until the active run has done `samples` ticks; false after `timeout`.
   bool wait_run_samples(std::uint64_t samples,

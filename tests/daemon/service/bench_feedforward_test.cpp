@@ -110,12 +110,6 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     return fast >= 1.0 / 0.95 || (fast > 1.0 && balance(verified) >= 1.0 / 0.95);
   }
 
-  static bool has_part(const json& extension, const std::string& cause) {
-    const json parts = extension.value("parts", json::array());
-    return std::any_of(parts.begin(), parts.end(),
-                       [&](const json& p) { return p.value("cause", "") == cause; });
-  }
-
   /// An adopted extension: every figure of its parts and of its verification is there, and the
   /// bench's references are better by the adoption's margin.
   static void expect_adopted(const json& e) {
