@@ -123,11 +123,19 @@ json wait_for_run(BenchClient& client, const std::string& run_id,
 
 namespace {
 
+// Where a run's largest error fell: ", at index N" (the log's `index` column), or nothing for a
+// result without the key.
+std::string at_index(const json& r, const char* key) {
+  if (!r.contains(key)) return {};
+  return ", at index " + std::to_string(r[key].get<std::uint64_t>());
+}
+
 // A tracking run's error against its reference, and the hysteresis it leaves.
 void print_tracking_error(std::ostream& out, const json& r) {
   out << "  tracking error  rms " << fixed(r["rms_error_um"], 4) << " um ("
       << fixed(r["rms_error_percent"], 3) << " % of " << fixed(r["range_um"], 2) << " um)   max "
-      << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %)\n";
+      << fixed(r["max_error_um"], 4) << " um (" << fixed(r["max_error_percent"], 3) << " %"
+      << at_index(r, "max_error_index") << ")\n";
   out << "  hysteresis      " << fixed(r["hysteresis_percent"], 3) << " % of the output range\n";
 }
 
@@ -188,8 +196,9 @@ void print_planned_feedforward(std::ostream& out, const json& p) {
 void print_model_error(std::ostream& out, const json& r) {
   out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
       << fixed(r["model_rms_error_percent"], 3) << " %)   max " << fixed(r["model_max_error_um"], 4)
-      << " um (" << fixed(r["model_max_error_percent"], 3)
-      << " %): y - y_model (y_model: " << r.value("y_model", std::string("?")) << ")\n";
+      << " um (" << fixed(r["model_max_error_percent"], 3) << " %"
+      << at_index(r, "model_max_error_index")
+      << "): y - y_model (y_model: " << r.value("y_model", std::string("?")) << ")\n";
 }
 
 // identify's model: its structure and file, its fit and held-out errors, the fit's notes.

@@ -434,16 +434,10 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::uint64_t k,
 bool BenchLoop::score(RunProgram& p, std::uint64_t k, const TickDrive& d,
                       const SampleRecord& rec) noexcept {
   if (k >= p.metrics_from && !std::isnan(d.y_ref)) {
-    const double e = rec.y_measured - d.y_ref;
-    p.error.sum2 += e * e;
-    p.error.max = std::max(p.error.max, std::abs(e));
-    ++p.error.samples;
+    p.error.add(rec.y_measured - d.y_ref, k);
   }
   if (k >= p.metrics_from && k >= p.model_metrics_from && p.model) {
-    const double e = rec.y_measured - rec.y_model;
-    p.model_error.sum2 += e * e;
-    p.model_error.max = std::max(p.model_error.max, std::abs(e));
-    ++p.model_error.samples;
+    p.model_error.add(rec.y_measured - rec.y_model, k);
   }
   if (k >= p.tare.startup_from && k < p.tare.startup_to && std::isfinite(d.y_ref) &&
       std::isfinite(rec.y_measured)) {

@@ -131,6 +131,7 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   const double rms = run.error.samples ? std::sqrt(run.error.sum2 / run.error.samples) : 0.0;
   r["rms_error_um"] = rms;
   r["max_error_um"] = run.error.max;
+  r["max_error_index"] = run.error.max_index;
   r["range_um"] = e.range;
   r["rms_error_percent"] = e.range > 0 ? 100.0 * rms / e.range : 0.0;
   r["max_error_percent"] = e.range > 0 ? 100.0 * run.error.max / e.range : 0.0;

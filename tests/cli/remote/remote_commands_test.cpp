@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "hystbench/cli/offline/data_table.hpp"
@@ -50,4 +51,33 @@ TEST_F(ReadUploadTest, AMissingColumnIsNamedWithTheCommandsOption) {
   ASSERT_EQ(read.values.size(), 3u);
   EXPECT_DOUBLE_EQ(read.values[2], 6.0);
   EXPECT_EQ(read.param, "reference_upload");
+}
+
+// A tracking run's printed result says where its largest errors fell (the log's index), and a
+// result without the index (an older daemon's) prints without it.
+TEST(PrintRunResult, SaysWhereTheLargestErrorsFell) {
+  nlohmann::json r = {{"run_id", "r1"},
+                      {"kind", "track"},
+                      {"end", "completed"},
+                      {"samples", 100},
+                      {"rms_error_um", 0.1},
+                      {"rms_error_percent", 1.0},
+                      {"range_um", 10.0},
+                      {"max_error_um", 0.3},
+                      {"max_error_percent", 3.0},
+                      {"max_error_index", 41},
+                      {"hysteresis_percent", 0.5},
+                      {"model_rms_error_um", 0.2},
+                      {"model_rms_error_percent", 2.0},
+                      {"model_max_error_um", 0.9},
+                      {"model_max_error_percent", 9.0},
+                      {"model_max_error_index", 17}};
+  std::ostringstream out;
+  cli::print_run_result(r, out);
+  EXPECT_NE(out.str().find("0.3000 um (3.000 %, at index 41)"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("0.9000 um (9.000 %, at index 17)"), std::string::npos) << out.str();
+  r.erase("max_error_index");
+  std::ostringstream older;
+  cli::print_run_result(r, older);
+  EXPECT_NE(older.str().find("0.3000 um (3.000 %)"), std::string::npos) << older.str();
 }

@@ -21,9 +21,10 @@ TEST(RunResult, ReportsTheOutcomeCountersSummaryAndTheModelsError) {
   p.summary = {{"compensator", "none"}};
   p.records.y = {0.0, 5.0, 10.0, 2.0};
   p.records.count = 4;
-  p.model_error.sum2 = 4.0;  // rms 1 um over 4 samples
-  p.model_error.samples = 4;
-  p.model_error.max = 1.5;
+  // rms 1 um over 4 samples, the largest (1.5 um) at sample 2
+  for (const auto& [k, e] : {std::pair{0, 1.0}, {1, -0.5}, {2, -1.5}, {3, std::sqrt(0.5)}}) {
+    p.model_error.add(e, k);
+  }
   const hdd::RunResult r = hdd::collect_result(p, 3.25);
   EXPECT_FALSE(r.wants_fit());
   EXPECT_TRUE(r.log_path.empty());
@@ -42,6 +43,7 @@ TEST(RunResult, ReportsTheOutcomeCountersSummaryAndTheModelsError) {
   EXPECT_DOUBLE_EQ(j["model_rms_error_um"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(j["model_rms_error_percent"].get<double>(), 10.0);
   EXPECT_DOUBLE_EQ(j["model_max_error_percent"].get<double>(), 15.0);
+  EXPECT_EQ(j["model_max_error_index"], 2);
 }
 
 TEST(RunResult, OnlyACompletedIdentifyWithARecordWantsAFit) {

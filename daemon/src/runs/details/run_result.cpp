@@ -24,6 +24,7 @@ void add_model_error(const RunProgram& run, json& report) {
   report["model_max_error_um"] = run.model_error.max;
   report["model_rms_error_percent"] = range > 0 ? 100.0 * rms / range : 0.0;
   report["model_max_error_percent"] = range > 0 ? 100.0 * run.model_error.max / range : 0.0;
+  report["model_max_error_index"] = run.model_error.max_index;
 }
 
 // A drive learned before whose lead-in ended before its longest: the header's metrics_from is

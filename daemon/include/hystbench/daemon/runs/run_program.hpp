@@ -4,6 +4,7 @@
 // outcome into it; the control thread reads them after the loop hands the program back.
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -52,6 +53,14 @@ struct RunCounters {
 struct ErrorFigures {
   double sum2 = 0.0, max = 0.0;
   std::uint64_t samples = 0;
+  std::uint64_t max_index = 0;  ///< the run sample (the log's `index`) where `max` fell
+
+  /// Adds one scored sample's error e at run sample k. Real-time safe.
+  void add(double e, std::uint64_t k) noexcept {
+    sum2 += e * e;
+    if (std::abs(e) > max) max = std::abs(e), max_index = k;
+    ++samples;
+  }
 };
 
 /// track: the output offset the model does not predict (slow creep, a sensor offset): the mean
