@@ -154,6 +154,12 @@ std::optional<Resonance> spectral_peak(const FrequencyResponse& fr, double f_lo,
   return peak;
 }
 
+// A fitted mode within kOffPeak in frequency and kOffPeakDamping in damping of the measured peak.
+bool on_peak(const DynamicsParameters& mode, const Resonance& peak) {
+  return std::abs(std::log(mode.natural_frequency_hz / peak.fn)) < std::log(kOffPeak) &&
+         std::abs(std::log(mode.damping_ratio / peak.zeta)) < std::log(kOffPeakDamping);
+}
+
 // The hysteresis-and-creep output of a model (its dynamics removed), delay kept.
 std::vector<double> static_prediction(const ExtensionFit& f, const DiagnosisRecord& r) {
   ActuatorModel m(f.model);
@@ -188,15 +194,28 @@ std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
                                                   const FrequencyResponse& response) {
   const auto [f_lo, f_hi] = resonance_band(r);
   const auto peak = spectral_peak(response, f_lo, f_hi);
-  if (!peak) return std::nullopt;
-  const bool on_peak =
-      std::abs(std::log(spec.dynamics->natural_frequency_hz / peak->fn)) < std::log(kOffPeak) &&
-      std::abs(std::log(spec.dynamics->damping_ratio / peak->zeta)) < std::log(kOffPeakDamping);
-  if (on_peak) return std::nullopt;
+  if (!peak || on_peak(*spec.dynamics, *peak)) return std::nullopt;
   const DesignRows rows(r, spec);
   JointObjective joint(r, spec, rows);
   const Resonance best = project_from(
       joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio}, peak, f_lo, f_hi);
+  DynamicsParameters found = *spec.dynamics;
+  found.natural_frequency_hz = best.fn;
+  found.damping_ratio = best.zeta;
+  return found;
+}
+
+std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
+                                                    const ExtensionSpec& spec,
+                                                    const FrequencyResponse& response) {
+  const auto [f_lo, f_hi] = resonance_band(r);
+  const auto peak = spectral_peak(response, f_lo, f_hi);
+  if (!peak || !on_peak(*spec.dynamics, *peak)) return std::nullopt;
+  const DesignRows rows(r, spec);
+  JointObjective joint(r, spec, rows);
+  const Resonance best =
+      project(joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio, 0.0},
+              f_lo, f_hi);
   DynamicsParameters found = *spec.dynamics;
   found.natural_frequency_hz = best.fn;
   found.damping_ratio = best.zeta;

@@ -135,6 +135,16 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     ExtensionFit f = fit_extension(r, t);
     if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
   }
+  // On top of a mode on its peak: the mode projected again with the law (its phase stood in for
+  // the widening where it was fitted without one).
+  if (out.fit.spec.dynamics) {
+    ExtensionSpec moded = out.fit.spec;
+    if (auto found = project_resonance(r, moded, c.response)) {
+      moded.dynamics = found;
+      ExtensionFit f = fit_extension(r, moded);
+      if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
+    }
+  }
   out.extension = describe_rate_law(out.fit.spec.structure, s, r.units.input);
   return out;
 }
