@@ -396,6 +396,7 @@ struct Naming {
   std::string reference_name;  ///< what that is: the baseline, or the given model refitted
   const std::vector<OnTopOfShape>& on_shape;
   const OnTopOfShape* beyond = nullptr;  ///< the first cause, named beyond the shape
+  double reference_delay_samples = 0.0;  ///< the reference's own input delay [samples]
 };
 
 /// The extended model as the causes after the first join it.
@@ -595,7 +596,7 @@ details::CandidateContext on_joint(const Diagnosis& d, const Naming& x, const Jo
                                    std::span<const double> residual,
                                    const std::vector<ResidualProfile>& profiles) {
   return {x.r,  joint.fit.spec, joint.fit,  joint.fit.prediction, residual,
-          x.ev, profiles,       x.response, d.noise_rms};
+          x.ev, profiles,       x.response, d.noise_rms,          x.reference_delay_samples};
 }
 
 // The next cause's test again, its baseline the joint model so far (its parameters, a
@@ -1134,8 +1135,9 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
     const std::string reference_name = decision.reference < d.baseline_heldout.rmse
                                            ? "the given model refitted here"
                                            : "the baseline";
-    name_causes_and_extend(d, {r, fits, ev, ref.profiles, ref.response, options, decision.reference,
-                               reference_name, decision.on_shape, decision.beyond});
+    name_causes_and_extend(
+        d, {r, fits, ev, ref.profiles, ref.response, options, decision.reference, reference_name,
+            decision.on_shape, decision.beyond, base.spec.delay_samples});
     note_ambiguity(d, decision);
   }
   report(options, 1.0, "done");

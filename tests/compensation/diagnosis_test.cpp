@@ -657,6 +657,25 @@ TEST(DiagnosisSeveralCauses, NamesAWideningLawBesideALightlyDampedMode) {
   }
 }
 
+// Thresholds widening with the rate beside a 1-sample delay at 500 Hz: the delay, named first and
+// found on the baseline, takes the widening's lag too (2 samples), and the law added on top of it
+// gained 1.04x. Tried on a sample less, the law is named, and the extended model holds the
+// truth's delay.
+TEST(DiagnosisSeveralCauses, NamesAWideningLawWhoseLagTheDelayTook) {
+  const auto [o, trace] = diagnose_ranked(
+      with_widening_law(hc::Cause::kRateDependence, 500.0, 4067, hc::Cause::kDelay));
+  SCOPED_TRACE(trace);
+  const std::vector<hc::Cause> named = named_causes(o.diagnosis);
+  ASSERT_FALSE(named.empty());
+  EXPECT_EQ(named.front(), hc::Cause::kDelay);
+  EXPECT_TRUE(names(named, hc::Cause::kRateDependence));
+  EXPECT_EQ(o.diagnosis.extended.delay_samples(), 1u);
+  EXPECT_NE(o.diagnosis.extended_description.find("the delay found again with it at 1 samples"),
+            std::string::npos)
+      << o.diagnosis.extended_description;
+  EXPECT_LE(o.ratio, kMaxRatio) << "extended / baseline rms on the second record";
+}
+
 // A slow drift beside a delay at 1 kHz: on the baseline's residual the delay's error on every
 // move hides the drift (its statistic below the threshold, in 9 of 12 such draws); read again on
 // what the delay leaves, it is named beside it, and not fitted into the saved model.

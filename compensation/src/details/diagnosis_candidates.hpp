@@ -25,6 +25,9 @@ struct CandidateContext {
   const std::vector<ResidualProfile>& profiles;
   const FrequencyResponse& response;
   double noise_rms = 0.0;
+  /// With base a joint model (causes named on top of the reference): the reference's own delay
+  /// [samples], below which base's delay is not the diagnosis's to move. Negative otherwise.
+  double reference_delay_samples = -1.0;
 
   const ResidualProfile& profile(const std::string& variable) const;
 };
