@@ -59,15 +59,6 @@ std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
                                                   const ExtensionSpec& spec,
                                                   const FrequencyResponse& response);
 
-/// The resonance of `spec` (which has dynamics) projected again, from where it is, with every
-/// other part's weights free: a part added on top of a mode fitted without it (a rate law, whose
-/// widening the mode's phase stood in for) is judged with the mode as fitted for it. Only for a
-/// mode on the measured `response`'s peak (as refit_resonance): one pulled off it stood in for a
-/// lag, which a delay, not the part added, takes. std::nullopt off the peak, or without one.
-std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
-                                                    const ExtensionSpec& spec,
-                                                    const FrequencyResponse& response);
-
 /// printf-style %.3g / %.4g helpers for evidence lines.
 std::string num(double v, int digits = 3);
 std::string percent(double fraction);

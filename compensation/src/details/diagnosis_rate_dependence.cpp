@@ -4,8 +4,8 @@
 // crosses the same levels at clearly different rates. Extension: the rate-dependent PI on the
 // baseline's plays (and dead zones), cumulative weights linear in du/dt or |du/dt|, or
 // thresholds widening with |du/dt| (the best fit), up to the 99.9th percentile of the record's
-// rates. On top of a delay, the thresholds law is also tried on a sample less; on top of a mode
-// on its measured peak, the mode is projected again beside the law.
+// rates. On top of a delay the diagnosis named, the thresholds law is also tried on a sample
+// less.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -144,16 +144,6 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
       ExtensionSpec t = best_widened;
       t.structure.threshold_rate_s *= step;
       ExtensionFit f = fit_extension(r, t);
-      if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
-    }
-  }
-  // On top of a mode on its peak: the mode projected again with the law (its phase stood in for
-  // the widening where it was fitted without one).
-  if (out.fit.spec.dynamics) {
-    ExtensionSpec moded = out.fit.spec;
-    if (auto found = project_resonance(r, moded, c.response)) {
-      moded.dynamics = found;
-      ExtensionFit f = fit_extension(r, moded);
       if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
     }
   }
