@@ -595,8 +595,17 @@ void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
 details::CandidateContext on_joint(const Diagnosis& d, const Naming& x, const Joint& joint,
                                    std::span<const double> residual,
                                    const std::vector<ResidualProfile>& profiles) {
-  return {x.r,  joint.fit.spec, joint.fit,  joint.fit.prediction, residual,
-          x.ev, profiles,       x.response, d.noise_rms,          x.reference_delay_samples};
+  return {x.r,
+          joint.fit.spec,
+          joint.fit,
+          joint.fit.prediction,
+          residual,
+          x.ev,
+          profiles,
+          x.response,
+          d.noise_rms,
+          x.reference_delay_samples,
+          std::min(x.options.min_gain, kMinAddedGain)};
 }
 
 // The next cause's test again, its baseline the joint model so far (its parameters, a

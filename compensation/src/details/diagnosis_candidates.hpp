@@ -28,6 +28,9 @@ struct CandidateContext {
   /// With base a joint model (causes named on top of the reference): the reference's own delay
   /// [samples], below which base's delay is not the diagnosis's to move. Negative otherwise.
   double reference_delay_samples = -1.0;
+  /// With base a joint model: the held-out gain a part added on top of it must reach to be named.
+  /// A candidate that falls just short of it may refine its fit at a cost; 0 on the reference.
+  double added_gain_needed = 0.0;
 
   const ResidualProfile& profile(const std::string& variable) const;
 };
@@ -58,6 +61,17 @@ double creep_statistic(const CandidateContext& c);
 std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
                                                   const ExtensionSpec& spec,
                                                   const FrequencyResponse& response);
+
+/// The resonance of `spec` (which has dynamics) projected again, from where it is, with every
+/// other part's weights free: a part added on top of a mode fitted without it (a rate law, whose
+/// widening the mode's phase stood in for) is judged with the mode as fitted for it. Only for a
+/// mode on the measured `response`'s peak (as refit_resonance): one pulled off it stood in for a
+/// lag, which a delay, not the part added, takes. Only where DesignRows serve the trials (each
+/// would step the record again: 3x the diagnosis of a 10 kHz record with creep beside dead zones).
+/// std::nullopt off the peak, without one, or where the rows do not serve.
+std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
+                                                    const ExtensionSpec& spec,
+                                                    const FrequencyResponse& response);
 
 /// printf-style %.3g / %.4g helpers for evidence lines.
 std::string num(double v, int digits = 3);

@@ -205,6 +205,23 @@ std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
   return found;
 }
 
+std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
+                                                    const ExtensionSpec& spec,
+                                                    const FrequencyResponse& response) {
+  const auto [f_lo, f_hi] = resonance_band(r);
+  const auto peak = spectral_peak(response, f_lo, f_hi);
+  if (!peak || !on_peak(*spec.dynamics, *peak)) return std::nullopt;
+  const DesignRows rows(r, spec);
+  if (!rows.serves(r, spec)) return std::nullopt;
+  JointObjective joint(r, spec, rows);
+  const Resonance best = project(
+      joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio, 0.0}, f_lo, f_hi);
+  DynamicsParameters found = *spec.dynamics;
+  found.natural_frequency_hz = best.fn;
+  found.damping_ratio = best.zeta;
+  return found;
+}
+
 CandidateOutcome test_dynamics(const CandidateContext& c) {
   CandidateOutcome out;
   const DiagnosisRecord& r = c.record;
