@@ -41,6 +41,10 @@ constexpr double kMinJoinGain = 1.02;
 // when lower): an effect beside a larger one gains little over the baseline on its own, and one
 // whose own gain was mostly theirs (a rate law widening the loop as a delay does) adds little.
 constexpr double kMinAddedGain = 1.1;
+// What a cause after the first must add: kMinAddedGain, or min_gain when lower.
+double added_gain_needed(const DiagnosisOptions& options) {
+  return std::min(options.min_gain, kMinAddedGain);
+}
 // The baseline family "does not fit the device" when, fitted on the others, it predicts some
 // record this many times worse than it predicts its own held-out blocks.
 constexpr double kFamilyMismatch = 3.0;
@@ -565,7 +569,7 @@ void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
   const double rms = o.fit.heldout.rmse;
   const double added_rms = quadrature_difference(joint_rms, rms);
   const double added_gain = rms > 0.0 ? joint_rms / rms : 0.0;
-  const double needed = std::min(options.min_gain, kMinAddedGain);
+  const double needed = added_gain_needed(options);
   const OnTopOfShape* s = x.beyond ? on_shape_of(x, c.cause) : nullptr;
   if (added_rms < d.noise_allowance_rms) {
     c.not_named = within_noise(before, added_rms, d.noise_allowance_rms, unit);
@@ -605,7 +609,7 @@ details::CandidateContext on_joint(const Diagnosis& d, const Naming& x, const Jo
           x.response,
           d.noise_rms,
           x.reference_delay_samples,
-          std::min(x.options.min_gain, kMinAddedGain)};
+          added_gain_needed(x.options)};
 }
 
 // The next cause's test again, its baseline the joint model so far (its parameters, a

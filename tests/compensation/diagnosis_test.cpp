@@ -567,6 +567,13 @@ bool names(const std::vector<hc::Cause>& named, hc::Cause cause) {
   return std::find(named.begin(), named.end(), cause) != named.end();
 }
 
+/// `first` named first, and `also` named after it.
+void expect_named_first_and(const std::vector<hc::Cause>& named, hc::Cause first, hc::Cause also) {
+  ASSERT_FALSE(named.empty());
+  EXPECT_EQ(named.front(), first);
+  EXPECT_TRUE(names(named, also));
+}
+
 /// The cause's statistic was read again on what the delay named first leaves.
 void expect_read_again_behind_the_delay(const hc::Diagnosis& d, hc::Cause cause) {
   const hc::CandidateReport* c = d.candidate(cause);
@@ -642,9 +649,7 @@ TEST(DiagnosisSeveralCauses, NamesAWideningLawWhoseLagTheDelayTook) {
       with_widening_law(hc::Cause::kRateDependence, 500.0, 4067, hc::Cause::kDelay));
   SCOPED_TRACE(trace);
   const std::vector<hc::Cause> named = named_causes(o.diagnosis);
-  ASSERT_FALSE(named.empty());
-  EXPECT_EQ(named.front(), hc::Cause::kDelay);
-  EXPECT_TRUE(names(named, hc::Cause::kRateDependence));
+  expect_named_first_and(named, hc::Cause::kDelay, hc::Cause::kRateDependence);
   EXPECT_EQ(o.diagnosis.extended.delay_samples(), 1u);
   EXPECT_NE(o.diagnosis.extended_description.find("the delay found again with it at 1 samples"),
             std::string::npos)
@@ -664,9 +669,7 @@ TEST(DiagnosisSeveralCauses, NamesAWideningLawBesideALightlyDampedMode) {
         with_widening_law(hc::Cause::kDynamics, 2000.0, seed, hc::Cause::kRateDependence));
     SCOPED_TRACE(trace);
     const std::vector<hc::Cause> named = named_causes(o.diagnosis);
-    ASSERT_FALSE(named.empty());
-    EXPECT_EQ(named.front(), hc::Cause::kDynamics);
-    EXPECT_TRUE(names(named, hc::Cause::kRateDependence));
+    expect_named_first_and(named, hc::Cause::kDynamics, hc::Cause::kRateDependence);
     EXPECT_FALSE(names(named, hc::Cause::kDelay));
     const auto& parts = o.diagnosis.extended_parts;
     EXPECT_NE(std::find(parts.begin(), parts.end(), "rate_dependence"), parts.end());
@@ -686,9 +689,7 @@ TEST(DiagnosisSeveralCauses, NamesADriftTheDelayHidFromTheBaseline) {
     const auto [o, trace] = diagnose_ranked(c);
     SCOPED_TRACE(trace);
     const std::vector<hc::Cause> named = named_causes(o.diagnosis);
-    ASSERT_FALSE(named.empty());
-    EXPECT_EQ(named.front(), hc::Cause::kDelay);
-    EXPECT_TRUE(names(named, hc::Cause::kDrift));
+    expect_named_first_and(named, hc::Cause::kDelay, hc::Cause::kDrift);
     expect_read_again_behind_the_delay(o.diagnosis, hc::Cause::kDrift);
     const hc::CandidateReport* drift = o.diagnosis.candidate(hc::Cause::kDrift);
     ASSERT_NE(drift, nullptr);
@@ -719,9 +720,7 @@ TEST(DiagnosisSeveralCauses, ReadsTheShapeAgainBeforeTheCausesAfterTheFirst) {
         with_widening_law(hc::Cause::kRateDependence, 100.0, seed, hc::Cause::kDelay));
     SCOPED_TRACE(trace);
     const std::vector<hc::Cause> named = named_causes(o.diagnosis);
-    ASSERT_FALSE(named.empty());
-    EXPECT_EQ(named.front(), hc::Cause::kDelay);
-    EXPECT_TRUE(names(named, hc::Cause::kRateDependence));
+    expect_named_first_and(named, hc::Cause::kDelay, hc::Cause::kRateDependence);
     expect_read_again_behind_the_delay(o.diagnosis, hc::Cause::kAsymmetry);
     const auto& parts = o.diagnosis.extended_parts;
     ASSERT_GE(parts.size(), 2u);

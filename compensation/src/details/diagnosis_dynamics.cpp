@@ -160,6 +160,13 @@ bool on_peak(const DynamicsParameters& mode, const Resonance& peak) {
          std::abs(std::log(mode.damping_ratio / peak.zeta)) < std::log(kOffPeakDamping);
 }
 
+// `mode` with the frequency and damping of `found` (its feedforward roll-off kept).
+DynamicsParameters moved_to(DynamicsParameters mode, const Resonance& found) {
+  mode.natural_frequency_hz = found.fn;
+  mode.damping_ratio = found.zeta;
+  return mode;
+}
+
 // The hysteresis-and-creep output of a model (its dynamics removed), delay kept.
 std::vector<double> static_prediction(const ExtensionFit& f, const DiagnosisRecord& r) {
   ActuatorModel m(f.model);
@@ -199,10 +206,7 @@ std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
   JointObjective joint(r, spec, rows);
   const Resonance best = project_from(
       joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio}, peak, f_lo, f_hi);
-  DynamicsParameters found = *spec.dynamics;
-  found.natural_frequency_hz = best.fn;
-  found.damping_ratio = best.zeta;
-  return found;
+  return moved_to(*spec.dynamics, best);
 }
 
 std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
@@ -216,10 +220,7 @@ std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
   JointObjective joint(r, spec, rows);
   const Resonance best = project(
       joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio, 0.0}, f_lo, f_hi);
-  DynamicsParameters found = *spec.dynamics;
-  found.natural_frequency_hz = best.fn;
-  found.damping_ratio = best.zeta;
-  return found;
+  return moved_to(*spec.dynamics, best);
 }
 
 CandidateOutcome test_dynamics(const CandidateContext& c) {
