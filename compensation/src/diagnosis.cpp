@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "details/after_reversals.hpp"
 #include "details/diagnosis_baseline.hpp"
 #include "details/diagnosis_candidates.hpp"
 #include "details/diagnosis_extension_fit.hpp"
@@ -28,6 +29,8 @@ constexpr std::array<Cause, 6> kCandidates{Cause::kAsymmetry, Cause::kRateDepend
 constexpr double kMinCoherentShare = 0.5;
 constexpr double kOneLoopBand = 0.03;  // of the input span: a reversal this close is at the end
 constexpr double kAmbiguity = 0.9;
+// Fewest held-out samples after the input's reversals that can tell a delay from a rate law.
+constexpr std::size_t kMinReversalSamples = 10;
 // Bins of the residual profiles.
 constexpr std::size_t kTimeBins = 32, kLevelBins = 24, kRateBins = 24, kSinceBins = 16;
 // Several records: an extension carries over when its geometric-mean gain on the records left
@@ -911,6 +914,43 @@ std::vector<const CandidateReport*> eligible_candidates(Diagnosis& d, const Deci
   return eligible;
 }
 
+// A delay and a rate law both lag a ramp, and on a coarse record gain about as much (a 1-sample
+// delay at 100 Hz: the delay 1.79x, a thresholds law 1.80x). Right after a reversal they differ:
+// for its length a delay carries the output on in the old direction, a rate law's widened
+// thresholds hold it. When a rate law is eligible first and a delay within kAmbiguity of it
+// predicts the held-out samples there better (by more than the noise allows), the delay is named
+// first. Only that way: a law named first takes a delay's lag into its widening, and the delay
+// then adds nothing, while on top of a delay the rate candidate tries the delay a sample less.
+void order_rate_and_delay(Diagnosis& d, Decision& decision, const details::DiagnosisRecord& r,
+                          const details::InputEvents& ev) {
+  std::vector<const CandidateReport*>& eligible = decision.eligible;
+  if (eligible.size() < 2 || eligible[0]->cause != Cause::kRateDependence ||
+      eligible[1]->cause != Cause::kDelay || eligible[1]->gain < kAmbiguity * eligible[0]->gain) {
+    return;
+  }
+  const CandidateReport& law = *eligible[0];
+  const CandidateReport& delay = *eligible[1];
+  const std::size_t window = std::max<std::size_t>(1, delay.model.delay_samples());
+  const details::WindowError law_error =
+      details::after_reversals_error(r, ev, law.prediction, window);
+  const details::WindowError delay_error =
+      details::after_reversals_error(r, ev, delay.prediction, window);
+  if (law_error.samples < kMinReversalSamples) return;
+  const bool delay_first =
+      delay_error.rms < law_error.rms &&
+      quadrature_difference(law_error.rms, delay_error.rms) >= d.noise_allowance_rms;
+  const std::string unit = r.units.output;
+  d.notes.push_back(
+      "rate_dependence and delay gain about as much (" + num(law.gain) + " and " + num(delay.gain) +
+      "); they differ after the input's reversals, where a delay carries the "
+      "output on in the old direction and a rate law holds it: over the " +
+      std::to_string(window) + " samples after each (" + std::to_string(law_error.samples) +
+      " held out), the delay predicts them to " + num(delay_error.rms) + " " + unit +
+      " rms, the rate law to " + num(law_error.rms) + " " + unit +
+      (delay_first ? ": the delay is named first" : ": the rate law stays first"));
+  if (delay_first) std::swap(eligible[0], eligible[1]);
+}
+
 // The loop's shape first. A classical PI follows neither a bent loop (a Preisach density, a
 // saturating top) nor an asymmetric one, and what it misses there inflates every other
 // candidate's gain: when the shape (asymmetry) is eligible, the other causes are tested again
@@ -1071,7 +1111,7 @@ void note_ambiguity(Diagnosis& d, const Decision& decision) {
   for (std::size_t i = 1; i < eligible.size() && !decision.beyond; ++i) {
     if (!eligible[i]->named && eligible[i]->gain >= kAmbiguity * eligible.front()->gain) {
       d.notes.push_back("not clean: " + std::string(to_string(eligible[i]->cause)) +
-                        " explains the data almost as well (gain " + num(eligible[i]->gain) +
+                        " explains the data about as well (gain " + num(eligible[i]->gain) +
                         " against " + num(eligible.front()->gain) + ")");
     }
   }
@@ -1130,6 +1170,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
   d.noise_allowance_rms =
       std::sqrt(options.noise_floor_factor * options.noise_floor_factor - 1.0) * d.noise_rms;
   decision.eligible = eligible_candidates(d, decision, options);
+  order_rate_and_delay(d, decision, r, ev);
   const std::string unit = r.units.output;
   test_on_shape(d, r, fits, ev, options, decision);
   decision.best_any = &*std::max_element(

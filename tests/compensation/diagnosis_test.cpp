@@ -508,10 +508,20 @@ TEST(DiagnosisHiddenEffect, ExtendedModelRoundTripsThroughAModelFile) {
 
 namespace {
 
+// Whether a delay gaining within 10 % of a rate law was named before it for its error after the
+// input's reversals (the report's note says so).
+bool ordered_after_reversals(const hc::Diagnosis& d) {
+  return std::any_of(d.notes.begin(), d.notes.end(), [](const std::string& s) {
+    return s.find("after the input's reversals") != std::string::npos &&
+           s.find("the delay is named first") != std::string::npos;
+  });
+}
+
 // What every list of named causes holds: `cause` first, gaining min_gain; each named cause
 // carrying over and, after the first, gaining 1.1x added to the causes before it and explaining
 // beyond them more than the noise allows; ranked by gain among those judged against the same
-// model, the shape (judged on top of the first) last; every other candidate says why not.
+// model (a delay within 10 % of a rate law's gain may go first for its error after the
+// reversals), the shape (judged on top of the first) last; every other candidate says why not.
 void expect_ranked(const hc::Diagnosis& d) {
   ASSERT_FALSE(d.causes.empty());
   EXPECT_EQ(d.cause, d.causes.front().cause);
@@ -531,7 +541,8 @@ void expect_ranked(const hc::Diagnosis& d) {
     EXPECT_GE(n.added_rms, d.noise_allowance_rms);
     const bool shape_last = n.cause == hc::Cause::kAsymmetry && i + 1 == d.causes.size();
     if (n.against == d.causes[i - 1].against && !shape_last) {
-      EXPECT_LE(n.gain, d.causes[i - 1].gain);
+      const bool by_reversals = i == 1 && ordered_after_reversals(d);
+      EXPECT_LE(n.gain, (by_reversals ? 1.0 / 0.9 : 1.0) * d.causes[i - 1].gain);
     }
   }
   for (const hc::CandidateReport& c : d.candidates) {
@@ -572,6 +583,17 @@ void expect_named_first_and(const std::vector<hc::Cause>& named, hc::Cause first
   ASSERT_FALSE(named.empty());
   EXPECT_EQ(named.front(), first);
   EXPECT_TRUE(names(named, also));
+}
+
+/// A delay named first and no rate dependence; the extended model holds `samples` of delay and
+/// predicts the second record better than the baseline.
+void expect_a_delay_and_no_rate_law(const Outcome& o, std::size_t samples) {
+  const std::vector<hc::Cause> named = named_causes(o.diagnosis);
+  ASSERT_FALSE(named.empty());
+  EXPECT_EQ(named.front(), hc::Cause::kDelay);
+  EXPECT_FALSE(names(named, hc::Cause::kRateDependence));
+  EXPECT_EQ(o.diagnosis.extended.delay_samples(), samples);
+  EXPECT_LE(o.ratio, kMaxRatio) << "extended / baseline rms on the second record";
 }
 
 /// The cause's statistic was read again on what the delay named first leaves.
@@ -638,6 +660,30 @@ TEST(DiagnosisSeveralCauses, NamesADelayWhosePhaseTheResonanceHeld) {
   ASSERT_TRUE(o.diagnosis.extended.dynamics().has_value());
   EXPECT_NEAR(o.diagnosis.extended.dynamics()->natural_frequency_hz, 49.3, 0.1 * 49.3);
   EXPECT_LE(o.ratio, kMaxRatio) << "extended / baseline rms on the second record";
+}
+
+// A 1-sample delay at 100 Hz (10 ms) and a linear thresholds law without a filter both lag every
+// ramp: alone (seed 3041) the law gained 1.80x and the delay 1.79x. Right after the input's
+// reversals they differ, the delay carrying the output on, the law holding it; ordered by their
+// errors there, the delay is named and the law is not. Beside a widening law (seed 4065) the
+// delay goes first the same way, and the law is named on top of it.
+TEST(DiagnosisSeveralCauses, TellsADelayFromARateLawAfterTheReversals) {
+  {
+    const auto [o, trace] = diagnose_ranked({hc::Cause::kDelay, 100.0, 3041});
+    SCOPED_TRACE(trace);
+    expect_a_delay_and_no_rate_law(o, 1);
+    EXPECT_TRUE(ordered_after_reversals(o.diagnosis));
+  }
+  {
+    const auto [o, trace] = diagnose_ranked(
+        with_widening_law(hc::Cause::kRateDependence, 100.0, 4065, hc::Cause::kDelay));
+    SCOPED_TRACE(trace);
+    expect_named_first_and(named_causes(o.diagnosis), hc::Cause::kDelay,
+                           hc::Cause::kRateDependence);
+    EXPECT_TRUE(ordered_after_reversals(o.diagnosis));
+    EXPECT_EQ(o.diagnosis.extended.delay_samples(), 1u);
+    EXPECT_LE(o.ratio, kMaxRatio) << "extended / baseline rms on the second record";
+  }
 }
 
 // Thresholds widening with the rate beside a 1-sample delay at 500 Hz: the delay, named first and
@@ -741,12 +787,7 @@ TEST(DiagnosisSeveralCauses, ReadsTheShapeAgainBeforeTheCausesAfterTheFirst) {
 TEST(DiagnosisSeveralCauses, FindsTheDelayAgainOnTopOfTheShape) {
   const auto [o, trace] = diagnose_ranked({hc::Cause::kDelay, 20000.0, 4048});
   SCOPED_TRACE(trace);
-  const std::vector<hc::Cause> named = named_causes(o.diagnosis);
-  ASSERT_FALSE(named.empty());
-  EXPECT_EQ(named.front(), hc::Cause::kDelay);
-  EXPECT_FALSE(names(named, hc::Cause::kRateDependence));
-  EXPECT_EQ(o.diagnosis.extended.delay_samples(), 35u);
-  EXPECT_LE(o.ratio, kMaxRatio) << "extended / baseline rms on the second record";
+  expect_a_delay_and_no_rate_law(o, 35);
 }
 
 // The same actuator with the delay alone: one cause is named (beside the Preisach base's shape,
@@ -1237,4 +1278,42 @@ TEST(DiagnosisHiddenEffect, RandomisedSweepConfusionTable) {
   EXPECT_EQ(bad_ratio, 0);
   EXPECT_EQ(rate_as_delay, 0);
   EXPECT_EQ(delay_as_rate, 0);
+}
+
+// Many draws of the cases a delay and a rate law are hardest to tell apart in: a delay, a rate law
+// (widening thresholds, a switching front) and a widening law beside a delay, 60 each at 100,
+// 200, 500 and 1000 Hz (at 100-200 Hz every delay is 1 sample). Prints per kind and rate how
+// often each was named; asserts that a rate law alone is never called delay, and that a delay
+// alone is named in 95 % of its draws.
+TEST(DiagnosisHiddenEffect, RateOrDelayDraws) {
+  if (!long_tests()) GTEST_SKIP() << "set HYSTBENCH_LONG_TESTS=1 for the 960 draws";
+  const double rates[] = {100.0, 200.0, 500.0, 1000.0};
+  const std::uint64_t first = 5000, draws = 60;
+  enum Kind { kDelayAlone, kWideningLaw, kSwitchingFront, kLawAndDelay };
+  const char* labels[] = {"delay", "widening law", "switching front", "widening law + delay"};
+  int rate_called_delay = 0, delays_named = 0, delay_cases = 0;
+  std::printf("%-22s %6s %8s %8s %8s\n", "hidden", "Hz", "delay", "rate", "both");
+  for (const Kind kind : {kDelayAlone, kWideningLaw, kSwitchingFront, kLawAndDelay}) {
+    for (const double fs : rates) {
+      int delay = 0, rate = 0, both = 0;
+      for (std::uint64_t seed = first; seed < first + draws; ++seed) {
+        HiddenCase c{kind == kDelayAlone ? hc::Cause::kDelay : hc::Cause::kRateDependence, fs,
+                     seed};
+        c.widening_thresholds = kind != kSwitchingFront && kind != kDelayAlone;
+        if (kind == kLawAndDelay) c.also = hc::Cause::kDelay;
+        const Outcome o = diagnose_case(make_hidden(c));
+        const std::vector<hc::Cause> named = named_causes(o.diagnosis);
+        const bool d = names(named, hc::Cause::kDelay),
+                   r = names(named, hc::Cause::kRateDependence);
+        delay += d ? 1 : 0, rate += r ? 1 : 0, both += d && r ? 1 : 0;
+      }
+      std::printf("%-22s %6.0f %8d %8d %8d  of %llu\n", labels[kind], fs, delay, rate, both,
+                  static_cast<unsigned long long>(draws));
+      std::fflush(stdout);
+      if (kind == kWideningLaw || kind == kSwitchingFront) rate_called_delay += delay;
+      if (kind == kDelayAlone) delays_named += delay, delay_cases += static_cast<int>(draws);
+    }
+  }
+  EXPECT_EQ(rate_called_delay, 0);
+  EXPECT_GE(delays_named, 0.95 * delay_cases);
 }
