@@ -944,10 +944,10 @@ void order_rate_and_delay(Diagnosis& d, Decision& decision, const details::Diagn
       "rate_dependence and delay gain about as much (" + num(law.gain) + " and " + num(delay.gain) +
       "); they differ after the input's reversals, where a delay carries the "
       "output on in the old direction and a rate law holds it: over the " +
-      std::to_string(window) + " samples after each (" + std::to_string(law_error.samples) +
-      " held out), the delay predicts them to " + num(delay_error.rms) + " " + unit +
-      " rms, the rate law to " + num(law_error.rms) + " " + unit +
-      (delay_first ? ": the delay is named first" : ": the rate law stays first"));
+      std::to_string(window) + (window == 1 ? " sample" : " samples") + " after each (" +
+      std::to_string(law_error.samples) + " held out), the delay predicts them to " +
+      num(delay_error.rms) + " " + unit + " rms, the rate law to " + num(law_error.rms) + " " +
+      unit + (delay_first ? ": the delay is named first" : ": the rate law stays first"));
   if (delay_first) std::swap(eligible[0], eligible[1]);
 }
 
