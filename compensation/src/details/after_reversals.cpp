@@ -7,7 +7,6 @@ namespace hystbench::compensation::details {
 
 WindowError after_reversals_error(const DiagnosisRecord& r, const InputEvents& ev,
                                   std::span<const double> prediction, std::size_t window) {
-  window = std::max<std::size_t>(window, 1);
   double square = 0.0;
   WindowError out;
   std::size_t scored_until = 0;  // windows of close reversals overlap: each sample counts once
