@@ -731,9 +731,12 @@ void Identifier::add_creep(Candidate& c) {
         std::copy(bank.state().begin(), bank.state().end(), ne.row());
         ne.push(r_.y[k] - h - drift * hs.drift_time_s(k));
       }
+      // Creep follows the move it answers: its lags' gains >= 0 (unbounded, long lags that are
+      // near each other cancel in large opposite gains).
       const Eigen::VectorXd inf =
           Eigen::VectorXd::Constant(K, std::numeric_limits<double>::infinity());
-      const Eigen::VectorXd g = details::solve_bounded_lsq(ne.gram(), ne.rhs(), -inf, inf).x;
+      const Eigen::VectorXd g =
+          details::solve_bounded_lsq(ne.gram(), ne.rhs(), Eigen::VectorXd::Zero(K), inf).x;
       gains.assign(g.data(), g.data() + K);
       Candidate alt;
       alt.structure = s;

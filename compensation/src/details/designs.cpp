@@ -174,6 +174,9 @@ Eigen::VectorXd Design::lower_bounds() const {
   // paper's Fig. 1, as a lag widens it), and W_i >= eps on all of [-max_rate, max_rate].
   if (play_cols_ > n_) lo.segment(n_, play_cols_ - n_).setConstant(0.0);
   lo.segment(dz_col_, m_pos_ + m_neg_).setConstant(s_.min_dead_zone_slope);
+  // Creep follows the move it answers: its lags' gains >= 0 (unbounded, lags longer than the
+  // record, near each other, cancel in large opposite gains that drift away over a longer run).
+  lo.segment(creep_col_, drift_col_ - creep_col_).setConstant(0.0);
   return lo;
 }
 

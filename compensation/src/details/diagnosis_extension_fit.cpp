@@ -287,14 +287,20 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
       // what its input does not explain.
       const auto c = static_cast<Eigen::Index>(nc), b = static_cast<Eigen::Index>(nb);
       const Eigen::MatrixXd& g = ne.gram();
-      coef.head(c) =
-          solve_bounded_lsq(g.topLeftCorner(c, c), ne.rhs().head(c), -inf.head(c), inf.head(c)).x;
+      coef.head(c) = solve_bounded_lsq(g.topLeftCorner(c, c), ne.rhs().head(c),
+                                       Eigen::VectorXd::Zero(c), inf.head(c))
+                         .x;
       coef.tail(b) = solve_bounded_lsq(g.bottomRightCorner(b, b),
                                        ne.rhs().tail(b) - g.bottomLeftCorner(b, c) * coef.head(c),
                                        -inf.tail(b), inf.tail(b))
                          .x;
     } else {
-      coef = solve_bounded_lsq(ne.gram(), ne.rhs(), -inf, inf).x;
+      // Creep follows the move it answers, its lags' gains >= 0: unbounded, lags longer than
+      // the record (near ramps, near each other) cancel in large opposite gains that drift
+      // away over a longer run. The drift's pieces are free.
+      Eigen::VectorXd lo = -inf;
+      lo.head(static_cast<Eigen::Index>(nc)).setZero();
+      coef = solve_bounded_lsq(ne.gram(), ne.rhs(), lo, inf).x;
     }
     const double rss =
         ne.target_square_sum() - 2.0 * ne.rhs().dot(coef) + coef.dot(ne.gram() * coef);
