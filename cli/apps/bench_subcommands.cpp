@@ -16,8 +16,6 @@
 namespace cli = hystbench::cli;
 namespace common = hystbench::common;
 
-namespace {
-
 // --json, and --wait for a command that starts a run.
 void add_output_flags(CLI::App* c, cli::RemoteCommand& remote, bool waits) {
   c->add_flag("--json", remote.json_output, "Print the result as one JSON line");
@@ -34,6 +32,8 @@ int send_request(cli::RemoteCommand& remote, const std::string& cmd, nlohmann::j
   remote.params = std::move(params);
   return cli::run_remote(remote, std::cout, std::cerr);
 }
+
+namespace {
 
 // cli::read_upload, or nullopt after printing why the file cannot be read.
 std::optional<cli::RemoteUpload> read_upload_or_report(const std::string& path,
@@ -104,7 +104,7 @@ namespace {
 // track: a built-in reference or a reference file, the compensator, learning.
 struct TrackOptions {
   std::string reference = "triangle", compensator;
-  double frequency = 1.0, periods = 5.0, duration = 0.0, fraction = 0.8;
+  double frequency = 1.0, periods = 5.0, duration = 0.0, fraction = NAN;
   double min = NAN, max = NAN, precondition = NAN;
   int learn = 0;
   double learn_gain = NAN, learn_cutoff = NAN, lead_in_max = NAN;
@@ -112,12 +112,41 @@ struct TrackOptions {
   // A user's trajectory instead of a built-in reference: read here, uploaded over the socket.
   std::string file, t_column = "t", yr_column = "yr";
   double yr_scale = 1.0, rate = 0.0, approach = NAN;
+  // Feedback gains by hand, instead of the designed loop.
+  double kp = NAN, ki = NAN, kd = NAN;
+  bool force_gains = false;
 };
+
+// track's hand gains for inverse+pid and pid.
+void add_track_gain_options(CLI::App* cmd, TrackOptions& tr) {
+  cmd->add_option("--kp", tr.kp,
+                  "inverse+pid, pid: proportional gain [V/um] instead of the designed loop "
+                  "(checked against the loop's targets on the measured responses; `hystbench "
+                  "tune --kp ...` prints its margins)")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--ki", tr.ki, "inverse+pid, pid: integral gain [V/(um s)], as --kp")
+      ->check(CLI::Range(0.0, 1e9));
+  cmd->add_option("--kd", tr.kd, "inverse+pid, pid: derivative gain [V s/um], as --kp")
+      ->check(CLI::Range(0.0, 1e3));
+  cmd->add_flag("--force-gains", tr.force_gains,
+                "Run gains that break the loop's targets (refused otherwise, naming their "
+                "margins)");
+}
+
+// The hand gains into the request.
+void add_gains(const TrackOptions& tr, nlohmann::json& p) {
+  if (!std::isnan(tr.kp)) p["kp"] = tr.kp;
+  if (!std::isnan(tr.ki)) p["ki"] = tr.ki;
+  if (!std::isnan(tr.kd)) p["kd"] = tr.kd;
+  if (tr.force_gains) p["force_gains"] = true;
+}
 
 // track's built-in reference: its shape, frequency, length and range.
 void add_track_reference_options(CLI::App* cmd, TrackOptions& tr) {
   cmd->add_option("--reference", tr.reference,
-                  "sine, triangle, sawtooth, decaying_sine, multi_frequency, chirp")
+                  "sine, triangle, sawtooth, step (a square wave: a step up and one down each "
+                  "period; the result gives their settling time to 1 % and overshoot), "
+                  "decaying_sine, multi_frequency, chirp")
       ->capture_default_str();
   cmd->add_option("--frequency", tr.frequency, "Reference frequency [Hz]")->capture_default_str();
   cmd->add_option("--periods", tr.periods, "Number of periods")->capture_default_str();
@@ -126,8 +155,8 @@ void add_track_reference_options(CLI::App* cmd, TrackOptions& tr) {
                   "none, inverse, inverse_multiplicative, inverse+pid, pid (default: inverse "
                   "with a model, none without)");
   cmd->add_option("--range-fraction", tr.fraction,
-                  "Part of the actuator range the reference spans, centred")
-      ->capture_default_str();
+                  "Part of the actuator range the reference spans, centred (default 0.8; 0.2 "
+                  "for step)");
   cmd->add_option("--min", tr.min, "Reference minimum [um] (instead of --range-fraction)");
   cmd->add_option("--max", tr.max, "Reference maximum [um]");
   cmd->add_option("--precondition", tr.precondition,
@@ -226,6 +255,7 @@ int track_reference_file(const TrackOptions& tr, cli::RemoteCommand& remote) {
   if (!std::isnan(tr.precondition)) p["precondition_s"] = tr.precondition;
   if (!std::isnan(tr.approach)) p["approach_s"] = tr.approach;
   add_learning(tr, p);
+  add_gains(tr, p);
   remote.upload =
       read_upload_or_report(tr.file, "reference", tr.t_column, tr.yr_column, tr.yr_scale, tr.rate);
   if (!remote.upload) return 1;
@@ -249,10 +279,11 @@ int run_track(const TrackOptions& tr, cli::RemoteCommand& remote) {
   }
   if (!tr.compensator.empty()) p["compensator"] = tr.compensator;
   if (!std::isnan(tr.precondition)) p["precondition_s"] = tr.precondition;
+  add_gains(tr, p);
   if (!std::isnan(tr.min) || !std::isnan(tr.max)) {
     if (!std::isnan(tr.min)) p["min_um"] = tr.min;
     if (!std::isnan(tr.max)) p["max_um"] = tr.max;
-  } else {
+  } else if (!std::isnan(tr.fraction)) {
     p["range_fraction"] = tr.fraction;
   }
   return send_request(remote, "track", p);
@@ -272,6 +303,7 @@ CliCommand add_track(CLI::App& app, cli::RemoteCommand& remote) {
                   "when it ends, as `hystbench plot` does; with --learn also learning.png "
                   "(the error per trial, and the last trial's error)");
   add_track_file_options(cmd, *tr);
+  add_track_gain_options(cmd, *tr);
   return {cmd, [tr, &remote] { return run_track(*tr, remote); }};
 }
 

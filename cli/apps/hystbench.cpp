@@ -61,6 +61,8 @@ int run(int argc, char** argv) {
   commands.push_back(add_identify(app, remote));
   commands.push_back(add_track(app, remote));
   commands.push_back(add_excite(app, remote));
+  commands.push_back(add_frf(app, remote));
+  commands.push_back(add_tune(app, remote));
   commands.push_back(add_plot(app));
   commands.push_back(add_sweep(app, remote));
   commands.push_back(add_plain_request(app, remote, "stop",

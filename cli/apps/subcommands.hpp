@@ -38,6 +38,12 @@ CliCommand add_plot(CLI::App& app);
 // Bench commands, which talk to hystbenchd (bench_subcommands.cpp). They share `remote`: the
 // socket path and the output options --json, --wait and --plot.
 
+// --json, and --wait for a command that starts a run.
+void add_output_flags(CLI::App* c, hystbench::cli::RemoteCommand& remote, bool waits);
+// Sends the daemon `cmd` with `params`; returns the exit code of run_remote.
+int send_request(hystbench::cli::RemoteCommand& remote, const std::string& cmd,
+                 nlohmann::json params);
+
 // A command that sends the daemon one request without parameters (status, stop, config ...).
 CliCommand add_plain_request(CLI::App& parent, hystbench::cli::RemoteCommand& remote,
                              const std::string& name, const std::string& description,
@@ -47,3 +53,6 @@ CliCommand add_track(CLI::App& app, hystbench::cli::RemoteCommand& remote);
 CliCommand add_excite(CLI::App& app, hystbench::cli::RemoteCommand& remote);
 CliCommand add_sweep(CLI::App& app, hystbench::cli::RemoteCommand& remote);
 CliCommand add_model(CLI::App& app, hystbench::cli::RemoteCommand& remote);
+// The stage's frequency responses and the feedback designed on them (feedback_subcommands.cpp).
+CliCommand add_frf(CLI::App& app, hystbench::cli::RemoteCommand& remote);
+CliCommand add_tune(CLI::App& app, hystbench::cli::RemoteCommand& remote);

@@ -6,6 +6,8 @@
 #include <complex>
 #include <numbers>
 #include <stdexcept>
+#include <unsupported/Eigen/FFT>
+#include <utility>
 
 namespace hystbench::compensation {
 
@@ -76,7 +78,7 @@ std::array<double, 5> low_pass_section(double f0_over_fs, double q) {
 
 IterativeLearning::IterativeLearning(const ActuatorModel& model, std::size_t period_samples,
                                      LearningOptions options)
-    : model_(model), period_(period_samples), o_(options) {
+    : model_(model), period_(period_samples), o_(std::move(options)) {
   if (!model_.valid()) throw std::invalid_argument("iterative learning needs a model");
   if (period_ < 4) throw std::invalid_argument("iterative learning needs a trial of 4 samples");
   if (!(o_.dt > 0.0)) throw std::invalid_argument("iterative learning needs a sample period > 0");
@@ -94,11 +96,20 @@ IterativeLearning::IterativeLearning(const ActuatorModel& model, std::size_t per
   }
   advance_samples_ = model_delay_samples_ = model_.delay_s() / o_.dt;
   fast_trial_ = kCutoffFloorHarmonic * trial_hz > kCutoffOfRate * fs;
-  if (const auto& d = model_.dynamics(); d && o_.cutoff_hz <= 0.0) {
+  const bool measured = o_.measured_plant.has_value();
+  if (measured) {
+    const MeasuredLearningPlant& m = *o_.measured_plant;
+    if (m.frequency_hz.empty() || m.frequency_hz.size() != m.response.size() ||
+        m.stage_gain.size() != m.response.size()) {
+      throw std::invalid_argument("iterative learning: the measured plant needs lines");
+    }
+  }
+  // A mode the learning does not invert holds Q below it; the measured plant inverts it.
+  if (const auto& d = model_.dynamics(); d && o_.cutoff_hz <= 0.0 && !measured) {
     cutoff_hz_ = std::min(cutoff_hz_, kCutoffOfMode * d->natural_frequency_hz);
   }
   if (const auto& d = model_.dynamics() ? model_.dynamics() : o_.bench_mode;
-      d && fast_trial_ && o_.cutoff_hz <= 0.0) {
+      d && fast_trial_ && o_.cutoff_hz <= 0.0 && !measured) {
     mode_.emplace(*d, o_.dt);
   }
   cutoff_hz_ = std::min(cutoff_hz_, 0.45 * fs);
@@ -284,6 +295,56 @@ std::complex<double> IterativeLearning::harmonic(std::span<const double> x, std:
   return sum;
 }
 
+std::complex<double> IterativeLearning::measured_response(double f_hz, double& stage_gain) const {
+  const MeasuredLearningPlant& m = *o_.measured_plant;
+  const std::vector<double>& f = m.frequency_hz;
+  stage_gain = 0.0;
+  if (f_hz > f.back()) return 0.0;
+  if (f_hz <= f.front()) {
+    stage_gain = m.stage_gain.front();
+    return m.response.front();
+  }
+  const auto hi = static_cast<std::size_t>(std::upper_bound(f.begin(), f.end(), f_hz) - f.begin());
+  const std::size_t lo = hi - 1;
+  if (hi >= f.size()) {
+    stage_gain = m.stage_gain.back();
+    return m.response.back();
+  }
+  // Linear in log frequency, of the log magnitude and of the phase step between the lines.
+  const double w = std::log(f_hz / f[lo]) / std::log(f[hi] / f[lo]);
+  stage_gain = (1.0 - w) * m.stage_gain[lo] + w * m.stage_gain[hi];
+  const std::complex<double> a = m.response[lo], b = m.response[hi];
+  const double mag = std::exp((1.0 - w) * std::log(std::abs(a)) + w * std::log(std::abs(b)));
+  const double phase =
+      std::arg(a) + w * std::remainder(std::arg(b) - std::arg(a), 2.0 * std::numbers::pi);
+  return std::polar(mag, phase);
+}
+
+void IterativeLearning::through_measured_inverse(std::vector<double>& x) {
+  const std::size_t n = x.size();
+  Eigen::FFT<double> fft;
+  std::vector<std::complex<double>> spectrum;
+  fft.fwd(spectrum, x);
+  const double fs = 1.0 / o_.dt;
+  measured_harmonics_ = measured_left_out_ = 0;
+  for (std::size_t h = 0; h <= n / 2; ++h) {
+    const double f = static_cast<double>(h) * fs / static_cast<double>(n);
+    double stage = 0.0;
+    const std::complex<double> p = measured_response(std::max(f, 1e-300), stage);
+    std::complex<double> c = 0.0;
+    if (stage >= kHighBandMinGain && std::abs(p) > 0.0) {
+      c = spectrum[h] / p;
+      if (h > 0) ++measured_harmonics_;
+    } else if (h > 0 && f <= o_.measured_plant->frequency_hz.back()) {
+      ++measured_left_out_;
+    }
+    if (h == 0) c = spectrum[0];  // the mean: the slope holds it (and the drift estimate)
+    spectrum[h] = c;
+    if (h > 0 && h < n - h) spectrum[n - h] = std::conj(c);
+  }
+  fft.inv(x, spectrum);
+}
+
 bool IterativeLearning::in_high_band(std::size_t h) const {
   const double fs = 1.0 / o_.dt;
   const double f = static_cast<double>(h) * fs / static_cast<double>(period_);
@@ -344,7 +405,16 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
   last_drive_.assign(drive.begin(), drive.end());
   last_error_.assign(error.begin(), error.end());
   local_slope(drive);
-  const std::vector<double> e = advanced_error(error, drive, before);
+  std::vector<double> e;
+  if (o_.measured_plant) {
+    // The measured response holds the bench's delay and dynamics: the error through its inverse,
+    // harmonic by harmonic, in place of the delay's advance.
+    e.assign(error.begin(), error.end());
+    low_pass(e);
+    through_measured_inverse(e);
+  } else {
+    e = advanced_error(error, drive, before);
+  }
   std::vector<double> c(n);
   for (std::size_t j = 0; j < n; ++j) c[j] = (gain * e[j] + drift_) / slope_[j];
   last_mean_error_ = mean_error;

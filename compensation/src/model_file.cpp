@@ -3,6 +3,7 @@
 #include <cmath>
 #include <tuple>
 
+#include "details/json_fields.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
@@ -14,24 +15,10 @@ using nlohmann::json;
 
 namespace {
 
-[[noreturn]] void fail(const std::string& field, const std::string& what) {
-  throw ModelFileError(field + ": " + what);
-}
-
-const json& member(const json& obj, const std::string& parent, const char* key) {
-  const std::string field = parent.empty() ? key : parent + "." + key;
-  if (!obj.is_object()) fail(parent.empty() ? "(top level)" : parent, "must be an object");
-  const auto it = obj.find(key);
-  if (it == obj.end()) fail(field, "missing");
-  return *it;
-}
-
-double number(const json& v, const std::string& field) {
-  if (!v.is_number()) fail(field, std::string("must be a number, got ") + v.type_name());
-  const double d = v.get<double>();
-  if (!std::isfinite(d)) fail(field, "must be finite");
-  return d;
-}
+using details::fail;
+using details::member;
+using details::number;
+using details::numbers;
 
 double number_member(const json& obj, const std::string& parent, const char* key,
                      std::optional<double> fallback = std::nullopt) {
@@ -48,19 +35,6 @@ RateLaw rate_law_from_json(const json& rate) {
     if (const auto law = rate_law_from_string(it->get<std::string>())) return *law;
   }
   fail("rate.law", "must be \"signed\", \"magnitude\" or \"thresholds\", got " + it->dump());
-}
-
-std::vector<double> numbers(const json& obj, const std::string& parent, const char* key) {
-  const json& v = member(obj, parent, key);
-  const std::string field = parent + "." + key;
-  // NaN is not valid JSON; a null in an array (what many tools write for NaN) is caught here.
-  if (!v.is_array()) fail(field, std::string("must be an array of numbers, got ") + v.type_name());
-  std::vector<double> out;
-  out.reserve(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    out.push_back(number(v[i], field + "[" + std::to_string(i) + "]"));
-  }
-  return out;
 }
 
 void require_increasing(const std::vector<double>& v, const std::string& field) {
@@ -231,6 +205,7 @@ json to_json(const ModelFile& file) {
     }
   }
   if (m.delay_s() > 0.0) j["delay_s"] = m.delay_s();
+  if (file.responses) j["frequency_response"] = to_json(*file.responses);
   j["identification"] = file.identification.is_null() ? json::object() : file.identification;
   return j;
 }
@@ -266,6 +241,9 @@ ModelFile model_file_from_json(const json& j) {
     if (!(out.model.input_min < out.model.input_max)) fail("input_range", "needs min < max");
   }
   if (j.contains("identification")) out.identification = j["identification"];
+  if (j.contains("frequency_response")) {
+    out.responses = stage_responses_from_json(j["frequency_response"], "frequency_response");
+  }
   return out;
 }
 

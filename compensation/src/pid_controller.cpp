@@ -21,9 +21,6 @@ PidController::PidController(PidParameters p, double dt_s) : p_(p), dt_(dt_s) {
   details::require(std::isfinite(p_.output_filter_hz) && p_.output_filter_hz >= 0.0 &&
                        p_.output_filter_hz < 0.5 / dt_s,
                    "pid.output_filter_hz must be >= 0 and below the Nyquist frequency");
-  details::require(std::isfinite(p_.error_period_s) && p_.error_period_s >= 0.0,
-                   "pid.error_period_s must be >= 0");
-  error_average_ = PeriodAverage(p_.error_period_s / dt_);
   if (p_.output_filter_hz > 0.0) {
     beta_ = 1.0 - std::exp(-2.0 * std::numbers::pi * p_.output_filter_hz * dt_);
   }
@@ -33,10 +30,9 @@ PidController::PidController(PidParameters p, double dt_s) : p_(p), dt_(dt_s) {
   }
 }
 
-double PidController::step(double measured_error) noexcept {
+double PidController::step(double error) noexcept {
   // hold on a bad measurement; the loop faults on it
-  if (!std::isfinite(measured_error)) return out_;
-  const double error = error_average_.step(measured_error);
+  if (!std::isfinite(error)) return out_;
   ef_ = samples_ == 0 ? error : ef_ + alpha_ * (error - ef_);
   if (samples_ == 0) {
     e1_ = error;
@@ -63,7 +59,16 @@ void PidController::reset(double initial_output) noexcept {
   e1_ = ef_ = ef1_ = ef2_ = 0.0;
   external_saturation_ = 0;
   samples_ = 0;
-  error_average_.reset();
+}
+
+std::complex<double> PidController::response(double f_hz) const noexcept {
+  const std::complex<double> zi = std::polar(1.0, -2.0 * std::numbers::pi * f_hz * dt_);  // 1 / z
+  const std::complex<double> diff = 1.0 - zi;
+  // u = kp e + ki dt e / (1 - 1/z) + kd / dt (1 - 1/z) ef, ef = alpha e / (1 - (1 - alpha) / z),
+  // then the output low-pass beta / (1 - (1 - beta) / z).
+  const std::complex<double> ef = alpha_ / (1.0 - (1.0 - alpha_) * zi);
+  const std::complex<double> u = p_.kp + p_.ki * dt_ / diff + p_.kd / dt_ * diff * ef;
+  return u * beta_ / (1.0 - (1.0 - beta_) * zi);
 }
 
 }  // namespace hystbench::compensation

@@ -70,4 +70,55 @@ double output_lag_samples(std::span<const double> y_ref, std::span<const double>
   return gg > 0.0 ? -eg / gg : 0.0;
 }
 
+StepFigures step_figures(std::span<const double> y_ref, std::span<const double> y, double dt_s,
+                         double min_step, double band) {
+  StepFigures f;
+  const std::size_t n = std::min(y_ref.size(), y.size());
+  // The reference's levels: samples equal to the one before. A step is a move between two
+  // levels: from the first sample after the last held one to the first held at the new level.
+  struct Move {
+    std::size_t start, level;  // the first moving sample; a sample of the new level
+  };
+  std::vector<Move> moves;
+  bool holding = false;
+  std::size_t held = 0;  // the last sample known to be on a level
+  for (std::size_t k = 1; k < n; ++k) {
+    if (y_ref[k] != y_ref[k - 1]) continue;
+    if (holding && held + 1 < k && std::abs(y_ref[k] - y_ref[held]) >= min_step) {
+      moves.push_back({held + 1, k});
+    }
+    holding = true;
+    held = k;
+  }
+  for (std::size_t i = 0; i < moves.size(); ++i) {
+    const std::size_t k0 = moves[i].start;
+    const std::size_t end = i + 1 < moves.size() ? moves[i + 1].start : n;
+    const double level = y_ref[moves[i].level], step = level - y_ref[k0 - 1];
+    const double size = std::abs(step), direction = step > 0.0 ? 1.0 : -1.0;
+    double overshoot = 0.0;
+    std::size_t last_outside = k0 - 1;  // the last sample outside the band
+    for (std::size_t k = k0; k < end; ++k) {
+      const double e = y[k] - level;
+      overshoot = std::max(overshoot, direction * e / size);
+      if (std::abs(e) > band * size) last_outside = k;
+    }
+    const bool settled = last_outside + 1 < end;
+    const double settling = static_cast<double>(last_outside + 1 - k0) * dt_s;
+    f.settled = f.settled && settled;
+    f.max_settling_s = std::max(f.max_settling_s, settling);
+    f.mean_settling_s += settling;
+    f.max_overshoot = std::max(f.max_overshoot, overshoot);
+    f.mean_overshoot += overshoot;
+    f.mean_size += size;
+    ++f.steps;
+  }
+  if (f.steps > 0) {
+    const auto count = static_cast<double>(f.steps);
+    f.mean_settling_s /= count;
+    f.mean_overshoot /= count;
+    f.mean_size /= count;
+  }
+  return f;
+}
+
 }  // namespace hystbench::compensation

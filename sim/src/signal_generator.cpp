@@ -14,11 +14,12 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-constexpr std::array<std::pair<SignalKind, std::string_view>, 8> kKindNames{{
+constexpr std::array<std::pair<SignalKind, std::string_view>, 9> kKindNames{{
     {SignalKind::kSine, "sine"},
     {SignalKind::kDecayingSine, "decaying_sine"},
     {SignalKind::kTriangle, "triangle"},
     {SignalKind::kSawtooth, "sawtooth"},
+    {SignalKind::kStep, "step"},
     {SignalKind::kSteps, "steps"},
     {SignalKind::kMultiFrequency, "multi_frequency"},
     {SignalKind::kChirp, "chirp"},
@@ -54,14 +55,15 @@ class ShapedSignal : public SignalGenerator {
   double duration_s_;
 };
 
-/// Sine, triangle and sawtooth: a shape of the cycle fraction x = f t + phase / 2 pi.
+/// Sine, triangle, sawtooth and step: a shape of the cycle fraction x = f t + phase / 2 pi.
 class PeriodicSignal final : public ShapedSignal {
  public:
   explicit PeriodicSignal(const SignalSpec& spec)
       : ShapedSignal(spec, spec.duration_s),
         kind_(spec.kind),
         frequency_hz_(spec.frequency_hz),
-        cycle_offset_(spec.phase_rad / kTwoPi) {}
+        cycle_offset_(spec.phase_rad / kTwoPi),
+        rise_cycles_(std::min(spec.rise_s * spec.frequency_hz, 0.25)) {}
 
  private:
   double shape(double t_s) const noexcept override {
@@ -71,6 +73,15 @@ class PeriodicSignal final : public ShapedSignal {
         return 1.0 - 4.0 * std::abs(fractional_part(x + 0.25) - 0.5);
       case SignalKind::kSawtooth:
         return 2.0 * fractional_part(x + 0.5) - 1.0;
+      case SignalKind::kStep: {
+        // Up at cycle 0, down at 0.5, each along a minimum-jerk move of rise_cycles_.
+        const double c = fractional_part(x);
+        const double into = c < 0.5 ? c : c - 0.5;
+        const double to = c < 0.5 ? 1.0 : -1.0;
+        if (into >= rise_cycles_) return to;
+        const double r = into / rise_cycles_;
+        return -to + 2.0 * to * r * r * r * (10.0 - 15.0 * r + 6.0 * r * r);
+      }
       default:
         return std::sin(kTwoPi * x);
     }
@@ -79,6 +90,7 @@ class PeriodicSignal final : public ShapedSignal {
   SignalKind kind_;
   double frequency_hz_;
   double cycle_offset_;
+  double rise_cycles_;  // step: its edges' move, in cycles
 };
 
 class DecayingSineSignal final : public ShapedSignal {
@@ -227,11 +239,13 @@ void validate(const SignalSpec& spec) {
   require(std::isfinite(spec.amplitude), "amplitude", "must be a finite number");
   require(std::isfinite(spec.offset), "offset", "must be a finite number");
   require(std::isfinite(spec.phase_rad), "phase_rad", "must be a finite number");
+  require(std::isfinite(spec.rise_s) && spec.rise_s >= 0.0, "rise_s", "must be >= 0");
   const std::string kind(to_string(spec.kind));
   switch (spec.kind) {
     case SignalKind::kSine:
     case SignalKind::kTriangle:
     case SignalKind::kSawtooth:
+    case SignalKind::kStep:
     case SignalKind::kMultiFrequency:
       require(spec.duration_s > 0.0, "duration_s", "must be > 0 (infinite allowed)");
       break;
@@ -250,6 +264,7 @@ void validate(const SignalSpec& spec) {
     case SignalKind::kSine:
     case SignalKind::kTriangle:
     case SignalKind::kSawtooth:
+    case SignalKind::kStep:
     case SignalKind::kDecayingSine:
       require_positive(spec.frequency_hz, "frequency_hz");
       break;
@@ -308,6 +323,7 @@ std::unique_ptr<SignalGenerator> make_signal_generator(const SignalSpec& spec) {
     case SignalKind::kSine:
     case SignalKind::kTriangle:
     case SignalKind::kSawtooth:
+    case SignalKind::kStep:
       return std::make_unique<PeriodicSignal>(spec);
     case SignalKind::kDecayingSine:
       return std::make_unique<DecayingSineSignal>(spec);

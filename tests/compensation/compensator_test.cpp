@@ -14,6 +14,14 @@ namespace hc = hystbench::compensation;
 
 namespace {
 
+// An integral-and-proportional loop on the feedforward's target: kp [1], ki [1/s], v within
+// +/- limit [um].
+hc::FeedbackController feedback(double kp, double ki, double limit, double dt) {
+  hc::FeedbackLaw law;
+  law.pid = {kp, ki, 0.0, 0.0, -limit, limit};
+  return hc::FeedbackController(law, dt);
+}
+
 struct TrackFigures {
   double max_error, hysteresis;
 };
@@ -21,9 +29,8 @@ struct TrackFigures {
 // Tracks a 1 Hz triangle with `kind` on a plant equal to `truth`, at 10 kHz.
 TrackFigures track(hc::CompensatorKind kind, const hc::ActuatorModel& model,
                    hc::ActuatorModel truth) {
-  std::optional<hc::PidController> pid;
-  if (hc::uses_feedback(kind))
-    pid.emplace(hc::PidParameters{0.05, 200.0, 0.0, 0.0, -150, 150}, 1e-4);
+  std::optional<hc::FeedbackController> pid;
+  if (hc::uses_feedback(kind)) pid.emplace(feedback(0.015, 60.0, 45.0, 1e-4));
   std::unique_ptr<hc::InverseModel> inverse;
   if (hc::needs_model(kind)) {
     inverse = hc::make_inverse(model, kind == hc::CompensatorKind::kInverseMultiplicative
@@ -74,8 +81,7 @@ TEST(Compensator, ACopyPlaysAheadFromTheSameStateAndLeavesTheOriginal) {
   const hc::ActuatorModel model = hystbench::testing::random_mpi_actuator(rng, 12, 2, 150.0, 1e-4);
   const double y0 = model.peek_static(0.0), y1 = model.peek_static(150.0);
   hc::Compensator original(hc::CompensatorKind::kInversePid, hc::make_inverse(model),
-                           hc::PidController(hc::PidParameters{0.05, 200.0, 0.0, 0.0, -5, 5}, 1e-4),
-                           {(y1 - y0) / 150.0, y0});
+                           feedback(0.015, 60.0, 1.5, 1e-4), {(y1 - y0) / 150.0, y0});
   original.reset(0.0);
   const auto reference = [&](int k) { return y0 + (y1 - y0) * (0.5 + 0.4 * std::sin(k * 1e-3)); };
   for (int k = 0; k < 3000; ++k) (void)original.step(reference(k), reference(k) - 0.1);
@@ -97,11 +103,9 @@ TEST(Compensator, PidAloneFollowsASlowReferenceOnAMismatchedPlant) {
   EXPECT_LT(pid.hysteresis, none.hysteresis);
 }
 
-// The run log's feedback_saturated flag comes from here: set while u_fb sits at its clamp.
+// The run log's feedback_saturated flag comes from here: set while the loop sits at its clamp.
 TEST(Compensator, SaysWhenTheFeedbackIsAtItsClamp) {
-  hc::Compensator c(hc::CompensatorKind::kPid, nullptr,
-                    hc::PidController(hc::PidParameters{0.0, 1000.0, 0.0, 0.0, -5.0, 5.0}, 1e-3),
-                    {});
+  hc::Compensator c(hc::CompensatorKind::kPid, nullptr, feedback(0.0, 1000.0, 5.0, 1e-3), {});
   c.reset(0.0);
   hc::CompensatorOutput out = c.step(1.0, 0.0);
   EXPECT_FALSE(out.feedback_saturated);
@@ -113,6 +117,45 @@ TEST(Compensator, SaysWhenTheFeedbackIsAtItsClamp) {
   EXPECT_LT(out.u_fb, 5.0);
   hc::Compensator none(hc::CompensatorKind::kNone, nullptr, std::nullopt, {1.0, 0.0});
   EXPECT_FALSE(none.step(1e9, 0.0).feedback_saturated);
+}
+
+// The loop's output corrects the feedforward's target: u = inverse(target + v). The feedforward
+// alone (u_ff) is what the same inverse gives for the target, and on a plant that is the model
+// plus an offset the loop takes the offset out, whatever the model's local slope there.
+TEST(Compensator, TheFeedbackCorrectsTheTargetThroughTheInverseAndUffStaysTheFeedforwards) {
+  std::mt19937_64 rng(11);
+  hc::ActuatorModel model = hystbench::testing::random_mpi_actuator(rng, 12, 2, 150.0, 1e-4);
+  const double y0 = model.peek_static(0.0), y1 = model.peek_static(150.0);
+  hc::Compensator c(hc::CompensatorKind::kInversePid, hc::make_inverse(model),
+                    feedback(0.0, 300.0, 10.0, 1e-4), {(y1 - y0) / 150.0, y0});
+  std::unique_ptr<hc::InverseModel> plain = hc::make_inverse(model);
+  hc::ActuatorModel truth = model;
+  truth.reset(0.0);
+  c.reset(0.0);
+  plain->reset(0.0);
+  double y = NAN, last_error = 0.0;
+  for (int k = 0; k < 20000; ++k) {
+    const double yr = y0 + (y1 - y0) * (0.5 + 0.4 * std::sin(2.0 * M_PI * k / 10000.0));
+    const hc::CompensatorOutput out = c.step(yr, y);
+    ASSERT_DOUBLE_EQ(out.u_ff, plain->step(yr)) << k;
+    ASSERT_DOUBLE_EQ(out.u_fb, out.u - out.u_ff) << k;
+    y = truth.step(out.u) + 0.5;  // the actuator sits 0.5 um above the model
+    last_error = yr - y;
+  }
+  EXPECT_LT(std::abs(last_error), 0.01);
+}
+
+// The integral holds while the drive sits at a bound of its range: no wind-up while the
+// target is out of reach, so the loop lets go as soon as it is back in reach.
+TEST(Compensator, TheLoopDoesNotWindUpWhileTheDriveSitsAtItsBound) {
+  hc::Compensator c(hc::CompensatorKind::kPid, nullptr, feedback(0.0, 1000.0, 100.0, 1e-3),
+                    {1.0, 0.0});
+  c.set_drive_range(0.0, 10.0);
+  c.reset(0.0);
+  hc::CompensatorOutput out;
+  for (int k = 0; k < 200; ++k) out = c.step(9.5, std::min(out.u, 10.0) - 2.0);  // 2 short
+  EXPECT_GE(out.u, 10.0);
+  EXPECT_LT(out.v, 3.0);  // stopped at the bound, not wound up over 200 ticks
 }
 
 TEST(Compensator, RefusesAnInverseKindWithoutAModel) {
@@ -136,4 +179,36 @@ TEST(TrackingMetrics, HysteresisPercentMeasuresTheLoopWidth) {
   // Widest at the middle: 2 sin(phi) over a range of 2.
   EXPECT_NEAR(hc::hysteresis_percent(yr, y), 100.0 * std::sin(phi), 0.5);
   EXPECT_NEAR(hc::hysteresis_percent(yr, yr), 0.0, 1e-12);
+}
+
+// A step answered by a second-order lag: its overshoot and its settling to 1 % as the formulas
+// give them (zeta 0.5: 16.3 % overshoot; the envelope exp(-zeta wn t) within 1 % of the step by
+// about 4.6 / (zeta wn), give or take the oscillation's phase).
+TEST(TrackingMetrics, StepFiguresMeasureOvershootAndSettling) {
+  const double dt = 1e-4, wn = 2.0 * M_PI * 500.0, zeta = 0.5;
+  std::vector<double> yr, y;
+  double x = 0.0, v = 0.0;
+  for (int k = 0; k < 20000; ++k) {
+    const double target = (k / 5000) % 2 == 0 ? 0.0 : 10.0;  // up at 5000, down at 10000 ...
+    yr.push_back(target);
+    for (int s = 0; s < 10; ++s) {  // the lag integrated finely
+      const double a = wn * wn * (target - x) - 2.0 * zeta * wn * v;
+      v += a * dt / 10.0;
+      x += v * dt / 10.0;
+    }
+    y.push_back(x);
+  }
+  const hc::StepFigures f = hc::step_figures(yr, y, dt, 1.0);
+  EXPECT_EQ(f.steps, 3u);
+  EXPECT_DOUBLE_EQ(f.mean_size, 10.0);
+  EXPECT_NEAR(f.max_overshoot, std::exp(-zeta * M_PI / std::sqrt(1.0 - zeta * zeta)), 0.01);
+  const double settling = 4.6 / (zeta * wn);
+  EXPECT_NEAR(f.max_settling_s, settling, 0.3 * settling);
+  EXPECT_TRUE(f.settled);
+  // A reference without a step has none; a response that never gets there is not settled.
+  EXPECT_EQ(
+      hc::step_figures(std::vector<double>(100, 1.0), std::vector<double>(100, 1.0), dt, 0.1).steps,
+      0u);
+  std::vector<double> stuck(yr.size(), 0.0);
+  EXPECT_FALSE(hc::step_figures(yr, stuck, dt, 1.0).settled);
 }

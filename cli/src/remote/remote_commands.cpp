@@ -13,8 +13,10 @@
 
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/remote/bench_client.hpp"
+#include "hystbench/cli/report/loop_plots.hpp"
 #include "hystbench/cli/report/plot_command.hpp"
 #include "hystbench/common/command_error.hpp"
+#include "remote/details/feedback_text.hpp"
 
 namespace hystbench::cli {
 
@@ -119,6 +121,33 @@ json wait_for_run(BenchClient& client, const std::string& run_id,
       progress(event->value("fraction", 0.0), "fitting: " + event->value("stage", ""));
     }
   }
+}
+
+bool measure_response_if_missing(BenchClient& client, const std::string& compensator,
+                                 std::ostream& err) {
+  if (compensator != "inverse+pid" && compensator != "pid") return true;
+  const json probe = client.request("tune", {{"compensator", compensator}});
+  if (probe.value("ok", false) || probe["error"].value("code", "") != "no_frequency_response") {
+    return true;  // designed, or refused for a cause the run will name itself
+  }
+  err << "hystbench: no frequency response is stored for the active model: measuring it first "
+         "(hystbench frf)\n";
+  const json started = client.request("frf", json::object());
+  if (!started.value("ok", false)) {
+    err << "hystbench: frf refused: " << started["error"].value("message", "?") << "\n";
+    return false;
+  }
+  const bool tty = ::isatty(STDERR_FILENO) == 1;
+  std::function<void(double, const std::string&)> show;
+  if (tty) show = [&](double f, const std::string&) { progress_bar(err, f, "frf"); };
+  const json r = wait_for_run(client, started["result"].value("run_id", ""), show);
+  if (tty) err << "\r\x1b[K" << std::flush;
+  if (r.value("end", "") != "completed" || !r.contains("frequency_response")) {
+    err << "hystbench: frf did not measure a response: "
+        << r.value("frequency_response_error", r.value("reason", std::string("?"))) << "\n";
+    return false;
+  }
+  return true;
 }
 
 namespace {
@@ -298,6 +327,16 @@ void print_run_result(const json& r, std::ostream& out) {
   print_candidates(out, r.value("candidates", json::array()));
   if (r.contains("fit_error"))
     out << "  fit failed      " << r["fit_error"].get<std::string>() << "\n";
+  if (r.contains("frequency_response"))
+    details::print_frequency_response(out, r["frequency_response"]);
+  if (r.contains("frequency_response_error")) {
+    out << "  response        not measured: " << r["frequency_response_error"].get<std::string>()
+        << "\n";
+  }
+  if (r.contains("feedback")) details::print_feedback(out, r["feedback"]);
+  if (r.contains("feedback_error")) {
+    out << "  feedback        not designed: " << r["feedback_error"].get<std::string>() << "\n";
+  }
   // An unplayed run has no timing.
   if (r.contains("loop") && r.value("samples", 0) > 0) print_loop_timing(out, r);
   if (r.contains("clamps")) {
@@ -415,10 +454,18 @@ void report_refusal(const RemoteCommand& cmd, const common::CommandError& e, std
 }
 
 /// Plots the finished run's log into --plot's folder and lists the images in r["plots"]; false
-/// when plotting failed.
+/// when plotting failed. An frf run: its measured responses.
 bool plot_run(const RemoteCommand& cmd, json& r, std::ostream& err) {
   try {
     json files = json::array();
+    if (cmd.cmd == "frf") {
+      if (!r.contains("frequency_response")) throw std::runtime_error("nothing was measured");
+      for (const auto& png : plot_responses(r["frequency_response"]["measured"], cmd.plot_dir)) {
+        files.push_back(png.string());
+      }
+      r["plots"] = files;
+      return true;
+    }
     for (const auto& png : plot_run_log(r["log"].get<std::string>(), cmd.plot_dir)) {
       files.push_back(png.string());
     }
@@ -433,12 +480,54 @@ bool plot_run(const RemoteCommand& cmd, json& r, std::ostream& err) {
   }
 }
 
+/// tune's reply: the design in words (or as JSON), its plots with --plot. 0, or 1 when the
+/// plots failed.
+int print_tune(const RemoteCommand& cmd, json& result, std::ostream& out, std::ostream& err) {
+  int status = 0;
+  if (!cmd.plot_dir.empty()) {
+    try {
+      json files = json::array();
+      for (const auto& png : plot_loop(result, cmd.plot_dir)) files.push_back(png.string());
+      result["plots"] = files;
+    } catch (const std::exception& e) {
+      err << "hystbench: error: --plot: " << e.what() << "\n";
+      status = 1;
+    }
+  }
+  if (cmd.json_output) {
+    out << result.dump() << "\n";
+    return status;
+  }
+  out << "tune " << result.value("compensator", std::string("?")) << " on the responses of "
+      << result.value("responses_from", std::string("?")) << "\n";
+  details::print_feedback(out, result);
+  for (const json& m : result.value("margins", json::array())) {
+    out << "  on " << m.value("response", std::string("?")) << ": crossover "
+        << fixed_or_dash(m.value("crossover_hz", json()), 0) << " Hz, gain margin "
+        << fixed_or_dash(m.value("gain_margin_db", json()), 1) << " dB at "
+        << fixed_or_dash(m.value("gain_margin_hz", json()), 0) << " Hz, phase margin "
+        << fixed_or_dash(m.value("phase_margin_deg", json()), 1) << " deg, peak |S| "
+        << fixed_or_dash(m.value("peak_sensitivity_db", json()), 1) << " dB at "
+        << fixed_or_dash(m.value("peak_sensitivity_hz", json()), 0) << " Hz"
+        << (m.value("stable", false) ? "" : ", UNSTABLE") << "\n";
+  }
+  for (const auto& png : result.value("plots", json::array())) {
+    out << "  plot            " << png.get<std::string>() << "\n";
+  }
+  return status;
+}
+
 }  // namespace
 
 int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
     BenchClient client(cmd.socket_path);
     const bool tty = ::isatty(STDERR_FILENO) == 1;
+    if (cmd.cmd == "track" && cmd.wait && !cmd.params.contains("kp") &&
+        !cmd.params.contains("ki") && !cmd.params.contains("kd") &&
+        !measure_response_if_missing(client, cmd.params.value("compensator", ""), err)) {
+      return 1;
+    }
     json reply;
     try {
       reply = request_command(client, cmd, tty, err);
@@ -446,8 +535,10 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
       report_refusal(cmd, e, out, err);
       return 1;
     }
-    const json& result = reply["result"];
-    const bool is_run = cmd.cmd == "identify" || cmd.cmd == "track" || cmd.cmd == "excite";
+    json result = reply["result"];
+    const bool is_run =
+        cmd.cmd == "identify" || cmd.cmd == "track" || cmd.cmd == "excite" || cmd.cmd == "frf";
+    if (cmd.cmd == "tune") return print_tune(cmd, result, out, err);
     if (!(is_run && cmd.wait)) {
       if (cmd.json_output || !is_run) {
         out << (cmd.json_output ? result.dump() : result.dump(2)) << "\n";

@@ -156,6 +156,9 @@ int run_sweep(const SweepCommand& cmd, std::ostream& out, std::ostream& err) {
   try {
     BenchClient client(cmd.socket_path);
     for (const auto& comp : cols) {
+      if (!measure_response_if_missing(client, comp, err)) return 1;
+    }
+    for (const auto& comp : cols) {
       for (const double f : cmd.frequencies_hz) {
         const json params = track_params(cmd, comp, f);
         const json reply = client.request("track", params);

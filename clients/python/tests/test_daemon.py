@@ -139,13 +139,16 @@ class WithoutModelTest(unittest.TestCase):
         )
         self.assertTrue(result.completed, result)
         trials = result["learning"]["trials"]
-        self.assertEqual([t["trial"] for t in trials], [0, 1, 2, 3, 4])
+        # The compensator's drive, the same again (what differs is the bench's floor), four learned.
+        self.assertEqual([t["trial"] for t in trials], [0, 1, 2, 3, 4, 5])
         self.assertEqual(trials[0]["drive"], "compensator")
+        self.assertEqual(trials[1]["drive"], "repeat")
+        self.assertGreater(result["learning"]["floor"]["rms_error_percent"], 0.0)
         rms = [t["rms_error_percent"] for t in trials]
         self.assertLess(rms[-1], 0.5 * rms[0], rms)
         self.assertEqual(result["rms_error_percent"], rms[-1])
         self.assertTrue(os.path.exists(result["learning"]["drive_file"]), result["learning"])
-        self.assertTrue(any(what.startswith("learning: trial 4 of 4") for what in seen), seen)
+        self.assertTrue(any(what.startswith("learning: trial 5 of 5") for what in seen), seen)
         # The learned drive replays by its name, and only for its own reference.
         replay = self.bench.track(
             "sine",
@@ -175,7 +178,7 @@ class WithoutModelTest(unittest.TestCase):
         learning = result["learning"]
         self.assertEqual(learning["reference"], "upload")
         rms = [t["rms_error_percent"] for t in learning["trials"]]
-        self.assertEqual(len(rms), 4, learning)
+        self.assertEqual(len(rms), 5, learning)
         self.assertLess(rms[-1], 0.5 * rms[0], rms)
         self.assertGreater(learning["scored_from"], 0)
         self.assertTrue(os.path.exists(learning["drive_file"]), learning)
@@ -368,7 +371,7 @@ class WithModelTest(unittest.TestCase):
         self.assertTrue(rows.completed, rows)
         learned, inverse = rows.row(20.0, "learned"), rows.row(20.0, "inverse")
         self.assertEqual(learned["learn_trials"], 3)
-        self.assertEqual(len(learned["learning"]["trials_rms_percent"]), 4)
+        self.assertEqual(len(learned["learning"]["trials_rms_percent"]), 5)
         self.assertLess(learned["rms_error_percent"], inverse["rms_error_percent"])
         self.assertIn("learned", rows.table())
 

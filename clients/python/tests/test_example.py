@@ -58,7 +58,8 @@ class ExampleTest(unittest.TestCase):
         self.assertEqual(len(rows), 2, out)
         for row in rows:
             first, last = float(row[1]), float(row[-1])
-            self.assertEqual(len(row), 6, out)  # f, then trial 0 and four learned trials
+            # f, then trial 0, its repeat and four learned trials
+            self.assertEqual(len(row), 7, out)
             self.assertLess(last, 0.5 * first, out)
         self.assertIn("learned drive: ", out)
 

@@ -271,11 +271,16 @@ void visit_pid(S& p, Visit&& visit, const LoopSection& loop) {
   visit("kp", p.kp, Bounds{0.0});
   visit("ki", p.ki, Bounds{0.0});
   visit("kd", p.kd, Bounds{0.0});
-  visit("bandwidth_hz", p.bandwidth_hz, Bounds{0.0, loop.rate_hz / 20.0, true});
+  visit("bandwidth_hz", p.bandwidth_hz, Bounds{0.0, loop.rate_hz / 2.0, true});
   visit("output_filter_hz", p.output_filter_hz, Bounds{0.0});
   visit("derivative_filter_hz", p.derivative_filter_hz, Bounds{0.0});
   visit("u_fb_min", p.u_fb_min, Bounds{});
   visit("u_fb_max", p.u_fb_max, Bounds{});
+  visit("gain_margin_db", p.gain_margin_db, Bounds{0.0, 40.0});
+  visit("phase_margin_deg", p.phase_margin_deg, Bounds{0.0, 89.0});
+  visit("peak_sensitivity_db", p.peak_sensitivity_db, Bounds{0.0, 40.0, true});
+  visit("force", p.force);
+  visit("oscillation_trip", p.oscillation_trip);
 }
 
 /// Reads each visited key from a Section with the checks its type and bounds call for.

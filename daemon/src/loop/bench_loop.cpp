@@ -87,6 +87,11 @@ std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> progra
   if (program->compensator && !program->preview) {
     program->targets.allocate(program->compensator->preview_samples());
   }
+  program->dt_s = dt_;
+  // The feedback's integral holds while the drive sits at a bound of the output range.
+  if (program->compensator) {
+    program->compensator->set_drive_range(options_.limits.u_min, options_.limits.u_max);
+  }
   RunProgram* expected = nullptr;
   RunProgram* raw = program.get();
   stop_requested_.store(false, std::memory_order_relaxed);
@@ -290,7 +295,12 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   }
   const TickDrive d = drive(p, k, rec);
   const OutputLimiter::Applied lim = limit(p, k, d.u_request, rec);
-  const TickExchange x = exchange(p, k, lim, rec);
+  TickExchange x = exchange(p, k, lim, rec);
+  if (x.failure == nullptr && p.oscillation && k >= p.feedback_from && std::isfinite(d.y_ref) &&
+      p.oscillation->update(d.y_ref - rec.y_measured, k)) {
+    x.failure = "the feedback loop oscillates (a growing or sustained oscillation of the error)";
+    rec.flags |= kSampleFault;
+  }
   const bool last_trial_played = x.failure == nullptr && score(p, k, d, rec);
   record(p, k, d, x.response, wake_ns - scheduled_ns, rec);
 

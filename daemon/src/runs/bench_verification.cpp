@@ -113,6 +113,10 @@ bool Bench::verify_next_candidate() {
 
 void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   IdentifySession& s = *session_;
+  if (s.response_options) {
+    stage_responses_measured(std::move(run));
+    return;
+  }
   {
     std::lock_guard lock(mutex_);
     phase_ = RunPhase::kFinalizing;
@@ -155,6 +159,10 @@ void Bench::continue_identify() {
   if (s.extend && !s.extension_tried && !s.interrupted && !quit_.load()) {
     if (play_while_diagnosing() && verify_next_candidate()) return;
     if (extend_identified_model() && verify_next_candidate()) return;
+  }
+  if (!s.responses_tried && !s.interrupted && !quit_.load()) {
+    s.responses_tried = true;
+    if (measure_stage_responses()) return;
   }
   finish_identify();
 }

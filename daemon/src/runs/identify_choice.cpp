@@ -278,6 +278,7 @@ void Bench::finish_identify() {
                                 {"verification", c.verification}});
     if (s.candidates.size() > 1) file.identification["candidates"] = candidates;
     if (s.rate_free) file.identification["rate_law"] = rate_law;
+    file.responses = s.responses;
     std::filesystem::create_directories(settings_.model_dir);
     const std::string path = (std::filesystem::path(settings_.model_dir) /
                               (result["run_id"].get<std::string>() + ".json"))
@@ -288,10 +289,16 @@ void Bench::finish_identify() {
     if (s.rate_free) result["model"]["rate_law"] = rate_law;
     result["verification"] = c.verification;
     if (s.candidates.size() > 1) result["candidates"] = candidates;
+    if (!s.responses_result.is_null()) result["frequency_response"] = s.responses_result;
     std::lock_guard lock(mutex_);
+    if (s.responses) responses_ = s.responses;
     model_ = std::move(file);
     model_path_ = path;
     ++model_generation_;
+    // The loop a track through the new model's inverse gets, designed now (a track reuses it).
+    json why;
+    result["feedback"] = feedback_now(hc::CompensatorKind::kInversePid, &why);
+    if (result["feedback"].is_null()) result["feedback_error"] = why;
   } catch (const std::exception& e) {
     result["fit_error"] = e.what();
   }

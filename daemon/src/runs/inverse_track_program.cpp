@@ -139,6 +139,19 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   r["error_samples"] = run.error.samples;
   if (run.tare.samples > 0) r["tare_um"] = run.tare.um();
   if (run.tare.startup_samples > 0) r["startup_offset_um"] = run.tare.startup_um();
+  // A reference that steps (a tenth of its span or more between two ticks): how y answered.
+  const hc::StepFigures steps = hc::step_figures(yr, y, run.dt_s, 0.1 * e.range);
+  if (steps.steps > 0) {
+    r["step"] = {{"steps", steps.steps},
+                 {"size_um", steps.mean_size},
+                 {"size_percent", e.range > 0 ? 100.0 * steps.mean_size / e.range : 0.0},
+                 {"settling_ms",
+                  {{"max", 1e3 * steps.max_settling_s}, {"mean", 1e3 * steps.mean_settling_s}}},
+                 {"overshoot_percent",
+                  {{"max", 100.0 * steps.max_overshoot}, {"mean", 100.0 * steps.mean_overshoot}}},
+                 {"band_percent", 1.0},
+                 {"settled", steps.settled}};
+  }
   return r;
 }
 

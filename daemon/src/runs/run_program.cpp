@@ -12,6 +12,8 @@ const char* to_string(RunKind kind) noexcept {
       return "track";
     case RunKind::kExcite:
       return "excite";
+    case RunKind::kFrequencyResponse:
+      return "frf";
   }
   return "unknown";
 }

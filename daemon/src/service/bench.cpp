@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "runs/details/excite_program.hpp"
+#include "runs/details/feedback_design.hpp"
 #include "runs/details/identify_program.hpp"
 #include "runs/details/identify_session.hpp"
 #include "runs/details/learned_drive.hpp"
@@ -42,7 +43,9 @@ const char* state_name(BenchLoop::State s) {
 }  // namespace
 
 Bench::Bench(BenchSettings settings)
-    : settings_(std::move(settings)), plans_(std::make_shared<details::PlanCache>()) {
+    : settings_(std::move(settings)),
+      plans_(std::make_shared<details::PlanCache>()),
+      feedback_plans_(std::make_shared<details::FeedbackPlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;
   try {
     driver_ = drivers::make_driver(settings_.driver_type);
@@ -251,6 +254,7 @@ json Bench::status() const {
   s["uploads"] = {{"open", uploads_.open()},
                   {"staged_samples", uploads_.staged_samples()},
                   {"max_samples", uploads_.limits().max_samples}};
+  s["feedback"] = last_feedback_;
   s["last_result"] = last_result_;
   return s;
 }
@@ -313,7 +317,8 @@ Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json&
 }
 
 details::RunContext Bench::run_context() const {
-  return {settings_, model_ ? &*model_ : nullptr, loop_->last_output(), model_generation_, plans_};
+  return {settings_, model_ ? &*model_ : nullptr,         loop_->last_output(), model_generation_,
+          plans_,    responses_ ? &*responses_ : nullptr, feedback_plans_};
 }
 
 json Bench::launch(const char* kind, details::BuiltRun run) {
@@ -388,6 +393,10 @@ json Bench::start_track(const details::RequestParams& request, std::uint64_t cli
   }
   details::BuiltRun run = details::make_track_program(track, ctx, upload.get());
   std::unique_ptr<details::TrackLearning> learning = std::move(run.learning);
+  if (run.reply.contains("feedback") && run.reply["feedback"].is_object()) {
+    last_feedback_ = run.reply["feedback"];
+    last_feedback_["compensator"] = track.compensator;
+  }
   json reply = launch("track", std::move(run));
   if (upload) uploads_.erase(upload_name, client);  // the run has it now
   learning_ = std::move(learning);                  // the supervisor takes the lock before it looks
@@ -469,7 +478,9 @@ void Bench::learn() {
 }
 
 void Bench::announce_trials(details::TrackLearning& learning, const std::string& run_id) {
-  const std::size_t asked = learning.request().trials;
+  // The last trial's number: trial 0, its repeat (trial 1), then the learned ones.
+  const std::size_t learned = learning.request().trials;
+  const std::size_t asked = learned > 0 ? learned + 1 : 0;
   std::vector<details::TrackLearning::Trial> scored;
   try {
     scored = learning.poll();
@@ -620,6 +631,10 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
   set_phase(RunPhase::kFinalizing);
   details::RunResult result = details::collect_result(*run, loop_->last_output());
   finish_learning(*run, result.report);
+  if (result.kind == RunKind::kFrequencyResponse) {
+    responses_finished(std::move(run), std::move(result));
+    return;
+  }
   if (result.wants_fit()) {
     fit_identify(*run, std::move(result));  // delivers when the candidates are verified
     return;

@@ -12,9 +12,12 @@
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "hystbench/compensation/second_order_dynamics.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "hystbench/sim/frequency_response_excitation.hpp"
 #include "runs/details/excite_program.hpp"
 #include "runs/details/identify_program.hpp"
+#include "runs/details/response_program.hpp"
 #include "runs/details/track_program.hpp"
 #include "runs/details/track_request.hpp"
 #include "service/details/command_table.hpp"
@@ -257,18 +260,77 @@ TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
   }
 }
 
-TEST(TrackProgram, FeedbackGainsAreDerivedUnlessTheRequestGivesThem) {
-  const hd::BenchSettings s = settings();
+namespace {
+
+// The bench's frequency responses of a stage of gain 0.3 um/V with a 120 Hz mode (zeta 0.05),
+// measured as frf measures them at 1 kHz (noise-free).
+hc::StageResponses stage_responses(const hd::BenchSettings& s) {
   const hdd::RunContext ctx{s, nullptr, 0.0};
-  const hdd::BuiltRun derived = track({{"compensator", "pid"}}, ctx);
-  EXPECT_EQ(derived.reply["feedback"]["gains"], "derived");
-  // `pid` adds the feedback to the linear map's drive: clamped as behind any feedforward.
-  EXPECT_EQ(derived.reply["feedback"]["u_fb_min"], s.pid.u_fb_min);
-  EXPECT_EQ(derived.reply["feedback"]["u_fb_max"], s.pid.u_fb_max);
+  const auto o = hdd::response_options(ctx);
+  const auto x = hystbench::sim::make_frequency_response_excitation(o);
+  hc::SecondOrderDynamics mode({120.0, 0.05}, 1.0 / s.loop.rate_hz);
+  hd::RunProgram run;
+  run.run_id = "frf-test";
+  run.records.u = x.u;
+  for (const double u : x.u) run.records.y.push_back(0.3 * mode.step(u));
+  run.records.count = x.u.size();
+  return hdd::measure_responses(run, o);
+}
+
+}  // namespace
+
+TEST(TrackProgram, TheFeedbackIsDesignedOnTheMeasuredResponsesUnlessGainsAreGiven) {
+  const hd::BenchSettings s = settings();
+  EXPECT_THAT(refusal({{"compensator", "pid"}}, hdd::RunContext{s, nullptr, 0.0}),
+              StartsWith("no_frequency_response: "));
+  const hc::StageResponses responses = stage_responses(s);
+  hdd::RunContext ctx{s, nullptr, 0.0};
+  ctx.responses = &responses;
+  const hdd::BuiltRun designed = track({{"compensator", "pid"}}, ctx);
+  const json& f = designed.reply["feedback"];
+  EXPECT_EQ(f["gains"], "designed");
+  EXPECT_EQ(f["responses_from"], "frf-test");
+  EXPECT_TRUE(f["meets_targets"].get<bool>());
+  EXPECT_EQ(f["margins"].size(), responses.responses.size());
+  for (const json& m : f["margins"]) EXPECT_GE(m["gain_margin_db"].get<double>(), 6.0);
+  EXPECT_GT(f["bandwidth_hz"].get<double>(), 0.0);
+  EXPECT_FALSE(f["limited_by"].get<std::string>().empty());
+  // The feedback starts with the reference, after the open-loop prefix.
+  EXPECT_EQ(designed.program->feedback_from, designed.program->excitation.size());
+  // Gains given: taken at the drive's mean slope (45 um over 150 V), checked, stated.
   const hdd::BuiltRun given = track({{"compensator", "pid"}, {"ki", 100.0}}, ctx);
   EXPECT_EQ(given.reply["feedback"]["gains"], "request");
-  EXPECT_EQ(given.reply["feedback"]["ki"], 100.0);
+  EXPECT_DOUBLE_EQ(given.reply["feedback"]["law"]["ki"].get<double>(), 100.0 * 45.0 / 150.0);
+  EXPECT_FALSE(given.reply["feedback"]["forced"].get<bool>());
   EXPECT_TRUE(track({{"compensator", "none"}}, ctx).reply["feedback"].is_null());
+}
+
+TEST(TrackProgram, GainsThatBreakTheMarginsAreRefusedNamingThemUnlessForced) {
+  const hd::BenchSettings s = settings();
+  const hc::StageResponses responses = stage_responses(s);
+  hdd::RunContext ctx{s, nullptr, 0.0};
+  ctx.responses = &responses;
+  // Integral alone at a 100 Hz crossover: past the 120 Hz mode's limit, unstable.
+  const json fast = {{"compensator", "pid"}, {"ki", 2.0 * M_PI * 100.0 / 0.3}};
+  const std::string why = refusal(fast, ctx);
+  EXPECT_THAT(why, StartsWith("unsafe_gains: these gains break the loop's targets"));
+  EXPECT_THAT(why, HasSubstr("UNSTABLE"));
+  EXPECT_THAT(why, HasSubstr("gain margin"));
+  json forced = fast;
+  forced["force_gains"] = true;
+  const hdd::BuiltRun run = track(forced, ctx);
+  EXPECT_TRUE(run.reply["feedback"]["forced"].get<bool>());
+  EXPECT_FALSE(run.reply["feedback"]["broken"].get<std::string>().empty());
+}
+
+TEST(TrackProgram, ResponsesMeasuredAtAnotherLoopRateAreRefused) {
+  hd::BenchSettings other = settings();
+  other.loop.rate_hz = 2000.0;
+  const hc::StageResponses responses = stage_responses(other);
+  const hd::BenchSettings s = settings();
+  hdd::RunContext ctx{s, nullptr, 0.0};
+  ctx.responses = &responses;
+  EXPECT_THAT(refusal({{"compensator", "pid"}}, ctx), StartsWith("stale_frequency_response: "));
 }
 
 TEST(TrackProgram, RefusalsNameTheCause) {

@@ -92,7 +92,8 @@ TEST_F(TrackLearningTest, AnUploadedTrajectoryIsLearnedPassByPass) {
   const json& l = r["learning"];
   EXPECT_EQ(l["reference"], "upload");
   const std::vector<double> rms = trial_rms(r);
-  ASSERT_EQ(rms.size(), 11u) << l.dump(2);
+  // A pass with the compensator's drive, the same again (the bench's floor), ten learned.
+  ASSERT_EQ(rms.size(), 12u) << l.dump(2);
   std::cout << "raster line, rms % per pass:";
   for (const double v : rms) std::cout << " " << v;
   std::cout << "; max " << r["max_error_percent"] << " %\n";
@@ -108,14 +109,15 @@ TEST_F(TrackLearningTest, AnUploadedTrajectoryIsLearnedPassByPass) {
   ASSERT_TRUE(std::filesystem::exists(l.value("drive_file", ""))) << l.dump(2);
 
   // It replays for the same file, as trial 0 of a run that learns on from it: within 1.5x of
-  // the last pass, its lead-in following the actuator's offset where identify's excitation left
-  // it settling (with a single pass of lead-in, `scripts/measure-loopback.sh learning-raster`
-  // replayed at 2.1x).
+  // the last pass or of 0.03 % (the passes' figure, 0.02-0.05 % run to run, as the actuator's
+  // creep after identify's last segment left it), its lead-in following the actuator's offset
+  // (with a single pass of lead-in, `scripts/measure-loopback.sh learning-raster` replayed at
+  // 2.1x).
   const std::string drive = l["drive"];
   const json more = run(daemon.socket(), "track", {{"learned", drive}, {"learn_trials", 2}}, line);
   ASSERT_EQ(more.value("end", ""), "completed") << more.dump(2);
   EXPECT_EQ(more["learning"]["trials"][0]["drive"], "saved");
-  EXPECT_LT(trial_rms(more).front(), 1.5 * rms.back()) << more["learning"].dump(2);
+  EXPECT_LT(trial_rms(more).front(), 1.5 * std::max(rms.back(), 0.03)) << more["learning"].dump(2);
   std::cout << "replayed: " << trial_rms(more).front() << " %, then " << trial_rms(more).back()
             << " % (lead-in " << more["learning"]["lead_in_periods"]
             << " passes: " << more["learning"]["lead_in_end"] << ")\n";

@@ -66,15 +66,27 @@ class BenchLearningTest : public hystbench::test::BenchFixture {
     return out;
   }
 
-  // A learning run that completed its trials, none above the first, the last within `bound`
-  // [% of range]: its trials' rms (empty when it did not complete).
+  // A learning run that completed: trial 0, its repeat (the bench's floor), then `trials` learned
+  // ones, or fewer where a trial reached the floor (the best drive then plays to the end); none
+  // above the first, the last within `bound` [% of range]: its trials' rms (empty when it did
+  // not complete).
   static std::vector<double> converged(const json& r, std::size_t trials, double bound) {
     EXPECT_EQ(r["end"], "completed") << r.dump(2);
     if (r["end"] != "completed") return {};
     print(r);
     std::vector<double> rms = trial_rms(r);
-    EXPECT_EQ(rms.size(), trials + 1);
-    for (const double v : rms) EXPECT_LE(v, rms.front()) << r["learning"].dump(2);
+    EXPECT_LE(rms.size(), trials + 2) << r["learning"].dump(2);
+    EXPECT_GE(rms.size(), 4u) << r["learning"].dump(2);
+    if (rms.size() < trials + 2) {
+      EXPECT_TRUE(r["learning"]["floor"]["reached"].get<bool>()) << r["learning"].dump(2);
+    }
+    // The repeat is trial 0 again, within the bench's floor; the learned ones below trial 0.
+    if (rms.size() > 1) {
+      const double floor = r["learning"]["floor"].value("rms_error_percent", 0.0);
+      EXPECT_LE(rms[1], rms.front() + 3.0 * floor) << r["learning"].dump(2);
+    }
+    for (std::size_t i = 2; i < rms.size(); ++i)
+      EXPECT_LE(rms[i], rms.front()) << r["learning"].dump(2);
     if (!rms.empty()) {
       EXPECT_LE(rms.back(), bound) << r["learning"].dump(2);
     }
@@ -102,21 +114,25 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
     ASSERT_EQ(r["end"], "completed") << r.dump(2);
     print(r);
     const json& l = r["learning"];
-    const std::vector<double> rms = trial_rms(r);
-    ASSERT_EQ(rms.size(), 11u) << l.dump(2);
+    const std::vector<double> rms = converged(r, 10, bound);
+    ASSERT_FALSE(rms.empty());
     EXPECT_EQ(l["trials"][0]["drive"], "compensator");
-    EXPECT_EQ(l["trials"][10]["drive"], "learned");
-    EXPECT_FALSE(l["stopped"].get<bool>()) << l.dump(2);
+    EXPECT_EQ(l["trials"][1]["drive"], "repeat");  // the same drive: what differs is the floor
+    EXPECT_EQ(l["trials"][2]["drive"], "learned");
+    // The floor: the sensor's 5 nm noise, 0.011 % of the 80 % span, and a little more.
+    EXPECT_GT(l["floor"]["rms_error_percent"].get<double>(), 0.008) << l.dump(2);
+    EXPECT_LT(l["floor"]["rms_error_percent"].get<double>(), 0.03) << l.dump(2);
+    // Not stopped, or stopped where it reached the floor.
+    EXPECT_TRUE(!l["stopped"].get<bool>() || l["floor"]["reached"].get<bool>()) << l.dump(2);
     EXPECT_DOUBLE_EQ(l["frequency_hz"].get<double>(), hz);  // 10 kHz / a whole period
-    for (const double v : rms) EXPECT_LE(v, rms.front()) << l.dump(2);
-    EXPECT_LE(rms.back(), bound) << l.dump(2);
     EXPECT_LE(rms.back(), rms.front() / 20.0) << l.dump(2);
     // The run's figures are its last trial's.
     EXPECT_DOUBLE_EQ(r["rms_error_percent"].get<double>(), rms.back());
     EXPECT_LE(r["max_error_percent"].get<double>(), 5.0 * bound);
     // The update is computed off the loop, in well under a period here.
     EXPECT_EQ(l["stale_periods"], 0) << l.dump(2);
-    EXPECT_EQ(l["update_ms"]["count"], 10) << l.dump(2);
+    EXPECT_GE(l["update_ms"]["count"].get<int>(), 1) << l.dump(2);
+    EXPECT_LE(l["update_ms"]["count"].get<int>(), 10) << l.dump(2);
     // Each trial went out as run.progress as it ended.
     std::vector<int> announced;
     {
@@ -125,7 +141,9 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
         if (e["run_id"] == r["run_id"]) announced.push_back(e["learning"]["trial"]);
       }
     }
-    EXPECT_EQ(announced, std::vector<int>({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10}));
+    std::vector<int> every(rms.size());
+    for (std::size_t i = 0; i < every.size(); ++i) every[i] = static_cast<int>(i);
+    EXPECT_EQ(announced, every);
     // The kept drive: one period of t,u (and the compensator's u) in the model folder, with the
     // reference it belongs to.
     const std::string path = l.value("drive_file", "");
@@ -147,7 +165,9 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
     // `hystbench track --learn` prints the trials.
     std::ostringstream text;
     cli::print_run_result(r, text);
-    EXPECT_NE(text.str().find("learning        11 trials of "), std::string::npos) << text.str();
+    EXPECT_NE(text.str().find("learning        " + std::to_string(rms.size()) + " trials of "),
+              std::string::npos)
+        << text.str();
     EXPECT_NE(text.str().find("learned drive   " + l["drive"].get<std::string>() + " (" + path),
               std::string::npos)
         << text.str();
@@ -173,31 +193,23 @@ TEST_F(BenchLearningTest, AWrongModelStillConverges) {
   ASSERT_EQ(r["end"], "completed") << r.dump(2);
   print(r);
   EXPECT_EQ(r["clamps"], 0) << r.dump(2);
-  const std::vector<double> rms = trial_rms(r);
-  ASSERT_EQ(rms.size(), 21u);
-  for (const double v : rms) EXPECT_LE(v, rms.front());
-  EXPECT_LE(rms.back(), 0.03);
+  const std::vector<double> rms = converged(r, 20, 0.03);
+  ASSERT_FALSE(rms.empty());
 
   // The model without the delay (as an identify with the delay off keeps it) at 500 Hz, 20
   // trials: its error is mostly the sixth harmonic, on the truth's 3 kHz mode, which the model
-  // does not hold and Q cuts; the learner meets it through the mode identify timed on its
-  // record's steps: 0.06-0.14 %. With Q set by hand (the same cut-off), learned below it alone:
-  // 0.21-0.22 % (a model identified with the delay off stalled at 0.39-0.43 % that way).
+  // does not hold. The learner meets the mode and the delay through the stage's frequency
+  // response identify measured (each harmonic divided by it), which holds both as measured:
+  // within 0.3 % (0.11 % measured).
   model = json::parse(std::ifstream(id["model"]["path"].get<std::string>()));
   model["delay_s"] = 0.0;
-  ASSERT_TRUE(model["identification"]["extension"].contains("timing")) << model.dump(2);
   bench_->handle("model.load", {{"model", model}, {"name", "no-delay.json"}});
   const json fast = learn(500.0, 20);
   const std::vector<double> fast_rms = converged(fast, 20, 0.3);
   ASSERT_FALSE(fast_rms.empty());
-  const json& above = fast["learning"]["above_cutoff"];
-  EXPECT_EQ(above.value("mode_from", ""), "the steps its identify timed") << above.dump();
-  EXPECT_GT(above.value("updates", 0), 0) << above.dump();
-  const json by_hand = learn(500.0, 20, {{"learn_cutoff_hz", fast["learning"]["cutoff_hz"]}});
-  ASSERT_EQ(by_hand["end"], "completed") << by_hand.dump(2);
-  print(by_hand);
-  EXPECT_EQ(by_hand["learning"]["above_cutoff"].value("updates", -1), 0);
-  EXPECT_LE(fast_rms.back(), 0.75 * trial_rms(by_hand).back());
+  ASSERT_TRUE(fast["learning"]["measured_plant"].is_object()) << fast["learning"].dump(2);
+  EXPECT_GE(fast["learning"]["measured_plant"]["harmonics"].get<int>(), 6)
+      << fast["learning"].dump(2);
 }
 
 // The default truth with the delay on: identify's extension usually adds the 3 kHz mode it times
@@ -214,12 +226,10 @@ TEST_F(BenchLearningTest, AFastSineLearnsBesideTheModeIdentifyAdded) {
   ASSERT_FALSE(rms.empty());
   const json active = bench_->handle("model.get", json::object())["model"];
   std::cout << "extension: " << id["model"].value("extension", json()).dump() << "\n";
-  if (active.contains("dynamics") && active["dynamics"].is_object()) {
-    EXPECT_LT(r["learning"]["cutoff_hz"].get<double>(),
-              0.9 * active["dynamics"]["natural_frequency_hz"].get<double>() + 1.0);
-    EXPECT_EQ(r["learning"]["above_cutoff"].value("mode_from", ""), "the model")
-        << r["learning"].dump(2);
-  }
+  // The mode is met through the stage's frequency response identify measured: each harmonic
+  // divided by it, Q no longer held below the model's mode.
+  ASSERT_TRUE(r["learning"]["measured_plant"].is_object()) << r["learning"].dump(2);
+  EXPECT_GT(r["learning"]["measured_plant"]["harmonics"].get<int>(), 4) << r["learning"].dump(2);
   // Replayed, the drive plays 20 ms (ten periods) ahead of its scored period: one period of
   // 2 ms leaves the actuator settling from rest.
   const json replay = run_and_wait(
@@ -245,13 +255,14 @@ TEST_F(BenchLearningTest, ALearningForcedToDivergeStopsOnTheBestDrive) {
   EXPECT_TRUE(l["stopped"].get<bool>()) << l.dump(2);
   EXPECT_NE(l["why"].get<std::string>().find("stopped"), std::string::npos) << l.dump(2);
   const json& trials = l["trials"];
-  ASSERT_GE(trials.size(), 4u) << l.dump(2);
-  EXPECT_LT(trials.size(), 11u) << l.dump(2);
+  ASSERT_GE(trials.size(), 5u) << l.dump(2);
+  EXPECT_LT(trials.size(), 12u) << l.dump(2);
   EXPECT_EQ(trials.back()["drive"], "best") << l.dump(2);
   EXPECT_EQ(trials[trials.size() - 2]["drive"], "best") << l.dump(2);
   const double best = trials[l["best_trial"].get<std::size_t>()]["rms_error_percent"];
   EXPECT_LE(trials.back()["rms_error_percent"].get<double>(), 1.5 * best) << l.dump(2);
-  EXPECT_DOUBLE_EQ(trials[2]["gain"].get<double>(), 5.0) << l.dump(2);  // halved once
+  EXPECT_DOUBLE_EQ(trials[2]["gain"].get<double>(), 10.0) << l.dump(2);  // after the repeat
+  EXPECT_DOUBLE_EQ(trials[3]["gain"].get<double>(), 5.0) << l.dump(2);   // halved once
 }
 
 TEST_F(BenchLearningTest, RefusesWhatItCannotLearn) {
@@ -389,14 +400,14 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
   const std::vector<double> resumed = trial_rms(r);
   const json& trials = r["learning"]["trials"];
   if (r["learning"].value("stopped", false)) {
-    // Stopped after trial k (2-4): the best drive then plays twice, trials k + 1 and k + 2.
-    ASSERT_GE(resumed.size(), 5u) << r["learning"].dump(2);
-    ASSERT_LE(resumed.size(), 7u) << r["learning"].dump(2);
+    // Stopped after trial k (3-5): the best drive then plays twice, trials k + 1 and k + 2.
+    ASSERT_GE(resumed.size(), 6u) << r["learning"].dump(2);
+    ASSERT_LE(resumed.size(), 8u) << r["learning"].dump(2);
     EXPECT_EQ(trials[resumed.size() - 1]["drive"], "best") << r["learning"].dump(2);
     EXPECT_EQ(trials[resumed.size() - 2]["drive"], "best") << r["learning"].dump(2);
     EXPECT_NE(trials[resumed.size() - 3]["drive"], "best") << r["learning"].dump(2);
   } else {
-    ASSERT_EQ(resumed.size(), 5u) << r["learning"].dump(2);
+    ASSERT_EQ(resumed.size(), 6u) << r["learning"].dump(2);  // saved, its repeat, four learned
   }
   EXPECT_EQ(trials[0]["drive"], "saved");
   EXPECT_LE(resumed.front(), 1.5 * last) << r["learning"].dump(2);

@@ -77,14 +77,11 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
     mpi_rms[f] = rms(inv);  // worse than none from 10 Hz: the wrong model for this actuator
     const json pid = track("inverse+pid", f, f < 2 ? 3 : 6);
     ASSERT_EQ(pid["end"], "completed") << pid.dump(2);
-    EXPECT_EQ(pid["feedback"]["gains"], "derived") << pid.dump(2);
-    // With the wrong model the feedback cannot know the actuator's lag (the signed rate law's
-    // zero): a plain integral loop crossing over at 2 Hz amplified the 5-19 Hz mismatch by
-    // 13-14 %. Above its crossover it averages the error over the reference's period and
-    // answers the mean alone. 5 % covers the spread between two runs of one compensator.
-    EXPECT_DOUBLE_EQ(pid["feedback"]["error_period_s"].get<double>(), f > 1 ? 1.0 / f : 0.0)
-        << pid.dump(2);
-    EXPECT_LE(rms(pid), 1.05 * mpi_rms[f] + 0.02) << f << " Hz: " << pid.dump(2);
+    // The loop designed on the measured responses, its crossover far above these references:
+    // with the wrong model for this actuator it takes most of the feedforward's error out.
+    EXPECT_EQ(pid["feedback"]["gains"], "designed") << pid.dump(2);
+    EXPECT_TRUE(pid["feedback"]["meets_targets"].get<bool>()) << pid.dump(2);
+    EXPECT_LE(rms(pid), 0.5 * mpi_rms[f]) << f << " Hz: " << pid.dump(2);
   }
 
   const json id_rpi = run_and_wait("identify", {{"model", "rpi"}});

@@ -34,7 +34,7 @@ std::string refusal(const std::string& cmd, const json& params) {
 TEST(CommandTable, AnUnknownKeyIsNamedWithTheValidOnes) {
   EXPECT_EQ(refusal("track", {{"bogus", 1}}),
             "bad_params: unknown parameter 'bogus' (valid: reference, frequency_hz, periods, "
-            "duration_s, compensator, range_fraction, min_um, max_um, kp, ki, kd, "
+            "duration_s, compensator, range_fraction, min_um, max_um, kp, ki, kd, force_gains, "
             "precondition_s, learn_trials, learn_gain, learn_cutoff_hz, learned, lead_in_max_s)");
   EXPECT_EQ(refusal("status", {{"verbose", true}}),
             "bad_params: unknown parameter 'verbose' (valid: )");
@@ -80,7 +80,7 @@ TEST(CommandTable, ARefusedKeySaysWhy) {
 
 TEST(CommandTable, AnUnknownCommandListsEveryCommandOnce) {
   EXPECT_EQ(refusal("fly", json::object()),
-            "unknown_command: unknown command 'fly' (status, identify, track, excite, "
+            "unknown_command: unknown command 'fly' (status, identify, track, excite, frf, tune, "
             "upload.begin, upload.chunk, upload.cancel, stop, abort, reset, model.get, "
             "model.load, model.delete, model.list, config.get)");
   for (const hdd::Command& c : hdd::bench_commands()) {

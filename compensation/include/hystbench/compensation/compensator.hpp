@@ -1,22 +1,31 @@
 #pragma once
-// The bench's compensator: feedforward from a model inverse plus optional incremental PID.
-//   none                  u = (y_ref - offset) / gain               (linear map, no model)
-//   inverse               u = inverse(y_ref)
-//   inverse_multiplicative u = inverse-multiplicative structure(y_ref)
-//   inverse_pid           u = inverse(y_ref) + pid(e)
-//   pid                   u = (y_ref - offset) / gain + pid(e)     (the linear map and feedback)
-// e is the error of the last completed tick, y_ref(k-1) - y(k-1), so a reference that moves
-// does not show up as error. `pid` starts from the linear map's drive, as `none`: an integral
-// loop alone, slow enough for the actuator's lags, would trail a 1 Hz reference by more than
-// the hysteresis it removes. The linear map acts on the feedforward target (the reference less
-// the tare). step() is real-time safe.
+// The bench's compensator: feedforward from a model inverse (or the linear map), and for the
+// feedback kinds a loop (feedback_controller.hpp) whose output v corrects the feedforward's
+// target, so that the correction passes the same inverse:
+//   none                   u = (target - offset) / gain               (linear map, no model)
+//   inverse                u = inverse(target)
+//   inverse_multiplicative u = inverse-multiplicative structure(target)
+//   inverse_pid            u = inverse(target + v),      v = C[y_ref - y]
+//   pid                    u = (target + v - offset) / gain
+// Through the inverse the loop sees the actuator over the model (near 1 where the model holds
+// the actuator's local slope), not the actuator's slope itself, which a hysteresis loop moves by
+// a factor of two along its branches. An inverse solved each tick at its own drive's rate (a
+// rate law) is too sensitive to its target for that: there the correction goes through the
+// linear map, u = inverse(target) + v / gain (FeedbackPath::kLinearMap). u_ff is the feedforward
+// alone (a second copy of the inverse, stepped with the target only), u_fb = u - u_ff: a learned
+// drive that replaces u_ff keeps the feedback's share. The error is that of the last completed
+// tick, y_ref(k-1) - y(k-1) (a moving reference does not show up as error); y_ref NaN holds v.
+// Anti-windup: v's integral stops while the drive sits at a bound of its range (set_drive_range)
+// or a later stage clamps it (notify_saturation). step() is real-time safe.
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string_view>
+#include <vector>
 
+#include "hystbench/compensation/feedback_controller.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
-#include "hystbench/compensation/pid_controller.hpp"
 
 namespace hystbench::compensation {
 
@@ -34,20 +43,26 @@ struct LinearMap {
   double offset = 0.0;  ///< [output unit]
 };
 
+/// Where the feedback's target correction v enters the drive.
+enum class FeedbackPath { kInverse, kLinearMap };
+
 struct CompensatorOutput {
   double u_ff = 0.0;                ///< feedforward [input unit]
-  double u_fb = 0.0;                ///< feedback [input unit]
-  double u = 0.0;                   ///< sum, before the output limits
-  bool feedback_saturated = false;  ///< u_fb at the PID's clamp [u_fb_min, u_fb_max]
+  double u_fb = 0.0;                ///< the feedback's share of u [input unit]
+  double u = 0.0;                   ///< the drive, before the output limits
+  double v = 0.0;                   ///< the feedback's target correction [output unit]
+  bool feedback_saturated = false;  ///< v's PID at its clamp
 };
 
 class Compensator {
  public:
-  /// `inverse` is required for the inverse kinds, `pid` for the PID kinds; throws
-  /// std::invalid_argument naming what is missing.
+  /// `inverse` is required for the inverse kinds, `feedback` for the feedback kinds; throws
+  /// std::invalid_argument naming what is missing. Allocates the second inverse and the
+  /// targets' buffer.
   Compensator(CompensatorKind kind, std::unique_ptr<InverseModel> inverse,
-              std::optional<PidController> pid, LinearMap linear);
-  /// A copy in the same state (the inverse cloned): to play ahead what this one would do.
+              std::optional<FeedbackController> feedback, LinearMap linear,
+              FeedbackPath path = FeedbackPath::kInverse);
+  /// A copy in the same state (the inverses cloned): to play ahead what this one would do.
   Compensator(const Compensator& other);
   Compensator& operator=(const Compensator&) = delete;
   Compensator(Compensator&&) noexcept = default;
@@ -72,15 +87,36 @@ class Compensator {
   }
   /// The stage after the compensator clamped the output: +1 high, -1 low, 0 none.
   void notify_saturation(int direction) noexcept;
+  /// The drive's range [input unit]: v's integral stops while the drive sits at a bound.
+  void set_drive_range(double u_min, double u_max) noexcept {
+    drive_min_ = u_min;
+    drive_max_ = u_max;
+  }
   /// Starts from a relaxed actuator at input u0.
   void reset(double u0) noexcept;
   CompensatorKind kind() const noexcept { return kind_; }
+  FeedbackPath feedback_path() const noexcept { return path_; }
+  /// The feedback loop (null for a kind without one).
+  const FeedbackController* feedback() const noexcept { return feedback_ ? &*feedback_ : nullptr; }
 
  private:
+  double linear_drive(double target) const noexcept {
+    return (target - linear_.offset) / linear_.gain;
+  }
+  double inverse_drive(InverseModel& inverse, std::span<const double> targets) noexcept {
+    return targets.size() > 1 ? inverse.step_previewed(targets) : inverse.step(targets.front());
+  }
+
   CompensatorKind kind_;
-  std::unique_ptr<InverseModel> inverse_;
-  std::optional<PidController> pid_;
+  std::unique_ptr<InverseModel> inverse_;      // the drive: target + v
+  std::unique_ptr<InverseModel> feedforward_;  // the feedforward alone (feedback kinds)
+  std::optional<FeedbackController> feedback_;
   LinearMap linear_;
+  FeedbackPath path_ = FeedbackPath::kInverse;
+  std::vector<double> shifted_;  // the targets + v
+  double drive_min_ = -std::numeric_limits<double>::infinity();
+  double drive_max_ = std::numeric_limits<double>::infinity();
+  int at_bound_ = 0;  // the drive at a bound of its range: +1 high, -1 low
   double y_ref_prev_ = 0.0;
   bool have_prev_ = false;
 };

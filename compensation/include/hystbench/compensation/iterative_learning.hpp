@@ -46,6 +46,16 @@
 
 namespace hystbench::compensation {
 
+/// The response a learned drive's change meets at each frequency, over the model's local slope:
+/// the stage as measured in place (its frequency responses through the model or the linear map,
+/// compensation/feedback_plant.hpp), and where a feedback runs beside the learning, times the
+/// loop's sensitivity S (the loop takes out part of each change). Lines increasing in frequency.
+struct MeasuredLearningPlant {
+  std::vector<double> frequency_hz;
+  std::vector<std::complex<double>> response;
+  std::vector<double> stage_gain;  ///< |the stage's part| alone (without S), for each line
+};
+
 struct LearningOptions {
   double dt = 1e-4;        ///< sample period [s], > 0
   double cutoff_hz = 0.0;  ///< Q's cut-off [Hz]; 0 = the default above (set: nothing above it)
@@ -60,6 +70,12 @@ struct LearningOptions {
   /// The bench's mode where the model has none (its identify's step timing): a fast trial
   /// learns its harmonics above Q through it. Unused where the model has dynamics.
   std::optional<DynamicsParameters> bench_mode;
+  /// The response measured in place. When given it replaces the model's delay and mode: each
+  /// harmonic of the correction is divided by it at its frequency (it holds the delay, the modes
+  /// and what the model lacks, as measured), Q is not held below a mode, and only harmonics
+  /// where the stage's gain is 1/4 or more (an inverse would amplify the noise elsewhere) and
+  /// within its lines are learned.
+  std::optional<MeasuredLearningPlant> measured_plant;
 };
 
 class IterativeLearning {
@@ -92,6 +108,12 @@ class IterativeLearning {
   bool fast_trial() const noexcept { return fast_trial_; }
   /// The updates that learned the harmonics above Q.
   std::size_t high_band_updates() const noexcept { return high_band_updates_; }
+  /// The learning divides each harmonic by the response measured in place (options).
+  bool uses_measured_plant() const noexcept { return o_.measured_plant.has_value(); }
+  /// Harmonics the last update learned through it, and those it left out (the stage's gain
+  /// below 1/4).
+  std::size_t measured_harmonics() const noexcept { return measured_harmonics_; }
+  std::size_t measured_harmonics_left_out() const noexcept { return measured_left_out_; }
 
  private:
   void local_slope(std::span<const double> drive);
@@ -108,6 +130,11 @@ class IterativeLearning {
   bool in_high_band(std::size_t h) const;
   // x's h-th harmonic over the trial (unscaled DFT).
   std::complex<double> harmonic(std::span<const double> x, std::size_t h) const;
+  // The measured plant at f_hz and the stage's gain there (interpolated between its lines; 0
+  // beyond its top line).
+  std::complex<double> measured_response(double f_hz, double& stage_gain) const;
+  // x through the measured plant's inverse, harmonic by harmonic, in place.
+  void through_measured_inverse(std::vector<double>& x);
   // The model's mode at w [rad / sample]: its discrete response, output over input.
   std::complex<double> mode_response(double w) const;
 
@@ -115,6 +142,7 @@ class IterativeLearning {
   std::optional<SecondOrderDynamics> mode_;  // a fast trial's high band's mode
   bool fast_trial_ = false;
   std::size_t high_band_updates_ = 0;
+  std::size_t measured_harmonics_ = 0, measured_left_out_ = 0;
   std::size_t period_;
   LearningOptions o_;
   double cutoff_hz_ = 0.0;

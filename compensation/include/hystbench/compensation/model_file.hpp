@@ -10,13 +10,16 @@
 //    "creep": {"time_constants_s": [...], "gains": [...]},                   (optional)
 //    "dynamics": {"natural_frequency_hz": f, "damping_ratio": z},           (optional)
 //    "delay_s": 0,                                                           (optional)
+//    "frequency_response": {...},         (optional: the stage's, stage_responses.hpp)
 //    "identification": {...}}                                                (free-form metadata)
 // Pure conversion between JSON values and models; reading and writing files is the caller's.
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/stage_responses.hpp"
 
 namespace hystbench::compensation {
 
@@ -31,6 +34,8 @@ class ModelFileError : public std::runtime_error {
 struct ModelFile {
   ActuatorModel model;
   nlohmann::json identification = nlohmann::json::object();
+  /// The stage's frequency responses measured with the model (its feedback is designed on them).
+  std::optional<StageResponses> responses;
 };
 
 nlohmann::json to_json(const ModelFile& file);

@@ -6,14 +6,10 @@
 // (or the stage after it, see set_saturation()) is saturated in the direction it would push.
 // The output may pass a first-order low-pass (output_filter_hz): it keeps the feedback's per-tick
 // changes small, so an actuator whose gain grows with |du/dt| does not see them as rate.
-// The error may first pass a moving average over one period of a periodic reference
-// (error_period_s, PeriodAverage): the loop then answers the error's slow part only, not the part
-// that repeats with the reference.
-// Units: error in output unit (µm), u_fb in input unit (V); Ki in 1/s, Kd in s.
-// step() is real-time safe.
+// Units: u_fb in the unit of whatever it is added to, per unit of error: V/µm added to a drive,
+// 1 (Kp), 1/s (Ki) and s (Kd) added to a feedforward's target. step() is real-time safe.
+#include <complex>
 #include <cstdint>
-
-#include "hystbench/compensation/period_average.hpp"
 
 namespace hystbench::compensation {
 
@@ -25,13 +21,11 @@ struct PidParameters {
   double output_min = -1e300;         ///< clamp of u_fb [V]
   double output_max = 1e300;
   double output_filter_hz = 0.0;  ///< low-pass of u_fb; 0 = none; below the Nyquist frequency
-  double error_period_s = 0.0;    ///< average the error over this period first [s]; 0 = none
 };
 
 class PidController {
  public:
-  /// Throws std::invalid_argument for NaN gains, dt <= 0, output_min > output_max or a negative
-  /// error_period_s. Allocates the averaging window (error_period_s / dt_s samples).
+  /// Throws std::invalid_argument for NaN gains, dt <= 0 or output_min > output_max.
   PidController(PidParameters p, double dt_s);
 
   /// Advances one sample with error e = y_ref - y; returns u_fb.
@@ -45,6 +39,9 @@ class PidController {
   /// True while u_fb sits at output_min or output_max (before the output filter).
   bool saturated() const noexcept { return u_ >= p_.output_max || u_ <= p_.output_min; }
   const PidParameters& parameters() const noexcept { return p_; }
+  /// The linear response u_fb / e at f_hz (no clamp, no saturation): its discrete transfer
+  /// function at z = exp(j 2 pi f dt).
+  std::complex<double> response(double f_hz) const noexcept;
 
  private:
   PidParameters p_;
@@ -56,7 +53,6 @@ class PidController {
   double e1_ = 0.0;
   double ef_ = 0.0, ef1_ = 0.0, ef2_ = 0.0;
   int external_saturation_ = 0;
-  PeriodAverage error_average_;
   std::uint64_t samples_ = 0;
 };
 

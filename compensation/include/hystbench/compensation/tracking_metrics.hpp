@@ -1,5 +1,7 @@
 #pragma once
-// Figures of a tracking run: error statistics and the hysteresis left in y against y_ref.
+// Figures of a tracking run: error statistics, the hysteresis left in y against y_ref, and how y
+// answers the reference's steps.
+#include <cstddef>
 #include <span>
 
 namespace hystbench::compensation {
@@ -20,5 +22,23 @@ double hysteresis_width(std::span<const double> y_ref, std::span<const double> y
 /// the reference or in its harmonics, does not move it. 0 when y_ref does not move. Allocates
 /// nothing; O(n).
 double output_lag_samples(std::span<const double> y_ref, std::span<const double> y);
+
+/// How y answered the steps of y_ref: its moves of at least min_step from one level it holds to
+/// the next (a jump, or a shaped move over several samples). Per step its overshoot beyond the
+/// new level (a fraction of the step; 0 when y never passes it) and its settling time: from the
+/// move's first sample to the first one after which y stays within `band` x the step of the new
+/// level until the next move or the end (a step whose y is still outside then is not settled).
+/// Figures over every step; all zero without a step.
+struct StepFigures {
+  std::size_t steps = 0;
+  double mean_size = 0.0;       ///< mean |step| [output unit]
+  double max_settling_s = 0.0;  ///< the longest settling time [s]
+  double mean_settling_s = 0.0;
+  double max_overshoot = 0.0;  ///< the largest overshoot, a fraction of its step
+  double mean_overshoot = 0.0;
+  bool settled = true;  ///< every step settled before the next (or the end)
+};
+StepFigures step_figures(std::span<const double> y_ref, std::span<const double> y, double dt_s,
+                         double min_step, double band = 0.01);
 
 }  // namespace hystbench::compensation

@@ -32,19 +32,18 @@ BuiltRun make_excite_program(const Upload& upload, const RunContext& ctx) {
   allocate_records(*p);
 
   BuiltRun run;
-  run.header = {
-      {"run",
-       {{"kind", "excite"},
-        {"source", upload.source},
-        {"upload_samples", upload.values.size()},
-        {"ramp_samples", offset},
-        {"metrics_from", p->metrics_from},
-        {"u_min", *std::min_element(drive.begin(), drive.end())},
-        {"u_max", *std::max_element(drive.begin(), drive.end())},
-        {"rate_hz", s.loop.rate_hz}}},
-      {"driver", s.driver_type},
-      {"y_model", predictor_name(ctx)},
-      {"model", ctx.model != nullptr ? compensation::to_json(*ctx.model) : json(nullptr)}};
+  run.header = {{"run",
+                 {{"kind", "excite"},
+                  {"source", upload.source},
+                  {"upload_samples", upload.values.size()},
+                  {"ramp_samples", offset},
+                  {"metrics_from", p->metrics_from},
+                  {"u_min", *std::min_element(drive.begin(), drive.end())},
+                  {"u_max", *std::max_element(drive.begin(), drive.end())},
+                  {"rate_hz", s.loop.rate_hz}}},
+                {"driver", s.driver_type},
+                {"y_model", predictor_name(ctx)},
+                {"model", model_header(ctx)}};
   run.reply = {{"drive_samples", drive.size()}, {"ramp_samples", offset}};
   run.program = std::move(p);
   return run;

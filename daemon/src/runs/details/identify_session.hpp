@@ -17,7 +17,9 @@
 #include <vector>
 
 #include "hystbench/compensation/identification.hpp"
+#include "hystbench/compensation/stage_responses.hpp"
 #include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/sim/frequency_response_excitation.hpp"
 #include "runs/details/diagnosis_ahead.hpp"
 
 namespace hystbench::daemon {
@@ -115,6 +117,12 @@ struct Bench::IdentifySession {
   nlohmann::json extension;   ///< what the extension found, added and verified
   std::string program_id;     ///< run id of the verification on the loop
   bool interrupted = false;   ///< stop, abort or fault during a verification
+  /// The stage's frequency responses, measured once the model is chosen (frf's run, last):
+  /// the options of the run while it plays, what it measured, and what the result says of it.
+  bool responses_tried = false;
+  std::optional<sim::FrequencyResponseExcitationOptions> response_options;
+  std::optional<compensation::StageResponses> responses;
+  nlohmann::json responses_result;
   /// The candidates' diagnoses, run while the loop verifies them (with the extension on);
   /// last, so that it stops before the record it reads goes.
   std::unique_ptr<details::DiagnosisAhead> ahead;

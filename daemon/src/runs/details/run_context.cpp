@@ -40,6 +40,13 @@ std::optional<hc::ActuatorModel> predictor(const RunContext& ctx, double u0) {
   return m;
 }
 
+nlohmann::json model_header(const RunContext& ctx) {
+  if (ctx.model == nullptr) return nullptr;
+  compensation::ModelFile header = *ctx.model;
+  header.responses.reset();
+  return compensation::to_json(header);
+}
+
 const char* predictor_name(const RunContext& ctx) {
   if (ctx.model != nullptr) return "the active model, stepped with u";
   if (ctx.settings.y_max > ctx.settings.y_min) {

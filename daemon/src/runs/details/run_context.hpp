@@ -15,11 +15,14 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/model_file.hpp"
-#include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/compensation/stage_responses.hpp"
 #include "hystbench/daemon/runs/run_program.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "runs/details/track_learning.hpp"
 
 namespace hystbench::daemon::details {
+
+struct FeedbackPlanCache;  // feedback_design.hpp
 
 /// The last feedforward plan and what it was planned from: a track run with the same model, the
 /// same start (output, open-loop prefix) and the same targets (another compensator over the same
@@ -44,6 +47,11 @@ struct RunContext {
   std::uint64_t model_generation = 0;
   /// Where track keeps its last plan; null = every plan is made anew.
   std::shared_ptr<PlanCache> plans = nullptr;
+  /// The stage's frequency responses the bench measured last (frf, identify), null if none:
+  /// the feedback's when the active model holds none.
+  const compensation::StageResponses* responses = nullptr;
+  /// Where the feedback's last design is kept; null = designed anew.
+  std::shared_ptr<FeedbackPlanCache> feedback_plans = nullptr;
 };
 
 /// Thrown by a preparation's progress callback to cancel it (stop, abort, shutdown); not a
@@ -92,6 +100,9 @@ std::optional<ActuatorRange> actuator_range(const RunContext& ctx);
 std::optional<compensation::ActuatorModel> predictor(const RunContext& ctx, double u0);
 /// What predictor() gives, in words, for the log header.
 const char* predictor_name(const RunContext& ctx);
+/// The active model as a run log's header keeps it (its file without the stage's frequency
+/// responses, which the model file keeps); null without one.
+nlohmann::json model_header(const RunContext& ctx);
 
 /// The driver exchange latency the active model's delay holds (its identification's
 /// exchange_ticks; 0 for a model made elsewhere or none) [ticks].

@@ -71,6 +71,13 @@ RunResult collect_result(RunProgram& run, double output_v_after) {
   if (!counts.error.empty()) r.report["log_error"] = counts.error;
   r.report.update(run.summary);
   if (run.kind == RunKind::kTrack) r.report.update(tracking_error_json(run));
+  if (run.oscillation && run.oscillation->trip().tripped) {
+    const OscillationTrip& t = run.oscillation->trip();
+    r.report["oscillation"] = {{"kind", t.growing ? "growing" : "sustained"},
+                               {"rms_um", t.rms_um},
+                               {"frequency_hz", t.frequency_hz},
+                               {"tick", t.tick}};
+  }
   add_model_error(run, r.report);
   return r;
 }

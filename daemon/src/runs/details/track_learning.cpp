@@ -14,7 +14,7 @@ LearnedFor learned_for(const LearningRequest& r, std::size_t period_samples) {
 }
 
 TrackLearning::TrackLearning(const hc::ActuatorModel& model, LearningExchange& exchange,
-                             LearningRequest request, hc::LearningOptions options)
+                             LearningRequest request, const hc::LearningOptions& options)
     : exchange_(exchange),
       request_(std::move(request)),
       learner_(model, exchange.period, options),
@@ -34,58 +34,128 @@ TrackLearning::TrackLearning(const hc::ActuatorModel& model, LearningExchange& e
   done_ = request_.trials == 0;  // a replay: trial 0 is the last
 }
 
+namespace {
+
+// x less its least-squares straight line over [from, size).
+void remove_line(std::vector<double>& x, std::size_t from) {
+  const auto n = static_cast<double>(x.size() - from);
+  double st = 0.0, sx = 0.0, stt = 0.0, stx = 0.0;
+  for (std::size_t j = from; j < x.size(); ++j) {
+    const auto t = static_cast<double>(j - from);
+    st += t, sx += x[j], stt += t * t, stx += t * x[j];
+  }
+  const double den = n * stt - st * st;
+  const double slope = den > 0.0 ? (n * stx - st * sx) / den : 0.0;
+  const double offset = (sx - slope * st) / n;
+  for (std::size_t j = from; j < x.size(); ++j)
+    x[j] -= offset + slope * static_cast<double>(j - from);
+}
+
+}  // namespace
+
+double TrackLearning::scored_rms(const std::vector<double>& e) const noexcept {
+  const std::size_t from = std::min(request_.scored_from, e.size() - 1);
+  double sum2 = 0.0;
+  for (std::size_t j = from; j < e.size(); ++j) sum2 += e[j] * e[j];
+  return std::sqrt(sum2 / static_cast<double>(e.size() - from));
+}
+
+TrackLearning::Trial TrackLearning::score(std::uint64_t number) const {
+  const std::size_t from = std::min(request_.scored_from, e_.size() - 1);
+  const std::size_t n = e_.size() - from;
+  double sum2 = 0.0, peak = 0.0;
+  for (std::size_t j = from; j < e_.size(); ++j) {
+    sum2 += e_[j] * e_[j];
+    peak = std::max(peak, std::abs(e_[j]));
+  }
+  Trial t;
+  t.trial = number;
+  t.rms_um = std::sqrt(sum2 / static_cast<double>(n));
+  t.max_um = peak;
+  const double range = request_.range_um;
+  t.rms_percent = range > 0.0 ? 100.0 * t.rms_um / range : 0.0;
+  t.max_percent = range > 0.0 ? 100.0 * peak / range : 0.0;
+  t.gain = number == 0 ? 0.0 : next_gain_;
+  t.drive = number != 0 ? next_drive_ : request_.start_drive.empty() ? "compensator" : "saved";
+  return t;
+}
+
+void TrackLearning::measure_floor() {
+  // What differs between the two plays of one drive, less a straight line over the trial: what
+  // the start from rest still moves slowly (creep, a switching front's tail) is not what does
+  // not repeat.
+  std::vector<double> d(e_.size());
+  for (std::size_t j = 0; j < d.size(); ++j) d[j] = e_[j] - first_error_[j];
+  remove_line(d, std::min(request_.scored_from, d.size() - 1));
+  floor_um_ = scored_rms(d) / std::sqrt(2.0);
+}
+
+bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
+  // The best drive plays twice: the first period settles the actuator after the trials that
+  // went wrong (their extremes and creep), the second is the run's last trial.
+  const bool last = stopped_;
+  if (!stopped_) {
+    why_ = at_floor ? "trial " + std::to_string(t.trial) + " reached the bench's floor (" +
+                          std::to_string(t.rms_um / floor_um_).substr(0, 4) +
+                          "x the part of the error that does not repeat, measured on trials "
+                          "0 and 1, the same drive): learning on would learn what does not "
+                          "repeat; the best trial's drive plays, twice (the first settles "
+                          "the actuator)"
+                    : "two trials in a row more than 20 % above the best (trial " +
+                          std::to_string(trials_[guard_.best_trial()].trial) +
+                          "): the learning stopped and plays the best trial's drive, twice "
+                          "(the first settles the actuator)";
+  }
+  stopped_ = true;
+  next_ = best_drive_;
+  next_gain_ = 0.0;
+  next_drive_ = "best";
+  return last;
+}
+
+void TrackLearning::learn_next() {
+  next_gain_ = guard_.gain();
+  next_drive_ = "learned";
+  const auto start = std::chrono::steady_clock::now();
+  next_.resize(u_.size());
+  learner_.update(u_, e_, guard_.gain(), next_);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  update_ms_sum_ += ms;
+  update_ms_max_ = std::max(update_ms_max_, ms);
+  ++updates_;
+}
+
 std::vector<TrackLearning::Trial> TrackLearning::poll() {
   std::vector<Trial> scored;
   std::uint64_t number = 0;
   while (exchange_.take_trial(u_, c_, e_, number)) {
-    const std::size_t from = std::min(request_.scored_from, e_.size() - 1);
-    const std::size_t n = e_.size() - from;
-    double sum2 = 0.0, peak = 0.0;
-    for (std::size_t j = from; j < e_.size(); ++j) {
-      sum2 += e_[j] * e_[j];
-      peak = std::max(peak, std::abs(e_[j]));
-    }
-    Trial t;
-    t.trial = number;
-    t.rms_um = std::sqrt(sum2 / static_cast<double>(n));
-    t.max_um = peak;
-    const double range = request_.range_um;
-    t.rms_percent = range > 0.0 ? 100.0 * t.rms_um / range : 0.0;
-    t.max_percent = range > 0.0 ? 100.0 * peak / range : 0.0;
-    t.gain = number == 0 ? 0.0 : next_gain_;
-    t.drive = number != 0 ? next_drive_ : request_.start_drive.empty() ? "compensator" : "saved";
+    const Trial t = score(number);
     trials_.push_back(t);
     scored.push_back(t);
     if (done_) continue;  // the last trial: nothing more to offer
+    if (repeats(number)) {
+      // Trial 1 plays this drive again: the bench's floor is what differs between the two.
+      first_error_ = e_;
+      next_ = u_;
+      next_gain_ = 0.0;
+      next_drive_ = "repeat";
+      kept_ = next_;
+      if (!exchange_.offer(next_, false)) fail("the loop had not taken the drive before trial 1");
+      continue;
+    }
+    if (number == 1 && first_error_.size() == e_.size()) measure_floor();
     bool last = false;
     const hc::LearningGuard::Action action =
         stopped_ ? hc::LearningGuard::Action::kStop : guard_.after_trial(t.rms_um);
     if (!stopped_ && guard_.best_trial() == guard_.trials() - 1) best_drive_ = u_;
-    if (action == hc::LearningGuard::Action::kStop) {
-      // The best drive plays twice: the first period settles the actuator after the trials that
-      // went wrong (their extremes and creep), the second is the run's last trial.
-      last = stopped_;
-      stopped_ = true;
-      why_ = "two trials in a row more than 20 % above the best (trial " +
-             std::to_string(trials_[guard_.best_trial()].trial) +
-             "): the learning stopped and plays the best trial's drive, twice (the first "
-             "settles the actuator)";
-      next_ = best_drive_;
-      next_gain_ = 0.0;
-      next_drive_ = "best";
+    const bool at_floor =
+        !stopped_ && number >= 2 && floor_um_ > 0.0 && t.rms_um <= kFloorReach * floor_um_;
+    if (action == hc::LearningGuard::Action::kStop || at_floor) {
+      last = stop_on_best(t, at_floor);
     } else {
-      next_gain_ = guard_.gain();
-      next_drive_ = "learned";
-      const auto start = std::chrono::steady_clock::now();
-      next_.resize(u_.size());
-      learner_.update(u_, e_, guard_.gain(), next_);
-      const double ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-              .count();
-      update_ms_sum_ += ms;
-      update_ms_max_ = std::max(update_ms_max_, ms);
-      ++updates_;
-      last = number + 1 >= request_.trials;
+      learn_next();
+      last = number >= request_.trials;  // trials 0 and 1 (its repeat), then N learned
     }
     kept_ = next_;
     done_ = last;
@@ -169,35 +239,49 @@ json TrackLearning::result() const {
   for (std::size_t i = 1; i < trials_.size(); ++i) {
     if (trials_[i].rms_um < trials_[best].rms_um) best = i;
   }
-  return {{"trials", trials},
-          {"trials_requested", request_.trials},
-          {"gain", request_.gain},
-          {"cutoff_hz", learner_.cutoff_hz()},
-          {"above_cutoff", above_cutoff()},
-          {"delay_ticks",
-           {{"model", learner_.model_delay_samples()},
-            {"used", learner_.delay_samples()},
-            {"measurements", learner_.delay_measurements()}}},
-          {"period_samples", exchange_.period},
-          {"scored_from", request_.scored_from},
-          {"reference", request_.reference},
-          {"frequency_hz", request_.frequency_hz},
-          {"stopped", stopped_},
-          {"why", stopped_ ? why_
-                  : trials_.size() >= request_.trials + 1
-                      ? "every trial asked for was played"
-                      : "the run ended before the trials asked for were played"},
-          {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
-          {"lead_in_offset_um", exchange_.lead_in_offset()},
-          {"lead_in_periods", started ? exchange_.lead_in_played() : 0},
-          {"lead_in_followed_um", exchange_.lead_in_followed()},
-          {"lead_in_end", started ? lead_in_end(exchange_) : "none: no drive learned before"},
-          {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
-          {"stale_periods", exchange_.stale_periods()},
-          {"update_ms",
-           {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
-            {"max", update_ms_max_},
-            {"count", updates_}}}};
+  return {
+      {"trials", trials},
+      {"trials_requested", request_.trials},
+      {"gain", request_.gain},
+      {"cutoff_hz", learner_.cutoff_hz()},
+      {"above_cutoff", above_cutoff()},
+      {"delay_ticks",
+       {{"model", learner_.model_delay_samples()},
+        {"used", learner_.delay_samples()},
+        {"measurements", learner_.delay_measurements()}}},
+      {"period_samples", exchange_.period},
+      {"scored_from", request_.scored_from},
+      {"reference", request_.reference},
+      {"frequency_hz", request_.frequency_hz},
+      {"stopped", stopped_},
+      {"why", stopped_ ? why_
+              : trials_.size() >= request_.trials + (request_.trials > 0 ? 2 : 1)
+                  ? "every trial asked for was played"
+                  : "the run ended before the trials asked for were played"},
+      {"floor", floor_um_ > 0.0
+                    ? json{{"rms_error_um", floor_um_},
+                           {"rms_error_percent",
+                            request_.range_um > 0.0 ? 100.0 * floor_um_ / request_.range_um : 0.0},
+                           {"measured_on",
+                            "trials 0 and 1: the same drive; the rms of their errors' "
+                            "difference over sqrt(2)"},
+                           {"reached", stopped_ && why_.find("floor") != std::string::npos}}
+                    : json(nullptr)},
+      {"measured_plant", learner_.uses_measured_plant()
+                             ? json{{"harmonics", learner_.measured_harmonics()},
+                                    {"left_out", learner_.measured_harmonics_left_out()}}
+                             : json(nullptr)},
+      {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
+      {"lead_in_offset_um", exchange_.lead_in_offset()},
+      {"lead_in_periods", started ? exchange_.lead_in_played() : 0},
+      {"lead_in_followed_um", exchange_.lead_in_followed()},
+      {"lead_in_end", started ? lead_in_end(exchange_) : "none: no drive learned before"},
+      {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
+      {"stale_periods", exchange_.stale_periods()},
+      {"update_ms",
+       {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
+        {"max", update_ms_max_},
+        {"count", updates_}}}};
 }
 
 }  // namespace hystbench::daemon::details

@@ -2,8 +2,11 @@
 // The learner of a `track --learn N` run, on the supervisor thread: takes each trial the loop
 // closes (LearningExchange), scores it, lets the guard decide, and offers the next trial's drive
 // (compensation::IterativeLearning), or the best trial's drive twice (a period to settle, then the
-// last) when the guard stops the learning. Its result is the run's `learning` object; the drive it
-// keeps is saved for replay. Not real-time safe.
+// last) when the guard stops the learning. Trial 1 plays trial 0's drive again: what differs
+// between the two is what does not repeat on the bench (noise, a DAQ's clock, stale readings),
+// the floor no learning goes below; once a trial is within kFloorReach of it the learning
+// stops the same way, and says so. N learned trials follow the two. Its result is the run's
+// `learning` object; the drive it keeps is saved for replay. Not real-time safe.
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -45,8 +48,11 @@ LearnedFor learned_for(const LearningRequest& r, std::size_t period_samples);
 
 class TrackLearning {
  public:
+  /// A trial within this factor of the floor ends the learning.
+  static constexpr double kFloorReach = 1.25;
+
   TrackLearning(const compensation::ActuatorModel& model, LearningExchange& exchange,
-                LearningRequest request, compensation::LearningOptions options);
+                LearningRequest request, const compensation::LearningOptions& options);
 
   /// A trial the learner scored: number, rms and max error [% of range], the gain it was
   /// learned with, what drive it played.
@@ -98,6 +104,23 @@ class TrackLearning {
   std::string next_drive_;  ///< what it is: "learned" or "best"
   double update_ms_sum_ = 0.0, update_ms_max_ = 0.0;
   std::size_t updates_ = 0;
+  // The floor: trial 0's error, kept until trial 1 (the same drive) closes; then the rms of
+  // their difference over sqrt(2) [µm] (0 before).
+  std::vector<double> first_error_;
+  double floor_um_ = 0.0;
+  // Whether trial n is the repeat of trial 0 (no learning between them).
+  bool repeats(std::uint64_t n) const noexcept { return n == 0 && request_.trials > 0; }
+  // The trials' rms within their scored phases [µm].
+  double scored_rms(const std::vector<double>& e) const noexcept;
+  // The trial just taken (u_, e_), scored.
+  Trial score(std::uint64_t number) const;
+  // The floor from trial 1's error (e_) and trial 0's.
+  void measure_floor();
+  // The best drive offered next (the guard stopped, or the trial reached the floor); true
+  // when it is the last.
+  bool stop_on_best(const Trial& t, bool at_floor);
+  // The next drive learned from the trial just taken.
+  void learn_next();
 };
 
 }  // namespace hystbench::daemon::details

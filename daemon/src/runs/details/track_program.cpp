@@ -18,7 +18,6 @@
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
-#include "hystbench/compensation/pid_tuning.hpp"
 #include "hystbench/compensation/planned_inverse.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
@@ -130,6 +129,10 @@ std::optional<LearningPlan> learning_plan(const TrackRequest& request, const Run
     plan.lead_in = periods_filling(kLeadInS, plan.frequency_hz);
     plan.lead_in_max =
         std::max(plan.lead_in, periods_filling(keys.lead_in_max_s, plan.frequency_hz));
+  } else {
+    // The start from rest rings the stage's modes: trial 0 and its repeat (the bench's floor)
+    // wait until they have died out.
+    plan.lead_in = plan.lead_in_max = periods_filling(ringing_time_s(ctx), plan.frequency_hz);
   }
   return plan;
 }
@@ -184,58 +187,20 @@ std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
   }
 }
 
-// The PID's gains (derived, the request's or the configuration's) and clamp; `summary` says
-// which. Derived gains (always behind a feedforward: the inverse, or the linear map for `pid`)
-// average the error over the period of a periodic reference of reference_hz (0: none) where
-// tune_pid says so. nullopt for a compensator without feedback.
-std::optional<hc::PidController> feedback_controller(const FeedbackGainsRequest& request,
-                                                     hc::CompensatorKind kind,
-                                                     const RunContext& ctx, double gain,
-                                                     double reference_hz, json& summary) {
+// The feedback (designed on the stage's measured responses, or the gains given by hand checked
+// on them: feedback_design.hpp); `summary` states it. nullopt for a compensator without one.
+std::optional<hc::FeedbackController> feedback_controller(const FeedbackGainsRequest& request,
+                                                          hc::CompensatorKind kind,
+                                                          const RunContext& ctx, json& summary,
+                                                          std::optional<FeedbackPlan>& plan) {
   if (!hc::uses_feedback(kind)) return std::nullopt;
-  const BenchSettings& s = ctx.settings;
-  const PidSection& c = s.pid;
-  hc::PidParameters pp{c.kp.value_or(0.0),
-                       c.ki.value_or(0.0),
-                       c.kd.value_or(0.0),
-                       c.derivative_filter_hz,
-                       c.u_fb_min,
-                       c.u_fb_max,
-                       c.output_filter_hz.value_or(0.0)};
-  const bool derived = !c.kp && !c.ki && !c.kd;
-  const bool given = request.any();
-  if (derived && !given) {
-    const hc::ActuatorModel* m = ctx.model != nullptr ? &ctx.model->model : nullptr;
-    const hc::PidTuning t =
-        hc::tune_pid(gain, s.loop.rate_hz, c.bandwidth_hz.value_or(0.0), m, reference_hz,
-                     kind == hc::CompensatorKind::kPid ? hc::FeedforwardKind::kLinearMap
-                                                       : hc::FeedforwardKind::kModelInverse);
-    pp.kp = t.kp;
-    pp.ki = t.ki;
-    pp.kd = t.kd;
-    pp.output_filter_hz = c.output_filter_hz.value_or(t.output_filter_hz);
-    pp.error_period_s = t.error_period_s;
-    summary = {{"gains", "derived"}, {"basis", t.basis}};
-  } else {
-    pp.kp = request.kp.value_or(pp.kp);
-    pp.ki = request.ki.value_or(pp.ki);
-    pp.kd = request.kd.value_or(pp.kd);
-    summary = {{"gains", given ? "request" : "config"}};
-  }
-  std::optional<hc::PidController> pid;
+  plan = plan_feedback(ctx, kind, request);
+  summary = plan->summary;
   try {
-    pid.emplace(pp, ctx.dt());
+    return hc::FeedbackController(plan->law, ctx.dt());
   } catch (const std::exception& e) {
     throw common::CommandError("bad_params", e.what());
   }
-  summary.update({{"kp", pp.kp},
-                  {"ki", pp.ki},
-                  {"kd", pp.kd},
-                  {"output_filter_hz", pp.output_filter_hz},
-                  {"error_period_s", pp.error_period_s},
-                  {"u_fb_min", pp.output_min},
-                  {"u_fb_max", pp.output_max}});
-  return pid;
 }
 
 // The feedforward inverts the whole model: hysteresis, creep and rate in the static inverse,
@@ -281,8 +246,9 @@ struct FeedforwardPlanning {
   std::uint64_t planned_samples = 0;  ///< the targets planned; a periodic rest continues them
   double period_samples = 0.0;
   hc::CompensatorKind kind;
-  std::optional<hc::PidController> pid;
+  std::optional<hc::FeedbackController> pid;
   hc::LinearMap linear;
+  hc::FeedbackPath path = hc::FeedbackPath::kInverse;
   std::shared_ptr<PlanCache> cache;
   std::uint64_t generation = 0;  ///< the model's, for the cache
 
@@ -353,7 +319,7 @@ struct FeedforwardPlanning {
     if (plan.rms <= plan.start_rms) {
       program.compensator.emplace(
           kind, std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(plan)), pid,
-          linear);
+          linear, path);
     } else {
       planned["samples"] = 0;
       planned["why_not"] = "on the model the plan's error (" + std::to_string(plan.rms) +
@@ -394,8 +360,8 @@ std::pair<std::uint64_t, double> planned_window(const hc::ActuatorModel& model,
 RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
                                 hc::CompensatorKind kind, std::uint64_t samples,
                                 double reference_hz, json& feedforward,
-                                const std::optional<hc::PidController>& pid,
-                                const hc::LinearMap& linear) {
+                                const std::optional<hc::FeedbackController>& pid,
+                                const hc::LinearMap& linear, hc::FeedbackPath path) {
   if (!hc::can_plan_drive(ctx.model->model) || samples == 0) return {};
   const auto& lim = ctx.settings.loop.limits;
   const double dt = ctx.dt();
@@ -420,7 +386,7 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
       "planning the feedforward",
       FeedforwardPlanning{model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt),
                           ctx.u_now, std::move(targets), planned_samples, period_samples, kind, pid,
-                          linear, ctx.plans, ctx.model_generation}};
+                          linear, path, ctx.plans, ctx.model_generation}};
 }
 
 // The mode the active model's identify timed on its record's steps, where it kept none in the
@@ -442,7 +408,8 @@ std::optional<hc::DynamicsParameters> timed_mode(const RunContext& ctx) {
 // The learner of a learning run: the trials' exchange from the first scored period on, the
 // active model (else the linear map of the limits) as its L, the drive limits of the loop.
 std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
-                                        const RunContext& ctx, const TrackReference& ref) {
+                                        const RunContext& ctx, const TrackReference& ref,
+                                        const FeedbackPlan* feedback) {
   const auto& lim = ctx.settings.loop.limits;
   const std::optional<hc::ActuatorModel> model = predictor(ctx, ctx.u_now);
   if (!model)
@@ -456,6 +423,7 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   o.cutoff_hz = plan.cutoff_hz;
   o.fundamental_hz = ref.content_hz;
   o.bench_mode = timed_mode(ctx);
+  o.measured_plant = learning_plant(ctx, feedback);
   if (lim.slew_v_per_s > 0.0) o.max_step = lim.slew_v_per_s * o.dt;
   LearningRequest r;
   r.trials = plan.trials;
@@ -579,8 +547,9 @@ LearningLeadIn lead_in_following(const LearnedDrive& start, const LearningPlan& 
 // feedforward at its offset, played ahead after the run's `preparation`.
 std::unique_ptr<TrackLearning> arm_learning(RunProgram& p, const LearningPlan& plan,
                                             const RunContext& ctx, const TrackReference& ref,
-                                            RunPreparation& preparation) {
-  std::unique_ptr<TrackLearning> learner = learning(p, plan, ctx, ref);
+                                            RunPreparation& preparation,
+                                            const FeedbackPlan* feedback) {
+  std::unique_ptr<TrackLearning> learner = learning(p, plan, ctx, ref, feedback);
   if (plan.start) {
     if (const auto offset = learned_start_offset(*plan.start, p, ctx)) {
       preparation = with_learned_start(std::move(preparation), *offset, ctx.dt());
@@ -610,12 +579,13 @@ json learning_summary(const LearningPlan& learn) {
 // feedforward on a second unscored period: its mean error moves the target from the first scored
 // tick on (TareWindow::startup_um). The first period is the start from rest, whose mean is not
 // the periodic motion's. Only beside the prefix's tare (a feedforward that inverts the model)
-// and with two scored periods left; not for a learning run (it has its own lead-in) or an upload
-// (its approach is not the trajectory). A feedback holds from the first scored tick on, so the
-// start-up's mean error is the feedforward's own. Call with total_samples and metrics_from set.
-void arm_periodic_startup(RunProgram& p, const TrackReference& ref, bool learning) {
+// and with two scored periods left; not for a learning run (it has its own lead-in), an upload
+// (its approach is not the trajectory) or a run with feedback (the loop holds the mean from the
+// reference's start, and the target's step would only kick the stage). Call with total_samples
+// and metrics_from set.
+void arm_periodic_startup(RunProgram& p, const TrackReference& ref, bool learning, bool feedback) {
   const std::uint64_t prefix = p.excitation.size(), period = ref.unscored;
-  if (ref.frequency_hz <= 0.0 || learning || ref.pass_samples != 0 || period < 4 ||
+  if (ref.frequency_hz <= 0.0 || learning || feedback || ref.pass_samples != 0 || period < 4 ||
       p.tare.from >= prefix || p.metrics_from != prefix + period ||
       p.total_samples < p.metrics_from + 3 * period) {
     return;
@@ -623,6 +593,33 @@ void arm_periodic_startup(RunProgram& p, const TrackReference& ref, bool learnin
   p.tare.startup_from = p.metrics_from;
   p.metrics_from += period;
   p.tare.startup_to = p.metrics_from;
+}
+
+// The run log's header and the start reply of a track run built as `p`.
+void describe_track_run(BuiltRun& run, const RunProgram& p, const TrackReference& ref,
+                        const RunContext& ctx, const std::string& comp_name, const json& feedback,
+                        const std::optional<LearningPlan>& learn) {
+  const BenchSettings& s = ctx.settings;
+  json run_header = {{"kind", "track"}};
+  run_header.update(ref.header);
+  run_header.update({{"compensator", comp_name},
+                     {"precondition_samples", p.excitation.size()},
+                     {"metrics_from", p.metrics_from},
+                     {"rate_hz", s.loop.rate_hz},
+                     {"feedback", feedback}});
+  run.header = {{"run", run_header},
+                {"driver", s.driver_type},
+                {"y_model", predictor_name(ctx)},
+                {"model", model_header(ctx)}};
+  run.reply = {{"reference", ref.reply},
+               {"compensator", comp_name},
+               {"feedback", feedback},
+               {"feedforward", p.summary.value("feedforward", json(nullptr))}};
+  if (learn) {
+    const json l = learning_summary(*learn);
+    run.header["run"]["learning"] = l;
+    run.reply["learning"] = l;
+  }
 }
 
 }  // namespace
@@ -652,15 +649,17 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
   if (ctx.model != nullptr && hc::needs_model(kind)) feedforward = arm_feedforward(*p, ctx);
   std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
   json feedback = nullptr;
-  const std::optional<hc::PidController> pid =
-      feedback_controller(request.gains, kind, ctx, linear.gain, ref.frequency_hz, feedback);
+  std::optional<FeedbackPlan> plan;
+  const std::optional<hc::FeedbackController> pid =
+      feedback_controller(request.gains, kind, ctx, feedback, plan);
+  const hc::FeedbackPath path = plan ? plan->path : hc::FeedbackPath::kInverse;
   RunPreparation preparation;
   if (inverse) {
-    preparation =
-        feedforward_plan(*p, ctx, kind, ref.samples, ref.frequency_hz, feedforward, pid, linear);
+    preparation = feedforward_plan(*p, ctx, kind, ref.samples, ref.frequency_hz, feedforward, pid,
+                                   linear, path);
   }
   try {
-    p->compensator.emplace(kind, std::move(inverse), pid, linear);
+    p->compensator.emplace(kind, std::move(inverse), pid, linear, path);
   } catch (const std::exception& e) {
     throw common::CommandError("bad_params", e.what());
   }
@@ -672,35 +671,21 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
   const std::uint64_t prefix = p->excitation.size();
   p->total_samples = prefix + ref.samples;
   p->metrics_from = prefix + ref.unscored;
-  arm_periodic_startup(*p, ref, learn.has_value());
-  // The feedback holds the reading to the reference from the scored part on: the run's start
-  // from rest (the first period of a periodic reference, an upload's approach) is a transient
-  // the feedforward predicts, which an integral loop would wind up on and pay back later.
-  if (pid) p->feedback_from = p->metrics_from;
+  arm_periodic_startup(*p, ref, learn.has_value(), pid.has_value());
+  // The feedback holds the reading to the reference from the reference's first tick on, so that
+  // it has taken out the start from rest before the scored part begins (held until then, the
+  // scored part began with the feedforward's error there).
+  if (pid) p->feedback_from = prefix;
+  if (pid && s.pid.oscillation_trip) {
+    p->oscillation.emplace(oscillation_options(feedback, ref.max_um - ref.min_um, s.loop.rate_hz));
+  }
   allocate_records(*p);
 
   BuiltRun run;
-  if (learn) run.learning = arm_learning(*p, *learn, ctx, ref, preparation);
-  json run_header = {{"kind", "track"}};
-  run_header.update(ref.header);
-  run_header.update({{"compensator", comp_name},
-                     {"precondition_samples", prefix},
-                     {"metrics_from", p->metrics_from},
-                     {"rate_hz", s.loop.rate_hz},
-                     {"feedback", feedback}});
-  run.header = {{"run", run_header},
-                {"driver", s.driver_type},
-                {"y_model", predictor_name(ctx)},
-                {"model", ctx.model != nullptr ? hc::to_json(*ctx.model) : json(nullptr)}};
-  run.reply = {{"reference", ref.reply},
-               {"compensator", comp_name},
-               {"feedback", feedback},
-               {"feedforward", p->summary.value("feedforward", json(nullptr))}};
   if (learn) {
-    const json l = learning_summary(*learn);
-    run.header["run"]["learning"] = l;
-    run.reply["learning"] = l;
+    run.learning = arm_learning(*p, *learn, ctx, ref, preparation, plan ? &*plan : nullptr);
   }
+  describe_track_run(run, *p, ref, ctx, comp_name, feedback, learn);
   run.status = {{"compensator", comp_name}};
   run.program = std::move(p);
   run.preparation = std::move(preparation);

@@ -182,6 +182,7 @@ TrackReference builtin_reference(const BuiltinReferenceRequest& request,
   spec.offset = 0.5 * (y_hi + y_lo);
   spec.phase_rad = -M_PI / 2.0;  // start at the bottom of the range, rising
   spec.duration_s = duration;
+  spec.rise_s = request.rise_s;
 
   TrackReference r;
   try {
@@ -205,6 +206,10 @@ TrackReference builtin_reference(const BuiltinReferenceRequest& request,
               {"min_um", y_lo},
               {"max_um", y_hi}};
   r.reply = {{"kind", ref_name}, {"min_um", y_lo}, {"max_um", y_hi}};
+  if (spec.kind == sim::SignalKind::kStep) {
+    r.header["rise_s"] = spec.rise_s;
+    r.reply["rise_s"] = spec.rise_s;
+  }
   return r;
 }
 
@@ -287,9 +292,11 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
 }
 
 double learning_periods(std::size_t trials, double frequency_hz) {
+  // Trial 0's drive plays twice (trial 1 measures the bench's floor) before N learned trials.
+  const std::size_t played = trials > 0 ? trials + 1 : trials;
   const double allowance =
-      std::ceil(kUpdateAllowanceS * frequency_hz) * static_cast<double>(trials + 1);
-  return static_cast<double>(trials + 2) + allowance;
+      std::ceil(kUpdateAllowanceS * frequency_hz) * static_cast<double>(played + 1);
+  return static_cast<double>(played + 2) + allowance;
 }
 
 std::size_t periods_filling(double seconds, double frequency_hz) {

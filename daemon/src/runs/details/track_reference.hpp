@@ -67,9 +67,9 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
                                   double lead_in_max_s = 0.0);
 
 /// How many periods (passes) a learning run over `trials` trials of frequency_hz [Hz] plays at
-/// most: the start-up, the first trial, the learned ones, and time for the learner's update
-/// before each (a period that begins before its drive is ready plays the last one again). The
-/// run ends after its last trial.
+/// most: the start-up, the first trial and its repeat (the bench's floor), the learned ones, and
+/// time for the learner's update before each (a period that begins before its drive is ready
+/// plays the last one again). The run ends after its last trial.
 double learning_periods(std::size_t trials, double frequency_hz);
 
 /// The whole periods of frequency_hz [Hz] that fill seconds [s] (at least one).

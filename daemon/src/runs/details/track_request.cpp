@@ -62,6 +62,17 @@ void parse_learning(const RequestParams& request, const RunContext& ctx, TrackRe
   }
 }
 
+// A setpoint move's rise: three periods of the stage's first mode, so that the move does not ring
+// it; at least four ticks.
+double step_rise_s(const RunContext& ctx) {
+  double mode_hz = first_mode_hz(ctx);
+  if (mode_hz <= 0.0 && ctx.model != nullptr && ctx.model->model.dynamics()) {
+    mode_hz = ctx.model->model.dynamics()->natural_frequency_hz;
+  }
+  const double ticks = 4.0 * ctx.dt();
+  return mode_hz > 0.0 ? std::max(ticks, 3.0 / mode_hz) : ticks;
+}
+
 void parse_builtin_reference(const RequestParams& request, const RunContext& ctx,
                              BuiltinReferenceRequest& ref) {
   try {
@@ -71,7 +82,7 @@ void parse_builtin_reference(const RequestParams& request, const RunContext& ctx
   }
   if (ref.kind == sim::SignalKind::kSteps || ref.kind == sim::SignalKind::kSamples) {
     throw CommandError("bad_params", "reference: '" + ref.name +
-                                         "' needs data; use sine, triangle, sawtooth, "
+                                         "' needs data; use sine, triangle, sawtooth, step, "
                                          "decaying_sine, multi_frequency or chirp, or upload "
                                          "a trajectory (reference_upload)");
   }
@@ -79,9 +90,12 @@ void parse_builtin_reference(const RequestParams& request, const RunContext& ctx
   ref.frequency_hz = request.number("frequency_hz", ref.frequency_hz, 1e-3, rate / 20.0);
   ref.periods = request.number("periods", ref.periods);
   ref.duration_s = request.number("duration_s", ref.duration_s);
-  ref.range_fraction = request.number("range_fraction", ref.range_fraction);
+  // A step is a setpoint move: a fifth of the range by default (a triangle or sine spans 0.8).
+  ref.range_fraction = request.number(
+      "range_fraction", ref.kind == sim::SignalKind::kStep ? 0.2 : ref.range_fraction);
   if (request.has("min_um")) ref.min_um = request.number("min_um", 0.0);
   if (request.has("max_um")) ref.max_um = request.number("max_um", 0.0);
+  if (ref.kind == sim::SignalKind::kStep) ref.rise_s = step_rise_s(ctx);
 }
 
 }  // namespace
@@ -105,6 +119,7 @@ TrackRequest parse_track_request(const RequestParams& request, const RunContext&
   if (request.has("kp")) r.gains.kp = request.number("kp", 0.0);
   if (request.has("ki")) r.gains.ki = request.number("ki", 0.0);
   if (request.has("kd")) r.gains.kd = request.number("kd", 0.0);
+  r.gains.force = request.boolean("force_gains", ctx.settings.pid.force);
   return r;
 }
 

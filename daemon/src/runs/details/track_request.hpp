@@ -9,6 +9,7 @@
 
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/sim/signal_generator.hpp"
+#include "runs/details/feedback_design.hpp"
 #include "runs/details/run_context.hpp"
 #include "service/details/request_params.hpp"
 
@@ -24,12 +25,9 @@ struct BuiltinReferenceRequest {
   double range_fraction = 0.8;  ///< of the actuator's range, centred in it
   /// The reference's bottom and top in place of range_fraction [µm]; either may be given.
   std::optional<double> min_um, max_um;
-};
-
-/// PID gains a request names; each absent one is the configured (or derived) gain.
-struct FeedbackGainsRequest {
-  std::optional<double> kp, ki, kd;
-  bool any() const { return kp || ki || kd; }
+  /// step: how long each move takes [s] (a minimum-jerk curve): three periods of the stage's
+  /// first mode (its measured responses', else the model's), at least four ticks.
+  double rise_s = 0.0;
 };
 
 /// A learning run's keys: trials > 0 learns over that many trials; a learned drive's name

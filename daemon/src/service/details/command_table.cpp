@@ -27,6 +27,7 @@ constexpr ParamSpec kTrackUploaded[] = {{"reference_upload", T::kString},
                                         {"kp", T::kNumber, 0.0, 1e6},
                                         {"ki", T::kNumber, 0.0, 1e9},
                                         {"kd", T::kNumber, 0.0, 1e3},
+                                        {"force_gains", T::kBoolean},
                                         {"precondition_s", T::kNumber, 0.0, 60.0},
                                         {"learn_trials", T::kInteger, 0, 1000},
                                         {"learn_gain", T::kNumber, 1e-3, 20.0},
@@ -44,6 +45,7 @@ constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"kp", T::kNumber, 0.0, 1e6},
                                        {"ki", T::kNumber, 0.0, 1e9},
                                        {"kd", T::kNumber, 0.0, 1e3},
+                                       {"force_gains", T::kBoolean},
                                        {"precondition_s", T::kNumber, 0.0, 60.0},
                                        {"learn_trials", T::kInteger, 0, 1000},
                                        {"learn_gain", T::kNumber, 1e-3, 20.0},
@@ -51,6 +53,12 @@ constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"learned", T::kString},
                                        {"lead_in_max_s", T::kNumber, 0.0, 600.0}};
 constexpr ParamSpec kExcite[] = {{"drive_upload", T::kString}};
+constexpr ParamSpec kFrf[] = {{"amplitude", T::kNumber, 1e-3, 0.1},
+                              {"periods", T::kInteger, 2, 64}};
+constexpr ParamSpec kTune[] = {{"compensator", T::kString},
+                               {"kp", T::kNumber, 0.0, 1e6},
+                               {"ki", T::kNumber, 0.0, 1e9},
+                               {"kd", T::kNumber, 0.0, 1e3}};
 // The upload store checks the ranges (and what is missing) itself, with the same validator.
 constexpr ParamSpec kUploadBegin[] = {{"kind", T::kString},
                                       {"samples", T::kInteger},
@@ -87,6 +95,10 @@ std::span<const Command> bench_commands() {
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
       {"excite", nullptr, kExcite,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_excite(r, c); }},
+      {"frf", nullptr, kFrf,
+       [](Bench& b, const RequestParams& r, std::uint64_t) { return b.start_frf(r); }},
+      {"tune", nullptr, kTune,
+       [](Bench& b, const RequestParams& r, std::uint64_t) { return b.tune(r); }},
       {"upload.begin", nullptr, kUploadBegin,
        [](Bench& b, const RequestParams& r, std::uint64_t c) {
          return b.uploads_.begin(r.params(), c);

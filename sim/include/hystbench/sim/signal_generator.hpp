@@ -18,13 +18,15 @@ enum class SignalKind {
   kDecayingSine,    ///< (1 - t/T) sin(...), or |sin| when rectified (multilayer paper, eq. 12)
   kTriangle,        ///< constant-rate ramps; same phase convention as the sine (0 at t = 0, rising)
   kSawtooth,        ///< rising ramp from -1 to 1, sharp fall; 0 at phase 0
+  kStep,            ///< a square wave: the sine's sign, each edge a move over rise_s
   kSteps,           ///< levels held for their hold times
   kMultiFrequency,  ///< superposed amplitude-modulated sines (rate-dependent paper: 1, 10, 19 Hz)
   kChirp,           ///< linear sweep frequency_hz -> end_frequency_hz over duration_s
   kSamples,         ///< (t, value) samples, e.g. a CSV loaded by the caller; linear interpolation
 };
 
-/// "sine", "decaying_sine", "triangle", "sawtooth", "steps", "multi_frequency", "chirp", "csv".
+/// "sine", "decaying_sine", "triangle", "sawtooth", "step", "steps", "multi_frequency", "chirp",
+/// "csv".
 std::string_view to_string(SignalKind kind) noexcept;
 /// Throws std::invalid_argument listing the valid names.
 SignalKind signal_kind_from_string(std::string_view name);
@@ -46,12 +48,15 @@ struct SignalSpec {
   double amplitude = 1.0;  ///< peak of the shape (not peak-to-peak)
   double offset = 0.0;
   double frequency_hz = 1.0;  ///< > 0; chirp: start frequency
-  double phase_rad = 0.0;     ///< sine, decaying_sine, triangle, sawtooth
+  double phase_rad = 0.0;     ///< sine, decaying_sine, triangle, sawtooth, step
   /// [s]; decaying_sine and chirp need it finite; periodic kinds may be infinite.
   /// steps and csv ignore it (their levels and samples define the duration).
   double duration_s = kInfiniteDuration;
 
   bool rectified = false;  ///< decaying_sine: |sin| (all loops share the lower turning point)
+  /// step: each edge moves along a minimum-jerk curve 10 x^3 - 15 x^4 + 6 x^5 over this long
+  /// [s], from its edge on (0: a jump); at most a quarter period.
+  double rise_s = 0.0;
   double end_frequency_hz = 10.0;  ///< chirp: frequency at duration_s (> 0); held afterwards
   std::vector<StepLevel> steps;    ///< steps: the last level holds after the sequence
   bool repeat_steps = false;       ///< steps: loop the sequence (infinite duration)

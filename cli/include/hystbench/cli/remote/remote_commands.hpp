@@ -61,6 +61,12 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err);
 nlohmann::json wait_for_run(BenchClient& client, const std::string& run_id,
                             const std::function<void(double, const std::string&)>& progress);
 
+/// Before a run with feedback (`compensator` inverse+pid or pid): where the bench holds no
+/// measured frequency response to design the loop on, says so on `err` and runs frf first
+/// (with progress on a terminal). False when frf could not measure one (`err` says why).
+bool measure_response_if_missing(BenchClient& client, const std::string& compensator,
+                                 std::ostream& err);
+
 /// Draws a progress bar on a terminal line (carriage return, no newline).
 void progress_bar(std::ostream& err, double fraction, const std::string& label);
 

@@ -129,18 +129,28 @@ struct IdentifySection {
 };
 
 struct PidSection {
-  /// Gains; all three absent = derived per run from the model and the loop rate
-  /// (compensation/pid_tuning.hpp); any given = the given ones, the others 0.
+  /// Gains; all three absent = the loop designed per run from the stage's measured frequency
+  /// responses (compensation/loop_design.hpp); any given = the given ones, the others 0, checked
+  /// against the targets below on those responses. In V per µm of error at the drive's mean
+  /// slope: behind the model's inverse they act through its local slope.
   std::optional<double> kp;            ///< [V/µm] >= 0
   std::optional<double> ki;            ///< [V/(µm s)] >= 0
   std::optional<double> kd;            ///< [V s/µm] >= 0
-  std::optional<double> bandwidth_hz;  ///< crossover of the derived gains; absent = the default
-  /// Low-pass of the feedback output [Hz]; absent = 4x the crossover for derived gains, none
-  /// for given ones; below loop.rate_hz / 2.
+  std::optional<double> bandwidth_hz;  ///< the designed loop's crossover at most this; absent: none
+  /// Low-pass of the feedback output for given gains [Hz]; absent = none; below loop.rate_hz / 2.
   std::optional<double> output_filter_hz;
   double derivative_filter_hz = 0.0;  ///< 0 = unfiltered; below loop.rate_hz / 2
-  double u_fb_min = -30.0;            ///< clamp of the feedback output [V]
+  double u_fb_min = -30.0;            ///< clamp of the feedback's share of the drive [V]
   double u_fb_max = 30.0;
+  /// The loop's targets, met on every measured response: the design's and the check of given
+  /// gains.
+  double gain_margin_db = 6.0;       ///< at least, >= 0
+  double phase_margin_deg = 45.0;    ///< at least, in [0, 90)
+  double peak_sensitivity_db = 6.0;  ///< at most, > 0
+  /// Run given gains that break the targets (refused otherwise).
+  bool force = false;
+  /// Fault a run whose loop oscillates (loop/oscillation_detector.hpp) to the safe output.
+  bool oscillation_trip = true;
 };
 
 struct DaemonConfig {

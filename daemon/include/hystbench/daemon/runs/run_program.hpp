@@ -17,6 +17,7 @@
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/daemon/loop/loop_statistics.hpp"
+#include "hystbench/daemon/loop/oscillation_detector.hpp"
 #include "hystbench/daemon/runs/learning_exchange.hpp"
 #include "hystbench/daemon/runs/target_window.hpp"
 #include "hystbench/daemon/service/sample_log_writer.hpp"
@@ -25,8 +26,9 @@
 namespace hystbench::daemon {
 
 /// identify: the built-in excitation, then a fit; track: a reference through a compensator;
-/// excite: a user's drive, open loop, logged for fit and diagnose.
-enum class RunKind { kIdentify, kTrack, kExcite };
+/// excite: a user's drive, open loop, logged for fit and diagnose; frf: the multisines that
+/// measure the stage's frequency responses, open loop.
+enum class RunKind { kIdentify, kTrack, kExcite, kFrequencyResponse };
 enum class RunEnd { kCompleted, kStopped, kAborted, kFault };
 const char* to_string(RunKind kind) noexcept;
 const char* to_string(RunEnd end) noexcept;
@@ -104,6 +106,7 @@ struct RunProgram {
   // ---- set by the control thread before submit() ----
   std::string run_id;
   RunKind kind = RunKind::kTrack;
+  double dt_s = 0.0;  ///< the loop's period [s] (BenchLoop::submit() sets it)
   std::uint64_t total_samples = 0;
   /// identify, excite: the open-loop drive, one value per sample [V]; track: its open-loop
   /// prefix (the precondition sweep).
@@ -120,10 +123,12 @@ struct RunProgram {
   /// The active model, configured at the loop's period and relaxed at the run's first output:
   /// stepped every tick with the drive actually applied, its output is y_model (absent = NaN).
   std::optional<compensation::ActuatorModel> model;
-  /// The feedback sees no error before this tick (its PID holds): it starts with the scored
-  /// part, after the run's start from rest, a transient the feedforward predicts and an
-  /// integral loop would wind up on and pay back over the next periods.
+  /// The feedback sees no error before this tick (its loop holds at 0): track's is its
+  /// reference's first tick, after the open-loop prefix.
   std::uint64_t feedback_from = 0;
+  /// A run with feedback: watches the error from feedback_from on, and faults the run to the
+  /// safe output when the loop oscillates (the loop writes its trip).
+  std::optional<OscillationDetector> oscillation;
   /// track: references outside [y_ref_min, y_ref_max] are clipped and flagged [µm].
   double y_ref_min = -std::numeric_limits<double>::infinity();
   double y_ref_max = std::numeric_limits<double>::infinity();

@@ -17,13 +17,15 @@
 #include <thread>
 
 #include "hystbench/common/command_error.hpp"
+#include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/model_file.hpp"
-#include "hystbench/compensation/pid_controller.hpp"
+#include "hystbench/compensation/stage_responses.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/loop/bench_loop.hpp"
 #include "hystbench/daemon/service/upload_store.hpp"
 #include "hystbench/drivers/driver.hpp"
+#include "hystbench/sim/frequency_response_excitation.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon {
@@ -36,6 +38,7 @@ struct BuiltRun;
 struct RunPreparation;
 struct RunResult;
 struct PlanCache;
+struct FeedbackPlanCache;
 class TrackLearning;
 std::span<const Command> bench_commands();
 }  // namespace details
@@ -57,8 +60,9 @@ struct BenchSettings {
   /// The excitation's other segments (minor loops, rates, holds, reversals); `identify` sets
   /// its major-loop and preconditioning options. The standard one by default.
   sim::IdentificationExcitationOptions identify_excitation;
-  /// track's feedback: the configuration's [pid] section (no gains = derived per run from the
-  /// model and the loop rate, compensation::tune_pid, unless a request gives kp, ki or kd).
+  /// track's feedback: the configuration's [pid] section (no gains = designed per run on the
+  /// stage's measured frequency responses, compensation::design_loop, unless a request gives kp,
+  /// ki or kd; given ones are checked against its targets).
   PidSection pid;
   /// Open-loop sweep to u_max and back to u_min before every track run [s], so the actuator's
   /// hysteresis state is known and the inverse starts consistent with it.
@@ -111,6 +115,22 @@ class Bench {
   nlohmann::json start_track(const details::RequestParams& request, std::uint64_t client);
   /// excite: a complete drive upload played open loop after a ramp from the present output.
   nlohmann::json start_excite(const details::RequestParams& request, std::uint64_t client);
+  // The stage's frequency responses and the feedback designed on them (bench_responses.cpp).
+  /// frf: the multisines that measure them, open loop; its result kept by the bench and the
+  /// active model (its file saved again).
+  nlohmann::json start_frf(const details::RequestParams& request);
+  /// tune: the feedback a track run would get (designed, or given gains checked), with its
+  /// loop's curves; runs nothing.
+  nlohmann::json tune(const details::RequestParams& request);
+  /// A finished frf run: the responses estimated, kept, and its result (supervisor thread).
+  void responses_finished(std::unique_ptr<RunProgram> run, details::RunResult result);
+  /// identify's last segment: frf's run, once the model is chosen; false when it did not start.
+  bool measure_stage_responses();
+  /// identify's frf run played: its responses go with the chosen model (supervisor thread).
+  void stage_responses_measured(std::unique_ptr<RunProgram> run);
+  /// The feedback a track run with `kind` would get now, for a result or status (null when the
+  /// bench cannot design one: `why` says so). Caller holds mutex_.
+  nlohmann::json feedback_now(compensation::CompensatorKind kind, nlohmann::json* why);
   nlohmann::json stop_run();
   nlohmann::json abort_run();
   /// reset: leaves FAULT (reset_failed when the loop does not).
@@ -219,6 +239,12 @@ class Bench {
   std::string model_path_;
   std::uint64_t model_generation_ = 0;         // bumped with every change of model_
   std::shared_ptr<details::PlanCache> plans_;  // track's last plan (its own lock)
+  // The stage's frequency responses measured last (frf, identify): the feedback's where the
+  // active model holds none; the options of the frf run under way; the feedback's last design.
+  std::optional<compensation::StageResponses> responses_;
+  std::optional<sim::FrequencyResponseExcitationOptions> frf_options_;
+  std::shared_ptr<details::FeedbackPlanCache> feedback_plans_;
+  nlohmann::json last_feedback_;  // the feedback of the last track, tune or frf (status)
   nlohmann::json last_result_;
   nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
   RunPhase phase_ = RunPhase::kIdle;

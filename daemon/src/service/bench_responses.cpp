@@ -1,0 +1,192 @@
+// The stage's frequency responses and the feedback designed on them: frf's run and result,
+// identify's measurement once its model is chosen, tune, and the feedback status states
+// (Bench members; the supervisor thread finalises the runs).
+#include <spdlog/spdlog.h>
+
+#include <mutex>
+
+#include "hystbench/common/model_file_io.hpp"
+#include "runs/details/feedback_design.hpp"
+#include "runs/details/identify_session.hpp"
+#include "runs/details/response_program.hpp"
+#include "runs/details/run_context.hpp"
+#include "runs/details/run_result.hpp"
+#include "service/details/request_params.hpp"
+
+namespace hystbench::daemon {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+namespace {
+
+// The responses the bench would design on: the active model's, else its last measured.
+const hc::StageResponses* current_responses(const std::optional<hc::ModelFile>& model,
+                                            const std::optional<hc::StageResponses>& bench) {
+  if (model && model->responses) return &*model->responses;
+  return bench ? &*bench : nullptr;
+}
+
+// The compensator a result's design is for: inverse+pid with a model, pid without.
+hc::CompensatorKind default_feedback(bool model) {
+  return model ? hc::CompensatorKind::kInversePid : hc::CompensatorKind::kPid;
+}
+
+}  // namespace
+
+json Bench::feedback_now(hc::CompensatorKind kind, json* why) {
+  try {
+    const details::RunContext ctx = run_context();
+    json f = details::plan_feedback(ctx, kind, {}).summary;
+    f["compensator"] = std::string(hc::to_string(kind));
+    last_feedback_ = f;
+    return f;
+  } catch (const std::exception& e) {
+    if (why != nullptr) *why = e.what();
+    return nullptr;
+  }
+}
+
+json Bench::start_frf(const details::RequestParams& request) {
+  std::lock_guard lock(mutex_);
+  require_idle();
+  const details::RunContext ctx = run_context();
+  const sim::FrequencyResponseExcitationOptions o = details::response_options(request, ctx);
+  json reply = launch("frf", details::make_response_program(o, ctx));
+  frf_options_ = o;
+  return reply;
+}
+
+void Bench::responses_finished(std::unique_ptr<RunProgram> run, details::RunResult result) {
+  json& report = result.report;
+  std::optional<sim::FrequencyResponseExcitationOptions> options;
+  {
+    std::lock_guard lock(mutex_);
+    options = std::move(frf_options_);
+    frf_options_.reset();
+  }
+  if (run->end == RunEnd::kCompleted && options) {
+    try {
+      hc::StageResponses r = details::measure_responses(*run, *options);
+      std::lock_guard lock(mutex_);
+      report["frequency_response"] =
+          details::responses_summary(r, current_responses(model_, responses_));
+      report["frequency_response"]["measured"] = hc::to_json(r);
+      responses_ = r;
+      if (model_) {
+        model_->responses = std::move(r);
+        try {
+          if (!model_path_.empty()) common::save_model_file(model_path_, *model_);
+          report["frequency_response"]["kept_in"] = model_path_;
+        } catch (const std::exception& e) {
+          report["frequency_response"]["save_error"] = e.what();
+        }
+      }
+      json why;
+      report["feedback"] = feedback_now(default_feedback(model_.has_value()), &why);
+      if (report["feedback"].is_null()) report["feedback_error"] = why;
+    } catch (const std::exception& e) {
+      report["frequency_response_error"] = e.what();
+      spdlog::error("run {}: the frequency response: {}", run->run_id, e.what());
+    }
+  } else {
+    report["frequency_response_error"] = "the run did not complete: nothing was measured";
+  }
+  deliver_result(std::move(report));
+}
+
+json Bench::tune(const details::RequestParams& request) {
+  std::lock_guard lock(mutex_);
+  const std::string name = request.string("compensator", model_ ? "inverse+pid" : "pid");
+  const auto kind = hc::compensator_kind_from_string(name);
+  if (!kind || !hc::uses_feedback(*kind)) {
+    throw common::CommandError("bad_params",
+                               "compensator: '" + name + "' has no feedback (inverse+pid, pid)");
+  }
+  if (hc::needs_model(*kind) && !model_) {
+    throw common::CommandError("no_model", "inverse+pid needs a model: identify or load one");
+  }
+  details::FeedbackGainsRequest gains;
+  if (request.has("kp")) gains.kp = request.number("kp", 0.0);
+  if (request.has("ki")) gains.ki = request.number("ki", 0.0);
+  if (request.has("kd")) gains.kd = request.number("kd", 0.0);
+  gains.force = true;  // tune states a hand law's margins; it refuses nothing, as it runs nothing
+  const details::RunContext ctx = run_context();
+  const details::FeedbackPlan plan = details::plan_feedback(ctx, *kind, gains);
+  json out = plan.summary;
+  out["compensator"] = name;
+  out["curves"] = details::loop_curves(plan, dt_);
+  last_feedback_ = plan.summary;
+  last_feedback_["compensator"] = name;
+  return out;
+}
+
+bool Bench::measure_stage_responses() {
+  IdentifySession& s = *session_;
+  std::unique_ptr<RunProgram> p;
+  sim::FrequencyResponseExcitationOptions o;
+  {
+    std::lock_guard lock(mutex_);
+    const details::RunContext ctx = run_context();
+    o = details::response_options(ctx);
+    try {
+      details::BuiltRun run = details::make_response_program(o, ctx);
+      p = std::move(run.program);
+      p->run_id = s.result["run_id"].get<std::string>() + "-frf";
+      open_log(*p, run.header);
+    } catch (const std::exception& e) {
+      s.responses_result = {{"error", e.what()}};
+      return false;
+    }
+  }
+  const std::string program_id = p->run_id;
+  const std::string log = p->log->path().string();
+  const std::uint64_t total = p->total_samples;
+  std::lock_guard lock(mutex_);
+  if (quit_.load()) {
+    p->log->close();
+    s.responses_result = {{"error", "daemon shutting down"}};
+    return false;
+  }
+  if (auto refused = loop_->submit(std::move(p))) {
+    refused->log->close();
+    s.responses_result = {{"error", "the loop did not accept the run"}};
+    return false;
+  }
+  s.program_id = program_id;
+  s.response_options = o;
+  active_run_["stage"] = "measuring the frequency response";
+  active_run_["total"] = total;
+  active_run_["verification_log"] = log;
+  phase_ = RunPhase::kRunning;
+  return true;
+}
+
+void Bench::stage_responses_measured(std::unique_ptr<RunProgram> run) {
+  IdentifySession& s = *session_;
+  {
+    std::lock_guard lock(mutex_);
+    phase_ = RunPhase::kFinalizing;
+    active_run_["stage"] = "designing the feedback";
+  }
+  const sim::FrequencyResponseExcitationOptions o = *s.response_options;
+  s.response_options.reset();
+  const std::string log = run->log ? run->log->path().string() : "";
+  if (run->log) run->log->close();
+  if (run->end == RunEnd::kCompleted) {
+    try {
+      s.responses = details::measure_responses(*run, o);
+      s.responses_result = details::responses_summary(*s.responses, nullptr);
+      s.responses_result["log"] = log;
+    } catch (const std::exception& e) {
+      s.responses_result = {{"error", e.what()}, {"log", log}};
+    }
+  } else {
+    s.interrupted = true;
+    s.responses_result = {{"error", std::string("the run did not complete: ") + run->end_reason},
+                          {"log", log}};
+  }
+  finish_identify();
+}
+
+}  // namespace hystbench::daemon
