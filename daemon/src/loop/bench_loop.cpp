@@ -429,7 +429,10 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::uint64_t k,
           std::min<std::uint64_t>(m.response_ticks, RunRecords::kNoFreshReading - 1));
     }
     if (x.failure == nullptr) {
-      y_prev_ = m.position_um;
+      // A stale reading is the last fresh one again: the feedback must not integrate an error
+      // that only the reading's age makes. It holds until the next fresh one.
+      y_prev_ = st == drivers::DriverStatus::kOk ? m.position_um
+                                                 : std::numeric_limits<double>::quiet_NaN();
       last_y_.store(m.position_um, std::memory_order_relaxed);
       if (st == drivers::DriverStatus::kOk) add_tare_sample(p, k, m);
     }

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "drivers/example_driver.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 
@@ -89,4 +90,56 @@ TEST(BenchLoop, StepIsIgnoredWhileTheLoopThreadRuns) {
   // At 1 kHz the thread adds a few ticks meanwhile; step() would have added 100 at once.
   EXPECT_LT(loop.ticks() - before, 100u);
   loop.shutdown();
+}
+
+// A stale reading is the last fresh one again: the feedback holds on it instead of integrating
+// an error that only the reading's age makes. The example driver's sensor answers every second
+// tick, so every second tick's feedback holds: the drive does not move on the tick after a
+// stale reading, and does on the tick after a fresh one while the loop still converges.
+TEST(BenchLoop, TheFeedbackHoldsOnAStaleReading) {
+  constexpr double kRate = 2000.0, kDt = 1.0 / kRate;
+  fake_now = 0;
+  hystbench::drivers::Driver driver(std::make_unique<example::FirstOrderDriver>());
+  ASSERT_TRUE(driver.configure(nlohmann::json::object(), kRate).ok);
+  ASSERT_TRUE(driver.activate().ok);
+  hd::BenchLoopOptions o;
+  o.rate_hz = kRate;
+  o.clock_ns = &fake_clock;
+  hd::BenchLoop loop(driver, o);
+  loop.step();
+  namespace hc = hystbench::compensation;
+  hc::FeedbackLaw law;
+  law.pid.ki = 200.0;  // [1/s] on the 50 Hz first-order stage through its gain
+  const hc::LinearMap linear{.gain = 0.2, .offset = 0.0};
+  auto program = std::make_unique<hd::RunProgram>();
+  program->kind = hd::RunKind::kTrack;
+  program->total_samples = 400;
+  program->reference = hystbench::sim::make_uniform_signal({10.0, 10.0}, 1.0);
+  program->compensator.emplace(hc::CompensatorKind::kPid, nullptr, hc::FeedbackController(law, kDt),
+                               linear);
+  program->records.capacity = program->total_samples;
+  program->records.u.resize(program->total_samples);
+  program->records.y.resize(program->total_samples);
+  program->records.yr.resize(program->total_samples);
+  ASSERT_EQ(loop.submit(std::move(program)), nullptr);
+  for (int k = 0; k < 400; ++k) loop.step();
+  auto done = loop.take_finished();
+  ASSERT_NE(done, nullptr);
+  ASSERT_EQ(done->end, hd::RunEnd::kCompleted);
+  EXPECT_EQ(done->counters.stale_reads, 200u);
+  const auto& u = done->records.u;
+  int held = 0, moved = 0;
+  for (std::size_t k = 2; k < 100; ++k) {
+    // The driver's first, third ... reading is stale: the one at tick k - 1 when k - 1 is odd
+    // (the loop's first step read before the run).
+    if ((k - 1) % 2 == 1) {
+      held += u[k] == u[k - 1] ? 1 : 0;
+    } else {
+      moved += u[k] != u[k - 1] ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(held, 49) << "the drive moved on a stale reading";
+  EXPECT_EQ(moved, 49);
+  // Held or not, the loop reaches the reference.
+  EXPECT_NEAR(done->records.y[399], 10.0, 0.05);
 }

@@ -35,8 +35,8 @@
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/loop/output_limiter.hpp"
 #include "hystbench/daemon/loop/realtime.hpp"
-#include "hystbench/daemon/runs/run_program.hpp"
 #include "hystbench/daemon/loop/stuck_sensor_detector.hpp"
+#include "hystbench/daemon/runs/run_program.hpp"
 #include "hystbench/drivers/driver.hpp"
 
 namespace hystbench::daemon {
@@ -203,6 +203,7 @@ class BenchLoop {
   // Loop-thread state.
   RunProgram* active_ = nullptr;
   std::int64_t run_start_ns_ = 0;
+  // The last tick's reading for the feedback; NaN after a stale one (the feedback holds).
   double y_prev_ = 0.0;
   double dt_ = 1e-4;
   std::int64_t period_ns_ = 100000;
