@@ -92,8 +92,14 @@ TEST_F(TrackLearningTest, AnUploadedTrajectoryIsLearnedPassByPass) {
   const json& l = r["learning"];
   EXPECT_EQ(l["reference"], "upload");
   const std::vector<double> rms = trial_rms(r);
-  // A pass with the compensator's drive, the same again (the bench's floor), ten learned.
-  ASSERT_EQ(rms.size(), 12u) << l.dump(2);
+  // A pass with the compensator's drive, the same again (the bench's floor), ten learned; fewer
+  // only where a pass reached the floor, which ends the learning and says so.
+  ASSERT_GE(rms.size(), 3u) << l.dump(2);
+  ASSERT_LE(rms.size(), 12u) << l.dump(2);
+  if (rms.size() < 12u) {
+    EXPECT_TRUE(l["floor"]["reached"].get<bool>()) << l.dump(2);
+    EXPECT_TRUE(l["stopped"].get<bool>()) << l.dump(2);
+  }
   std::cout << "raster line, rms % per pass:";
   for (const double v : rms) std::cout << " " << v;
   std::cout << "; max " << r["max_error_percent"] << " %\n";
