@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hystbench/common/request_limits.hpp"
+
 namespace hystbench::common {
 
 namespace hc = compensation;
@@ -47,7 +49,7 @@ hc::ModelFile load_model_file(const std::string& path) {
 }
 
 nlohmann::json read_model_document(const std::string& path) {
-  const std::string text = read_model_text(path, 60000);
+  const std::string text = read_model_text(path, kMaxModelFileBytes);
   // Checked here as the daemon will check it, so the error comes at once and names the file;
   // the file's own document is what travels (not a re-serialisation of the parsed model).
   (void)parse_model_text(path, text);

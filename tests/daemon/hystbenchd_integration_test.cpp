@@ -23,6 +23,7 @@
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/remote/bench_client.hpp"
 #include "hystbench/cli/remote/remote_commands.hpp"
+#include "hystbench/common/request_limits.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 #include "support/daemon_process.hpp"
@@ -89,7 +90,8 @@ TEST_F(HystbenchdTest, BadInputGetsAClearErrorAndChangesNothing) {
             "out_of_range");
   EXPECT_EQ(code_of("{\"id\":5,\"cmd\":\"track\",\"params\":{\"compensator\":\"inverse\"}}\n"),
             "no_model");
-  EXPECT_EQ(code_of(std::string(70 * 1024, 'x') + "\n"), "line_too_long");
+  EXPECT_EQ(code_of(std::string(hystbench::common::kMaxRequestLineBytes + 1, 'x') + "\n"),
+            "line_too_long");
   EXPECT_EQ(code_of("\xff\xfe{\"cmd\":\"status\"}\n"), "bad_json");
   // The connection still works and nothing changed.
   raw.send("{\"id\":9,\"cmd\":\"status\"}\n");
@@ -280,6 +282,49 @@ TEST(HystbenchdService, ModelLoadWorksWhenTheDaemonCannotSeeTheClientsFolder) {
     EXPECT_TRUE(stored["ok"].get<bool>()) << stored.dump();
     EXPECT_EQ(c.request("status")["result"]["model"]["type"], "pi");
   }
+  fs::remove_all(dir);
+}
+
+// A model identify wrote, with the frequency responses it measured (a file of 80 kB or more),
+// travels in one request: `hystbench model load FILE` gives it to another daemon, which then
+// designs its feedback on those responses without measuring (`tune`).
+TEST(HystbenchdService, AnIdentifiedModelWithItsResponsesLoadsIntoAnotherDaemon) {
+  const fs::path dir = fs::temp_directory_path() / ("hbd_models_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ifstream in(std::string(HYSTBENCH_SOURCE_DIR) + "/config/loopback.toml");
+  std::stringstream toml;
+  for (std::string line; std::getline(in, line);) {
+    toml << line << "\n";
+    if (line == "[loop]") toml << "clock = \"simulated\"\n";
+  }
+  const fs::path config = dir / "simulated.toml";
+  std::ofstream(config) << toml.str();
+  auto cli_json = [](const std::string& socket, const std::string& args) {
+    const std::string cmd = std::string(HYSTBENCH_BIN_DIR) + "/hystbench --socket " + socket +
+                            " " + args + " --json 2>&1";
+    std::string output;
+    FILE* p = ::popen(cmd.c_str(), "r");
+    char buf[4096];
+    while (p != nullptr && std::fgets(buf, sizeof buf, p) != nullptr) output += buf;
+    const int status = p != nullptr ? ::pclose(p) : -1;
+    return std::make_pair(status, output);
+  };
+  std::string model;
+  {
+    Daemon first(dir / "first", config.string());
+    ASSERT_TRUE(first.running());
+    const auto [status, out] = cli_json(first.socket(), "identify --wait");
+    ASSERT_EQ(status, 0) << out;
+    model = json::parse(out)["model"]["path"].get<std::string>();
+  }
+  ASSERT_GT(fs::file_size(model), 80000u) << "a model this small proves nothing about the limit";
+  Daemon second(dir / "second", config.string());
+  ASSERT_TRUE(second.running());
+  const auto [loaded_status, loaded] = cli_json(second.socket(), "model load " + model);
+  ASSERT_EQ(loaded_status, 0) << loaded;
+  const auto [tune_status, tune] = cli_json(second.socket(), "tune");
+  ASSERT_EQ(tune_status, 0) << tune;
+  EXPECT_EQ(json::parse(tune)["gains"], "designed") << tune;
   fs::remove_all(dir);
 }
 

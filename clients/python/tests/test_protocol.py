@@ -11,6 +11,7 @@ import socket
 import tempfile
 import threading
 import unittest
+from unittest import mock
 from typing import Any, Callable, Dict, List, Optional
 
 import _support  # noqa: F401  (puts this tree's package on sys.path)
@@ -308,13 +309,16 @@ class ProtocolTest(unittest.TestCase):
         t = [k / 3.0e3 + 1e-7 * (k % 7) for k in range(n)]
         values = [10.0 + 20.0 * (k % 100) / 99.0 + 1e-9 * k for k in range(n)]
         seen: List[float] = []
-        result = bench.track(
-            t=t,
-            reference=values,
-            compensator="inverse",
-            wait=True,
-            progress=lambda f, w: seen.append(f),
-        )
+        # A limit that 2000 samples with their times exceed, so that the chunks must split.
+        limit = 64 * 1024
+        with mock.patch("hystbench.client.MAX_LINE_BYTES", limit):
+            result = bench.track(
+                t=t,
+                reference=values,
+                compensator="inverse",
+                wait=True,
+                progress=lambda f, w: seen.append(f),
+            )
         self.assertTrue(result.completed)
         begin = fake.requests[0]
         self.assertEqual(begin["cmd"], "upload.begin")
@@ -322,8 +326,9 @@ class ProtocolTest(unittest.TestCase):
         chunks = [r for r in fake.requests if r["cmd"] == "upload.chunk"]
         offsets = [c["params"]["offset"] for c in chunks]
         sizes = [len(c["params"]["values"]) for c in chunks]
-        self.assertLess(sizes[0], 2000)  # 2000 values with their times exceed 64 KiB
-        self.assertLessEqual(max(fake.line_bytes), MAX_LINE_BYTES)
+        self.assertLess(sizes[0], 2000)  # 2000 values with their times exceed the limit
+        self.assertLessEqual(max(fake.line_bytes), limit)
+        self.assertGreater(MAX_LINE_BYTES, 80_000)  # an identified model file fits in one line
         self.assertEqual(offsets, [sum(sizes[:i]) for i in range(len(sizes))])
         self.assertEqual(sum(sizes), n)
         self.assertEqual([v for c in chunks for v in c["params"]["values"]], values)

@@ -246,9 +246,12 @@ TEST_F(SocketServerTest, EveryBadInputGetsItsErrorAndTheConnectionStaysUsable) {
 TEST_F(SocketServerTest, OversizeLineIsRefusedAndItsRestDiscarded) {
   TestClient c(path_);
   ASSERT_TRUE(c.greeted());
-  // 200 KiB in pieces, so the server sees it grow past the limit before the newline arrives.
-  const std::string piece(10 * 1024, 'a');
-  for (int i = 0; i < 20; ++i) ASSERT_TRUE(c.send_raw(piece));
+  // Past the limit in pieces, so the server sees it grow past it before the newline arrives.
+  const std::size_t kLimit = hd::SocketServerOptions{}.max_line_bytes;
+  const std::string piece(64 * 1024, 'a');
+  for (std::size_t sent = 0; sent <= kLimit + piece.size(); sent += piece.size()) {
+    ASSERT_TRUE(c.send_raw(piece));
+  }
   c.send_raw("\n");
   c.send({{"id", 1}, {"cmd", "echo"}});
   json r = c.read_json();
@@ -260,10 +263,10 @@ TEST_F(SocketServerTest, OversizeLineIsRefusedAndItsRestDiscarded) {
   EXPECT_EQ(r["ok"], true);
 
   // An over-long line that arrives whole, then a line of exactly the limit (accepted).
-  c.send_raw(std::string(70 * 1024, 'b') + "\n");
+  c.send_raw(std::string(kLimit + 1, 'b') + "\n");
   EXPECT_EQ(c.read_json()["error"]["code"], "line_too_long");
   std::string exact = R"({"id":2,"cmd":"echo"})";
-  exact += std::string(64 * 1024 - exact.size(), ' ');
+  exact += std::string(kLimit - exact.size(), ' ');
   c.send_raw(exact + "\n");
   EXPECT_EQ(c.read_json()["id"], 2);
 }

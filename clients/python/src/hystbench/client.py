@@ -35,8 +35,9 @@ from .runlog import _read_signal_lines
 DEFAULT_SOCKET = "/run/hystbench/hystbench.sock"
 """The service's socket, used when neither ``socket_path`` nor ``$HYSTBENCH_SOCKET`` is given."""
 
-MAX_LINE_BYTES = 64 * 1024
-"""The daemon's longest request line, the newline excluded [bytes]."""
+MAX_LINE_BYTES = 1024 * 1024
+"""The daemon's longest request line, the newline excluded [bytes]: a model file with its measured
+frequency responses (about 85 kB) fits many times."""
 
 Progress = Callable[[float, str], None]
 """A progress callback: ``progress(fraction, label)``, fraction in [0, 1]."""

@@ -33,6 +33,8 @@
 #include <thread>
 #include <vector>
 
+#include "hystbench/common/request_limits.hpp"
+
 struct pollfd;
 
 namespace hystbench::daemon {
@@ -63,7 +65,8 @@ struct SocketServerOptions {
   std::filesystem::path path;  ///< at most 107 bytes; its folder is created when missing
   unsigned mode = 0660;        ///< file mode of the socket
   std::size_t max_clients = 128;
-  std::size_t max_line_bytes = std::size_t{64} << 10;  ///< longest request line, '\n' excluded
+  /// The longest request line, '\n' excluded.
+  std::size_t max_line_bytes = common::kMaxRequestLineBytes;
   std::size_t max_output_bytes = std::size_t{1}
                                  << 20;  ///< unsent bytes per client before disconnect
 };
