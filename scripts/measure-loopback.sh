@@ -25,13 +25,23 @@
 #              drive replayed; then a restarted daemon (its model loaded) replays them again
 #   learning-scaled  the same effects: identify, its model's dead-zone weights x1.3 loaded,
 #              track --learn 20 at each frequency over the identified model's reference range
+#   feedback   the loop designed from the measured responses, on the default truth: identify
+#              (the design, the frf's bench time), a 1 Hz triangle with none / inverse /
+#              inverse+pid, sines of 10 / 50 / 100 Hz with inverse and inverse+pid, a 20 % step,
+#              an AFM-like raster line (ramps and plateaus, 1.5 s period, --reference-file);
+#              then identify again and the triangle with inverse+pid
+#   feedback-variants  every truth variant on both loop rates (10 kHz; 1 kHz with a 190 Hz
+#              mode): identify, the design, then a sweep below its crossover with inverse and
+#              inverse+pid (rate dependence, the delay, one mode at 800 Hz, the modified-PI truth)
+#   feedback-learning  a 1 kHz loop with a 190 Hz mode (zeta 0.07), rate dependence and creep
+#              on: identify, then track --learn 10 at 20 and 50 Hz with inverse+pid
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled feedback feedback-variants feedback-learning)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -84,6 +94,23 @@ track_row() {  # track_row LABEL JSON
     "| \($l) | \($t.rms_error_percent | f) | \($t.max_error_percent | f) | \($t.end) |"'
 }
 triangle() { hb track --reference triangle --frequency 1 --periods 5 --compensator "$1" --wait --json; }
+# The design a result states (jq filter on its `feedback`), and the frf's bench time.
+design='"\(.structure // .gains); crossover \(.crossover_hz | f) Hz, bandwidth \(.bandwidth_hz | f) Hz, |S| -20 dB from \(.tenfold_rejection_hz | f) Hz; GM >= \([.margins[].gain_margin_db] | min | f) dB, PM >= \([.margins[].phase_margin_deg] | min | f) deg, peak |S| <= \([.margins[].peak_sensitivity_db] | max | f) dB; limited by \(.limited_by // "-")"'
+# A 1 kHz bench with a 190 Hz mode (zeta 0.07): the loopback at 1 kHz with one mode.
+slow_bench() {
+  sed 's/^rate_hz = 10000/rate_hz = 1000/' config/loopback.toml >"$work/slow.toml"
+  printf '[actuator.dynamics]\nnatural_frequencies_hz = [190.0]\ndamping_ratios = [0.07]\nmode_gains = [1.0]\n' >>"$work/slow.toml"
+  echo "$work/slow.toml"
+}
+# AFM-like raster line: 8 -> 36 um in 0.6 s, 0.15 s plateau, back in 0.6 s, 0.15 s plateau;
+# two periods at 5 kHz.
+afm_line() {
+  awk 'BEGIN { print "t,yr"; T = 1.5; for (k = 0; k <= 15000; k++) { t = k / 5000;
+    p = (t - T * int(t / T)) / T;
+    if (p < 0.4) y = 8 + 28 * p / 0.4; else if (p < 0.5) y = 36;
+    else if (p < 0.9) y = 36 - 28 * (p - 0.5) / 0.4; else y = 8;
+    printf "%.6f,%.6f\n", t, y } }' >"$1"
+}
 
 for section in "${sections[@]}"; do
   case "$section" in
@@ -347,8 +374,85 @@ for section in "${sections[@]}"; do
       echo
       stop_daemon
       ;;
+    feedback)
+      start_daemon feedback config/loopback.toml
+      echo "### The loop designed from the measured responses (default truth, 10 kHz)"
+      id=$(hb identify --wait --json || true)
+      frf_log=$(jq -r '.frequency_response.log // empty' <<<"$id")
+      echo
+      echo "identify: $(identify_row default "$id")"
+      jq -r "$f3"'"- design: \(.feedback | '"$design"')"' <<<"$id" || true
+      jq -r "$f3"'"- while moving: \(.frequency_response.moving | "the \(.lagging) ramps lag by \(.lag_deg | f) +/- \(.lag_noise_deg | f) deg at \(.frequency_hz | f) Hz, zero \(.zero_hz | f) Hz")"' <<<"$id" || true
+      [ -z "$frf_log" ] || echo "- frf: $(grep -vc '^#' "$frf_log") samples ($(grep -vc '^#' "$frf_log" | awk '{ printf "%.1f", ($1 - 1) / 10000 }') s of bench time)"
+      echo
+      echo "| run | compensator | rms % | max % | end |"
+      echo "| --- | --- | --- | --- | --- |"
+      for c in none inverse inverse+pid; do track_row "1 Hz triangle | $c" "$(triangle "$c" || true)"; done
+      for f in 10 50 100; do
+        for c in inverse inverse+pid; do
+          track_row "$f Hz sine | $c" "$(hb track --reference sine --frequency "$f" --compensator "$c" --wait --json || true)"
+        done
+      done
+      afm_line "$work/feedback/afm.csv"
+      for c in none inverse inverse+pid; do
+        track_row "raster line | $c" "$(hb track --reference-file "$work/feedback/afm.csv" --compensator "$c" --wait --json || true)"
+      done
+      echo
+      hb track --reference step --frequency 10 --periods 6 --compensator inverse+pid --wait --json |
+        jq -r "$f3"'"20 % step (10 moves): settled \(.step.settled), settling max \(.step.settling_ms.max | f) ms, overshoot max \(.step.overshoot_percent.max | f) %"' || true
+      id=$(hb identify --wait --json || true)
+      jq -r "$f3"'"second identify: \(.feedback | '"$design"')"' <<<"$id" || true
+      track_row "second identify, 1 Hz triangle | inverse+pid" "$(triangle inverse+pid || true)"
+      echo
+      stop_daemon
+      ;;
+    feedback-variants)
+      slow=$(slow_bench)
+      for truth in rate delay mode-800 mpi; do
+        case "$truth" in
+          rate) extra=$'[actuator.rate_dependence]\nenabled = true' ;;
+          delay) extra=$'[actuator.delay]\nenabled = true' ;;
+          mode-800) extra=$'[actuator.dynamics]\nnatural_frequencies_hz = [800.0]\ndamping_ratios = [0.06]\nmode_gains = [1.0]\nenabled = true' ;;
+          mpi) extra=$'[actuator.hysteresis]\nkind = "modified_pi"' ;;
+        esac
+        for bench in 10k 1k; do
+          config=config/loopback.toml
+          freqs=1,5,10,20,50,100
+          if [ "$bench" = 1k ]; then
+            config=$slow
+            freqs=1,5,10,20
+            # One mode only: the 190 Hz one, or the variant's own.
+            [ "$truth" = mode-800 ] && continue
+          fi
+          start_daemon "variant-$truth-$bench" "$config" "$extra"
+          echo "### $truth truth, $bench loop"
+          id=$(hb identify --wait --json || true)
+          jq -r "$f3"'"\(.model.type) [\([.model.extension.parts[]?.cause] | join("+"))]: \(.feedback | '"$design"')"' <<<"$id" || true
+          echo
+          hb sweep --frequencies "$freqs" --compensators inverse,inverse+pid || true
+          echo
+          stop_daemon
+        done
+      done
+      ;;
+    feedback-learning)
+      slow=$(slow_bench)
+      start_daemon feedback-learning "$slow" $'[actuator.rate_dependence]\nenabled = true'
+      echo "### 1 kHz loop, a 190 Hz mode, rate dependence and creep on: learning with inverse+pid"
+      id=$(hb identify --wait --json || true)
+      jq -r "$f3"'"\(.model.type) [\([.model.extension.parts[]?.cause] | join("+"))]: \(.feedback | '"$design"')"' <<<"$id" || true
+      echo
+      echo "| f [Hz] | trials (rms %, the first the compensator's) | last rms % | last max % | floor % | why it ended |"
+      echo "| --- | --- | --- | --- | --- | --- |"
+      for f in 20 50; do
+        hb track --reference sine --frequency "$f" --compensator inverse+pid --learn 10 --wait --json |
+          jq -r --arg f "$f" "$f3"'"| \($f) | '"$trials_cells"' | \(.learning.floor.rms_error_percent | f) | \(.learning.why // "-") |"' || true
+      done
+      echo
+      stop_daemon
+      ;;
     *)
-      echo "measure-loopback: unknown section '$section' (default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster)" >&2
+      echo "measure-loopback: unknown section '$section' (default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled feedback feedback-variants feedback-learning)" >&2
       exit 2
       ;;
   esac

@@ -31,10 +31,14 @@ CliCommand add_frf(CLI::App& app, cli::RemoteCommand& remote) {
       "Measure the stage's frequency response in place: after a sweep to both drive limits, "
       "small multisines at a quarter, half and three quarters of the drive span (2 % of it) and "
       "a larger one at half (8 %), each averaged over 4 periods, every line to 0.45 of the loop "
-      "rate with its noise and coherence (about 5.5 s at 10 kHz, 12 s at 1 kHz). The bench and "
-      "the active model keep it (its file is saved again): the feedback of inverse+pid and pid "
-      "is designed on it. The result gives the modes found, how far the gain and the first mode "
-      "moved since the last measurement, and the loop designed now. identify measures it too.\n"
+      "rate with its noise and coherence; then the stage while it moves, ramps up and down "
+      "across the middle of the span carrying a small sine at a fiftieth of the loop rate: a "
+      "rate law acts only then, and one direction's ramps lagging the other's is the zero it "
+      "puts on the loop (about 4 s at 10 kHz, 14 s at 1 kHz). The bench and the active model "
+      "keep it (its file is saved again): the feedback of inverse+pid and pid is designed on it. "
+      "The result gives the modes found, the zero found while moving, how far the gain and the "
+      "first mode moved since the last measurement, and the loop designed now. identify "
+      "measures it too.\n"
       "Example: hystbench frf --wait --plot frf/");
   cmd->add_option("--amplitude", o->amplitude,
                   "Peak of the small multisines, a fraction of the drive span (the larger one is "

@@ -20,7 +20,47 @@ std::size_t count(const json& v, const std::string& field) {
   return v.get<std::size_t>();
 }
 
+json complex_json(std::complex<double> x) { return json::array({x.real(), x.imag()}); }
+
+std::complex<double> complex_from(const json& v, const std::string& field) {
+  if (!v.is_array() || v.size() != 2) fail(field, "must be [real, imag]");
+  return {number(v[0], field + "[0]"), number(v[1], field + "[1]")};
+}
+
+MovingResponse moving_from(const json& j, const std::string& f) {
+  MovingResponse m;
+  m.frequency_hz = number(member(j, f, "frequency_hz"), f + ".frequency_hz");
+  if (!(m.frequency_hz > 0.0)) fail(f + ".frequency_hz", "must be > 0");
+  m.rising = complex_from(member(j, f, "rising"), f + ".rising");
+  m.falling = complex_from(member(j, f, "falling"), f + ".falling");
+  m.ramps = count(member(j, f, "ramps"), f + ".ramps");
+  m.lag_deg = number(member(j, f, "lag_deg"), f + ".lag_deg");
+  m.lag_noise_deg = number(member(j, f, "lag_noise_deg"), f + ".lag_noise_deg");
+  const json& lagging = member(j, f, "lagging");
+  if (!lagging.is_string() || (lagging != "rising" && lagging != "falling")) {
+    fail(f + ".lagging", "must be \"rising\" or \"falling\"");
+  }
+  m.lagging = lagging.get<std::string>();
+  const json& zero = member(j, f, "zero_hz");
+  if (!zero.is_null()) {
+    m.zero_hz = number(zero, f + ".zero_hz");
+    if (!(m.zero_hz > 0.0)) fail(f + ".zero_hz", "must be > 0 or null");
+  }
+  return m;
+}
+
 }  // namespace
+
+json to_json(const MovingResponse& m) {
+  return {{"frequency_hz", m.frequency_hz},
+          {"rising", complex_json(m.rising)},
+          {"falling", complex_json(m.falling)},
+          {"ramps", m.ramps},
+          {"lag_deg", m.lag_deg},
+          {"lag_noise_deg", m.lag_noise_deg},
+          {"lagging", m.lagging},
+          {"zero_hz", m.zero_hz > 0.0 ? json(m.zero_hz) : json(nullptr)}};
+}
 
 json to_json(const StageResponses& r) {
   json responses = json::array();
@@ -44,10 +84,12 @@ json to_json(const StageResponses& r) {
          {"noise", m.noise},
          {"coherence", m.coherence}});
   }
-  return {{"rate_hz", r.rate_hz},
-          {"run_id", r.run_id},
-          {"excitation", r.excitation},
-          {"responses", responses}};
+  json out = {{"rate_hz", r.rate_hz},
+              {"run_id", r.run_id},
+              {"excitation", r.excitation},
+              {"responses", responses}};
+  if (r.moving) out["moving"] = to_json(*r.moving);
+  return out;
 }
 
 StageResponses stage_responses_from_json(const json& j, const std::string& field) {
@@ -88,6 +130,7 @@ StageResponses stage_responses_from_json(const json& j, const std::string& field
     out.responses.push_back(std::move(m));
     out.segments.push_back(s);
   }
+  if (j.contains("moving")) out.moving = moving_from(j["moving"], field + ".moving");
   return out;
 }
 

@@ -51,6 +51,39 @@ std::vector<double> multisine(std::size_t period, const std::vector<std::size_t>
   return x;
 }
 
+// The moving part from x.u's end on: a move to the lower end, a hold, then ramps up and down
+// with the sine on top, the first unaveraged.
+void append_moving(FrequencyResponseExcitation& x, const FrequencyResponseExcitationOptions& o) {
+  const double span = o.u_max - o.u_min, dt = 1.0 / o.rate_hz;
+  const double lo = o.u_min + o.moving_from * span, hi = o.u_min + o.moving_to * span;
+  // Whole cycles per ramp, more where the slew limit needs a slower ramp: its peak rate is the
+  // ramp's and the sine's together, 1.5 x the ramp's.
+  const double samples_per_cycle = 1.0 / o.moving_tone_fraction;
+  const double slowest = 1.5 * (hi - lo) / o.slew_v_per_s / dt;  // samples, at least
+  const auto cycles =
+      std::max(o.moving_cycles, static_cast<std::size_t>(std::ceil(slowest / samples_per_cycle)));
+  const auto n =
+      static_cast<std::size_t>(std::lround(static_cast<double>(cycles) * samples_per_cycle));
+  MovingExcitation& m = x.moving;
+  m.tone_hz = static_cast<double>(cycles) * o.rate_hz / static_cast<double>(n);
+  m.ramp_v_per_s = (hi - lo) / (static_cast<double>(n) * dt);
+  m.amplitude_v = m.ramp_v_per_s / (4.0 * std::numbers::pi * m.tone_hz);
+  const double move = std::max(o.move_s, std::abs(lo - x.u.back()) / o.slew_v_per_s);
+  ramp(x.u, x.u.back(), lo,
+       std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(move / dt))));
+  x.u.insert(x.u.end(), static_cast<std::size_t>(std::ceil(o.hold_s / dt)), lo);
+  for (std::size_t r = 0; r <= o.moving_ramps; ++r) {
+    const bool rising = r % 2 == 0;
+    if (r > 0) m.ramps.push_back({x.u.size(), n, rising});
+    for (std::size_t k = 0; k < n; ++k) {
+      const double along = static_cast<double>(k) / static_cast<double>(n);
+      const double base = rising ? lo + (hi - lo) * along : hi - (hi - lo) * along;
+      x.u.push_back(base + m.amplitude_v * std::sin(2.0 * std::numbers::pi * m.tone_hz *
+                                                    static_cast<double>(k) * dt));
+    }
+  }
+}
+
 std::string percent(double fraction) {
   char text[16];
   std::snprintf(text, sizeof text, "%.3g", fraction * 100.0);
@@ -73,6 +106,13 @@ FrequencyResponseExcitation make_frequency_response_excitation(
   require(o.lines >= 4, "lines must be >= 4");
   require(o.top_fraction > 0.0 && o.top_fraction < 0.5, "top_fraction must be in (0, 0.5)");
   require(o.move_s >= 0.0 && o.hold_s >= 0.0, "move_s and hold_s must be >= 0");
+  require(o.moving_tone_fraction >= 0.0 && o.moving_tone_fraction < 0.25,
+          "moving_tone_fraction must be in [0, 0.25)");
+  require(o.moving_tone_fraction == 0.0 ||
+              (o.moving_cycles >= 2 && o.moving_ramps >= 2 && o.moving_ramps % 2 == 0 &&
+               o.moving_from >= 0.0 && o.moving_from < o.moving_to && o.moving_to <= 1.0),
+          "the moving part needs moving_cycles >= 2, an even moving_ramps >= 2 and 0 <= "
+          "moving_from < moving_to <= 1");
   const double span = o.u_max - o.u_min, dt = 1.0 / o.rate_hz;
   FrequencyResponseExcitation x;
   x.period = std::max(kMinPeriod, static_cast<std::size_t>(std::lround(o.rate_hz * kPeriodS)));
@@ -117,6 +157,7 @@ FrequencyResponseExcitation make_frequency_response_excitation(
     }
     u = x.u.back();
   }
+  if (o.moving_tone_fraction > 0.0) append_moving(x, o);
   return x;
 }
 

@@ -168,6 +168,31 @@ TEST_F(BenchFeedbackTest, HandGainsAreCheckedAndAForcedUnstableLoopTripsToTheSaf
   EXPECT_EQ(status()["state"], "idle");
 }
 
+// A zero measured while the stage moves (a rate law's, on one direction's branches) holds the
+// loop below it: the default truth's responses, their moving part given a zero at 100 Hz, designed
+// on. The design names the rate law as what limits it and crosses over below the zero; without
+// the zero the same responses cross over far above it.
+TEST_F(BenchFeedbackTest, AZeroMeasuredWhileTheStageMovesHoldsTheLoopBelowIt) {
+  hd::BenchSettings s = settings_from_toml(loopback_toml());
+  cut_identify(s);
+  start(s);
+  const json id = identify();
+  json model = json::parse(std::ifstream(id["model"]["path"].get<std::string>()));
+  ASSERT_TRUE(model["frequency_response"]["moving"].is_object()) << model["frequency_response"];
+  const json free = bench_->handle("tune", json::object());
+  model["frequency_response"]["moving"]["zero_hz"] = 100.0;
+  model["frequency_response"]["moving"]["lagging"] = "falling";
+  bench_->handle("model.load", {{"model", model}, {"name", "zero.json"}});
+  const json held = bench_->handle("tune", json::object());
+  std::cout << "crossover without the zero " << free["crossover_hz"] << " Hz, with it "
+            << held["crossover_hz"] << " Hz: " << held["limit"] << "\n";
+  EXPECT_GT(free["crossover_hz"].get<double>(), 200.0) << free.dump(2);
+  EXPECT_EQ(held["limited_by"], "rate_law") << held.dump(2);
+  EXPECT_LT(held["crossover_hz"].get<double>(), 100.0) << held.dump(2);
+  EXPECT_TRUE(held["meets_targets"].get<bool>()) << held.dump(2);
+  EXPECT_NE(held["limit"].get<std::string>().find("while it moves"), std::string::npos) << held;
+}
+
 // A 20 % setpoint move (`track --reference step`, each move along a minimum-jerk curve over
 // three periods of the stage's first mode): the result gives each step's settling to 1 % and its
 // overshoot: within 5 ms and 5 % on the loopback (1.1 ms and 2.7 % measured).
@@ -187,11 +212,11 @@ TEST_F(BenchFeedbackTest, AStepSettlesWithinFiveMillisecondsAndOvershootsAtMostF
 }
 
 // A 1 kHz loop with a 190 Hz mode (zeta 0.07): identify measures it and the loop is designed on
-// it, stable and within its margins, and never worse than the inverse alone at 1 and 10 Hz.
-// With a rate-free model it reaches a closed-loop bandwidth of 20 Hz or more and takes most of
-// the inverse's error out. Where identify's extension kept a rate law whose rate lowers the
-// output while the stage moves, the loop must hold that law's right-half-plane zero, which the
-// measurements at rest cannot show: the result names it as what limits the bandwidth.
+// it, stable and within its margins, with a closed-loop bandwidth of 20 Hz or more (70 Hz
+// measured). identify's extension may keep a rate law here (the truth has none: the law stands
+// in for the mode's rise); the stage measured while it moves shows no zero that would limit the
+// loop, so the law's zero, which it only supposes, does not. The loop is never worse than the
+// inverse alone below its crossover and takes most of the inverse's error out at 1 Hz.
 TEST_F(BenchFeedbackTest, AOneKilohertzLoopWithA190HzModeIsDesignedOnItsMeasuredResponse) {
   start(settings_from_toml(loopback_toml(
       "[actuator.dynamics]\nnatural_frequencies_hz = [190.0]\ndamping_ratios = [0.07]\n"
@@ -207,22 +232,25 @@ TEST_F(BenchFeedbackTest, AOneKilohertzLoopWithA190HzModeIsDesignedOnItsMeasured
     mode_found = mode_found || std::abs(m["frequency_hz"].get<double>() / 190.0 - 1.0) < 0.05;
   }
   EXPECT_TRUE(mode_found) << f.dump(2);
-  const bool rate_law = id["model"]["type"] == "rpi";
+  const json& moving = id["frequency_response"]["moving"];
+  ASSERT_TRUE(moving.is_object()) << id["frequency_response"].dump(2);
+  // No zero, or one beyond the loop's band (the creep lags the rising ramps by a few degrees).
+  EXPECT_TRUE(moving["zero_hz"].is_null() || moving["zero_hz"].get<double>() > 500.0) << moving;
   std::cout << "1 kHz, 190 Hz mode: " << id["model"]["type"] << ", bandwidth " << f["bandwidth_hz"]
-            << " Hz, limited by " << f["limited_by"] << "\n";
-  if (rate_law) {
-    EXPECT_EQ(f["limited_by"], "rate_law") << f.dump(2);
-  } else {
-    EXPECT_GE(f["bandwidth_hz"].get<double>(), 20.0) << f.dump(2);
-  }
-  for (const double hz : {1.0, 10.0}) {
+            << " Hz, crossover " << f["crossover_hz"] << " Hz, limited by " << f["limited_by"]
+            << "; moving: " << moving.dump() << "\n";
+  EXPECT_GE(f["bandwidth_hz"].get<double>(), 20.0) << f.dump(2);
+  EXPECT_NE(f["limited_by"], "rate_law") << f.dump(2);
+  for (const double hz : {1.0, 10.0, 20.0}) {
     const json inverse = track("sine", hz, "inverse");
     const json pid = track("sine", hz, "inverse+pid");
     ASSERT_EQ(pid["end"], "completed") << pid.dump(2);
     std::cout << hz << " Hz sine at 1 kHz: inverse " << rms(inverse) << " %, inverse+pid "
               << rms(pid) << " %\n";
-    EXPECT_LE(rms(pid), 1.05 * rms(inverse) + 0.02) << pid.dump(2);
-    if (!rate_law) EXPECT_LT(rms(pid), 0.6 * rms(inverse)) << pid.dump(2);
+    EXPECT_LT(rms(pid), rms(inverse)) << pid.dump(2);
+    if (hz == 1.0) {
+      EXPECT_LT(rms(pid), 0.3 * rms(inverse)) << pid.dump(2);
+    }
   }
 }
 

@@ -107,6 +107,18 @@ void print_frequency_response(std::ostream& out, const json& s) {
     }
     out << "\n";
   }
+  if (s.contains("moving")) {
+    const json& m = s["moving"];
+    out << "  while moving    at " << num(m.value("frequency_hz", json()), 0) << " Hz the "
+        << m.value("lagging", std::string("?")) << " ramps lag by "
+        << num(m.value("lag_deg", json()), 2) << " +/- " << num(m.value("lag_noise_deg", json()), 2)
+        << " deg: ";
+    if (m.value("zero_hz", json()).is_number()) {
+      out << "a rate law's zero at " << num(m["zero_hz"], 0) << " Hz\n";
+    } else {
+      out << "no rate law's zero\n";
+    }
+  }
   if (s.contains("change")) {
     const json& c = s["change"];
     out << "  since           " << c.value("since", std::string("?")) << ": gain x"

@@ -123,7 +123,8 @@ std::vector<hc::MeasuredResponse> plants(const RunContext& ctx, hc::CompensatorK
   return seen_through(ctx, feedback_path(ctx, kind), r, gain);
 }
 
-hc::LoopDesignOptions design_options(const RunContext& ctx, double gain) {
+hc::LoopDesignOptions design_options(const RunContext& ctx, const hc::StageResponses& r,
+                                     double gain) {
   const PidSection& c = ctx.settings.pid;
   hc::LoopDesignOptions o;
   o.dt_s = ctx.dt();
@@ -133,11 +134,22 @@ hc::LoopDesignOptions design_options(const RunContext& ctx, double gain) {
     o.max_crossover_hz = *c.bandwidth_hz;
     o.max_crossover_reason = "pid.bandwidth_hz";
   }
-  if (rate_dependent(ctx)) {
+  if (r.moving) {
+    // Measured while the stage moved: the zero a rate law puts there, if any.
+    if (r.moving->zero_hz > 0.0) {
+      o.rhp_zero_hz = r.moving->zero_hz;
+      o.rhp_zero_reason = "the stage while it moves (its " + r.moving->lagging +
+                          " ramps lag the others by " + text(r.moving->lag_deg) + " deg at " +
+                          text(r.moving->frequency_hz) + " Hz: a rate law)";
+    }
+  } else if (rate_dependent(ctx)) {
+    // Responses from before the moving part was measured: the model's law stands for it.
     const double kr = lowering_rate_gain(ctx.model->model);
     if (kr > 0.0) {
       o.rhp_zero_hz = gain / kr / (2.0 * std::numbers::pi);
-      o.rhp_zero_reason = "the rate law (its rate lowers the output while the stage moves)";
+      o.rhp_zero_reason =
+          "the model's rate law (its rate lowers the output while the stage moves; not measured "
+          "moving: run frf)";
     }
   }
   return o;
@@ -249,7 +261,7 @@ FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
   const hc::StageResponses& r = measured_responses(ctx);
   const PidSection& c = ctx.settings.pid;
   const double gain = mean_slope(ctx);
-  const hc::LoopDesignOptions o = design_options(ctx, gain);
+  const hc::LoopDesignOptions o = design_options(ctx, r, gain);
   const bool by_hand = gains.any() || c.kp || c.ki || c.kd;
   auto number = [](const std::optional<double>& a, const std::optional<double>& b) {
     return a ? text(*a) : b ? text(*b) : "-";

@@ -59,7 +59,13 @@ json to_json(const sim::FrequencyResponseExcitationOptions& o) {
           {"lines", o.lines},
           {"top_fraction", o.top_fraction},
           {"move_s", o.move_s},
-          {"hold_s", o.hold_s}};
+          {"hold_s", o.hold_s},
+          {"moving",
+           {{"tone_fraction", o.moving_tone_fraction},
+            {"cycles", o.moving_cycles},
+            {"ramps", o.moving_ramps},
+            {"from", o.moving_from},
+            {"to", o.moving_to}}}};
 }
 
 sim::FrequencyResponseExcitationOptions response_options_from_json(const json& j) {
@@ -82,6 +88,16 @@ sim::FrequencyResponseExcitationOptions response_options_from_json(const json& j
     o.top_fraction = j.at("top_fraction").get<double>();
     o.move_s = j.at("move_s").get<double>();
     o.hold_s = j.at("hold_s").get<double>();
+    // Files from before the moving part: their drive had none.
+    o.moving_tone_fraction = 0.0;
+    if (j.contains("moving")) {
+      const json& m = j["moving"];
+      o.moving_tone_fraction = m.at("tone_fraction").get<double>();
+      o.moving_cycles = m.at("cycles").get<std::size_t>();
+      o.moving_ramps = m.at("ramps").get<std::size_t>();
+      o.moving_from = m.at("from").get<double>();
+      o.moving_to = m.at("to").get<double>();
+    }
   } catch (const json::exception& e) {
     throw common::CommandError("bad_model",
                                std::string("frequency_response.excitation: ") + e.what());
@@ -148,6 +164,31 @@ std::optional<double> clip_level(std::span<const double> y) {
   return std::nullopt;
 }
 
+// The moving part's response; nullopt where the output clipped on a ramp (the stage's answer is
+// not in it). Throws CommandError measurement_failed for a short record.
+std::optional<hc::MovingResponse> moving_response(const RunProgram& run,
+                                                  const sim::FrequencyResponseExcitation& x,
+                                                  std::size_t n, double rate_hz) {
+  std::vector<hc::MovingRamp> ramps;
+  for (const sim::MovingRampSegment& r : x.moving.ramps) {
+    if (r.first + r.length > n) {
+      throw common::CommandError("measurement_failed",
+                                 "the run recorded " + std::to_string(n) +
+                                     " samples, short of the moving ramps (up to sample " +
+                                     std::to_string(r.first + r.length) + ")");
+    }
+    if (clip_level(std::span(run.records.y).subspan(r.first, r.length))) return std::nullopt;
+    ramps.push_back({r.first, r.length, r.rising});
+  }
+  try {
+    return hc::estimate_moving_response(std::span(run.records.u).first(n),
+                                        std::span(run.records.y).first(n), ramps, x.moving.tone_hz,
+                                        rate_hz);
+  } catch (const std::invalid_argument& e) {
+    throw common::CommandError("measurement_failed", std::string("the moving ramps: ") + e.what());
+  }
+}
+
 }  // namespace
 
 hc::StageResponses measure_responses(const RunProgram& run,
@@ -186,6 +227,7 @@ hc::StageResponses measure_responses(const RunProgram& run,
       throw common::CommandError("measurement_failed", s.label + ": " + e.what());
     }
   }
+  if (!x.moving.ramps.empty()) out.moving = moving_response(run, x, n, o.rate_hz);
   if (out.responses.empty()) {
     throw common::CommandError(
         "measurement_failed",
@@ -218,6 +260,7 @@ json responses_summary(const hc::StageResponses& r, const hc::StageResponses* be
   }
   json out = {{"run_id", r.run_id}, {"responses", list}, {"modes", mode_list}};
   if (r.excitation.contains("left_out")) out["left_out"] = r.excitation["left_out"];
+  if (r.moving) out["moving"] = hc::to_json(*r.moving);
   if (before != nullptr && !before->responses.empty()) {
     auto mean_gain = [](const hc::StageResponses& s) {
       double g = 0.0;

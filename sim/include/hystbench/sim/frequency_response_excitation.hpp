@@ -8,7 +8,12 @@
 // that), with Schroeder phases (a low crest factor) and its peak at the condition's amplitude,
 // less where the slew limit needs it. Its period is max(500, rate x 0.1 s) samples: 2 Hz lines
 // at 1 kHz, 10 Hz at 10 kHz. The default conditions (2 % of the span at a quarter, half and
-// three quarters of it, 8 % at half) take 5.5 s at 10 kHz and 12 s at 1 kHz.
+// three quarters of it, 8 % at half) take 4 s at 10 kHz and 12 s at 1 kHz.
+// Then the stage while it moves: ramps across the middle of the span, alternately up and down,
+// each carrying a small sine of a fiftieth of the rate over whole cycles, its peak rate half the
+// ramp's so that the motion never turns; the first ramp settles, four follow (0.2 s at 10 kHz,
+// 2 s at 1 kHz). A rate law acts only while the stage moves: its zero shows as one direction's
+// ramps lagging the other's at the sine (compensation's moving_response.hpp).
 // Deterministic: the same options give the same drive. Not real-time: allocates.
 #include <cstddef>
 #include <limits>
@@ -36,6 +41,26 @@ struct FrequencyResponseExcitationOptions {
   double top_fraction = 0.45;         ///< the highest line, of the rate, in (0, 0.5)
   double move_s = 0.1;                ///< the ramp to each operating point [s], >= 0
   double hold_s = 0.1;                ///< the hold after it [s], >= 0
+  /// The moving part: its sine's frequency over the rate, in [0, 0.25); 0 = none.
+  double moving_tone_fraction = 0.02;
+  std::size_t moving_cycles =
+      8;  ///< the sine's whole cycles per ramp (more if the slew limit needs), >= 2
+  std::size_t moving_ramps = 4;  ///< averaged after the first, even (half of each direction), >= 2
+  double moving_from = 0.25;     ///< the ramps' lower end, of the span, in [0, 1)
+  double moving_to = 0.75;       ///< their upper end, of the span, in (moving_from, 1]
+};
+
+/// One ramp of the moving part: `length` samples from `first` on.
+struct MovingRampSegment {
+  std::size_t first = 0, length = 0;
+  bool rising = true;
+};
+
+struct MovingExcitation {
+  double tone_hz = 0.0;                  ///< the sine's frequency [Hz] (whole cycles per ramp)
+  double amplitude_v = 0.0;              ///< its peak [V]
+  double ramp_v_per_s = 0.0;             ///< the ramps' rate [V/s]
+  std::vector<MovingRampSegment> ramps;  ///< the averaged ramps, in order; empty: none
 };
 
 struct ResponseMeasurementSegment {
@@ -51,6 +76,7 @@ struct FrequencyResponseExcitation {
   std::size_t period = 0;          ///< the multisine's period [samples]
   std::vector<std::size_t> lines;  ///< its excited DFT lines of one period, increasing
   std::vector<ResponseMeasurementSegment> segments;  ///< one per condition, in order
+  MovingExcitation moving;                           ///< after the conditions
 };
 
 /// Throws std::invalid_argument naming the option.
