@@ -35,7 +35,7 @@ struct ModelFile {
   ActuatorModel model;
   nlohmann::json identification = nlohmann::json::object();
   /// The stage's frequency responses measured with the model (its feedback is designed on them).
-  std::optional<StageResponses> responses;
+  std::optional<StageResponses> responses = std::nullopt;
 };
 
 nlohmann::json to_json(const ModelFile& file);

@@ -197,7 +197,7 @@ json law_json(const hc::FeedbackLaw& law) {
 }
 
 json summary_json(const FeedbackPlan& p, const hc::StageResponses& r,
-                  const hc::LoopDesignOptions& o, hc::CompensatorKind kind) {
+                  const hc::LoopDesignOptions& o) {
   const hc::LoopEvaluation& e = p.evaluation;
   json s = {{"law", law_json(p.law)},
             {"units",
@@ -286,7 +286,7 @@ FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
     if (!p.evaluation.ok() && !gains.force) {
       throw common::CommandError("unsafe_gains", refusal(p.evaluation, p.plants, o.targets));
     }
-    p.summary = summary_json(p, r, o, kind);
+    p.summary = summary_json(p, r, o);
     p.summary["gains"] = gains.any() ? "request" : "config";
     p.summary["forced"] = !p.evaluation.ok();
     if (!p.evaluation.ok()) p.summary["broken"] = p.evaluation.failure;
@@ -295,7 +295,7 @@ FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
     if (!d.found) throw common::CommandError("no_design", d.limit);
     p.law = d.law;
     p.evaluation = d.evaluation;
-    p.summary = summary_json(p, r, o, kind);
+    p.summary = summary_json(p, r, o);
     p.summary["gains"] = "designed";
     p.summary["structure"] = d.structure;
     p.summary["limited_by"] = d.limited_by;
