@@ -1,5 +1,5 @@
 // ns per sample of each model's step and of the inverses, at n = 10, 50, 200 plays
-// (modified PI: n plays and 2m+1 = n/5 + 1 dead zones).
+// (modified PI: n plays and 2m+1 = n/5 + 1 dead zones); the Preisach model at n x n cells.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -9,6 +9,7 @@
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "support/random_models.hpp"
 
@@ -29,6 +30,16 @@ hc::ActuatorModel make_model(const std::string& kind, int n) {
     h = std::make_unique<hc::PiModel>(mpi.play);
   } else if (kind == "mpi") {
     h = std::make_unique<hc::ModifiedPiModel>(mpi);
+  } else if (kind == "preisach") {
+    std::uniform_real_distribution<double> d(0.0, 1e-4);
+    hc::PreisachParameters p{0.0,
+                             150.0,
+                             static_cast<std::size_t>(n),
+                             std::vector<double>(hc::PreisachModel::cell_count(n)),
+                             0.05,
+                             0.0};
+    for (double& x : p.densities) x = d(rng);
+    h = std::make_unique<hc::PreisachModel>(p);
   } else if (kind == "rpi") {
     h = std::make_unique<hc::RateDependentPiModel>(
         hc::RateDependentPiParameters{mpi, std::vector<double>(n, 1e-6), 1e4}, 1e-4);
@@ -134,6 +145,11 @@ BENCHMARK_CAPTURE(model_step, pi, std::string("pi"))->Arg(10)->Arg(50)->Arg(200)
 BENCHMARK_CAPTURE(model_step, mpi, std::string("mpi"))->Arg(10)->Arg(50)->Arg(200);
 BENCHMARK_CAPTURE(model_step, cpi, std::string("cpi"))->Arg(10)->Arg(50)->Arg(200);
 BENCHMARK_CAPTURE(model_step, rpi, std::string("rpi"))->Arg(10)->Arg(50)->Arg(200);
+BENCHMARK_CAPTURE(model_step, preisach, std::string("preisach"))->Arg(10)->Arg(30);
+BENCHMARK_CAPTURE(inverse_step, preisach_numeric, std::string("preisach"),
+                  hc::InverseKind::kNumeric)
+    ->Arg(10)
+    ->Arg(30);
 BENCHMARK_CAPTURE(inverse_step, pi_analytic, std::string("pi"), hc::InverseKind::kAnalytic)
     ->Arg(10)
     ->Arg(50)

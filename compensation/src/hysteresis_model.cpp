@@ -7,11 +7,12 @@
 namespace hystbench::compensation {
 
 namespace {
-constexpr std::array<std::pair<ModelKind, std::string_view>, 4> kNames{{
+constexpr std::array<std::pair<ModelKind, std::string_view>, 5> kNames{{
     {ModelKind::kPi, "pi"},
     {ModelKind::kModifiedPi, "mpi"},
     {ModelKind::kCoupledPlayPi, "cpi"},
     {ModelKind::kRateDependentPi, "rpi"},
+    {ModelKind::kPreisach, "preisach"},
 }};
 }  // namespace
 

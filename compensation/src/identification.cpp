@@ -679,8 +679,11 @@ Candidate Identifier::search(ModelKind kind) {
       return search_cpi();
     case ModelKind::kRateDependentPi:
       return search_rpi();
+    case ModelKind::kPreisach:
+      break;  // not a play-operator search: preisach_identification.hpp
   }
-  throw std::invalid_argument("unknown model kind");
+  throw std::invalid_argument("identify: no play-operator search for model kind " +
+                              std::string(to_string(kind)));
 }
 
 void Identifier::refine(Candidate& c) {

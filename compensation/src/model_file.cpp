@@ -7,6 +7,7 @@
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 
 namespace hystbench::compensation {
@@ -88,7 +89,8 @@ ModelKind model_kind_from_json(const json& j) {
   if (!type.is_string()) fail("type", "must be a string");
   const auto kind = model_kind_from_string(type.get<std::string>());
   if (!kind)
-    fail("type", "unknown model type \"" + type.get<std::string>() + "\" (pi, mpi, cpi, rpi)");
+    fail("type",
+         "unknown model type \"" + type.get<std::string>() + "\" (pi, mpi, cpi, rpi, preisach)");
   return *kind;
 }
 
@@ -130,6 +132,27 @@ std::unique_ptr<HysteresisModel> hysteresis_from_json(const json& j, ModelKind k
                               0.0};
       if (j.contains("deadzone")) std::tie(p.dead_zone, p.center) = dead_zone_from_json(j);
       h = std::make_unique<CoupledPlayPiModel>(std::move(p));
+      break;
+    }
+    case ModelKind::kPreisach: {
+      const json& c = member(j, "", "preisach");
+      const json& cells = member(c, "preisach", "cells");
+      if (!cells.is_number_integer() || cells.get<long long>() < 1) {
+        fail("preisach.cells", "must be an integer >= 1");
+      }
+      PreisachParameters p{number(member(c, "preisach", "u_min"), "preisach.u_min"),
+                           number(member(c, "preisach", "u_max"), "preisach.u_max"),
+                           cells.get<std::size_t>(),
+                           numbers(c, "preisach", "densities"),
+                           number(member(c, "preisach", "slope"), "preisach.slope"),
+                           number(member(c, "preisach", "offset"), "preisach.offset")};
+      if (c.contains("output_map")) {  // files without it: the identity
+        const json& o = c["output_map"];
+        p.output_map = {numbers(o, "preisach.output_map", "thresholds"),
+                        numbers(o, "preisach.output_map", "weights")};
+        p.center = number(member(o, "preisach.output_map", "center"), "preisach.output_map.center");
+      }
+      h = std::make_unique<PreisachModel>(std::move(p));
       break;
     }
   }
@@ -191,6 +214,20 @@ json to_json(const ModelFile& file) {
       j["coupled_play"] = {{"r", p.r},   {"ra", p.ra},           {"rb", p.rb},
                            {"rc", p.rc}, {"weights", p.weights}, {"offset", p.offset}};
       if (p.has_dead_zones()) j["deadzone"] = dead_zone_to_json(p.dead_zone, p.center);
+      break;
+    }
+    case ModelKind::kPreisach: {
+      const auto& p = static_cast<const PreisachModel&>(m.hysteresis()).parameters();
+      j["preisach"] = {{"u_min", p.u_min},
+                       {"u_max", p.u_max},
+                       {"cells", p.cells},
+                       {"densities", p.densities},
+                       {"slope", p.slope},
+                       {"offset", p.offset},
+                       {"output_map",
+                        {{"thresholds", p.output_map.thresholds},
+                         {"weights", p.output_map.weights},
+                         {"center", p.center}}}};
       break;
     }
   }

@@ -142,8 +142,10 @@ TEST(ModelFile, CoupledPlayRoundTripWithAndWithoutOutputDeadZones) {
 
 TEST(ModelFile, ErrorsNameTheField) {
   json j = valid_mpi();
-  j["type"] = "preisach";
+  j["type"] = "bouc_wen";
   EXPECT_NE(error_of(j.dump()).find("type"), std::string::npos);
+  j["type"] = "preisach";  // a known type without its member
+  EXPECT_NE(error_of(j.dump()).find("preisach: missing"), std::string::npos) << error_of(j.dump());
 
   j = valid_mpi();
   j["play"].erase("weights");

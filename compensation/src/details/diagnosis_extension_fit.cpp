@@ -97,6 +97,8 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
         if (!(s.max_rate > 0.0)) return std::nullopt;
         break;
       }
+      case ModelKind::kPreisach:
+        return std::nullopt;  // no operator structure to extend
       case ModelKind::kCoupledPlayPi: {
         const auto& p = dynamic_cast<const CoupledPlayPiModel&>(h).parameters();
         s.play_thresholds = p.r;
@@ -240,6 +242,36 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
   return out;
 }
 
+// The additive terms' coefficients from their equations: nc creep lags' gains, then nb drift
+// pieces.
+Eigen::VectorXd additive_coefficients(NormalEquations& ne, std::size_t nc, std::size_t nb) {
+  const auto c = static_cast<Eigen::Index>(nc), b = static_cast<Eigen::Index>(nb);
+  const Eigen::VectorXd inf =
+      Eigen::VectorXd::Constant(c + b, std::numeric_limits<double>::infinity());
+  if (nc > 0 && nb > 0) {
+    // Creep first, then the drift on what it leaves: lags longer than the record are near
+    // ramps, as the drift's pieces are, and fitted together the two cancel in large opposite
+    // gains that a record without this drift then shows. Creep is the device's, the drift
+    // what its input does not explain.
+    Eigen::VectorXd coef(c + b);
+    const Eigen::MatrixXd& g = ne.gram();
+    coef.head(c) = solve_bounded_lsq(g.topLeftCorner(c, c), ne.rhs().head(c),
+                                     Eigen::VectorXd::Zero(c), inf.head(c))
+                       .x;
+    coef.tail(b) = solve_bounded_lsq(g.bottomRightCorner(b, b),
+                                     ne.rhs().tail(b) - g.bottomLeftCorner(b, c) * coef.head(c),
+                                     -inf.tail(b), inf.tail(b))
+                       .x;
+    return coef;
+  }
+  // Creep follows the move it answers, its lags' gains >= 0: unbounded, lags longer than the
+  // record (near ramps, near each other) cancel in large opposite gains that drift away over a
+  // longer run. The drift's pieces are free.
+  Eigen::VectorXd lo = -inf;
+  lo.head(c).setZero();
+  return solve_bounded_lsq(ne.gram(), ne.rhs(), lo, inf).x;
+}
+
 // Dead-zone kinds regress S'[y] (Kuhnen's error model), where creep and drift, which add to the
 // output, do not belong. As the identification does for creep, alternate: the hysteresis on
 // y minus the additive terms, then the additive terms (creep gains, drift) on y minus the
@@ -278,30 +310,7 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
       drift.row(k, row + nc);
       ne.push(r.y[k] - h[k]);
     }
-    const Eigen::VectorXd inf = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(unknowns),
-                                                          std::numeric_limits<double>::infinity());
-    if (nc > 0 && nb > 0) {
-      // Creep first, then the drift on what it leaves: lags longer than the record are near
-      // ramps, as the drift's pieces are, and fitted together the two cancel in large opposite
-      // gains that a record without this drift then shows. Creep is the device's, the drift
-      // what its input does not explain.
-      const auto c = static_cast<Eigen::Index>(nc), b = static_cast<Eigen::Index>(nb);
-      const Eigen::MatrixXd& g = ne.gram();
-      coef.head(c) = solve_bounded_lsq(g.topLeftCorner(c, c), ne.rhs().head(c),
-                                       Eigen::VectorXd::Zero(c), inf.head(c))
-                         .x;
-      coef.tail(b) = solve_bounded_lsq(g.bottomRightCorner(b, b),
-                                       ne.rhs().tail(b) - g.bottomLeftCorner(b, c) * coef.head(c),
-                                       -inf.tail(b), inf.tail(b))
-                         .x;
-    } else {
-      // Creep follows the move it answers, its lags' gains >= 0: unbounded, lags longer than
-      // the record (near ramps, near each other) cancel in large opposite gains that drift
-      // away over a longer run. The drift's pieces are free.
-      Eigen::VectorXd lo = -inf;
-      lo.head(static_cast<Eigen::Index>(nc)).setZero();
-      coef = solve_bounded_lsq(ne.gram(), ne.rhs(), lo, inf).x;
-    }
+    coef = additive_coefficients(ne, nc, nb);
     const double rss =
         ne.target_square_sum() - 2.0 * ne.rhs().dot(coef) + coef.dot(ne.gram() * coef);
     out.regression_mse =

@@ -1,5 +1,5 @@
 #pragma once
-// Common interface of the Prandtl-Ishlinskii-family hysteresis models.
+// Common interface of the hysteresis models: the Prandtl-Ishlinskii family and the Preisach model.
 // Units are the caller's: input typically V, output typically µm.
 // step()/peek()/reset() are real-time safe: no allocation, no exceptions, O(number of operators).
 #include <cstddef>
@@ -18,9 +18,10 @@ enum class ModelKind {
   kModifiedPi,       ///< Kuhnen's modified PI: PI followed by 2m+1 one-sided dead zones
   kCoupledPlayPi,    ///< asymmetric PI of coupled-play operators (r, ra, rb, rc)
   kRateDependentPi,  ///< modified PI whose cumulative play weights are linear in |du/dt|
+  kPreisach,         ///< Preisach relays with a density on a grid (preisach_model.hpp)
 };
 
-/// "pi", "mpi", "cpi", "rpi".
+/// "pi", "mpi", "cpi", "rpi", "preisach".
 std::string_view to_string(ModelKind kind) noexcept;
 std::optional<ModelKind> model_kind_from_string(std::string_view name) noexcept;
 

@@ -1,0 +1,211 @@
+#include "hystbench/compensation/preisach_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "details/validate.hpp"
+
+namespace hystbench::compensation {
+
+namespace {
+
+// The input's place on the grid: its cell (clamped to N - 1) and where in it, in [0, 1].
+struct GridPoint {
+  std::size_t cell = 0;
+  double along = 0.0;
+};
+
+GridPoint on_grid(double x, double u_min, double h, std::size_t n) {
+  const double f = (x - u_min) / h;
+  const auto cell = std::min(n - 1, static_cast<std::size_t>(std::max(0.0, f)));
+  return {cell, std::clamp(f - static_cast<double>(cell), 0.0, 1.0)};
+}
+
+}  // namespace
+
+PreisachModel::PreisachModel(PreisachParameters p) : p_(std::move(p)), map_(p_.output_map) {
+  details::require(std::isfinite(p_.u_min) && std::isfinite(p_.u_max) && p_.u_min < p_.u_max,
+                   "preisach: u_min must be below u_max");
+  details::require(p_.cells >= 1 && p_.cells <= kMaxCells,
+                   "preisach: cells must be in [1, " + std::to_string(kMaxCells) + "]");
+  const std::size_t n = p_.cells, stride = n + 1;
+  details::require(
+      p_.densities.size() == cell_count(n),
+      "preisach: densities must hold N (N + 1) / 2 = " + std::to_string(cell_count(n)) +
+          " values, got " + std::to_string(p_.densities.size()));
+  details::require_finite(p_.densities, "preisach: densities");
+  details::require_finite(p_.slope, "preisach: slope");
+  details::require_finite(p_.offset, "preisach: offset");
+  details::require_finite(p_.center, "preisach: center");
+  h_ = (p_.u_max - p_.u_min) / static_cast<double>(n);
+  mass_.resize(p_.densities.size());
+  for (std::size_t q = 0, i = 0; q < n; ++q) {
+    for (std::size_t c = 0; c <= q; ++c, ++i) {
+      mass_[i] = p_.densities[i] * h_ * h_ * (c == q ? 0.5 : 1.0);
+    }
+  }
+  auto mass = [&](std::size_t row, std::size_t col) { return mass_[row * (row + 1) / 2 + col]; };
+  row_.assign(n * stride, 0.0);
+  column_.assign(n * stride, 0.0);
+  for (std::size_t r = 0; r < n; ++r) {
+    for (std::size_t k = 1; k <= n; ++k) {
+      row_[r * stride + k] = row_[r * stride + k - 1] + (k - 1 < r ? mass(r, k - 1) : 0.0);
+    }
+  }
+  for (std::size_t c = 0; c < n; ++c) {
+    for (std::size_t k = 1; k <= n; ++k) {
+      // Cells (r, c) with c < r < k.
+      const std::size_t r = k - 1;
+      column_[c * stride + k] = column_[c * stride + k - 1] + (r > c ? mass(r, c) : 0.0);
+    }
+  }
+  triangle_.assign(stride * stride, 0.0);
+  for (std::size_t i = 1; i <= n; ++i) {
+    for (std::size_t j = i; j-- > 0;) {
+      // G(x_i, x_j) = G(x_i, x_(j+1)) + column j below row i + the diagonal cell j.
+      triangle_[i * stride + j] =
+          triangle_[i * stride + j + 1] + column_[j * stride + i] + mass(j, j);
+    }
+  }
+  reset(p_.u_min);
+}
+
+double PreisachModel::clamp(double u) const noexcept {
+  return std::isfinite(u) ? std::clamp(u, p_.u_min, p_.u_max) : u_;
+}
+
+double PreisachModel::everett(double a, double b) const noexcept {
+  a = clamp(a);
+  b = clamp(b);
+  if (!(a > b)) return 0.0;
+  const std::size_t n = p_.cells, stride = n + 1;
+  const GridPoint ga = on_grid(a, p_.u_min, h_, n), gb = on_grid(b, p_.u_min, h_, n);
+  const std::size_t i = ga.cell, j = gb.cell;
+  const double s = ga.along, t = gb.along;
+  auto diagonal = [&](std::size_t c) { return mass_[c * (c + 1) / 2 + c]; };
+  if (i == j) return (s - t) * (s - t) * diagonal(i);
+  const double below = 1.0 - t;  // of b's cell, the part above b
+  return triangle_[i * stride + j + 1] + s * (row_[i * stride + i] - row_[i * stride + j + 1]) +
+         s * s * diagonal(i) + below * column_[j * stride + i] + below * below * diagonal(j) +
+         s * below * mass_[i * (i + 1) / 2 + j];
+}
+
+void PreisachModel::apply(double u, Memory& m) const noexcept {
+  const double x = clamp(u);
+  if (x == u_) return;
+  const bool rising = x > u_;
+  if (rising != (m.n % 2 == 1)) {
+    // The last input turned: it joins the memory (a full memory forgets its innermost pair).
+    if (m.n == kMaxExtrema) m.n -= 2;
+    m.e[m.n++] = u_;
+  }
+  if (rising) {
+    while (m.n >= 3 && x >= m.e[m.n - 2]) m.n -= 2;  // maxima below x are wiped out
+  } else {
+    while (m.n >= 2 && x <= m.e[m.n - 2]) {
+      if (m.n == 2) {  // down to u_min: every relay down
+        m.n = 1;
+        break;
+      }
+      m.n -= 2;
+    }
+  }
+}
+
+double PreisachModel::hysteresis(const Memory& m, double x) const noexcept {
+  double y = 0.0;
+  for (std::size_t i = 1; i < m.n; i += 2) {
+    const double after = i + 1 < m.n ? m.e[i + 1] : x;
+    y += everett(m.e[i], m.e[i - 1]) - everett(m.e[i], after);
+  }
+  if (m.n % 2 == 1) y += everett(x, m.e[m.n - 1]);
+  return y;
+}
+
+double PreisachModel::step(double u) noexcept {
+  apply(u, memory_);
+  u_ = clamp(u);
+  return p_.center + map_.apply(p_.offset + p_.slope * u + hysteresis(memory_, u_));
+}
+
+double PreisachModel::peek(double u) const noexcept {
+  Memory m = memory_;
+  apply(u, m);
+  return p_.center + map_.apply(p_.offset + p_.slope * u + hysteresis(m, clamp(u)));
+}
+
+void PreisachModel::reset(double u0) noexcept {
+  memory_.n = 1;
+  memory_.e[0] = p_.u_min;
+  u_ = p_.u_min;
+  apply(u0, memory_);
+  u_ = clamp(u0);
+}
+
+void PreisachModel::cell_areas(double u, std::span<double> out) const noexcept {
+  if (out.size() != p_.densities.size()) return;
+  std::fill(out.begin(), out.end(), 0.0);
+  Memory m = memory_;
+  apply(u, m);
+  const double x = clamp(u);
+  // Each cell's area in {b <= beta <= alpha <= a}, times sign, added to out.
+  auto add = [&](double a, double b, double sign) {
+    if (!(a > b)) return;
+    const std::size_t n = p_.cells;
+    const std::size_t i = on_grid(a, p_.u_min, h_, n).cell, j = on_grid(b, p_.u_min, h_, n).cell;
+    for (std::size_t r = j; r <= i; ++r) {
+      const double a_lo = p_.u_min + static_cast<double>(r) * h_;
+      const double a_hi = std::min(a_lo + h_, a);
+      for (std::size_t c = j; c <= r; ++c) {
+        const double b_lo = std::max(p_.u_min + static_cast<double>(c) * h_, b);
+        const double b_hi = p_.u_min + static_cast<double>(c + 1) * h_;
+        double area = 0.0;
+        if (c < r) {
+          area = std::max(0.0, a_hi - a_lo) * std::max(0.0, b_hi - b_lo);
+        } else if (a_hi > b_lo) {
+          area = 0.5 * (a_hi - b_lo) * (a_hi - b_lo);
+        }
+        out[r * (r + 1) / 2 + c] += sign * area;
+      }
+    }
+  };
+  for (std::size_t i = 1; i < m.n; i += 2) {
+    add(m.e[i], m.e[i - 1], 1.0);
+    add(m.e[i], i + 1 < m.n ? m.e[i + 1] : x, -1.0);
+  }
+  if (m.n % 2 == 1) add(x, m.e[m.n - 1], 1.0);
+}
+
+Invertibility PreisachModel::invertibility() const {
+  for (std::size_t i = 0; i < p_.densities.size(); ++i) {
+    if (p_.densities[i] < 0.0) {
+      return Invertibility::failure("preisach", static_cast<int>(i), p_.densities[i],
+                                    "preisach density[" + std::to_string(i) +
+                                        "] = " + details::fmt(p_.densities[i]) +
+                                        " is negative: the output would fall as the input rises");
+    }
+  }
+  if (p_.slope < 0.0) {
+    return Invertibility::failure("preisach", -1, p_.slope,
+                                  "preisach slope = " + details::fmt(p_.slope) + " is negative");
+  }
+  if (Invertibility map = map_.invertibility(); !map.invertible) {
+    map.block = "preisach.output_map";
+    map.reason = "preisach output map: " + map.reason;
+    return map;
+  }
+  const bool any = p_.slope > 0.0 || std::any_of(p_.densities.begin(), p_.densities.end(),
+                                                 [](double d) { return d > 0.0; });
+  if (!any) {
+    return Invertibility::failure("preisach", -1, 0.0,
+                                  "preisach: every density and the slope are 0 (a constant)");
+  }
+  return Invertibility::ok();
+}
+
+std::unique_ptr<HysteresisModel> PreisachModel::clone() const {
+  return std::make_unique<PreisachModel>(*this);
+}
+
+}  // namespace hystbench::compensation
