@@ -1,5 +1,6 @@
 #include "hystbench/common/fit_families.hpp"
 
+#include <algorithm>
 #include <array>
 #include <stdexcept>
 
@@ -29,13 +30,22 @@ std::vector<std::string> fit_family_name_list() {
   return names;
 }
 
+namespace {
+// A fitted family's kind by its name (a model kind that is no fit family: none).
+std::optional<hc::ModelKind> family_named(const std::string& name) noexcept {
+  const auto kind = hc::model_kind_from_string(name);
+  if (kind && std::find(kFamilies.begin(), kFamilies.end(), *kind) != kFamilies.end()) return kind;
+  return std::nullopt;
+}
+}  // namespace
+
 bool is_fit_family(const std::string& name) noexcept {
-  return name == kAuto || hc::model_kind_from_string(name).has_value();
+  return name == kAuto || family_named(name).has_value();
 }
 
 std::optional<hc::ModelKind> parse_fit_family(const std::string& name) {
   if (name == kAuto) return std::nullopt;
-  if (const auto kind = hc::model_kind_from_string(name)) return kind;
+  if (const auto kind = family_named(name)) return kind;
   throw std::invalid_argument("unknown '" + name + "' (" + fit_family_names() + ")");
 }
 
