@@ -20,18 +20,11 @@ namespace {
 constexpr double kRate = 1000.0, kDt = 1.0 / kRate;
 constexpr double kGain = 0.3;  // [um/V]
 
-// frf's drive at 1 kHz over 0-150 V, its moving part's ramps.
-struct Drive {
-  hs::FrequencyResponseExcitation x;
-  std::vector<hc::MovingRamp> ramps;
-};
-
-Drive frf_drive() {
+// frf's drive at 1 kHz over 0-150 V.
+hs::FrequencyResponseExcitation frf_drive() {
   hs::FrequencyResponseExcitationOptions o;
   o.rate_hz = kRate;
-  Drive d{hs::make_frequency_response_excitation(o), {}};
-  for (const auto& r : d.x.moving.ramps) d.ramps.push_back({r.first, r.length, r.rising});
-  return d;
+  return hs::make_frequency_response_excitation(o);
 }
 
 // A one-play rate-dependent PI whose weight grows with |du/dt| by `c` per V/s (its output
@@ -51,8 +44,8 @@ std::vector<double> through_rate_law(const std::vector<double>& u, double c, dou
   return y;
 }
 
-hc::MovingResponse measure(const Drive& d, const std::vector<double>& y) {
-  return hc::estimate_moving_response(d.x.u, y, d.ramps, d.x.moving.tone_hz, kRate);
+hc::MovingResponse measure(const hs::FrequencyResponseExcitation& d, const std::vector<double>& y) {
+  return hc::estimate_moving_response(d.u, y, d.moving.ramps, d.moving.tone_hz, kRate);
 }
 
 }  // namespace
@@ -61,23 +54,23 @@ hc::MovingResponse measure(const Drive& d, const std::vector<double>& y) {
 // that settles, a sine of a fiftieth of the rate on each over whole cycles, never turning the
 // motion (the drive's step keeps the ramp's sign), within the slew limit.
 TEST(MovingExcitation, RampsAlternateAndTheirSineNeverTurnsTheMotion) {
-  const Drive d = frf_drive();
-  const hs::MovingExcitation& m = d.x.moving;
+  const hs::FrequencyResponseExcitation d = frf_drive();
+  const hs::MovingExcitation& m = d.moving;
   ASSERT_EQ(m.ramps.size(), 4u);
   EXPECT_NEAR(m.tone_hz, 20.0, 1e-9);
   for (std::size_t i = 0; i < m.ramps.size(); ++i) {
-    const hs::MovingRampSegment& r = m.ramps[i];
+    const hc::MovingRamp& r = m.ramps[i];
     EXPECT_EQ(r.rising, i % 2 == 1) << i;  // the settling ramp rose; then down, up, down, up
     const double cycles = static_cast<double>(r.length) * m.tone_hz / kRate;
     EXPECT_NEAR(cycles, std::round(cycles), 1e-9);
     EXPECT_GE(cycles, 8.0);
     for (std::size_t k = r.first + 1; k < r.first + r.length; ++k) {
-      const double step = d.x.u[k] - d.x.u[k - 1];
+      const double step = d.u[k] - d.u[k - 1];
       ASSERT_GT(r.rising ? step : -step, 0.0) << "ramp " << i << " turns at sample " << k;
     }
-    EXPECT_NEAR(d.x.u[r.first], r.rising ? 37.5 : 112.5, 1e-9);
+    EXPECT_NEAR(d.u[r.first], r.rising ? 37.5 : 112.5, 1e-9);
   }
-  EXPECT_EQ(m.ramps.back().first + m.ramps.back().length, d.x.u.size());
+  EXPECT_EQ(m.ramps.back().first + m.ramps.back().length, d.u.size());
   // A slow slew limit lengthens the ramps (more cycles), never outruns the limit.
   hs::FrequencyResponseExcitationOptions o;
   o.rate_hz = kRate;
@@ -99,39 +92,39 @@ TEST(MovingExcitation, RampsAlternateAndTheirSineNeverTurnsTheMotion) {
 // 10 %, through a 190 Hz mode and the sensor's 5 nm of noise. A weight that falls with the rate
 // makes the rising ramps lag.
 TEST(MovingResponse, FindsTheZeroARateLawPutsOnOneDirection) {
-  const Drive d = frf_drive();
+  const hs::FrequencyResponseExcitation d = frf_drive();
   const double c = kGain / (2.0 * std::numbers::pi * 30.0 * 75.0);  // a 30 Hz zero at 75 V
-  const hc::MovingResponse m = measure(d, through_rate_law(d.x.u, c, 0.005));
+  const hc::MovingResponse m = measure(d, through_rate_law(d.u, c, 0.005));
   EXPECT_EQ(m.lagging, "falling");
   EXPECT_EQ(m.ramps, 4u);
   EXPECT_NEAR(m.zero_hz, 30.0, 3.0) << m.lag_deg << " deg";
   EXPECT_LT(m.lag_noise_deg, 0.5);
-  const hc::MovingResponse back = measure(d, through_rate_law(d.x.u, -c, 0.005));
+  const hc::MovingResponse back = measure(d, through_rate_law(d.u, -c, 0.005));
   EXPECT_EQ(back.lagging, "rising");
   EXPECT_NEAR(back.zero_hz, 30.0, 3.0) << back.lag_deg << " deg";
 }
 
 // Without a rate law the mode and the noise lag neither direction: no zero.
 TEST(MovingResponse, ARateIndependentStageHasNoZero) {
-  const Drive d = frf_drive();
-  const hc::MovingResponse m = measure(d, through_rate_law(d.x.u, 0.0, 0.005));
+  const hs::FrequencyResponseExcitation d = frf_drive();
+  const hc::MovingResponse m = measure(d, through_rate_law(d.u, 0.0, 0.005));
   EXPECT_EQ(m.zero_hz, 0.0) << m.lag_deg << " +/- " << m.lag_noise_deg << " deg";
   EXPECT_LT(m.lag_deg, 0.5);
   EXPECT_NEAR(std::abs(m.rising), kGain, 0.02 * kGain);  // the mode adds 1.1 % at 20 Hz
 }
 
 TEST(MovingResponse, RefusesWhatItCannotMeasure) {
-  const Drive d = frf_drive();
-  const std::vector<double> y = through_rate_law(d.x.u, 0.0, 0.0);
-  const std::vector<hc::MovingRamp> rising_only = {d.ramps[1], d.ramps[3]};
-  EXPECT_THROW(hc::estimate_moving_response(d.x.u, y, rising_only, 20.0, kRate),
+  const hs::FrequencyResponseExcitation d = frf_drive();
+  const std::vector<double> y = through_rate_law(d.u, 0.0, 0.0);
+  const std::vector<hc::MovingRamp> rising_only = {d.moving.ramps[1], d.moving.ramps[3]};
+  EXPECT_THROW(hc::estimate_moving_response(d.u, y, rising_only, 20.0, kRate),
                std::invalid_argument);
-  const std::vector<hc::MovingRamp> short_ramps = {{d.ramps[0].first, 60, false},
-                                                   {d.ramps[1].first, 60, true}};
-  EXPECT_THROW(hc::estimate_moving_response(d.x.u, y, short_ramps, 20.0, kRate),
+  const std::vector<hc::MovingRamp> short_ramps = {{d.moving.ramps[0].first, 60, false},
+                                                   {d.moving.ramps[1].first, 60, true}};
+  EXPECT_THROW(hc::estimate_moving_response(d.u, y, short_ramps, 20.0, kRate),
                std::invalid_argument);
-  const std::vector<hc::MovingRamp> beyond = {{d.x.u.size() - 100, 400, false}, d.ramps[1]};
-  EXPECT_THROW(hc::estimate_moving_response(d.x.u, y, beyond, 20.0, kRate), std::invalid_argument);
-  EXPECT_THROW(hc::estimate_moving_response(d.x.u, y, d.ramps, 600.0, kRate),
+  const std::vector<hc::MovingRamp> beyond = {{d.u.size() - 100, 400, false}, d.moving.ramps[1]};
+  EXPECT_THROW(hc::estimate_moving_response(d.u, y, beyond, 20.0, kRate), std::invalid_argument);
+  EXPECT_THROW(hc::estimate_moving_response(d.u, y, d.moving.ramps, 600.0, kRate),
                std::invalid_argument);
 }

@@ -169,8 +169,7 @@ std::optional<double> clip_level(std::span<const double> y) {
 std::optional<hc::MovingResponse> moving_response(const RunProgram& run,
                                                   const sim::FrequencyResponseExcitation& x,
                                                   std::size_t n, double rate_hz) {
-  std::vector<hc::MovingRamp> ramps;
-  for (const sim::MovingRampSegment& r : x.moving.ramps) {
+  for (const hc::MovingRamp& r : x.moving.ramps) {
     if (r.first + r.length > n) {
       throw common::CommandError("measurement_failed",
                                  "the run recorded " + std::to_string(n) +
@@ -178,12 +177,11 @@ std::optional<hc::MovingResponse> moving_response(const RunProgram& run,
                                      std::to_string(r.first + r.length) + ")");
     }
     if (clip_level(std::span(run.records.y).subspan(r.first, r.length))) return std::nullopt;
-    ramps.push_back({r.first, r.length, r.rising});
   }
   try {
     return hc::estimate_moving_response(std::span(run.records.u).first(n),
-                                        std::span(run.records.y).first(n), ramps, x.moving.tone_hz,
-                                        rate_hz);
+                                        std::span(run.records.y).first(n), x.moving.ramps,
+                                        x.moving.tone_hz, rate_hz);
   } catch (const std::invalid_argument& e) {
     throw common::CommandError("measurement_failed", std::string("the moving ramps: ") + e.what());
   }

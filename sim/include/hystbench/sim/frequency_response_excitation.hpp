@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "hystbench/compensation/moving_response.hpp"
+
 namespace hystbench::sim {
 
 struct ResponseCondition {
@@ -50,17 +52,12 @@ struct FrequencyResponseExcitationOptions {
   double moving_to = 0.75;       ///< their upper end, of the span, in (moving_from, 1]
 };
 
-/// One ramp of the moving part: `length` samples from `first` on.
-struct MovingRampSegment {
-  std::size_t first = 0, length = 0;
-  bool rising = true;
-};
-
 struct MovingExcitation {
-  double tone_hz = 0.0;                  ///< the sine's frequency [Hz] (whole cycles per ramp)
-  double amplitude_v = 0.0;              ///< its peak [V]
-  double ramp_v_per_s = 0.0;             ///< the ramps' rate [V/s]
-  std::vector<MovingRampSegment> ramps;  ///< the averaged ramps, in order; empty: none
+  double tone_hz = 0.0;       ///< the sine's frequency [Hz] (whole cycles per ramp)
+  double amplitude_v = 0.0;   ///< its peak [V]
+  double ramp_v_per_s = 0.0;  ///< the ramps' rate [V/s]
+  /// The averaged ramps, in order (compensation's moving_response.hpp reads them); empty: none.
+  std::vector<compensation::MovingRamp> ramps;
 };
 
 struct ResponseMeasurementSegment {
