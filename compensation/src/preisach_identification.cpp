@@ -17,7 +17,7 @@ namespace {
 Eigen::MatrixXd smoothness_gram(std::size_t n, Eigen::Index unknowns) {
   Eigen::MatrixXd d = Eigen::MatrixXd::Zero(unknowns, unknowns);
   auto at = [](std::size_t p, std::size_t q) {
-    return static_cast<Eigen::Index>(p * (p + 1) / 2 + q);
+    return static_cast<Eigen::Index>(PreisachModel::cell_index(p, q));
   };
   auto pair = [&d](Eigen::Index a, Eigen::Index b) {
     d(a, a) += 1.0;
@@ -85,10 +85,6 @@ double rms_over(std::span<const double> u, std::span<const double> y, const Prei
   }
   return std::sqrt(sum / static_cast<double>(to - from));
 }
-
-}  // namespace
-
-namespace {
 
 // The output map's inverse for m dead zones per side over the scored output's range, about its
 // middle (none for m = 0).

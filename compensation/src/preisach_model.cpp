@@ -45,7 +45,7 @@ PreisachModel::PreisachModel(PreisachParameters p) : p_(std::move(p)), map_(p_.o
       mass_[i] = p_.densities[i] * h_ * h_ * (c == q ? 0.5 : 1.0);
     }
   }
-  auto mass = [&](std::size_t row, std::size_t col) { return mass_[row * (row + 1) / 2 + col]; };
+  auto mass = [&](std::size_t row, std::size_t col) { return mass_[cell_index(row, col)]; };
   row_.assign(n * stride, 0.0);
   column_.assign(n * stride, 0.0);
   for (std::size_t r = 0; r < n; ++r) {
@@ -83,12 +83,12 @@ double PreisachModel::everett(double a, double b) const noexcept {
   const GridPoint ga = on_grid(a, p_.u_min, h_, n), gb = on_grid(b, p_.u_min, h_, n);
   const std::size_t i = ga.cell, j = gb.cell;
   const double s = ga.along, t = gb.along;
-  auto diagonal = [&](std::size_t c) { return mass_[c * (c + 1) / 2 + c]; };
+  auto diagonal = [&](std::size_t c) { return mass_[cell_index(c, c)]; };
   if (i == j) return (s - t) * (s - t) * diagonal(i);
   const double below = 1.0 - t;  // of b's cell, the part above b
   return triangle_[i * stride + j + 1] + s * (row_[i * stride + i] - row_[i * stride + j + 1]) +
          s * s * diagonal(i) + below * column_[j * stride + i] + below * below * diagonal(j) +
-         s * below * mass_[i * (i + 1) / 2 + j];
+         s * below * mass_[cell_index(i, j)];
 }
 
 void PreisachModel::apply(double u, Memory& m) const noexcept {
@@ -166,7 +166,7 @@ void PreisachModel::cell_areas(double u, std::span<double> out) const noexcept {
         } else if (a_hi > b_lo) {
           area = 0.5 * (a_hi - b_lo) * (a_hi - b_lo);
         }
-        out[r * (r + 1) / 2 + c] += sign * area;
+        out[cell_index(r, c)] += sign * area;
       }
     }
   };

@@ -33,7 +33,7 @@ struct PreisachParameters {
   double u_min = 0.0, u_max = 1.0;  ///< the plane's input range [input unit], u_min < u_max
   std::size_t cells = 1;            ///< N, cells per side, in [1, PreisachModel::kMaxCells]
   /// N (N + 1) / 2 densities >= 0 [output unit / input unit^2], cell (p, q) (alpha in row p,
-  /// beta in column q <= p) at p (p + 1) / 2 + q.
+  /// beta in column q <= p) at PreisachModel::cell_index(p, q) = p (p + 1) / 2 + q.
   std::vector<double> densities;
   double slope = 0.0;   ///< the reversible part [output unit / input unit], >= 0
   double offset = 0.0;  ///< [output unit]
@@ -68,6 +68,8 @@ class PreisachModel final : public HysteresisModel {
   void cell_areas(double u, std::span<double> out) const noexcept;
   /// Cells in the triangle of N cells per side.
   static std::size_t cell_count(std::size_t n) noexcept { return n * (n + 1) / 2; }
+  /// The index of cell (p, q), alpha in row p, beta in column q <= p, in densities.
+  static std::size_t cell_index(std::size_t p, std::size_t q) noexcept { return cell_count(p) + q; }
 
  private:
   // The memory after an input u from the present state: its extrema and how many.
