@@ -91,53 +91,78 @@ double PreisachModel::everett(double a, double b) const noexcept {
          s * below * mass_[cell_index(i, j)];
 }
 
-void PreisachModel::apply(double u, Memory& m) const noexcept {
-  const double x = clamp(u);
-  if (x == u_) return;
-  const bool rising = x > u_;
-  if (rising != (m.n % 2 == 1)) {
-    // The last input turned: it joins the memory (a full memory forgets its innermost pair).
-    if (m.n == kMaxExtrema) m.n -= 2;
-    m.e[m.n++] = u_;
-  }
-  if (rising) {
-    while (m.n >= 3 && x >= m.e[m.n - 2]) m.n -= 2;  // maxima below x are wiped out
-  } else {
-    while (m.n >= 2 && x <= m.e[m.n - 2]) {
-      if (m.n == 2) {  // down to u_min: every relay down
-        m.n = 1;
-        break;
-      }
-      m.n -= 2;
-    }
-  }
+double PreisachModel::closing(const Memory& m, std::size_t n, double v) const noexcept {
+  if (n == 0) return 0.0;
+  // Onto a minimum, a maximum opens its term; onto a maximum, a minimum closes it.
+  return n % 2 == 1 ? everett(v, m.e[n - 1]) : -everett(m.e[n - 1], v);
 }
 
-double PreisachModel::hysteresis(const Memory& m, double x) const noexcept {
-  double y = 0.0;
-  for (std::size_t i = 1; i < m.n; i += 2) {
-    const double after = i + 1 < m.n ? m.e[i + 1] : x;
-    y += everett(m.e[i], m.e[i - 1]) - everett(m.e[i], after);
+PreisachModel::Turn PreisachModel::turn(const Memory& m, double x) const noexcept {
+  Turn t{m.n, kNoPush, 0.0};
+  if (x == u_) return t;
+  const bool rising = x > u_;
+  if (rising != (t.n % 2 == 1)) {
+    // The last input turned: it joins the memory (a full memory forgets its innermost pair).
+    if (t.n == kMaxExtrema) t.n -= 2;
+    t.pushed_at = t.n;
+    t.pushed_prefix = m.p[t.n] + closing(m, t.n, u_);
+    ++t.n;
   }
-  if (m.n % 2 == 1) y += everett(x, m.e[m.n - 1]);
-  return y;
+  // The wiping reads below the pushed extremum only (n - 2 < pushed_at).
+  if (rising) {
+    while (t.n >= 3 && x >= m.e[t.n - 2]) t.n -= 2;  // maxima below x are wiped out
+  } else {
+    while (t.n >= 2 && x <= m.e[t.n - 2]) {
+      if (t.n == 2) {  // down to u_min: every relay down
+        t.n = 1;
+        break;
+      }
+      t.n -= 2;
+    }
+  }
+  return t;
+}
+
+void PreisachModel::apply(double u, Memory& m) const noexcept {
+  const Turn t = turn(m, clamp(u));
+  if (t.pushed_at < t.n) {
+    m.e[t.pushed_at] = u_;
+    m.p[t.pushed_at + 1] = t.pushed_prefix;
+  }
+  m.n = t.n;
+}
+
+double PreisachModel::hysteresis(const Memory& m, const Turn& t, double x) const noexcept {
+  // The closed terms' sum, then the open one the input x closes now.
+  const bool pushed = t.pushed_at + 1 == t.n;
+  const double prefix = pushed ? t.pushed_prefix : m.p[t.n];
+  const double top = pushed ? u_ : m.e[t.n - 1];
+  return t.n % 2 == 0 ? prefix - everett(top, x) : prefix + everett(x, top);
 }
 
 double PreisachModel::step(double u) noexcept {
-  apply(u, memory_);
-  u_ = clamp(u);
-  return p_.center + map_.apply(p_.offset + p_.slope * u + hysteresis(memory_, u_));
+  const double x = clamp(u);
+  const Turn t = turn(memory_, x);
+  const double y = hysteresis(memory_, t, x);
+  if (t.pushed_at < t.n) {
+    memory_.e[t.pushed_at] = u_;
+    memory_.p[t.pushed_at + 1] = t.pushed_prefix;
+  }
+  memory_.n = t.n;
+  u_ = x;
+  return p_.center + map_.apply(p_.offset + p_.slope * u + y);
 }
 
 double PreisachModel::peek(double u) const noexcept {
-  Memory m = memory_;
-  apply(u, m);
-  return p_.center + map_.apply(p_.offset + p_.slope * u + hysteresis(m, clamp(u)));
+  const double x = clamp(u);
+  return p_.center +
+         map_.apply(p_.offset + p_.slope * u + hysteresis(memory_, turn(memory_, x), x));
 }
 
 void PreisachModel::reset(double u0) noexcept {
   memory_.n = 1;
   memory_.e[0] = p_.u_min;
+  memory_.p[0] = memory_.p[1] = 0.0;
   u_ = p_.u_min;
   apply(u0, memory_);
   u_ = clamp(u0);

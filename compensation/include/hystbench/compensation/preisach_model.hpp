@@ -72,13 +72,26 @@ class PreisachModel final : public HysteresisModel {
   static std::size_t cell_index(std::size_t p, std::size_t q) noexcept { return cell_count(p) + q; }
 
  private:
-  // The memory after an input u from the present state: its extrema and how many.
+  // The memory: its extrema, how many, and p[i], the sum of the terms its first i extrema close
+  // (so that an output reads one Everett value, not one per extremum).
   struct Memory {
     std::array<double, kMaxExtrema> e{};
+    std::array<double, kMaxExtrema + 1> p{};
     std::size_t n = 0;
   };
+  // What an input x does to a memory, without changing it: its new size, and where the last
+  // input joins it (kNoPush: it does not) with the prefix sum there.
+  static constexpr std::size_t kNoPush = kMaxExtrema + 1;
+  struct Turn {
+    std::size_t n;
+    std::size_t pushed_at;
+    double pushed_prefix;
+  };
+  Turn turn(const Memory& m, double x) const noexcept;
+  // The term an extremum v closes, pushed at index n of m.
+  double closing(const Memory& m, std::size_t n, double v) const noexcept;
   void apply(double u, Memory& m) const noexcept;
-  double hysteresis(const Memory& m, double u) const noexcept;
+  double hysteresis(const Memory& m, const Turn& t, double x) const noexcept;
   double clamp(double u) const noexcept;
 
   PreisachParameters p_;
