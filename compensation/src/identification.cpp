@@ -20,6 +20,7 @@
 #include "details/validate.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/preisach_identification.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/compensation/rate_estimator.hpp"
 
@@ -62,6 +63,9 @@ std::vector<std::pair<RateLaw, double>> rate_laws_and_filters() {
   }
   return out;
 }
+// The Preisach plane's cells per side when the options leave the order open (its smoothness
+// penalty, chosen on held-out data, keeps a short record from over-fitting them).
+constexpr int kPreisachCells = 24;
 // Caps of the rate law tried, as fractions of the record's largest smooth rate.
 constexpr double kRateCapFractions[] = {1.0, 0.8, 0.64, 0.51};
 // The thresholds law: how far the thresholds widen at the record's largest smooth rate, as
@@ -257,6 +261,11 @@ class Identifier {
   Candidate search_mpi();
   Candidate search_cpi();
   Candidate search_rpi();
+  // The Preisach plane over the fitted input range, with drift and creep lags (as the options
+  // ask) fitted jointly (creep_taus empty: none). Its smoothness and output map by held-out.
+  Candidate fit_preisach_with(std::span<const double> y, const std::vector<double>& creep_taus);
+  Candidate search_preisach() { return fit_preisach_with(r_.y, {}); }
+  void add_preisach_creep(Candidate& c);
   // The rate law over one modified PI's plays and dead zones: its nested self, the joint fits
   // over the rate filters and caps, the paper's rate-group regression; the best by held-out.
   Candidate rpi_over(const Candidate& mpi);
@@ -410,7 +419,7 @@ int Identifier::mpi_plays(int m) {
 }
 
 void Identifier::finish(Candidate& c) {
-  if (o_.refine_thresholds) refine(c);
+  if (o_.refine_thresholds && c.structure.kind != ModelKind::kPreisach) refine(c);
   if (o_.creep) add_creep(c);
 }
 
@@ -680,7 +689,7 @@ Candidate Identifier::search(ModelKind kind) {
     case ModelKind::kRateDependentPi:
       return search_rpi();
     case ModelKind::kPreisach:
-      break;  // not a play-operator search: preisach_identification.hpp
+      return search_preisach();
   }
   throw std::invalid_argument("identify: no play-operator search for model kind " +
                               std::string(to_string(kind)));
@@ -705,6 +714,7 @@ std::vector<double> Identifier::creep_time_constants() const {
 }
 
 void Identifier::add_creep(Candidate& c) {
+  if (c.structure.kind == ModelKind::kPreisach) return add_preisach_creep(c);
   ModelStructure s = c.structure;
   s.creep_time_constants = creep_time_constants();
   // Joint linear fit: exact for PI / CPI (creep adds to the output); for MPI / RPI the
@@ -756,13 +766,83 @@ void Identifier::add_creep(Candidate& c) {
   if (o_.creep_always || best.score() < c.score()) c = std::move(best);
 }
 
+Candidate Identifier::fit_preisach_with(std::span<const double> y,
+                                        const std::vector<double>& creep_taus) {
+  PreisachFitOptions po;
+  po.cells = static_cast<std::size_t>(o_.operators > 0 ? o_.operators : kPreisachCells);
+  po.u_min = r_.u_lo;
+  po.u_max = r_.u_hi;
+  po.begin = r_.begin;
+  if (o_.dead_zones >= 0) po.output_zones = {static_cast<std::size_t>(o_.dead_zones)};
+  Candidate c;
+  c.structure.kind = ModelKind::kPreisach;
+  c.structure.dt = r_.dt;
+  c.structure.drift = o_.drift;
+  c.structure.drift_t0_s = r_.drift_t0_s;
+  std::vector<std::vector<double>> columns;
+  if (o_.drift) {
+    std::vector<double>& time = columns.emplace_back(r_.fit_end);
+    for (std::size_t k = 0; k < r_.fit_end; ++k) time[k] = c.structure.drift_time_s(k);
+  }
+  for (const double tau : creep_taus) {
+    std::vector<double>& lag = columns.emplace_back(r_.fit_end);
+    const double a = std::exp(-r_.dt / tau);
+    double x = r_.ud[0];
+    for (std::size_t k = 0; k < r_.fit_end; ++k) lag[k] = x = a * x + (1.0 - a) * r_.ud[k];
+  }
+  for (std::size_t j = 0; j < columns.size(); ++j) {
+    po.columns.push_back({columns[j], !(o_.drift && j == 0)});
+  }
+  const PreisachFit f = fit_preisach(std::span(r_.ud).first(r_.fit_end), y.first(r_.fit_end), po);
+  c.model = ActuatorModel(std::make_unique<PreisachModel>(f.parameters));
+  const std::size_t first_lag = o_.drift ? 1 : 0;
+  if (o_.drift) c.drift = f.column_weights[0];
+  if (!creep_taus.empty()) {
+    c.structure.creep_time_constants = creep_taus;
+    c.model->set_creep(CreepParameters{
+        creep_taus,
+        std::vector<double>(f.column_weights.begin() + first_lag, f.column_weights.end())});
+  }
+  c.method = "bounded-lsq-preisach (" + std::to_string(po.cells) + " cells per side, " +
+             std::to_string(f.output_zones) + " output dead zones per side, smoothness " +
+             fmt(f.smoothness) + ")";
+  score(c, r_);
+  log_.push_back({ModelKind::kPreisach, static_cast<int>(po.cells),
+                  static_cast<int>(f.output_zones), r_.delay, c.fit.rmse, c.heldout.rmse,
+                  c.method});
+  return c;
+}
+
+void Identifier::add_preisach_creep(Candidate& c) {
+  const std::vector<double> taus = creep_time_constants();
+  // Joint: the lags beside the cells, inside the output map (first order with one); then
+  // alternating, the plane refitted on y less the lags' output, whose gains are the joint fit's.
+  Candidate best = fit_preisach_with(r_.y, taus);
+  best.method += "+creep";
+  std::vector<double> y_adj(r_.n);
+  for (int iteration = 0; iteration < 2 && best.model; ++iteration) {
+    if (!best.model->creep()) break;
+    CreepOperatorBank bank(*best.model->creep(), r_.dt);
+    bank.reset(r_.ud[0]);
+    for (std::size_t k = 0; k < r_.n; ++k) y_adj[k] = r_.y[k] - bank.step(r_.ud[k]);
+    Candidate alt = fit_preisach_with(y_adj, {});
+    alt.structure.creep_time_constants = taus;
+    alt.model->set_creep(best.model->creep());
+    alt.method += "+creep-alternating";
+    score(alt, r_);
+    if (!(alt.score() < best.score())) break;
+    best = std::move(alt);
+  }
+  if (o_.creep_always || best.score() < c.score()) c = std::move(best);
+}
+
 FitResult Identifier::run() {
   progress(0.0, "checking the record");
   int delay = choose_delay(o_.kind.value_or(ModelKind::kModifiedPi));
   r_.set_delay(delay);
   memo_.clear();
   Candidate best = search_families();
-  if (o_.refine_thresholds) {
+  if (o_.refine_thresholds && best.structure.kind != ModelKind::kPreisach) {
     progress(0.7, "refining thresholds (Levenberg-Marquardt)");
     refine(best);
   }
@@ -782,6 +862,10 @@ Candidate Identifier::search_families() {
   if (o_.kind) {
     kinds.push_back(*o_.kind);
   } else {
+    // The play families only: auto judges by the held-out error on the record's last part, and
+    // the Preisach plane's cells beat the modified PI there on the NTU identification run (0.218
+    // against 0.241 um) yet predict its tracking run 1.6-2.2x worse. The plane is fitted by
+    // name, or among identify's candidates, which are judged by tracking on the bench.
     kinds = {ModelKind::kPi, ModelKind::kModifiedPi, ModelKind::kCoupledPlayPi,
              ModelKind::kRateDependentPi};
   }
@@ -892,6 +976,10 @@ FitResult Identifier::scored_result(Candidate& best, int delay, std::vector<std:
   out.heldout_samples = r_.n - r_.fit_end;
   out.operators = static_cast<int>(best.structure.plays());
   out.dead_zones = dead_zones_of(best.structure);
+  if (const auto* preisach = dynamic_cast<const PreisachModel*>(&out.model.hysteresis())) {
+    out.operators = static_cast<int>(preisach->parameters().cells);
+    out.dead_zones = static_cast<int>(preisach->parameters().output_map.thresholds.size() / 2);
+  }
   out.method = best.method;
   out.delay_samples = delay;
   out.creep = !best.structure.creep_time_constants.empty();

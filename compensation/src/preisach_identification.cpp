@@ -5,34 +5,13 @@
 #include <limits>
 
 #include "details/constrained_lsq.hpp"
+#include "details/preisach_smoothness.hpp"
 #include "details/validate.hpp"
 #include "hystbench/compensation/dead_zone.hpp"
 
 namespace hystbench::compensation {
 
 namespace {
-
-// The smoothness penalty's Gram matrix over the densities: one row per pair of neighbouring
-// cells (the next alpha row, the next beta column), e_a - e_b.
-Eigen::MatrixXd smoothness_gram(std::size_t n, Eigen::Index unknowns) {
-  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(unknowns, unknowns);
-  auto at = [](std::size_t p, std::size_t q) {
-    return static_cast<Eigen::Index>(PreisachModel::cell_index(p, q));
-  };
-  auto pair = [&d](Eigen::Index a, Eigen::Index b) {
-    d(a, a) += 1.0;
-    d(b, b) += 1.0;
-    d(a, b) -= 1.0;
-    d(b, a) -= 1.0;
-  };
-  for (std::size_t p = 0; p < n; ++p) {
-    for (std::size_t q = 0; q <= p; ++q) {
-      if (p + 1 < n) pair(at(p, q), at(p + 1, q));
-      if (q + 1 <= p) pair(at(p, q), at(p, q + 1));
-    }
-  }
-  return d;
-}
 
 // The output map's inverse S': thresholds (zero at index m) and its dead zones' columns.
 struct MapDesign {
@@ -74,13 +53,22 @@ PreisachParameters parameters_from(const PreisachParameters& grid, const MapDesi
   return p;
 }
 
+// The extra columns' weights in a solution (after the cells, slope, offset and map).
+std::vector<double> column_weights(const Eigen::VectorXd& x, Eigen::Index first, std::size_t n) {
+  std::vector<double> w(n);
+  for (std::size_t j = 0; j < n; ++j) w[j] = x(first + static_cast<Eigen::Index>(j));
+  return w;
+}
+
 double rms_over(std::span<const double> u, std::span<const double> y, const PreisachParameters& p,
-                std::size_t from, std::size_t to) {
+                const PreisachFitOptions& o, std::span<const double> weights, std::size_t from,
+                std::size_t to) {
   PreisachModel model(p);
   model.reset(u.front());
   double sum = 0.0;
   for (std::size_t k = 0; k < to; ++k) {
-    const double e = model.step(u[k]) - y[k];
+    double e = model.step(u[k]) - y[k];
+    for (std::size_t j = 0; j < weights.size(); ++j) e += weights[j] * o.columns[j].values[k];
     if (k >= from) sum += e * e;
   }
   return std::sqrt(sum / static_cast<double>(to - from));
@@ -109,7 +97,8 @@ PreisachFit fit_with_map(std::span<const double> u, std::span<const double> y,
                          std::size_t split) {
   const MapDesign map = map_design(y, o.begin, zones, grid);
   const std::size_t cells = grid.densities.size(), end = u.size();
-  const auto unknowns = static_cast<Eigen::Index>(cells + 2 + 2 * map.m);
+  const auto first_column = static_cast<Eigen::Index>(cells + 2 + 2 * map.m);
+  const auto unknowns = first_column + static_cast<Eigen::Index>(o.columns.size());
   // One pass: each sample's cell areas, u, 1 and the map's columns, into the first part's
   // equations and the rest's.
   details::NormalEquations first(unknowns), rest(unknowns);
@@ -127,26 +116,37 @@ PreisachFit fit_with_map(std::span<const double> u, std::span<const double> y,
     r[cells + 1] = 1.0;
     const double z = y[k] - grid.center;
     map.columns(z, r + cells + 2);
+    for (std::size_t j = 0; j < o.columns.size(); ++j) r[first_column + j] = o.columns[j].values[k];
     ne.push(z);
   }
   Eigen::VectorXd lower = Eigen::VectorXd::Zero(unknowns);
   const Eigen::VectorXd upper =
       Eigen::VectorXd::Constant(unknowns, std::numeric_limits<double>::infinity());
   lower(static_cast<Eigen::Index>(cells) + 1) = -std::numeric_limits<double>::infinity();  // offset
-  for (Eigen::Index j = static_cast<Eigen::Index>(cells) + 2; j < unknowns; ++j) {
+  for (Eigen::Index j = static_cast<Eigen::Index>(cells) + 2; j < first_column; ++j) {
     lower(j) = kMinMapSlope - 1.0;  // the inverse map's slope outward >= kMinMapSlope
   }
-  const Eigen::MatrixXd smooth = smoothness_gram(grid.cells, unknowns);
+  for (std::size_t j = 0; j < o.columns.size(); ++j) {
+    if (!o.columns[j].nonnegative) {
+      lower(first_column + static_cast<Eigen::Index>(j)) = -std::numeric_limits<double>::infinity();
+    }
+  }
   const Eigen::MatrixXd& g_first = first.gram();
-  const double scale = g_first.diagonal().head(static_cast<Eigen::Index>(cells)).mean();
-  auto solve = [&](const Eigen::MatrixXd& g, const Eigen::VectorXd& b, double weight) {
-    const Eigen::MatrixXd penalised = g + weight * scale * smooth;
-    return parameters_from(grid, map, details::solve_bounded_lsq(penalised, b, lower, upper).x);
-  };
   PreisachFit fit;
+  auto solve = [&](const Eigen::MatrixXd& g, const Eigen::VectorXd& b, double weight) {
+    // The penalty scaled by the first part's columns, for the whole record's fit too.
+    const double scale = g_first.diagonal().head(static_cast<Eigen::Index>(cells)).mean() /
+                         g.diagonal().head(static_cast<Eigen::Index>(cells)).mean();
+    Eigen::MatrixXd penalised = g;
+    details::add_preisach_smoothness(penalised, grid.cells, 0, weight * scale);
+    const Eigen::VectorXd x = details::solve_bounded_lsq(penalised, b, lower, upper).x;
+    fit.column_weights = column_weights(x, first_column, o.columns.size());
+    return parameters_from(grid, map, x);
+  };
   fit.heldout_rms = std::numeric_limits<double>::infinity();
   for (const double s : o.smoothness) {
-    const double rms = rms_over(u, y, solve(g_first, first.rhs(), s), split, end);
+    const PreisachParameters p = solve(g_first, first.rhs(), s);
+    const double rms = rms_over(u, y, p, o, fit.column_weights, split, end);
     fit.tried_rms.push_back(rms);
     if (rms < fit.heldout_rms) {
       fit.smoothness = s;
@@ -154,7 +154,7 @@ PreisachFit fit_with_map(std::span<const double> u, std::span<const double> y,
     }
   }
   fit.parameters = solve(g_first + rest.gram(), first.rhs() + rest.rhs(), fit.smoothness);
-  fit.fit_rms = rms_over(u, y, fit.parameters, o.begin, end);
+  fit.fit_rms = rms_over(u, y, fit.parameters, o, fit.column_weights, o.begin, end);
   fit.output_zones = zones;
   return fit;
 }
@@ -170,6 +170,10 @@ PreisachFit fit_preisach(std::span<const double> u, std::span<const double> y,
                    "preisach fit: heldout_fraction must be in (0, 0.5]");
   details::require(!o.smoothness.empty() && !o.output_zones.empty(),
                    "preisach fit: no smoothness weight or output map to try");
+  for (const PreisachFitOptions::Column& c : o.columns) {
+    details::require(c.values.size() == u.size(), "preisach fit: a column differs in length");
+    details::require_finite(c.values, "a column");
+  }
   for (const double s : o.smoothness) {
     details::require(std::isfinite(s) && s >= 0.0, "preisach fit: smoothness weights must be >= 0");
   }

@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
@@ -465,6 +466,38 @@ TEST(DiagnosisHiddenEffect, NamesCreep) { expect_named({hc::Cause::kCreep, 500.0
 TEST(DiagnosisHiddenEffect, NamesDynamics) { expect_named({hc::Cause::kDynamics, 5000.0, 105}); }
 TEST(DiagnosisHiddenEffect, NamesDelay) { expect_named({hc::Cause::kDelay, 1000.0, 106}); }
 TEST(DiagnosisHiddenEffect, NamesDrift) { expect_named({hc::Cause::kDrift, 1000.0, 107}); }
+
+// A Preisach plane as the baseline (`diagnose --model` of what `fit --model preisach` wrote): the
+// effect hidden beside the relays is named on top of it, the extension keeps the plane (its shape
+// fixed, its scale refitted), and the extended model predicts the second record better.
+TEST(DiagnosisHiddenEffect, NamesTheEffectBesideAPreisachBaseline) {
+  for (const HiddenCase& c :
+       {HiddenCase{hc::Cause::kCreep, 500.0, 104}, HiddenCase{hc::Cause::kDynamics, 5000.0, 105}}) {
+    const HiddenData d = make_hidden(c);
+    hc::FitOptions fit;
+    fit.kind = hc::ModelKind::kPreisach;
+    fit.delay_samples = 0;
+    hc::DiagnosisOptions o;
+    const hc::FitResult plane = hc::fit_model(d.first.t, d.first.u, d.first.y, fit);
+    ASSERT_EQ(plane.model.hysteresis().kind(), hc::ModelKind::kPreisach)
+        << testing::PrintToString(plane.notes);
+    o.baseline = plane.model;
+    const hc::Diagnosis dg = hc::diagnose(d.first.t, d.first.u, d.first.y, o);
+    SCOPED_TRACE(name_of(c) + ": " + d.truth);
+    EXPECT_EQ(dg.cause, c.cause) << hc::to_string(dg.cause);
+    EXPECT_EQ(dg.extended.hysteresis().kind(), hc::ModelKind::kPreisach)
+        << testing::PrintToString(dg.extended_parts)
+        << (dg.causes.empty() ? "" : dg.causes.front().extension);
+    const Record& r2 = d.second_without_drift;
+    const double dt2 = r2.t[1] - r2.t[0];
+    const double ratio = hc::validate_model(dg.extended, r2.u, r2.y, dt2).rmse /
+                         hc::validate_model(dg.baseline, r2.u, r2.y, dt2).rmse;
+    std::printf("%s on a Preisach baseline: named %s, gain %.2f, second record %.3fx\n",
+                name_of(c).c_str(), std::string(hc::to_string(dg.cause)).c_str(),
+                dg.baseline_heldout.rmse / dg.extended_heldout.rmse, ratio);
+    EXPECT_LT(ratio, 0.9);  // measured 0.83 (creep), 0.13 (dynamics)
+  }
+}
 
 // The resonance is fitted jointly with the weights (variable projection), not only named: its
 // natural frequency within 2 % and its damping within 20 %, across the range the bench meets

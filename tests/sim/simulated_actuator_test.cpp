@@ -233,6 +233,11 @@ TEST(SimulatedActuatorDefault, ThePreisachFamilyHoldsItsLoop) {
   const double cpi =
       heldout_rms_of_fit(hs::SimulatedActuatorConfig{}, hc::ModelKind::kCoupledPlayPi);
   EXPECT_LT(fit.heldout_rms, 0.5 * cpi);
+  // Through fit_model (`fit --model preisach`): the same plane, its held-out error alike.
+  const double by_name =
+      heldout_rms_of_fit(hs::SimulatedActuatorConfig{}, hc::ModelKind::kPreisach);
+  RecordProperty("fit_model_preisach_heldout_um", std::to_string(by_name));
+  EXPECT_LT(by_name, 0.5 * cpi);
   // On the modified-PI truth (plays, then dead zones on the output: not a Preisach model).
   c.hysteresis = hs::SimulatedActuatorConfig::modified_pi_truth().hysteresis;
   hs::SimulatedActuator b(c, dt);

@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "details/preisach_smoothness.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
@@ -46,9 +47,20 @@ std::vector<double> sample_rates(std::span<const double> u, double dt, double ra
 }
 
 Design::Design(ModelStructure s) : s_(std::move(s)) {
-  if (s_.play_thresholds.empty()) throw std::invalid_argument("a design needs at least one play");
+  if (s_.kind == ModelKind::kPreisach) {
+    const std::size_t n = s_.preisach_cells;
+    const bool shaped = !s_.preisach_shape.empty();
+    plane_ = std::make_unique<PreisachModel>(PreisachParameters{
+        s_.plane_min, s_.plane_max, n,
+        shaped ? s_.preisach_shape : std::vector<double>(PreisachModel::cell_count(n), 0.0)});
+    s_.play_thresholds.clear();
+    n_ = shaped ? 1 : static_cast<Eigen::Index>(PreisachModel::cell_count(n));
+  } else if (s_.play_thresholds.empty()) {
+    throw std::invalid_argument("a design needs at least one play");
+  } else {
+    n_ = static_cast<Eigen::Index>(s_.plays());
+  }
   if (s_.kind == ModelKind::kRateDependentPi) s_.input_reference = 0.0;  // see header
-  n_ = static_cast<Eigen::Index>(s_.plays());
   if (s_.kind == ModelKind::kCoupledPlayPi) {
     cp_ = coupled_thresholds(s_);
     increments_ = s_.cp_scale[2] > 1.0 || s_.cp_scale[0] < s_.cp_scale[1];
@@ -69,6 +81,7 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
     rate_.configure(s_.rate_filter_s, s_.dt, s_.rate_law);
   }
   play_cols_ = s_.kind == ModelKind::kRateDependentPi && !thresholds_law() ? 2 * n_ : n_;
+  if (plane_) play_cols_ = n_ + 1;  // the cells, then the reversible slope
   offset_col_ = play_cols_;
   dz_col_ = offset_col_ + 1;
   creep_col_ = dz_col_ + m_pos_ + m_neg_;
@@ -80,6 +93,7 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
 }
 
 void Design::reset(double u0) noexcept {
+  if (plane_) plane_->reset(u0);
   std::fill(z_.begin(), z_.end(), u0);
   std::fill(creep_x_.begin(), creep_x_.end(), u0);
   u_prev_ = u0;
@@ -108,13 +122,23 @@ double Design::row(double u, double y, double* a) noexcept {
   const double rho = s_.kind == ModelKind::kRateDependentPi
                          ? std::clamp(rate_.step(u) * inv_max_rate_, -1.0, 1.0)
                          : 0.0;
-  step_operators(u, thresholds_law()
-                        ? threshold_widening(s_.threshold_rate_s, s_.threshold_rate_exponent,
-                                             s_.max_rate, std::abs(rho) * s_.max_rate)
-                        : 0.0);
+  if (!plane_) {
+    step_operators(u, thresholds_law()
+                          ? threshold_widening(s_.threshold_rate_s, s_.threshold_rate_exponent,
+                                               s_.max_rate, std::abs(rho) * s_.max_rate)
+                          : 0.0);
+  }
   // Cumulative-weight regressors: sum_i w_i (p_i - u_ref) = sum_i W_i (p_i - p_{i+1}).
   const double* z = z_.data();
-  if (thresholds_law()) {
+  if (plane_) {
+    if (s_.preisach_shape.empty()) {
+      plane_->cell_areas(u, std::span<double>(a, static_cast<std::size_t>(n_)));
+      plane_->step(u);
+    } else {
+      a[0] = plane_->step(u);  // no slope, offset or map: the shape's relays alone
+    }
+    a[n_] = u - s_.input_reference;
+  } else if (thresholds_law()) {
     for (Eigen::Index i = 0; i < n_; ++i) a[i] = z[i] - (i + 1 < n_ ? z[i + 1] : 0.0);
   } else if (s_.kind == ModelKind::kRateDependentPi) {
     const bool signed_law = s_.rate_law == RateLaw::kSigned;
@@ -131,7 +155,7 @@ double Design::row(double u, double y, double* a) noexcept {
     a[n_ - 1] = z[n_ - 1] - s_.input_reference;
   }
   a[offset_col_] = 1.0;
-  double target = y;
+  double target = plane_ && !s_.has_dead_zones() ? y - s_.center : y;
   if (s_.has_dead_zones()) {
     // S'[v] = clamp(v, d'_-1, d'_1) + sum_j V_j t_j per side, t_j = s_j - s_{j+1}.
     const double v = y - s_.center;
@@ -173,6 +197,11 @@ Eigen::VectorXd Design::lower_bounds() const {
   // falls with the rate and the unloading one rises, so the loop widens with frequency (the
   // paper's Fig. 1, as a lag widens it), and W_i >= eps on all of [-max_rate, max_rate].
   if (play_cols_ > n_) lo.segment(n_, play_cols_ - n_).setConstant(0.0);
+  // Preisach: densities >= 0, the reversible slope >= the least play slope (strictly rising).
+  if (plane_) {
+    lo.head(n_).setConstant(0.0);
+    lo(n_) = s_.min_play_slope;
+  }
   lo.segment(dz_col_, m_pos_ + m_neg_).setConstant(s_.min_dead_zone_slope);
   // Creep follows the move it answers: its lags' gains >= 0 (unbounded, lags longer than the
   // record, near each other, cancel in large opposite gains that drift away over a longer run).
@@ -182,7 +211,49 @@ Eigen::VectorXd Design::lower_bounds() const {
 
 Eigen::VectorXd Design::upper_bounds() const { return Eigen::VectorXd::Constant(unknowns_, kInf); }
 
+void Design::add_penalty(Eigen::MatrixXd& gram) const {
+  if (plane_ && s_.preisach_shape.empty()) {
+    add_preisach_smoothness(gram, s_.preisach_cells, 0, s_.smoothness);
+  }
+}
+
+namespace {
+// The output dead zone S from the fitted cumulative weights of its inverse S' (w'_0 = 1, the
+// increments of V outward from 0: `pos` above, `neg` below).
+DeadZoneParameters output_map(const ModelStructure& s, const double* pos, std::size_t m_pos,
+                              const double* neg, std::size_t m_neg) {
+  DeadZoneParameters inv;
+  inv.thresholds = s.dead_zone_thresholds;
+  inv.weights.assign(inv.thresholds.size(), 0.0);
+  const std::size_t zero = s.zero_index();
+  inv.weights[zero] = 1.0;
+  const auto up = cumulative_to_increments(pos, m_pos, 1.0);
+  const auto down = cumulative_to_increments(neg, m_neg, 1.0);
+  for (std::size_t j = 0; j < up.size(); ++j) inv.weights[zero + 1 + j] = up[j];
+  for (std::size_t j = 0; j < down.size(); ++j) inv.weights[zero - 1 - j] = down[j];
+  return DeadZoneSuperposition(std::move(inv)).inverse().parameters();
+}
+}  // namespace
+
+std::unique_ptr<HysteresisModel> Design::build_plane(const Eigen::VectorXd& x) const {
+  PreisachParameters p = plane_->parameters();
+  if (s_.preisach_shape.empty()) {
+    p.densities.assign(x.data(), x.data() + n_);
+  } else {
+    for (double& d : p.densities) d *= x[0];
+  }
+  p.slope = x[n_];
+  p.offset = x[offset_col_] - s_.input_reference * p.slope;
+  if (s_.has_dead_zones()) {
+    p.output_map = output_map(s_, x.data() + dz_col_, static_cast<std::size_t>(m_pos_),
+                              x.data() + dz_col_ + m_pos_, static_cast<std::size_t>(m_neg_));
+  }
+  p.center = s_.center;
+  return std::make_unique<PreisachModel>(std::move(p));
+}
+
 std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd& x) const {
+  if (plane_) return build_plane(x);
   const auto n = static_cast<std::size_t>(n_);
   // Signed rate law: W_i(rho) = U_i + (1 - rho) C_i, C_i = sum_{j<=i} e_j, so at rest U_i + C_i
   // and the rate coefficients -C_i per max_rate.
@@ -212,16 +283,8 @@ std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd&
   }
   play.offset += s_.center;
   // Inverse dead zone: w'_0 = 1 and increments of the cumulative V outward from 0.
-  DeadZoneParameters inv;
-  inv.thresholds = s_.dead_zone_thresholds;
-  inv.weights.assign(inv.thresholds.size(), 0.0);
-  const std::size_t zero = s_.zero_index();
-  inv.weights[zero] = 1.0;
-  const auto pos = cumulative_to_increments(x.data() + dz_col_, dz_pos_.size(), 1.0);
-  const auto neg = cumulative_to_increments(x.data() + dz_col_ + m_pos_, dz_neg_.size(), 1.0);
-  for (std::size_t j = 0; j < pos.size(); ++j) inv.weights[zero + 1 + j] = pos[j];
-  for (std::size_t j = 0; j < neg.size(); ++j) inv.weights[zero - 1 - j] = neg[j];
-  DeadZoneParameters forward = DeadZoneSuperposition(std::move(inv)).inverse().parameters();
+  DeadZoneParameters forward = output_map(s_, x.data() + dz_col_, dz_pos_.size(),
+                                          x.data() + dz_col_ + m_pos_, dz_neg_.size());
   if (s_.kind == ModelKind::kCoupledPlayPi) {
     CoupledPlayParameters p{
         cp_.r, cp_.ra, cp_.rb, cp_.rc, play.weights, play.offset, std::move(forward), s_.center};
@@ -276,7 +339,9 @@ BoundedLsqResult fit_design(Design& design, std::span<const double> u, std::span
       }
     }
   }
-  return solve_bounded_lsq(ne.gram(), ne.rhs(), design.lower_bounds(), design.upper_bounds());
+  Eigen::MatrixXd g = ne.gram();
+  design.add_penalty(g);
+  return solve_bounded_lsq(g, ne.rhs(), design.lower_bounds(), design.upper_bounds());
 }
 
 }  // namespace hystbench::compensation::details

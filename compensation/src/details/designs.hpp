@@ -19,6 +19,11 @@
 //              thresholds law: as MPI, every play's threshold r_i > 0 + threshold_rate_s * rate
 //              (rate = min(|rate|, max_rate); with an exponent p < 1, + threshold_rate_s *
 //              max_rate * |rho|^p); no rate columns.
+//   Preisach : S'[y - ctr] = sum_c rho_c A_c(t) + s (u - u_ref) + c0 (S' only with dead zones;
+//              without, y itself and ctr = 0): each cell's area in the up region A_c, its
+//              density rho_c >= 0, the reversible slope s >= min_play_slope; a smoothness penalty
+//              on neighbouring densities (add_penalty) with the structure's weight. With a
+//              fixed shape, one column sum_c shape_c A_c(t) for all the cells, its scale >= 0.
 // Creep lags, when present, are extra unconstrained columns; so is the drift column (time from
 // drift_t0_s), which estimates a record's slow drift and is no part of the built model.
 #include <Eigen/Dense>
@@ -31,6 +36,7 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/dead_zone.hpp"
 #include "hystbench/compensation/hysteresis_model.hpp"
+#include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/compensation/rate_estimator.hpp"
 
 namespace hystbench::compensation::details {
@@ -54,8 +60,14 @@ struct ModelStructure {
   double min_play_slope = 0.0;             ///< lower bound on cumulative play weights
   double min_dead_zone_slope = 0.0;        ///< lower bound on cumulative inverse dead-zone weights
   std::vector<double> creep_time_constants;  ///< creep lag columns [s] (empty = none)
-  bool drift = false;       ///< a drift column: time since sample 0 less drift_t0_s [s]
-  double drift_t0_s = 0.0;  ///< the time the drift column is zero at [s]
+  bool drift = false;              ///< a drift column: time since sample 0 less drift_t0_s [s]
+  double drift_t0_s = 0.0;         ///< the time the drift column is zero at [s]
+  std::size_t preisach_cells = 0;  ///< Preisach: cells per side of the plane
+  double plane_min = 0.0, plane_max = 0.0;  ///< Preisach: the plane's input range [input unit]
+  double smoothness = 0.0;  ///< Preisach: the penalty's weight (add_preisach_smoothness)
+  /// Preisach: the densities' shape, fixed (PreisachParameters::densities): then one column, the
+  /// plane's output, whose scale is fitted. Empty: every cell's density is an unknown.
+  std::vector<double> preisach_shape;
 
   bool operator==(const ModelStructure&) const = default;
   std::size_t plays() const noexcept { return play_thresholds.size(); }
@@ -64,10 +76,12 @@ struct ModelStructure {
     return static_cast<double>(k) * dt - drift_t0_s;
   }
   std::size_t zero_index() const;  ///< index of 0 in dead_zone_thresholds
-  /// MPI and RPI always have the dead-zone stage; CPI when it has dead zones ({0} alone: none).
+  /// MPI and RPI always have the dead-zone stage; CPI and Preisach when they have dead zones ({0}
+  /// alone: none).
   bool has_dead_zones() const noexcept {
     return kind == ModelKind::kModifiedPi || kind == ModelKind::kRateDependentPi ||
-           (kind == ModelKind::kCoupledPlayPi && dead_zone_thresholds.size() > 1);
+           ((kind == ModelKind::kCoupledPlayPi || kind == ModelKind::kPreisach) &&
+            dead_zone_thresholds.size() > 1);
   }
 };
 
@@ -108,6 +122,9 @@ class Design {
 
   Eigen::VectorXd lower_bounds() const;
   Eigen::VectorXd upper_bounds() const;
+  /// Adds the structure's penalty to a Gram matrix over unknowns() (Preisach: the smoothness of
+  /// its densities; nothing for the play families).
+  void add_penalty(Eigen::MatrixXd& gram) const;
 
   /// The model for the fitted unknowns (hysteresis + creep gains; no delay, not configured).
   ActuatorModel build(const Eigen::VectorXd& x) const;
@@ -115,6 +132,7 @@ class Design {
   std::unique_ptr<HysteresisModel> build_hysteresis(const Eigen::VectorXd& x) const;
 
  private:
+  std::unique_ptr<HysteresisModel> build_plane(const Eigen::VectorXd& x) const;
   /// Steps the plays with input u; `widen` is added to every threshold [input unit].
   void step_operators(double u, double widen) noexcept;
   bool thresholds_law() const noexcept {
@@ -123,9 +141,10 @@ class Design {
 
   ModelStructure s_;
   CoupledThresholds cp_;
-  Eigen::Index n_ = 0;      // plays
-  Eigen::Index m_pos_ = 0;  // dead zones above 0
-  Eigen::Index m_neg_ = 0;  // dead zones below 0
+  std::unique_ptr<PreisachModel> plane_;  // Preisach: the grid that gives the cells' areas
+  Eigen::Index n_ = 0;                    // plays
+  Eigen::Index m_pos_ = 0;                // dead zones above 0
+  Eigen::Index m_neg_ = 0;                // dead zones below 0
   Eigen::Index play_cols_ = 0;
   Eigen::Index offset_col_ = 0;
   Eigen::Index dz_col_ = 0;

@@ -20,12 +20,26 @@ constexpr std::array<std::array<double, 3>, 4> kCoupledScales{
 
 ModelStructure with_dead_zones(const ModelStructure& base, const DiagnosisRecord& r, int m) {
   ModelStructure s = base;
-  if (s.kind != ModelKind::kRateDependentPi) s.kind = ModelKind::kModifiedPi;
+  // A Preisach plane keeps its relays and gains dead zones on its output map.
+  if (s.kind != ModelKind::kRateDependentPi && s.kind != ModelKind::kPreisach) {
+    s.kind = ModelKind::kModifiedPi;
+  }
   s.center = 0.5 * (r.y_lo + r.y_hi);
   const double above = r.y_hi - s.center;
   const double below = s.center - r.y_lo;
   s.dead_zone_thresholds = uniform_dead_zone_thresholds(static_cast<std::size_t>(m), below, above);
   return s;
+}
+
+std::string family_name(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::kRateDependentPi:
+      return "rate-dependent PI";
+    case ModelKind::kPreisach:
+      return "Preisach plane";
+    default:
+      return "modified PI";
+  }
 }
 
 int dead_zones_per_side(const ModelStructure& s) {
@@ -51,10 +65,8 @@ CandidateOutcome test_asymmetry(const CandidateContext& c) {
   for (int m = m0 + 1; m <= std::max(3, m0 + 2); ++m) {
     ExtensionSpec spec = c.base;
     spec.structure = with_dead_zones(base, c.record, m);
-    tries.emplace_back(
-        spec, std::string(spec.structure.kind == ModelKind::kRateDependentPi ? "rate-dependent PI"
-                                                                             : "modified PI") +
-                  " with " + std::to_string(m) + " dead zones per side");
+    tries.emplace_back(spec, family_name(spec.structure.kind) + " with " + std::to_string(m) +
+                                 " dead zones per side");
   }
   if (base.kind == ModelKind::kPi || base.kind == ModelKind::kCoupledPlayPi) {
     for (const auto& scale : kCoupledScales) {

@@ -5,6 +5,7 @@
 
 #include "details/diagnosis_candidates.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 
 namespace hystbench::compensation::details {
@@ -87,6 +88,12 @@ std::string describe_model(const ActuatorModel& model) {
       const auto& p = dynamic_cast<const RateDependentPiModel&>(h).parameters();
       s += ", " + std::to_string(p.base.play.thresholds.size()) + " plays, " +
            dead_zones(p.base.dead_zone) + ", rate-dependent up to " + num(p.max_rate) + "/s";
+      break;
+    }
+    case ModelKind::kPreisach: {
+      const auto& p = dynamic_cast<const PreisachModel&>(h).parameters();
+      s += ", " + std::to_string(p.cells) + " x " + std::to_string(p.cells) + " cells, " +
+           dead_zones(p.output_map) + " on its output";
       break;
     }
     default:

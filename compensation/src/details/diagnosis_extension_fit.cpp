@@ -12,6 +12,7 @@
 #include "hystbench/compensation/delay_line.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 
 namespace hystbench::compensation::details {
@@ -97,8 +98,21 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
         if (!(s.max_rate > 0.0)) return std::nullopt;
         break;
       }
-      case ModelKind::kPreisach:
-        return std::nullopt;  // no operator structure to extend
+      case ModelKind::kPreisach: {
+        const auto& p = dynamic_cast<const PreisachModel&>(h).parameters();
+        s.play_thresholds.clear();
+        s.preisach_cells = p.cells;
+        s.plane_min = p.u_min;
+        s.plane_max = p.u_max;
+        s.preisach_shape = p.densities;
+        s.center = p.center;
+        if (p.output_map.thresholds.size() > 1) {
+          s.dead_zone_thresholds =
+              DeadZoneSuperposition(p.output_map).inverse().parameters().thresholds;
+        }
+        if (model.creep()) s.creep_time_constants = model.creep()->time_constants_s;
+        return s;
+      }
       case ModelKind::kCoupledPlayPi: {
         const auto& p = dynamic_cast<const CoupledPlayPiModel&>(h).parameters();
         s.play_thresholds = p.r;
@@ -219,7 +233,9 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
   hi.tail(nb).setConstant(std::numeric_limits<double>::infinity());
   const Eigen::MatrixXd& G = ne.gram();
   const Eigen::VectorXd& b = ne.rhs();
-  const Eigen::VectorXd x = solve_bounded_lsq(G, b, lo, hi).x;
+  Eigen::MatrixXd penalised = G;
+  design.add_penalty(penalised);
+  const Eigen::VectorXd x = solve_bounded_lsq(penalised, b, lo, hi).x;
   const double rss = ne.target_square_sum() - 2.0 * b.dot(x) + x.dot(G * x);
 
   Joint out;

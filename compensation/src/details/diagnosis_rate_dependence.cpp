@@ -114,6 +114,12 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     }
   }
 
+  if (c.base.structure.kind == ModelKind::kPreisach) {
+    // The rate laws act on play weights or thresholds; the plane's relays have neither.
+    out.fit = c.base_fit;
+    out.extension = "no rate law: the Preisach plane's relays have no play weights to vary";
+    return out;
+  }
   std::vector<double> rates = sample_rates(r.u, r.dt);
   const auto q = rates.begin() +
                  static_cast<std::ptrdiff_t>(kRateQuantile * static_cast<double>(rates.size() - 1));

@@ -30,6 +30,14 @@ struct PreisachFitOptions {
   /// identity); the best on the held-out part is kept.
   std::vector<std::size_t> output_zones = {0, 3};
   std::size_t begin = 0;  ///< samples before this are simulated, not fitted or scored
+  /// Regressors fitted with the cells, one value per sample each (a creep lag's state, a drift's
+  /// time). They enter beside x, inside the output map: exact without a map, first order with
+  /// one. Scored as added to the model's output.
+  struct Column {
+    std::span<const double> values;
+    bool nonnegative = false;  ///< its weight >= 0 (else free)
+  };
+  std::vector<Column> columns;
 };
 
 /// The output map's least slope, as its inverse's: 1 / 20 of the identity's.
@@ -37,10 +45,11 @@ inline constexpr double kMinMapSlope = 0.05;
 
 struct PreisachFit {
   PreisachParameters parameters;
-  double smoothness = 0.0;       ///< the weight kept
-  std::size_t output_zones = 0;  ///< the output map's dead zones per side kept
-  double heldout_rms = 0.0;      ///< of the fit on the first part, on the rest [output unit]
-  double fit_rms = 0.0;          ///< of the kept fit on the whole scored record
+  double smoothness = 0.0;             ///< the weight kept
+  std::size_t output_zones = 0;        ///< the output map's dead zones per side kept
+  double heldout_rms = 0.0;            ///< of the fit on the first part, on the rest [output unit]
+  double fit_rms = 0.0;                ///< of the kept fit on the whole scored record
+  std::vector<double> column_weights;  ///< one per PreisachFitOptions::columns, in order
   std::vector<double>
       tried_rms;  ///< held-out rms of each smoothness weight, in order (the kept map's)
 };
