@@ -3,7 +3,7 @@
 # and scores each on the tracking record's three sine segments (rows 1200-2800, 7600-9200,
 # 12400-14000, 0-based, segment mean removed). Prints one line per
 # family: prediction rms per segment [um]. Needs ../shared/data/piezo-ntu-dbo and a build.
-# Usage: scripts/ntu-fit-defaults.sh [families...]   (default: pi mpi cpi rpi auto)
+# Usage: scripts/ntu-fit-defaults.sh [families...]   (default: pi mpi cpi rpi preisach auto)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 data="${HYSTBENCH_SHARED_DATA_DIR:-../shared/data}/piezo-ntu-dbo"
@@ -15,7 +15,7 @@ bin=build/bin/hystbench
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 columns=(--rate 200 --u-column 1 --y-column 5)
-for family in "${@:-pi mpi cpi rpi auto}"; do
+for family in "${@:-pi mpi cpi rpi preisach auto}"; do
   for f in $family; do
     "$bin" fit "$data/Model_Vi_Do.dat" "${columns[@]}" --model "$f" -o "$work/$f.json" \
       >"$work/$f.fit.txt" 2>/dev/null

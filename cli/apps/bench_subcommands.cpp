@@ -80,10 +80,13 @@ CliCommand add_identify(CLI::App& app, cli::RemoteCommand& remote) {
       "lowers the held-out error, and the extended model is kept when it tracks better on the "
       "bench (the result lists the parts and their gains)");
   cmd->add_option("--model", id->model,
-                  "pi, mpi, cpi, rpi or auto (every family, the best verified tracking "
-                  "kept; default: the config's)")
+                  "pi, mpi, cpi, rpi, preisach (relays on a grid of the Preisach plane, with "
+                  "creep lags; holds a loop no play family does) or auto (every family, the "
+                  "best verified tracking kept; default: the config's)")
       ->check(CLI::IsMember(common::fit_family_name_list()));
-  cmd->add_option("--operators", id->operators, "Number of plays (0 = by held-out error)");
+  cmd->add_option("--operators", id->operators,
+                  "Number of plays, or the Preisach plane's cells per side (0 = by held-out "
+                  "error; the plane: 24)");
   cmd->add_option("--deadzones", id->dead_zones, "Dead zones per side (-1 = by held-out error)");
   cmd->add_flag("--no-extend", id->no_extend,
                 "Keep the fitted model as it is: no diagnosis of the record, no "

@@ -80,12 +80,14 @@ CliCommand add_fit(CLI::App& app) {
       ->check(CLI::ExistingFile);
   std::vector<std::string> families = common::fit_family_name_list();
   families.push_back("hammerstein");
-  cmd->add_option("--model", fit->model_name,
-                  "Model family: pi (classical), mpi (modified, asymmetric), cpi (coupled-play), "
-                  "rpi (rate-dependent), auto (lowest held-out error); hammerstein (a play "
-                  "model per input, then linear dynamics with shared poles: the family of "
-                  "several inputs and outputs, which comma lists in --u-column / --y-column "
-                  "choose)")
+  cmd->add_option(
+         "--model", fit->model_name,
+         "Model family: pi (classical), mpi (modified, asymmetric), cpi (coupled-play), "
+         "rpi (rate-dependent), preisach (relays on a grid of the Preisach plane, not a PI), "
+         "auto (lowest held-out error); hammerstein (a play "
+         "model per input, then linear dynamics with shared poles: the family of "
+         "several inputs and outputs, which comma lists in --u-column / --y-column "
+         "choose)")
       ->check(CLI::IsMember(families))
       ->capture_default_str();
   cmd->add_option("--operators", fit->operators,

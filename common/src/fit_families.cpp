@@ -10,7 +10,8 @@ namespace hc = compensation;
 
 namespace {
 constexpr std::array kFamilies{hc::ModelKind::kPi, hc::ModelKind::kModifiedPi,
-                               hc::ModelKind::kCoupledPlayPi, hc::ModelKind::kRateDependentPi};
+                               hc::ModelKind::kCoupledPlayPi, hc::ModelKind::kRateDependentPi,
+                               hc::ModelKind::kPreisach};
 constexpr const char* kAuto = "auto";
 }  // namespace
 

@@ -106,7 +106,8 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
           {{"model", cmd.output_path}, {"type", type}, {"units", hc::to_json(r.model.units)}});
       out << result.dump() << "\n";
     } else {
-      out << "model     " << type << " with " << r.operators << " plays, " << r.dead_zones
+      out << "model     " << type << " with " << r.operators
+          << (type == "preisach" ? " cells per side, " : " plays, ") << r.dead_zones
           << " dead zones per side, delay " << r.delay_samples << " samples, "
           << (r.creep ? "with" : "no") << " creep lags (" << r.method << ")\n";
       for (const std::string& note : r.notes) out << "note      " << note << "\n";

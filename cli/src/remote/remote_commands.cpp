@@ -232,9 +232,10 @@ void print_model_error(std::ostream& out, const json& r) {
 
 // identify's model: its structure and file, its fit and held-out errors, the fit's notes.
 void print_model(std::ostream& out, const json& m) {
+  const bool plane = m.value("type", "") == "preisach";
   out << "  model           " << m.value("type", "?") << ", " << m.value("operators", 0)
-      << " plays, " << m.value("dead_zones", 0) << " dead zones per side -> "
-      << m.value("path", "?") << "\n";
+      << (plane ? " cells per side, " : " plays, ") << m.value("dead_zones", 0)
+      << " dead zones per side -> " << m.value("path", "?") << "\n";
   if (m.contains("heldout")) {
     out << "  model error     fit rms " << fixed(m["fit"]["rmse"], 4) << " um, held-out rms "
         << fixed(m["heldout"]["rmse"], 4) << " um (" << fixed(m["heldout"]["rmse_percent"], 3)

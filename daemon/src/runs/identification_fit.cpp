@@ -11,6 +11,9 @@ namespace hystbench::daemon {
 namespace hc = hystbench::compensation;
 
 namespace {
+// The modified PI that scores the delays for a Preisach fit.
+constexpr int kQuickPlays = 12;
+constexpr int kQuickDeadZones = 2;
 /// Held-out rms error, or the fit's without a held-out part.
 double score(const hc::FitResult& f) { return f.heldout.samples > 0 ? f.heldout.rmse : f.fit.rmse; }
 }  // namespace
@@ -114,7 +117,14 @@ IdentificationFit fit_identification_record(std::span<const double> u, std::span
   quick.kind = out.fit.model.hysteresis().kind();
   quick.operators = out.fit.operators;
   quick.dead_zones = out.fit.dead_zones;
+  if (quick.kind == hc::ModelKind::kPreisach) {
+    // A delay shows as well in a mid-size modified PI, whose fit is a tenth of the plane's.
+    quick.kind = hc::ModelKind::kModifiedPi;
+    quick.operators = kQuickPlays;
+    quick.dead_zones = kQuickDeadZones;
+  }
   quick.refine_thresholds = false;
+  quick.creep = false;  // the delay is a matter of samples; creep of seconds
   quick.progress = nullptr;
   int best = 0;
   double best_rmse = std::numeric_limits<double>::infinity();

@@ -392,7 +392,7 @@ TEST(IdentifyProgram, TheRequestOverTheDefaultsWithinTheLimits) {
     return std::string("ok");
   };
   EXPECT_EQ(refused({{"model", "spline"}}),
-            "bad_params: model: unknown 'spline' (pi, mpi, cpi, rpi, auto)");
+            "bad_params: model: unknown 'spline' (pi, mpi, cpi, rpi, preisach, auto)");
   EXPECT_THAT(refused({{"u_max", 200.0}}),
               StartsWith("bad_params: u_max: 200.000000 is out of range"));
   EXPECT_EQ(refused({{"u_min", 100.0}, {"u_max", 50.0}}),

@@ -18,8 +18,9 @@ namespace hystbench::cli {
 
 struct FitCommand {
   std::string data_path;
-  /// pi | mpi | cpi | rpi | auto, or hammerstein: operators per input, then linear dynamics (the
-  /// family of several inputs or outputs, which comma lists in columns.u / columns.y choose)
+  /// pi | mpi | cpi | rpi | preisach | auto, or hammerstein: operators per input, then linear
+  /// dynamics (the family of several inputs or outputs, which comma lists in columns.u / columns.y
+  /// choose)
   std::string model_name = "mpi";
   int operators = 0;    ///< 0 = chosen by held-out error
   int dead_zones = -1;  ///< -1 = chosen by held-out error

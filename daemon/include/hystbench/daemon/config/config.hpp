@@ -99,7 +99,7 @@ struct DriverSection {
 };
 
 struct IdentifySection {
-  std::string model = "mpi";  ///< pi | mpi | cpi | rpi | auto
+  std::string model = "mpi";  ///< pi | mpi | cpi | rpi | preisach | auto
   int operators = 0;          ///< plays [0, 100]; 0 = chosen by held-out error
   int dead_zones = -1;        ///< dead zones per side [-1, 50]; -1 = chosen by held-out error
   /// Excitation u = offset_v + amplitude_v * wave, inside [u_min, u_max] [V]; absent: half the
