@@ -14,6 +14,7 @@
 
 #include "details/constrained_lsq.hpp"
 #include "details/designs.hpp"
+#include "details/preisach_search.hpp"
 #include "details/rate_groups.hpp"
 #include "details/record_startup.hpp"
 #include "details/threshold_refinement.hpp"
@@ -215,6 +216,11 @@ int dead_zones_of(const ModelStructure& s) {
   return s.has_dead_zones() ? static_cast<int>(s.dead_zone_thresholds.size() / 2) : 0;
 }
 
+// Plays, or the Preisach plane's cells per side.
+int operators_of(const ModelStructure& s) {
+  return static_cast<int>(s.kind == ModelKind::kPreisach ? s.preisach_cells : s.plays());
+}
+
 class Identifier {
  public:
   Identifier(std::span<const double> t, std::span<const double> u, std::span<const double> y,
@@ -261,11 +267,9 @@ class Identifier {
   Candidate search_mpi();
   Candidate search_cpi();
   Candidate search_rpi();
-  // The Preisach plane over the fitted input range, with drift and creep lags (as the options
-  // ask) fitted jointly (creep_taus empty: none). Its smoothness and output map by held-out.
-  Candidate fit_preisach_with(std::span<const double> y, const std::vector<double>& creep_taus);
-  Candidate search_preisach() { return fit_preisach_with(r_.y, {}); }
-  void add_preisach_creep(Candidate& c);
+  // The Preisach plane over the fitted input range, its output map and smoothness by held-out
+  // error (preisach_identification.hpp), creep lags and a drift beside its cells.
+  Candidate search_preisach(const std::vector<double>& creep_time_constants = {});
   // The rate law over one modified PI's plays and dead zones: its nested self, the joint fits
   // over the rate filters and caps, the paper's rate-group regression; the best by held-out.
   Candidate rpi_over(const Candidate& mpi);
@@ -338,8 +342,8 @@ Candidate Identifier::evaluate(const ModelStructure& s, std::string method) {
   c.model = design.build(fit.x);
   if (s.drift) c.drift = fit.x[design.drift_column()];
   score(c, r_);
-  log_.push_back({s.kind, static_cast<int>(s.plays()), dead_zones_of(s), r_.delay, c.fit.rmse,
-                  c.heldout.rmse, c.method});
+  log_.push_back(
+      {s.kind, operators_of(s), dead_zones_of(s), r_.delay, c.fit.rmse, c.heldout.rmse, c.method});
   return c;
 }
 
@@ -419,7 +423,7 @@ int Identifier::mpi_plays(int m) {
 }
 
 void Identifier::finish(Candidate& c) {
-  if (o_.refine_thresholds && c.structure.kind != ModelKind::kPreisach) refine(c);
+  if (o_.refine_thresholds) refine(c);
   if (o_.creep) add_creep(c);
 }
 
@@ -696,6 +700,7 @@ Candidate Identifier::search(ModelKind kind) {
 }
 
 void Identifier::refine(Candidate& c) {
+  if (c.structure.kind == ModelKind::kPreisach) return;  // no thresholds: its cells are a grid
   details::RefinementSettings settings;
   settings.plays = o_.play_thresholds.empty();
   settings.dead_zones = o_.dead_zone_thresholds.empty();
@@ -714,15 +719,18 @@ std::vector<double> Identifier::creep_time_constants() const {
 }
 
 void Identifier::add_creep(Candidate& c) {
-  if (c.structure.kind == ModelKind::kPreisach) return add_preisach_creep(c);
   ModelStructure s = c.structure;
   s.creep_time_constants = creep_time_constants();
   // Joint linear fit: exact for PI / CPI (creep adds to the output); for MPI / RPI the
-  // error model puts the lags before the dead zone, so it is only a starting point.
-  Candidate best = evaluate(s, c.method + "+creep");
-  if (s.has_dead_zones()) {
+  // error model puts the lags before the dead zone, so it is only a starting point. The Preisach
+  // plane chooses its output map again with the lags beside its cells (without them, its map
+  // bends to the creep the record holds).
+  Candidate best = s.kind == ModelKind::kPreisach ? search_preisach(s.creep_time_constants)
+                                                  : evaluate(s, c.method + "+creep");
+  if (best.structure.has_dead_zones()) {
     // Alternate: hysteresis on y - creep, creep gains on y - hysteresis (both linear).
-    ModelStructure hs = c.structure;
+    ModelStructure hs = best.structure;
+    hs.creep_time_constants.clear();
     std::vector<double> gains(s.creep_time_constants.size(), 0.0);  // first pass: c's own H
     std::vector<double> y_adj(r_.n);
     const Eigen::Index K = static_cast<Eigen::Index>(gains.size());
@@ -752,13 +760,14 @@ void Identifier::add_creep(Candidate& c) {
           details::solve_bounded_lsq(ne.gram(), ne.rhs(), Eigen::VectorXd::Zero(K), inf).x;
       gains.assign(g.data(), g.data() + K);
       Candidate alt;
-      alt.structure = s;
+      alt.structure = hs;
+      alt.structure.creep_time_constants = s.creep_time_constants;
       alt.method = c.method + "+creep-alternating";
       alt.drift = drift;
       alt.model = ActuatorModel(design.build_hysteresis(fit.x));
       alt.model->set_creep(CreepParameters{s.creep_time_constants, gains});
       score(alt, r_);
-      log_.push_back({s.kind, static_cast<int>(s.plays()), dead_zones_of(s), r_.delay, alt.fit.rmse,
+      log_.push_back({s.kind, operators_of(hs), dead_zones_of(hs), r_.delay, alt.fit.rmse,
                       alt.heldout.rmse, alt.method});
       if (alt.fit.rmse < best.fit.rmse) best = std::move(alt);
     }
@@ -766,74 +775,34 @@ void Identifier::add_creep(Candidate& c) {
   if (o_.creep_always || best.score() < c.score()) c = std::move(best);
 }
 
-Candidate Identifier::fit_preisach_with(std::span<const double> y,
-                                        const std::vector<double>& creep_taus) {
-  PreisachFitOptions po;
-  po.cells = static_cast<std::size_t>(o_.operators > 0 ? o_.operators : kPreisachCells);
-  po.u_min = r_.u_lo;
-  po.u_max = r_.u_hi;
-  po.begin = r_.begin;
-  if (o_.dead_zones >= 0) po.output_zones = {static_cast<std::size_t>(o_.dead_zones)};
+Candidate Identifier::search_preisach(const std::vector<double>& creep_time_constants) {
+  ModelStructure s = structure(ModelKind::kPreisach, 0, 0);
+  s.creep_time_constants = creep_time_constants;
+  s.preisach_cells = static_cast<std::size_t>(o_.operators > 0 ? o_.operators : kPreisachCells);
+  s.plane_min = r_.u_lo;
+  s.plane_max = r_.u_hi;
+  s.min_play_slope = 0.0;  // the reversible slope may vanish: the relays rise
+  s.min_dead_zone_slope = kMinMapSlope;
+  const PreisachFitOptions choices;  // its smoothness weights, output maps, held-out share
+  std::vector<std::size_t> zones = choices.output_zones;
+  if (o_.dead_zones >= 0) zones = {static_cast<std::size_t>(o_.dead_zones)};
+  const auto split =
+      r_.fit_end - static_cast<std::size_t>(choices.heldout_fraction *
+                                            static_cast<double>(r_.fit_end - r_.begin));
+  const details::PreisachSearch found = details::search_preisach(
+      s, r_.ud, r_.y, r_.begin, split, r_.fit_end, choices.smoothness, zones);
   Candidate c;
-  c.structure.kind = ModelKind::kPreisach;
-  c.structure.dt = r_.dt;
-  c.structure.drift = o_.drift;
-  c.structure.drift_t0_s = r_.drift_t0_s;
-  std::vector<std::vector<double>> columns;
-  if (o_.drift) {
-    std::vector<double>& time = columns.emplace_back(r_.fit_end);
-    for (std::size_t k = 0; k < r_.fit_end; ++k) time[k] = c.structure.drift_time_s(k);
-  }
-  for (const double tau : creep_taus) {
-    std::vector<double>& lag = columns.emplace_back(r_.fit_end);
-    const double a = std::exp(-r_.dt / tau);
-    double x = r_.ud[0];
-    for (std::size_t k = 0; k < r_.fit_end; ++k) lag[k] = x = a * x + (1.0 - a) * r_.ud[k];
-  }
-  for (std::size_t j = 0; j < columns.size(); ++j) {
-    po.columns.push_back({columns[j], !(o_.drift && j == 0)});
-  }
-  const PreisachFit f = fit_preisach(std::span(r_.ud).first(r_.fit_end), y.first(r_.fit_end), po);
-  c.model = ActuatorModel(std::make_unique<PreisachModel>(f.parameters));
-  const std::size_t first_lag = o_.drift ? 1 : 0;
-  if (o_.drift) c.drift = f.column_weights[0];
-  if (!creep_taus.empty()) {
-    c.structure.creep_time_constants = creep_taus;
-    c.model->set_creep(CreepParameters{
-        creep_taus,
-        std::vector<double>(f.column_weights.begin() + first_lag, f.column_weights.end())});
-  }
-  c.method = "bounded-lsq-preisach (" + std::to_string(po.cells) + " cells per side, " +
-             std::to_string(f.output_zones) + " output dead zones per side, smoothness " +
-             fmt(f.smoothness) + ")";
+  c.structure = found.structure;
+  c.x = found.x;
+  const Design design(c.structure);
+  c.model = design.build(c.x);
+  if (c.structure.drift) c.drift = c.x[design.drift_column()];
+  c.method = "bounded-lsq-preisach (smoothness " + fmt(c.structure.smoothness) + ")" +
+             (creep_time_constants.empty() ? "" : "+creep");
   score(c, r_);
-  log_.push_back({ModelKind::kPreisach, static_cast<int>(po.cells),
-                  static_cast<int>(f.output_zones), r_.delay, c.fit.rmse, c.heldout.rmse,
-                  c.method});
+  log_.push_back({ModelKind::kPreisach, operators_of(c.structure), dead_zones_of(c.structure),
+                  r_.delay, c.fit.rmse, c.heldout.rmse, c.method});
   return c;
-}
-
-void Identifier::add_preisach_creep(Candidate& c) {
-  const std::vector<double> taus = creep_time_constants();
-  // Joint: the lags beside the cells, inside the output map (first order with one); then
-  // alternating, the plane refitted on y less the lags' output, whose gains are the joint fit's.
-  Candidate best = fit_preisach_with(r_.y, taus);
-  best.method += "+creep";
-  std::vector<double> y_adj(r_.n);
-  for (int iteration = 0; iteration < 2 && best.model; ++iteration) {
-    if (!best.model->creep()) break;
-    CreepOperatorBank bank(*best.model->creep(), r_.dt);
-    bank.reset(r_.ud[0]);
-    for (std::size_t k = 0; k < r_.n; ++k) y_adj[k] = r_.y[k] - bank.step(r_.ud[k]);
-    Candidate alt = fit_preisach_with(y_adj, {});
-    alt.structure.creep_time_constants = taus;
-    alt.model->set_creep(best.model->creep());
-    alt.method += "+creep-alternating";
-    score(alt, r_);
-    if (!(alt.score() < best.score())) break;
-    best = std::move(alt);
-  }
-  if (o_.creep_always || best.score() < c.score()) c = std::move(best);
 }
 
 FitResult Identifier::run() {
@@ -842,7 +811,7 @@ FitResult Identifier::run() {
   r_.set_delay(delay);
   memo_.clear();
   Candidate best = search_families();
-  if (o_.refine_thresholds && best.structure.kind != ModelKind::kPreisach) {
+  if (o_.refine_thresholds) {
     progress(0.7, "refining thresholds (Levenberg-Marquardt)");
     refine(best);
   }
@@ -974,12 +943,8 @@ FitResult Identifier::scored_result(Candidate& best, int delay, std::vector<std:
   out.heldout = s.heldout;
   out.fit_samples = r_.fit_end - r_.begin;
   out.heldout_samples = r_.n - r_.fit_end;
-  out.operators = static_cast<int>(best.structure.plays());
+  out.operators = operators_of(best.structure);
   out.dead_zones = dead_zones_of(best.structure);
-  if (const auto* preisach = dynamic_cast<const PreisachModel*>(&out.model.hysteresis())) {
-    out.operators = static_cast<int>(preisach->parameters().cells);
-    out.dead_zones = static_cast<int>(preisach->parameters().output_map.thresholds.size() / 2);
-  }
   out.method = best.method;
   out.delay_samples = delay;
   out.creep = !best.structure.creep_time_constants.empty();

@@ -2,15 +2,15 @@
 // The Preisach model (preisach_model.hpp) fitted to a record. Its Preisach part is linear in the
 // cell densities, the reversible slope and the offset (each cell's area in the up region is its
 // column); its output map S is fitted as Kuhnen fits the modified PI's, by its inverse S' on the
-// measured output: S'[y - center] = x, S' = the identity plus m one-sided dead zones per side
-// (uniform thresholds over the record's output range), their weights' running sums outward
-// unknowns bounded below by kMinMapSlope - 1 (S' and S invertible). So the fit is one bounded
-// least squares: the densities and the slope >= 0 (an invertible model by construction), plus a
-// smoothness penalty lambda x the sum of squared differences between neighbouring cells'
-// densities. lambda is chosen on held-out data: each candidate is
+// measured output: S'[y - center] = x, S' = m one-sided dead zones per side (uniform thresholds
+// over the record's output range), its slope outward >= kMinMapSlope (S' and S invertible). So
+// the fit is one bounded least squares: the densities and the slope >= 0 (an invertible model by
+// construction), plus a smoothness penalty lambda x the sum of squared differences between
+// neighbouring cells' densities. lambda is chosen on held-out data: each candidate is
 // fitted on the record's first part, the model simulated over the whole record, and scored on
 // the rest; the best (with the output map that gains most there) is then fitted on the whole
-// record. Pure maths, not real-time.
+// record. fit_model(kind = preisach) fits the same with creep lags and a drift beside the cells.
+// Pure maths, not real-time.
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -30,14 +30,6 @@ struct PreisachFitOptions {
   /// identity); the best on the held-out part is kept.
   std::vector<std::size_t> output_zones = {0, 3};
   std::size_t begin = 0;  ///< samples before this are simulated, not fitted or scored
-  /// Regressors fitted with the cells, one value per sample each (a creep lag's state, a drift's
-  /// time). They enter beside x, inside the output map: exact without a map, first order with
-  /// one. Scored as added to the model's output.
-  struct Column {
-    std::span<const double> values;
-    bool nonnegative = false;  ///< its weight >= 0 (else free)
-  };
-  std::vector<Column> columns;
 };
 
 /// The output map's least slope, as its inverse's: 1 / 20 of the identity's.
@@ -45,11 +37,10 @@ inline constexpr double kMinMapSlope = 0.05;
 
 struct PreisachFit {
   PreisachParameters parameters;
-  double smoothness = 0.0;             ///< the weight kept
-  std::size_t output_zones = 0;        ///< the output map's dead zones per side kept
-  double heldout_rms = 0.0;            ///< of the fit on the first part, on the rest [output unit]
-  double fit_rms = 0.0;                ///< of the kept fit on the whole scored record
-  std::vector<double> column_weights;  ///< one per PreisachFitOptions::columns, in order
+  double smoothness = 0.0;       ///< the weight kept
+  std::size_t output_zones = 0;  ///< the output map's dead zones per side kept
+  double heldout_rms = 0.0;      ///< of the fit on the first part, on the rest [output unit]
+  double fit_rms = 0.0;          ///< of the kept fit on the whole scored record
   std::vector<double>
       tried_rms;  ///< held-out rms of each smoothness weight, in order (the kept map's)
 };
