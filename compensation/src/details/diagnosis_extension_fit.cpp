@@ -110,8 +110,7 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
           s.dead_zone_thresholds =
               DeadZoneSuperposition(p.output_map).inverse().parameters().thresholds;
         }
-        if (model.creep()) s.creep_time_constants = model.creep()->time_constants_s;
-        return s;
+        break;
       }
       case ModelKind::kCoupledPlayPi: {
         const auto& p = dynamic_cast<const CoupledPlayPiModel&>(h).parameters();
@@ -135,7 +134,7 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
   } catch (const std::exception&) {
     return std::nullopt;  // e.g. a dead zone that cannot be inverted
   }
-  if (s.play_thresholds.empty()) return std::nullopt;
+  if (s.play_thresholds.empty() && s.kind != ModelKind::kPreisach) return std::nullopt;
   if (model.creep()) s.creep_time_constants = model.creep()->time_constants_s;
   return s;
 }
