@@ -91,7 +91,8 @@ CliCommand add_fit(CLI::App& app) {
       ->check(CLI::IsMember(families))
       ->capture_default_str();
   cmd->add_option("--operators", fit->operators,
-                  "Number of play operators (0 = choose by held-out error)")
+                  "Number of play operators, or the Preisach plane's cells per side (0 = choose by "
+                  "held-out error; the plane: 24)")
       ->check(CLI::Range(0, 500))
       ->capture_default_str();
   cmd->add_option("--deadzones", fit->dead_zones,
