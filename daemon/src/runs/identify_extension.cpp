@@ -178,7 +178,10 @@ bool Bench::play_while_diagnosing() {
   if (!s.ahead) return false;
   const std::size_t base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
   s.ahead->focus(base);
-  if (s.ahead->ready(base)) return false;
+  // Played whether or not the diagnosis is ready: the base's sines are the extension's yardstick,
+  // and playing them first in every run keeps the bench's history before the extension's own
+  // segments the same however long the diagnosis takes (on the simulated clock, the outcome of a
+  // run would otherwise depend on the machine's load).
   const double fast = delay_sine_frequency(settings_.loop.rate_hz);
   for (const double hz : {fast, fast / kMidFraction}) {
     if (s.candidates[base].sines.contains(hz)) continue;
