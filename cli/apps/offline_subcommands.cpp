@@ -178,7 +178,8 @@ CliCommand add_diagnose(CLI::App& app) {
   auto diag = std::make_shared<cli::DiagnoseCommand>();
   auto* cmd = app.add_subcommand(
       "diagnose",
-      "Find what a model misses on records (t,u,y) of one device: asymmetry, rate_dependence, "
+      "Find what a model misses on records (t,u,y) of one device: asymmetry, loop_shape, "
+      "rate_dependence, "
       "creep, dynamics, delay, drift or none; gains measured on held-out parts, and with "
       "several records on each record left out whole. A record of several inputs "
       "(--u-column u1,u2,...) names cross_coupling per output, each realization left out in "

@@ -22,9 +22,16 @@ namespace {
 
 using details::num;
 
-constexpr std::array<Cause, 6> kCandidates{Cause::kAsymmetry, Cause::kRateDependence,
-                                           Cause::kCreep,     Cause::kDynamics,
-                                           Cause::kDelay,     Cause::kDrift};
+constexpr std::array<Cause, 7> kCandidates{
+    Cause::kAsymmetry, Cause::kLoopShape, Cause::kRateDependence, Cause::kCreep,
+    Cause::kDynamics,  Cause::kDelay,     Cause::kDrift};
+// The causes that change the loop's shape: the play family's own extension (asymmetry) and the
+// operator swapped for a Preisach plane (loop_shape).
+bool is_shape(Cause c) { return c == Cause::kAsymmetry || c == Cause::kLoopShape; }
+// The plane is named as the shape only where it predicts the held-out blocks this much better
+// than the play family's own shape extension: a plane's hundreds of cells stand for a few plays
+// and dead zones no better than they do themselves.
+constexpr double kPlaneOverPlays = 1.1;
 // A runner-up this close to the named cause's gain makes the verdict ambiguous.
 constexpr double kMinCoherentShare = 0.5;
 constexpr double kOneLoopBand = 0.03;  // of the input span: a reversal this close is at the end
@@ -58,6 +65,8 @@ TestFunction test_of(Cause c) {
   switch (c) {
     case Cause::kAsymmetry:
       return details::test_asymmetry;
+    case Cause::kLoopShape:
+      return details::test_loop_shape;
     case Cause::kRateDependence:
       return details::test_rate_dependence;
     case Cause::kCreep:
@@ -128,6 +137,8 @@ std::string_view to_string(Cause cause) noexcept {
       return "delay";
     case Cause::kDrift:
       return "drift";
+    case Cause::kLoopShape:
+      return "loop_shape";
   }
   return "none";
 }
@@ -353,15 +364,20 @@ std::vector<double> residual_of(const details::DiagnosisRecord& r,
   return e;
 }
 
-/// Every other candidate that carries over, tested again with the asymmetry extension's fit as
-/// its baseline (its statistic read from that fit's residual), in candidate order; a candidate
-/// the designs cannot fit together with the shape is left out.
+// What the other causes are judged against when the first is named beyond the shape.
+std::string shape_name(Cause shape) {
+  return "the loop's shape (" + std::string(to_string(shape)) + ")";
+}
+
+/// Every other candidate that carries over (the other shape aside), tested again with the shape
+/// extension's fit as its baseline (its statistic read from that fit's residual), in candidate
+/// order; a candidate the designs cannot fit together with the shape is left out.
 std::vector<OnTopOfShape> beyond_shape(const Diagnosis& d, const details::DiagnosisRecord& r,
                                        const std::vector<details::ExtensionFit>& fits,
-                                       const details::InputEvents& ev,
+                                       const details::InputEvents& ev, Cause shape_cause,
                                        std::vector<std::string>& notes) {
   std::size_t shape = 0;
-  while (d.candidates[shape].cause != Cause::kAsymmetry) ++shape;
+  while (d.candidates[shape].cause != shape_cause) ++shape;
   const details::ExtensionFit& base = fits[shape];
   const std::vector<double> residual = residual_of(r, base.prediction);
   const std::vector<ResidualProfile> profiles = residual_profiles(r, residual, ev);
@@ -372,7 +388,7 @@ std::vector<OnTopOfShape> beyond_shape(const Diagnosis& d, const details::Diagno
   std::vector<OnTopOfShape> out;
   std::string tried;
   for (const CandidateReport& c : d.candidates) {
-    if (c.cause == Cause::kAsymmetry || !c.carries_over) continue;
+    if (is_shape(c.cause) || !c.carries_over) continue;
     try {
       details::CandidateOutcome o = test_of(c.cause)(ctx);
       if (!(o.fit.heldout.rmse > 0.0)) continue;
@@ -386,7 +402,7 @@ std::vector<OnTopOfShape> beyond_shape(const Diagnosis& d, const details::Diagno
     }
   }
   if (!tried.empty()) {
-    notes.push_back("on top of the loop's shape (asymmetry), the other causes gain: " + tried);
+    notes.push_back("on top of " + shape_name(shape_cause) + ", the other causes gain: " + tried);
   }
   return out;
 }
@@ -404,6 +420,7 @@ struct Naming {
   const std::vector<OnTopOfShape>& on_shape;
   const OnTopOfShape* beyond = nullptr;  ///< the first cause, named beyond the shape
   double reference_delay_samples = 0.0;  ///< the reference's own input delay [samples]
+  Cause shape = Cause::kAsymmetry;       ///< the shape cause `on_shape` was tested on
 };
 
 /// The extended model as the causes after the first join it.
@@ -456,8 +473,14 @@ void report(const DiagnosisOptions& options, double fraction, const std::string&
   if (options.progress) options.progress(fraction, what);
 }
 
-// What the other causes are judged against when the first is named beyond the shape.
-std::string shape_name() { return "the loop's shape (asymmetry)"; }
+// The plane and the play family's own shape extension both significant, and the plane not
+// kPlaneOverPlays better on the held-out blocks.
+bool plane_outdone(const Diagnosis& d) {
+  const CandidateReport* plane = d.candidate(Cause::kLoopShape);
+  const CandidateReport* plays = d.candidate(Cause::kAsymmetry);
+  return plane != nullptr && plays != nullptr && plane->significant && plays->significant &&
+         plane->heldout.rmse * kPlaneOverPlays > plays->heldout.rmse;
+}
 
 // Where cause c stands in d.candidates (it is there).
 std::size_t index_of(const Diagnosis& d, Cause c) {
@@ -493,12 +516,11 @@ Joint name_first_cause(Diagnosis& d, const Naming& x) {
   if (x.beyond) {
     // The named cause on top of the shape: both are parts of the extended model.
     joint.fit = x.beyond->outcome.fit;
-    joint.named_extension =
-        x.beyond->outcome.extension + "; " + d.candidate(Cause::kAsymmetry)->extension;
-    d.extended_parts = {std::string(to_string(d.cause)), std::string(to_string(Cause::kAsymmetry))};
-    const double shape_rms = d.candidate(Cause::kAsymmetry)->heldout.rmse;
-    d.causes = {{d.cause, x.beyond->gain, joint.fit.heldout.rmse, shape_name(), x.beyond->gain,
-                 quadrature_difference(shape_rms, joint.fit.heldout.rmse),
+    joint.named_extension = x.beyond->outcome.extension + "; " + d.candidate(x.shape)->extension;
+    d.extended_parts = {std::string(to_string(d.cause)), std::string(to_string(x.shape))};
+    const double shape_rms = d.candidate(x.shape)->heldout.rmse;
+    d.causes = {{d.cause, x.beyond->gain, joint.fit.heldout.rmse, shape_name(x.shape),
+                 x.beyond->gain, quadrature_difference(shape_rms, joint.fit.heldout.rmse),
                  x.beyond->outcome.evidence, x.beyond->outcome.extension}};
   } else {
     joint.fit = x.fits[index_of(d, d.cause)];
@@ -519,19 +541,23 @@ Joint name_first_cause(Diagnosis& d, const Naming& x) {
 // model. Says why a candidate that carries over is no contender beyond the shape.
 std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
   std::vector<Next> order;
+  const auto in_parts = [&d](Cause c) {
+    return std::find(d.extended_parts.begin(), d.extended_parts.end(), to_string(c)) !=
+           d.extended_parts.end();
+  };
+  // One shape at a time: the plane's search chose its output map, and the plays' dead zones are
+  // not swapped for a plane that did not gain over them.
+  const bool shape_held = in_parts(Cause::kAsymmetry) || in_parts(Cause::kLoopShape);
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
     CandidateReport& c = d.candidates[i];
-    const std::string name(to_string(c.cause));
-    if (std::find(d.extended_parts.begin(), d.extended_parts.end(), name) !=
-        d.extended_parts.end()) {
-      continue;
-    }
+    if (in_parts(c.cause) || (shape_held && is_shape(c.cause))) continue;
+    if (c.cause == Cause::kLoopShape && plane_outdone(d)) continue;
     const OnTopOfShape* s = x.beyond ? on_shape_of(x, c.cause) : nullptr;
     const bool contender = c.carries_over && (x.beyond ? s && s->significant : c.significant);
     if (x.beyond && c.carries_over && !contender) {
-      c.not_named = !s ? "it could not be fitted on top of " + shape_name()
-                       : "on top of " + shape_name() + " its statistic is not significant (gain " +
-                             num(s->gain) + ")";
+      c.not_named = !s ? "it could not be fitted on top of " + shape_name(x.shape)
+                       : "on top of " + shape_name(x.shape) +
+                             " its statistic is not significant (gain " + num(s->gain) + ")";
     }
     const bool joins = c.significant && c.carries_over && c.cause != Cause::kDrift;
     // A drift's and a creep's statistics (the residual's time and hold profiles) are swamped by a
@@ -551,8 +577,8 @@ std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
   // causes significant on the reference's residual, and those read again last: a creep read again
   // before a rate law takes the law's filtered tail.
   std::sort(order.begin(), order.end(), [&d](const Next& a, const Next& b) {
-    const bool shape_a = d.candidates[a.index].cause == Cause::kAsymmetry;
-    const bool shape_b = d.candidates[b.index].cause == Cause::kAsymmetry;
+    const bool shape_a = is_shape(d.candidates[a.index].cause);
+    const bool shape_b = is_shape(d.candidates[b.index].cause);
     if (shape_a != shape_b) return shape_a;
     if (a.retest != b.retest) return b.retest;
     return ranks_before(d.candidates[a.index].cause, a.gain, d.candidates[b.index].cause, b.gain);
@@ -588,7 +614,7 @@ void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
                   num(added_gain) + ", below " + num(needed);
   } else {
     d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
-                        s ? shape_name() : x.reference_name, added_gain, added_rms,
+                        s ? shape_name(x.shape) : x.reference_name, added_gain, added_rms,
                         // A retested cause's evidence is read on the joint model's residual.
                         s && !next.retest ? s->outcome.evidence : c.evidence,
                         s ? s->outcome.extension : c.extension});
@@ -685,12 +711,12 @@ void find_delay_again(const Diagnosis& d, const Naming& x, Joint& joint) {
 
 // The shape, judged on top of the first cause: the first alone against both together.
 void judge_shape(Diagnosis& d, const Naming& x) {
-  CandidateReport& shape = d.candidates[index_of(d, Cause::kAsymmetry)];
+  CandidateReport& shape = d.candidates[index_of(d, x.shape)];
   const double alone = d.candidate(d.cause)->heldout.rmse;
   const double both = x.beyond->outcome.fit.heldout.rmse;
   const double added_rms = quadrature_difference(alone, both);
   if (added_rms >= d.noise_allowance_rms) {
-    d.causes.push_back({Cause::kAsymmetry, x.reference / shape.heldout.rmse, shape.heldout.rmse,
+    d.causes.push_back({x.shape, x.reference / shape.heldout.rmse, shape.heldout.rmse,
                         x.reference_name, alone / both, added_rms, shape.evidence,
                         shape.extension});
     shape.named = true;
@@ -701,18 +727,18 @@ void judge_shape(Diagnosis& d, const Naming& x) {
 }
 
 // The causes named after the first, each with what it adds, appended to the verdict.
-void append_also_named(Diagnosis& d, const std::string& unit) {
+void append_also_named(Diagnosis& d, Cause shape, const std::string& unit) {
   d.verdict += ". Also named, each adding more than the noise allows (" +
                num(d.noise_allowance_rms) + " " + unit + " rms) to the causes before it: ";
   for (std::size_t i = 1; i < d.causes.size(); ++i) {
     const NamedCause& n = d.causes[i];
     // The shape, last, is judged on top of the first cause alone.
-    const std::string to = n.cause == Cause::kAsymmetry && i > 1
+    const std::string to = is_shape(n.cause) && i > 1
                                ? std::string(to_string(d.causes.front().cause))
                                : std::string("those");
     d.verdict += (i > 1 ? ", " : "") + std::string(to_string(n.cause)) + " (gain " + num(n.gain) +
-                 (n.against == shape_name() ? " over the shape" : "") + ", " + num(n.added_gain) +
-                 " added to ";
+                 (n.against == shape_name(shape) ? " over the shape" : "") + ", " +
+                 num(n.added_gain) + " added to ";
     d.verdict += to;
     d.verdict += ", " + num(n.added_rms) + " " + unit + " rms)";
   }
@@ -728,8 +754,7 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x) {
   report(x.options, 0.97, "naming the other causes and joining the significant extensions");
   for (const Next& next : order) {
     const bool part_joined = try_next_cause(d, x, next, joint);
-    if (part_joined && d.candidates[next.index].cause == Cause::kAsymmetry &&
-        d.cause == Cause::kDelay) {
+    if (part_joined && is_shape(d.candidates[next.index].cause) && d.cause == Cause::kDelay) {
       find_delay_again(d, x, joint);
     }
   }
@@ -737,7 +762,7 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x) {
   // when the first cause is named beyond it (alone, beside the cause that hid it, it gains little
   // over the baseline: its own gain does not rank it).
   const auto shape = std::find_if(d.causes.begin() + 1, d.causes.end(),
-                                  [](const NamedCause& n) { return n.cause == Cause::kAsymmetry; });
+                                  [](const NamedCause& n) { return is_shape(n.cause); });
   if (shape != d.causes.end()) std::rotate(shape, shape + 1, d.causes.end());
   if (!joint.added.empty()) {
     set_extended(d, joint.fit);
@@ -746,8 +771,20 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x) {
     for (const std::string& a : joint.added) d.extended_description += "; " + a;
     d.extended_description += ", refitted jointly)";
   }
+  // The parts joined on the plane were fitted with its cells' shape fixed: the cells are refitted
+  // beside them.
+  const bool on_plane = std::find(d.extended_parts.begin(), d.extended_parts.end(),
+                                  to_string(Cause::kLoopShape)) != d.extended_parts.end();
+  if (on_plane && (x.beyond || !joint.added.empty())) {
+    if (auto free = details::refit_plane_cells(x.r, joint.fit)) {
+      const std::size_t model_part = details::describe_model(joint.fit.model).size();
+      d.extended_description =
+          details::describe_model(free->model) + d.extended_description.substr(model_part);
+      set_extended(d, *free);
+    }
+  }
   if (x.beyond) judge_shape(d, x);
-  if (d.causes.size() > 1) append_also_named(d, x.r.units.output);
+  if (d.causes.size() > 1) append_also_named(d, x.shape, x.r.units.output);
 }
 
 /// The baseline structure every extension starts from, and that structure fitted here.
@@ -881,6 +918,7 @@ struct Decision {
   std::vector<const CandidateReport*> eligible;  ///< may be named, largest gain first
   std::vector<OnTopOfShape> on_shape;            ///< the other causes on top of the shape
   const OnTopOfShape* beyond = nullptr;          ///< the strongest of those that counts
+  Cause shape = Cause::kAsymmetry;               ///< the eligible shape cause on_shape holds
   const CandidateReport* best_any = nullptr;     ///< the largest gain of all
 };
 
@@ -912,6 +950,23 @@ std::vector<const CandidateReport*> eligible_candidates(Diagnosis& d, const Deci
   std::sort(eligible.begin(), eligible.end(),
             [](const CandidateReport* a, const CandidateReport* b) { return a->gain > b->gain; });
   return eligible;
+}
+
+// The plane, eligible beside the play family's own shape extension (asymmetry), is left out
+// unless it predicts the held-out blocks kPlaneOverPlays better; it is not tried later either.
+void prefer_the_plays_shape(Diagnosis& d, Decision& decision) {
+  if (!plane_outdone(d)) return;
+  auto& eligible = decision.eligible;
+  const auto plane = std::find_if(eligible.begin(), eligible.end(), [](const CandidateReport* r) {
+    return r->cause == Cause::kLoopShape;
+  });
+  if (plane == eligible.end()) return;
+  CandidateReport& c = d.candidates[index_of(d, Cause::kLoopShape)];
+  c.not_named = "the play family's own shape (asymmetry, held-out rms " +
+                num(d.candidate(Cause::kAsymmetry)->heldout.rmse) +
+                ") holds the loop about as well (" + num(c.heldout.rmse) +
+                "); the plane must gain " + num(kPlaneOverPlays) + "x over it";
+  eligible.erase(plane);
 }
 
 // A delay and a rate law both lag a ramp, and on a coarse record gain about as much (a 1-sample
@@ -958,12 +1013,12 @@ void order_rate_and_delay(Diagnosis& d, Decision& decision, const details::Diagn
 void test_on_shape(Diagnosis& d, const details::DiagnosisRecord& r,
                    const std::vector<details::ExtensionFit>& fits, const details::InputEvents& ev,
                    const DiagnosisOptions& options, Decision& decision) {
-  const bool shape =
-      std::any_of(decision.eligible.begin(), decision.eligible.end(),
-                  [](const CandidateReport* c) { return c->cause == Cause::kAsymmetry; });
-  if (!shape || decision.at_floor) return;
+  const auto shape = std::find_if(decision.eligible.begin(), decision.eligible.end(),
+                                  [](const CandidateReport* c) { return is_shape(c->cause); });
+  if (shape == decision.eligible.end() || decision.at_floor) return;
+  decision.shape = (*shape)->cause;
   report(options, 0.955, "testing the other causes on top of the loop's shape");
-  decision.on_shape = beyond_shape(d, r, fits, ev, d.notes);
+  decision.on_shape = beyond_shape(d, r, fits, ev, decision.shape, d.notes);
   for (const OnTopOfShape& o : decision.on_shape) {
     if (o.counts(options) &&
         (!decision.beyond ||
@@ -992,10 +1047,10 @@ void decide_cause(Diagnosis& d, const Decision& decision, const DiagnosisOptions
                 "); the baseline explains the data as far as these effects go";
   } else if (decision.beyond) {
     const OnTopOfShape* beyond = decision.beyond;
-    const CandidateReport& shape_report = *d.candidate(Cause::kAsymmetry);
+    const CandidateReport& shape_report = *d.candidate(decision.shape);
     d.cause = beyond->cause;
     d.verdict = std::string(to_string(beyond->cause)) + ": " + beyond->outcome.evidence + ". " +
-                beyond->outcome.extension + ", on top of the loop's shape (" +
+                beyond->outcome.extension + ", on top of " + shape_name(decision.shape) + " (" +
                 shape_report.extension + ", gain " + num(shape_report.gain) +
                 "), lowers the held-out rms error from " + num(shape_report.heldout.rmse) + " to " +
                 num(beyond->outcome.fit.heldout.rmse) + " " + unit + " (gain " + num(beyond->gain) +
@@ -1153,8 +1208,9 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
   // The candidates: their statistics read the residual of the reference the gains are judged
   // against.
   const Reference ref = reference_of(d, r, base.fit, ev, std::move(e), options);
-  const details::CandidateContext ctx{r,  base.spec,    base.fit,     ref.prediction, ref.residual,
-                                      ev, ref.profiles, ref.response, d.noise_rms};
+  details::CandidateContext ctx{r,  base.spec,    base.fit,     ref.prediction, ref.residual,
+                                ev, ref.profiles, ref.response, d.noise_rms};
+  ctx.swap_operator = options.baseline.has_value() && options.swap_operator;
   const std::vector<details::ExtensionFit> fits = test_candidates(d, ctx, options);
   if (parts.size() > 1) {
     report(options, 0.93, "leaving each record out");
@@ -1170,6 +1226,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
   d.noise_allowance_rms =
       std::sqrt(options.noise_floor_factor * options.noise_floor_factor - 1.0) * d.noise_rms;
   decision.eligible = eligible_candidates(d, decision, options);
+  prefer_the_plays_shape(d, decision);
   order_rate_and_delay(d, decision, r, ev);
   const std::string unit = r.units.output;
   test_on_shape(d, r, fits, ev, options, decision);
@@ -1191,7 +1248,7 @@ Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                                            : "the baseline";
     name_causes_and_extend(
         d, {r, fits, ev, ref.profiles, ref.response, options, decision.reference, reference_name,
-            decision.on_shape, decision.beyond, base.spec.delay_samples});
+            decision.on_shape, decision.beyond, base.spec.delay_samples, decision.shape});
     note_ambiguity(d, decision);
   }
   report(options, 1.0, "done");

@@ -223,6 +223,7 @@ std::string hide(hc::Cause cause, const HiddenCase& hc_case, hs::SimulatedActuat
   char buf[256];
   switch (cause) {
     case hc::Cause::kNone:
+    case hc::Cause::kLoopShape:  // the baseline truth is a Preisach plane already
       return "";
     case hc::Cause::kAsymmetry: {
       // The relay centres sit off mid-range: the loop loses its point symmetry.
@@ -409,8 +410,9 @@ TEST(Diagnosis, CauseNamesRoundTrip) {
   for (const hc::Cause c : hc::candidate_causes()) {
     EXPECT_EQ(hc::cause_from_string(hc::to_string(c)), c);
   }
-  EXPECT_EQ(hc::candidate_causes().size(), 6u);
+  EXPECT_EQ(hc::candidate_causes().size(), 7u);
   EXPECT_EQ(hc::cause_from_string("rate_dependence"), hc::Cause::kRateDependence);
+  EXPECT_EQ(hc::cause_from_string("loop_shape"), hc::Cause::kLoopShape);
   EXPECT_FALSE(hc::cause_from_string("resonance").has_value());
 }
 

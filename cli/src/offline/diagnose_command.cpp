@@ -46,6 +46,7 @@ std::string pct(double fraction) {
 const char* explanatory_variable(hc::Cause c) {
   switch (c) {
     case hc::Cause::kAsymmetry:
+    case hc::Cause::kLoopShape:
       return "input";
     case hc::Cause::kRateDependence:
     case hc::Cause::kDelay:

@@ -31,6 +31,8 @@ struct CandidateContext {
   /// With base a joint model: the held-out gain a part added on top of it must reach to be named.
   /// A candidate that falls just short of it may refine its fit at a cost; 0 on the reference.
   double added_gain_needed = 0.0;
+  /// loop_shape may swap the baseline's operator (a given baseline, DiagnosisOptions).
+  bool swap_operator = false;
 
   const ResidualProfile& profile(const std::string& variable) const;
 };
@@ -44,11 +46,17 @@ struct CandidateOutcome {
 };
 
 CandidateOutcome test_asymmetry(const CandidateContext& c);
+CandidateOutcome test_loop_shape(const CandidateContext& c);
 CandidateOutcome test_rate_dependence(const CandidateContext& c);
 CandidateOutcome test_creep(const CandidateContext& c);
 CandidateOutcome test_dynamics(const CandidateContext& c);
 CandidateOutcome test_delay(const CandidateContext& c);
 CandidateOutcome test_drift(const CandidateContext& c);
+
+/// A joint model on a plane whose shape loop_shape fixed (spec_of_model), refitted with its cells
+/// free beside the parts joined on it; std::nullopt for another spec, or where the refit does
+/// not fit the fit part better.
+std::optional<ExtensionFit> refit_plane_cells(const DiagnosisRecord& r, const ExtensionFit& joint);
 
 /// test_creep's statistic alone (no fit): read again on a joint model's residual.
 double creep_statistic(const CandidateContext& c);

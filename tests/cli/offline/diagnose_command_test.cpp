@@ -127,7 +127,7 @@ TEST_F(DiagnoseCommandTest, JsonNamesTheHiddenEffectAndSavedModelsPredictAnother
   EXPECT_EQ(j.at("baseline").at("model").at("type"), "pi");
   EXPECT_TRUE(j.at("extended").at("model").contains("creep"));
   EXPECT_FALSE(j.at("baseline").at("given").get<bool>());
-  ASSERT_EQ(j.at("candidates").size(), 6u);
+  ASSERT_EQ(j.at("candidates").size(), 7u);
   const double base_rmse = j.at("baseline").at("rmse").get<double>();
   for (const json& c : j.at("candidates")) {
     EXPECT_NEAR(c.at("gain").get<double>(), base_rmse / c.at("rmse_heldout").get<double>(),

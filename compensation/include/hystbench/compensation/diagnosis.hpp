@@ -25,6 +25,8 @@
 //
 // Candidates and their extensions:
 //   asymmetry        modified PI (dead zones) or coupled-play PI
+//   loop_shape       the operators swapped for a nonparametric Preisach plane (a density that
+//                    varies over the plane, a saturating top: a shape no play family holds)
 //   rate_dependence  rate-dependent PI (cumulative weights linear in du/dt or |du/dt|, or
 //                    thresholds widening with |du/dt| or its square root)
 //   creep            creep lags (CreepOperatorBank), time constants log-spaced
@@ -49,9 +51,19 @@
 
 namespace hystbench::compensation {
 
-enum class Cause { kNone, kAsymmetry, kRateDependence, kCreep, kDynamics, kDelay, kDrift };
+enum class Cause {
+  kNone,
+  kAsymmetry,
+  kRateDependence,
+  kCreep,
+  kDynamics,
+  kDelay,
+  kDrift,
+  kLoopShape
+};
 
-/// "none", "asymmetry", "rate_dependence", "creep", "dynamics", "delay", "drift".
+/// "none", "asymmetry", "rate_dependence", "creep", "dynamics", "delay", "drift",
+/// "loop_shape".
 std::string_view to_string(Cause cause) noexcept;
 std::optional<Cause> cause_from_string(std::string_view name) noexcept;
 /// Every cause but none, in the order they are tested and reported.
@@ -70,6 +82,11 @@ struct DiagnosisOptions {
   /// The baseline is "at the noise floor" when its held-out rms is below this times the
   /// estimated noise rms.
   double noise_floor_factor = 1.3;
+  /// loop_shape swaps the given baseline's operator for a Preisach plane; false keeps its family
+  /// (a family the user fixed): the candidate is reported, not tested. Without a given baseline
+  /// the plane is not tested either: the classical PI the diagnosis identifies there is the
+  /// reference the effects are named against, not a family to replace.
+  bool swap_operator = true;
   /// Units written to the models.
   Units units;
   /// Optional progress callback: (fraction done 0..1, what is happening).
