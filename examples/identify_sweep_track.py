@@ -131,8 +131,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return 1
         model = identified["model"]
         verified = identified.get("verification") or {}
+        # The plane's operators are its cells per side.
+        operators = "cells per side" if model["type"] == "preisach" else "plays"
         print(
-            f"identified {model['type']}, {model['operators']} plays, "
+            f"identified {model['type']}, {model['operators']} {operators}, "
             f"held-out rms {model['heldout']['rmse']:.4f} um "
             f"({model['heldout']['rmse_percent']:.3f} % of range); "
             f"verified tracking max {verified.get('max_error_percent', float('nan')):.3f} %"

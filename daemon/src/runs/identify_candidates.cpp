@@ -201,7 +201,7 @@ void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
       session_->ahead = std::make_unique<details::DiagnosisAhead>(
           identify_diagnosis(session_->candidates,
                              session_->history.value("exchange_ticks", 0) * dt_, session_->u,
-                             session_->y, dt_),
+                             session_->y, dt_, session_->swap_operator),
           std::move(order));
     }
     return;
@@ -270,6 +270,7 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
   session->y = aligned;
   session->unscored = fit_request.value("skip_samples", std::size_t{0});
   session->extend = fit_request.value("extend", true);
+  session->swap_operator = !fit_request.value("family_fixed", false);
   session->log_path = result.log_path;
   session->samples = n;
   session->fit_sample_period_s = static_cast<double>(block) * dt_;

@@ -11,6 +11,7 @@
 
 #include "hystbench/common/step_timed_model.hpp"
 #include "hystbench/compensation/diagnosis.hpp"
+#include "hystbench/compensation/preisach_model.hpp"
 #include "runs/details/identify_session.hpp"
 
 namespace hystbench::daemon {
@@ -113,6 +114,12 @@ IdentifyCandidate extended_candidate(const IdentifyCandidate& base, hc::Actuator
   model.input_max = base.fit.model.input_max;
   model.configure(dt);
   ext.fit.model = std::move(model);
+  if (ext.fit.model.hysteresis().kind() == hc::ModelKind::kPreisach) {
+    // The operator swapped for a plane: its cells per side and its output map's dead zones.
+    const auto& plane = dynamic_cast<const hc::PreisachModel&>(ext.fit.model.hysteresis());
+    ext.fit.operators = static_cast<int>(plane.parameters().cells);
+    ext.fit.dead_zones = static_cast<int>(plane.parameters().output_map.thresholds.size() / 2);
+  }
   ext.fit.delay_samples = static_cast<int>(std::lround(ext.fit.model.delay_s() / dt));
   const hc::ModelScore score = hc::score_model(ext.fit.model, record.t, record.u, record.y,
                                                record.heldout_fraction, record.unscored);
@@ -155,7 +162,8 @@ std::vector<double> record_times(std::size_t n, double dt) {
 
 details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandidate>& candidates,
                                                  double exchange_s, std::span<const double> u,
-                                                 std::span<const double> y, double dt) {
+                                                 std::span<const double> y, double dt,
+                                                 bool swap_operator) {
   std::vector<hc::ActuatorModel> baselines;
   baselines.reserve(candidates.size());
   for (const IdentifyCandidate& c : candidates) {
@@ -163,12 +171,13 @@ details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandi
     baselines.back().set_delay(std::max(0.0, baselines.back().delay_s() - exchange_s));
   }
   return [baselines = std::move(baselines), t = record_times(u.size(), dt),
-          u = std::vector<double>(u.begin(), u.end()), y = std::vector<double>(y.begin(), y.end())](
-             std::size_t candidate, const details::DiagnosisAhead::Progress& progress) {
+          u = std::vector<double>(u.begin(), u.end()), y = std::vector<double>(y.begin(), y.end()),
+          swap_operator](std::size_t candidate, const details::DiagnosisAhead::Progress& progress) {
     hc::DiagnosisOptions options;
     options.baseline = baselines.at(candidate);
     options.units = {"V", "um"};
     options.progress = progress;
+    options.swap_operator = swap_operator;
     return hc::diagnose(t, u, y, options);
   };
 }
@@ -202,8 +211,7 @@ bool Bench::extend_identified_model() {
     std::lock_guard lock(mutex_);
     active_run_["stage"] = "diagnosing the record with " + base.label;
   }
-  const auto started = std::chrono::steady_clock::now();
-  const auto seconds = [&started] {
+  const auto seconds = [started = std::chrono::steady_clock::now()] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   };
   // The extended model gets the driver's exchange latency back in its delay.
@@ -221,7 +229,8 @@ bool Bench::extend_identified_model() {
     details::DiagnosisAhead::Taken taken =
         s.ahead ? s.ahead->take(s.base, progress)
                 : details::DiagnosisAhead::Taken{
-                      identify_diagnosis(s.candidates, exchange_s, s.u, s.y, dt_)(s.base, progress),
+                      identify_diagnosis(s.candidates, exchange_s, s.u, s.y, dt_, s.swap_operator)(
+                          s.base, progress),
                       "after the verification"};
     s.ahead.reset();
     const hc::Diagnosis& d = taken.diagnosis;

@@ -320,7 +320,10 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterASecondIdentify) {
 TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReference) {
   const hd::BenchSettings settings = settings_from_toml(loopback_toml(kEveryEffect));
   start(settings);
-  const json id = run_and_wait("identify", json::object());
+  // The modified PI, named: through the plane that identify keeps by default, with its creep
+  // lags, the replay's lead-in may not find the offset the drive was learned at within its longest
+  // lead-in (a miss stated in docs/measurements.md).
+  const json id = run_and_wait("identify", {{"model", "mpi"}});
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   const json learned = learn(50.0, 10);
   ASSERT_EQ(learned["end"], "completed") << learned.dump(2);

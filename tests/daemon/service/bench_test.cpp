@@ -310,6 +310,30 @@ TEST_F(BenchTest, IdentifyWithThePreisachFamilyTracksTheTriangleThroughItsInvers
   EXPECT_NE(active.dump().find("\"preisach\""), std::string::npos) << active.dump().substr(0, 2000);
 }
 
+// The user's path with the defaults: `identify` alone. Its extension diagnoses the record with
+// the play family it kept, finds the loop's shape it misses, swaps the operator for a Preisach
+// plane, and keeps it where the bench tracks better; the inverse then tracks the 1 Hz triangle
+// better than the modified PI it replaced. A family the request names is kept as it is.
+TEST_F(BenchTest, IdentifyKeepsThePlaneItsDiagnosisFindsForTheLoopsShape) {
+  start(short_identify_settings());
+  const json id = run_and_wait("identify", json::object());
+  ASSERT_EQ(id["end"], "completed") << id.dump(2);
+  const json& extension = id["model"]["extension"];
+  bool shape = false;
+  for (const json& p : extension["parts"]) shape = shape || p["cause"] == "loop_shape";
+  ASSERT_TRUE(shape) << extension.dump(2);
+  EXPECT_EQ(extension["adopted"], true) << extension.dump(2);
+  EXPECT_EQ(id["model"]["type"], "preisach") << id.dump(2);
+  const double replaced = extension["verified"]["triangle_max_percent"]["model"].get<double>();
+  const json tr = run_and_wait("track", {{"compensator", "inverse"}, {"periods", 3}});
+  ASSERT_EQ(tr["end"], "completed") << tr.dump(2);
+  EXPECT_LT(tr["max_error_percent"].get<double>(), 0.8 * replaced) << tr.dump(2);
+
+  const json fixed = run_and_wait("identify", {{"model", "mpi"}});
+  ASSERT_EQ(fixed["end"], "completed") << fixed.dump(2);
+  EXPECT_EQ(fixed["model"]["type"], "mpi") << fixed["model"]["extension"].dump(2);
+}
+
 // The tare: an output offset the model does not predict (a sensor offset, the slow
 // creep a bench's history leaves) is measured as y - y_model on the precondition sweep's falling
 // ramp and taken off the feedforward's target. A model shifted by 2 µm (4.4 % of the range)

@@ -58,6 +58,7 @@ IdentifyRequest parse_identify_request(const RequestParams& request,
     throw common::CommandError(
         "bad_params", "model: unknown '" + r.model + "' (" + common::fit_family_names() + ")");
   }
+  r.family_fixed = request.has("model") && r.model != "auto";
   r.operators = request.integer("operators", settings.identify.operators);
   r.dead_zones = request.integer("dead_zones", settings.identify.dead_zones);
   r.extend = request.boolean("extend", settings.identify.extend);
@@ -115,6 +116,7 @@ BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext&
              {"operators", request.operators},
              {"dead_zones", request.dead_zones},
              {"extend", request.extend},
+             {"family_fixed", request.family_fixed},
              {"skip_samples", skip},
              {"precondition_s", s.identify.precondition_s},
              {"settle_s", s.identify.settle_s}};

@@ -19,6 +19,9 @@ struct IdentifyRequest {
          u_max = 0.0;  ///< excitation span [V], within the output limits, u_min < u_max
   /// Diagnose the record with the fitted model and adopt the extension when it tracks better.
   bool extend = true;
+  /// The request named the family (not auto): the extension keeps it, and never swaps the
+  /// operator for a Preisach plane (loop_shape).
+  bool family_fixed = false;
 };
 
 /// The request's keys over settings' identify defaults; bad_params naming the key when the

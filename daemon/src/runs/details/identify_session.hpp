@@ -96,6 +96,7 @@ struct Bench::IdentifySession {
   std::vector<double> u, y;
   std::size_t unscored = 0;
   bool extend = true;                   ///< diagnose and extend the chosen model
+  bool swap_operator = true;            ///< the extension may swap the operator (loop_shape)
   bool extension_tried = false;         ///< the diagnosis ran (or failed): no second one
   std::size_t base = 0;                 ///< the candidate the extension extends
   std::optional<std::size_t> extended;  ///< the extended candidate, when there is one
@@ -131,9 +132,11 @@ struct Bench::IdentifySession {
 /// The diagnosis of identify's record (u, y at the loop's period dt) with candidate i as the
 /// baseline, its delay less the driver's exchange latency (the record holds the outputs matched
 /// to the inputs they answer); the models and the record are copied: it runs beside the session.
+/// swap_operator: the diagnosis may swap its operator for a Preisach plane (loop_shape).
 details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandidate>& candidates,
                                                  double exchange_s, std::span<const double> u,
-                                                 std::span<const double> y, double dt);
+                                                 std::span<const double> y, double dt,
+                                                 bool swap_operator);
 
 /// Fits the requested family, or with options.kind unset ("auto") each of pi, mpi, cpi and rpi
 /// (a family that fails is left out); sorted by held-out error. Throws when none fits.
