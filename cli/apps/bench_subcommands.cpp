@@ -76,13 +76,15 @@ CliCommand add_identify(CLI::App& app, cli::RemoteCommand& remote) {
       "identify",
       "Precondition, play the identification excitation, fit a model, verify it by tracking "
       "through its inverse, make it the active model. Then the record is diagnosed with that "
-      "model: what it misses (delay, dynamics, creep, rate law, asymmetry) is added where it "
+      "model: what it misses (delay, dynamics, creep, rate law, asymmetry, the loop's shape: the "
+      "operator swapped for a Preisach plane unless --model names the family) is added where it "
       "lowers the held-out error, and the extended model is kept when it tracks better on the "
       "bench (the result lists the parts and their gains)");
   cmd->add_option("--model", id->model,
                   "pi, mpi, cpi, rpi, preisach (relays on a grid of the Preisach plane, with "
                   "creep lags; holds a loop no play family does) or auto (every family, the "
-                  "best verified tracking kept; default: the config's)")
+                  "best verified tracking kept); named, the extension keeps the family (default: "
+                  "the config's, whose operator the extension may swap)")
       ->check(CLI::IsMember(common::fit_family_name_list()));
   cmd->add_option("--operators", id->operators,
                   "Number of plays, or the Preisach plane's cells per side (0 = by held-out "
