@@ -550,7 +550,16 @@ std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
   const bool shape_held = in_parts(Cause::kAsymmetry) || in_parts(Cause::kLoopShape);
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
     CandidateReport& c = d.candidates[i];
-    if (in_parts(c.cause) || (shape_held && is_shape(c.cause))) continue;
+    if (in_parts(c.cause)) continue;
+    if (shape_held && is_shape(c.cause)) {
+      // Eligible (no other reason given): the shape it would add is held already.
+      if (c.not_named.empty()) {
+        c.not_named = "the extended model holds the loop's shape by " +
+                      std::string(in_parts(Cause::kLoopShape) ? "the plane (loop_shape)"
+                                                              : "its plays (asymmetry)");
+      }
+      continue;
+    }
     if (c.cause == Cause::kLoopShape && plane_outdone(d)) continue;
     const OnTopOfShape* s = x.beyond ? on_shape_of(x, c.cause) : nullptr;
     const bool contender = c.carries_over && (x.beyond ? s && s->significant : c.significant);
