@@ -78,22 +78,16 @@ CandidateOutcome test_asymmetry(const CandidateContext& c) {
     }
   }
   // Dead-zone kinds regress in transformed space: compare by the simulated fit-part error.
-  double best = std::numeric_limits<double>::infinity();
   std::vector<ExtensionFit> fits;
   for (const auto& [spec, what] : tries) {
     fits.push_back(fit_extension(c.record, spec));
     if (!fits.back().model.hysteresis().invertibility().invertible) {
       fits.back().fit.rmse = std::numeric_limits<double>::infinity();
     }
-    best = std::min(best, fits.back().fit.rmse);
   }
-  for (std::size_t i = 0; i < fits.size(); ++i) {
-    if (fits[i].fit.rmse <= best * (1.0 + kParsimony)) {
-      out.fit = std::move(fits[i]);
-      out.extension = tries[i].second;
-      break;
-    }
-  }
+  const std::size_t kept = simplest_within(fits, kParsimony);
+  out.fit = std::move(fits[kept]);
+  out.extension = tries[kept].second;
   return out;
 }
 

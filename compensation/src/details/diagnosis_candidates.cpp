@@ -1,6 +1,8 @@
 #include "details/diagnosis_candidates.hpp"
 
+#include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 namespace hystbench::compensation::details {
@@ -10,6 +12,14 @@ const ResidualProfile& CandidateContext::profile(const std::string& variable) co
     if (p.variable == variable) return p;
   }
   throw std::logic_error("diagnosis: no residual profile '" + variable + "'");
+}
+
+std::size_t simplest_within(const std::vector<ExtensionFit>& fits, double parsimony) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const ExtensionFit& f : fits) best = std::min(best, f.fit.rmse);
+  std::size_t i = 0;
+  while (i + 1 < fits.size() && !(fits[i].fit.rmse <= best * (1.0 + parsimony))) ++i;
+  return i;
 }
 
 std::string num(double v, int digits) {

@@ -81,6 +81,10 @@ std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
                                                     const ExtensionSpec& spec,
                                                     const FrequencyResponse& response);
 
+/// Index of the first of `fits` (simplest first) whose fit-part rms is within `parsimony` (a
+/// fraction) of the lowest: the simplest that fits about as well. fits not empty.
+std::size_t simplest_within(const std::vector<ExtensionFit>& fits, double parsimony);
+
 /// printf-style %.3g / %.4g helpers for evidence lines.
 std::string num(double v, int digits = 3);
 std::string percent(double fraction);

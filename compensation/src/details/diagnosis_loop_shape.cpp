@@ -9,7 +9,6 @@
 // plane already has nothing to swap (statistic 0).
 #include <algorithm>
 #include <array>
-#include <limits>
 #include <string>
 
 #include "details/constrained_lsq.hpp"
@@ -98,26 +97,20 @@ CandidateOutcome test_loop_shape(const CandidateContext& c) {
   out.evidence = "a Preisach plane of the input (" + std::to_string(kProbeCells) + " x " +
                  std::to_string(kProbeCells) + " cells) explains " + percent(out.statistic) +
                  " of the residual variance: the operators miss the loop's shape";
-  double best = std::numeric_limits<double>::infinity();
   std::vector<ExtensionFit> fits;
   for (const int zones : kOutputZones) {
     ExtensionSpec spec = c.base;
     spec.structure = plane_of(c.base.structure, c.record, kPlaneCells, zones);
     fits.push_back(fit_extension(c.record, spec));
-    best = std::min(best, fits.back().fit.rmse);
   }
-  for (std::size_t i = 0; i < fits.size(); ++i) {
-    if (fits[i].fit.rmse <= best * (1.0 + kParsimony)) {
-      out.fit = std::move(fits[i]);
-      const int zones = kOutputZones[i];
-      out.extension = "the operators swapped for a Preisach plane (" + std::to_string(kPlaneCells) +
-                      " x " + std::to_string(kPlaneCells) + " cells" +
-                      (zones > 0 ? ", " + std::to_string(zones) + " output dead zones per side"
-                                 : std::string()) +
-                      ")";
-      break;
-    }
-  }
+  const std::size_t kept = simplest_within(fits, kParsimony);
+  out.fit = std::move(fits[kept]);
+  const int zones = kOutputZones[kept];
+  out.extension =
+      "the operators swapped for a Preisach plane (" + std::to_string(kPlaneCells) + " x " +
+      std::to_string(kPlaneCells) + " cells" +
+      (zones > 0 ? ", " + std::to_string(zones) + " output dead zones per side" : std::string()) +
+      ")";
   // What is tested on top of the plane keeps its cells' shape as fitted here, their scale and the
   // output map free (as for a plane given as the baseline): a search over a mode or a delay would
   // refit hundreds of cells at every trial otherwise.
