@@ -130,6 +130,12 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
   const bool plans = hc::can_plan_drive(hc::model_file_from_json(rpi_model).model);
   double reduction_sum = 0.0;
   for (const double f : freqs) {
+    // The truth's creep relaxes while the bench idles at its safe output (as long as the host
+    // takes to fit: a slower machine idles longer), and no model here holds it: the rpi's first
+    // 1 Hz inverse after identify tracked at 0.86-1.07 % by the idle before it, 0.82-0.87 %
+    // after an uncompensated run. So each inverse follows the same run as the mpi's did.
+    const json none = track("none", f, f < 2 ? 3 : 6);
+    ASSERT_EQ(none["end"], "completed") << none.dump(2);
     const json inv = track("inverse", f, f < 2 ? 3 : 6);
     ASSERT_EQ(inv["end"], "completed") << inv.dump(2);
     rpi_rms[f] = rms(inv);
@@ -172,9 +178,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
       // No compensator is worse than none. `pid` adds its feedback to the linear map's drive
       // (an integral loop alone trailed 1 Hz by 26 % of range); `inverse_multiplicative` plays
       // the plan too (its one-tick loop through a law that lags the drive trailed by 21-44 %).
-      // Against none run just before (at 19 Hz none differs by 5 % between the two phases).
-      const json none = track("none", f, 6);
-      ASSERT_EQ(none["end"], "completed") << none.dump(2);
+      // Against none run in this phase (at 19 Hz none differs by 5 % between the two phases).
       for (const char* other : {"pid", "inverse_multiplicative"}) {
         const json r = track(other, f, 6);
         ASSERT_EQ(r["end"], "completed") << r.dump(2);
