@@ -200,10 +200,13 @@ CliCommand add_diagnose(CLI::App& app) {
   add_column_options(cmd, diag->columns, false);
   cmd->add_option("--report", diag->report_dir,
                   "Folder for report.txt, diagnosis.json and gnuplot PNGs");
-  cmd->add_option("--save-baseline", diag->save_baseline, "Write the baseline model file");
+  cmd->add_option("--save-baseline", diag->save_baseline,
+                  "Write the baseline model file, when it passes its check (its inverse follows "
+                  "it over its input range; else not written, exit status 1)");
   cmd->add_option("--save-extended", diag->save_extended,
                   "Write the extended model file (the baseline plus the named effects; its "
-                  "mode and delay timed on the first record's step responses)");
+                  "mode and delay timed on the first record's step responses), when it passes "
+                  "the same check");
   return {cmd, [diag] { return cli::run_diagnose(*diag, std::cout, std::cerr); }};
 }
 

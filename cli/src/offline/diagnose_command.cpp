@@ -16,6 +16,7 @@
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
 #include "hystbench/common/step_timed_model.hpp"
+#include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "offline/details/mimo_commands.hpp"
 #include "report/details/gnuplot.hpp"
@@ -425,21 +426,67 @@ void write_diagnosis_report(const std::string& dir_name, const hc::Diagnosis& d,
   details::run_gnuplot(dir / "report.gp", dir / "gnuplot.log");
 }
 
-// --save-baseline and --save-extended: the extended model's dynamics and delay timed on the first
-// record's step responses, as identify times its extension. Returns that timing (null: none).
-json save_models(const DiagnoseCommand& cmd, const hc::Diagnosis& d, const std::string& label,
-                 const Record& first) {
-  if (!cmd.save_baseline.empty()) {
-    common::save_model_file(cmd.save_baseline,
-                            hc::ModelFile{d.baseline, identification_of(d, label, false)});
+// What --save-baseline and --save-extended did: each model checked before it is written
+// (model_check.hpp), and the extended model's dynamics and delay timed on the first record's step
+// responses, as identify times its extension.
+struct SavedModels {
+  std::optional<json> timing;  ///< the extended model's timing (none: not saved, or no steps)
+  std::vector<std::pair<std::string, hc::ModelCheck>> checks;  ///< "baseline", "extended"
+  std::string refused;  ///< "extended model not saved to F: its check failed: ..."
+};
+
+// Writes `model` to `path` when it passes its check; else says why in saved.refused.
+void save_checked(const std::string& path, const std::string& which, const hc::ModelFile& file,
+                  double dt_s, SavedModels& saved) {
+  const hc::ModelCheck check = hc::check_model(file.model, dt_s);
+  saved.checks.emplace_back(which, check);
+  if (check.passed) {
+    common::save_model_file(path, file);
+    return;
   }
-  if (cmd.save_extended.empty()) return nullptr;
-  hc::ActuatorModel saved = d.extended;
-  json timing = common::time_on_steps(saved, first.u, first.y, first.sample_period_s, 0.0);
+  if (!saved.refused.empty()) saved.refused += "; ";
+  saved.refused += which + " model not saved to " + path + ": its check " + describe(check);
+}
+
+SavedModels save_models(const DiagnoseCommand& cmd, const hc::Diagnosis& d,
+                        const std::string& label, const Record& first) {
+  SavedModels saved;
+  if (!cmd.save_baseline.empty()) {
+    save_checked(cmd.save_baseline, "baseline",
+                 hc::ModelFile{d.baseline, identification_of(d, label, false)}, d.sample_period_s,
+                 saved);
+  }
+  if (cmd.save_extended.empty()) return saved;
+  hc::ActuatorModel model = d.extended;
+  json timing = common::time_on_steps(model, first.u, first.y, first.sample_period_s, 0.0);
   json identification = identification_of(d, label, true);
-  if (!timing.is_null()) identification["timing"] = timing;
-  common::save_model_file(cmd.save_extended, hc::ModelFile{saved, identification});
-  return timing;
+  if (!timing.is_null()) {
+    identification["timing"] = timing;
+    saved.timing = std::move(timing);
+  }
+  save_checked(cmd.save_extended, "extended", hc::ModelFile{model, identification},
+               d.sample_period_s, saved);
+  return saved;
+}
+
+// The models written, each with its check (or why it was not written: the error says so too).
+void print_saved(std::ostream& out, const DiagnoseCommand& cmd, const SavedModels& saved) {
+  for (const auto& [which, path] :
+       {std::pair{"baseline", &cmd.save_baseline}, std::pair{"extended", &cmd.save_extended}}) {
+    const auto check = std::find_if(saved.checks.begin(), saved.checks.end(),
+                                    [&which](const auto& c) { return c.first == which; });
+    if (path->empty() || check == saved.checks.end()) continue;
+    if (!check->second.passed) {
+      out << "not saved " << which << " " << *path << ": its check " << describe(check->second)
+          << "\n";
+      continue;
+    }
+    out << "saved     " << which << " " << *path;
+    if (std::string(which) == "extended" && saved.timing) {
+      out << " (its dynamics and delay " << common::timing_text(*saved.timing) << ")";
+    }
+    out << "; its check " << describe(check->second) << "\n";
+  }
 }
 
 int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
@@ -481,7 +528,7 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
         throw std::invalid_argument(paths[i] + ": " + e.what());
       }
     }
-    const json saved_timing = save_models(cmd, d, label, records[0]);
+    const SavedModels saved = save_models(cmd, d, label, records[0]);
     if (!cmd.report_dir.empty()) {
       // The records end to end, as the diagnosis saw them.
       std::vector<double> t, u, y;
@@ -502,19 +549,17 @@ int run_diagnose(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& er
       json v = json::array();
       for (const Validation& x : validations) v.push_back(to_json(x));
       j["validation"] = v;
+      for (const auto& [which, check] : saved.checks) j["model_checks"][which] = to_json(check);
       out << j.dump() << "\n";
     } else {
       print_diagnosis(out, d, label);
       for (const Validation& x : validations) print_validation(out, x, d.baseline.units.output);
-      if (!cmd.save_baseline.empty()) out << "saved     baseline " << cmd.save_baseline << "\n";
-      if (!cmd.save_extended.empty()) {
-        out << "saved     extended " << cmd.save_extended;
-        if (!saved_timing.is_null()) {
-          out << " (its dynamics and delay " << common::timing_text(saved_timing) << ")";
-        }
-        out << "\n";
-      }
+      print_saved(out, cmd, saved);
       if (!cmd.report_dir.empty()) out << "report    " << cmd.report_dir << "\n";
+    }
+    if (!saved.refused.empty()) {
+      err << "hystbench: error: " << saved.refused << "\n";
+      return 1;
     }
     return 0;
   } catch (const std::exception& e) {

@@ -70,6 +70,12 @@ void print_extension(std::ostream& out, const json& e) {
   if (parts.empty()) out << "nothing added";
   out << ": " << (e.value("adopted", false) ? "adopted" : "not adopted") << ", "
       << e.value("why", std::string()) << "\n";
+  const json check = e.value("check", json::object());
+  if (check.value("passed", false)) {
+    out << "  extension model checked: driven by its inverse it tracks a triangle over 90 % of its "
+           "range at "
+        << fixed_or_dash(check.value("inverse_rms_percent", json()), 3) << " % rms\n";
+  }
   if (e.contains("verified")) {
     const json& v = e["verified"];
     out << "  extension check triangle max "

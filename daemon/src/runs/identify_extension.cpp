@@ -11,6 +11,7 @@
 
 #include "hystbench/common/step_timed_model.hpp"
 #include "hystbench/compensation/diagnosis.hpp"
+#include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/preisach_model.hpp"
 #include "runs/details/identify_session.hpp"
 
@@ -158,6 +159,31 @@ std::vector<double> record_times(std::size_t n, double dt) {
   return t;
 }
 
+// A model whose inverse does not exist over its input range is never played nor written: the
+// extension says why (model_check.hpp).
+bool passes_check(const hc::ActuatorModel& model, double dt_s, json& extension) {
+  const hc::ModelCheck check = hc::check_model(model, dt_s);
+  extension["check"] = to_json(check);
+  if (check.passed) return true;
+  extension["adopted"] = false;
+  extension["why"] = "its check failed: " + check.reason;
+  return false;
+}
+
+// The extended candidate's verification: its triangle, and where a fast sine judges it, that
+// sine and a middle one (what the extension gives up below the fast one) for it and its base.
+void queue_extension_verification(std::vector<VerificationJob>& jobs,
+                                  const std::vector<IdentifyCandidate>& candidates,
+                                  std::size_t base, std::size_t extended, double fast_hz,
+                                  double mid_hz) {
+  jobs.push_back({extended, false});
+  if (!(fast_hz > 0.0)) return;
+  for (const double hz : {fast_hz, mid_hz}) {
+    if (!candidates[base].sines.contains(hz)) jobs.push_back({base, hz});
+    jobs.push_back({extended, hz});
+  }
+}
+
 }  // namespace
 
 details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandidate>& candidates,
@@ -252,6 +278,10 @@ bool Bench::extend_identified_model() {
     const ScoredRecord record{t, s.u, s.y, settings_.identify.heldout_fraction, s.unscored};
     IdentifyCandidate ext =
         extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
+    if (!passes_check(ext.fit.model, dt_, s.extension)) {
+      s.extension["diagnosis_s"] = seconds();
+      return false;
+    }
     std::string added = extension_added(d, draft->named, s.extension["parts"]);
     if (!timing.is_null()) added += "; " + common::timing_text(timing);
     ext.fit.notes.push_back("extended by the diagnosis of its record: " + added);
@@ -264,15 +294,8 @@ bool Bench::extend_identified_model() {
                    std::any_of(draft->parts.begin(), draft->parts.end(), [](const std::string& p) {
                      return p == "delay" || p == "dynamics";
                    });
-    s.jobs.push_back({*s.extended, false});
-    if (s.fast_hz > 0.0) {
-      // A middle sine too: what the extension gives up below the fast one.
-      s.mid_hz = s.fast_hz / kMidFraction;
-      for (const double hz : {s.fast_hz, s.mid_hz}) {
-        if (!s.candidates[s.base].sines.contains(hz)) s.jobs.push_back({s.base, hz});
-        s.jobs.push_back({*s.extended, hz});
-      }
-    }
+    if (s.fast_hz > 0.0) s.mid_hz = s.fast_hz / kMidFraction;
+    queue_extension_verification(s.jobs, s.candidates, s.base, *s.extended, s.fast_hz, s.mid_hz);
     s.extension["diagnosis_s"] = seconds();
     return true;
   } catch (const std::exception& e) {

@@ -18,6 +18,7 @@
 
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
+#include "hystbench/compensation/model_check.hpp"
 #include "hystbench/daemon/service/sample_log_writer.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
@@ -136,6 +137,12 @@ TEST_F(DiagnoseCommandTest, JsonNamesTheHiddenEffectAndSavedModelsPredictAnother
   }
   EXPECT_LT(j.at("extended").at("rmse").get<double>(), base_rmse);
   EXPECT_NE(j.at("heldout").get<std::string>().find("held out"), std::string::npos);
+  // Each model was checked before it was written: its inverse tracks it over its range.
+  for (const char* which : {"baseline", "extended"}) {
+    const json& check = j.at("model_checks").at(which);
+    EXPECT_TRUE(check.at("passed").get<bool>()) << check;
+    EXPECT_LT(check.at("inverse_rms_percent").get<double>(), hc::ModelCheck::kMaxRmsPercent);
+  }
 
   // Both saved models are ordinary model files: simulate runs them on the other record, where
   // the extended one predicts better; invert builds an inverse of the extended one.

@@ -73,10 +73,15 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     EXPECT_EQ(id["end"], "completed") << id.dump(2);
     EXPECT_FALSE(id.contains("fit_error")) << id.dump(2);
     f.extension = id["model"]["extension"];
-    // `hystbench identify` prints one line for the parts and one for the bench's check.
+    // `hystbench identify` prints one line for the parts, one for the model's check before it
+    // was played and one for the bench's check.
     std::ostringstream text;
     cli::print_run_result(id, text);
     EXPECT_NE(text.str().find("extension check triangle max "), std::string::npos) << text.str();
+    EXPECT_TRUE(f.extension["check"]["passed"].get<bool>()) << f.extension.dump(2);
+    EXPECT_NE(text.str().find("extension model checked: driven by its inverse it tracks"),
+              std::string::npos)
+        << text.str();
     if (f.extension.contains("timing")) {
       EXPECT_NE(text.str().find("extension timed on "), std::string::npos) << text.str();
     }

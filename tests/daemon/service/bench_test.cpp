@@ -324,6 +324,9 @@ TEST_F(BenchTest, IdentifyKeepsThePlaneItsDiagnosisFindsForTheLoopsShape) {
   for (const json& p : extension["parts"]) shape = shape || p["cause"] == "loop_shape";
   ASSERT_TRUE(shape) << extension.dump(2);
   EXPECT_EQ(extension["adopted"], true) << extension.dump(2);
+  // Checked before it was played: its inverse tracks the plane over its input range.
+  EXPECT_EQ(extension["check"]["passed"], true) << extension.dump(2);
+  EXPECT_LT(extension["check"]["inverse_rms_percent"].get<double>(), 0.5) << extension.dump(2);
   EXPECT_EQ(id["model"]["type"], "preisach") << id.dump(2);
   const double replaced = extension["verified"]["triangle_max_percent"]["model"].get<double>();
   const json tr = run_and_wait("track", {{"compensator", "inverse"}, {"periods", 3}});
