@@ -129,6 +129,16 @@ class BenchFixture : public TempDirTest {
                        [&](const nlohmann::json& p) { return p.value("cause", "") == cause; });
   }
 
+  /// True when identify's extension was adopted with the part `cause` in it (an extension
+  /// adopted in part, its fast parts alone, leaves the others out).
+  static bool adopted_part(const nlohmann::json& extension, const std::string& cause) {
+    const nlohmann::json parts = extension.value("parts", nlohmann::json::array());
+    return extension.value("adopted", false) &&
+           std::any_of(parts.begin(), parts.end(), [&](const nlohmann::json& p) {
+             return p.value("cause", "") == cause && p.value("adopted", false);
+           });
+  }
+
   /// Waits until the active run has done `samples` ticks; false after `timeout`.
   bool wait_run_samples(std::uint64_t samples,
                         std::chrono::seconds timeout = std::chrono::seconds(20)) {

@@ -59,6 +59,29 @@ void print_delay_trim(std::ostream& out, const json& t) {
       << "\n";
 }
 
+// The extension's fast parts alone, tried where the whole extension lost on the bench.
+void print_fast_parts(std::ostream& out, const json& f) {
+  const auto names = [](const json& list) {
+    std::string s;
+    for (const json& n : list) s += (s.empty() ? "" : " + ") + n.get<std::string>();
+    return s;
+  };
+  out << "  extension fast  " << names(f.value("parts", json::array())) << " alone (without "
+      << names(f.value("left_out", json::array())) << ")";
+  if (f.contains("verified")) {
+    const json& v = f["verified"];
+    out << ": triangle rms " << fixed_or_dash(v["triangle_rms_percent"].value("model", json()), 3)
+        << " -> " << fixed_or_dash(v["triangle_rms_percent"].value("extended", json()), 3) << " %";
+    if (v.contains("fast_hz")) {
+      out << ", " << fixed(v["fast_hz"].get<double>(), 0) << " Hz sine rms "
+          << fixed_or_dash(v["fast_rms_percent"].value("model", json()), 3) << " -> "
+          << fixed_or_dash(v["fast_rms_percent"].value("extended", json()), 3) << " %";
+    }
+  }
+  out << ": " << (f.value("adopted", false) ? "adopted" : "not adopted") << ", "
+      << f.value("why", std::string("not judged: the verification did not complete")) << "\n";
+}
+
 // identify's extension: each part with its held-out gain, the verified figures, the decision.
 void print_extension(std::ostream& out, const json& e) {
   out << "  extension       ";
@@ -99,6 +122,7 @@ void print_extension(std::ostream& out, const json& e) {
     }
     if (e.contains("delay_trim")) print_delay_trim(out, e["delay_trim"]);
   }
+  if (e.contains("fast_parts")) print_fast_parts(out, e["fast_parts"]);
 }
 
 }  // namespace

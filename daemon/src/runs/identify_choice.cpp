@@ -166,6 +166,8 @@ json fit_description(const hc::FitResult& fit, const json& history, const std::s
           {"extension", extension}};
 }
 
+}  // namespace
+
 // The extension's verified gains against the model it extends: the triangle's max error and
 // the fast sine's rms error (base / extended; > 1 is better).
 json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& ext, double fast_hz,
@@ -193,8 +195,6 @@ json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& 
   }
   return v;
 }
-
-}  // namespace
 
 double rate_sine_frequency(double loop_rate_hz) { return std::min(20.0, loop_rate_hz / 20.0); }
 
@@ -242,8 +242,10 @@ void Bench::finish_identify() {
   IdentifySession& s = *session;
   json result = std::move(s.result);
   // The verified figure decides when any candidate was verified; else the held-out error.
-  std::size_t chosen = best_verified(
-      s.candidates, left_out_of_choice(s.candidates, s.extended, s.rate_free, s.rate_sine_hz));
+  std::vector<std::size_t> left_out =
+      left_out_of_choice(s.candidates, s.extended, s.rate_free, s.rate_sine_hz);
+  if (s.fast_parts) left_out.push_back(*s.fast_parts);
+  std::size_t chosen = best_verified(s.candidates, left_out);
   bool extended = false;
   if (s.extended) {
     const IdentifyCandidate &base = s.candidates[s.base], &ext = s.candidates[*s.extended];
@@ -252,7 +254,15 @@ void Bench::finish_identify() {
     s.extension["adopted"] = extended;
     s.extension["why"] =
         extended ? "it tracks better on the bench" : "it does not track better on the bench";
+    const bool fast_parts = !extended && chosen == s.base && s.fast_parts &&
+                            adopt_fast_parts(s.candidates[s.base], s.candidates[*s.fast_parts],
+                                             s.fast_hz, s.mid_hz, s.extension);
     if (extended) chosen = *s.extended;
+    if (fast_parts) {
+      extended = true;
+      chosen = *s.fast_parts;
+    }
+    mark_adopted_parts(s.extension, extended, fast_parts);
   } else if (s.extension.is_null()) {
     s.extension = {{"adopted", false},
                    {"why", !s.extend ? "not asked (extend = false)"

@@ -81,3 +81,43 @@ TEST(PrintRunResult, SaysWhereTheLargestErrorsFell) {
   cli::print_run_result(r, older);
   EXPECT_NE(older.str().find("0.3000 um (3.000 %)"), std::string::npos) << older.str();
 }
+
+// identify's extension adopted in part: its model's check, and its fast parts alone with their
+// verified figures and the decision, one line each.
+TEST(PrintRunResult, SaysWhichPartsOfTheExtensionWereAdopted) {
+  const nlohmann::json extension = {
+      {"parts",
+       {{{"cause", "delay"}, {"heldout_gain", 1.36}, {"adopted", true}},
+        {{"cause", "creep"}, {"heldout_gain", 1.01}, {"adopted", false}}}},
+      {"adopted", true},
+      {"why", "its fast parts alone track better on the bench; the whole extension does not"},
+      {"check", {{"passed", true}, {"inverse_rms_percent", 0.0004}}},
+      {"fast_parts",
+       {{"parts", {"delay"}},
+        {"left_out", {"creep"}},
+        {"adopted", true},
+        {"why", "they track better on the bench"},
+        {"verified",
+         {{"triangle_rms_percent", {{"model", 0.165}, {"extended", 0.107}}},
+          {"fast_hz", 500.0},
+          {"fast_rms_percent", {{"model", 15.78}, {"extended", 0.555}}}}}}}};
+  const nlohmann::json r = {{"run_id", "r2"},
+                            {"kind", "identify"},
+                            {"end", "completed"},
+                            {"model", {{"type", "mpi"}, {"extension", extension}}}};
+  std::ostringstream out;
+  cli::print_run_result(r, out);
+  const std::string text = out.str();
+  EXPECT_NE(text.find("delay (held-out gain 1.36x) + creep (held-out gain 1.01x): adopted, its "
+                      "fast parts alone track better"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("extension model checked: driven by its inverse it tracks a triangle over "
+                      "90 % of its range at 0.000 % rms"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("extension fast  delay alone (without creep): triangle rms 0.165 -> 0.107 "
+                      "%, 500 Hz sine rms 15.780 -> 0.555 %: adopted, they track better"),
+            std::string::npos)
+      << text;
+}

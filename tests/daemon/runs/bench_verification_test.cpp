@@ -110,3 +110,47 @@ TEST(ExtensionTracksBetter, GainsOnEveryReferenceAddUp) {
   EXPECT_FALSE(hd::extension_tracks_better(base, on_sines(0.806, 7.95, 4.413), 500.0, 200.0));
   EXPECT_FALSE(hd::extension_tracks_better(base, on_sines(0.96, 7.85, 5.3), 500.0, 200.0));
 }
+
+// An extension whose mode and delay gain 68x at 500 Hz, but whose creep and rate law (their
+// state set at rest each run) lose 3x on the triangle: not adopted whole (a run under load,
+// 0.071 -> 0.213 % rms). Its fast parts alone are tried, and adopted where they track better;
+// each part then says whether it was taken.
+TEST(FastParts, TriedWhereTheWholeExtensionGainedFastButLostOnTheTriangle) {
+  const hd::IdentifyCandidate base = on_sines(0.071, 15.73, 6.28);
+  const hd::IdentifyCandidate whole = on_sines(0.213, 0.232, 0.197);
+  const json parts = json::array({{{"cause", "delay"}},
+                                  {{"cause", "dynamics"}},
+                                  {{"cause", "creep"}},
+                                  {{"cause", "rate_dependence"}}});
+  ASSERT_FALSE(hd::extension_tracks_better(base, whole, 500.0, 200.0));
+  EXPECT_TRUE(hd::fast_parts_worth_trying(base, whole, parts, 500.0, 200.0));
+  // Not where the whole extension is adopted, holds no slow part or no fast one, or lost on the
+  // fast sine too.
+  EXPECT_FALSE(
+      hd::fast_parts_worth_trying(base, on_sines(0.08, 0.232, 0.197), parts, 500.0, 200.0));
+  const json fast_only = json::array({{{"cause", "delay"}}, {{"cause", "dynamics"}}});
+  EXPECT_FALSE(hd::fast_parts_worth_trying(base, whole, fast_only, 500.0, 200.0));
+  const json slow_only = json::array({{{"cause", "creep"}}});
+  EXPECT_FALSE(hd::fast_parts_worth_trying(base, whole, slow_only, 500.0, 200.0));
+  EXPECT_FALSE(
+      hd::fast_parts_worth_trying(base, on_sines(0.213, 16.0, 0.197), parts, 500.0, 200.0));
+
+  json extension = {
+      {"parts", parts}, {"adopted", false}, {"fast_parts", {{"parts", {"delay", "dynamics"}}}}};
+  ASSERT_TRUE(hd::adopt_fast_parts(base, on_sines(0.075, 0.25, 0.2), 500.0, 200.0, extension));
+  EXPECT_TRUE(extension["adopted"].get<bool>());
+  EXPECT_TRUE(extension["fast_parts"]["adopted"].get<bool>());
+  EXPECT_NEAR(extension["fast_parts"]["verified"]["fast_gain"].get<double>(), 15.73 / 0.25, 1e-9);
+  hd::mark_adopted_parts(extension, true, true);
+  for (const json& p : extension["parts"]) {
+    const std::string cause = p["cause"];
+    EXPECT_EQ(p["adopted"].get<bool>(), cause == "delay" || cause == "dynamics") << p;
+  }
+  // Alone, they may lose on the triangle as well: nothing adopted, and every part says so.
+  json lost = {{"parts", parts}, {"fast_parts", {{"parts", {"delay", "dynamics"}}}}};
+  EXPECT_FALSE(hd::adopt_fast_parts(base, on_sines(0.2, 0.25, 0.2), 500.0, 200.0, lost));
+  EXPECT_FALSE(lost["fast_parts"]["adopted"].get<bool>());
+  EXPECT_FALSE(lost.contains("adopted"));
+  hd::mark_adopted_parts(lost, false, false);
+  for (const json& p : lost["parts"]) EXPECT_FALSE(p["adopted"].get<bool>()) << p;
+}

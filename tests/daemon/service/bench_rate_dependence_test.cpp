@@ -113,8 +113,7 @@ TEST_F(BenchRateDependenceTest, RateDependentInverseTracksAcrossFrequencyAndPidN
   // or, where it lost on the triangle, left out and added again by the diagnosis of identify's
   // own record (a thresholds law with creep tracked 20 Hz at 0.92 % against 1.48 % without).
   const json& extension = id_rpi["model"].value("extension", json::object());
-  const bool extended_by_rate =
-      extension.value("adopted", false) && has_part(extension, "rate_dependence");
+  const bool extended_by_rate = adopted_part(extension, "rate_dependence");
   EXPECT_TRUE(judged["kept"].get<bool>() || extended_by_rate) << judged << extension;
   std::ostringstream text;
   cli::print_run_result(id_rpi, text);

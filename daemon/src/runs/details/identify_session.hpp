@@ -62,6 +62,31 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
 bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
                              double fast_hz, double mid_hz = 0.0);
 
+/// The extension's parts (its result's parts[].cause), fast (a mode, a delay) and the others.
+void split_parts(const nlohmann::json& parts, std::vector<std::string>& fast,
+                 std::vector<std::string>& slow);
+
+/// Whether identify tries the extension's fast parts alone (Bench::queue_fast_parts()): the
+/// extension holds a mode or a delay beside slower parts, gained on the fast sine, and does not
+/// track better on the bench as a whole.
+bool fast_parts_worth_trying(const IdentifyCandidate& base, const IdentifyCandidate& ext,
+                             const nlohmann::json& parts, double fast_hz, double mid_hz);
+
+/// The fast parts alone (`alone`), judged as the whole extension is: adopted when they track
+/// better on the bench than `base`. Says so in extension["fast_parts"] (verified, adopted, why)
+/// and, adopted, in extension["adopted"] and ["why"].
+bool adopt_fast_parts(const IdentifyCandidate& base, const IdentifyCandidate& alone, double fast_hz,
+                      double mid_hz, nlohmann::json& extension);
+
+/// Each of extension["parts"] says whether the model took it ("adopted"): all of an extension
+/// adopted whole, the fast parts of one adopted in part, none otherwise.
+void mark_adopted_parts(nlohmann::json& extension, bool extended, bool fast_parts_only);
+
+/// The verified gains of `ext` against `base`: the triangle's max and rms, the fast and middle
+/// sines' rms (null where one did not run).
+nlohmann::json verified_gain_json(const IdentifyCandidate& base, const IdentifyCandidate& ext,
+                                  double fast_hz, double mid_hz);
+
 /// v[key] of candidate c's sine at hz, or null when it did not run.
 nlohmann::json sine_field(const IdentifyCandidate& c, double hz, const char* key);
 
@@ -108,6 +133,10 @@ struct Bench::IdentifySession {
   /// On trial, the last two candidates: the extension with its delay trimmed (this one), and as
   /// timed, played again.
   std::optional<std::size_t> trim;
+  /// The base with only the extension's mode and delay, when the whole extension gained on the
+  /// fast sine but not on the bench as a whole (queue_fast_parts()); tried once.
+  std::optional<std::size_t> fast_parts;
+  bool fast_parts_tried = false;
   /// The base's sines played while its diagnosis ran [Hz] (play_while_diagnosing()).
   std::vector<double> sines_while_diagnosing;
   /// The rate-free neighbour of a rate law (candidate 0), when there is one: the two are judged

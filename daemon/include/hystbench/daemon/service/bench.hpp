@@ -213,6 +213,10 @@ class Bench {
   /// Once both have played: the extension takes the trimmed delay when it tracks that sine
   /// better; the two trial candidates are dropped either way.
   void settle_delay_trim();
+  /// Once the extension is verified (its delay trim settled): where it gained on the fast sine
+  /// but does not track better on the bench, and holds slower parts beside a mode or a delay,
+  /// the base with that mode and delay alone, queued on the triangle and both sines.
+  void queue_fast_parts();
   /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
   /// when the fit fails).
   void fit_identify(const RunProgram& run, details::RunResult result);
