@@ -92,19 +92,22 @@ void TrackLearning::measure_floor() {
 
 bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
   // The best drive plays twice: the first period settles the actuator after the trials that
-  // went wrong (their extremes and creep), the second is the run's last trial.
-  const bool last = stopped_;
+  // went wrong (their extremes and creep), the second is the run's last trial. Where the trials
+  // asked for leave one more, it plays once: the run never plays more trials than asked.
+  const bool used_up = t.trial >= request_.trials;
+  const bool last = stopped_ || used_up;
+  const std::string plays = used_up ? "once, as the last of the trials asked for"
+                                    : "twice (the first settles the actuator)";
   if (!stopped_) {
     why_ = at_floor ? "trial " + std::to_string(t.trial) + " reached the bench's floor (" +
                           std::to_string(t.rms_um / floor_um_).substr(0, 4) +
                           "x the part of the error that does not repeat, measured on trials "
                           "0 and 1, the same drive): learning on would learn what does not "
-                          "repeat; the best trial's drive plays, twice (the first settles "
-                          "the actuator)"
+                          "repeat; the best trial's drive plays " +
+                          plays
                     : "two trials in a row more than 20 % above the best (trial " +
                           std::to_string(trials_[guard_.best_trial()].trial) +
-                          "): the learning stopped and plays the best trial's drive, twice "
-                          "(the first settles the actuator)";
+                          "): the learning stopped and plays the best trial's drive " + plays;
   }
   stopped_ = true;
   next_ = best_drive_;
