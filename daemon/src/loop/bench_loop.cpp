@@ -87,10 +87,16 @@ std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> progra
   if (program->compensator && !program->preview) {
     program->targets.allocate(program->compensator->preview_samples());
   }
+  if (program->learned_twin && !program->preview) {
+    program->twin_targets.allocate(program->learned_twin->preview_samples());
+  }
   program->dt_s = dt_;
   // The feedback's integral holds while the drive sits at a bound of the output range.
   if (program->compensator) {
     program->compensator->set_drive_range(options_.limits.u_min, options_.limits.u_max);
+  }
+  if (program->learned_twin) {
+    program->learned_twin->set_drive_range(options_.limits.u_min, options_.limits.u_max);
   }
   RunProgram* expected = nullptr;
   RunProgram* raw = program.get();
@@ -326,6 +332,20 @@ BenchLoop::TickDrive BenchLoop::drive(RunProgram& p, std::uint64_t k, SampleReco
   return d;
 }
 
+double BenchLoop::twin_feedforward(RunProgram& p, double t) const noexcept {
+  const double none = std::numeric_limits<double>::quiet_NaN();  // its feedback holds
+  const double offset = p.learned_twin_offset_um;
+  if (const std::size_t ahead = p.twin_targets.capacity(); ahead > 1) {
+    if (p.twin_targets.view().empty()) {
+      for (std::size_t j = 0; j + 1 < ahead; ++j)
+        p.twin_targets.push(p.feedforward_target(t + static_cast<double>(j) * dt_, offset));
+    }
+    p.twin_targets.push(p.feedforward_target(t + static_cast<double>(ahead - 1) * dt_, offset));
+    return p.learned_twin->step(none, none, p.twin_targets.view()).u_ff;
+  }
+  return p.learned_twin->step(none, none, p.feedforward_target(t, offset)).u_ff;
+}
+
 void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
                             SampleRecord& rec) noexcept {
   const double t = static_cast<double>(k - p.excitation.size()) * dt_;
@@ -356,6 +376,7 @@ void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
   } else {
     out = p.compensator->step(fb_ref, y_prev_, target_at(t));
   }
+  const double twin = p.learned_twin ? twin_feedforward(p, t) : kNoTwin;
   rec.u_ff = out.u_ff;
   rec.u_fb = out.u_fb;
   d.u_compensator = out.u_ff;
@@ -366,11 +387,11 @@ void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
     if (simulated_) await_learned_drive(*p.learning, k);
     d.phase = p.learning->begin_tick(k);
     d.learning = true;
-    if (double u_ff = out.u_ff; p.learning->learned(d.phase, u_ff)) {
+    if (double u_ff = out.u_ff; p.learning->learned(d.phase, u_ff, twin)) {
       rec.u_ff = u_ff;
       d.u_request = u_ff + out.u_fb;
     }
-  } else if (double u_ff = out.u_ff; p.learning && p.learning->lead_in(k, u_ff)) {
+  } else if (double u_ff = out.u_ff; p.learning && p.learning->lead_in(k, u_ff, twin)) {
     rec.u_ff = u_ff;  // a drive learned before plays the start-up period too
     d.u_request = u_ff + out.u_fb;
     d.lead_in = true;

@@ -57,10 +57,11 @@ std::size_t LearningExchange::begin_tick(std::uint64_t k) noexcept {
   return j;
 }
 
-bool LearningExchange::learned(std::size_t j, double& u_ff) const noexcept {
+bool LearningExchange::learned(std::size_t j, double& u_ff, double twin) const noexcept {
   if (playing_ < 0) return false;
-  const double moved =
-      playing_started_ && !started_compensator_.empty() ? u_ff - started_compensator_[j] : 0.0;
+  const double moved = !playing_started_ || started_compensator_.empty() ? 0.0
+                       : std::isfinite(twin)                             ? u_ff - twin
+                                             : u_ff - started_compensator_[j];
   u_ff = drive_[static_cast<std::size_t>(playing_)][j] + moved;
   return true;
 }
@@ -71,11 +72,13 @@ void LearningExchange::follow_offset(std::size_t min_periods,
   follow_ = lead_in;
 }
 
-bool LearningExchange::lead_in(std::uint64_t k, double& u_ff) const noexcept {
+bool LearningExchange::lead_in(std::uint64_t k, double& u_ff, double twin) const noexcept {
   if (started_from_ == 0 || k >= start_ || k < lead_start_) return false;
   // The drive start_from made ready: the learner writes the other buffer first.
   const auto j = static_cast<std::size_t>((k - lead_start_) % period);
-  const double moved = started_compensator_.empty() ? 0.0 : u_ff - started_compensator_[j];
+  const double moved = started_compensator_.empty() ? 0.0
+                       : std::isfinite(twin)        ? u_ff - twin
+                                                    : u_ff - started_compensator_[j];
   u_ff = drive_[0][j] + moved;
   return true;
 }

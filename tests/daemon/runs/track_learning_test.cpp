@@ -83,10 +83,8 @@ std::vector<double> trial_rms(const json& r) {
 TEST_F(TrackLearningTest, AnUploadedTrajectoryIsLearnedPassByPass) {
   hystbench::testing::Daemon daemon(dir_, config());
   ASSERT_TRUE(daemon.running()) << "hystbenchd did not start";
-  // The modified PI, named: the plane that identify keeps by default replays the learned drive at
-  // 0.11 % on its first pass (a miss stated in docs/measurements.md), where the mpi replays
-  // within 1.5x of its last pass.
-  const json id = run(daemon.socket(), "identify", {{"model", "mpi"}});
+  // identify with its defaults: the plane its extension keeps, with creep lags.
+  const json id = run(daemon.socket(), "identify", json::object());
   ASSERT_EQ(id.value("end", ""), "completed") << id.dump(2);
 
   const std::string line = raster("raster.csv", 8.0, 36.0);

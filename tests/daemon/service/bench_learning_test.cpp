@@ -320,10 +320,7 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterASecondIdentify) {
 TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReference) {
   const hd::BenchSettings settings = settings_from_toml(loopback_toml(kEveryEffect));
   start(settings);
-  // The modified PI, named: through the plane that identify keeps by default, with its creep
-  // lags, the replay's lead-in may not find the offset the drive was learned at within its longest
-  // lead-in (a miss stated in docs/measurements.md).
-  const json id = run_and_wait("identify", {{"model", "mpi"}});
+  const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   const json learned = learn(50.0, 10);
   ASSERT_EQ(learned["end"], "completed") << learned.dump(2);
@@ -404,12 +401,13 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
   const json& trials = r["learning"]["trials"];
   if (r["learning"].value("stopped", false)) {
     // Stopped after trial k (2-5; from 2 on a trial at the bench's floor ends it): the best
-    // drive then plays twice, trials k + 1 and k + 2.
+    // drive then plays twice, trials k + 1 and k + 2, or once where k + 1 is the last asked for
+    // (never more trials than asked).
     ASSERT_GE(resumed.size(), 5u) << r["learning"].dump(2);
-    ASSERT_LE(resumed.size(), 8u) << r["learning"].dump(2);
-    EXPECT_EQ(trials[resumed.size() - 1]["drive"], "best") << r["learning"].dump(2);
-    EXPECT_EQ(trials[resumed.size() - 2]["drive"], "best") << r["learning"].dump(2);
-    EXPECT_NE(trials[resumed.size() - 3]["drive"], "best") << r["learning"].dump(2);
+    ASSERT_LE(resumed.size(), 6u) << r["learning"].dump(2);
+    std::size_t best = 0;
+    while (best < resumed.size() && trials[resumed.size() - 1 - best]["drive"] == "best") ++best;
+    EXPECT_TRUE(best == 2 || (best == 1 && resumed.size() == 6u)) << r["learning"].dump(2);
   } else {
     ASSERT_EQ(resumed.size(), 6u) << r["learning"].dump(2);  // saved, its repeat, four learned
   }

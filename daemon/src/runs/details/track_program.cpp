@@ -515,13 +515,18 @@ std::optional<double> learned_start_offset(const LearnedDrive& start, const RunP
 }
 
 // After the feedforward's own preparation: the compensator's feedforward over the first trial
-// at the learned drive's offset (learned_start_offset), which the drive then moves from.
+// at the learned drive's offset (learned_start_offset), and its twin that plays the reference
+// at that offset beside it, tick by tick (RunProgram::learned_twin): the drive moves from it.
 RunPreparation with_learned_start(RunPreparation preparation, double offset, double dt) {
   if (preparation.stage.empty()) preparation.stage = "playing the compensator ahead";
   preparation.work = [before = std::move(preparation.work), offset, dt](
                          RunProgram& p, const std::function<void(double)>& progress) {
     if (before) before(p, progress);
-    if (p.compensator && p.learning) p.learning->rebase_start(feedforward_period(p, offset, dt));
+    if (p.compensator && p.learning) {
+      p.learning->rebase_start(feedforward_period(p, offset, dt));
+      p.learned_twin = *p.compensator;  // its state the compensator's at the run's start
+      p.learned_twin_offset_um = offset;
+    }
   };
   return preparation;
 }

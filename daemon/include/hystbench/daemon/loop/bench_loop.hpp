@@ -29,6 +29,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <thread>
 
@@ -155,6 +156,10 @@ class BenchLoop {
   /// A tracking tick: the reference, limited to the range, and the compensator's output for it
   /// (or a learned drive's).
   inline void track_drive(RunProgram& p, std::uint64_t k, TickDrive& d, SampleRecord& rec) noexcept;
+  /// track --learned: the compensator's twin stepped at run time t [s] on the targets at the
+  /// offset the drive was learned at (RunProgram::learned_twin); its feedforward [V].
+  inline double twin_feedforward(RunProgram& p, double t) const noexcept;
+  static constexpr double kNoTwin = std::numeric_limits<double>::quiet_NaN();
   /// The requested output through the limits, counted, and the model's prediction for it.
   inline OutputLimiter::Applied limit(RunProgram& p, std::uint64_t k, double u_request,
                                       SampleRecord& rec) noexcept;

@@ -72,12 +72,16 @@ struct LearningExchange {
   /// True when the period plays a learned drive: u_ff holds the compensator's feedforward at
   /// phase j on entry [input unit] and the drive's sample on return. A drive learned before
   /// (start_from) moves by how far the compensator's moved from its own in the run that learned
-  /// it (the output offset the run measured, through the model's inverse).
-  bool learned(std::size_t j, double& u_ff) const noexcept;
+  /// it (the output offset the run measured, through the model's inverse): from `twin` when it
+  /// is finite (the compensator's twin at this tick, fed the targets at the offset the drive was
+  /// learned at: RunProgram::learned_twin), else from the feedforward start_from was given.
+  bool learned(std::size_t j, double& u_ff,
+               double twin = std::numeric_limits<double>::quiet_NaN()) const noexcept;
   /// Before first_tick: as learned() for tick k, true when a drive learned before plays the
   /// lead_in_periods before trial 0 too, so that trial 0 follows its own drive as a learned
   /// trial follows the one before.
-  bool lead_in(std::uint64_t k, double& u_ff) const noexcept;
+  bool lead_in(std::uint64_t k, double& u_ff,
+               double twin = std::numeric_limits<double>::quiet_NaN()) const noexcept;
   /// The error (reference - reading) of lead-in tick k, `tare` the run's: its last period (the
   /// second half of a single one) measures the output offset the drive learned before now plays
   /// at; a longer lead-in follows the offset, and each period's first tick decides whether the

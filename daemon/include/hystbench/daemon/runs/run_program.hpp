@@ -150,6 +150,14 @@ struct RunProgram {
   /// From its first_tick on, a period that plays a learned drive plays it in place of the
   /// compensator's feedforward (its feedback stays on).
   std::unique_ptr<LearningExchange> learning;
+  /// track --learned: the compensator again, fed the targets at the offset the drive was learned
+  /// at (learned_twin_offset_um) with its feedback held; the drive moves by how far the
+  /// compensator's feedforward is from its twin's at the same tick: the target offset's effect
+  /// alone, where the compensator's slow states (a model's creep, relaxed at the run's start)
+  /// move both alike (LearningExchange::learned()). Absent otherwise.
+  std::optional<compensation::Compensator> learned_twin;
+  double learned_twin_offset_um = 0.0;
+  TargetWindow twin_targets;  ///< the twin's targets ahead, sized as `targets`
   /// The per-run log (may be null in unit tests).
   std::unique_ptr<SampleLogWriter> log;
   RunRecords records;
