@@ -39,7 +39,7 @@ done
 echo "== hystbenchd on the loopback driver (simulated 150 V / 45 um piezo stack)"
 grep -m1 "real-time" "$work/hystbenchd.log" || true
 echo
-echo "== identify: play the identification excitation, fit a modified-PI model"
+echo "== identify: play the identification excitation, fit, verify and extend the model"
 "$bin/hystbench" identify --wait
 declare -A logs
 for comp in none inverse inverse+pid; do
