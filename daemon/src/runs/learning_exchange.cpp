@@ -200,23 +200,18 @@ bool LearningExchange::start_from(const std::vector<double>& drive,
   return true;
 }
 
-bool LearningExchange::rebase_start(const std::vector<double>& compensator) {
-  if (started_from_ == 0 || started_compensator_.empty() || compensator.size() != period) {
-    return false;
-  }
-  started_compensator_ = compensator;
-  return true;
-}
-
 bool LearningExchange::offer(const std::vector<double>& drive, bool last) noexcept {
   if (ready_.load(std::memory_order_acquire) >= 0 || drive.size() != period) return false;
   // The loop took the drive offered before and plays it from the other buffer.
   const auto idx = static_cast<int>(offered_.load(std::memory_order_acquire) % 2);
   std::copy(drive.begin(), drive.end(), drive_[static_cast<std::size_t>(idx)].begin());
   ready_last_.store(last, std::memory_order_release);
-  if (last) final_offered_.store(true, std::memory_order_release);
-  offered_.fetch_add(1, std::memory_order_acq_rel);
+  // The drive is made ready before it is counted: owed() must not see it counted (or the final
+  // one offered) while ready_ is still empty, or the loop would go on without waiting and play
+  // a stale period. Counted after, the loop at most waits for the count.
   ready_.store(idx, std::memory_order_release);
+  offered_.fetch_add(1, std::memory_order_acq_rel);
+  if (last) final_offered_.store(true, std::memory_order_release);
   return true;
 }
 
