@@ -334,16 +334,13 @@ BenchLoop::TickDrive BenchLoop::drive(RunProgram& p, std::uint64_t k, SampleReco
 
 double BenchLoop::twin_feedforward(RunProgram& p, double t) const noexcept {
   const double none = std::numeric_limits<double>::quiet_NaN();  // its feedback holds
-  const double offset = p.learned_twin_offset_um;
-  if (const std::size_t ahead = p.twin_targets.capacity(); ahead > 1) {
-    if (p.twin_targets.view().empty()) {
-      for (std::size_t j = 0; j + 1 < ahead; ++j)
-        p.twin_targets.push(p.feedforward_target(t + static_cast<double>(j) * dt_, offset));
-    }
-    p.twin_targets.push(p.feedforward_target(t + static_cast<double>(ahead - 1) * dt_, offset));
-    return p.learned_twin->step(none, none, p.twin_targets.view()).u_ff;
+  auto target_at = [&p](double tt) noexcept {
+    return p.feedforward_target(tt, p.learned_twin_offset_um);
+  };
+  if (p.twin_targets.capacity() > 1) {
+    return p.learned_twin->step(none, none, p.twin_targets.advance(t, dt_, target_at)).u_ff;
   }
-  return p.learned_twin->step(none, none, p.feedforward_target(t, offset)).u_ff;
+  return p.learned_twin->step(none, none, target_at(t)).u_ff;
 }
 
 void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
@@ -366,13 +363,8 @@ void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
   // The feedback's reference; before feedback_from NaN: the PID holds (RunProgram).
   const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : d.y_ref;
   compensation::CompensatorOutput out;
-  if (const std::size_t ahead = p.targets.capacity(); ahead > 1) {
-    if (p.targets.view().empty()) {
-      for (std::size_t j = 0; j + 1 < ahead; ++j)
-        p.targets.push(target_at(t + static_cast<double>(j) * dt_));
-    }
-    p.targets.push(target_at(t + static_cast<double>(ahead - 1) * dt_));
-    out = p.compensator->step(fb_ref, y_prev_, p.targets.view());
+  if (p.targets.capacity() > 1) {
+    out = p.compensator->step(fb_ref, y_prev_, p.targets.advance(t, dt_, target_at));
   } else {
     out = p.compensator->step(fb_ref, y_prev_, target_at(t));
   }

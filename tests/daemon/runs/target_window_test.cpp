@@ -28,3 +28,18 @@ TEST(TargetWindow, WithoutCapacityItHoldsNothing) {
   EXPECT_EQ(w.capacity(), 0u);
   EXPECT_TRUE(w.view().empty());
 }
+
+// advance(): the first tick fills the window with this tick's target and the ones ahead; each
+// later tick adds the one capacity() - 1 ticks ahead, so view()[0] is always this tick's.
+TEST(TargetWindow, AdvanceKeepsThisTicksTargetFirstAndTheOnesAheadBehindIt) {
+  hd::TargetWindow w;
+  w.allocate(3);
+  const double dt = 0.5;
+  auto target_at = [](double t) noexcept { return 10.0 * t; };
+  for (int k = 0; k < 9; ++k) {
+    const double t = k * dt;
+    const auto v = w.advance(t, dt, target_at);
+    ASSERT_EQ(v.size(), 3u) << k;
+    for (int j = 0; j < 3; ++j) EXPECT_DOUBLE_EQ(v[j], target_at(t + j * dt)) << k << " " << j;
+  }
+}

@@ -35,6 +35,18 @@ class TargetWindow {
   }
   /// Oldest (this tick's) first.
   std::span<const double> view() const noexcept { return {buffer_.data() + begin_, size_}; }
+  /// One tick at run time t_s [s], ticks dt_s [s] apart: an empty window is first filled with
+  /// target_at(t_s + j dt_s) for the capacity() - 1 ticks before the newest, then the target
+  /// capacity() - 1 ticks ahead is pushed. Returns view(). target_at must be noexcept.
+  template <class TargetAt>
+  std::span<const double> advance(double t_s, double dt_s, TargetAt&& target_at) noexcept {
+    if (size_ == 0) {
+      for (std::size_t j = 0; j + 1 < capacity_; ++j)
+        push(target_at(t_s + static_cast<double>(j) * dt_s));
+    }
+    push(target_at(t_s + static_cast<double>(capacity_ - 1) * dt_s));
+    return view();
+  }
 
  private:
   std::vector<double> buffer_;
