@@ -270,16 +270,16 @@ TEST(LearningExchange, ALeadInEndsAtItsLongest) {
   EXPECT_EQ(r.first_scored, 1000u);
 }
 
-// The feedforward the drive moves from can be replaced before the run (the active model's, at
-// the offset the drive was learned with): the drive then moves by the difference from it.
-TEST(LearningExchange, ADriveLearnedBeforeMovesFromTheFeedforwardItIsRebasedOn) {
-  hd::LearningExchange none(kPeriod, kFirst);
-  EXPECT_FALSE(none.rebase_start({1, 2, 3, 4}));  // no drive to start from
+// A drive learned before moves by how far the compensator's feedforward moved: from its twin's
+// at this tick where one steps beside it (fed the targets at the offset the drive was learned
+// at), else from the feedforward saved with the drive.
+TEST(LearningExchange, ADriveLearnedBeforeMovesFromTheTwinWhereOneStepsBesideIt) {
   hd::LearningExchange x(kPeriod, kFirst);
   ASSERT_TRUE(x.start_from({7, 8, 9, 10}, {1000.5, 1001.5, 1002.5, 1003.5}, true));
-  EXPECT_FALSE(x.rebase_start({1, 2}));  // another period's
-  ASSERT_TRUE(x.rebase_start({999.0, 1000.0, 1001.0, 1002.0}));
   double u = 1000.0;  // the compensator's at phase 0
+  ASSERT_TRUE(x.lead_in(kFirst - kPeriod, u, 999.0));
+  EXPECT_DOUBLE_EQ(u, 8.0);  // 7 + (1000 - 999)
+  u = 1000.0;
   ASSERT_TRUE(x.lead_in(kFirst - kPeriod, u));
-  EXPECT_DOUBLE_EQ(u, 8.0);
+  EXPECT_DOUBLE_EQ(u, 6.5);  // 7 + (1000 - 1000.5)
 }

@@ -449,26 +449,6 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
   }
 }
 
-// The compensator's feedforward over the first trial (P ticks from the learning's first tick),
-// played ahead on a copy from the reference's start as the loop plays it, its target less
-// `offset_um` throughout.
-std::vector<double> feedforward_period(const RunProgram& p, double offset_um, double dt) {
-  hc::Compensator c = *p.compensator;
-  const std::uint64_t start = p.excitation.size(), first = p.learning->earliest_first_tick();
-  const std::size_t period = p.learning->period, ahead = c.preview_samples();
-  const double none = std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> window(std::max<std::size_t>(ahead, 1)), out(period);
-  for (std::uint64_t k = start; k < first + period; ++k) {
-    const double t = static_cast<double>(k - start) * dt;
-    for (std::size_t j = 0; j < window.size(); ++j) {
-      window[j] = p.feedforward_target(t + static_cast<double>(j) * dt, offset_um);
-    }
-    const double u_ff = c.step(none, none, window).u_ff;
-    if (k >= first) out[k - first] = u_ff;
-  }
-  return out;
-}
-
 // The mean output `model` predicts over the tare's window of the run's precondition sweep
 // (relaxed at the sweep's first drive, as the loop's predictor is); nullopt without a window.
 std::optional<double> tare_window_prediction(hc::ActuatorModel model, const RunProgram& p,
@@ -514,16 +494,15 @@ std::optional<double> learned_start_offset(const LearnedDrive& start, const RunP
   return offset;
 }
 
-// After the feedforward's own preparation: the compensator's feedforward over the first trial
-// at the learned drive's offset (learned_start_offset), and its twin that plays the reference
-// at that offset beside it, tick by tick (RunProgram::learned_twin): the drive moves from it.
-RunPreparation with_learned_start(RunPreparation preparation, double offset, double dt) {
-  if (preparation.stage.empty()) preparation.stage = "playing the compensator ahead";
-  preparation.work = [before = std::move(preparation.work), offset, dt](
+// After the feedforward's own preparation: the compensator's twin, which plays the reference at
+// the learned drive's offset (learned_start_offset) beside it, tick by tick
+// (RunProgram::learned_twin): the drive moves from it.
+RunPreparation with_learned_start(RunPreparation preparation, double offset) {
+  if (preparation.stage.empty()) preparation.stage = "copying the compensator";
+  preparation.work = [before = std::move(preparation.work), offset](
                          RunProgram& p, const std::function<void(double)>& progress) {
     if (before) before(p, progress);
     if (p.compensator && p.learning) {
-      p.learning->rebase_start(feedforward_period(p, offset, dt));
       p.learned_twin = *p.compensator;  // its state the compensator's at the run's start
       p.learned_twin_offset_um = offset;
     }
@@ -557,7 +536,7 @@ std::unique_ptr<TrackLearning> arm_learning(RunProgram& p, const LearningPlan& p
   std::unique_ptr<TrackLearning> learner = learning(p, plan, ctx, ref, feedback);
   if (plan.start) {
     if (const auto offset = learned_start_offset(*plan.start, p, ctx)) {
-      preparation = with_learned_start(std::move(preparation), *offset, ctx.dt());
+      preparation = with_learned_start(std::move(preparation), *offset);
       p.learning->follow_offset(
           plan.lead_in, lead_in_following(*plan.start, plan, *offset, ctx.settings.loop.rate_hz));
     }

@@ -112,10 +112,6 @@ struct LearningExchange {
   /// moved); `last`: the run ends after it. False for another length, or a second call.
   bool start_from(const std::vector<double>& drive, const std::vector<double>& compensator,
                   bool last);
-  /// Before the run is handed to the loop, after start_from() with a compensator: the
-  /// compensator's feedforward to move the drive from, in place of the one saved with it (P
-  /// samples). False for another length or without a start.
-  bool rebase_start(const std::vector<double>& compensator);
   /// Takes the oldest complete trial not yet taken: copies its drive, the compensator's
   /// feedforward and its error into u, c and e (P samples each) and its number into trial.
   /// False when there is none.
