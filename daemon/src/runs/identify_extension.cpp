@@ -159,17 +159,6 @@ std::vector<double> record_times(std::size_t n, double dt) {
   return t;
 }
 
-// A model whose inverse does not exist over its input range is never played nor written: the
-// extension says why (model_check.hpp).
-bool passes_check(const hc::ActuatorModel& model, double dt_s, json& extension) {
-  const hc::ModelCheck check = hc::check_model(model, dt_s);
-  extension["check"] = to_json(check);
-  if (check.passed) return true;
-  extension["adopted"] = false;
-  extension["why"] = "its check failed: " + check.reason;
-  return false;
-}
-
 // The extended candidate's verification: its triangle, and where a fast sine judges it, that
 // sine and a middle one (what the extension gives up below the fast one) for it and its base.
 void queue_extension_verification(std::vector<VerificationJob>& jobs,
@@ -185,6 +174,16 @@ void queue_extension_verification(std::vector<VerificationJob>& jobs,
 }
 
 }  // namespace
+
+// A model whose inverse does not exist over its input range is never played nor written.
+bool passes_check(const hc::ActuatorModel& model, double dt_s, json& extension) {
+  const hc::ModelCheck check = hc::check_model(model, dt_s);
+  extension["check"] = to_json(check);
+  if (check.passed) return true;
+  extension["adopted"] = false;
+  extension["why"] = "its check failed: " + check.reason;
+  return false;
+}
 
 details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandidate>& candidates,
                                                  double exchange_s, std::span<const double> u,

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <string>
 
-#include "hystbench/compensation/model_check.hpp"
 #include "runs/details/identify_session.hpp"
 
 namespace hystbench::daemon {
@@ -29,19 +28,18 @@ std::string joined(const std::vector<std::string>& v) {
 
 }  // namespace
 
-void split_parts(const json& parts, std::vector<std::string>& fast,
-                 std::vector<std::string>& slow) {
+PartsByBand split_parts(const json& parts) {
+  PartsByBand out;
   for (const json& p : parts) {
     const std::string name = p.value("cause", "");
-    (is_fast_part(name) ? fast : slow).push_back(name);
+    (is_fast_part(name) ? out.fast : out.slow).push_back(name);
   }
+  return out;
 }
 
 bool fast_parts_worth_trying(const IdentifyCandidate& base, const IdentifyCandidate& ext,
-                             const json& parts, double fast_hz, double mid_hz) {
-  std::vector<std::string> fast, slow;
-  split_parts(parts, fast, slow);
-  return !fast.empty() && !slow.empty() && fast_hz > 0.0 &&
+                             const PartsByBand& parts, double fast_hz, double mid_hz) {
+  return !parts.fast.empty() && !parts.slow.empty() && fast_hz > 0.0 &&
          !extension_tracks_better(base, ext, fast_hz, mid_hz) &&
          verified_sine_rms(ext, fast_hz) < verified_sine_rms(base, fast_hz);
 }
@@ -78,25 +76,19 @@ void Bench::queue_fast_parts() {
     return;
   }
   s.fast_parts_tried = true;
-  const json parts = s.extension.value("parts", json::array());
+  const PartsByBand parts = split_parts(s.extension.value("parts", json::array()));
   const IdentifyCandidate &base = s.candidates[s.base], &ext = s.candidates[*s.extended];
   if (!fast_parts_worth_trying(base, ext, parts, s.fast_hz, s.mid_hz)) return;
-  std::vector<std::string> fast, slow;
-  split_parts(parts, fast, slow);
   IdentifyCandidate alone{base.fit, json(), base.label + "-fast-parts", {}};
   hc::ActuatorModel& m = alone.fit.model;
   m.set_dynamics(ext.fit.model.dynamics());
   m.set_delay(ext.fit.model.delay_s());
   m.configure(dt_);
   alone.fit.delay_samples = ext.fit.delay_samples;
-  alone.fit.notes.push_back("extended by the diagnosis of its record: its " + joined(fast) +
-                            " alone, without " + joined(slow));
-  json tried = {{"parts", fast}, {"left_out", slow}};
-  const hc::ModelCheck check = hc::check_model(m, dt_);
-  tried["check"] = to_json(check);
-  if (!check.passed) {
-    tried["adopted"] = false;
-    tried["why"] = "its check failed: " + check.reason;
+  alone.fit.notes.push_back("extended by the diagnosis of its record: its " + joined(parts.fast) +
+                            " alone, without " + joined(parts.slow));
+  json tried = {{"parts", parts.fast}, {"left_out", parts.slow}};
+  if (!passes_check(m, dt_, tried)) {
     s.extension["fast_parts"] = std::move(tried);
     return;
   }

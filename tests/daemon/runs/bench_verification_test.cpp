@@ -123,17 +123,17 @@ TEST(FastParts, TriedWhereTheWholeExtensionGainedFastButLostOnTheTriangle) {
                                   {{"cause", "creep"}},
                                   {{"cause", "rate_dependence"}}});
   ASSERT_FALSE(hd::extension_tracks_better(base, whole, 500.0, 200.0));
-  EXPECT_TRUE(hd::fast_parts_worth_trying(base, whole, parts, 500.0, 200.0));
+  EXPECT_TRUE(hd::fast_parts_worth_trying(base, whole, hd::split_parts(parts), 500.0, 200.0));
   // Not where the whole extension is adopted, holds no slow part or no fast one, or lost on the
   // fast sine too.
-  EXPECT_FALSE(
-      hd::fast_parts_worth_trying(base, on_sines(0.08, 0.232, 0.197), parts, 500.0, 200.0));
+  EXPECT_FALSE(hd::fast_parts_worth_trying(base, on_sines(0.08, 0.232, 0.197),
+                                           hd::split_parts(parts), 500.0, 200.0));
   const json fast_only = json::array({{{"cause", "delay"}}, {{"cause", "dynamics"}}});
-  EXPECT_FALSE(hd::fast_parts_worth_trying(base, whole, fast_only, 500.0, 200.0));
+  EXPECT_FALSE(hd::fast_parts_worth_trying(base, whole, hd::split_parts(fast_only), 500.0, 200.0));
   const json slow_only = json::array({{{"cause", "creep"}}});
-  EXPECT_FALSE(hd::fast_parts_worth_trying(base, whole, slow_only, 500.0, 200.0));
-  EXPECT_FALSE(
-      hd::fast_parts_worth_trying(base, on_sines(0.213, 16.0, 0.197), parts, 500.0, 200.0));
+  EXPECT_FALSE(hd::fast_parts_worth_trying(base, whole, hd::split_parts(slow_only), 500.0, 200.0));
+  EXPECT_FALSE(hd::fast_parts_worth_trying(base, on_sines(0.213, 16.0, 0.197),
+                                           hd::split_parts(parts), 500.0, 200.0));
 
   json extension = {
       {"parts", parts}, {"adopted", false}, {"fast_parts", {{"parts", {"delay", "dynamics"}}}}};

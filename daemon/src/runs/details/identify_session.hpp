@@ -62,15 +62,23 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
 bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
                              double fast_hz, double mid_hz = 0.0);
 
-/// The extension's parts (its result's parts[].cause), fast (a mode, a delay) and the others.
-void split_parts(const nlohmann::json& parts, std::vector<std::string>& fast,
-                 std::vector<std::string>& slow);
+/// The extension's parts (its result's parts[].cause) by the band they act in: fast (a mode, a
+/// delay) and the others.
+struct PartsByBand {
+  std::vector<std::string> fast, slow;
+};
+PartsByBand split_parts(const nlohmann::json& parts);
 
 /// Whether identify tries the extension's fast parts alone (Bench::queue_fast_parts()): the
 /// extension holds a mode or a delay beside slower parts, gained on the fast sine, and does not
 /// track better on the bench as a whole.
 bool fast_parts_worth_trying(const IdentifyCandidate& base, const IdentifyCandidate& ext,
-                             const nlohmann::json& parts, double fast_hz, double mid_hz);
+                             const PartsByBand& parts, double fast_hz, double mid_hz);
+
+/// Whether an extended model may be played and written: its check (model_check.hpp) passes.
+/// Writes the check to extension["check"] and, where it fails, extension["adopted"] = false and
+/// ["why"].
+bool passes_check(const compensation::ActuatorModel& model, double dt_s, nlohmann::json& extension);
 
 /// The fast parts alone (`alone`), judged as the whole extension is: adopted when they track
 /// better on the bench than `base`. Says so in extension["fast_parts"] (verified, adopted, why)
