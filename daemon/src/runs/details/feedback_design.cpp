@@ -117,10 +117,41 @@ std::vector<hc::MeasuredResponse> seen_through(const RunContext& ctx, hc::Feedba
   }
 }
 
+// Through the linear map, the loop sees the stage's own slope, steeper along its loop than a
+// small signal at rest shows (feedback_plant.hpp): the response steepest along the loop, scaled
+// by how much steeper the model's branch climbs, is one more plant the design must hold. None
+// below 5 % or without a model.
+constexpr double kMotionScaleFloor = 1.05;
+
+std::optional<hc::MeasuredResponse> along_the_loop(const RunContext& ctx,
+                                                   const hc::StageResponses& r, double gain) {
+  if (ctx.model == nullptr) return std::nullopt;
+  const sim::FrequencyResponseExcitation x =
+      sim::make_frequency_response_excitation(response_options_from_json(r.excitation));
+  hc::MotionScale m;
+  try {
+    m = hc::motion_scale(r.responses, r.segments, ctx.model->model, x.u, r.rate_hz);
+  } catch (const std::invalid_argument& e) {
+    throw common::CommandError("bad_model", std::string("the feedback's plant: ") + e.what());
+  }
+  if (m.ratio < kMotionScaleFloor) return std::nullopt;
+  hc::MeasuredResponse moving = r.responses[m.response];
+  for (auto& v : moving.response) v *= m.ratio / gain;
+  for (auto& v : moving.noise) v *= m.ratio / gain;
+  moving.label = r.responses[m.response].label + ", along the loop (x" + text(m.ratio) +
+                 ": the model's steepest branch over its slope at rest)";
+  return moving;
+}
+
 // The responses as the loop of `kind` sees them.
 std::vector<hc::MeasuredResponse> plants(const RunContext& ctx, hc::CompensatorKind kind,
                                          const hc::StageResponses& r, double gain) {
-  return seen_through(ctx, feedback_path(ctx, kind), r, gain);
+  const hc::FeedbackPath path = feedback_path(ctx, kind);
+  std::vector<hc::MeasuredResponse> out = seen_through(ctx, path, r, gain);
+  if (path == hc::FeedbackPath::kLinearMap) {
+    if (auto moving = along_the_loop(ctx, r, gain)) out.push_back(std::move(*moving));
+  }
+  return out;
 }
 
 hc::LoopDesignOptions design_options(const RunContext& ctx, const hc::StageResponses& r,
