@@ -107,79 +107,130 @@ std::optional<ActuatorModel> operator_of(const json& j, const std::string& field
   }
 }
 
-}  // namespace
-
-bool is_mimo_model_file(const json& j) {
-  return j.is_object() && j.contains("type") && j["type"] == kMimoModelType;
-}
-
-json to_json(const MimoModelFile& file) {
-  const auto& g = file.model.dynamics();
+// A Hammerstein model's own keys: its operators and its dynamics.
+json body_json(const HammersteinMimoModel& model) {
+  const auto& g = model.dynamics();
   json poles = json::array(), terms = json::array(), ops = json::array();
   for (const auto p : g.poles()) poles.push_back({p.real(), p.imag()});
   for (const auto& t : g.terms()) terms.push_back(matrix_json(t));
-  for (const auto& op : file.model.operators()) {
-    ops.push_back(operator_json(op));
-  }
-  const auto channel_list = [](const std::vector<MimoChannel>& cs) {
-    json a = json::array();
-    for (const auto& c : cs) a.push_back({{"name", c.name}, {"unit", c.unit}});
-    return a;
-  };
+  for (const auto& op : model.operators()) ops.push_back(operator_json(op));
   const Eigen::VectorXd& off = g.output_offset();
-  return {{"schema", kModelSchema},
-          {"type", kMimoModelType},
-          {"sample_period_s", file.sample_period_s},
-          {"inputs", channel_list(file.inputs)},
-          {"outputs", channel_list(file.outputs)},
-          {"operators", ops},
+  return {{"operators", ops},
           {"dynamics",
            {{"poles", poles},
             {"terms", terms},
-            {"output_offset", std::vector<double>(off.data(), off.data() + off.size())}}},
-          {"identification", file.identification}};
+            {"output_offset", std::vector<double>(off.data(), off.data() + off.size())}}}};
+}
+
+// The Hammerstein model of m inputs and p outputs in j's "operators" and "dynamics"; field: the
+// prefix that names where j is in the file.
+HammersteinMimoModel body_of(const json& j, std::size_t m, std::size_t p, double dt,
+                             const std::string& field) {
+  const json& ops = member(j, "operators", field);
+  if (!ops.is_array() || ops.size() != m) fail(field + "operators", "not one entry per input");
+  std::vector<std::optional<ActuatorModel>> operators(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    operators[i] = operator_of(ops[i], field + "operators[" + std::to_string(i) + "]");
+  }
+  const std::string d = field + "dynamics.";
+  const json& dyn = member(j, "dynamics", field);
+  const json& pj = member(dyn, "poles", d);
+  if (!pj.is_array()) fail(d + "poles", "not an array");
+  std::vector<std::complex<double>> poles;
+  for (std::size_t i = 0; i < pj.size(); ++i) {
+    const auto v = numbers(pj[i], d + "poles[" + std::to_string(i) + "]");
+    if (v.size() != 2) fail(d + "poles[" + std::to_string(i) + "]", "not [re, im]");
+    poles.emplace_back(v[0], v[1]);
+  }
+  const json& tj = member(dyn, "terms", d);
+  if (!tj.is_array()) fail(d + "terms", "not an array");
+  std::vector<Eigen::MatrixXd> terms;
+  for (std::size_t q = 0; q < tj.size(); ++q) {
+    terms.push_back(matrix_of(tj[q], p, m, d + "terms[" + std::to_string(q) + "]"));
+  }
+  const auto off = numbers(member(dyn, "output_offset", d), d + "output_offset");
+  if (off.size() != p) fail(d + "output_offset", "not one value per output");
+  try {
+    MimoLinearModel g(std::move(poles), std::move(terms),
+                      Eigen::Map<const Eigen::VectorXd>(off.data(), static_cast<Eigen::Index>(p)));
+    return HammersteinMimoModel(std::move(operators), std::move(g), dt);
+  } catch (const std::invalid_argument& e) {
+    fail(field + "dynamics", e.what());
+  }
+}
+
+json channel_list(const std::vector<MimoChannel>& cs) {
+  json a = json::array();
+  for (const auto& c : cs) a.push_back({{"name", c.name}, {"unit", c.unit}});
+  return a;
+}
+
+}  // namespace
+
+bool is_mimo_model_file(const json& j) {
+  return j.is_object() && j.contains("type") &&
+         (j["type"] == kMimoModelType || j["type"] == kScheduledMimoModelType);
+}
+
+json to_json(const MimoModelFile& file) {
+  json doc = {{"schema", kModelSchema},
+              {"type", file.scheduled ? kScheduledMimoModelType : kMimoModelType},
+              {"sample_period_s", file.sample_period_s},
+              {"inputs", channel_list(file.inputs)},
+              {"outputs", channel_list(file.outputs)}};
+  if (file.scheduled) {
+    const AmplitudeScheduledMimoModel& s = *file.scheduled;
+    doc["schedule"] = {{"window_s", s.window_s()}};
+    json local = json::array();
+    for (std::size_t i = 0; i < s.local_models().size(); ++i) {
+      json l = body_json(s.local_models()[i]);
+      l["amplitude"] = s.amplitudes()[i];
+      l["identification"] =
+          i < file.local_identification.size() ? file.local_identification[i] : json::object();
+      local.push_back(std::move(l));
+    }
+    doc["local_models"] = std::move(local);
+  } else {
+    doc.update(body_json(file.model));
+  }
+  doc["identification"] = file.identification;
+  return doc;
 }
 
 MimoModelFile mimo_model_file_from_json(const json& j) {
   if (!j.is_object()) fail("model", "not a JSON object");
   const json& schema = member(j, "schema", "");
   if (schema != kModelSchema) fail("schema", "not " + std::string(kModelSchema));
-  if (!is_mimo_model_file(j)) fail("type", std::string("not ") + kMimoModelType);
+  if (!is_mimo_model_file(j)) {
+    fail("type", std::string("not ") + kMimoModelType + " or " + kScheduledMimoModelType);
+  }
   MimoModelFile f;
   f.sample_period_s = number(member(j, "sample_period_s", ""), "sample_period_s");
   if (!(f.sample_period_s > 0.0)) fail("sample_period_s", "not > 0");
   f.inputs = channels(member(j, "inputs", ""), "inputs");
   f.outputs = channels(member(j, "outputs", ""), "outputs");
   const std::size_t m = f.inputs.size(), p = f.outputs.size();
-  const json& ops = member(j, "operators", "");
-  if (!ops.is_array() || ops.size() != m) fail("operators", "not one entry per input");
-  std::vector<std::optional<ActuatorModel>> operators(m);
-  for (std::size_t i = 0; i < m; ++i) {
-    operators[i] = operator_of(ops[i], "operators[" + std::to_string(i) + "]");
-  }
-  const json& dyn = member(j, "dynamics", "");
-  const json& pj = member(dyn, "poles", "dynamics.");
-  if (!pj.is_array()) fail("dynamics.poles", "not an array");
-  std::vector<std::complex<double>> poles;
-  for (std::size_t i = 0; i < pj.size(); ++i) {
-    const auto v = numbers(pj[i], "dynamics.poles[" + std::to_string(i) + "]");
-    if (v.size() != 2) fail("dynamics.poles[" + std::to_string(i) + "]", "not [re, im]");
-    poles.emplace_back(v[0], v[1]);
-  }
-  const json& tj = member(dyn, "terms", "dynamics.");
-  if (!tj.is_array()) fail("dynamics.terms", "not an array");
-  std::vector<Eigen::MatrixXd> terms;
-  for (std::size_t q = 0; q < tj.size(); ++q) {
-    terms.push_back(matrix_of(tj[q], p, m, "dynamics.terms[" + std::to_string(q) + "]"));
-  }
-  const auto off = numbers(member(dyn, "output_offset", "dynamics."), "dynamics.output_offset");
-  if (off.size() != p) fail("dynamics.output_offset", "not one value per output");
-  try {
-    MimoLinearModel g(std::move(poles), std::move(terms),
-                      Eigen::Map<const Eigen::VectorXd>(off.data(), static_cast<Eigen::Index>(p)));
-    f.model = HammersteinMimoModel(std::move(operators), std::move(g), f.sample_period_s);
-  } catch (const std::invalid_argument& e) {
-    fail("dynamics", e.what());
+  if (j["type"] == kScheduledMimoModelType) {
+    const json& sj = member(j, "schedule", "");
+    const double window_s = number(member(sj, "window_s", "schedule."), "schedule.window_s");
+    const json& lj = member(j, "local_models", "");
+    if (!lj.is_array() || lj.empty()) fail("local_models", "not a non-empty array");
+    std::vector<double> amplitudes;
+    std::vector<HammersteinMimoModel> local;
+    for (std::size_t i = 0; i < lj.size(); ++i) {
+      const std::string field = "local_models[" + std::to_string(i) + "].";
+      amplitudes.push_back(number(member(lj[i], "amplitude", field), field + "amplitude"));
+      local.push_back(body_of(lj[i], m, p, f.sample_period_s, field));
+      f.local_identification.push_back(lj[i].value("identification", json::object()));
+    }
+    try {
+      f.scheduled.emplace(std::move(amplitudes), std::move(local), window_s);
+    } catch (const std::invalid_argument& e) {
+      fail("local_models", e.what());
+    }
+    f.model = f.scheduled->local_models().back();
+  } else {
+    f.model = body_of(j, m, p, f.sample_period_s, "");
   }
   if (j.contains("identification")) f.identification = j["identification"];
   return f;

@@ -9,18 +9,26 @@
 //    "dynamics": {"poles": [[re, im], ...], "terms": [[[row], ...], ...],          (p x m each)
 //                 "output_offset": [...]},
 //    "identification": {...}}                                                     (free-form)
+// Type "mimo_amplitude_scheduled" (AmplitudeScheduledMimoModel) holds, in place of "operators"
+// and "dynamics", local models fitted at several amplitudes and the schedule that blends them:
+//    "schedule": {"window_s": 0.25},
+//    "local_models": [{"amplitude": a [input unit], "operators": [...], "dynamics": {...},
+//                      "identification": {...}}, ...]                     (amplitudes ascending)
 // The dynamics are discrete-time: the model holds at its own sample period only.
 // Pure conversion between JSON values and models; reading and writing files is the caller's.
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "hystbench/compensation/amplitude_scheduled_model.hpp"
 #include "hystbench/compensation/hammerstein_mimo_model.hpp"
 #include "hystbench/compensation/model_file.hpp"
 
 namespace hystbench::compensation {
 
 inline constexpr const char* kMimoModelType = "mimo_hammerstein";
+inline constexpr const char* kScheduledMimoModelType = "mimo_amplitude_scheduled";
 
 struct MimoChannel {
   std::string name;  ///< the record's column
@@ -28,13 +36,23 @@ struct MimoChannel {
 };
 
 struct MimoModelFile {
+  /// The model; with a schedule, its local model of the largest amplitude.
   HammersteinMimoModel model;
+  /// Set for a model fitted at several amplitudes: what simulate() runs.
+  std::optional<AmplitudeScheduledMimoModel> scheduled;
+  /// With a schedule: each local model's identification (free-form), in its order.
+  std::vector<nlohmann::json> local_identification;
   double sample_period_s = 0.0;  ///< > 0 [s]
   std::vector<MimoChannel> inputs, outputs;
   nlohmann::json identification = nlohmann::json::object();
+
+  /// Output (p x N) for input u (m x N), from rest: the schedule's where there is one.
+  Eigen::MatrixXd simulate(const Eigen::MatrixXd& u) const {
+    return scheduled ? scheduled->simulate(u) : model.simulate(u);
+  }
 };
 
-/// True for a model file of this type (whatever else it holds).
+/// True for a model file of either type (whatever else it holds).
 bool is_mimo_model_file(const nlohmann::json& j);
 nlohmann::json to_json(const MimoModelFile& file);
 /// Validates every field and builds the model; throws ModelFileError naming the field.
