@@ -75,7 +75,12 @@ CliCommand add_fit(CLI::App& app) {
   auto fit = std::make_shared<cli::FitCommand>();
   auto* cmd =
       app.add_subcommand("fit", "Identify a hysteresis model from a measured record (t,u,y)");
-  cmd->add_option("data", fit->data_path, "CSV file with columns t, u, y")
+  auto files = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("data", *files,
+                  "CSV file with columns t, u, y. Records of several inputs: more than one file "
+                  "holds the same device at other amplitudes (as do realizations of one file "
+                  "more than 25 % apart in amplitude), each fitted on its own, the models "
+                  "blended by the drive's amplitude (one model for every amplitude)")
       ->required()
       ->check(CLI::ExistingFile);
   std::vector<std::string> families = common::fit_family_name_list();
@@ -121,7 +126,11 @@ CliCommand add_fit(CLI::App& app) {
   cmd->add_option("-o,--output", fit->output_path, "Model file to write (JSON)")->required();
   cmd->add_flag("--json", fit->json_output, "Print the result as one JSON line");
   add_column_options(cmd, fit->columns, false);
-  return {cmd, [fit] { return cli::run_fit(*fit, std::cout, std::cerr); }};
+  return {cmd, [fit, files] {
+            fit->data_path = files->front();
+            fit->more_data_paths.assign(files->begin() + 1, files->end());
+            return cli::run_fit(*fit, std::cout, std::cerr);
+          }};
 }
 
 CliCommand add_simulate(CLI::App& app) {
@@ -183,11 +192,13 @@ CliCommand add_diagnose(CLI::App& app) {
       "creep, dynamics, delay, drift or none; gains measured on held-out parts, and with "
       "several records on each record left out whole. A record of several inputs "
       "(--u-column u1,u2,...) names cross_coupling per output, each realization left out in "
-      "turn");
+      "turn; several such records at several amplitudes name amplitude_dependence (modes that "
+      "move with the drive), each amplitude left out in turn");
   cmd->add_option("data", diag->data_paths,
                   "CSV with columns t, u, y (a bench run log works too); several records of one "
                   "device are diagnosed together (effects seen only across records, such as "
-                  "rate dependence between runs at different frequencies)")
+                  "rate dependence between runs at different frequencies; a device of several "
+                  "inputs at several amplitudes)")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--validate", diag->validate_paths,

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "hystbench/common/model_file_io.hpp"
+#include "hystbench/compensation/amplitude_dependence.hpp"
 #include "hystbench/compensation/mimo_diagnosis.hpp"
 #include "offline/details/progress_line.hpp"
 #include "report/details/gnuplot.hpp"
@@ -32,6 +33,12 @@ std::vector<std::size_t> runs(const std::vector<double>& ids, std::size_t from, 
   return starts;
 }
 
+std::vector<double> to_vector(const Eigen::VectorXd& v) {
+  return std::vector<double>(v.data(), v.data() + v.size());
+}
+
+}  // namespace
+
 std::string joined(const std::vector<std::string>& names) {
   std::string s;
   for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
@@ -46,12 +53,6 @@ std::vector<hc::MimoChannel> channels(const std::vector<std::string>& names,
     out.push_back({names[i], units[i].value_or(fallback)});
   return out;
 }
-
-std::vector<double> to_vector(const Eigen::VectorXd& v) {
-  return std::vector<double>(v.data(), v.data() + v.size());
-}
-
-}  // namespace
 
 hc::PeriodicRecord periodic_record(const MultiRecord& data, const std::string& path) {
   const std::size_t rows = data.rows;
@@ -194,12 +195,21 @@ void print_coupling_shares(std::ostream& out, const MultiRecord& data,
 }  // namespace
 
 int run_fit_mimo(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
+  if (!cmd.more_data_paths.empty()) {
+    std::vector<std::string> paths{cmd.data_path};
+    paths.insert(paths.end(), cmd.more_data_paths.begin(), cmd.more_data_paths.end());
+    return run_fit_scheduled(cmd, amplitude_records(paths, cmd.columns), out, err);
+  }
   const auto started = std::chrono::steady_clock::now();
   const MultiRecord data = read_multi_record(cmd.data_path, cmd.columns, true);
   const hc::PeriodicRecord rec = periodic_record(data, cmd.data_path);
   if (rec.period < 16) {
     throw DataFileError(cmd.data_path + ": periods of " + std::to_string(rec.period) +
                         " samples: a dynamic fit needs at least 16 per period");
+  }
+  const auto groups = hc::amplitude_groups(rec);
+  if (groups.size() > 1) {
+    return run_fit_scheduled(cmd, amplitude_records(cmd.data_path, data, rec, groups), out, err);
   }
   hc::HammersteinFitOptions options;
   if (cmd.operators > 0) options.operators = static_cast<std::size_t>(cmd.operators);
@@ -308,7 +318,7 @@ MimoSimulation simulate_realizations(const hc::MimoModelFile& file, const hc::Pe
   sim.sum2 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p));
   sim.max_abs = sim.sum2;
   for (const auto& u : rec.u) {
-    const Eigen::MatrixXd y = file.model.simulate(u);
+    const Eigen::MatrixXd y = file.simulate(u);
     for (Eigen::Index t = 0; t < y.cols(); ++t, ++row) {
       for (std::size_t i = 0; i < p; ++i) {
         sim.y_model[i][row] = y(static_cast<Eigen::Index>(i), t);
@@ -612,11 +622,17 @@ void print_coupling_diagnosis(std::ostream& text, const std::string& path,
 }  // namespace
 
 int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostream& err) {
+  const bool alone =
+      cmd.validate_paths.empty() && cmd.model_path.empty() && cmd.save_baseline.empty();
+  if (cmd.data_paths.size() > 1 && alone) {
+    return run_diagnose_amplitude(cmd, amplitude_records(cmd.data_paths, cmd.columns), out, err);
+  }
   if (cmd.data_paths.size() != 1 || !cmd.validate_paths.empty() || !cmd.model_path.empty() ||
       !cmd.save_baseline.empty()) {
     throw std::invalid_argument(
-        "a record of several columns is diagnosed alone: one file (its realizations are the "
-        "held-out checks), without --validate, --model or --save-baseline");
+        "a record of several columns is diagnosed alone (its realizations are the held-out "
+        "checks), or with records of the same device at other amplitudes (each left out in "
+        "turn), without --validate, --model or --save-baseline");
   }
   const std::string& path = cmd.data_paths.front();
   const MultiRecord data = read_multi_record(path, cmd.columns, true);
@@ -632,6 +648,10 @@ int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostrea
   std::vector<std::size_t> own(p);
   for (std::size_t i = 0; i < p; ++i) own[i] = p == 1 ? 0 : i;
   const hc::PeriodicRecord rec = periodic_record(data, path);
+  const auto groups = hc::amplitude_groups(rec);
+  if (groups.size() > 1) {
+    return run_diagnose_amplitude(cmd, amplitude_records(path, data, rec, groups), out, err);
+  }
   const hc::PeriodicSpectra spectra = hc::periodic_spectra(rec);
   std::function<void(double, const std::string&)> progress;
   if (!cmd.json_output)
@@ -663,10 +683,14 @@ int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostrea
     text << "report    " << cmd.report_dir
          << " (report.txt, diagnosis.json, frf.png, residual_spectrum.png)\n";
   }
-  if (cmd.json_output) {
+  return print_result(out, cmd.json_output, result, text.str());
+}
+
+int print_result(std::ostream& out, bool json_output, const json& result, const std::string& text) {
+  if (json_output) {
     out << result.dump() << "\n";
   } else {
-    out << text.str();
+    out << text;
   }
   return 0;
 }

@@ -53,6 +53,11 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
       }
       return details::run_fit_mimo(cmd, out, err);
     }
+    if (!cmd.more_data_paths.empty()) {
+      throw std::invalid_argument(
+          "several records are fitted as one model of several inputs (comma lists in --u-column "
+          "and --y-column); a model of one input takes one record");
+    }
     const Record data = read_record(cmd.data_path, cmd.columns, true);
     hc::FitOptions opt;
     try {

@@ -11,6 +11,7 @@
 #include <random>
 #include <sstream>
 
+#include "cli/offline/offline_command_test.hpp"
 #include "hystbench/cli/offline/convert_command.hpp"
 #include "hystbench/cli/offline/diagnose_command.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
@@ -25,27 +26,9 @@ namespace {
 
 const fs::path kCubeSpec = fs::path(HYSTBENCH_SHARED_DATA_DIR) / "piezo-fsm-cubespec";
 
-class MimoCommandsTest : public ::testing::Test {
+class MimoCommandsTest : public hystbench::test::OfflineCommandTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("hystbench-mimo-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  // Runs a command; returns its exit code, the JSON line on out (or null) and err.
-  template <typename F>
-  int run(F&& f, json* result = nullptr) {
-    std::ostringstream out, err;
-    const int code = f(out, err);
-    err_ = err.str();
-    if (result != nullptr && code == 0) *result = json::parse(out.str());
-    return code;
-  }
+  MimoCommandsTest() : OfflineCommandTest("hystbench-mimo") {}
 
   // Two inputs, two outputs, each input reaching both: modes at 150 and 600 Hz at 5 kHz, a play
   // model on neither. Realizations of random-phase multisines, `periods` each, written with
@@ -113,9 +96,6 @@ class MimoCommandsTest : public ::testing::Test {
     sim.json_output = true;
     return sim;
   }
-
-  fs::path dir_;
-  std::string err_;
 };
 
 }  // namespace

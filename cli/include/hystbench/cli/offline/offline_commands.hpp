@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/common/model_file_io.hpp"  // the model files the commands read and write
@@ -18,6 +19,10 @@ namespace hystbench::cli {
 
 struct FitCommand {
   std::string data_path;
+  /// Records of several inputs only: the same device at other amplitudes. Every record is fitted
+  /// on its own and the models blended by the drive's amplitude (type
+  /// "mimo_amplitude_scheduled"): one model for every amplitude.
+  std::vector<std::string> more_data_paths;
   /// pi | mpi | cpi | rpi | preisach | auto, or hammerstein: operators per input, then linear
   /// dynamics (the family of several inputs or outputs, which comma lists in columns.u / columns.y
   /// choose)
