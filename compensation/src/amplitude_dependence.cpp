@@ -7,6 +7,8 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "details/parallel_tasks.hpp"
+
 namespace hystbench::compensation {
 
 namespace {
@@ -157,17 +159,17 @@ AmplitudeFit fit_amplitude_schedule(const std::vector<PeriodicRecord>& records,
     }
     fit.amplitudes.push_back(amplitude[i]);
   }
-  std::vector<HammersteinMimoModel> local;
-  for (std::size_t k = 0; k < n; ++k) {
+  // The records' fits are independent: one per core.
+  fit.local.resize(n);
+  details::SharedProgress shared(n, options.progress);
+  details::run_parallel(n, [&](std::size_t k) {
     HammersteinFitOptions o = options.local;
     const std::string at = "amplitude " + std::to_string(k + 1) + "/" + std::to_string(n) + ": ";
-    o.linear.progress = [&](double f, const std::string& what) {
-      if (options.progress)
-        options.progress((static_cast<double>(k) + f) / static_cast<double>(n), at + what);
-    };
-    fit.local.push_back(identify_mimo_hammerstein(records[fit.order[k]], o));
-    local.push_back(fit.local.back().model);
-  }
+    o.linear.progress = [&, k](double f, const std::string& what) { shared(k, f, at + what); };
+    fit.local[k] = identify_mimo_hammerstein(records[fit.order[k]], o);
+  });
+  std::vector<HammersteinMimoModel> local;
+  for (const auto& l : fit.local) local.push_back(l.model);
   fit.model.emplace(fit.amplitudes, std::move(local), options.window_s);
   for (std::size_t k = 0; k < n; ++k) {
     fit.schedule_rms.push_back(simulation_rms(
@@ -274,14 +276,18 @@ AmplitudeDiagnosis diagnose_amplitude_dependence(const std::vector<PeriodicRecor
   for (const std::size_t i : fit.order) sorted.push_back(records[i]);
   AmplitudeDiagnosis d;
   d.amplitudes = fit.amplitudes;
-  double log_gain = 0.0;
-  for (std::size_t k = 0; k < n; ++k) {
+  // The baselines' fits are independent: one per core.
+  std::vector<HammersteinFitResult> baselines(n);
+  details::SharedProgress shared(n, progress);
+  details::run_parallel(n, [&](std::size_t k) {
     HammersteinFitOptions o = options;
     const std::string at = "amplitude " + std::to_string(k + 1) + " left out: ";
-    o.linear.progress = [&](double f, const std::string& what) {
-      if (progress) progress((static_cast<double>(k) + f) / static_cast<double>(n), at + what);
-    };
-    const HammersteinFitResult baseline = identify_mimo_hammerstein(pooled(sorted, k), o);
+    o.linear.progress = [&, k](double f, const std::string& what) { shared(k, f, at + what); };
+    baselines[k] = identify_mimo_hammerstein(pooled(sorted, k), o);
+  });
+  double log_gain = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const HammersteinFitResult& baseline = baselines[k];
     const AmplitudeScheduledMimoModel others = fit.model->without(k);
     AmplitudeLeftOut l;
     l.amplitude = fit.amplitudes[k];

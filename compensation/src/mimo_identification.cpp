@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <unsupported/Eigen/FFT>
 
+#include "details/parallel_tasks.hpp"
 #include "hystbench/compensation/play_operator.hpp"
 
 namespace hystbench::compensation {
@@ -544,15 +547,23 @@ MimoFitResult identify_mimo_linear(const PeriodicSpectra& spectra, const MimoFit
   const auto report = [&](double f, const std::string& what) {
     if (options.progress) options.progress(f, what);
   };
-  for (std::size_t q = 0; q < orders.size(); ++q) {
-    report(static_cast<double>(q) / static_cast<double>(orders.size() + 1),
-           "order " + std::to_string(orders[q]));
+  // The candidates are independent: one per core. An order the bins cannot carry ends the list.
+  std::vector<std::optional<double>> heldout(orders.size());
+  std::size_t done = 0;
+  std::mutex report_mutex;
+  details::run_parallel(orders.size(), [&](std::size_t q) {
     try {
       const MimoLinearModel m = fit_on(spectra, orders[q], train);
-      result.scores.push_back({orders[q], overall(rms_on(m, spectra, test))});
+      heldout[q] = overall(rms_on(m, spectra, test));
     } catch (const std::invalid_argument&) {
-      break;  // more order than the bins carry
+      // more order than the bins carry
     }
+    const std::lock_guard<std::mutex> lock(report_mutex);
+    report(static_cast<double>(++done) / static_cast<double>(orders.size() + 1),
+           "order " + std::to_string(orders[q]));
+  });
+  for (std::size_t q = 0; q < orders.size() && heldout[q]; ++q) {
+    result.scores.push_back({orders[q], *heldout[q]});
   }
   if (result.scores.empty()) {
     throw std::invalid_argument("MIMO fit: no candidate order fits " +
