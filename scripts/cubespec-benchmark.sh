@@ -8,7 +8,7 @@
 # window) not scored. Prints the table beside the published figures, then what each part buys:
 # the amplitude schedule (each amplitude left out in turn), the coupling (one model per axis
 # instead), the order (held-out error per order) and the play operators (with and without).
-# About 4 minutes on 2 cores.
+# About 100 s on 2 cores.
 # Needs ../shared/data/piezo-fsm-cubespec (or HYSTBENCH_SHARED_DATA_DIR) and a build.
 # Usage: scripts/cubespec-benchmark.sh   (work files in HYSTBENCH_MEASURE_DIR, else a temp dir)
 set -euo pipefail
