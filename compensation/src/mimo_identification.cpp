@@ -543,7 +543,10 @@ MimoFitResult identify_mimo_linear(const PeriodicSpectra& spectra, const MimoFit
     for (std::size_t n = 2; n <= 40; n += 2) orders.push_back(n);
   }
   MimoFitResult result;
-  const auto [train, test] = heldout_split(spectra, result.heldout);
+  // Named, not bound: the candidates' tasks capture them.
+  const std::pair<Selection, Selection> split = heldout_split(spectra, result.heldout);
+  const Selection& train = split.first;
+  const Selection& test = split.second;
   const auto report = [&](double f, const std::string& what) {
     if (options.progress) options.progress(f, what);
   };

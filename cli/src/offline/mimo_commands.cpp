@@ -334,6 +334,17 @@ MimoSimulation simulate_realizations(const hc::MimoModelFile& file, const hc::Pe
   return sim;
 }
 
+// What a schedule saw: the drive's amplitude estimate, each realization from its start.
+std::vector<double> schedule_amplitudes(const hc::AmplitudeScheduledMimoModel& model,
+                                        const hc::PeriodicRecord& rec) {
+  std::vector<double> out;
+  for (const auto& u : rec.u) {
+    const Eigen::VectorXd a = hc::amplitude_estimate(u, model.window_samples());
+    out.insert(out.end(), a.data(), a.data() + a.size());
+  }
+  return out;
+}
+
 }  // namespace
 
 int run_simulate_mimo(const SimulateCommand& cmd, const hc::MimoModelFile& file, std::ostream& out,
@@ -367,6 +378,10 @@ int run_simulate_mimo(const SimulateCommand& cmd, const hc::MimoModelFile& file,
     names.push_back(data.u_names[j]), cols.push_back(&data.u[j]);
   for (std::size_t i = 0; i < p; ++i)
     names.push_back(y_names[i] + "_model"), cols.push_back(&sim.y_model[i]);
+  if (file.scheduled) {
+    owned.push_back(schedule_amplitudes(*file.scheduled, rec));
+    names.push_back("amplitude_" + file.inputs.front().unit), cols.push_back(&owned.back());
+  }
   json result = {{"samples", data.rows},
                  {"output", cmd.output_path},
                  {"realizations", rec.u.size()},

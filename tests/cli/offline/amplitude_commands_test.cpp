@@ -4,10 +4,12 @@
 // train sets where ../shared/data holds them (the benchmark's table).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "cli/offline/offline_command_test.hpp"
 #include "hystbench/cli/offline/convert_command.hpp"
@@ -140,6 +142,24 @@ TEST_F(AmplitudeCommandsTest, AStiffeningModeIsNamedAndOneModelHoldsEveryAmplitu
   }
   const std::string between = write_record("between.csv", {0.005}, kBeta, 7);
   const double scheduled = simulate(path("scheduled.json"), between)["rmse"].get<double>();
+  // The simulation says what amplitude the schedule saw: settled at the record's own.
+  std::ifstream simulated(path("simulated.csv"));
+  std::string line, header;
+  while (std::getline(simulated, line) && line.starts_with("#")) {
+  }
+  header = line;
+  EXPECT_TRUE(header.ends_with(",amplitude_V") || header.find(",amplitude_V,") != std::string::npos)
+      << header;
+  const double settled = f["amplitudes"][1]["amplitude"].get<double>() * 1.25;  // 0.005 / 0.004
+  std::string last;
+  while (std::getline(simulated, line)) last = line;
+  const std::size_t column = static_cast<std::size_t>(
+      std::count(header.begin(),
+                 header.begin() + static_cast<std::ptrdiff_t>(header.find("amplitude_V")), ','));
+  std::stringstream cells(last);
+  std::string cell;
+  for (std::size_t k = 0; k <= column; ++k) std::getline(cells, cell, ',');
+  EXPECT_NEAR(std::stod(cell), settled, 0.05 * settled) << last;
   for (const std::size_t k : {0u, 2u}) {
     cli::FitCommand one;
     one.data_path = records[k];
