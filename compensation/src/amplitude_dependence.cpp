@@ -172,8 +172,12 @@ AmplitudeFit fit_amplitude_schedule(const std::vector<PeriodicRecord>& records,
   for (const auto& l : fit.local) local.push_back(l.model);
   fit.model.emplace(fit.amplitudes, std::move(local), options.window_s);
   for (std::size_t k = 0; k < n; ++k) {
-    fit.schedule_rms.push_back(simulation_rms(
-        [&](const Eigen::MatrixXd& u) { return fit.model->simulate(u); }, records[fit.order[k]]));
+    const PeriodicRecord& record = records[fit.order[k]];
+    fit.schedule_rms.push_back(
+        simulation_rms([&](const Eigen::MatrixXd& u) { return fit.model->simulate(u); }, record));
+    const AmplitudeScheduledMimoModel others = fit.model->without(k);
+    fit.left_out_rms.push_back(
+        simulation_rms([&](const Eigen::MatrixXd& u) { return others.simulate(u); }, record));
   }
   if (options.progress) options.progress(1.0, "done");
   return fit;
@@ -288,14 +292,12 @@ AmplitudeDiagnosis diagnose_amplitude_dependence(const std::vector<PeriodicRecor
   double log_gain = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
     const HammersteinFitResult& baseline = baselines[k];
-    const AmplitudeScheduledMimoModel others = fit.model->without(k);
     AmplitudeLeftOut l;
     l.amplitude = fit.amplitudes[k];
     l.baseline_order = baseline.linear.order;
     l.baseline_rms = simulation_rms(
         [&](const Eigen::MatrixXd& u) { return baseline.model.simulate(u); }, sorted[k]);
-    l.extended_rms =
-        simulation_rms([&](const Eigen::MatrixXd& u) { return others.simulate(u); }, sorted[k]);
+    l.extended_rms = fit.left_out_rms[k];
     l.gain = l.baseline_rms / std::max(l.extended_rms, 1e-300);
     log_gain += std::log(l.gain);
     d.left_out.push_back(l);

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -552,8 +551,10 @@ MimoFitResult identify_mimo_linear(const PeriodicSpectra& spectra, const MimoFit
   };
   // The candidates are independent: one per core. An order the bins cannot carry ends the list.
   std::vector<std::optional<double>> heldout(orders.size());
-  std::size_t done = 0;
-  std::mutex report_mutex;
+  const double scan_share =
+      static_cast<double>(orders.size()) / static_cast<double>(orders.size() + 1);
+  details::SharedProgress scanned(
+      orders.size(), [&](double f, const std::string& what) { report(scan_share * f, what); });
   details::run_parallel(orders.size(), [&](std::size_t q) {
     try {
       const MimoLinearModel m = fit_on(spectra, orders[q], train);
@@ -561,9 +562,7 @@ MimoFitResult identify_mimo_linear(const PeriodicSpectra& spectra, const MimoFit
     } catch (const std::invalid_argument&) {
       // more order than the bins carry
     }
-    const std::lock_guard<std::mutex> lock(report_mutex);
-    report(static_cast<double>(++done) / static_cast<double>(orders.size() + 1),
-           "order " + std::to_string(orders[q]));
+    scanned(q, 1.0, "order " + std::to_string(orders[q]));
   });
   for (std::size_t q = 0; q < orders.size() && heldout[q]; ++q) {
     result.scores.push_back({orders[q], *heldout[q]});

@@ -25,8 +25,7 @@ hc::FitProgress progress_to(std::ostream& err, bool quiet) {
 }
 
 // Each local model's figures: its record, amplitude, order, held-out error, and the schedule's.
-json local_json(const hc::AmplitudeFit& fit, std::size_t k, const AmplitudeRecords& r,
-                double left_out_rms) {
+json local_json(const hc::AmplitudeFit& fit, std::size_t k, const AmplitudeRecords& r) {
   const hc::HammersteinFitResult& l = fit.local[k];
   const hc::PeriodicRecord& rec = r.records[fit.order[k]];
   return {{"data", r.labels[fit.order[k]]},
@@ -36,7 +35,7 @@ json local_json(const hc::AmplitudeFit& fit, std::size_t k, const AmplitudeRecor
           {"heldout_rms", {{"linear", l.heldout_linear}, {"hammerstein", l.heldout_hammerstein}}},
           {"hysteresis_kept", l.hysteresis_kept},
           {"schedule_rms", fit.schedule_rms[k]},
-          {"left_out_rms", left_out_rms},
+          {"left_out_rms", fit.left_out_rms[k]},
           {"realizations", rec.u.size()},
           {"periods", rec.periods},
           {"period_samples", rec.period}};
@@ -71,20 +70,16 @@ AmplitudeRecords amplitude_records(const std::vector<std::string>& paths,
       r.y_names = d.y_names;
       r.u_units = d.u_units;
       r.y_units = d.y_units;
-      r.sample_period_s = d.sample_period_s;
     } else if (d.u_units != r.u_units || d.y_units != r.y_units) {
       throw DataFileError(path + ": its columns' units differ from " + paths.front() + "'s");
-    } else if (std::abs(d.sample_period_s - r.sample_period_s) > 1e-9 * r.sample_period_s) {
+    } else if (const double dt = r.records.front().dt;
+               std::abs(d.sample_period_s - dt) > 1e-9 * dt) {
       std::ostringstream msg;
       msg << path << ": sampled at " << 1.0 / d.sample_period_s << " Hz, " << paths.front()
-          << " at " << 1.0 / r.sample_period_s << " Hz";
+          << " at " << 1.0 / dt << " Hz";
       throw DataFileError(msg.str());
     }
-    r.records.push_back(periodic_record(d, path));
-    if (r.records.back().period < 16) {
-      throw DataFileError(path + ": periods of " + std::to_string(r.records.back().period) +
-                          " samples: a dynamic fit needs at least 16 per period");
-    }
+    r.records.push_back(dynamic_record(d, path));
   }
   return r;
 }
@@ -97,7 +92,6 @@ AmplitudeRecords amplitude_records(const std::string& path, const MultiRecord& d
   r.y_names = data.y_names;
   r.u_units = data.u_units;
   r.y_units = data.y_units;
-  r.sample_period_s = data.sample_period_s;
   for (const auto& g : groups) {
     std::string label = path + " (realization" + (g.size() > 1 ? "s" : "");
     for (std::size_t k = 0; k < g.size(); ++k) label += (k > 0 ? ", " : " ") + std::to_string(g[k]);
@@ -118,12 +112,7 @@ int run_fit_scheduled(const FitCommand& cmd, const AmplitudeRecords& r, std::ost
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   json locals = json::array();
-  for (std::size_t k = 0; k < fit.local.size(); ++k) {
-    const hc::AmplitudeScheduledMimoModel others = fit.model->without(k);
-    const double left_out = hc::simulation_rms(
-        [&](const Eigen::MatrixXd& u) { return others.simulate(u); }, r.records[fit.order[k]]);
-    locals.push_back(local_json(fit, k, r, left_out));
-  }
+  for (std::size_t k = 0; k < fit.local.size(); ++k) locals.push_back(local_json(fit, k, r));
   hc::MimoModelFile file = scheduled_file(fit, r);
   const std::string estimate =
       "the rms over the inputs of each one's standard deviation over the last window";

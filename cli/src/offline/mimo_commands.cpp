@@ -107,6 +107,15 @@ hc::PeriodicRecord periodic_record(const MultiRecord& data, const std::string& p
   return rec;
 }
 
+hc::PeriodicRecord dynamic_record(const MultiRecord& data, const std::string& path) {
+  hc::PeriodicRecord rec = periodic_record(data, path);
+  if (rec.period < 16) {
+    throw DataFileError(path + ": periods of " + std::to_string(rec.period) +
+                        " samples: a dynamic fit needs at least 16 per period");
+  }
+  return rec;
+}
+
 namespace {
 
 // The noise on the averaged period, from the differences between periods (Parseval).
@@ -202,11 +211,7 @@ int run_fit_mimo(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
   }
   const auto started = std::chrono::steady_clock::now();
   const MultiRecord data = read_multi_record(cmd.data_path, cmd.columns, true);
-  const hc::PeriodicRecord rec = periodic_record(data, cmd.data_path);
-  if (rec.period < 16) {
-    throw DataFileError(cmd.data_path + ": periods of " + std::to_string(rec.period) +
-                        " samples: a dynamic fit needs at least 16 per period");
-  }
+  const hc::PeriodicRecord rec = dynamic_record(data, cmd.data_path);
   const auto groups = hc::amplitude_groups(rec);
   if (groups.size() > 1) {
     return run_fit_scheduled(cmd, amplitude_records(cmd.data_path, data, rec, groups), out, err);
@@ -642,8 +647,7 @@ int run_diagnose_mimo(const DiagnoseCommand& cmd, std::ostream& out, std::ostrea
   if (cmd.data_paths.size() > 1 && alone) {
     return run_diagnose_amplitude(cmd, amplitude_records(cmd.data_paths, cmd.columns), out, err);
   }
-  if (cmd.data_paths.size() != 1 || !cmd.validate_paths.empty() || !cmd.model_path.empty() ||
-      !cmd.save_baseline.empty()) {
+  if (cmd.data_paths.size() != 1 || !alone) {
     throw std::invalid_argument(
         "a record of several columns is diagnosed alone (its realizations are the held-out "
         "checks), or with records of the same device at other amplitudes (each left out in "

@@ -20,6 +20,9 @@ namespace hystbench::cli::details {
 /// realization, one period where absent). Rows of a realization, and of a period, are
 /// contiguous, and every period has the same length; else DataFileError naming the row.
 compensation::PeriodicRecord periodic_record(const MultiRecord& data, const std::string& path);
+/// periodic_record() of a record to fit dynamics on: DataFileError where its periods are shorter
+/// than 16 samples.
+compensation::PeriodicRecord dynamic_record(const MultiRecord& data, const std::string& path);
 
 /// "a, b, c".
 std::string joined(const std::vector<std::string>& names);
@@ -39,7 +42,6 @@ struct AmplitudeRecords {
   std::vector<compensation::PeriodicRecord> records;
   std::vector<std::string> u_names, y_names;
   std::vector<std::optional<std::string>> u_units, y_units;
-  double sample_period_s = 0.0;
 };
 /// Every file's record; DataFileError naming a file whose units or rate differ from the first's.
 AmplitudeRecords amplitude_records(const std::vector<std::string>& paths,

@@ -61,6 +61,9 @@ struct AmplitudeFit {
   std::vector<HammersteinFitResult> local;  ///< each record's own fit, in that order
   std::optional<AmplitudeScheduledMimoModel> model;  ///< always set on return
   std::vector<double> schedule_rms;  ///< per amplitude: the schedule on its record (simulation_rms)
+  /// Per amplitude: the other amplitudes' schedule on its record (simulation_rms), the
+  /// interpolation's own check.
+  std::vector<double> left_out_rms;
 };
 
 struct AmplitudeFitOptions {
@@ -78,7 +81,7 @@ struct AmplitudeLeftOut {
   double amplitude = 0.0;          ///< the record left out [input unit]
   std::size_t baseline_order = 0;  ///< of the model fitted on the others pooled
   double baseline_rms = 0.0;       ///< that model on the left-out record [output unit]
-  double extended_rms = 0.0;       ///< the others' schedule on it [output unit]
+  double extended_rms = 0.0;       ///< the others' schedule on it (the fit's left_out_rms)
   double gain = 0.0;               ///< baseline / extended
 };
 
