@@ -269,13 +269,33 @@ std::vector<double> IterativeLearning::advanced_error(std::span<const double> er
   // change would be learned twice, a trial late, and the trial's start would swing from trial to
   // trial.
   if (before.size() == n) {
-    for (std::size_t j = 0; j < n; ++j) {
-      const double wraps =
-          std::clamp(static_cast<double>(j) + a - static_cast<double>(n - 1), 0.0, 1.0);
-      e[j] -= kWrapShare * wraps * slope_[j] * (drive[j] - before[j]);
-    }
+    for (std::size_t j = 0; j < n; ++j) e[j] -= wrapped_change(drive, before, j);
   }
   return e;
+}
+
+double IterativeLearning::wrapped_change(std::span<const double> drive,
+                                         const std::vector<double>& before, std::size_t j) const {
+  const double a = std::fmod(advance_samples_, static_cast<double>(period_));
+  const double wraps =
+      std::clamp(static_cast<double>(j) + a - static_cast<double>(period_ - 1), 0.0, 1.0);
+  return wraps > 0.0 ? kWrapShare * wraps * slope_[j] * (drive[j] - before[j]) : 0.0;
+}
+
+void IterativeLearning::take_off_wrapped_change(std::span<const double> drive,
+                                                const std::vector<double>& before,
+                                                std::vector<double>& error) const {
+  if (before.size() != period_) return;
+  const std::size_t n = period_;
+  const double a = std::fmod(advance_samples_, static_cast<double>(n));
+  const auto whole = static_cast<std::size_t>(std::floor(a));
+  const double frac = a - std::floor(a);
+  for (std::size_t j = 0; j < n; ++j) {
+    const double change = wrapped_change(drive, before, j);
+    if (change == 0.0) continue;
+    error[(j + whole) % n] -= (1.0 - frac) * change;
+    error[(j + whole + 1) % n] -= frac * change;
+  }
 }
 
 std::complex<double> IterativeLearning::mode_response(double w) const {
@@ -409,7 +429,10 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
   if (o_.measured_plant) {
     // The measured response holds the bench's delay and dynamics: the error through its inverse,
     // harmonic by harmonic, in place of the delay's advance.
+    // Its start, though, answered the drive the trial before ended with: what this trial
+    // changed there is taken off first, as where the error is advanced.
     e.assign(error.begin(), error.end());
+    take_off_wrapped_change(drive, before, e);
     low_pass(e);
     through_measured_inverse(e);
   } else {

@@ -13,6 +13,7 @@
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "hystbench/cli/remote/remote_commands.hpp"
@@ -108,8 +109,12 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
   start_with_progress(settings_from_toml(loopback_toml(kEveryEffect)));
   const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
-  // Measured: 10 Hz 1.02 -> 0.016 %, 200 Hz 3.99 -> 0.10 % (targets 0.03 and 0.1 %).
-  for (const auto& [hz, bound] : {std::pair{10.0, 0.03}, std::pair{200.0, 0.15}}) {
+  // Targets: 10 Hz 0.03 % rms, 200 Hz 0.15 %; the largest error within 4x and 5x of them. A
+  // trial's start answers the drive the trial before ended with: learned as if it answered its
+  // own, each change there is learned twice and steps the drive at every trial's start, and a
+  // 10 Hz trial's largest error sat there, at 0.08-0.15 %.
+  for (const auto& [hz, bound, peak] :
+       {std::tuple{10.0, 0.03, 4.0}, std::tuple{200.0, 0.15, 5.0}}) {
     const json r = learn(hz, 10);
     ASSERT_EQ(r["end"], "completed") << r.dump(2);
     print(r);
@@ -128,7 +133,7 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
     EXPECT_LE(rms.back(), rms.front() / 20.0) << l.dump(2);
     // The run's figures are its last trial's.
     EXPECT_DOUBLE_EQ(r["rms_error_percent"].get<double>(), rms.back());
-    EXPECT_LE(r["max_error_percent"].get<double>(), 5.0 * bound);
+    EXPECT_LE(r["max_error_percent"].get<double>(), peak * bound);
     // The update is computed off the loop, in well under a period here.
     EXPECT_EQ(l["stale_periods"], 0) << l.dump(2);
     EXPECT_GE(l["update_ms"]["count"].get<int>(), 1) << l.dump(2);

@@ -74,7 +74,8 @@ struct LearningOptions {
   /// harmonic of the correction is divided by it at its frequency (it holds the delay, the modes
   /// and what the model lacks, as measured), Q is not held below a mode, and only harmonics
   /// where the stage's gain is 1/4 or more (an inverse would amplify the noise elsewhere) and
-  /// within its lines are learned.
+  /// within its lines are learned. The trial's start, which answered the drive the trial before
+  /// ended with, has the change made there taken off first, as where the error is advanced.
   std::optional<MeasuredLearningPlant> measured_plant;
 };
 
@@ -125,6 +126,14 @@ class IterativeLearning {
   // (where that wraps to the trial's start) a share of what the trial changed since `before`.
   std::vector<double> advanced_error(std::span<const double> error, std::span<const double> drive,
                                      const std::vector<double>& before);
+  // What the trial changed at drive sample j (from `before`, the trial before's drive) does to
+  // the next trial's start where the error read advance_samples_ ahead wraps there: kWrapShare of
+  // the model's slope times the change, else 0 [output unit].
+  double wrapped_change(std::span<const double> drive, const std::vector<double>& before,
+                        std::size_t j) const;
+  // The same taken off the error where it lands (advance_samples_ on, around the trial).
+  void take_off_wrapped_change(std::span<const double> drive, const std::vector<double>& before,
+                               std::vector<double>& error) const;
   // A fast trial's harmonics above Q: each through the mode and the bench's delay.
   void add_high_band(std::span<const double> error, double gain, std::vector<double>& correction);
   bool in_high_band(std::size_t h) const;
