@@ -17,7 +17,7 @@ constexpr double kNoiseFactor = 10.0;
 constexpr double kFloorFraction = 0.002;  // of the span
 }  // namespace
 
-OscillationDetector::OscillationDetector(OscillationOptions o) noexcept : o_(o) {
+OscillationDetector::OscillationDetector(OscillationOptions o) : o_(o) {
   o_.rate_hz = std::isfinite(o_.rate_hz) && o_.rate_hz > 0.0 ? o_.rate_hz : 10000.0;
   const double nyquist = o_.rate_hz / 2.0;
   o_.frequency_hz = std::isfinite(o_.frequency_hz) && o_.frequency_hz > 0.0
@@ -42,14 +42,40 @@ OscillationDetector::OscillationDetector(OscillationOptions o) noexcept : o_(o) 
   sustained_needed_ =
       std::max(kMinSustainedWindows, static_cast<int>(std::ceil(kSustainedS / window_s)));
   trip_.frequency_hz = o_.frequency_hz;
+  if (std::isfinite(o_.period_samples) && o_.period_samples >= 2.0 &&
+      o_.period_samples <= kMaxPeriodTicks) {
+    whole_ = static_cast<std::size_t>(std::floor(o_.period_samples));
+    frac_ = o_.period_samples - std::floor(o_.period_samples);
+    history_.assign(whole_ + 2, 0.0);
+  } else {
+    o_.period_samples = 0.0;
+  }
+}
+
+double OscillationDetector::change_over_period(double e) noexcept {
+  if (history_.empty()) return e;
+  const std::size_t n = history_.size();
+  // e(k - P), linear between e(k - whole) and e(k - whole - 1); before a whole period has
+  // passed there is nothing to compare with and the error itself is watched.
+  double change = e;
+  if (seen_ > whole_) {
+    const double a = history_[(head_ + n - whole_) % n];
+    const double b = history_[(head_ + n - whole_ - 1) % n];
+    change = e - ((1.0 - frac_) * a + frac_ * b);
+  }
+  history_[head_] = e;
+  head_ = (head_ + 1) % n;
+  ++seen_;
+  return change;
 }
 
 bool OscillationDetector::update(double e, std::uint64_t k) noexcept {
   if (trip_.tripped) return true;
   if (!std::isfinite(e)) return false;
-  const double y = b0_ * e + b2_ * x2_ - a1_ * y1_ - a2_ * y2_;
+  const double x = change_over_period(e);
+  const double y = b0_ * x + b2_ * x2_ - a1_ * y1_ - a2_ * y2_;
   x2_ = x1_;
-  x1_ = e;
+  x1_ = x;
   y2_ = y1_;
   y1_ = y;
   sum2_ += y * y;

@@ -76,8 +76,49 @@ TEST(OscillationDetector, TripsOnASustainedOscillation) {
 }
 
 TEST(OscillationDetector, ClampsOptionsOutOfRangeInsteadOfThrowing) {
-  hd::OscillationDetector d({kRate, 1e9, -1.0, NAN});
+  hd::OscillationDetector d({kRate, 1e9, -1.0, NAN, -5.0});
   EXPECT_LT(d.options().frequency_hz, kRate / 2.0);
   EXPECT_GT(d.options().span_um, 0.0);
   EXPECT_FALSE(d.update(NAN, 0));
+  EXPECT_EQ(d.options().period_samples, 0.0);  // not periodic
+}
+
+// A stable loop tracking a fast reference near the peak of |S|: its answer, a 500 Hz error of
+// 14 % of the span with its harmonics, repeats every period of the reference. Watched as it is,
+// it looks sustained and trips; watched as its change over the reference's period, it is left
+// alone, while an oscillation of the loop's own (1850 Hz, not locked to the reference) beside
+// it still trips, growing or sustained.
+TEST(OscillationDetector, LeavesAnErrorLockedToAPeriodicReferenceAlone) {
+  const auto locked = [](long k) {
+    const double t = static_cast<double>(k) / kRate;
+    return 0.14 * kSpan * std::sin(kTwoPi * 500.0 * t) +
+           0.05 * kSpan * std::sin(kTwoPi * 1000.0 * t + 0.3) +
+           0.03 * kSpan * std::sin(kTwoPi * 1500.0 * t + 1.1);
+  };
+  hd::OscillationDetector plain = detector(1130.0);
+  EXPECT_GT(first_trip(plain, 0.5, locked), 0);
+  hd::OscillationDetector periodic({kRate, 1130.0, kSpan, 0.005, kRate / 500.0});
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  EXPECT_EQ(first_trip(periodic, 2.0, [&](long k) { return locked(k) + noise(rng); }), -1);
+
+  hd::OscillationDetector growing({kRate, 1130.0, kSpan, 0.005, kRate / 500.0});
+  double amplitude_at_trip = 0.0;
+  const long grown = first_trip(growing, 1.0, [&](long k) {
+    const double t = static_cast<double>(k) / kRate;
+    amplitude_at_trip = 0.001 * std::exp(t / 0.01);
+    return locked(k) + amplitude_at_trip * std::sin(kTwoPi * 1170.0 * t);
+  });
+  ASSERT_GT(grown, 0);
+  EXPECT_TRUE(growing.trip().growing);
+  EXPECT_LT(amplitude_at_trip, 0.1 * kSpan);
+
+  // A period of fractional ticks (10 kHz / 30 Hz): the change is read between two ticks.
+  hd::OscillationDetector sustained({kRate, 1130.0, kSpan, 0.005, kRate / 30.0});
+  const long cycle = first_trip(sustained, 1.0, [&](long k) {
+    const double t = static_cast<double>(k) / kRate;
+    return 0.3 * kSpan * std::sin(kTwoPi * 30.0 * t) + 0.1 * kSpan * std::sin(kTwoPi * 1130.0 * t);
+  });
+  EXPECT_GT(cycle, 0);
+  EXPECT_FALSE(sustained.trip().growing);
 }

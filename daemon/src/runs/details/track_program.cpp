@@ -661,7 +661,11 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
   // scored part began with the feedforward's error there).
   if (pid) p->feedback_from = prefix;
   if (pid && s.pid.oscillation_trip) {
-    p->oscillation.emplace(oscillation_options(feedback, ref.max_um - ref.min_um, s.loop.rate_hz));
+    OscillationOptions o = oscillation_options(feedback, ref.max_um - ref.min_um, s.loop.rate_hz);
+    // A periodic reference: the supervisor watches the error's change over its period (what a
+    // stable loop answers it with repeats; a fast one near the peak of |S| is large there).
+    if (ref.frequency_hz > 0.0) o.period_samples = s.loop.rate_hz / ref.frequency_hz;
+    p->oscillation.emplace(o);
   }
   allocate_records(*p);
 
