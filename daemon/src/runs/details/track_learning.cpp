@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 
 namespace hystbench::daemon::details {
 
@@ -51,6 +52,26 @@ void remove_line(std::vector<double>& x, std::size_t from) {
     x[j] -= offset + slope * static_cast<double>(j - from);
 }
 
+// x less its first `harmonics` harmonics over [from, size) (least squares: the window's own
+// Fourier series, orthogonal to a constant and to each other there).
+void remove_harmonics(std::vector<double>& x, std::size_t from, std::size_t harmonics) {
+  const std::size_t n = x.size() - from;
+  for (std::size_t h = 1; h <= harmonics; ++h) {
+    const double w = 2.0 * std::numbers::pi * static_cast<double>(h) / static_cast<double>(n);
+    double c = 0.0, s = 0.0;
+    for (std::size_t j = 0; j < n; ++j) {
+      c += x[from + j] * std::cos(w * static_cast<double>(j));
+      s += x[from + j] * std::sin(w * static_cast<double>(j));
+    }
+    c *= 2.0 / static_cast<double>(n);
+    s *= 2.0 / static_cast<double>(n);
+    for (std::size_t j = 0; j < n; ++j) {
+      x[from + j] -=
+          c * std::cos(w * static_cast<double>(j)) + s * std::sin(w * static_cast<double>(j));
+    }
+  }
+}
+
 }  // namespace
 
 double TrackLearning::scored_rms(const std::vector<double>& e) const noexcept {
@@ -83,11 +104,22 @@ TrackLearning::Trial TrackLearning::score(std::uint64_t number) const {
 void TrackLearning::measure_floor() {
   // What differs between the two plays of one drive, less a straight line over the trial: what
   // the start from rest still moves slowly (creep, a switching front's tail) is not what does
-  // not repeat.
+  // not repeat. Over a trial of kFloorMinSamples or more, less its first kFloorSettlingHarmonics
+  // harmonics too: the loop still settling toward the orbit it repeats shows there, at the
+  // trial's fundamental and second harmonic, and the rms is scaled back for the share of a
+  // noise that takes (2 h of the n samples' degrees of freedom). Over a shorter trial those
+  // harmonics are much of the band, and are kept.
   std::vector<double> d(e_.size());
   for (std::size_t j = 0; j < d.size(); ++j) d[j] = e_[j] - first_error_[j];
-  remove_line(d, std::min(request_.scored_from, d.size() - 1));
-  floor_um_ = scored_rms(d) / std::sqrt(2.0);
+  const std::size_t from = std::min(request_.scored_from, d.size() - 1);
+  remove_line(d, from);
+  const std::size_t n = d.size() - from;
+  double noise_share = 1.0;
+  if (n >= kFloorMinSamples) {
+    remove_harmonics(d, from, kFloorSettlingHarmonics);
+    noise_share = static_cast<double>(n) / static_cast<double>(n - 2 * kFloorSettlingHarmonics);
+  }
+  floor_um_ = scored_rms(d) * std::sqrt(noise_share) / std::sqrt(2.0);
 }
 
 bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
@@ -267,7 +299,10 @@ json TrackLearning::result() const {
                             request_.range_um > 0.0 ? 100.0 * floor_um_ / request_.range_um : 0.0},
                            {"measured_on",
                             "trials 0 and 1: the same drive; the rms of their errors' "
-                            "difference over sqrt(2)"},
+                            "difference over sqrt(2), less its straight line (and over " +
+                                std::to_string(kFloorMinSamples) + " samples or more its first " +
+                                std::to_string(kFloorSettlingHarmonics) +
+                                " harmonics: the start still settling)"},
                            {"reached", stopped_ && why_.find("floor") != std::string::npos}}
                     : json(nullptr)},
       {"measured_plant", learner_.uses_measured_plant()

@@ -50,6 +50,10 @@ class TrackLearning {
  public:
   /// A trial within this factor of the floor ends the learning.
   static constexpr double kFloorReach = 1.25;
+  /// The floor leaves out the trials' difference's first this many harmonics (the start from
+  /// rest settling toward the orbit it repeats), over trials of at least kFloorMinSamples.
+  static constexpr std::size_t kFloorSettlingHarmonics = 2;
+  static constexpr std::size_t kFloorMinSamples = 100;
 
   TrackLearning(const compensation::ActuatorModel& model, LearningExchange& exchange,
                 LearningRequest request, const compensation::LearningOptions& options);
