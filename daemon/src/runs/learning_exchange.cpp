@@ -21,8 +21,9 @@ LearningExchange::LearningExchange(std::size_t period_samples, std::uint64_t fir
   }
 }
 
-void LearningExchange::start_recording(std::uint64_t trial) noexcept {
+void LearningExchange::start_recording(std::uint64_t trial, std::uint64_t k) noexcept {
   const std::size_t s = trial % 2;
+  rec_tick_ = k;
   int state = slot_[s].load(std::memory_order_acquire);
   // A full slot the learner never took is written over (it fell behind); one it is reading is
   // left alone and this trial goes unrecorded.
@@ -42,7 +43,7 @@ std::size_t LearningExchange::begin_tick(std::uint64_t k) noexcept {
     playing_started_ = ready >= 0;
     last_ = ready >= 0 && ready_last_.load(std::memory_order_acquire);
     trial_ = 0;
-    start_recording(0);
+    start_recording(0, k);
     return j;
   }
   if (ready < 0) {
@@ -53,7 +54,7 @@ std::size_t LearningExchange::begin_tick(std::uint64_t k) noexcept {
   playing_ = ready;
   playing_started_ = false;
   last_ = ready_last_.load(std::memory_order_acquire);
-  start_recording(++trial_);
+  start_recording(++trial_, k);
   return j;
 }
 
@@ -152,6 +153,7 @@ bool LearningExchange::end_tick(std::size_t j, double u_ff, double u_compensator
   if (rec_slot_ >= 0) {
     const auto s = static_cast<std::size_t>(rec_slot_);
     slot_trial_[s].store(trial_, std::memory_order_relaxed);
+    slot_tick_[s].store(rec_tick_, std::memory_order_relaxed);
     slot_[s].store(kFull, std::memory_order_release);
     played_.fetch_add(1, std::memory_order_acq_rel);
     rec_slot_ = -1;
@@ -168,7 +170,8 @@ bool LearningExchange::owed(std::uint64_t k) const noexcept {
 }
 
 bool LearningExchange::take_trial(std::vector<double>& u, std::vector<double>& c,
-                                  std::vector<double>& e, std::uint64_t& trial) {
+                                  std::vector<double>& e, std::uint64_t& trial,
+                                  std::uint64_t* first_tick) {
   int pick = -1;
   for (int s = 0; s < 2; ++s) {
     if (slot_[s].load(std::memory_order_acquire) != kFull) continue;
@@ -186,6 +189,7 @@ bool LearningExchange::take_trial(std::vector<double>& u, std::vector<double>& c
   c.assign(rec_c_[pick].begin(), rec_c_[pick].end());
   e.assign(rec_e_[pick].begin(), rec_e_[pick].end());
   trial = slot_trial_[pick].load(std::memory_order_relaxed);
+  if (first_tick != nullptr) *first_tick = slot_tick_[pick].load(std::memory_order_relaxed);
   slot_[pick].store(kFree, std::memory_order_release);
   taken_.fetch_add(1, std::memory_order_acq_rel);
   return true;

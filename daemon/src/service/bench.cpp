@@ -529,6 +529,7 @@ void Bench::finish_learning(const RunProgram& run, json& report) {
     report["max_error_um"] = last->max_um;
     report["rms_error_percent"] = last->rms_percent;
     report["max_error_percent"] = last->max_percent;
+    report["max_error_index"] = last->max_tick;
   }
   const std::vector<double>& drive = learning->kept_drive();
   const details::LearningRequest& r = learning->request();

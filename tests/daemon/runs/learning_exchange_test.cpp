@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 namespace hd = hystbench::daemon;
@@ -77,8 +78,10 @@ TEST(LearningExchange, TrialsAreThePeriodsThatBeginWithANewDrive) {
   p = tick_period(x, kFirst + 3 * kPeriod);
   EXPECT_EQ(p.drive, std::vector<double>({9, 9, 9, 9}));
   EXPECT_TRUE(p.ends);
-  ASSERT_TRUE(x.take_trial(u, c, e, trial));
+  std::uint64_t first_tick = 0;
+  ASSERT_TRUE(x.take_trial(u, c, e, trial, &first_tick));
   EXPECT_EQ(trial, 2u);
+  EXPECT_EQ(first_tick, kFirst + 3 * kPeriod);  // after the stale period: the run tick it began
   EXPECT_FALSE(x.owed(kFirst + 4 * kPeriod));
 }
 

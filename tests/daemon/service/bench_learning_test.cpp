@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -131,8 +132,13 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
     EXPECT_TRUE(!l["stopped"].get<bool>() || l["floor"]["reached"].get<bool>()) << l.dump(2);
     EXPECT_DOUBLE_EQ(l["frequency_hz"].get<double>(), hz);  // 10 kHz / a whole period
     EXPECT_LE(rms.back(), rms.front() / 20.0) << l.dump(2);
-    // The run's figures are its last trial's.
+    // The run's figures are its last trial's, the run's last period: its largest error's
+    // index in the log too.
     EXPECT_DOUBLE_EQ(r["rms_error_percent"].get<double>(), rms.back());
+    const auto logged = r["logged"].get<std::uint64_t>();
+    const auto period = l["period_samples"].get<std::uint64_t>();
+    EXPECT_GE(r["max_error_index"].get<std::uint64_t>(), logged - period) << r.dump(2);
+    EXPECT_LT(r["max_error_index"].get<std::uint64_t>(), logged) << r.dump(2);
     EXPECT_LE(r["max_error_percent"].get<double>(), peak * bound);
     // The update is computed off the loop, in well under a period here.
     EXPECT_EQ(l["stale_periods"], 0) << l.dump(2);

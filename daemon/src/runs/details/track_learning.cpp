@@ -81,16 +81,21 @@ double TrackLearning::scored_rms(const std::vector<double>& e) const noexcept {
   return std::sqrt(sum2 / static_cast<double>(e.size() - from));
 }
 
-TrackLearning::Trial TrackLearning::score(std::uint64_t number) const {
+TrackLearning::Trial TrackLearning::score(std::uint64_t number, std::uint64_t first_tick) const {
   const std::size_t from = std::min(request_.scored_from, e_.size() - 1);
   const std::size_t n = e_.size() - from;
   double sum2 = 0.0, peak = 0.0;
+  std::size_t peak_at = from;
   for (std::size_t j = from; j < e_.size(); ++j) {
     sum2 += e_[j] * e_[j];
-    peak = std::max(peak, std::abs(e_[j]));
+    if (std::abs(e_[j]) > peak) {
+      peak = std::abs(e_[j]);
+      peak_at = j;
+    }
   }
   Trial t;
   t.trial = number;
+  t.max_tick = first_tick + peak_at;
   t.rms_um = std::sqrt(sum2 / static_cast<double>(n));
   t.max_um = peak;
   const double range = request_.range_um;
@@ -163,9 +168,9 @@ void TrackLearning::learn_next() {
 
 std::vector<TrackLearning::Trial> TrackLearning::poll() {
   std::vector<Trial> scored;
-  std::uint64_t number = 0;
-  while (exchange_.take_trial(u_, c_, e_, number)) {
-    const Trial t = score(number);
+  std::uint64_t number = 0, first_tick = 0;
+  while (exchange_.take_trial(u_, c_, e_, number, &first_tick)) {
+    const Trial t = score(number, first_tick);
     trials_.push_back(t);
     scored.push_back(t);
     if (done_) continue;  // the last trial: nothing more to offer

@@ -63,6 +63,7 @@ class TrackLearning {
   struct Trial {
     std::uint64_t trial = 0;
     double rms_percent = 0.0, max_percent = 0.0, rms_um = 0.0, max_um = 0.0;
+    std::uint64_t max_tick = 0;  ///< the run tick (the log's index) of its largest error
     double gain = 0.0;
     /// "compensator", "saved" (a drive learned before), "learned" or "best" (kept after the
     /// guard stopped)
@@ -117,7 +118,7 @@ class TrackLearning {
   // The trials' rms within their scored phases [µm].
   double scored_rms(const std::vector<double>& e) const noexcept;
   // The trial just taken (u_, e_), scored.
-  Trial score(std::uint64_t number) const;
+  Trial score(std::uint64_t number, std::uint64_t first_tick) const;
   // The floor from trial 1's error (e_) and trial 0's.
   void measure_floor();
   // The best drive offered next (the guard stopped, or the trial reached the floor); true

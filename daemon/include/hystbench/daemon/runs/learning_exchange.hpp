@@ -113,10 +113,10 @@ struct LearningExchange {
   bool start_from(const std::vector<double>& drive, const std::vector<double>& compensator,
                   bool last);
   /// Takes the oldest complete trial not yet taken: copies its drive, the compensator's
-  /// feedforward and its error into u, c and e (P samples each) and its number into trial.
-  /// False when there is none.
+  /// feedforward and its error into u, c and e (P samples each), its number into trial and,
+  /// where given, the run tick of its first sample into first_tick. False when there is none.
   bool take_trial(std::vector<double>& u, std::vector<double>& c, std::vector<double>& e,
-                  std::uint64_t& trial);
+                  std::uint64_t& trial, std::uint64_t* first_tick = nullptr);
   /// Makes `drive` (P samples) the next trial's; `last`: the run ends after it. False when the
   /// loop has not taken the one made ready before (call again after the next trial).
   bool offer(const std::vector<double>& drive, bool last) noexcept;
@@ -134,7 +134,8 @@ struct LearningExchange {
   std::vector<double> started_compensator_;  // start_from's compensator (empty: not moved)
   std::array<std::atomic<int>, 2> slot_{};
   std::array<std::atomic<std::uint64_t>, 2> slot_trial_{};
-  std::atomic<int> ready_{-1};  // drive_ index made ready, -1 = none
+  std::array<std::atomic<std::uint64_t>, 2> slot_tick_{};  // each trial's first run tick
+  std::atomic<int> ready_{-1};                             // drive_ index made ready, -1 = none
   std::atomic<bool> ready_last_{false};
   std::atomic<std::uint64_t> played_{0};   // trials closed by the loop
   std::atomic<std::uint64_t> taken_{0};    // trials taken by the learner
@@ -143,11 +144,12 @@ struct LearningExchange {
   std::atomic<bool> final_offered_{false};
   std::uint64_t started_from_ = 0;  // 1 when trial 0 plays a drive given before the run
   // loop only
-  void start_recording(std::uint64_t trial) noexcept;
+  void start_recording(std::uint64_t trial, std::uint64_t k) noexcept;
   int playing_ = -1;
   bool playing_started_ = false;  // the period plays the drive start_from gave
   bool last_ = false;
   int rec_slot_ = -1;
+  std::uint64_t rec_tick_ = 0;  // the recorded trial's first tick
   std::uint64_t trial_ = 0;
   double lead_in_error_sum_ = 0.0;
   std::uint64_t lead_in_samples_ = 0;
