@@ -218,7 +218,8 @@ TEST_F(BenchFeedbackTest, AStepSettlesWithinFiveMillisecondsAndOvershootsAtMostF
 // measured). identify's extension may keep a rate law here (the truth has none: the law stands
 // in for the mode's rise); the stage measured while it moves shows no zero that would limit the
 // loop, so the law's zero, which it only supposes, does not. The loop is better than the
-// inverse alone at 1 and 10 Hz and takes most of the inverse's error out at 1 Hz.
+// inverse alone at 1 and 10 Hz and takes most of the inverse's error out at 1 Hz; at 50 Hz,
+// above the crossover, the result says the loop amplifies there (|S| above 1).
 TEST_F(BenchFeedbackTest, AOneKilohertzLoopWithA190HzModeIsDesignedOnItsMeasuredResponse) {
   start(settings_from_toml(loopback_toml(
       "[actuator.dynamics]\nnatural_frequencies_hz = [190.0]\ndamping_ratios = [0.07]\n"
@@ -255,7 +256,17 @@ TEST_F(BenchFeedbackTest, AOneKilohertzLoopWithA190HzModeIsDesignedOnItsMeasured
     if (hz == 1.0) {
       EXPECT_LT(rms(pid), 0.3 * rms(inverse)) << pid.dump(2);
     }
+    EXPECT_FALSE(pid["feedback"].contains("at_reference")) << pid["feedback"].dump(2);
   }
+  // 50 Hz, above the crossover: the result says the loop amplifies there.
+  const json fast = track("sine", 50.0, "inverse+pid");
+  ASSERT_EQ(fast["end"], "completed") << fast.dump(2);
+  const json& at = fast["feedback"]["at_reference"];
+  ASSERT_TRUE(at.is_object()) << fast["feedback"].dump(2);
+  EXPECT_DOUBLE_EQ(at["frequency_hz"].get<double>(), 50.0);
+  EXPECT_GT(at["sensitivity"].get<double>(), 1.0) << at;
+  std::cout << "50 Hz at 1 kHz: |S| " << at["sensitivity"] << ", inverse+pid " << rms(fast)
+            << " %\n";
 }
 
 // The modified-PI truth on the 1 kHz bench: identify keeps a model whose inverse runs at its

@@ -70,6 +70,11 @@ void print_feedback(std::ostream& out, const json& f) {
     out << "  limited by      " << f["limited_by"].get<std::string>() << ": "
         << f.value("limit", std::string()) << "\n";
   }
+  if (const json& at = f.value("at_reference", json()); at.is_object()) {
+    out << "  at reference    |S| " << num(at.value("sensitivity", json()), 2) << " at "
+        << num(at.value("frequency_hz", json()), 0) << " Hz: " << at.value("note", std::string())
+        << "\n";
+  }
   if (f.value("forced", false)) {
     out << "  forced          these gains break a target: " << f.value("broken", std::string())
         << "\n";

@@ -1,5 +1,6 @@
 #include "runs/details/feedback_design.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -440,6 +441,26 @@ json loop_curves(const FeedbackPlan& plan, double dt_s) {
                    {"complementary", t}});
   }
   return out;
+}
+
+double sensitivity_at(const FeedbackPlan& plan, double frequency_hz, double dt_s) {
+  const hc::FeedbackController c(plan.law, dt_s);
+  double largest = std::numeric_limits<double>::quiet_NaN();
+  for (const hc::MeasuredResponse& p : plan.plants) {
+    if (p.size() < 2 || frequency_hz < p.frequency_hz.front() ||
+        frequency_hz > p.frequency_hz.back()) {
+      continue;
+    }
+    const std::vector<std::complex<double>> l = hc::loop_response(p, c, dt_s);
+    const auto above = std::upper_bound(p.frequency_hz.begin(), p.frequency_hz.end(), frequency_hz);
+    const auto i = static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(
+        above - p.frequency_hz.begin(), 1, static_cast<std::ptrdiff_t>(p.size()) - 1));
+    const double f0 = p.frequency_hz[i - 1], f1 = p.frequency_hz[i];
+    const double w = (frequency_hz - f0) / (f1 - f0);
+    const double s = (1.0 - w) / std::abs(1.0 + l[i - 1]) + w / std::abs(1.0 + l[i]);
+    if (!(s <= largest)) largest = s;
+  }
+  return largest;
 }
 
 }  // namespace hystbench::daemon::details

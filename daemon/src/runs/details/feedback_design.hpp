@@ -63,6 +63,10 @@ FeedbackPlan plan_feedback(const RunContext& ctx, compensation::CompensatorKind 
 /// and its margins' marks.
 nlohmann::json loop_curves(const FeedbackPlan& plan, double dt_s);
 
+/// |S| of the plan's loop at frequency_hz [Hz], the largest over the responses whose lines
+/// reach it (linear between lines); NaN where none does.
+double sensitivity_at(const FeedbackPlan& plan, double frequency_hz, double dt_s);
+
 /// The oscillation supervisor of a run with `feedback` (its summary): the error watched around
 /// the loop's weakest frequency (the largest peak of |S| over the measured responses), against
 /// the reference's span [µm].

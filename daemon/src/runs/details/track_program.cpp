@@ -637,6 +637,20 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
   const std::optional<hc::FeedbackController> pid =
       feedback_controller(request.gains, kind, ctx, feedback, plan);
   const hc::FeedbackPath path = plan ? plan->path : hc::FeedbackPath::kInverse;
+  // A periodic reference where the loop amplifies (|S| > 1 at its fundamental, above the
+  // crossover): the feedback adds to what the feedforward leaves there; the result says so.
+  if (plan && feedback.is_object() && ref.frequency_hz > 0.0) {
+    const double s_ref = sensitivity_at(*plan, ref.frequency_hz, 1.0 / s.loop.rate_hz);
+    if (std::isfinite(s_ref) && s_ref > 1.0) {
+      feedback["at_reference"] = {
+          {"frequency_hz", ref.frequency_hz},
+          {"sensitivity", s_ref},
+          {"note",
+           "the reference's fundamental lies where the loop amplifies what the "
+           "feedforward leaves (|S| above 1, above its crossover): the feedback can track "
+           "it worse than the feedforward alone; --learn learns the repeated error"}};
+    }
+  }
   RunPreparation preparation;
   if (inverse) {
     preparation = feedforward_plan(*p, ctx, kind, ref.samples, ref.frequency_hz, feedforward, pid,
