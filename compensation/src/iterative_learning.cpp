@@ -56,6 +56,14 @@ constexpr double kWrapShare = 0.5;
 constexpr double kHighBandOfRate = 0.45;
 constexpr double kHighBandMinGain = 0.25;
 constexpr std::size_t kHighBandDelayPairs = 3;
+// The measured response checked in place: the lag at which the output's change between two
+// trials best follows the drive's change through the response, searched this far each way
+// [samples], the median over this many pairs, applied where it is at least kResidualMin (a
+// response measured on this bench shows none; one carried in a model from another, a delay
+// switched on or a slower link since, shows what it lacks).
+constexpr std::size_t kResidualSearch = 8;
+constexpr std::size_t kResidualPairs = 3;
+constexpr double kResidualMin = 0.5;
 // ... and once the error Q leaves out is at least this share of what it passes (rms): before,
 // the error there is mostly what the fundamental's changes make of it, which the next trial's
 // change remakes (at 500 Hz with every effect on, learning it from the start took ten trials to
@@ -340,6 +348,79 @@ std::complex<double> IterativeLearning::measured_response(double f_hz, double& s
   return std::polar(mag, phase);
 }
 
+void IterativeLearning::measure_residual_delay(std::span<const double> drive,
+                                               std::span<const double> error) {
+  const std::size_t n = period_;
+  const std::size_t search = std::min(kResidualSearch, n / 4);
+  if (search < 2) return;
+  // The drive's change through the slope along the trial before and the measured response,
+  // and the output's change, both through Q and differenced (as for the delay).
+  std::vector<double> cu(n), cy(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    cu[j] = (drive[j] - last_drive_[j]) * slope_[j];
+    cy[j] = last_error_[j] - error[j];
+  }
+  low_pass(cu);
+  low_pass(cy);
+  Eigen::FFT<double> fft;
+  std::vector<std::complex<double>> spectrum;
+  fft.fwd(spectrum, cu);
+  const double fs = 1.0 / o_.dt;
+  for (std::size_t h = 1; h <= n / 2; ++h) {
+    double stage = 0.0;
+    const double f = static_cast<double>(h) * fs / static_cast<double>(n);
+    const std::complex<double> p =
+        measured_response(f, stage) *
+        std::polar(1.0, -2.0 * std::numbers::pi * f * residual_delay_samples_ * o_.dt);
+    spectrum[h] *= p;
+    if (h < n - h) spectrum[n - h] = std::conj(spectrum[h]);
+  }
+  fft.inv(cu, spectrum);
+  std::vector<double> du(n), dy(n);
+  double uu = 0.0, yy = 0.0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t p = (j + n - 1) % n;
+    du[j] = cu[j] - cu[p];
+    dy[j] = cy[j] - cy[p];
+    uu += du[j] * du[j];
+    yy += dy[j] * dy[j];
+  }
+  if (!(uu > 0.0 && yy > 0.0)) return;
+  const auto k = static_cast<std::ptrdiff_t>(search);
+  std::vector<double> corr(2 * search + 1, 0.0);
+  std::size_t best = 0;
+  for (std::ptrdiff_t d = -k; d <= k; ++d) {
+    const auto i = static_cast<std::size_t>(d + k);
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto at = static_cast<std::size_t>(
+          (static_cast<std::ptrdiff_t>(j) + d + static_cast<std::ptrdiff_t>(n)) %
+          static_cast<std::ptrdiff_t>(n));
+      corr[i] += dy[at] * du[j];
+    }
+    if (corr[i] > corr[best]) best = i;
+  }
+  if (best == 0 || best + 1 == corr.size() || corr[best] < kDelayClear * std::sqrt(uu * yy)) {
+    return;
+  }
+  const double c0 = corr[best - 1], c1 = corr[best], c2 = corr[best + 1];
+  const double curvature = c0 - 2.0 * c1 + c2;
+  const double vertex = curvature < 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
+  residual_delays_.push_back(static_cast<double>(best) - static_cast<double>(search) +
+                             std::clamp(vertex, -0.5, 0.5));
+  if (residual_delays_.size() < kResidualPairs) return;
+  // Their median, once there are enough of them; the response is moved by it where it is
+  // kResidualMin or more (what the measured response holds is then not this bench's delay).
+  std::vector<double> sorted = residual_delays_;
+  const std::size_t m = sorted.size() / 2;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(m), sorted.end());
+  const double median = sorted[m];
+  // Measured on the response as moved so far: what it still lacks adds to what it was moved by.
+  if (std::abs(median) >= kResidualMin) {
+    residual_delay_samples_ += median;
+    residual_delays_.clear();
+  }
+}
+
 void IterativeLearning::through_measured_inverse(std::vector<double>& x) {
   const std::size_t n = x.size();
   Eigen::FFT<double> fft;
@@ -350,7 +431,9 @@ void IterativeLearning::through_measured_inverse(std::vector<double>& x) {
   for (std::size_t h = 0; h <= n / 2; ++h) {
     const double f = static_cast<double>(h) * fs / static_cast<double>(n);
     double stage = 0.0;
-    const std::complex<double> p = measured_response(std::max(f, 1e-300), stage);
+    const std::complex<double> p =
+        measured_response(std::max(f, 1e-300), stage) *
+        std::polar(1.0, -2.0 * std::numbers::pi * f * residual_delay_samples_ * o_.dt);
     std::complex<double> c = 0.0;
     if (stage >= kHighBandMinGain && std::abs(p) > 0.0) {
       c = spectrum[h] / p;
@@ -407,7 +490,10 @@ void IterativeLearning::update(std::span<const double> drive, std::span<const do
   if (drive.size() != n || error.size() != n || next.size() != n) {
     throw std::invalid_argument("iterative learning: drive, error and next need one trial each");
   }
-  if (updates_ > 0) measure_delay(drive, error);
+  if (updates_ > 0) {
+    measure_delay(drive, error);
+    if (o_.measured_plant) measure_residual_delay(drive, error);
+  }
   // The drift over a trial: how far the trial's mean error moved beyond what the last correction's
   // mean should have moved it. Creep settling or a thermal drift moves the offset every trial,
   // which a correction of the last error alone trails by drift / gain.

@@ -114,12 +114,18 @@ class IterativeLearning {
   /// Harmonics the last update learned through it, and those it left out (the stage's gain
   /// below 1/4).
   std::size_t measured_harmonics() const noexcept { return measured_harmonics_; }
+  /// The delay the bench shows beyond what the measured response holds [samples]: found in
+  /// place from the trial pairs (the output's change against the drive's through the
+  /// response), 0 until a median of three is half a sample or more; the response is moved by it.
+  double residual_delay_samples() const noexcept { return residual_delay_samples_; }
   std::size_t measured_harmonics_left_out() const noexcept { return measured_left_out_; }
 
  private:
   void local_slope(std::span<const double> drive);
   // The bench's delay from this trial and the one before (last_drive_, last_error_).
   void measure_delay(std::span<const double> drive, std::span<const double> error);
+  // The same through the measured response: the delay it lacks.
+  void measure_residual_delay(std::span<const double> drive, std::span<const double> error);
   // Q: zero-phase low-pass in place, circular over the trial.
   void low_pass(std::vector<double>& x);
   // The error filtered by Q, read advance_samples_ ahead of the drive that caused it, less
@@ -158,6 +164,8 @@ class IterativeLearning {
   double advance_samples_ = 0.0;                 // the delay the error is read ahead by [samples]
   double model_delay_samples_ = 0.0;             // the model's
   std::vector<double> delays_;                   // the bench's, measured
+  std::vector<double> residual_delays_;          // beyond the measured response's, measured
+  double residual_delay_samples_ = 0.0;          // the response moved by it
   std::vector<double> last_drive_, last_error_;  // the trial the last update was given
   // Butterworth sections (b0, b1, b2, a1, a2) of Q, and the warm-up periods its circular run needs.
   std::vector<std::array<double, 5>> sections_;

@@ -312,7 +312,8 @@ json TrackLearning::result() const {
                     : json(nullptr)},
       {"measured_plant", learner_.uses_measured_plant()
                              ? json{{"harmonics", learner_.measured_harmonics()},
-                                    {"left_out", learner_.measured_harmonics_left_out()}}
+                                    {"left_out", learner_.measured_harmonics_left_out()},
+                                    {"delay_added_ticks", learner_.residual_delay_samples()}}
                              : json(nullptr)},
       {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
       {"lead_in_offset_um", exchange_.lead_in_offset()},
