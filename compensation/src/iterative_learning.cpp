@@ -5,6 +5,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <unsupported/Eigen/FFT>
 #include <utility>
@@ -64,6 +65,46 @@ constexpr std::size_t kHighBandDelayPairs = 3;
 constexpr std::size_t kResidualSearch = 8;
 constexpr std::size_t kResidualPairs = 3;
 constexpr double kResidualMin = 0.5;
+
+// The lag in [from, to] [samples] at which the output's change best follows the drive's (cu and
+// cy: both over a trial pair, through Q), the two differenced (what changes slowly, creep
+// answering late or a drift, would stretch it) and refined between samples; none where the peak
+// is not clear (below kDelayClear of their norms: a change that mostly is not the drive's) or
+// sits at the search's edge (beyond it).
+std::optional<double> clearest_lag(const std::vector<double>& cu, const std::vector<double>& cy,
+                                   std::ptrdiff_t from, std::ptrdiff_t to) {
+  const std::size_t n = cu.size();
+  std::vector<double> du(n), dy(n);
+  double uu = 0.0, yy = 0.0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t p = (j + n - 1) % n;
+    du[j] = cu[j] - cu[p];
+    dy[j] = cy[j] - cy[p];
+    uu += du[j] * du[j];
+    yy += dy[j] * dy[j];
+  }
+  if (!(uu > 0.0 && yy > 0.0) || to <= from) return std::nullopt;
+  const auto span = static_cast<std::ptrdiff_t>(n);
+  std::vector<double> corr(static_cast<std::size_t>(to - from + 1), 0.0);
+  std::size_t best = 0;
+  for (std::size_t i = 0; i < corr.size(); ++i) {
+    const std::ptrdiff_t d = from + static_cast<std::ptrdiff_t>(i);
+    for (std::size_t j = 0; j < n; ++j) {
+      corr[i] += dy[static_cast<std::size_t>(((static_cast<std::ptrdiff_t>(j) + d) % span + span) %
+                                             span)] *
+                 du[j];
+    }
+    if (corr[i] > corr[best]) best = i;
+  }
+  if (best == 0 || best + 1 == corr.size() || corr[best] < kDelayClear * std::sqrt(uu * yy)) {
+    return std::nullopt;
+  }
+  const double c0 = corr[best - 1], c1 = corr[best], c2 = corr[best + 1];
+  const double curvature = c0 - 2.0 * c1 + c2;
+  const double vertex = curvature < 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
+  return static_cast<double>(from + static_cast<std::ptrdiff_t>(best)) +
+         std::clamp(vertex, -0.5, 0.5);
+}
 // ... and once the error Q leaves out is at least this share of what it passes (rms): before,
 // the error there is mostly what the fundamental's changes make of it, which the next trial's
 // change remakes (at 500 Hz with every effect on, learning it from the start took ten trials to
@@ -205,6 +246,19 @@ void IterativeLearning::local_slope(std::span<const double> drive) {
   }
 }
 
+void IterativeLearning::pair_changes(std::span<const double> drive, std::span<const double> error,
+                                     std::vector<double>& cu, std::vector<double>& cy) {
+  const std::size_t n = period_;
+  cu.resize(n);
+  cy.resize(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    cu[j] = (drive[j] - last_drive_[j]) * slope_[j];
+    cy[j] = last_error_[j] - error[j];
+  }
+  low_pass(cu);
+  low_pass(cy);
+}
+
 void IterativeLearning::measure_delay(std::span<const double> drive,
                                       std::span<const double> error) {
   const std::size_t n = period_;
@@ -213,37 +267,13 @@ void IterativeLearning::measure_delay(std::span<const double> drive,
   // differenced: what changes slowly (creep answering the drive late, drift) would stretch the
   // delay found, and is not what the preview has to meet.
   // The output's change goes through Q first, as the drive's did: above it is the sensor's noise.
-  std::vector<double> cu(n), cy(n), du(n), dy(n);
-  for (std::size_t j = 0; j < n; ++j) {
-    cu[j] = (drive[j] - last_drive_[j]) * slope_[j];
-    cy[j] = last_error_[j] - error[j];
-  }
-  low_pass(cu);
-  low_pass(cy);
-  double uu = 0.0, yy = 0.0;
-  for (std::size_t j = 0; j < n; ++j) {
-    const std::size_t p = (j + n - 1) % n;
-    du[j] = cu[j] - cu[p];
-    dy[j] = cy[j] - cy[p];
-    uu += du[j] * du[j];
-    yy += dy[j] * dy[j];
-  }
-  if (!(uu > 0.0 && yy > 0.0)) return;
+  std::vector<double> cu, cy;
+  pair_changes(drive, error, cu, cy);
   const std::size_t lags =
       std::min(n / 4, static_cast<std::size_t>(std::ceil(model_delay_samples_)) + kDelaySearch);
-  std::vector<double> corr(lags + 1, 0.0);
-  std::size_t best = 0;
-  for (std::size_t d = 0; d <= lags; ++d) {
-    for (std::size_t j = 0; j < n; ++j) corr[d] += dy[(j + d) % n] * du[j];
-    if (corr[d] > corr[best]) best = d;
-  }
-  // A clear peak inside the search only: a change that mostly is not the drive's (noise, drift)
-  // or a delay beyond the search tells nothing.
-  if (best == 0 || best == lags || corr[best] < kDelayClear * std::sqrt(uu * yy)) return;
-  const double c0 = corr[best - 1], c1 = corr[best], c2 = corr[best + 1];
-  const double curvature = c0 - 2.0 * c1 + c2;
-  const double vertex = curvature < 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
-  delays_.push_back(static_cast<double>(best) + std::clamp(vertex, -0.5, 0.5));
+  const std::optional<double> lag = clearest_lag(cu, cy, 0, static_cast<std::ptrdiff_t>(lags));
+  if (!lag) return;
+  delays_.push_back(*lag);
   // Their median: a pair that one slow or noisy change misled does not move it.
   std::vector<double> sorted = delays_;
   const std::size_t m = sorted.size() / 2;
@@ -354,14 +384,9 @@ void IterativeLearning::measure_residual_delay(std::span<const double> drive,
   const std::size_t search = std::min(kResidualSearch, n / 4);
   if (search < 2) return;
   // The drive's change through the slope along the trial before and the measured response,
-  // and the output's change, both through Q and differenced (as for the delay).
-  std::vector<double> cu(n), cy(n);
-  for (std::size_t j = 0; j < n; ++j) {
-    cu[j] = (drive[j] - last_drive_[j]) * slope_[j];
-    cy[j] = last_error_[j] - error[j];
-  }
-  low_pass(cu);
-  low_pass(cy);
+  // and the output's change, both through Q (as for the delay).
+  std::vector<double> cu, cy;
+  pair_changes(drive, error, cu, cy);
   Eigen::FFT<double> fft;
   std::vector<std::complex<double>> spectrum;
   fft.fwd(spectrum, cu);
@@ -376,37 +401,10 @@ void IterativeLearning::measure_residual_delay(std::span<const double> drive,
     if (h < n - h) spectrum[n - h] = std::conj(spectrum[h]);
   }
   fft.inv(cu, spectrum);
-  std::vector<double> du(n), dy(n);
-  double uu = 0.0, yy = 0.0;
-  for (std::size_t j = 0; j < n; ++j) {
-    const std::size_t p = (j + n - 1) % n;
-    du[j] = cu[j] - cu[p];
-    dy[j] = cy[j] - cy[p];
-    uu += du[j] * du[j];
-    yy += dy[j] * dy[j];
-  }
-  if (!(uu > 0.0 && yy > 0.0)) return;
   const auto k = static_cast<std::ptrdiff_t>(search);
-  std::vector<double> corr(2 * search + 1, 0.0);
-  std::size_t best = 0;
-  for (std::ptrdiff_t d = -k; d <= k; ++d) {
-    const auto i = static_cast<std::size_t>(d + k);
-    for (std::size_t j = 0; j < n; ++j) {
-      const auto at = static_cast<std::size_t>(
-          (static_cast<std::ptrdiff_t>(j) + d + static_cast<std::ptrdiff_t>(n)) %
-          static_cast<std::ptrdiff_t>(n));
-      corr[i] += dy[at] * du[j];
-    }
-    if (corr[i] > corr[best]) best = i;
-  }
-  if (best == 0 || best + 1 == corr.size() || corr[best] < kDelayClear * std::sqrt(uu * yy)) {
-    return;
-  }
-  const double c0 = corr[best - 1], c1 = corr[best], c2 = corr[best + 1];
-  const double curvature = c0 - 2.0 * c1 + c2;
-  const double vertex = curvature < 0.0 ? 0.5 * (c0 - c2) / curvature : 0.0;
-  residual_delays_.push_back(static_cast<double>(best) - static_cast<double>(search) +
-                             std::clamp(vertex, -0.5, 0.5));
+  const std::optional<double> lag = clearest_lag(cu, cy, -k, k);
+  if (!lag) return;
+  residual_delays_.push_back(*lag);
   if (residual_delays_.size() < kResidualPairs) return;
   // Their median, once there are enough of them; the response is moved by it where it is
   // kResidualMin or more (what the measured response holds is then not this bench's delay).

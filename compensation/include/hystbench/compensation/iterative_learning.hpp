@@ -122,6 +122,10 @@ class IterativeLearning {
 
  private:
   void local_slope(std::span<const double> drive);
+  // The drive's change from the trial before (last_drive_) through the slope along it, and the
+  // output's change (from last_error_), both through Q, into cu and cy.
+  void pair_changes(std::span<const double> drive, std::span<const double> error,
+                    std::vector<double>& cu, std::vector<double>& cy);
   // The bench's delay from this trial and the one before (last_drive_, last_error_).
   void measure_delay(std::span<const double> drive, std::span<const double> error);
   // The same through the measured response: the delay it lacks.
