@@ -267,7 +267,10 @@ for section in "${sections[@]}"; do
       log=$(hb track --reference sine --frequency 10 --periods 2 --wait --json | jq -r '.log')
       range=$(grep -m1 '^# {"run"' "$log" | cut -c3- | jq -r '.run | "\(.min_um) \(.max_um)"')
       read -r ymin ymax <<<"$range"
-      jq '.deadzone.weights |= map(. * 1.3)' "$model" >"$work/learning-scaled/scaled.json"
+      # The output map the identified family holds: an mpi's dead zones, a plane's output map.
+      jq 'if .deadzone then .deadzone.weights |= map(. * 1.3)
+          else .preisach.output_map.weights |= map(. * 1.3) end' "$model" \
+        >"$work/learning-scaled/scaled.json"
       hb model load "$work/learning-scaled/scaled.json" >/dev/null
       echo "### The model's output map 1.3x too steep, learning over the identified model's range"
       echo
