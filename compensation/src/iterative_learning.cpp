@@ -10,6 +10,8 @@
 #include <unsupported/Eigen/FFT>
 #include <utility>
 
+#include "details/diagnosis_signals.hpp"
+
 namespace hystbench::compensation {
 
 namespace {
@@ -354,6 +356,11 @@ std::complex<double> IterativeLearning::harmonic(std::span<const double> x, std:
 }
 
 std::complex<double> IterativeLearning::measured_response(double f_hz, double& stage_gain) const {
+  return measured_lines(f_hz, stage_gain) *
+         std::polar(1.0, -2.0 * std::numbers::pi * f_hz * residual_delay_samples_ * o_.dt);
+}
+
+std::complex<double> IterativeLearning::measured_lines(double f_hz, double& stage_gain) const {
   const MeasuredLearningPlant& m = *o_.measured_plant;
   const std::vector<double>& f = m.frequency_hz;
   stage_gain = 0.0;
@@ -394,10 +401,7 @@ void IterativeLearning::measure_residual_delay(std::span<const double> drive,
   for (std::size_t h = 1; h <= n / 2; ++h) {
     double stage = 0.0;
     const double f = static_cast<double>(h) * fs / static_cast<double>(n);
-    const std::complex<double> p =
-        measured_response(f, stage) *
-        std::polar(1.0, -2.0 * std::numbers::pi * f * residual_delay_samples_ * o_.dt);
-    spectrum[h] *= p;
+    spectrum[h] *= measured_response(f, stage);
     if (h < n - h) spectrum[n - h] = std::conj(spectrum[h]);
   }
   fft.inv(cu, spectrum);
@@ -408,13 +412,10 @@ void IterativeLearning::measure_residual_delay(std::span<const double> drive,
   if (residual_delays_.size() < kResidualPairs) return;
   // Their median, once there are enough of them; the response is moved by it where it is
   // kResidualMin or more (what the measured response holds is then not this bench's delay).
-  std::vector<double> sorted = residual_delays_;
-  const std::size_t m = sorted.size() / 2;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(m), sorted.end());
-  const double median = sorted[m];
   // Measured on the response as moved so far: what it still lacks adds to what it was moved by.
-  if (std::abs(median) >= kResidualMin) {
-    residual_delay_samples_ += median;
+  const double lacking = details::median(residual_delays_, 0.0);
+  if (std::abs(lacking) >= kResidualMin) {
+    residual_delay_samples_ += lacking;
     residual_delays_.clear();
   }
 }
@@ -429,9 +430,7 @@ void IterativeLearning::through_measured_inverse(std::vector<double>& x) {
   for (std::size_t h = 0; h <= n / 2; ++h) {
     const double f = static_cast<double>(h) * fs / static_cast<double>(n);
     double stage = 0.0;
-    const std::complex<double> p =
-        measured_response(std::max(f, 1e-300), stage) *
-        std::polar(1.0, -2.0 * std::numbers::pi * f * residual_delay_samples_ * o_.dt);
+    const std::complex<double> p = measured_response(std::max(f, 1e-300), stage);
     std::complex<double> c = 0.0;
     if (stage >= kHighBandMinGain && std::abs(p) > 0.0) {
       c = spectrum[h] / p;

@@ -149,9 +149,11 @@ class IterativeLearning {
   bool in_high_band(std::size_t h) const;
   // x's h-th harmonic over the trial (unscaled DFT).
   std::complex<double> harmonic(std::span<const double> x, std::size_t h) const;
-  // The measured plant at f_hz and the stage's gain there (interpolated between its lines; 0
-  // beyond its top line).
+  // The measured plant at f_hz and the stage's gain there: its lines (measured_lines), moved by
+  // the delay found in place that they lack (residual_delay_samples_).
   std::complex<double> measured_response(double f_hz, double& stage_gain) const;
+  // The measured plant's lines at f_hz, interpolated between them (0 beyond the top one).
+  std::complex<double> measured_lines(double f_hz, double& stage_gain) const;
   // x through the measured plant's inverse, harmonic by harmonic, in place.
   void through_measured_inverse(std::vector<double>& x);
   // The model's mode at w [rad / sample]: its discrete response, output over input.
