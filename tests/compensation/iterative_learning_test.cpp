@@ -260,7 +260,7 @@ TEST(IterativeLearning, ATrialsStartAnswersTheTrialBefore) {
 // The plant's response measured in place (its 3 kHz mode, zeta 0.1) but carried from a bench
 // without the plant's delay of 3 ticks (a model identified with the delay off, loaded where it
 // is on): divided by it, each harmonic's correction comes late by 3 ticks, 65 degrees at Q's
-// 2 kHz, and a 10 Hz learning stalled, then grew. The learner checks the response in place: the
+// 2 kHz, and a 10 Hz learning stalls, then grows. The learner checks the response in place: the
 // output's change between two trials follows the drive's change through the response 3 ticks
 // late, and the response is moved by that. With the response as measured on this bench, it
 // adds nothing.

@@ -113,7 +113,7 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
   // Targets: 10 Hz 0.03 % rms, 200 Hz 0.15 %; the largest error within 4x and 5x of them. A
   // trial's start answers the drive the trial before ended with: learned as if it answered its
   // own, each change there is learned twice and steps the drive at every trial's start, and a
-  // 10 Hz trial's largest error sat there, at 0.08-0.15 %.
+  // 10 Hz trial's largest error sits there, at 0.08-0.15 %.
   for (const auto& [hz, bound, peak] :
        {std::tuple{10.0, 0.03, 4.0}, std::tuple{200.0, 0.15, 5.0}}) {
     const json r = learn(hz, 10);
@@ -191,7 +191,7 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
 // it (measured 0.029-0.064 %: the target is met in some runs, missed by up to 28 % in others;
 // the best trial 0.037-0.049 %, its drive replayed up to 1.4x it).
 // A 50 Hz trial is 20 ticks, the first 2-3 answering the drive the trial before ended with:
-// learned as if they answered the trial's own, 50 Hz ended at 0.056 % (best trial 0.049).
+// learned as if they answered the trial's own, 50 Hz ends at 0.056 % (best trial 0.049).
 TEST_F(BenchLearningTest, OnAOneKilohertzBenchWithA190HzModeTheLoopLearnsBothSines) {
   start_with_progress(settings_from_toml(loopback_toml(
       "[actuator.rate_dependence]\nenabled = true\n[actuator.dynamics]\n"
