@@ -25,11 +25,30 @@ constexpr double kOwnRateMonotoneMargin = 0.8;
 // moves with the drive by a / dt per unit of it. A linear widening beta * rate keeps the output
 // growing with the drive at its own rate while beta a / dt stays below the margin; a widening
 // that grows as a power p < 1 of the rate grows without bound near rate 0, so never.
-bool thresholds_grow_at_own_rate(const RateDependentPiModel& rpi) {
-  const RateDependentPiParameters& p = rpi.parameters();
-  const double a = RateEstimator(p.rate_filter_s, rpi.sample_period()).coefficient();
-  return p.threshold_rate_exponent == 1.0 &&
-         p.threshold_rate_s * a / rpi.sample_period() < kOwnRateMonotoneMargin;
+bool thresholds_grow_at_own_rate(const ThresholdsRateLaw& law, double dt) {
+  const double a = RateEstimator(law.rate_filter_s, dt).coefficient();
+  return law.exponent == 1.0 && law.threshold_rate_s * a / dt < kOwnRateMonotoneMargin;
+}
+
+// The sample period the hysteresis reads its rate at [s]: the rate-dependent PI keeps its own
+// (set when it is built), every other model the actuator model's.
+double rate_sample_period(const ActuatorModel& model) {
+  const auto* rpi = dynamic_cast<const RateDependentPiModel*>(&model.hysteresis());
+  return rpi != nullptr ? rpi->sample_period() : model.sample_period();
+}
+
+// The model with its hysteresis's rate law taken out (creep and the rate's sample period kept),
+// over [input_min, input_max], at rest at u0: the drive it inverts to predicts the rate of the
+// full model's drive.
+ActuatorModel rate_free_model(const ActuatorModel& model, double input_min, double input_max,
+                              double u0) {
+  ActuatorModel rate_free(model.hysteresis().rate_free_part());
+  rate_free.set_creep(model.creep());
+  rate_free.input_min = input_min;
+  rate_free.input_max = input_max;
+  rate_free.configure(rate_sample_period(model));
+  rate_free.reset(u0);
+  return rate_free;
 }
 }  // namespace
 
@@ -102,37 +121,37 @@ NumericInverse::NumericInverse(const ActuatorModel& model, Options options)
       std::abs(probe.peek_static(opt_.input_max) - probe.peek_static(opt_.input_min));
   y_tol_ = opt_.tolerance * std::max(y_span, 1e-300);
   u_prev_ = model_.last_input();
-  if (model_.hysteresis().kind() == ModelKind::kRateDependentPi) {
+  const double dt = rate_sample_period(model_);
+  if (const std::optional<ThresholdsRateLaw> law = model_.hysteresis().thresholds_law()) {
+    // Widening thresholds (the rate-dependent PI's law, the plane's): where the output still
+    // grows with the drive at its own rate each tick inverts exactly; else the drive is solved
+    // at the rate the rate-free inverse's drive predicts.
+    rate_free_ = make_inverse(rate_free_model(model_, opt_.input_min, opt_.input_max, u_prev_));
+    // A prediction, so smoothed at least over a few samples even for the per-sample rate law.
+    rate_free_rate_.configure(std::max(law->rate_filter_s, kMinRatePredictionSamples * dt), dt,
+                              RateLaw::kThresholds);
+    rate_free_rate_.reset(u_prev_);
+    u_free_prev_ = u_prev_;
+    max_rate_ = law->max_rate;
+    own_rate_ = thresholds_grow_at_own_rate(*law, dt);
+  } else if (model_.hysteresis().kind() == ModelKind::kRateDependentPi) {
     const auto& rpi = static_cast<const RateDependentPiModel&>(model_.hysteresis());
     const RateDependentPiParameters& p = rpi.parameters();
-    ActuatorModel rate_free(std::make_unique<ModifiedPiModel>(p.base));
-    rate_free.set_creep(model_.creep());
-    rate_free.input_min = opt_.input_min;
-    rate_free.input_max = opt_.input_max;
-    rate_free.configure(model_.sample_period());
-    rate_free.reset(u_prev_);
-    rate_free_ = make_inverse(rate_free);
+    rate_free_ = make_inverse(rate_free_model(model_, opt_.input_min, opt_.input_max, u_prev_));
     // A prediction, so smoothed at least over a few samples even for the per-sample rate law.
-    rate_free_rate_.configure(
-        std::max(p.rate_filter_s, kMinRatePredictionSamples * rpi.sample_period()),
-        rpi.sample_period(), p.rate_law);
+    rate_free_rate_.configure(std::max(p.rate_filter_s, kMinRatePredictionSamples * dt), dt,
+                              p.rate_law);
     rate_free_rate_.reset(u_prev_);
     u_free_prev_ = u_prev_;
     for (const double w : p.base.play.weights) total_ += w;
     total_slope_ = p.rate_coefficients.empty() ? 0.0 : p.rate_coefficients.back();
     max_rate_ = p.max_rate;
     signed_ = p.rate_law == RateLaw::kSigned;
-    if (p.rate_law == RateLaw::kThresholds) {
-      // Widening thresholds: where the output still grows with the drive at its own rate each
-      // tick inverts exactly; else the drive is solved at the rate the rate-free inverse's drive
-      // predicts.
-      own_rate_ = thresholds_grow_at_own_rate(rpi);
-    } else if (signed_) {
+    if (signed_) {
       // Weights that grow with the signed rate: the output grows with u and with its own rate
       // on both branches, so the own-rate solution is exact and stable forward in time.
       own_rate_ = p.max_rate > 0.0 && rpi.grows_with_signed_rate();
     } else if (p.rate_filter_s == 0.0 && p.max_rate > 0.0) {
-      const double dt = rpi.sample_period();
       window_ = static_cast<std::size_t>(std::clamp(std::ceil(kPreviewS / dt), 4.0, 1024.0));
       blend_ = std::min(1.0, dt / kFallingBlendS);
     }
@@ -367,31 +386,22 @@ InverseMultiplicativeCompensator::InverseMultiplicativeCompensator(const Actuato
   }
   details::require(std::isfinite(gain_) && gain_ > 0.0,
                    "inverse multiplicative compensator needs a positive gain");
-  iterate_ = model_.hysteresis().kind() != ModelKind::kRateDependentPi;
+  // A weight rate law keeps one pass a tick (step()).
+  const std::optional<ThresholdsRateLaw> law = model_.hysteresis().thresholds_law();
+  iterate_ = law || model_.hysteresis().kind() != ModelKind::kRateDependentPi;
   tolerance_ = 1e-9 * std::max(std::abs(model_.input_max - model_.input_min), 1.0);
   u_prev_ = model_.last_input();
   y_prev_ = model_.peek_static(u_prev_);
-  if (!iterate_) {
-    const auto& rpi = static_cast<const RateDependentPiModel&>(model_.hysteresis());
-    const RateDependentPiParameters& p = rpi.parameters();
-    if (p.rate_law == RateLaw::kThresholds) {
-      // The thresholds widen with |du/dt|: where the output still grows with the drive at its
-      // own rate, the iteration contracts as for a static map; else each tick is solved at the
-      // rate the rate-free structure's drive predicts.
-      iterate_ = true;
-      const double dt = rpi.sample_period();
-      if (!thresholds_grow_at_own_rate(rpi)) {
-        ActuatorModel rate_free(std::make_unique<ModifiedPiModel>(p.base));
-        rate_free.set_creep(model_.creep());
-        rate_free.input_min = model_.input_min;
-        rate_free.input_max = model_.input_max;
-        rate_free.configure(dt);
-        rate_free.reset(u_prev_);
-        rate_free_ = std::make_unique<InverseMultiplicativeCompensator>(rate_free);
-        rate_.configure(std::max(p.rate_filter_s, kMinRatePredictionSamples * dt), dt, p.rate_law);
-        rate_.reset(u_prev_);
-      }
-    }
+  const double dt = rate_sample_period(model_);
+  if (law && !thresholds_grow_at_own_rate(*law, dt)) {
+    // The thresholds widen with |du/dt|: where the output still grows with the drive at its
+    // own rate, the iteration contracts as for a static map; else each tick is solved at the
+    // rate the rate-free structure's drive predicts.
+    rate_free_ = std::make_unique<InverseMultiplicativeCompensator>(
+        rate_free_model(model_, model_.input_min, model_.input_max, u_prev_));
+    rate_.configure(std::max(law->rate_filter_s, kMinRatePredictionSamples * dt), dt,
+                    RateLaw::kThresholds);
+    rate_.reset(u_prev_);
   }
 }
 

@@ -152,6 +152,18 @@ std::unique_ptr<HysteresisModel> hysteresis_from_json(const json& j, ModelKind k
                         numbers(o, "preisach.output_map", "weights")};
         p.center = number(member(o, "preisach.output_map", "center"), "preisach.output_map.center");
       }
+      if (c.contains("rate")) {  // files without it: no rate law
+        const json& r = c["rate"];
+        if (rate_law_from_json(r) != RateLaw::kThresholds) {
+          fail("preisach.rate.law", "must be \"thresholds\" (the plane's relays widen)");
+        }
+        p.rate_law = {
+            number(member(r, "preisach.rate", "threshold_s"), "preisach.rate.threshold_s"),
+            number_member(r, "preisach.rate", "threshold_exponent", 1.0),
+            number_member(r, "preisach.rate", "max_rate", 0.0),
+            number_member(r, "preisach.rate", "record_max_rate", 0.0),
+            number_member(r, "preisach.rate", "filter_s", 0.0)};
+      }
       h = std::make_unique<PreisachModel>(std::move(p));
       break;
     }
@@ -228,6 +240,14 @@ json to_json(const ModelFile& file) {
                         {{"thresholds", p.output_map.thresholds},
                          {"weights", p.output_map.weights},
                          {"center", p.center}}}};
+      if (p.rate_law.active()) {
+        j["preisach"]["rate"] = {{"law", to_string(RateLaw::kThresholds)},
+                                 {"threshold_s", p.rate_law.threshold_rate_s},
+                                 {"threshold_exponent", p.rate_law.exponent},
+                                 {"max_rate", p.rate_law.max_rate},
+                                 {"record_max_rate", p.rate_law.record_max_rate},
+                                 {"filter_s", p.rate_law.rate_filter_s}};
+      }
       break;
     }
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "details/validate.hpp"
 
@@ -38,6 +39,20 @@ PreisachModel::PreisachModel(PreisachParameters p) : p_(std::move(p)), map_(p_.o
   details::require_finite(p_.slope, "preisach: slope");
   details::require_finite(p_.offset, "preisach: offset");
   details::require_finite(p_.center, "preisach: center");
+  const ThresholdsRateLaw& law = p_.rate_law;
+  details::require(std::isfinite(law.threshold_rate_s) && law.threshold_rate_s >= 0.0,
+                   "preisach: rate.threshold_s must be >= 0");
+  details::require(law.exponent > 0.0 && law.exponent <= 1.0,
+                   "preisach: rate.threshold_exponent must be in (0, 1]");
+  details::require(law.exponent == 1.0 || law.max_rate > 0.0,
+                   "preisach: rate.threshold_exponent below 1 needs rate.max_rate > 0");
+  for (const auto& [value, name] : {std::pair{law.max_rate, "rate.max_rate"},
+                                    std::pair{law.record_max_rate, "rate.record_max_rate"},
+                                    std::pair{law.rate_filter_s, "rate.filter_s"}}) {
+    details::require(std::isfinite(value) && value >= 0.0,
+                     std::string("preisach: ") + name + " must be >= 0");
+  }
+  rate_.configure(law.rate_filter_s, 1e-3);
   h_ = (p_.u_max - p_.u_min) / static_cast<double>(n);
   mass_.resize(p_.densities.size());
   for (std::size_t q = 0, i = 0; q < n; ++q) {
@@ -140,8 +155,20 @@ double PreisachModel::hysteresis(const Memory& m, const Turn& t, double x) const
   return t.n % 2 == 0 ? prefix - everett(top, x) : prefix + everett(x, top);
 }
 
+double PreisachModel::front(double u, double rate) const noexcept {
+  if (!p_.rate_law.active()) return u;
+  const double w = p_.rate_law.widening(rate);
+  return std::clamp(front_, u - w, u + w);
+}
+
+double PreisachModel::relays(double x) const noexcept {
+  x = clamp(x);
+  return hysteresis(memory_, turn(memory_, x), x);
+}
+
 double PreisachModel::step(double u) noexcept {
-  const double x = clamp(u);
+  if (p_.rate_law.active()) front_ = front(u, rate_.step(u));
+  const double x = clamp(p_.rate_law.active() ? front_ : u);
   const Turn t = turn(memory_, x);
   const double y = hysteresis(memory_, t, x);
   if (t.pushed_at < t.n) {
@@ -154,12 +181,34 @@ double PreisachModel::step(double u) noexcept {
 }
 
 double PreisachModel::peek(double u) const noexcept {
-  const double x = clamp(u);
-  return p_.center +
-         map_.apply(p_.offset + p_.slope * u + hysteresis(memory_, turn(memory_, x), x));
+  const double x = p_.rate_law.active() ? front(u, rate_.peek(u)) : u;
+  return p_.center + map_.apply(p_.offset + p_.slope * u + relays(x));
+}
+
+double PreisachModel::peek_at_rate(double u, double rate) const noexcept {
+  return p_.center + map_.apply(p_.offset + p_.slope * u + relays(front(u, rate)));
+}
+
+void PreisachModel::set_sample_period(double dt_s) {
+  details::require(std::isfinite(dt_s) && dt_s > 0.0, "sample period must be > 0");
+  rate_.configure(p_.rate_law.rate_filter_s, dt_s);
+}
+
+std::optional<ThresholdsRateLaw> PreisachModel::thresholds_law() const {
+  if (!p_.rate_law.active()) return std::nullopt;
+  return p_.rate_law;
+}
+
+std::unique_ptr<HysteresisModel> PreisachModel::rate_free_part() const {
+  if (!p_.rate_law.active()) return nullptr;
+  PreisachParameters p = p_;
+  p.rate_law = {};
+  return std::make_unique<PreisachModel>(std::move(p));
 }
 
 void PreisachModel::reset(double u0) noexcept {
+  rate_.reset(u0);
+  front_ = u0;
   memory_.n = 1;
   memory_.e[0] = p_.u_min;
   memory_.p[0] = memory_.p[1] = 0.0;
@@ -171,9 +220,11 @@ void PreisachModel::reset(double u0) noexcept {
 void PreisachModel::cell_areas(double u, std::span<double> out) const noexcept {
   if (out.size() != p_.densities.size()) return;
   std::fill(out.begin(), out.end(), 0.0);
+  // The relays' input as step(u) would leave it.
+  const double f = p_.rate_law.active() ? front(u, rate_.peek(u)) : u;
   Memory m = memory_;
-  apply(u, m);
-  const double x = clamp(u);
+  apply(f, m);
+  const double x = clamp(f);
   // Each cell's area in {b <= beta <= alpha <= a}, times sign, added to out.
   auto add = [&](double a, double b, double sign) {
     if (!(a > b)) return;

@@ -132,6 +132,16 @@ bool RateDependentPiModel::grows_with_signed_rate() const noexcept {
          std::all_of(dw_.begin(), dw_.end(), [](double d) { return d >= 0.0; });
 }
 
+std::optional<ThresholdsRateLaw> RateDependentPiModel::thresholds_law() const {
+  if (p_.rate_law != RateLaw::kThresholds) return std::nullopt;
+  return ThresholdsRateLaw{p_.threshold_rate_s, p_.threshold_rate_exponent, p_.max_rate,
+                           p_.record_max_rate, p_.rate_filter_s};
+}
+
+std::unique_ptr<HysteresisModel> RateDependentPiModel::rate_free_part() const {
+  return std::make_unique<ModifiedPiModel>(p_.base);
+}
+
 std::size_t RateDependentPiModel::operator_count() const noexcept {
   return pi_.operator_count() + dz_.size();
 }

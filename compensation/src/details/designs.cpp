@@ -50,9 +50,15 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
   if (s_.kind == ModelKind::kPreisach) {
     const std::size_t n = s_.preisach_cells;
     const bool shaped = !s_.preisach_shape.empty();
-    plane_ = std::make_unique<PreisachModel>(PreisachParameters{
+    PreisachParameters plane{
         s_.plane_min, s_.plane_max, n,
-        shaped ? s_.preisach_shape : std::vector<double>(PreisachModel::cell_count(n), 0.0)});
+        shaped ? s_.preisach_shape : std::vector<double>(PreisachModel::cell_count(n), 0.0)};
+    if (s_.rate_law == RateLaw::kThresholds) {
+      plane.rate_law = {s_.threshold_rate_s, s_.threshold_rate_exponent, s_.max_rate,
+                        s_.record_max_rate, s_.rate_filter_s};
+    }
+    plane_ = std::make_unique<PreisachModel>(std::move(plane));
+    plane_->set_sample_period(s_.dt);
     s_.play_thresholds.clear();
     n_ = shaped ? 1 : static_cast<Eigen::Index>(PreisachModel::cell_count(n));
   } else if (s_.play_thresholds.empty()) {
@@ -249,7 +255,9 @@ std::unique_ptr<HysteresisModel> Design::build_plane(const Eigen::VectorXd& x) c
                               x.data() + dz_col_ + m_pos_, static_cast<std::size_t>(m_neg_));
   }
   p.center = s_.center;
-  return std::make_unique<PreisachModel>(std::move(p));
+  auto plane = std::make_unique<PreisachModel>(std::move(p));
+  plane->set_sample_period(s_.dt);
+  return plane;
 }
 
 std::unique_ptr<HysteresisModel> Design::build_hysteresis(const Eigen::VectorXd& x) const {

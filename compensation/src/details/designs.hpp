@@ -24,6 +24,8 @@
 //              density rho_c >= 0, the reversible slope s >= min_play_slope; a smoothness penalty
 //              on neighbouring densities (add_penalty) with the structure's weight. With a
 //              fixed shape, one column sum_c shape_c A_c(t) for all the cells, its scale >= 0.
+//              With the thresholds law (rate_law kThresholds, threshold_rate_s > 0) the cells'
+//              areas are those of the rate-widened front (preisach_model.hpp).
 // Creep lags, when present, are extra unconstrained columns; so is the drift column (time from
 // drift_t0_s), which estimates a record's slow drift and is no part of the built model.
 #include <Eigen/Dense>

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "hystbench/compensation/invertibility.hpp"
+#include "hystbench/compensation/thresholds_rate_law.hpp"
 
 namespace hystbench::compensation {
 
@@ -46,6 +47,12 @@ class HysteresisModel {
   virtual void reset(double u0) noexcept = 0;
   /// Sample period in seconds; only rate-dependent models use it. Not real-time safe.
   virtual void set_sample_period(double /*dt_s*/) {}
+  /// The thresholds rate law the model carries (thresholds_rate_law.hpp): the rate-dependent
+  /// PI's thresholds law, the Preisach plane's; nullopt for none.
+  virtual std::optional<ThresholdsRateLaw> thresholds_law() const { return std::nullopt; }
+  /// The same model without its rate law (its output at rate 0, its state at reset); nullptr for
+  /// a model without one. Not real-time safe.
+  virtual std::unique_ptr<HysteresisModel> rate_free_part() const { return nullptr; }
   /// Number of elementary operators (plays + dead zones + ...), for reports and benchmarks.
   virtual std::size_t operator_count() const noexcept = 0;
   /// Checked, never assumed: names the first offending block and index.

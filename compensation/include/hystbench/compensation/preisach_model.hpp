@@ -17,15 +17,24 @@
 // is invertible. Inputs outside [u_min, u_max]
 // move only the slope's term (every relay already switched). The memory holds kMaxExtrema
 // extrema; a reversal beyond that is not remembered (a minor loop below the grid's scale).
+// The thresholds rate law (thresholds_rate_law.hpp), when active: every relay's thresholds
+// widen by w(|du/dt|) (up at alpha + w, down at beta - w), so the relays see the input through a
+// play of half-width w, the front f(t) = clamp(f(t-1), u - w, u + w), which lags a rising input
+// and leads a falling one and meets it where the input reverses; the reversible slope does not
+// lag (x = offset + slope u + relays of f). Needs set_sample_period().
 // Not the PI family: no play operators; Mayergoyz's representation, its density discretised
-// without a parametric form. step()/peek()/reset() are real-time safe (no allocation).
+// without a parametric form. step()/peek()/peek_at_rate()/reset() are real-time safe (no
+// allocation).
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "hystbench/compensation/dead_zone.hpp"
 #include "hystbench/compensation/hysteresis_model.hpp"
+#include "hystbench/compensation/rate_estimator.hpp"
+#include "hystbench/compensation/thresholds_rate_law.hpp"
 
 namespace hystbench::compensation {
 
@@ -40,6 +49,9 @@ struct PreisachParameters {
   /// S, the output map of x - (its identity: one operator at 0 of weight 1).
   DeadZoneParameters output_map{{0.0}, {1.0}};
   double center = 0.0;  ///< [output unit]
+  /// The relays' thresholds widening with the input's rate; inactive (threshold_rate_s 0) by
+  /// default. Model files without it: inactive.
+  ThresholdsRateLaw rate_law{};
 };
 
 class PreisachModel final : public HysteresisModel {
@@ -53,8 +65,14 @@ class PreisachModel final : public HysteresisModel {
   ModelKind kind() const noexcept override { return ModelKind::kPreisach; }
   double step(double u) noexcept override;
   double peek(double u) const noexcept override;
-  /// Relaxed at u0: from every relay down (u_min), the input risen to u0.
+  /// As peek(), the relays' widening at the given rate [input unit / s].
+  double peek_at_rate(double u, double rate) const noexcept override;
+  /// Relaxed at u0: from every relay down (u_min), the input risen to u0; the front at u0.
   void reset(double u0) noexcept override;
+  void set_sample_period(double dt_s) override;
+  std::optional<ThresholdsRateLaw> thresholds_law() const override;
+  /// The same plane without its rate law.
+  std::unique_ptr<HysteresisModel> rate_free_part() const override;
   std::size_t operator_count() const noexcept override { return p_.densities.size(); }
   Invertibility invertibility() const override;
   std::unique_ptr<HysteresisModel> clone() const override;
@@ -66,6 +84,8 @@ class PreisachModel final : public HysteresisModel {
   /// Each cell's area in the up region now, the input at u (as step(u) would leave it, without
   /// stepping) [input unit^2]: x is offset + slope u + sum densities x areas.
   void cell_areas(double u, std::span<double> out) const noexcept;
+  /// The input the relays see for input u at rate [input unit / s]: u without a rate law.
+  double front(double u, double rate) const noexcept;
   /// Cells in the triangle of N cells per side.
   static std::size_t cell_count(std::size_t n) noexcept { return n * (n + 1) / 2; }
   /// The index of cell (p, q), alpha in row p, beta in column q <= p, in densities.
@@ -93,6 +113,8 @@ class PreisachModel final : public HysteresisModel {
   void apply(double u, Memory& m) const noexcept;
   double hysteresis(const Memory& m, const Turn& t, double x) const noexcept;
   double clamp(double u) const noexcept;
+  // The relays' output for the front x (clamped), without changing the memory.
+  double relays(double x) const noexcept;
 
   PreisachParameters p_;
   DeadZoneSuperposition map_;
@@ -102,7 +124,9 @@ class PreisachModel final : public HysteresisModel {
   std::vector<double> row_;       // per row p, prefix over q < p of the off-diagonal masses
   std::vector<double> column_;    // per column q, prefix over p > q of the off-diagonal masses
   Memory memory_;
-  double u_ = 0.0;  // the last input, clamped to the plane
+  double u_ = 0.0;      // the relays' last input (the front), clamped to the plane
+  double front_ = 0.0;  // the front, unclamped (rate law)
+  RateEstimator rate_;  // |du/dt| as the rate law reads it
 };
 
 }  // namespace hystbench::compensation

@@ -22,6 +22,7 @@
 
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/rate_estimator.hpp"
+#include "hystbench/compensation/thresholds_rate_law.hpp"
 
 namespace hystbench::compensation {
 
@@ -49,18 +50,6 @@ struct RateDependentPiParameters {
   double threshold_rate_exponent = 1.0;
 };
 
-/// The thresholds law's widening [input unit] at rate (>= 0, capped at max_rate > 0 when
-/// exponent < 1): threshold_rate_s * rate, or threshold_rate_s * max_rate * (rate /
-/// max_rate)^exponent. Real-time safe.
-inline double threshold_widening(double threshold_rate_s, double exponent, double max_rate,
-                                 double rate) noexcept {
-  if (exponent == 1.0 || !(max_rate > 0.0) || threshold_rate_s == 0.0) {
-    return threshold_rate_s * rate;
-  }
-  const double rho = std::abs(rate) / max_rate;
-  return threshold_rate_s * max_rate * (exponent == 0.5 ? std::sqrt(rho) : std::pow(rho, exponent));
-}
-
 class RateDependentPiModel final : public HysteresisModel {
  public:
   explicit RateDependentPiModel(RateDependentPiParameters p, double dt_s = 1e-3);
@@ -75,6 +64,10 @@ class RateDependentPiModel final : public HysteresisModel {
   void reset(double u0) noexcept override;
   void set_sample_period(double dt_s) override;
   std::size_t operator_count() const noexcept override;
+  /// The thresholds law's numbers; nullopt for the weight laws.
+  std::optional<ThresholdsRateLaw> thresholds_law() const override;
+  /// The modified PI of its weights at rate 0 (base).
+  std::unique_ptr<HysteresisModel> rate_free_part() const override;
   Invertibility invertibility() const override;
   std::unique_ptr<HysteresisModel> clone() const override;
 
