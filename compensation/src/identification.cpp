@@ -42,6 +42,11 @@ constexpr int kDefaultDeadZones = 2;
 constexpr std::size_t kRowsPerUnknown = 10;  // order search: at least this many rows per unknown
 // A larger model must beat the best smaller one by more than this (relative) to be chosen.
 constexpr double kParsimony = 0.01;
+// The Preisach plane's thresholds rate law is kept where it lowers the held-out error by this
+// share: more than the parsimony margin, as it adds a mechanism (the inverse's rate prediction)
+// and not only unknowns.
+constexpr double kPlaneRateLawGain = 0.02;
+constexpr std::size_t kPlaneSearchStride = 4;
 // Coupled-play asymmetry grid: rb (and ra) and rc as multiples of r. The levels compare with
 // the absolute input (the paper's is bipolar): for u >= 0 the falling width is always rb, and
 // rc only changes anything when rc > r + rb, hence level scales up to 6.
@@ -252,7 +257,8 @@ class Identifier {
   }
 
   ModelStructure structure(ModelKind kind, int plays, int dead_zones) const;
-  Candidate evaluate(const ModelStructure& s, std::string method);
+  // Fitted on every stride-th row of the fitted part (fit_design), scored on every sample.
+  Candidate evaluate(const ModelStructure& s, std::string method, std::size_t stride = 1);
   Candidate& memo(ModelKind kind, int plays, int dead_zones,
                   std::array<double, 3> cp = {1.0, 1.0, 1.0});
   std::vector<int> operator_grid(int extra_unknowns) const;
@@ -270,11 +276,16 @@ class Identifier {
   // The Preisach plane over the fitted input range, its output map and smoothness by held-out
   // error (preisach_identification.hpp), creep lags and a drift beside its cells.
   Candidate search_preisach(const std::vector<double>& creep_time_constants = {});
+  // The plane's relays widening with the rate, over the plane c found (its map and smoothness).
+  void add_plane_rate_law(Candidate& c);
   // The rate law over one modified PI's plays and dead zones: its nested self, the joint fits
   // over the rate filters and caps, the paper's rate-group regression; the best by held-out.
   Candidate rpi_over(const Candidate& mpi);
   // search_rpi()'s candidate on the modified PI's own order, when another order scored better.
   std::optional<Candidate> rpi_by_mpi_order_;
+  // The plane's rate law as the first plane search found it (its structure), or that it found
+  // none (nullopt inside): the plane with creep lags refits it rather than search again.
+  std::optional<std::optional<ModelStructure>> plane_law_;
   // The thresholds law over one rate-dependent structure: the widening and the rate filter
   // chosen by the fit's error; empty when the record has no input span or rate.
   Candidate thresholds_law_over(ModelStructure s);
@@ -331,13 +342,13 @@ ModelStructure Identifier::structure(ModelKind kind, int plays, int dead_zones) 
   return s;
 }
 
-Candidate Identifier::evaluate(const ModelStructure& s, std::string method) {
+Candidate Identifier::evaluate(const ModelStructure& s, std::string method, std::size_t stride) {
   Candidate c;
   c.structure = s;
   c.method = std::move(method);
   Design design(s);
   const details::BoundedLsqResult fit =
-      details::fit_design(design, r_.ud, r_.y, r_.begin, r_.fit_end);
+      details::fit_design(design, r_.ud, r_.y, r_.begin, r_.fit_end, stride);
   c.x = fit.x;
   c.model = design.build(fit.x);
   if (s.drift) c.drift = fit.x[design.drift_column()];
@@ -579,6 +590,9 @@ Candidate Identifier::rpi_over(const Candidate& mpi) {
 
 Candidate Identifier::thresholds_law_over(ModelStructure s) {
   s.rate_law = RateLaw::kThresholds;
+  // The plane's hundreds of cells: its search fits on every kPlaneSearchStride-th row, the
+  // point found then on every row.
+  const std::size_t stride = s.kind == ModelKind::kPreisach ? kPlaneSearchStride : 1;
   const double span = r_.u_hi - r_.u_lo;
   if (!(span > 0.0) || !(s.max_rate > 0.0)) return {};
   Candidate best;
@@ -598,7 +612,7 @@ Candidate Identifier::thresholds_law_over(ModelStructure s) {
     s.max_rate = cap > 0.0 ? cap : uncapped.at(filter_s);
     s.record_max_rate = std::max(smooth_rate, s.max_rate);
     s.threshold_rate_s = fraction * span / smooth_rate;
-    Candidate c = evaluate(s, "constrained-lsq-rate-thresholds");
+    Candidate c = evaluate(s, "constrained-lsq-rate-thresholds", stride);
     const double rmse = c.fit.rmse;
     if (!best.model || rmse < best.fit.rmse) {
       best = std::move(c);
@@ -638,6 +652,7 @@ Candidate Identifier::thresholds_law_over(ModelStructure s) {
   const double fraction = best_fraction;
   for (const double cap : kRateCapFractions) try_at(fraction, filter_s, cap * smooth_rate);
   if (best_cap > 0.0) refine(best_cap);
+  if (stride > 1 && best.model) best = evaluate(best.structure, best.method);
   return best;
 }
 
@@ -802,7 +817,42 @@ Candidate Identifier::search_preisach(const std::vector<double>& creep_time_cons
   score(c, r_);
   log_.push_back({ModelKind::kPreisach, operators_of(c.structure), dead_zones_of(c.structure),
                   r_.delay, c.fit.rmse, c.heldout.rmse, c.method});
+  if (o_.preisach_rate_law) add_plane_rate_law(c);
   return c;
+}
+
+void Identifier::add_plane_rate_law(Candidate& c) {
+  ModelStructure s = c.structure;
+  Candidate widened;
+  if (plane_law_) {
+    // Searched once already (the plane before its creep lags): the law found, on this plane.
+    if (!*plane_law_) return;
+    const ModelStructure& law = **plane_law_;
+    s.rate_law = RateLaw::kThresholds;
+    s.threshold_rate_s = law.threshold_rate_s;
+    s.threshold_rate_exponent = law.threshold_rate_exponent;
+    s.max_rate = law.max_rate;
+    s.record_max_rate = law.record_max_rate;
+    s.rate_filter_s = law.rate_filter_s;
+    stage_progress(0.0, "the plane's thresholds rate law, refitted");
+    widened = evaluate(s, "constrained-lsq-rate-thresholds");
+  } else {
+    s.max_rate = smooth_max_rate(r_.ud, r_.dt);
+    if (!(s.max_rate > 0.0)) return;  // a record without smooth motion shows no rate law
+    s.record_max_rate = s.max_rate;
+    // The rate-dependent PI's thresholds law, fitted the same way (its widening, filter and cap
+    // by the fit's error).
+    widened = thresholds_law_over(s);
+  }
+  // Kept where it predicts the held-out part better by kPlaneRateLawGain.
+  const bool kept = widened.model && widened.score() < (1.0 - kPlaneRateLawGain) * c.score();
+  if (!plane_law_) {
+    plane_law_ = kept ? std::optional<ModelStructure>(widened.structure) : std::nullopt;
+  }
+  if (kept) {
+    widened.method = c.method + "+rate-thresholds";
+    c = std::move(widened);
+  }
 }
 
 FitResult Identifier::run() {
@@ -810,6 +860,7 @@ FitResult Identifier::run() {
   int delay = choose_delay(o_.kind.value_or(ModelKind::kModifiedPi));
   r_.set_delay(delay);
   memo_.clear();
+  plane_law_.reset();
   Candidate best = search_families();
   if (o_.refine_thresholds) {
     progress(0.7, "refining thresholds (Levenberg-Marquardt)");
@@ -902,7 +953,7 @@ void Identifier::fall_back_to_pi(Candidate& best, int& delay, std::vector<std::s
   // At the delay a classical PI fit would choose itself, so that `--model pi` on the same
   // record is never better than what this returns.
   const int pi_delay = choose_delay(ModelKind::kPi);
-  if (pi_delay != delay) r_.set_delay(pi_delay), memo_.clear();
+  if (pi_delay != delay) r_.set_delay(pi_delay), memo_.clear(), plane_law_.reset();
   Candidate pi = search_pi();
   finish(pi);
   if (pi.score() < best.score()) {

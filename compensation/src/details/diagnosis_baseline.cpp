@@ -94,6 +94,7 @@ std::string describe_model(const ActuatorModel& model) {
       const auto& p = dynamic_cast<const PreisachModel&>(h).parameters();
       s += ", " + std::to_string(p.cells) + " x " + std::to_string(p.cells) + " cells, " +
            dead_zones(p.output_map) + " on its output";
+      if (p.rate_law.active()) s += ", relays widening with |du/dt|";
       break;
     }
     default:

@@ -4,12 +4,14 @@
 // crosses the same levels at clearly different rates. Extension: the rate-dependent PI on the
 // baseline's plays (and dead zones), cumulative weights linear in du/dt or |du/dt|, or
 // thresholds widening with |du/dt| (the best fit), up to the 99.9th percentile of the record's
-// rates. On top of a delay the diagnosis named, the thresholds law is also tried on a sample
-// less; on top of a mode on its peak, where the law falls just short of being named, the mode is
-// projected again beside it.
+// rates; on a Preisach baseline, the plane's relays widening with |du/dt| (the thresholds law,
+// preisach_model.hpp). On top of a delay the diagnosis named, the thresholds law is also tried on a
+// sample less; on top of a mode on its peak, where the law falls just short of being named, the
+// mode is projected again beside it.
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "details/diagnosis_candidates.hpp"
 #include "details/rate_groups.hpp"
@@ -74,6 +76,33 @@ ExtensionSpec best_thresholds_law(const DiagnosisRecord& r, const ExtensionSpec&
   return best_widened;
 }
 
+// The grid's best widening and its neighbours (x sqrt 2 either way), each refitted on every row and
+// simulated: the one of least fit error.
+ExtensionFit refined_thresholds_law(const DiagnosisRecord& r, const ExtensionSpec& grid_best) {
+  std::optional<ExtensionFit> best;
+  for (const double step : {1.0, std::sqrt(2.0), 1.0 / std::sqrt(2.0)}) {
+    ExtensionSpec t = grid_best;
+    t.structure.threshold_rate_s *= step;
+    ExtensionFit f = fit_extension(r, t);
+    if (!best || f.fit.rmse < best->fit.rmse) best = std::move(f);
+  }
+  return std::move(*best);
+}
+
+// The plane's law, in the input unit; s: the structure with the smooth rates' max.
+std::string describe_plane_rate_law(const ModelStructure& chosen, const ModelStructure& s,
+                                    const std::string& unit) {
+  std::string text = "the Preisach plane's relays widening with |du/dt|";
+  if (chosen.threshold_rate_exponent != 1.0) {
+    text += '^';
+    text += num(chosen.threshold_rate_exponent);
+  }
+  const double widening = threshold_widening(
+      chosen.threshold_rate_s, chosen.threshold_rate_exponent, chosen.max_rate, s.max_rate);
+  text += ", by " + num(widening) + " " + unit + " at " + num(s.max_rate) + " " + unit + "/s";
+  return text;
+}
+
 // What the chosen rate law adds, in the input unit; s: the structure with the smooth rates' max.
 std::string describe_rate_law(const ModelStructure& chosen, const ModelStructure& s,
                               const std::string& unit) {
@@ -114,18 +143,19 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     }
   }
 
-  if (c.base.structure.kind == ModelKind::kPreisach) {
-    // The rate laws act on play weights or thresholds; the plane's relays have neither.
-    out.fit = c.base_fit;
-    out.extension = "no rate law: the Preisach plane's relays have no play weights to vary";
-    return out;
-  }
   std::vector<double> rates = sample_rates(r.u, r.dt);
   const auto q = rates.begin() +
                  static_cast<std::ptrdiff_t>(kRateQuantile * static_cast<double>(rates.size() - 1));
   std::nth_element(rates.begin(), q, rates.end());
   ExtensionSpec spec = c.base;
   ModelStructure& s = spec.structure;
+  if (s.kind == ModelKind::kPreisach) {
+    // The plane's relays have no play weights: only the thresholds law, its relays widening.
+    s.max_rate = *q > 0.0 ? *q : 1.0 / r.dt;
+    out.fit = refined_thresholds_law(r, best_thresholds_law(r, spec));
+    out.extension = describe_plane_rate_law(out.fit.spec.structure, s, r.units.input);
+    return out;
+  }
   const bool had_dead_zones = s.has_dead_zones();
   s.kind = ModelKind::kRateDependentPi;
   if (!had_dead_zones) {
@@ -150,13 +180,8 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     delays.back().delay_samples -= 1.0;
   }
   for (const ExtensionSpec& delayed : delays) {
-    const ExtensionSpec best_widened = best_thresholds_law(r, delayed);
-    for (const double step : {1.0, std::sqrt(2.0), 1.0 / std::sqrt(2.0)}) {
-      ExtensionSpec t = best_widened;
-      t.structure.threshold_rate_s *= step;
-      ExtensionFit f = fit_extension(r, t);
-      if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
-    }
+    ExtensionFit f = refined_thresholds_law(r, best_thresholds_law(r, delayed));
+    if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
   }
   // On top of a mode on its peak, the law just short of being named: the mode was fitted without
   // it, and its phase stood in for some of the widening (a law beside a lightly damped mode at 2

@@ -72,6 +72,10 @@ struct FitOptions {
   /// record without it. Exact for the classical PI; first order for the dead-zone families,
   /// whose error model drifts the hysteresis before the output dead zone.
   bool drift = false;
+  /// The Preisach plane: also try relays whose thresholds widen with the input's rate (the
+  /// thresholds law, preisach_model.hpp), fitted as the rate-dependent PI's is; kept only where
+  /// the held-out error falls by more than 2 %.
+  bool preisach_rate_law = true;
   /// Fixed play thresholds (r_0 = 0, strictly increasing) [input unit]; overrides
   /// `operators` and disables their refinement. Empty = uniform on half the input span.
   std::vector<double> play_thresholds;
