@@ -5,7 +5,8 @@
 #              none / inverse / inverse+pid (5 periods, the first unscored)
 #   repeat     identify three times in one daemon, each followed by the 1 Hz triangle (inverse)
 #   rate       rate dependence on (config/loopback-rate-dependent.toml): identify --model mpi,
-#              rpi and auto, each followed by a sweep 1-200 Hz with inverse and inverse+pid
+#              rpi, preisach and auto, each followed by a sweep 1-200 Hz with inverse and
+#              inverse+pid
 #   thresholds rate dependence by widening thresholds (the rate-dependent loopback with
 #              mechanism "switching_thresholds"): identify --model mpi, rpi and auto, each
 #              followed by a sweep 1-19 Hz with inverse
@@ -79,7 +80,7 @@ start_daemon() {
 hb() { "$bin/hystbench" --socket "$sock" "$@"; }
 f3='def f: if . == null then "-" else (. * 1000 | round / 1000 | tostring) end;'
 # The rate law a model file holds, with the thresholds law's power of the rate.
-rate_law='.model.rate | if . == null then "-" elif .law == "thresholds" then "thresholds, |du/dt|^\(.threshold_exponent // 1)" else .law end'
+rate_law='(.model.rate // .model.preisach.rate) | if . == null then "-" elif .law == "thresholds" then "thresholds, |du/dt|^\(.threshold_exponent // 1)" else .law end'
 # A learning run's row cells: every trial's rms, the last trial's rms and max (jq, after $f3).
 trials_cells='\([.learning.trials[].rms_error_percent | f] | join(" ")) | \(.rms_error_percent | f) | \(.max_error_percent | f)'
 # Rate dependence, the delay and thermal drift on: the learning sections' truth.
@@ -143,7 +144,7 @@ for section in "${sections[@]}"; do
     rate)
       start_daemon rate config/loopback-rate-dependent.toml
       echo "### Rate dependence on: identify --model M, then a sweep (rms % of range)"
-      for m in mpi rpi auto; do
+      for m in mpi rpi preisach auto; do
         id=$(hb identify --model "$m" --wait --json || true)
         law=$(hb model get --json | jq -r "$rate_law" || true)
         echo

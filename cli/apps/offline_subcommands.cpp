@@ -119,6 +119,9 @@ CliCommand add_fit(CLI::App& app) {
   cmd->add_flag_callback(
          "--no-creep", [fit] { fit->creep = false; }, "Never fit creep lags")
       ->excludes(creep_on);
+  cmd->add_flag("!--no-rate-law", fit->plane_rate_law,
+                "The Preisach plane: never widen its relays with the input rate (default: the "
+                "thresholds law tried, kept when it lowers the held-out error by 2 %)");
   cmd->add_flag("--drift", fit->drift,
                 "Fit a straight-line drift of the output over the record with the weights and "
                 "leave it out of the model (a record taken while earlier creep still settled, "

@@ -78,6 +78,7 @@ int run_fit(const FitCommand& cmd, std::ostream& out, std::ostream& err) {
     opt.creep = cmd.creep.value_or(true);  // unset: tried, kept when it lowers held-out error
     opt.creep_always = cmd.creep.value_or(false);
     opt.drift = cmd.drift;
+    opt.preisach_rate_law = cmd.plane_rate_law;
     opt.units = data.units();
     if (!cmd.json_output) {
       opt.progress = [&err](double fraction, const std::string& what) {

@@ -150,6 +150,21 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
                              const hc::FitOptions& options) {
   if (candidates.empty()) return;
   const hc::FitResult& chosen = candidates.front().fit;
+  if (chosen.model.hysteresis().kind() == hc::ModelKind::kPreisach) {
+    // The plane's relays widening with the rate: the plane fitted without the law beside it.
+    if (!chosen.model.hysteresis().thresholds_law()) return;
+    hc::FitOptions o = neighbour_options(options, "without the rate law: ");
+    o.preisach_rate_law = false;
+    try {
+      hc::FitResult fit = hc::fit_model(t, u, y, o);
+      if (fit.model.hysteresis().kind() != hc::ModelKind::kPreisach) return;
+      fit.notes.push_back("the rate law left out: the plane refitted without it");
+      candidates.push_back({std::move(fit), json(), "preisach-rate-free", {}});
+    } catch (const std::exception&) {
+      // The rate law stands alone; its own fit succeeded.
+    }
+    return;
+  }
   const auto* rpi = dynamic_cast<const hc::RateDependentPiModel*>(&chosen.model.hysteresis());
   if (rpi == nullptr) return;
   const hc::RateDependentPiParameters& law = rpi->parameters();

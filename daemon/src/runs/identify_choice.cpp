@@ -208,10 +208,12 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
     out.push_back(*rate_free);
     return out;
   }
+  // The law left out: so is every candidate that carries one (an rpi's, a plane's).
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const auto* rpi =
-        dynamic_cast<const hc::RateDependentPiModel*>(&candidates[i].fit.model.hysteresis());
-    if (i != *rate_free && i != extended && rpi != nullptr && !rpi->rate_free()) out.push_back(i);
+    const hc::HysteresisModel& h = candidates[i].fit.model.hysteresis();
+    const auto* rpi = dynamic_cast<const hc::RateDependentPiModel*>(&h);
+    const bool law = rpi != nullptr ? !rpi->rate_free() : h.thresholds_law().has_value();
+    if (i != *rate_free && i != extended && law) out.push_back(i);
   }
   return out;
 }

@@ -211,7 +211,10 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
   const hc::DynamicsInversion inversion(model, ctx.dt(), ctx.settings.feedforward_bandwidth_hz);
   json inverted = json::array({"hysteresis"});
   if (model.creep()) inverted.push_back("creep");
-  if (model.hysteresis().kind() == hc::ModelKind::kRateDependentPi) inverted.push_back("rate");
+  const bool thresholds_law = model.hysteresis().thresholds_law().has_value();
+  if (model.hysteresis().kind() == hc::ModelKind::kRateDependentPi || thresholds_law) {
+    inverted.push_back("rate");
+  }
   if (model.delay_samples() > 0 || model.delay_s() > 0.0) inverted.push_back("delay");
   if (model.dynamics()) inverted.push_back("dynamics");
   if (inversion.active()) p.preview = inversion;
@@ -221,7 +224,7 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
               {"bandwidth_hz", inversion.bandwidth_hz()},
               {"how", inversion.describe()}};
   const auto* rpi = dynamic_cast<const hc::RateDependentPiModel*>(&model.hysteresis());
-  if (rpi != nullptr && rpi->parameters().rate_law == hc::RateLaw::kThresholds) {
+  if (thresholds_law) {
     out["rate"] =
         "solved each tick (thresholds widening with the rate): at the drive's own rate, exact, "
         "where the output still grows with the drive; else at the rate the rate-free inverse's "

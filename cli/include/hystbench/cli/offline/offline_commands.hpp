@@ -39,6 +39,7 @@ struct FitCommand {
   /// Fit a straight-line output drift with the weights and leave it out of the model
   /// (FitOptions::drift): a record taken while earlier creep still settled or a sensor warmed.
   bool drift = false;
+  bool plane_rate_law = true;  ///< the Preisach plane: try its relays widening with the rate
   std::string output_path;
   bool json_output = false;
   RecordColumns columns;  ///< which columns are t, u, y (default t, u, y)
