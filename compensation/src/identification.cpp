@@ -847,7 +847,8 @@ void Identifier::add_plane_rate_law(Candidate& c) {
   // Kept where it predicts the held-out part better by kPlaneRateLawGain.
   const bool kept = widened.model && widened.score() < (1.0 - kPlaneRateLawGain) * c.score();
   if (!plane_law_) {
-    plane_law_ = kept ? std::optional<ModelStructure>(widened.structure) : std::nullopt;
+    plane_law_.emplace();  // searched: the law found, or none
+    if (kept) *plane_law_ = widened.structure;
   }
   if (kept) {
     widened.method = c.method + "+rate-thresholds";

@@ -167,7 +167,8 @@ double PreisachModel::relays(double x) const noexcept {
 }
 
 double PreisachModel::step(double u) noexcept {
-  if (p_.rate_law.active()) front_ = front(u, rate_.step(u));
+  // A non-finite input leaves the relays where they are (clamp()), and the front and rate too.
+  if (p_.rate_law.active() && std::isfinite(u)) front_ = front(u, rate_.step(u));
   const double x = clamp(p_.rate_law.active() ? front_ : u);
   const Turn t = turn(memory_, x);
   const double y = hysteresis(memory_, t, x);

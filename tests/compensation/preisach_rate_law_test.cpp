@@ -123,6 +123,11 @@ TEST(PreisachRateLaw, TheLoopWidensWithTheRateAndTheSlopeDoesNotLag) {
   relays.reset(10.0);
   for (double v = 11.0; v <= u - 1.0; v += 1.0) relays.step(v);
   EXPECT_NEAR(relays_only, relays.peek(u - 1.0), 1e-9);
+
+  // A non-finite input moves neither the relays nor the front nor the rate.
+  const double next = law.peek(u + 1.0);
+  law.step(std::nan(""));
+  EXPECT_EQ(law.peek(u + 1.0), next);
 }
 
 TEST(PreisachRateLaw, RoundTripsThroughAModelFileAndRefusesAnotherLaw) {
