@@ -149,6 +149,12 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
   std::nth_element(rates.begin(), q, rates.end());
   ExtensionSpec spec = c.base;
   ModelStructure& s = spec.structure;
+  if (s.kind == ModelKind::kPreisach && s.rate_law == RateLaw::kThresholds &&
+      s.threshold_rate_s > 0.0) {
+    out.fit = c.base_fit;
+    out.extension = "none: the Preisach plane's relays already widen with |du/dt|";
+    return out;
+  }
   if (s.kind == ModelKind::kPreisach) {
     // The plane's relays have no play weights: only the thresholds law, its relays widening.
     s.max_rate = *q > 0.0 ? *q : 1.0 / r.dt;
