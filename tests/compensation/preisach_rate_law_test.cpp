@@ -15,6 +15,7 @@
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/compensation/rate_estimator.hpp"
+#include "support/inverse_composition.hpp"
 
 namespace hc = hystbench::compensation;
 
@@ -175,18 +176,9 @@ TEST(PreisachRateLaw, TheInverseComposesWithTheModel) {
   std::vector<double> ref;
   for (const double u : sine(10.0, 1.0, 10.0, 140.0)) ref.push_back(probe.step(u));
   auto worst_of = [&](hc::InverseModel& inverse) {
-    inverse.reset(10.0);
-    const std::vector<double> drive = hc::invert_sequence(inverse, ref);
-    hc::ActuatorModel check = model;
-    check.reset(10.0);
-    double worst = 0.0, span = 0.0;
-    for (std::size_t k = 0; k < ref.size(); ++k) {
-      const double y = check.step(drive[k]);
-      if (k > ref.size() / 5) worst = std::max(worst, std::abs(y - ref[k]));
-      span = std::max(span, std::abs(ref[k] - ref[0]));
-    }
-    return worst / span;
+    return hystbench::testing::worst_composed_error(model, inverse, ref, 10.0);
   };
+
   hc::ActuatorModel free_model(model.hysteresis().rate_free_part());
   free_model.configure(kDt);
   free_model.input_min = 0.0;

@@ -143,10 +143,6 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     }
   }
 
-  std::vector<double> rates = sample_rates(r.u, r.dt);
-  const auto q = rates.begin() +
-                 static_cast<std::ptrdiff_t>(kRateQuantile * static_cast<double>(rates.size() - 1));
-  std::nth_element(rates.begin(), q, rates.end());
   ExtensionSpec spec = c.base;
   ModelStructure& s = spec.structure;
   if (s.kind == ModelKind::kPreisach && s.rate_law == RateLaw::kThresholds &&
@@ -155,6 +151,10 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     out.extension = "none: the Preisach plane's relays already widen with |du/dt|";
     return out;
   }
+  std::vector<double> rates = sample_rates(r.u, r.dt);
+  const auto q = rates.begin() +
+                 static_cast<std::ptrdiff_t>(kRateQuantile * static_cast<double>(rates.size() - 1));
+  std::nth_element(rates.begin(), q, rates.end());
   if (s.kind == ModelKind::kPreisach) {
     // The plane's relays have no play weights: only the thresholds law, its relays widening.
     s.max_rate = *q > 0.0 ? *q : 1.0 / r.dt;
