@@ -133,6 +133,15 @@ void validate_options(const FitOptions& o, std::size_t n) {
                        "options.creep_time_constants_s must be positive");
     }
   }
+  if (o.preisach_given_rate_law) {
+    const ThresholdsRateLaw& law = *o.preisach_given_rate_law;
+    const auto nonnegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
+    details::require(nonnegative(law.threshold_rate_s) && nonnegative(law.max_rate) &&
+                         nonnegative(law.record_max_rate) && nonnegative(law.rate_filter_s) &&
+                         law.exponent > 0.0 && law.exponent <= 1.0,
+                     "options.preisach_given_rate_law needs a widening, caps and a filter >= 0 "
+                     "and an exponent in (0, 1]");
+  }
   validate_thresholds(o);
 }
 
@@ -284,7 +293,8 @@ class Identifier {
   // search_rpi()'s candidate on the modified PI's own order, when another order scored better.
   std::optional<Candidate> rpi_by_mpi_order_;
   // The plane's rate law as the first plane search found it (its structure), or that it found
-  // none (nullopt inside): the plane with creep lags refits it rather than search again.
+  // none (nullopt inside): the plane with creep lags refits it rather than search again. Seeded
+  // from FitOptions::preisach_given_rate_law.
   std::optional<std::optional<ModelStructure>> plane_law_;
   // The thresholds law over one rate-dependent structure: the widening and the rate filter
   // chosen by the fit's error; empty when the record has no input span or rate.
@@ -825,7 +835,7 @@ void Identifier::add_plane_rate_law(Candidate& c) {
   ModelStructure s = c.structure;
   Candidate widened;
   if (plane_law_) {
-    // Searched once already (the plane before its creep lags): the law found, on this plane.
+    // Searched once already (the plane before its creep lags), or given: that law, on this plane.
     if (!*plane_law_) return;
     const ModelStructure& law = **plane_law_;
     s.rate_law = RateLaw::kThresholds;
@@ -862,6 +872,16 @@ FitResult Identifier::run() {
   r_.set_delay(delay);
   memo_.clear();
   plane_law_.reset();
+  if (o_.preisach_given_rate_law && o_.preisach_given_rate_law->active()) {
+    const ThresholdsRateLaw& law = *o_.preisach_given_rate_law;
+    ModelStructure given;
+    given.threshold_rate_s = law.threshold_rate_s;
+    given.threshold_rate_exponent = law.exponent;
+    given.max_rate = law.max_rate;
+    given.record_max_rate = law.record_max_rate;
+    given.rate_filter_s = law.rate_filter_s;
+    plane_law_.emplace(given);
+  }
   Candidate best = search_families();
   if (o_.refine_thresholds) {
     progress(0.7, "refining thresholds (Levenberg-Marquardt)");

@@ -2,11 +2,14 @@
 // their model file, their inverse and their fit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <memory>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "hystbench/compensation/actuator_model.hpp"
@@ -233,4 +236,54 @@ TEST(PreisachRateLaw, IsRecoveredFromItsOwnRecordAndNotAddedWhereThereIsNone) {
   o.preisach_rate_law = true;
   const hc::FitResult none = hc::fit_model(t, u, record_of(configured(plain)), o);
   EXPECT_FALSE(none.model.hysteresis().thresholds_law()) << none.method;
+}
+
+// A law given to the fit (identify's neighbour of a plane whose law was found) is refitted on
+// the plane as given, without a search over the widening and filter; one that does not lower
+// the held-out error is not kept, and a malformed one is refused with its cause.
+TEST(PreisachRateLaw, AGivenLawIsRefittedNotSearchedFor) {
+  std::mt19937_64 rng(11);
+  const hc::PreisachParameters truth = plane_with_law(rng);
+  const std::vector<double> u = ramps_at_many_rates(rng, 200);
+  std::vector<double> t(u.size());
+  for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<double>(k) * kDt;
+  hc::PreisachModel m = configured(truth);
+  m.reset(u.front());
+  const std::vector<double> y = m.simulate(u);
+  hc::FitOptions o;
+  o.kind = hc::ModelKind::kPreisach;
+  o.operators = 10;
+  o.delay_samples = 0;
+  const auto law_trials = [](const hc::FitResult& f) {
+    return std::count_if(f.candidates.begin(), f.candidates.end(), [](const auto& c) {
+      return c.method.find("rate-thresholds") != std::string::npos;
+    });
+  };
+  const hc::FitResult searched = hc::fit_model(t, u, y, o);
+  const auto found = searched.model.hysteresis().thresholds_law();
+  ASSERT_TRUE(found) << searched.method;
+
+  hc::ThresholdsRateLaw given = *found;
+  given.threshold_rate_s *= 0.8;
+  o.preisach_given_rate_law = given;
+  const hc::FitResult refitted = hc::fit_model(t, u, y, o);
+  const auto kept = refitted.model.hysteresis().thresholds_law();
+  ASSERT_TRUE(kept) << refitted.method;
+  std::cout << "law trials: " << law_trials(searched) << " searched, " << law_trials(refitted)
+            << " given; held-out " << searched.heldout.rmse << " searched, "
+            << refitted.heldout.rmse << " given at 0.8x its widening\n";
+  EXPECT_EQ(kept->threshold_rate_s, given.threshold_rate_s);
+  EXPECT_EQ(kept->rate_filter_s, given.rate_filter_s);
+  EXPECT_EQ(law_trials(refitted), 1);
+  EXPECT_GT(law_trials(searched), 10);
+  EXPECT_GE(refitted.heldout.rmse, searched.heldout.rmse);
+
+  given.threshold_rate_s = 1e3 * found->threshold_rate_s;  // wider than the whole plane
+  o.preisach_given_rate_law = given;
+  const hc::FitResult wrong = hc::fit_model(t, u, y, o);
+  EXPECT_FALSE(wrong.model.hysteresis().thresholds_law()) << wrong.method;
+
+  given.exponent = 0.0;
+  o.preisach_given_rate_law = given;
+  EXPECT_THROW(hc::fit_model(t, u, y, o), std::invalid_argument);
 }

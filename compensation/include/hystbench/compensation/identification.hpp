@@ -23,6 +23,7 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/thresholds_rate_law.hpp"
 
 namespace hystbench::compensation {
 
@@ -76,6 +77,10 @@ struct FitOptions {
   /// thresholds law, preisach_model.hpp), fitted as the rate-dependent PI's is; kept only where
   /// the held-out error falls by more than 2 %.
   bool preisach_rate_law = true;
+  /// With preisach_rate_law: this law (its widening, exponent, filter and caps) is refitted on
+  /// the plane instead of searched for, and kept by the same rule (identify's neighbours of a
+  /// plane whose law was found). Empty = searched.
+  std::optional<ThresholdsRateLaw> preisach_given_rate_law;
   /// Fixed play thresholds (r_0 = 0, strictly increasing) [input unit]; overrides
   /// `operators` and disables their refinement. Empty = uniform on half the input span.
   std::vector<double> play_thresholds;
