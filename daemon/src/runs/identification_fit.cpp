@@ -147,6 +147,11 @@ IdentificationFit fit_identification_record(std::span<const double> u, std::span
     return finish(0);
   }
   const AveragedRecord rd = block_average(u, y, dt_s, block, static_cast<std::size_t>(best));
+  if (out.fit.model.hysteresis().kind() == hc::ModelKind::kPreisach) {
+    // The plane's rate law as found without the delay, refitted at it: a few samples of delay
+    // hardly move the rates, and the law's search is most of the plane's fit.
+    options.preisach_given_rate_law = out.fit.model.hysteresis().thresholds_law();
+  }
   hc::FitResult delayed = hc::fit_model(rd.t, rd.u, rd.y, options);
   const std::string figures =
       fmt::format(" (held-out {:.4g} vs {:.4g}, fit part {:.4g} vs {:.4g} um)", score(delayed),

@@ -135,6 +135,11 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
   hc::FitOptions o =
       neighbour_options(options, std::to_string(chosen.dead_zones - 1) + " dead zones: ");
   o.dead_zones = chosen.dead_zones - 1;
+  // A plane's rate law, searched for on the chosen plane, is refitted on its neighbour rather
+  // than searched for again (the search is most of a plane's fit).
+  if (chosen.model.hysteresis().kind() == hc::ModelKind::kPreisach) {
+    o.preisach_given_rate_law = chosen.model.hysteresis().thresholds_law();
+  }
   try {
     hc::FitResult fit = hc::fit_model(t, u, y, o);
     if (fit.dead_zones != o.dead_zones) return;  // e.g. a fall-back to the classical PI

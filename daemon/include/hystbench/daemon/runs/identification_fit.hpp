@@ -64,7 +64,8 @@ bool delayed_fit_is_better(const compensation::FitResult& without,
 /// Fits `options` (its delay_samples is ignored) to the record averaged by `block`: y aligned
 /// by `response` (empty: every reading answers its own tick), then the further delay in ticks
 /// 0..max_delay_ticks with the lowest held-out error, kept only when the full fit at that delay
-/// beats the one without (delayed_fit_is_better). Throws std::invalid_argument as
+/// beats the one without (delayed_fit_is_better); a Preisach plane's rate law found without the
+/// delay is refitted at it, not searched for again. Throws std::invalid_argument as
 /// compensation::fit_model does.
 IdentificationFit fit_identification_record(std::span<const double> u, std::span<const double> y,
                                             std::span<const std::uint32_t> response, double dt_s,
