@@ -60,22 +60,25 @@ void print_delay_trim(std::ostream& out, const json& t) {
 }
 
 // The extension's fast parts alone, tried where the whole extension lost on the bench.
-void print_fast_parts(std::ostream& out, const json& f) {
+// One band of an extension's parts tried alone (model.extension.fast_parts / slow_parts).
+void print_parts_alone(std::ostream& out, const json& f, const std::string& band) {
   const auto names = [](const json& list) {
     std::string s;
     for (const json& n : list) s += (s.empty() ? "" : " + ") + n.get<std::string>();
     return s;
   };
-  out << "  extension fast  " << names(f.value("parts", json::array())) << " alone (without "
-      << names(f.value("left_out", json::array())) << ")";
+  out << "  extension " << band << "  " << names(f.value("parts", json::array()))
+      << " alone (without " << names(f.value("left_out", json::array())) << ")";
   if (f.contains("verified")) {
     const json& v = f["verified"];
     out << ": triangle rms " << fixed_or_dash(v["triangle_rms_percent"].value("model", json()), 3)
         << " -> " << fixed_or_dash(v["triangle_rms_percent"].value("extended", json()), 3) << " %";
-    if (v.contains("fast_hz")) {
-      out << ", " << fixed(v["fast_hz"].get<double>(), 0) << " Hz sine rms "
-          << fixed_or_dash(v["fast_rms_percent"].value("model", json()), 3) << " -> "
-          << fixed_or_dash(v["fast_rms_percent"].value("extended", json()), 3) << " %";
+    for (const char* sine : {"fast", "mid"}) {
+      const std::string hz = std::string(sine) + "_hz", rms = std::string(sine) + "_rms_percent";
+      if (!v.contains(hz) || !v[hz].is_number()) continue;
+      out << ", " << fixed(v[hz].get<double>(), 0) << " Hz sine rms "
+          << fixed_or_dash(v[rms].value("model", json()), 3) << " -> "
+          << fixed_or_dash(v[rms].value("extended", json()), 3) << " %";
     }
   }
   out << ": " << (f.value("adopted", false) ? "adopted" : "not adopted") << ", "
@@ -122,7 +125,8 @@ void print_extension(std::ostream& out, const json& e) {
     }
     if (e.contains("delay_trim")) print_delay_trim(out, e["delay_trim"]);
   }
-  if (e.contains("fast_parts")) print_fast_parts(out, e["fast_parts"]);
+  if (e.contains("fast_parts")) print_parts_alone(out, e["fast_parts"], "fast");
+  if (e.contains("slow_parts")) print_parts_alone(out, e["slow_parts"], "slow");
 }
 
 }  // namespace

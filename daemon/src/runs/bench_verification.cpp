@@ -154,7 +154,7 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
 void Bench::continue_identify() {
   settle_delay_trim();
   queue_delay_trim();
-  queue_fast_parts();
+  queue_parts_alone();
   if (verify_next_candidate()) return;
   IdentifySession& s = *session_;
   if (s.extend && !s.extension_tried && !s.interrupted && !quit_.load()) {

@@ -121,6 +121,13 @@ bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandid
          balance >= 1.0;
 }
 
+bool slow_parts_track_better(const IdentifyCandidate& base, const IdentifyCandidate& alone,
+                             double fast_hz, double mid_hz) {
+  return mid_hz > 0.0 && extension_tracks_better(base, alone, mid_hz) &&
+         (!(fast_hz > 0.0) ||
+          within_spread(verified_sine_rms(alone, fast_hz), verified_sine_rms(base, fast_hz)));
+}
+
 namespace {
 
 // A rate law (candidate 0) against its rate-free self: the law is an extension of it, kept when
@@ -246,7 +253,9 @@ void Bench::finish_identify() {
   // The verified figure decides when any candidate was verified; else the held-out error.
   std::vector<std::size_t> left_out =
       left_out_of_choice(s.candidates, s.extended, s.rate_free, s.rate_sine_hz);
-  if (s.fast_parts) left_out.push_back(*s.fast_parts);
+  for (const auto& alone : {s.fast_parts, s.slow_parts}) {
+    if (alone) left_out.push_back(*alone);
+  }
   std::size_t chosen = best_verified(s.candidates, left_out);
   bool extended = false;
   if (s.extended) {
@@ -256,15 +265,28 @@ void Bench::finish_identify() {
     s.extension["adopted"] = extended;
     s.extension["why"] =
         extended ? "it tracks better on the bench" : "it does not track better on the bench";
-    const bool fast_parts = !extended && chosen == s.base && s.fast_parts &&
-                            adopt_fast_parts(s.candidates[s.base], s.candidates[*s.fast_parts],
-                                             s.fast_hz, s.mid_hz, s.extension);
     if (extended) chosen = *s.extended;
-    if (fast_parts) {
+    // Else one band of its parts alone, the fast first (a mode gains the most where it acts).
+    std::optional<PartsBand> alone;
+    for (const PartsBand band : {PartsBand::kFast, PartsBand::kSlow}) {
+      const std::optional<std::size_t> c = band == PartsBand::kFast ? s.fast_parts : s.slow_parts;
+      if (extended || chosen != s.base || !c ||
+          !adopt_parts_alone(base, s.candidates[*c], band, s.fast_hz, s.mid_hz, s.extension)) {
+        continue;
+      }
       extended = true;
-      chosen = *s.fast_parts;
+      chosen = *c;
+      alone = band;
     }
-    mark_adopted_parts(s.extension, extended, fast_parts);
+    if (s.extension_band) {
+      // The extension held one band alone (the whole failed its check): that band was judged.
+      alone = s.extension_band;
+      json& band = s.extension[parts_key(*alone)];
+      band["adopted"] = extended;
+      band["verified"] = s.extension["verified"];
+      band["why"] = s.extension["why"];
+    }
+    mark_adopted_parts(s.extension, extended, alone);
   } else if (s.extension.is_null()) {
     s.extension = {{"adopted", false},
                    {"why", !s.extend ? "not asked (extend = false)"

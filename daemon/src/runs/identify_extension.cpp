@@ -277,22 +277,40 @@ bool Bench::extend_identified_model() {
     const ScoredRecord record{t, s.u, s.y, settings_.identify.heldout_fraction, s.unscored};
     IdentifyCandidate ext =
         extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
+    std::vector<std::string> parts = draft->parts;
     if (!passes_check(ext.fit.model, dt_, s.extension)) {
+      // A slow part that breaks the inverse (a rate law's weights) need not take a mode or a
+      // delay that passes with it: the base with the fast parts alone is the extension then.
+      const PartsByBand bands = split_parts(s.extension["parts"]);
       s.extension["diagnosis_s"] = seconds();
-      return false;
+      if (bands.fast.empty() || bands.slow.empty()) return false;
+      IdentifyCandidate fast = with_timing_of(base, ext, bands, PartsBand::kFast, dt_);
+      json tried = {{"parts", bands.fast}, {"left_out", bands.slow}};
+      const bool checked = passes_check(fast.fit.model, dt_, tried);
+      s.extension[parts_key(PartsBand::kFast)] = std::move(tried);
+      if (!checked) return false;
+      s.extension["why_fast_parts"] =
+          "the whole extension failed its check; its fast parts alone passed it";
+      ext = std::move(fast);
+      s.extension_band = PartsBand::kFast;
+      parts = bands.fast;
     }
-    std::string added = extension_added(d, draft->named, s.extension["parts"]);
+    std::string added =
+        s.extension_band ? parts_alone_text(split_parts(s.extension["parts"]), *s.extension_band) +
+                               " (the whole extension failed its check)"
+                         : extension_added(d, draft->named, s.extension["parts"]);
     if (!timing.is_null()) added += "; " + common::timing_text(timing);
+    if (s.extension_band) ext.fit.notes.pop_back();  // with_timing_of()'s, said again below
     ext.fit.notes.push_back("extended by the diagnosis of its record: " + added);
     s.extension["description"] = added;
-    ext.label += "-extended";
+    ext.label += s.extension_band ? "-fast-parts" : "-extended";
     s.candidates.push_back(std::move(ext));
     s.extended = s.candidates.size() - 1;
-    s.fast_hz = fast_frequency(draft->parts, s.candidates.back().fit.model, settings_.loop.rate_hz);
-    s.trim_delay = s.fast_hz > 0.0 &&
-                   std::any_of(draft->parts.begin(), draft->parts.end(), [](const std::string& p) {
-                     return p == "delay" || p == "dynamics";
-                   });
+    s.fast_hz = fast_frequency(parts, s.candidates.back().fit.model, settings_.loop.rate_hz);
+    s.trim_delay =
+        s.fast_hz > 0.0 && std::any_of(parts.begin(), parts.end(), [](const std::string& p) {
+          return p == "delay" || p == "dynamics";
+        });
     if (s.fast_hz > 0.0) s.mid_hz = s.fast_hz / kMidFraction;
     queue_extension_verification(s.jobs, s.candidates, s.base, *s.extended, s.fast_hz, s.mid_hz);
     s.extension["diagnosis_s"] = seconds();

@@ -62,6 +62,12 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
 bool extension_tracks_better(const IdentifyCandidate& base, const IdentifyCandidate& ext,
                              double fast_hz, double mid_hz = 0.0);
 
+/// The extension's slow parts alone (the base's mode and delay kept) against `base`: they track
+/// the middle sine better as extension_tracks_better() judges a sine (the triangle within the
+/// spread between runs), and the fast sine no worse than that spread.
+bool slow_parts_track_better(const IdentifyCandidate& base, const IdentifyCandidate& alone,
+                             double fast_hz, double mid_hz);
+
 /// The extension's parts (its result's parts[].cause) by the band they act in: fast (a mode, a
 /// delay) and the others.
 struct PartsByBand {
@@ -69,26 +75,43 @@ struct PartsByBand {
 };
 PartsByBand split_parts(const nlohmann::json& parts);
 
-/// Whether identify tries the extension's fast parts alone (Bench::queue_fast_parts()): the
-/// extension holds a mode or a delay beside slower parts, gained on the fast sine, and does not
-/// track better on the bench as a whole.
-bool fast_parts_worth_trying(const IdentifyCandidate& base, const IdentifyCandidate& ext,
-                             const PartsByBand& parts, double fast_hz, double mid_hz);
+/// The band an extension's parts act in: fast (a mode, a delay: the fast sine judges them), slow
+/// (creep, a rate law, the loop's shape: the triangle and the middle sine). Its key in the
+/// extension's result: "fast_parts" or "slow_parts".
+enum class PartsBand { kFast, kSlow };
+const char* parts_key(PartsBand band);
+
+/// Whether identify tries one band of the extension's parts alone (Bench::queue_parts_alone()):
+/// the extension holds parts of both bands and does not track better on the bench as a whole;
+/// the fast band where it gained on the fast sine, the slow band where it gained on the middle
+/// sine and lost on the fast one.
+bool parts_alone_worth_trying(const IdentifyCandidate& base, const IdentifyCandidate& ext,
+                              const PartsByBand& parts, PartsBand band, double fast_hz,
+                              double mid_hz);
 
 /// Whether an extended model may be played and written: its check (model_check.hpp) passes.
 /// Writes the check to extension["check"] and, where it fails, extension["adopted"] = false and
 /// ["why"].
 bool passes_check(const compensation::ActuatorModel& model, double dt_s, nlohmann::json& extension);
 
-/// The fast parts alone (`alone`), judged as the whole extension is: adopted when they track
-/// better on the bench than `base`. Says so in extension["fast_parts"] (verified, adopted, why)
-/// and, adopted, in extension["adopted"] and ["why"].
-bool adopt_fast_parts(const IdentifyCandidate& base, const IdentifyCandidate& alone, double fast_hz,
-                      double mid_hz, nlohmann::json& extension);
+/// "its dynamics alone, without rate_dependence": one band of an extension's parts.
+std::string parts_alone_text(const PartsByBand& parts, PartsBand band);
+
+/// `from` with the dynamics and the delay of `timing`: one band of an extension's parts alone
+/// (the base with the extension's fast parts, or the extension with the base's), noted as such
+/// (parts_alone_text()); `from`'s label.
+IdentifyCandidate with_timing_of(const IdentifyCandidate& from, const IdentifyCandidate& timing,
+                                 const PartsByBand& parts, PartsBand band, double dt_s);
+
+/// One band of the parts alone (`alone`): the fast parts judged as the whole extension is, the
+/// slow parts by slow_parts_track_better(). Says so in extension[parts_key(band)] (verified,
+/// adopted, why) and, adopted, in extension["adopted"] and ["why"].
+bool adopt_parts_alone(const IdentifyCandidate& base, const IdentifyCandidate& alone,
+                       PartsBand band, double fast_hz, double mid_hz, nlohmann::json& extension);
 
 /// Each of extension["parts"] says whether the model took it ("adopted"): all of an extension
-/// adopted whole, the fast parts of one adopted in part, none otherwise.
-void mark_adopted_parts(nlohmann::json& extension, bool extended, bool fast_parts_only);
+/// adopted whole, one band's parts of one adopted in part (`alone`), none otherwise.
+void mark_adopted_parts(nlohmann::json& extension, bool extended, std::optional<PartsBand> alone);
 
 /// The verified gains of `ext` against `base`: the triangle's max and rms, the fast and middle
 /// sines' rms (null where one did not run).
@@ -141,10 +164,14 @@ struct Bench::IdentifySession {
   /// On trial, the last two candidates: the extension with its delay trimmed (this one), and as
   /// timed, played again.
   std::optional<std::size_t> trim;
-  /// The base with only the extension's mode and delay, when the whole extension gained on the
-  /// fast sine but not on the bench as a whole (queue_fast_parts()); tried once.
-  std::optional<std::size_t> fast_parts;
-  bool fast_parts_tried = false;
+  /// The base with only the extension's mode and delay, and the extension with the base's, when
+  /// the whole extension gained in that band but not on the bench as a whole
+  /// (queue_parts_alone()); tried once.
+  std::optional<std::size_t> fast_parts, slow_parts;
+  bool parts_alone_tried = false;
+  /// The band of parts the extension holds alone, where the whole failed its check and that band
+  /// passed it (the extension's fast parts on the base); empty = the whole extension.
+  std::optional<PartsBand> extension_band;
   /// The base's sines played while its diagnosis ran [Hz] (play_while_diagnosing()).
   std::vector<double> sines_while_diagnosing;
   /// The rate-free neighbour of a rate law (candidate 0), when there is one: the two are judged

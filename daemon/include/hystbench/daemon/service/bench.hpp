@@ -213,10 +213,11 @@ class Bench {
   /// Once both have played: the extension takes the trimmed delay when it tracks that sine
   /// better; the two trial candidates are dropped either way.
   void settle_delay_trim();
-  /// Once the extension is verified (its delay trim settled): where it gained on the fast sine
-  /// but does not track better on the bench, and holds slower parts beside a mode or a delay,
-  /// the base with that mode and delay alone, queued on the triangle and both sines.
-  void queue_fast_parts();
+  /// Once the extension is verified (its delay trim settled): where it holds slower parts beside
+  /// a mode or a delay and does not track better on the bench, the base with that mode and delay
+  /// alone (it gained on the fast sine), the extension without them (it gained on the middle
+  /// sine), each queued on the triangle and both sines.
+  void queue_parts_alone();
   /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
   /// when the fit fails).
   void fit_identify(const RunProgram& run, details::RunResult result);
