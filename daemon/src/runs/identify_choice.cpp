@@ -266,27 +266,7 @@ void Bench::finish_identify() {
     s.extension["why"] =
         extended ? "it tracks better on the bench" : "it does not track better on the bench";
     if (extended) chosen = *s.extended;
-    // Else one band of its parts alone, the fast first (a mode gains the most where it acts).
-    std::optional<PartsBand> alone;
-    for (const PartsBand band : {PartsBand::kFast, PartsBand::kSlow}) {
-      const std::optional<std::size_t> c = band == PartsBand::kFast ? s.fast_parts : s.slow_parts;
-      if (extended || chosen != s.base || !c ||
-          !adopt_parts_alone(base, s.candidates[*c], band, s.fast_hz, s.mid_hz, s.extension)) {
-        continue;
-      }
-      extended = true;
-      chosen = *c;
-      alone = band;
-    }
-    if (s.extension_band) {
-      // The extension held one band alone (the whole failed its check): that band was judged.
-      alone = s.extension_band;
-      json& band = s.extension[parts_key(*alone)];
-      band["adopted"] = extended;
-      band["verified"] = s.extension["verified"];
-      band["why"] = s.extension["why"];
-    }
-    mark_adopted_parts(s.extension, extended, alone);
+    settle_parts_alone(s, chosen, extended);
   } else if (s.extension.is_null()) {
     s.extension = {{"adopted", false},
                    {"why", !s.extend ? "not asked (extend = false)"

@@ -83,6 +83,13 @@ std::optional<ExtensionDraft> extension_draft(const hc::Diagnosis& d) {
 
 // What the diagnosis of identify's record found: each part added with its held-out gain alone
 // on the diagnosis's blocks (the given model's held-out rms / with the part), and the verdict.
+// Where an extension's parts come from (the result's extension.from).
+const char* extension_origin(bool named) {
+  return named ? "the diagnosis's extended model (named causes)"
+               : "significant tests below the naming gain, grafted on the model for the bench to "
+                 "judge";
+}
+
 json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& added) {
   json parts = json::array();
   for (const std::string& name : added) {
@@ -231,7 +238,6 @@ bool Bench::extend_identified_model() {
   s.extension_tried = true;
   s.base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
   const IdentifyCandidate& base = s.candidates[s.base];
-  const std::string run_id = s.result["run_id"].get<std::string>();
   {
     std::lock_guard lock(mutex_);
     active_run_["stage"] = "diagnosing the record with " + base.label;
@@ -243,13 +249,13 @@ bool Bench::extend_identified_model() {
   const double exchange_s = s.history.value("exchange_ticks", 0) * dt_;
   try {
     const std::vector<double> t = record_times(s.u.size(), dt_);
-    const details::DiagnosisAhead::Progress progress = [this, &run_id](double f,
-                                                                       const std::string& what) {
-      emit({{"event", "fit.progress"},
-            {"run_id", run_id},
-            {"fraction", f},
-            {"stage", "extension: " + what}});
-    };
+    const details::DiagnosisAhead::Progress progress =
+        [this, run_id = s.result["run_id"].get<std::string>()](double f, const std::string& what) {
+          emit({{"event", "fit.progress"},
+                {"run_id", run_id},
+                {"fraction", f},
+                {"stage", "extension: " + what}});
+        };
     // The worker started with the session's extension; without it, the diagnosis runs here.
     details::DiagnosisAhead::Taken taken =
         s.ahead ? s.ahead->take(s.base, progress)
@@ -263,57 +269,41 @@ bool Bench::extend_identified_model() {
     s.extension = extension_json(d, draft ? draft->parts : std::vector<std::string>{});
     s.extension["diagnosis_ran"] = taken.how;
     s.extension["sines_while_diagnosing_hz"] = s.sines_while_diagnosing;
+    s.extension["diagnosis_s"] = seconds();
     if (!draft) {
-      s.extension["adopted"] = false;
-      s.extension["why"] = "the diagnosis finds nothing the model misses";
-      s.extension["diagnosis_s"] = seconds();
+      s.extension.update(
+          {{"adopted", false}, {"why", "the diagnosis finds nothing the model misses"}});
       return false;
     }
-    s.extension["from"] = draft->named ? "the diagnosis's extended model (named causes)"
-                                       : "significant tests below the naming gain, grafted on the "
-                                         "model for the bench to judge";
+    s.extension["from"] = extension_origin(draft->named);
     const json timing = common::time_on_steps(draft->model, s.u, s.y, dt_, exchange_s);
     if (!timing.is_null()) s.extension["timing"] = timing;
     const ScoredRecord record{t, s.u, s.y, settings_.identify.heldout_fraction, s.unscored};
     IdentifyCandidate ext =
         extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
-    std::vector<std::string> parts = draft->parts;
     if (!passes_check(ext.fit.model, dt_, s.extension)) {
       // A slow part that breaks the inverse (a rate law's weights) need not take a mode or a
       // delay that passes with it: the base with the fast parts alone is the extension then.
-      const PartsByBand bands = split_parts(s.extension["parts"]);
-      s.extension["diagnosis_s"] = seconds();
-      if (bands.fast.empty() || bands.slow.empty()) return false;
-      IdentifyCandidate fast = with_timing_of(base, ext, bands, PartsBand::kFast, dt_);
-      json tried = {{"parts", bands.fast}, {"left_out", bands.slow}};
-      const bool checked = passes_check(fast.fit.model, dt_, tried);
-      s.extension[parts_key(PartsBand::kFast)] = std::move(tried);
-      if (!checked) return false;
-      s.extension["why_fast_parts"] =
-          "the whole extension failed its check; its fast parts alone passed it";
-      ext = std::move(fast);
+      std::optional<IdentifyCandidate> fast = fast_parts_instead(base, ext, dt_, s.extension);
+      if (!fast) return false;
+      ext = std::move(*fast);
       s.extension_band = PartsBand::kFast;
-      parts = bands.fast;
     }
-    std::string added =
-        s.extension_band ? parts_alone_text(split_parts(s.extension["parts"]), *s.extension_band) +
-                               " (the whole extension failed its check)"
-                         : extension_added(d, draft->named, s.extension["parts"]);
+    const PartsByBand bands = split_parts(s.extension["parts"]);
+    std::string added = s.extension_band ? parts_alone_text(bands, PartsBand::kFast) +
+                                               " (the whole extension failed its check)"
+                                         : extension_added(d, draft->named, s.extension["parts"]);
     if (!timing.is_null()) added += "; " + common::timing_text(timing);
-    if (s.extension_band) ext.fit.notes.pop_back();  // with_timing_of()'s, said again below
     ext.fit.notes.push_back("extended by the diagnosis of its record: " + added);
     s.extension["description"] = added;
     ext.label += s.extension_band ? "-fast-parts" : "-extended";
     s.candidates.push_back(std::move(ext));
     s.extended = s.candidates.size() - 1;
-    s.fast_hz = fast_frequency(parts, s.candidates.back().fit.model, settings_.loop.rate_hz);
-    s.trim_delay =
-        s.fast_hz > 0.0 && std::any_of(parts.begin(), parts.end(), [](const std::string& p) {
-          return p == "delay" || p == "dynamics";
-        });
+    s.fast_hz = fast_frequency(s.extension_band ? bands.fast : draft->parts,
+                               s.candidates.back().fit.model, settings_.loop.rate_hz);
+    s.trim_delay = s.fast_hz > 0.0 && !bands.fast.empty();
     if (s.fast_hz > 0.0) s.mid_hz = s.fast_hz / kMidFraction;
     queue_extension_verification(s.jobs, s.candidates, s.base, *s.extended, s.fast_hz, s.mid_hz);
-    s.extension["diagnosis_s"] = seconds();
     return true;
   } catch (const std::exception& e) {
     s.extension = {{"adopted", false},

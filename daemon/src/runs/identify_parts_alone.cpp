@@ -105,6 +105,46 @@ IdentifyCandidate with_timing_of(const IdentifyCandidate& from, const IdentifyCa
   return alone;
 }
 
+std::optional<IdentifyCandidate> fast_parts_instead(const IdentifyCandidate& base,
+                                                    const IdentifyCandidate& ext, double dt_s,
+                                                    json& extension) {
+  const PartsByBand parts = split_parts(extension.value("parts", json::array()));
+  if (parts.fast.empty() || parts.slow.empty()) return std::nullopt;
+  IdentifyCandidate fast = with_timing_of(base, ext, parts, PartsBand::kFast, dt_s);
+  json tried = {{"parts", parts.fast}, {"left_out", parts.slow}};
+  const bool checked = passes_check(fast.fit.model, dt_s, tried);
+  extension[parts_key(PartsBand::kFast)] = std::move(tried);
+  if (!checked) return std::nullopt;
+  fast.fit.notes.pop_back();  // the caller says what the extension holds
+  extension["why_fast_parts"] =
+      "the whole extension failed its check; its fast parts alone passed it";
+  return fast;
+}
+
+void Bench::settle_parts_alone(IdentifySession& s, std::size_t& chosen, bool& extended) {
+  std::optional<PartsBand> alone = s.extension_band;
+  if (alone) {
+    // The extension held one band alone (the whole failed its check): that band was judged.
+    json& band = s.extension[parts_key(*alone)];
+    band["adopted"] = extended;
+    band["verified"] = s.extension["verified"];
+    band["why"] = s.extension["why"];
+  }
+  // Else the fast band first (a mode gains the most where it acts).
+  for (const PartsBand band : {PartsBand::kFast, PartsBand::kSlow}) {
+    const std::optional<std::size_t> c = band == PartsBand::kFast ? s.fast_parts : s.slow_parts;
+    if (extended || chosen != s.base || !c ||
+        !adopt_parts_alone(s.candidates[s.base], s.candidates[*c], band, s.fast_hz, s.mid_hz,
+                           s.extension)) {
+      continue;
+    }
+    extended = true;
+    chosen = *c;
+    alone = band;
+  }
+  mark_adopted_parts(s.extension, extended, alone);
+}
+
 void Bench::queue_parts_alone() {
   if (!session_) return;
   IdentifySession& s = *session_;

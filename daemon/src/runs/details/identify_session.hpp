@@ -103,6 +103,14 @@ std::string parts_alone_text(const PartsByBand& parts, PartsBand band);
 IdentifyCandidate with_timing_of(const IdentifyCandidate& from, const IdentifyCandidate& timing,
                                  const PartsByBand& parts, PartsBand band, double dt_s);
 
+/// Where the whole extension `ext` failed its check: `base` with the extension's fast parts
+/// alone, checked (extension["fast_parts"]: parts, left_out, check), without with_timing_of()'s
+/// note (the caller describes the extension); empty where the extension
+/// does not hold parts of both bands, or the fast parts fail the check too.
+std::optional<IdentifyCandidate> fast_parts_instead(const IdentifyCandidate& base,
+                                                    const IdentifyCandidate& ext, double dt_s,
+                                                    nlohmann::json& extension);
+
 /// One band of the parts alone (`alone`): the fast parts judged as the whole extension is, the
 /// slow parts by slow_parts_track_better(). Says so in extension[parts_key(band)] (verified,
 /// adopted, why) and, adopted, in extension["adopted"] and ["why"].

@@ -218,6 +218,10 @@ class Bench {
   /// alone (it gained on the fast sine), the extension without them (it gained on the middle
   /// sine), each queued on the triangle and both sines.
   void queue_parts_alone();
+  /// After the whole extension's verdict (`extended`, `chosen`): a band of its parts alone that
+  /// tracks better is taken (the band the extension held alone where the whole failed its
+  /// check; else the fast band, then the slow one), and every part says whether it was.
+  static void settle_parts_alone(IdentifySession& s, std::size_t& chosen, bool& extended);
   /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
   /// when the fit fails).
   void fit_identify(const RunProgram& run, details::RunResult result);
