@@ -81,8 +81,6 @@ std::optional<ExtensionDraft> extension_draft(const hc::Diagnosis& d) {
   return draft;
 }
 
-// What the diagnosis of identify's record found: each part added with its held-out gain alone
-// on the diagnosis's blocks (the given model's held-out rms / with the part), and the verdict.
 // Where an extension's parts come from (the result's extension.from).
 const char* extension_origin(bool named) {
   return named ? "the diagnosis's extended model (named causes)"
@@ -90,6 +88,8 @@ const char* extension_origin(bool named) {
                  "judge";
 }
 
+// What the diagnosis of identify's record found: each part added with its held-out gain alone
+// on the diagnosis's blocks (the given model's held-out rms / with the part), and the verdict.
 json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& added) {
   json parts = json::array();
   for (const std::string& name : added) {
