@@ -30,7 +30,9 @@ BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
       stuck_(stuck_options(options.stuck_sensor, driver)),
       dt_(1.0 / options.rate_hz),
       period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))),
-      simulated_(options.clock == LoopClock::kSimulated) {
+      simulated_(options.clock == LoopClock::kSimulated),
+      held_gap_ticks_(std::max<std::uint64_t>(
+          1, static_cast<std::uint64_t>(std::llround(options.held_gap_s * options.rate_hz)))) {
   limiter_.reset(driver_.safe_output_v());
   last_u_.store(driver_.safe_output_v());
 }
@@ -169,18 +171,46 @@ void BenchLoop::run_simulated() {
   std::int64_t virtual_ns = 0;  // tick count x period
   overran_ = false;
   while (!quit_.load(std::memory_order_acquire)) {
-    if (run_in_play() && state() != State::kFault) {
-      paced = false;  // a run: the next tick as soon as this one is computed
-    } else {
-      if (!paced) timer.start();  // idle again: paced from now on, whatever the run took
-      paced = true;
-      (void)timer.wait();
+    switch (next_simulated_step()) {
+      case SimulatedStep::kFree:
+        paced = false;  // the next tick as soon as this one is computed
+        break;
+      case SimulatedStep::kPaced:
+        if (!paced) timer.start();  // idle again: paced from now on, whatever the run took
+        paced = true;
+        (void)timer.wait();
+        // A run may have come, and the hold with it, while the loop slept: decided again.
+        if (next_simulated_step() == SimulatedStep::kStandStill) continue;
+        break;
+      case SimulatedStep::kStandStill:
+        ticks_.fetch_add(1, std::memory_order_relaxed);  // alive, for the watchdog
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+        continue;
     }
     exec_start_ns_ = LoopTimer::now_ns();
     tick(virtual_ns, virtual_ns);
     stats_.record(0, LoopTimer::now_ns() - exec_start_ns_, false, 0);
     virtual_ns += period_ns_;
   }
+}
+
+BenchLoop::SimulatedStep BenchLoop::next_simulated_step() noexcept {
+  defer_pending_ = false;
+  if (state() == State::kFault) return SimulatedStep::kPaced;
+  if (active_ != nullptr) return SimulatedStep::kFree;
+  const bool pending = pending_.load(std::memory_order_acquire) != nullptr;
+  if (!hold_gaps_.load(std::memory_order_acquire)) {
+    return pending ? SimulatedStep::kFree : SimulatedStep::kPaced;
+  }
+  if (idle_ticks_ < held_gap_ticks_) {
+    defer_pending_ = true;  // the gap first, however early the next run came
+    return SimulatedStep::kFree;
+  }
+  if (pending || abort_requested_.load(std::memory_order_acquire) ||
+      reset_requested_.load(std::memory_order_acquire)) {
+    return SimulatedStep::kFree;
+  }
+  return SimulatedStep::kStandStill;
 }
 
 void BenchLoop::log_sample(RunProgram& p, const SampleRecord& rec) noexcept {
@@ -214,10 +244,11 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
     if (driver_.read(m) == drivers::DriverStatus::kOk) last_y_.store(m.position_um);
     return;
   }
-  if (active_ == nullptr) {
+  if (active_ == nullptr && !defer_pending_) {
     RunProgram* p = pending_.exchange(nullptr, std::memory_order_acq_rel);
     if (p != nullptr) {
       active_ = p;
+      idle_ticks_ = 0;
       stuck_.reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
       driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
@@ -241,6 +272,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
 }
 
 void BenchLoop::idle_tick() noexcept {
+  ++idle_ticks_;
   const auto lim = limiter_.apply(driver_.safe_output_v());
   if (driver_.write(lim.u) != drivers::DriverStatus::kOk) {
     fault("driver write failed while idle");

@@ -323,6 +323,9 @@ details::RunContext Bench::run_context() const {
 
 json Bench::launch(const char* kind, details::BuiltRun run) {
   run.program->run_id = new_run_id(kind);
+  // The request's runs (identify's segments) follow each other after a fixed gap on the
+  // simulated clock, however long the bench computes between them; released with its result.
+  loop_->hold_time_between_runs(true);
   std::string run_id, log_path;
   std::uint64_t total = 0;
   if (run.preparation.work) {
@@ -651,6 +654,7 @@ void Bench::deliver_result(json result) {
     phase_ = RunPhase::kIdle;
     delivering_result_ = true;
   }
+  loop_->hold_time_between_runs(false);
   // Clients may start the next run as soon as they see this event, so the bench is idle before
   // it goes out; wait_idle() still waits for it, or a caller could read the previous result.
   emit({{"event", "run.finished"}, {"result", result}});

@@ -21,7 +21,10 @@
 // have the same columns and time grid as on the wall clock. During a run the loop ticks without
 // sleeping, each tick as soon as the previous one is computed; while idle (no run, or in kFault)
 // ticks stay paced on the wall clock, so an idle daemon does not burn a core and the idle plant
-// evolves at a real one's pace while the bench fits or plans. Wake latency is 0 and there are no
+// evolves at a real one's pace while the bench fits or plans, except between the runs of one
+// request (hold_time_between_runs): there the idle lasts BenchLoopOptions::held_gap_s of virtual
+// time, ticked without sleeping, and then the plant's time stands still until the next run comes,
+// so a request's history does not follow the machine's load. Wake latency is 0 and there are no
 // overruns and no overrun faults (lateness means nothing there); execution time per tick is still
 // measured on CLOCK_MONOTONIC. No SCHED_FIFO (a free-running FIFO thread would starve the rest of
 // the process on its CPU) and no memory lock. A full sample-log ring makes the loop wait for room
@@ -63,6 +66,9 @@ struct BenchLoopOptions {
   /// (LoopTimer::now_ns). Must be real-time safe. Used by step() only: the loop thread's
   /// deadlines and figures stay on CLOCK_MONOTONIC.
   std::int64_t (*clock_ns)() noexcept = nullptr;
+  /// Simulated clock, while hold_time_between_runs(true): the idle between two runs [s] of
+  /// virtual time, > 0 (about what a fit between two of identify's segments takes).
+  double held_gap_s = 1.0;
 };
 
 class BenchLoop {
@@ -89,6 +95,11 @@ class BenchLoop {
   /// Hands a run to the loop. Fails (returns the program back) when a run is active, another
   /// is pending, a finished one has not been taken yet, or the loop is in kFault.
   std::unique_ptr<RunProgram> submit(std::unique_ptr<RunProgram> program);
+  /// Simulated clock only (ignored on the wall clock and by step()): while on, the idle between
+  /// two runs lasts exactly held_gap_s, and then time stands still (no tick) until a run is
+  /// submitted. The bench holds it from a request's start to its result, so the runs of one
+  /// request (identify's segments) see the same plant however long it computes between them.
+  void hold_time_between_runs(bool on) noexcept { hold_gaps_.store(on, std::memory_order_release); }
   /// Ends the active run normally at the next tick.
   void request_stop() noexcept { stop_requested_.store(true, std::memory_order_release); }
   /// Safe output at the next tick; the active run ends as aborted (not a fault).
@@ -130,7 +141,8 @@ class BenchLoop {
   void reset_statistics() noexcept { stats_.request_reset(); }
   double last_measurement() const noexcept { return last_y_.load(std::memory_order_relaxed); }
   double last_output() const noexcept { return last_u_.load(std::memory_order_relaxed); }
-  /// Increments every tick: the watchdog is fed only while it advances.
+  /// Increments every tick, and every poll while the simulated clock's time stands still: the
+  /// watchdog is fed only while it advances.
   std::uint64_t ticks() const noexcept { return ticks_.load(std::memory_order_relaxed); }
   const BenchLoopOptions& options() const noexcept { return options_; }
 
@@ -140,6 +152,9 @@ class BenchLoop {
   void run_wall();
   /// The simulated-clock loop: free-running ticks during a run, paced ones while idle.
   void run_simulated();
+  /// What the simulated clock does next (loop thread; sets defer_pending_).
+  enum class SimulatedStep { kFree, kPaced, kStandStill };
+  SimulatedStep next_simulated_step() noexcept;
   /// A run is active or waiting to be picked up by the next tick (loop thread).
   bool run_in_play() const noexcept {
     return active_ != nullptr || pending_.load(std::memory_order_acquire) != nullptr;
@@ -199,6 +214,7 @@ class BenchLoop {
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> abort_requested_{false};
   std::atomic<bool> reset_requested_{false};
+  std::atomic<bool> hold_gaps_{false};
   std::atomic<double> last_y_{0.0};
   std::atomic<double> last_u_{0.0};
   std::atomic<std::uint64_t> ticks_{0};
@@ -215,6 +231,11 @@ class BenchLoop {
   bool overran_ = false;
   bool stepped_ = false;  // driven by step(): the injected clock applies
   bool simulated_ = false;
+  // Simulated clock: idle ticks since the last run ended, the held gap's length in ticks, and
+  // whether a pending run waits for the gap to be full.
+  std::uint64_t idle_ticks_ = 0;
+  std::uint64_t held_gap_ticks_ = 1;
+  bool defer_pending_ = false;
   std::int64_t exec_start_ns_ = 0;  // CLOCK_MONOTONIC (or step()'s clock) when this tick began
 };
 
