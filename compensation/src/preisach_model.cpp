@@ -220,12 +220,26 @@ void PreisachModel::reset(double u0) noexcept {
 
 void PreisachModel::cell_areas(double u, std::span<double> out) const noexcept {
   if (out.size() != p_.densities.size()) return;
-  std::fill(out.begin(), out.end(), 0.0);
   // The relays' input as step(u) would leave it.
   const double f = p_.rate_law.active() ? front(u, rate_.peek(u)) : u;
   Memory m = memory_;
   apply(f, m);
-  const double x = clamp(f);
+  write_cell_areas(m, clamp(f), out);
+}
+
+void PreisachModel::step_cell_areas(double u, std::span<double> out) noexcept {
+  if (out.size() != p_.densities.size()) return;
+  // As step(u), without the output's Everett value.
+  if (p_.rate_law.active() && std::isfinite(u)) front_ = front(u, rate_.step(u));
+  const double x = clamp(p_.rate_law.active() ? front_ : u);
+  apply(x, memory_);
+  u_ = x;
+  write_cell_areas(memory_, x, out);
+}
+
+void PreisachModel::write_cell_areas(const Memory& m, double x,
+                                     std::span<double> out) const noexcept {
+  std::fill(out.begin(), out.end(), 0.0);
   // Each cell's area in {b <= beta <= alpha <= a}, times sign, added to out.
   auto add = [&](double a, double b, double sign) {
     if (!(a > b)) return;

@@ -72,6 +72,31 @@ TEST(PreisachModel, TheOutputIsTheDensitiesTimesTheUpAreas) {
   }
 }
 
+// The identification's row: step_cell_areas(u) gives the areas cell_areas(u) gives and leaves the
+// state step(u) leaves, with a rate law's front (its filtered rate stepped once) as without one.
+TEST(PreisachModel, StepCellAreasIsCellAreasThenStep) {
+  std::mt19937_64 rng(11);
+  hc::PreisachParameters p = random_parameters(rng, 12);
+  for (const double law_s : {0.0, 2e-4}) {
+    p.rate_law.threshold_rate_s = law_s;
+    p.rate_law.exponent = 1.0;
+    p.rate_law.rate_filter_s = 1e-3;
+    hc::PreisachModel stepped(p), twin(p);
+    stepped.set_sample_period(1e-4);
+    twin.set_sample_period(1e-4);
+    stepped.reset(0.0);
+    twin.reset(0.0);
+    std::vector<double> areas(p.densities.size()), twin_areas(p.densities.size());
+    for (const double u : reversals(rng, 300, 0.0, 150.0)) {
+      stepped.cell_areas(u, areas);
+      (void)stepped.step(u);
+      twin.step_cell_areas(u, twin_areas);
+      ASSERT_EQ(areas, twin_areas) << "law " << law_s << ", u " << u;
+      ASSERT_EQ(stepped.peek(u + 1.0), twin.peek(u + 1.0)) << "law " << law_s << ", u " << u;
+    }
+  }
+}
+
 // Preisach's properties: the output rises with a rising input and falls with a falling one; a
 // minor loop closes where it began (return-point memory); the top and bottom of the range
 // saturate every relay; peek() is step() without the step.

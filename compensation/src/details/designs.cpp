@@ -138,8 +138,7 @@ double Design::row(double u, double y, double* a) noexcept {
   const double* z = z_.data();
   if (plane_) {
     if (s_.preisach_shape.empty()) {
-      plane_->cell_areas(u, std::span<double>(a, static_cast<std::size_t>(n_)));
-      plane_->step(u);
+      plane_->step_cell_areas(u, std::span<double>(a, static_cast<std::size_t>(n_)));
     } else {
       a[0] = plane_->step(u);  // no slope, offset or map: the shape's relays alone
     }
