@@ -160,6 +160,9 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     if (!chosen.model.hysteresis().thresholds_law()) return;
     hc::FitOptions o = neighbour_options(options, "without the rate law: ");
     o.preisach_rate_law = false;
+    // Its output map as the chosen plane's: the law alone is what the bench judges (and the
+    // map's search is half the plane's fit).
+    o.dead_zones = chosen.dead_zones;
     try {
       hc::FitResult fit = hc::fit_model(t, u, y, o);
       if (fit.model.hysteresis().kind() != hc::ModelKind::kPreisach) return;
@@ -212,23 +215,29 @@ void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
   try {
     session_ = fit_candidates(run, result, fit_request);
     continue_identify();
-    // The diagnoses start once the first segment is on the loop (building its drive does not
-    // share the second core with them). Every candidate may become the base: diagnosed in the
-    // order the choice prefers them until the verification has chosen.
-    if (session_ && session_->extend && !session_->extension_tried) {
-      std::vector<std::size_t> order(session_->candidates.size());
-      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-      session_->ahead = std::make_unique<details::DiagnosisAhead>(
-          identify_diagnosis(session_->candidates,
-                             session_->history.value("exchange_ticks", 0) * dt_, session_->u,
-                             session_->y, dt_, session_->swap_operator),
-          std::move(order));
-    }
+    // The rest start once the first segment is on the loop (building its drive does not share
+    // the second core with them).
+    if (session_ && !session_->extension_tried) diagnose_candidates_ahead(*session_);
     return;
   } catch (const std::exception& e) {
     result.report["fit_error"] = e.what();
   }
   deliver_result(std::move(result.report));
+}
+
+void Bench::diagnose_candidates_ahead(IdentifySession& s) const {
+  if (!s.extend) return;
+  // Every candidate may become the base: diagnosed in the order the choice prefers them until
+  // the verification has chosen.
+  std::vector<std::size_t> order(s.candidates.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  details::DiagnosisAhead::Task task = identify_diagnosis(
+      s.candidates, s.history.value("exchange_ticks", 0) * dt_, s.u, s.y, dt_, s.swap_operator);
+  if (s.ahead) {
+    s.ahead->queue_more(std::move(task), std::move(order));
+  } else {
+    s.ahead = std::make_unique<details::DiagnosisAhead>(std::move(task), std::move(order));
+  }
 }
 
 std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& run,
@@ -265,27 +274,6 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
   // Each candidate (one family, or every family for auto) is verified on the loop by a
   // tracking segment through its inverse before one is adopted and run.finished goes out.
   auto session = std::make_unique<IdentifySession>();
-  if (opt.kind) {
-    // One family: the delay search's fit at the chosen delay is that family's fit.
-    session->candidates.push_back(family_candidate(id.fit));
-    add_dead_zone_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
-    const std::size_t before = session->candidates.size();
-    add_rate_free_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
-    if (session->candidates.size() > before) session->rate_free = before;
-  } else {
-    session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
-  }
-  for (std::size_t i = 0; i < session->candidates.size(); ++i) {
-    IdentifyCandidate& c = session->candidates[i];
-    c.fit.delay_samples = id.delay_ticks;
-    c.fit.model.set_delay(static_cast<double>(id.delay_ticks) * dt_);
-    session->jobs.push_back({i});
-  }
-  if (session->rate_free) {
-    session->rate_sine_hz = rate_sine_frequency(settings_.loop.rate_hz);
-    session->jobs.push_back({0, session->rate_sine_hz});
-    session->jobs.push_back({*session->rate_free, session->rate_sine_hz});
-  }
   session->u.assign(u_rec.begin(), u_rec.end());
   session->y = aligned;
   session->unscored = fit_request.value("skip_samples", std::size_t{0});
@@ -299,6 +287,32 @@ std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& 
   session->history["exchange_ticks"] = id.exchange_ticks;
   session->history["delay_note"] = id.delay_note;
   session->result = result.report;
+  const auto timed = [&](IdentifyCandidate& c) {
+    c.fit.delay_samples = id.delay_ticks;
+    c.fit.model.set_delay(static_cast<double>(id.delay_ticks) * dt_);
+  };
+  if (opt.kind) {
+    // One family: the delay search's fit at the chosen delay is that family's fit. Its
+    // diagnosis starts now, on the second core beside its neighbours' fits.
+    session->candidates.push_back(family_candidate(id.fit));
+    timed(session->candidates.front());
+    diagnose_candidates_ahead(*session);
+    add_dead_zone_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
+    const std::size_t before = session->candidates.size();
+    add_rate_free_neighbour(session->candidates, rec.t, rec.u, rec.y, opt);
+    if (session->candidates.size() > before) session->rate_free = before;
+  } else {
+    session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
+  }
+  for (std::size_t i = 0; i < session->candidates.size(); ++i) {
+    timed(session->candidates[i]);
+    session->jobs.push_back({i});
+  }
+  if (session->rate_free) {
+    session->rate_sine_hz = rate_sine_frequency(settings_.loop.rate_hz);
+    session->jobs.push_back({0, session->rate_sine_hz});
+    session->jobs.push_back({*session->rate_free, session->rate_sine_hz});
+  }
   return session;
 }
 

@@ -209,3 +209,35 @@ TEST(DiagnosisAhead, DestroyingItCancelsTheOneRunning) {
   }
   EXPECT_TRUE(cancelled.load());
 }
+
+// Started on the first candidate while the others are still being fitted: the worker waits
+// for more, the candidates queued later are diagnosed by the task given with them, and once
+// focused no candidate joins any more.
+TEST(DiagnosisAhead, CandidatesFittedLaterJoinTheQueue) {
+  std::atomic<int> first_task_runs{0};
+  hd::DiagnosisAhead ahead(
+      [&](std::size_t i, const hd::DiagnosisAhead::Progress&) {
+        ++first_task_runs;
+        return marked(i);
+      },
+      {0});
+  wait_until([&] { return ahead.ready(0); });
+  std::thread::id later_ran_on;
+  const auto later = [&](std::size_t i, const hd::DiagnosisAhead::Progress&) {
+    later_ran_on = std::this_thread::get_id();
+    hc::Diagnosis d = marked(i);
+    d.verdict += " (later)";
+    return d;
+  };
+  ahead.queue_more(later, {0, 1});
+  wait_until([&] { return ahead.ready(1); });
+  EXPECT_EQ(first_task_runs.load(), 1);  // candidate 0 is not diagnosed twice
+  EXPECT_NE(later_ran_on, std::this_thread::get_id());
+  ahead.focus(1);
+  ahead.queue_more(later, {2});
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_FALSE(ahead.ready(2));
+  const auto taken = ahead.take(1, nullptr);
+  EXPECT_EQ(taken.diagnosis.verdict, "candidate 1 (later)");
+  EXPECT_EQ(taken.how, "during the verification");
+}

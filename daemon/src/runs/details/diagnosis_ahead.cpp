@@ -6,7 +6,9 @@
 namespace hystbench::daemon::details {
 
 DiagnosisAhead::DiagnosisAhead(Task task, std::vector<std::size_t> order)
-    : task_(std::move(task)), queue_(order.begin(), order.end()), worker_([this] { run(); }) {}
+    : task_(std::make_shared<const Task>(std::move(task))),
+      queue_(order.begin(), order.end()),
+      worker_([this] { run(); }) {}
 
 DiagnosisAhead::~DiagnosisAhead() { stop_and_join(); }
 
@@ -15,15 +17,34 @@ void DiagnosisAhead::stop_and_join() {
     std::lock_guard lock(mutex_);
     cancel_ = true;
   }
+  changed_.notify_all();  // a worker waiting for more
   if (worker_.joinable()) worker_.join();
 }
 
+void DiagnosisAhead::queue_more(Task task, std::vector<std::size_t> order) {
+  {
+    std::lock_guard lock(mutex_);
+    if (focused_ || cancel_ || stop_after_running_) return;
+    task_ = std::make_shared<const Task>(std::move(task));
+    for (const std::size_t i : order) {
+      const bool known = done_.contains(i) || failed_.contains(i) || running_ == i ||
+                         std::find(queue_.begin(), queue_.end(), i) != queue_.end();
+      if (!known) queue_.push_back(i);
+    }
+  }
+  changed_.notify_all();
+}
+
 void DiagnosisAhead::focus(std::size_t candidate) {
-  std::lock_guard lock(mutex_);
-  queue_.clear();
-  if (done_.contains(candidate) || failed_.contains(candidate) || running_ == candidate) return;
-  queue_.push_back(candidate);
-  abandon_ = running_.has_value();
+  {
+    std::lock_guard lock(mutex_);
+    focused_ = true;
+    queue_.clear();
+    if (done_.contains(candidate) || failed_.contains(candidate) || running_ == candidate) return;
+    queue_.push_back(candidate);
+    abandon_ = running_.has_value();
+  }
+  changed_.notify_all();
 }
 
 bool DiagnosisAhead::ready(std::size_t candidate) {
@@ -34,20 +55,23 @@ bool DiagnosisAhead::ready(std::size_t candidate) {
 void DiagnosisAhead::run() {
   for (;;) {
     std::size_t i = 0;
+    std::shared_ptr<const Task> task;
     {
-      std::lock_guard lock(mutex_);
-      if (cancel_ || stop_after_running_ || queue_.empty()) break;
+      std::unique_lock lock(mutex_);
+      changed_.wait(lock, [&] { return cancel_ || stop_after_running_ || !queue_.empty(); });
+      if (cancel_ || stop_after_running_) break;
       i = queue_.front();
       queue_.pop_front();
       running_ = i;
       abandon_ = false;
+      task = task_;
     }
     const Progress cancellable = [this](double, const std::string&) {
       std::lock_guard lock(mutex_);
       if (cancel_ || abandon_) throw Cancelled{};
     };
     try {
-      compensation::Diagnosis d = task_(i, cancellable);
+      compensation::Diagnosis d = (*task)(i, cancellable);
       std::lock_guard lock(mutex_);
       done_.emplace(i, std::move(d));
     } catch (const Cancelled&) {
@@ -80,7 +104,7 @@ DiagnosisAhead::Taken DiagnosisAhead::take(std::size_t candidate, const Progress
   stop_and_join();
   if (const auto f = failed_.find(candidate); f != failed_.end()) std::rethrow_exception(f->second);
   if (auto d = done_.find(candidate); d != done_.end()) return {std::move(d->second), how};
-  return {task_(candidate, progress), "after the verification"};
+  return {(*task_)(candidate, progress), "after the verification"};
 }
 
 }  // namespace hystbench::daemon::details

@@ -1,8 +1,9 @@
 #pragma once
 // The diagnoses of identify's candidates, run on a worker thread while the loop plays their
 // verification segments (wall time the supervisor spends waiting): one candidate after another,
-// in the order given, each kept until taken; once the verification has chosen, only the chosen
-// one (focus). The worker runs at the normal policy: at SCHED_IDLE
+// in the order given, each kept until taken; candidates fitted after it started join the queue
+// (queue_more); once the verification has chosen, only the chosen one (focus). The worker waits
+// for more until it is taken or destroyed. The worker runs at the normal policy: at SCHED_IDLE
 // another busy process starves it, and taking or cancelling it then waits for as long. Not
 // real-time code; the supervisor thread owns it.
 #include <condition_variable>
@@ -11,6 +12,7 @@
 #include <exception>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -31,6 +33,9 @@ class DiagnosisAhead {
   DiagnosisAhead(Task task, std::vector<std::size_t> order);
   /// Cancels what is running (at its next progress report) and joins.
   ~DiagnosisAhead();
+  /// The candidates in `order` join the queue, diagnosed from now on by `task`, which must give
+  /// what the task before gave for the candidates it knew. Ignored once focused or taken.
+  void queue_more(Task task, std::vector<std::size_t> order);
   /// Only candidate i is wanted from now on: another one running is abandoned (at its next
   /// progress report) and none but i starts.
   void focus(std::size_t candidate);
@@ -53,8 +58,9 @@ class DiagnosisAhead {
   void run();
   void stop_and_join();
 
-  Task task_;
-  std::deque<std::size_t> queue_;  ///< the candidates still to start, in order
+  std::shared_ptr<const Task> task_;  ///< the latest; the worker holds the one it runs
+  std::deque<std::size_t> queue_;     ///< the candidates still to start, in order
+  bool focused_ = false;              ///< focus() was called: no candidate joins any more
   std::mutex mutex_;
   std::condition_variable changed_;
   std::map<std::size_t, compensation::Diagnosis> done_;

@@ -229,6 +229,10 @@ class Bench {
   std::unique_ptr<IdentifySession> fit_candidates(const RunProgram& run,
                                                   const details::RunResult& result,
                                                   const nlohmann::json& fit_request);
+  /// Diagnoses s's candidates ahead on a worker (s.ahead), in the order the choice prefers them:
+  /// started with those there are, or those fitted since queued on it. Nothing where s does not
+  /// extend its model.
+  void diagnose_candidates_ahead(IdentifySession& s) const;
   /// Adopts the chosen candidate and delivers the identify result.
   void finish_identify();
   /// Opens p's log (p.log) with `header`; the header's run and p's result name the loop's clock.
