@@ -60,6 +60,16 @@ class BenchFixture : public TempDirTest {
            "\n[driver]\ntype = \"loopback\"\n" + tables;
   }
 
+  /// The slow bench: a 1 kHz loop on the simulated clock whose loopback has one mode, at 190 Hz
+  /// (damping 0.07), and `tables` switched on beside it.
+  static std::string slow_bench_toml(const std::string& tables = {}) {
+    return loopback_toml(
+        "[actuator.dynamics]\nnatural_frequencies_hz = [190.0]\ndamping_ratios = [0.07]\n"
+        "mode_gains = [1.0]\n" +
+            tables,
+        kSimulatedClock, 1000.0);
+  }
+
   /// The daemon's settings for a TOML config (the user's path: bench_settings_from), with the
   /// test's folders and the shared-machine loop settings of base_settings().
   daemon::BenchSettings settings_from_toml(const std::string& toml) const {

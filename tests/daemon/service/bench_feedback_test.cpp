@@ -221,10 +221,7 @@ TEST_F(BenchFeedbackTest, AStepSettlesWithinFiveMillisecondsAndOvershootsAtMostF
 // inverse alone at 1 and 10 Hz and takes most of the inverse's error out at 1 Hz; at 50 Hz,
 // above the crossover, the result says the loop amplifies there (|S| above 1).
 TEST_F(BenchFeedbackTest, AOneKilohertzLoopWithA190HzModeIsDesignedOnItsMeasuredResponse) {
-  start(settings_from_toml(loopback_toml(
-      "[actuator.dynamics]\nnatural_frequencies_hz = [190.0]\ndamping_ratios = [0.07]\n"
-      "mode_gains = [1.0]\n",
-      kSimulatedClock, 1000.0)));
+  start(settings_from_toml(slow_bench_toml()));
   const json id = identify();
   const json& f = id["feedback"];
   ASSERT_TRUE(f.is_object()) << id.dump(2);
@@ -278,10 +275,7 @@ TEST_F(BenchFeedbackTest, AOneKilohertzLoopWithA190HzModeIsDesignedOnItsMeasured
 // amplified). At 5 Hz the loop is about neutral (0.93-1.04x over four runs): what it takes off
 // the fundamental it gives back on the harmonics near its |S| peak.
 TEST_F(BenchFeedbackTest, ThroughTheLinearMapTheLoopHoldsTheStageAlongItsLoopAndIsNeverWorse) {
-  start(settings_from_toml(loopback_toml(
-      "[actuator.dynamics]\nnatural_frequencies_hz = [190.0]\ndamping_ratios = [0.07]\n"
-      "mode_gains = [1.0]\n[actuator.hysteresis]\nkind = \"modified_pi\"\n",
-      kSimulatedClock, 1000.0)));
+  start(settings_from_toml(slow_bench_toml("[actuator.hysteresis]\nkind = \"modified_pi\"\n")));
   const json id = identify();
   const json& f = id["feedback"];
   ASSERT_TRUE(f.is_object()) << id.dump(2);

@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -242,10 +243,7 @@ TEST_F(BenchFeedforwardTest,
 // the 20 and 50 Hz sines at 0.90 / 1.33 % rms through the inverse, where the model without it
 // tracked at 4.0 / 10.3 % (one run of each build).
 TEST_F(BenchFeedforwardTest, WhereTheWholeExtensionFailsItsCheckItsModeAloneIsKept) {
-  start(settings_from_toml(loopback_toml(
-      "[actuator.dynamics]\nnatural_frequencies_hz = [190.0]\ndamping_ratios = [0.07]\n"
-      "mode_gains = [1.0]\n[actuator.delay]\nenabled = true\n",
-      kSimulatedClock, 1000.0)));
+  start(settings_from_toml(slow_bench_toml("[actuator.delay]\nenabled = true\n")));
   const json id = run_and_wait("identify", json::object());
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   const json& e = id["model"]["extension"];
@@ -257,13 +255,42 @@ TEST_F(BenchFeedforwardTest, WhereTheWholeExtensionFailsItsCheckItsModeAloneIsKe
   }
   EXPECT_TRUE(mode_kept) << e.dump(2);
   for (const double f : {20.0, 50.0}) {
-    const json r = run_and_wait("track", {{"reference", "sine"},
-                                          {"frequency_hz", f},
-                                          {"periods", 20},
-                                          {"compensator", "inverse"}});
+    const json r = run_and_wait(
+        "track",
+        {{"reference", "sine"}, {"frequency_hz", f}, {"periods", 20}, {"compensator", "inverse"}});
     ASSERT_EQ(r["end"], "completed") << r.dump(2);
     const double rms = r.value("rms_error_percent", 100.0);
     std::cout << f << " Hz sine through the inverse: " << rms << " % rms\n";
     EXPECT_LE(rms, f < 30.0 ? 1.5 : 2.5) << r.dump(2);
+  }
+}
+
+// Issue 60's bench: a 1 kHz loop with a 190 Hz mode and the delay on (creep is the truth's
+// own), `identify --model preisach`. The diagnosis of the plane gains from the mode, from creep
+// and from a rate law, and identify adopts all three on the bench: the 20 and 50 Hz sines at
+// 0.36 / 0.94 % rms through the inverse (one run), where the mpi with its mode alone, which
+// plain identify keeps there, tracks at 0.83-0.90 / 1.33-1.75 % (the test before).
+TEST_F(BenchFeedforwardTest, WhereTheDiagnosisGainsFromAModeCreepAndARateLawIdentifyAdoptsAll) {
+  start(settings_from_toml(slow_bench_toml("[actuator.delay]\nenabled = true\n")));
+  const json id = run_and_wait("identify", {{"model", "preisach"}});
+  ASSERT_EQ(id["end"], "completed") << id.dump(2);
+  const json& e = id["model"]["extension"];
+  std::cout << "extension: " << e.value("why", "") << "; " << e.value("description", "") << "\n";
+  ASSERT_TRUE(e.value("adopted", false)) << e.dump(2);
+  std::set<std::string> adopted;
+  for (const json& p : e["parts"]) {
+    if (p.value("adopted", false)) adopted.insert(p["cause"].get<std::string>());
+  }
+  for (const char* cause : {"dynamics", "creep", "rate_dependence"}) {
+    EXPECT_TRUE(adopted.contains(cause)) << cause << " not adopted: " << e.dump(2);
+  }
+  for (const double f : {20.0, 50.0}) {
+    const json r = run_and_wait(
+        "track",
+        {{"reference", "sine"}, {"frequency_hz", f}, {"periods", 20}, {"compensator", "inverse"}});
+    ASSERT_EQ(r["end"], "completed") << r.dump(2);
+    const double rms = r.value("rms_error_percent", 100.0);
+    std::cout << f << " Hz sine through the inverse: " << rms << " % rms\n";
+    EXPECT_LE(rms, f < 30.0 ? 0.6 : 1.3) << r.dump(2);
   }
 }
