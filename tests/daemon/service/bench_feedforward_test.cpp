@@ -261,7 +261,7 @@ TEST_F(BenchFeedforwardTest, WhereTheWholeExtensionFailsItsCheckItsModeAloneIsKe
   EXPECT_LE(sine_rms(50.0, 1000.0), 2.5);
 }
 
-// Issue 60's bench: a 1 kHz loop with a 190 Hz mode and the delay on (creep is the truth's
+// The slow bench: a 1 kHz loop with a 190 Hz mode and the delay on (creep is the truth's
 // own), `identify --model preisach`. The diagnosis of the plane gains from the mode, from creep
 // and from a rate law, and identify adopts all three on the bench: the 20 and 50 Hz sines at
 // 0.36 / 0.94 % rms through the inverse (one run), where the mpi with its mode alone, which
