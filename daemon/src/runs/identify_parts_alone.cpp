@@ -93,15 +93,13 @@ std::string parts_alone_text(const PartsByBand& parts, PartsBand band) {
 }
 
 IdentifyCandidate with_timing_of(const IdentifyCandidate& from, const IdentifyCandidate& timing,
-                                 const PartsByBand& parts, PartsBand band, double dt_s) {
+                                 double dt_s) {
   IdentifyCandidate alone{from.fit, json(), from.label, {}};
   hc::ActuatorModel& m = alone.fit.model;
   m.set_dynamics(timing.fit.model.dynamics());
   m.set_delay(timing.fit.model.delay_s());
   m.configure(dt_s);
   alone.fit.delay_samples = timing.fit.delay_samples;
-  alone.fit.notes.push_back("extended by the diagnosis of its record: " +
-                            parts_alone_text(parts, band));
   return alone;
 }
 
@@ -110,12 +108,11 @@ std::optional<IdentifyCandidate> fast_parts_instead(const IdentifyCandidate& bas
                                                     json& extension) {
   const PartsByBand parts = split_parts(extension.value("parts", json::array()));
   if (parts.fast.empty() || parts.slow.empty()) return std::nullopt;
-  IdentifyCandidate fast = with_timing_of(base, ext, parts, PartsBand::kFast, dt_s);
+  IdentifyCandidate fast = with_timing_of(base, ext, dt_s);
   json tried = {{"parts", parts.fast}, {"left_out", parts.slow}};
   const bool checked = passes_check(fast.fit.model, dt_s, tried);
   extension[parts_key(PartsBand::kFast)] = std::move(tried);
   if (!checked) return std::nullopt;
-  fast.fit.notes.pop_back();  // the caller says what the extension holds
   extension["why_fast_parts"] =
       "the whole extension failed its check; its fast parts alone passed it";
   return fast;
@@ -159,8 +156,10 @@ void Bench::queue_parts_alone() {
     if (!parts_alone_worth_trying(base, ext, parts, band, s.fast_hz, s.mid_hz)) continue;
     const bool fast = band == PartsBand::kFast;
     // The fast parts on the base, or the extension with the base's mode and delay.
-    IdentifyCandidate alone = fast ? with_timing_of(base, ext, parts, band, dt_)
-                                   : with_timing_of(ext, base, parts, band, dt_);
+    IdentifyCandidate alone =
+        fast ? with_timing_of(base, ext, dt_) : with_timing_of(ext, base, dt_);
+    alone.fit.notes.push_back("extended by the diagnosis of its record: " +
+                              parts_alone_text(parts, band));
     alone.label = base.label + (fast ? "-fast-parts" : "-slow-parts");
     const hc::ActuatorModel& m = alone.fit.model;
     const std::vector<std::string>& in = fast ? parts.fast : parts.slow;

@@ -98,14 +98,14 @@ bool passes_check(const compensation::ActuatorModel& model, double dt_s, nlohman
 std::string parts_alone_text(const PartsByBand& parts, PartsBand band);
 
 /// `from` with the dynamics and the delay of `timing`: one band of an extension's parts alone
-/// (the base with the extension's fast parts, or the extension with the base's), noted as such
-/// (parts_alone_text()); `from`'s label.
+/// (the base with the extension's fast parts, or the extension with the base's); `from`'s
+/// label and notes.
 IdentifyCandidate with_timing_of(const IdentifyCandidate& from, const IdentifyCandidate& timing,
-                                 const PartsByBand& parts, PartsBand band, double dt_s);
+                                 double dt_s);
 
 /// Where the whole extension `ext` failed its check: `base` with the extension's fast parts
-/// alone, checked (extension["fast_parts"]: parts, left_out, check), without with_timing_of()'s
-/// note (the caller describes the extension); empty where the extension
+/// alone, checked (extension["fast_parts"]: parts, left_out, check), with no note of them (the
+/// caller describes the extension); empty where the extension
 /// does not hold parts of both bands, or the fast parts fail the check too.
 std::optional<IdentifyCandidate> fast_parts_instead(const IdentifyCandidate& base,
                                                     const IdentifyCandidate& ext, double dt_s,
