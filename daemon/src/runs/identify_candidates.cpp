@@ -234,7 +234,7 @@ void Bench::diagnose_candidates_ahead(IdentifySession& s) const {
   details::DiagnosisAhead::Task task = identify_diagnosis(
       s.candidates, s.history.value("exchange_ticks", 0) * dt_, s.u, s.y, dt_, s.swap_operator);
   if (s.ahead) {
-    s.ahead->queue_more(std::move(task), std::move(order));
+    s.ahead->queue_more(std::move(task), order);
   } else {
     s.ahead = std::make_unique<details::DiagnosisAhead>(std::move(task), std::move(order));
   }

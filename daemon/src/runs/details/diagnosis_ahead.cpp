@@ -21,7 +21,7 @@ void DiagnosisAhead::stop_and_join() {
   if (worker_.joinable()) worker_.join();
 }
 
-void DiagnosisAhead::queue_more(Task task, std::vector<std::size_t> order) {
+void DiagnosisAhead::queue_more(Task task, const std::vector<std::size_t>& order) {
   {
     std::lock_guard lock(mutex_);
     if (focused_ || cancel_ || stop_after_running_) return;

@@ -35,7 +35,7 @@ class DiagnosisAhead {
   ~DiagnosisAhead();
   /// The candidates in `order` join the queue, diagnosed from now on by `task`, which must give
   /// what the task before gave for the candidates it knew. Ignored once focused or taken.
-  void queue_more(Task task, std::vector<std::size_t> order);
+  void queue_more(Task task, const std::vector<std::size_t>& order);
   /// Only candidate i is wanted from now on: another one running is abandoned (at its next
   /// progress report) and none but i starts.
   void focus(std::size_t candidate);
