@@ -326,6 +326,13 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
   // The request's runs (identify's segments) follow each other after a fixed gap on the
   // simulated clock, however long the bench computes between them; released with its result.
   loop_->hold_time_between_runs(true);
+  struct ReleaseUnlessLaunched {  // a log that cannot open launches nothing: paced idle again
+    BenchLoop& loop;
+    bool launched = false;
+    ~ReleaseUnlessLaunched() {
+      if (!launched) loop.hold_time_between_runs(false);
+    }
+  } hold{*loop_};
   std::string run_id, log_path;
   std::uint64_t total = 0;
   if (run.preparation.work) {
@@ -356,6 +363,7 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
                 {"duration_s", static_cast<double>(total) * dt_},
                 {"log", log_path}};
   reply.update(run.reply);
+  hold.launched = true;
   return reply;
 }
 
