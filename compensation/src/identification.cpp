@@ -295,7 +295,7 @@ class Identifier {
   // The plane's rate law as the first plane search found it (its structure), or that it found
   // none (nullopt inside): the plane with creep lags refits it rather than search again. Seeded
   // from FitOptions::preisach_given_rate_law.
-  std::optional<std::optional<ModelStructure>> plane_law_;
+  std::optional<std::optional<ThresholdsRateLaw>> plane_law_;
   // The thresholds law over one rate-dependent structure: the widening and the rate filter
   // chosen by the fit's error; empty when the record has no input span or rate.
   Candidate thresholds_law_over(ModelStructure s);
@@ -837,13 +837,7 @@ void Identifier::add_plane_rate_law(Candidate& c) {
   if (plane_law_) {
     // Searched once already (the plane before its creep lags), or given: that law, on this plane.
     if (!*plane_law_) return;
-    const ModelStructure& law = **plane_law_;
-    s.rate_law = RateLaw::kThresholds;
-    s.threshold_rate_s = law.threshold_rate_s;
-    s.threshold_rate_exponent = law.threshold_rate_exponent;
-    s.max_rate = law.max_rate;
-    s.record_max_rate = law.record_max_rate;
-    s.rate_filter_s = law.rate_filter_s;
+    s.set_thresholds_law(**plane_law_);
     stage_progress(0.0, "the plane's thresholds rate law, refitted");
     widened = evaluate(s, "constrained-lsq-rate-thresholds");
   } else {
@@ -858,7 +852,7 @@ void Identifier::add_plane_rate_law(Candidate& c) {
   const bool kept = widened.model && widened.score() < (1.0 - kPlaneRateLawGain) * c.score();
   if (!plane_law_) {
     plane_law_.emplace();  // searched: the law found, or none
-    if (kept) *plane_law_ = widened.structure;
+    if (kept) *plane_law_ = widened.structure.thresholds_law();
   }
   if (kept) {
     widened.method = c.method + "+rate-thresholds";
@@ -873,14 +867,7 @@ FitResult Identifier::run() {
   memo_.clear();
   plane_law_.reset();
   if (o_.preisach_given_rate_law && o_.preisach_given_rate_law->active()) {
-    const ThresholdsRateLaw& law = *o_.preisach_given_rate_law;
-    ModelStructure given;
-    given.threshold_rate_s = law.threshold_rate_s;
-    given.threshold_rate_exponent = law.exponent;
-    given.max_rate = law.max_rate;
-    given.record_max_rate = law.record_max_rate;
-    given.rate_filter_s = law.rate_filter_s;
-    plane_law_.emplace(given);
+    plane_law_.emplace(*o_.preisach_given_rate_law);
   }
   Candidate best = search_families();
   if (o_.refine_thresholds) {

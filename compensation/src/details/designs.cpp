@@ -53,10 +53,7 @@ Design::Design(ModelStructure s) : s_(std::move(s)) {
     PreisachParameters plane{
         s_.plane_min, s_.plane_max, n,
         shaped ? s_.preisach_shape : std::vector<double>(PreisachModel::cell_count(n), 0.0)};
-    if (s_.rate_law == RateLaw::kThresholds) {
-      plane.rate_law = {s_.threshold_rate_s, s_.threshold_rate_exponent, s_.max_rate,
-                        s_.record_max_rate, s_.rate_filter_s};
-    }
+    if (s_.rate_law == RateLaw::kThresholds) plane.rate_law = s_.thresholds_law();
     plane_ = std::make_unique<PreisachModel>(std::move(plane));
     plane_->set_sample_period(s_.dt);
     s_.play_thresholds.clear();

@@ -78,6 +78,19 @@ struct ModelStructure {
     return static_cast<double>(k) * dt - drift_t0_s;
   }
   std::size_t zero_index() const;  ///< index of 0 in dead_zone_thresholds
+  /// The thresholds law its fields hold (rate_law kThresholds; a plane's or an rpi's).
+  ThresholdsRateLaw thresholds_law() const noexcept {
+    return {threshold_rate_s, threshold_rate_exponent, max_rate, record_max_rate, rate_filter_s};
+  }
+  /// Sets rate_law to kThresholds and its fields from `law`.
+  void set_thresholds_law(const ThresholdsRateLaw& law) noexcept {
+    rate_law = RateLaw::kThresholds;
+    threshold_rate_s = law.threshold_rate_s;
+    threshold_rate_exponent = law.exponent;
+    max_rate = law.max_rate;
+    record_max_rate = law.record_max_rate;
+    rate_filter_s = law.rate_filter_s;
+  }
   /// MPI and RPI always have the dead-zone stage; CPI and Preisach when they have dead zones ({0}
   /// alone: none).
   bool has_dead_zones() const noexcept {

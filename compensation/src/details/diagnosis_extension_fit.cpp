@@ -106,14 +106,7 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
         s.plane_max = p.u_max;
         s.preisach_shape = p.densities;
         s.center = p.center;
-        if (p.rate_law.active()) {
-          s.rate_law = RateLaw::kThresholds;
-          s.threshold_rate_s = p.rate_law.threshold_rate_s;
-          s.threshold_rate_exponent = p.rate_law.exponent;
-          s.max_rate = p.rate_law.max_rate;
-          s.record_max_rate = p.rate_law.record_max_rate;
-          s.rate_filter_s = p.rate_law.rate_filter_s;
-        }
+        if (p.rate_law.active()) s.set_thresholds_law(p.rate_law);
         if (p.output_map.thresholds.size() > 1) {
           s.dead_zone_thresholds =
               DeadZoneSuperposition(p.output_map).inverse().parameters().thresholds;
