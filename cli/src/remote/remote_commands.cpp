@@ -59,7 +59,6 @@ void print_delay_trim(std::ostream& out, const json& t) {
       << "\n";
 }
 
-// The extension's fast parts alone, tried where the whole extension lost on the bench.
 // One band of an extension's parts tried alone (model.extension.fast_parts / slow_parts).
 void print_parts_alone(std::ostream& out, const json& f, const std::string& band) {
   const auto names = [](const json& list) {

@@ -236,7 +236,8 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
 /// gains on the held-out record can still track worse than none where the actuator follows
 /// another law (a switching front: docs/measurements.md, "Rate dependence on"); on the slow
 /// triangle a law that helps and its rate-free self differ by no more than two runs of one model.
-/// Nothing is appended for another family, a rate-free fit, or a refit that fails.
+/// A Preisach plane whose rate law the fit kept: the plane refitted without it, with the same
+/// output map. Nothing is appended for another family, a rate-free fit, or a refit that fails.
 void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
                              std::span<const double> u, std::span<const double> y,
                              const compensation::FitOptions& options);
