@@ -192,18 +192,19 @@ double SimulatedActuator::static_map(double ud) noexcept {
   return preisach_map(config_.hysteresis, config_.input.min_v, preisach_->step(front), ud);
 }
 
-double SimulatedActuator::mechanics(double ud) noexcept {
+double SimulatedActuator::stroke(double u_volts) noexcept {
+  applied_input_ = condition_input(u_volts);
+  const double ud = delay_.push(applied_input_);
   double y = static_map(ud);
   if (!input_creep_.empty()) y += input_creep_.step(ud);
   if (!displacement_creep_.empty()) y += displacement_creep_.step(y - creep_reference_um_);
-  return modes_.step(y);
+  stroke_um_ = y;
+  return y;
 }
 
-double SimulatedActuator::step(double u_volts) noexcept {
-  applied_input_ = condition_input(u_volts);
-  const double ud = delay_.push(applied_input_);
+double SimulatedActuator::measure(double x_um) noexcept {
   const double previous = true_position_;
-  true_position_ = clamp_displacement(mechanics(ud) + drift_.step());
+  true_position_ = clamp_displacement(x_um + drift_.step());
   // The sensor sees the position move during the sample, not held at its end: its filter takes
   // the sample's mean (the trapezoid), so it adds its own lag and not half a sample's lead.
   double measured = sensor_ ? sensor_->step(0.5 * (previous + true_position_)) : true_position_;
@@ -211,6 +212,15 @@ double SimulatedActuator::step(double u_volts) noexcept {
     measured += config_.sensor_noise.rms_um * unit_normal_(noise_rng_);
   }
   return adc_.apply(measured);
+}
+
+double SimulatedActuator::step(double u_volts) noexcept {
+  return measure(structure(stroke(u_volts)));
+}
+
+void SimulatedActuator::settle_measurement(double x_um) noexcept {
+  true_position_ = clamp_displacement(x_um);
+  if (sensor_) sensor_->reset(true_position_);
 }
 
 void SimulatedActuator::reset(double u0) noexcept {
@@ -236,12 +246,12 @@ void SimulatedActuator::reset(double u0) noexcept {
     displacement_creep_.reset(y - creep_reference_um_);
     y += displacement_creep_.peek(y - creep_reference_um_);
   }
+  stroke_um_ = y;
   modes_.reset(y);
   drift_.reset();
   noise_rng_.seed(config_.sensor_noise.seed);
   unit_normal_.reset();
-  true_position_ = clamp_displacement(y);
-  if (sensor_) sensor_->reset(true_position_);
+  settle_measurement(y);
 }
 
 }  // namespace hystbench::sim

@@ -46,6 +46,20 @@ class SimulatedActuator {
   /// reset() repeats exactly.
   void reset(double u0) noexcept;
 
+  /// The signal path in three parts, for a stage that couples several actuators between their
+  /// modes and their sensors (SimulatedStage); step(u) is measure(structure(stroke(u))).
+  /// stroke: input conditioning, delay, static map and creep: the displacement before the
+  /// modes [µm]. structure: the modes. measure: + drift, displacement clamp (true_position()),
+  /// sensor filter, noise and ADC: the measured displacement [µm].
+  double stroke(double u_volts) noexcept;
+  double structure(double x_um) noexcept { return modes_.step(x_um); }
+  double measure(double x_um) noexcept;
+  /// The stroke after the last stroke() or reset() [µm].
+  double last_stroke() const noexcept { return stroke_um_; }
+  /// After reset(): the structure's output is x_um instead of the stroke at rest (a stage adds
+  /// its coupling); the true position and the sensor settle there.
+  void settle_measurement(double x_um) noexcept;
+
   /// Noise-free displacement after the last step() [µm] (drift and displacement clamp included,
   /// before the sensor's filter).
   double true_position() const noexcept { return true_position_; }
@@ -62,8 +76,6 @@ class SimulatedActuator {
   double clamp_displacement(double x_um) const noexcept;
   /// The static map's output for the delayed input ud (hysteresis and its rate dependence).
   double static_map(double ud) noexcept;
-  /// static_map + creep -> modes: the displacement before drift.
-  double mechanics(double ud) noexcept;
 
   SimulatedActuatorConfig config_;
   double dt_s_;
@@ -83,6 +95,7 @@ class SimulatedActuator {
   std::mt19937_64 noise_rng_;
   std::normal_distribution<double> unit_normal_{0.0, 1.0};
   double applied_input_ = 0.0;
+  double stroke_um_ = 0.0;
   double true_position_ = 0.0;
 };
 
