@@ -1,0 +1,231 @@
+#include "hystbench/compensation/stage_decoupling.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/identification.hpp"
+#include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/sim/identification_excitation.hpp"
+#include "hystbench/sim/simulated_stage.hpp"
+
+namespace hc = hystbench::compensation;
+namespace hs = hystbench::sim;
+
+namespace {
+
+std::string refusal(const auto& make) {
+  try {
+    make();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Outputs of a linear stage r = (I + K) s for own displacements s: axis `moved` follows a
+// random walk, the others hold their levels; noise of `sigma` on every output.
+hc::OneAxisMotion linear_motion(const Eigen::MatrixXd& k, std::size_t moved, double sigma,
+                                unsigned seed) {
+  const Eigen::Index n = k.rows();
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> step(0.0, 0.3), noise(0.0, sigma);
+  Eigen::VectorXd own = Eigen::VectorXd::LinSpaced(n, 5.0, 20.0);
+  hc::OneAxisMotion rec{moved, Eigen::MatrixXd(n, 4000)};
+  for (Eigen::Index t = 0; t < rec.outputs.cols(); ++t) {
+    own(static_cast<Eigen::Index>(moved)) += step(rng);
+    rec.outputs.col(t) = (Eigen::MatrixXd::Identity(n, n) + k) * own;
+    for (Eigen::Index i = 0; i < n; ++i) rec.outputs(i, t) += noise(rng);
+  }
+  return rec;
+}
+
+Eigen::MatrixXd three_axis_gains() {
+  Eigen::MatrixXd k(3, 3);
+  k << 0.0, 0.05, -0.12, 0.1, 0.0, 0.03, -0.02, 0.18, 0.0;
+  return k;
+}
+
+}  // namespace
+
+TEST(StageDecoupler, ApplyInvertsTheCouplingExactly) {
+  const hc::StageDecoupler d(three_axis_gains());
+  const double target[3] = {12.0, -3.0, 30.0};
+  double own[3], back[3];
+  d.apply(target, own);
+  d.couple(own, back);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(back[i], target[i], 1e-12);
+  // Decoupling changes what each axis must do by the coupling's share.
+  EXPECT_GT(std::abs(own[0] - target[0]), 1.0);
+}
+
+TEST(StageDecoupler, RefusesWhatCannotBeInverted) {
+  Eigen::MatrixXd singular(2, 2);
+  singular << 0.0, 1.0, 1.0, 0.0;  // I + K = [[1, 1], [1, 1]]
+  EXPECT_NE(refusal([&] { hc::StageDecoupler d(singular); }).find("singular or ill-conditioned"),
+            std::string::npos);
+  Eigen::MatrixXd diagonal = Eigen::MatrixXd::Zero(2, 2);
+  diagonal(1, 1) = 0.1;
+  EXPECT_EQ(refusal([&] { hc::StageDecoupler d(diagonal); }),
+            "decoupler: gains(1, 1) must be 0 (an axis's own gain is its model's)");
+  EXPECT_EQ(refusal([&] { hc::StageDecoupler d(Eigen::MatrixXd::Zero(2, 3)); }),
+            "decoupler: the gains must be a square matrix, got 2 x 3");
+}
+
+TEST(StageCouplingEstimate, RecoversTheGainsOfALinearStageFromOneAxisAtATime) {
+  const Eigen::MatrixXd k = three_axis_gains();
+  std::vector<hc::OneAxisMotion> records;
+  for (std::size_t j = 0; j < 3; ++j) records.push_back(linear_motion(k, j, 0.005, 10 + j));
+  const hc::CouplingEstimate e = hc::estimate_coupling_gains(records);
+  for (Eigen::Index i = 0; i < 3; ++i) {
+    for (Eigen::Index j = 0; j < 3; ++j) EXPECT_NEAR(e.gains(i, j), k(i, j), 2e-3) << i << j;
+  }
+  // Noise of 5 nm on motions of several µm: the static gain explains nearly everything.
+  EXPECT_LT(e.residual_share.maxCoeff(), 0.01);
+}
+
+TEST(StageCouplingEstimate, RefusesRecordsThatCannotName) {
+  const Eigen::MatrixXd k = three_axis_gains();
+  std::vector<hc::OneAxisMotion> two{linear_motion(k, 0, 0.0, 1), linear_motion(k, 1, 0.0, 2)};
+  EXPECT_EQ(refusal([&] { hc::estimate_coupling_gains(two); }),
+            "coupling: no record moved axis 2 alone");
+  two[1].moved = 5;
+  EXPECT_EQ(refusal([&] { hc::estimate_coupling_gains(two); }),
+            "coupling: record 1 moved axis 5 of 3");
+  std::vector<hc::OneAxisMotion> still{linear_motion(k, 0, 0.0, 1), linear_motion(k, 1, 0.0, 2),
+                                       linear_motion(k, 2, 0.0, 3)};
+  still[2].outputs.row(2).setConstant(4.0);
+  EXPECT_EQ(refusal([&] { hc::estimate_coupling_gains(still); }),
+            "coupling: axis 2 barely moved in its record");
+  EXPECT_EQ(refusal([&] { hc::estimate_coupling_gains(std::vector<hc::OneAxisMotion>{}); }),
+            "coupling: no record");
+}
+
+// A raster on the two-axis loopback stage (sim::SimulatedStageConfig::xy(), 10 kHz):
+// each axis identified alone (the other held at the bottom of its range), the coupling
+// estimated from the same records, then a 10 Hz triangle on x over 80 % of its range beside a
+// 0.1 Hz ramp on y, through each axis's inverse with and without the decoupler. What x's motion
+// leaves on y is y's error in the raster less y's error with x's reference held at its bottom.
+namespace {
+
+constexpr double kDt = 1e-4;
+
+struct StageIdentification {
+  hc::CouplingEstimate coupling;
+  std::vector<hc::ActuatorModel> models;  // one per axis, of its own displacement
+};
+
+StageIdentification identify_stage(const hs::SimulatedStageConfig& config) {
+  hs::IdentificationExcitationOptions o;
+  o.rate_frequencies_hz = {2.0};
+  o.rate_cycles = {4};
+  o.hold_levels = {};
+  const hs::Excitation ex = hs::identification_excitation(0.0, 150.0, kDt, o);
+  std::vector<hc::OneAxisMotion> records;
+  for (std::size_t moved = 0; moved < 2; ++moved) {
+    hs::SimulatedStage stage(config, kDt);
+    hc::OneAxisMotion rec{moved, Eigen::MatrixXd(2, static_cast<Eigen::Index>(ex.samples.size()))};
+    double u[2] = {0.0, 0.0}, y[2];
+    for (std::size_t t = 0; t < ex.samples.size(); ++t) {
+      u[moved] = ex.samples[t];
+      stage.step(u, y);
+      rec.outputs(0, static_cast<Eigen::Index>(t)) = y[0];
+      rec.outputs(1, static_cast<Eigen::Index>(t)) = y[1];
+    }
+    records.push_back(std::move(rec));
+  }
+  StageIdentification id;
+  id.coupling = hc::estimate_coupling_gains(records);
+  const hc::StageDecoupler decoupler(id.coupling.gains);
+  // Each axis's model of its own displacement: its record decoupled, every 20th sample.
+  for (std::size_t axis = 0; axis < 2; ++axis) {
+    std::vector<double> t, u, own;
+    const Eigen::MatrixXd& out = records[axis].outputs;
+    for (Eigen::Index k = 0; k < out.cols(); k += 20) {
+      double s[2];
+      const double y[2] = {out(0, k), out(1, k)};
+      decoupler.apply(y, s);
+      t.push_back(static_cast<double>(k) * kDt);
+      u.push_back(ex.samples[static_cast<std::size_t>(k)]);
+      own.push_back(s[axis]);
+    }
+    hc::FitOptions fit;
+    fit.kind = hc::ModelKind::kPreisach;
+    fit.preisach_rate_law = false;  // the stage's truth has no rate dependence on
+    fit.delay_samples = 0;
+    hc::ActuatorModel model = hc::fit_model(t, u, own, fit).model;
+    model.input_min = 0.0;
+    model.input_max = 150.0;
+    id.models.push_back(std::move(model));
+  }
+  return id;
+}
+
+// y's error [µm] per sample of a raster whose x reference is `x_ref` and y's a ramp.
+std::vector<double> y_errors(const hs::SimulatedStageConfig& config, const StageIdentification& id,
+                             bool decouple, const std::function<double(double)>& x_ref,
+                             const std::function<double(double)>& y_ref, std::size_t samples) {
+  hs::SimulatedStage stage(config, kDt);
+  std::vector<std::unique_ptr<hc::InverseModel>> inverses;
+  for (const auto& m : id.models) inverses.push_back(hc::make_inverse(m));
+  const hc::StageDecoupler decoupler(id.coupling.gains);
+  const hc::StageDecoupler none(Eigen::MatrixXd::Zero(2, 2));
+  std::vector<double> errors;
+  double y[2] = {0.0, 0.0};
+  for (std::size_t k = 0; k < samples; ++k) {
+    const double t = static_cast<double>(k) * kDt;
+    const double r[2] = {x_ref(t), y_ref(t)};
+    double own[2];
+    (decouple ? decoupler : none).apply(r, own);
+    const double u[2] = {inverses[0]->step(own[0]), inverses[1]->step(own[1])};
+    stage.step(u, y);
+    errors.push_back(y[1] - r[1]);
+  }
+  return errors;
+}
+
+double rms_difference(const std::vector<double>& a, const std::vector<double>& b,
+                      std::size_t from) {
+  double sum = 0.0;
+  for (std::size_t k = from; k < a.size(); ++k) sum += (a[k] - b[k]) * (a[k] - b[k]);
+  return std::sqrt(sum / static_cast<double>(a.size() - from));
+}
+
+}  // namespace
+
+TEST(StageDecoupling, ARasterLeavesTenTimesLessOnTheSlowAxisDecoupled) {
+  const hs::SimulatedStageConfig config = hs::SimulatedStageConfig::xy();
+  const StageIdentification id = identify_stage(config);
+  EXPECT_NEAR(id.coupling.gains(1, 0), config.coupling.gains[1][0], 0.01);
+  EXPECT_NEAR(id.coupling.gains(0, 1), config.coupling.gains[0][1], 0.01);
+
+  const double bottom = 4.0, span = 36.0;  // 80 % of a ~45 µm range
+  const auto triangle = [&](double t) {
+    const double phase = std::fmod(t * 10.0, 1.0);
+    return bottom + span * (phase < 0.5 ? 2.0 * phase : 2.0 - 2.0 * phase);
+  };
+  const auto held = [&](double) { return bottom; };
+  // 0.1 Hz triangle: a ramp up over its first 5 s; 3 s of it here.
+  const auto ramp = [&](double t) { return bottom + span * 2.0 * 0.1 * t; };
+  const std::size_t samples = 30000, settle = 5000;
+  double left[2];
+  for (const bool decouple : {false, true}) {
+    const auto raster = y_errors(config, id, decouple, triangle, ramp, samples);
+    const auto alone = y_errors(config, id, decouple, held, ramp, samples);
+    left[decouple ? 1 : 0] = rms_difference(raster, alone, settle);
+  }
+  RecordProperty("coupling_error_um_without", std::to_string(left[0]));
+  RecordProperty("k_yx", std::to_string(id.coupling.gains(1, 0)));
+  RecordProperty("k_xy", std::to_string(id.coupling.gains(0, 1)));
+  RecordProperty("coupling_error_um_with", std::to_string(left[1]));
+  // About 0.1 of x's 36 µm triangle without: over a micrometre.
+  EXPECT_GT(left[0], 0.8);
+  EXPECT_LT(left[1], left[0] / 10.0) << "without " << left[0] << " um, with " << left[1] << " um";
+}
