@@ -1,5 +1,6 @@
 #include "hystbench/drivers/driver.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -42,6 +43,11 @@ Result Driver::configure(const nlohmann::json& params, double rate_hz) {
   info_ = driver_->info();
   rate_hz_ = rate_hz;
   if (r = refuse_rate("as configured"); !r) return r;
+  axes_ = driver_->axes();
+  if (axes_ < 1 || axes_ > kMaxAxes) {
+    return Result::failure("driver." + std::string(type()) + ": serves " + std::to_string(axes_) +
+                           " axes; a driver serves 1 to " + std::to_string(kMaxAxes));
+  }
   state_.store(State::kInactive, std::memory_order_release);
   return r;
 }
@@ -60,10 +66,11 @@ Result Driver::activate() {
     return r;
   }
   in_fault_ = false;
-  last_y_ = driver_->activation_position_um();
+  last_y_.fill(0.0);
+  last_y_[0] = driver_->activation_position_um();
   age_ = 0;
   response_ticks_ = 0;
-  position_um_.store(last_y_);
+  position_um_.store(last_y_[0]);
   output_v_.store(info_.safe_output_v);
   stale_reads_.store(0);
   state_.store(State::kActive, std::memory_order_release);
@@ -93,27 +100,58 @@ DriverStatus Driver::write(double output_v) noexcept {
   return faulted(s);
 }
 
+DriverStatus Driver::write_axes(std::span<const double> outputs_v) noexcept {
+  if (state_.load(std::memory_order_relaxed) != State::kActive) return DriverStatus::kFault;
+  const DriverStatus s = driver_->write_axes(outputs_v.first(std::min(outputs_v.size(), axes_)));
+  if (s == DriverStatus::kOk && !outputs_v.empty()) {
+    output_v_.store(outputs_v.front(), std::memory_order_relaxed);
+  }
+  return faulted(s);
+}
+
 DriverStatus Driver::read(Measurement& out) noexcept {
   if (state_.load(std::memory_order_relaxed) != State::kActive) return DriverStatus::kFault;
   Measurement m;
-  DriverStatus s = driver_->read(m);
+  const DriverStatus s = driver_->read(m);
+  return finish_read(s, std::span<const Measurement>(&m, 1), std::span<Measurement>(&out, 1));
+}
+
+DriverStatus Driver::read_axes(std::span<Measurement> out) noexcept {
+  if (state_.load(std::memory_order_relaxed) != State::kActive) return DriverStatus::kFault;
+  std::array<Measurement, kMaxAxes> m{};
+  const std::span<Measurement> fresh = std::span<Measurement>(m).first(axes_);
+  const DriverStatus s = driver_->read_axes(fresh);
+  return finish_read(s, fresh, out.first(std::min(out.size(), axes_)));
+}
+
+DriverStatus Driver::finish_read(DriverStatus s, std::span<const Measurement> fresh,
+                                 std::span<Measurement> out) noexcept {
   if (s == DriverStatus::kOk) {
     in_fault_ = false;
-    last_y_ = m.position_um;
+    for (std::size_t i = 0; i < fresh.size(); ++i) last_y_[i] = fresh[i].position_um;
     age_ = 0;
-    response_ticks_ = m.response_ticks;
-    if (std::isfinite(last_y_)) position_um_.store(last_y_, std::memory_order_relaxed);
-    out = {last_y_, 0, response_ticks_};
+    response_ticks_ = fresh.front().response_ticks;
+    if (std::isfinite(last_y_[0])) position_um_.store(last_y_[0], std::memory_order_relaxed);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      out[i] = {last_y_[i], 0, fresh[i].response_ticks};
+    }
     return s;
   }
   ++age_;
   stale_reads_.fetch_add(1, std::memory_order_relaxed);
-  out = {last_y_, age_, response_ticks_ + age_};
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = {last_y_[i], age_, response_ticks_ + age_};
   if (s == DriverStatus::kStale && info_.max_stale_reads > 0 && age_ >= info_.max_stale_reads) {
     faults_.store(*this, Fault::kStaleReads, static_cast<std::int64_t>(info_.max_stale_reads));
     s = DriverStatus::kFault;
   }
   return faulted(s);
+}
+
+Result Driver::serves(std::size_t wanted) const {
+  if (wanted >= 1 && wanted <= axes_) return Result::success();
+  const auto count = [](std::size_t n) { return std::to_string(n) + (n == 1 ? " axis" : " axes"); };
+  return Result::failure("axes: the " + std::string(type()) + " driver serves " + count(axes_) +
+                         ", the configuration names " + count(wanted));
 }
 
 DriverStatus Driver::safe_state() noexcept {
@@ -144,6 +182,7 @@ nlohmann::json Driver::diagnostics() const {
   d["position_um"] = position_um_.load(std::memory_order_relaxed);
   d["stale_reads"] = stale_reads_.load(std::memory_order_relaxed);
   d["max_rate_hz"] = info_.max_rate_hz;
+  d["axes"] = axes_;
   d["last_fault"] = faults_.describe();
   return d;
 }

@@ -18,6 +18,15 @@ Result DriverInterface::on_deactivate() {
                          ")");
 }
 
+DriverStatus DriverInterface::write_axes(std::span<const double> outputs_v) noexcept {
+  return outputs_v.empty() ? DriverStatus::kOk : write(outputs_v.front());
+}
+
+DriverStatus DriverInterface::read_axes(std::span<Measurement> out) noexcept {
+  Measurement unused;
+  return read(out.empty() ? unused : out.front());
+}
+
 std::string DriverInterface::describe_fault(int cause, std::int64_t detail) const {
   return std::string(type()) + " driver fault " + std::to_string(cause) + " (detail " +
          std::to_string(detail) + ")";

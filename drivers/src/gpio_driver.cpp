@@ -77,6 +77,18 @@ DriverStatus GpioDriver::read(Measurement& out) noexcept {
   return s;
 }
 
+DriverStatus GpioDriver::write_axes(std::span<const double> outputs_v) noexcept {
+  if (estop()) return DriverStatus::kFault;
+  lines_.tick();
+  return inner_->write_axes(outputs_v);
+}
+
+DriverStatus GpioDriver::read_axes(std::span<Measurement> out) noexcept {
+  const DriverStatus s = inner_->read_axes(out);
+  if (estop()) return DriverStatus::kFault;
+  return s;
+}
+
 DriverStatus GpioDriver::safe_state() noexcept {
   lines_.safe();
   return inner_->safe_state();

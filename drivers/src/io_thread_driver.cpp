@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <ctime>
+#include <string>
 
 #include "details/triple_buffer.hpp"
 
@@ -25,6 +26,13 @@ Result IoThreadDriver::on_activate() {
   Result r = inner_->on_activate();
   threaded_ = r.ok && inner_->info().io_thread;
   if (!threaded_) return r;
+  if (inner_->axes() > 1) {
+    threaded_ = false;
+    inner_->on_deactivate();
+    return Result::failure("driver." + std::string(inner_->type()) +
+                           ": its I/O thread serves one axis, this driver " +
+                           std::to_string(inner_->axes()));
+  }
   samples_->reset(Sample{inner_->activation_position_um(), 0});
   io_status_.store(DriverStatus::kStale);
   safe_output_v_ = inner_->info().safe_output_v;
@@ -105,6 +113,17 @@ DriverStatus IoThreadDriver::read(Measurement& out) noexcept {
   out.position_um = s.position_um;
   out.response_ticks = writes > s.command ? writes - s.command : 0;
   return DriverStatus::kOk;
+}
+
+DriverStatus IoThreadDriver::write_axes(std::span<const double> outputs_v) noexcept {
+  if (!threaded_) return inner_->write_axes(outputs_v);
+  return outputs_v.empty() ? DriverStatus::kOk : write(outputs_v.front());
+}
+
+DriverStatus IoThreadDriver::read_axes(std::span<Measurement> out) noexcept {
+  if (!threaded_) return inner_->read_axes(out);
+  Measurement unused;
+  return read(out.empty() ? unused : out.front());
 }
 
 DriverStatus IoThreadDriver::safe_state() noexcept {

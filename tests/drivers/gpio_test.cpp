@@ -202,3 +202,20 @@ TEST(GpioLibgpiod, NamesTheMissingChipOrLine) {
         << e.what();
   }
 }
+
+TEST(GpioDriver, TheEstopGuardsEveryAxisOfAStage) {
+  auto gpio = std::make_shared<hd::MemoryGpioBackend>();
+  gpio->set_level("sim0:4", true);
+  hd::Driver d(std::make_unique<hd::GpioDriver>(std::make_unique<hd::LoopbackDriver>(), gpio));
+  ASSERT_TRUE(d.configure({{"gpio", kGpio}, {"stage", json::object()}}, 1000.0).ok);
+  ASSERT_TRUE(d.activate().ok);
+  ASSERT_EQ(d.axes(), 2u);
+  const double u[2] = {50.0, 60.0};
+  hd::Measurement m[2];
+  EXPECT_EQ(d.write_axes(u), hd::DriverStatus::kOk);
+  EXPECT_EQ(d.read_axes(m), hd::DriverStatus::kOk);
+  gpio->set_level("sim0:4", false);  // asserted
+  EXPECT_EQ(d.write_axes(u), hd::DriverStatus::kFault);
+  EXPECT_EQ(d.read_axes(m), hd::DriverStatus::kFault);
+  d.deactivate();
+}

@@ -5,6 +5,7 @@
 // threads are not counted.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 
 #include "example_driver.hpp"
@@ -52,6 +53,29 @@ TEST(RealTimePath, LoopbackAllocatesNothing) {
   EXPECT_EQ(t.allocations, 0);
   EXPECT_EQ(t.fresh, 5000);
   std::cout << "[ loopback ] " << t.allocations << " allocations in 5000 ticks\n";
+}
+
+TEST(RealTimePath, ALoopbackStageOfSixAxesAllocatesNothing) {
+  json stage = {{"axes", json::array()}};
+  for (int i = 0; i < 6; ++i) stage["axes"].push_back({{"name", "a" + std::to_string(i)}});
+  const auto d = hd::make_driver("loopback");
+  ASSERT_TRUE(d->configure({{"stage", stage}}, 10000.0).ok);
+  ASSERT_TRUE(d->activate().ok);
+  ASSERT_EQ(d->axes(), 6u);
+  std::array<double, 6> u{};
+  std::array<hd::Measurement, 6> m{};
+  long allocations = 0;
+  int fresh = 0;
+  for (int k = 0; k < 5000; ++k) {
+    allocations += ht::allocations_during([&] {
+      for (std::size_t i = 0; i < u.size(); ++i) u[i] = 50.0 + static_cast<double>((k + i) % 10);
+      d->write_axes(u);
+      if (d->read_axes(m) == hd::DriverStatus::kOk) ++fresh;
+      if (k % 100 == 99) d->safe_state();
+    });
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(fresh, 5000);
 }
 
 TEST(RealTimePath, TheFrameworksStaleAndFaultPathsAllocateNothing) {

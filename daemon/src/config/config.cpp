@@ -448,6 +448,14 @@ void check_actuators(const Context& ctx, const toml::table& root, const DaemonCo
     return;
   }
   if (actuator) check_actuator(ctx, "actuator", *actuator);
+  // The driver simulates a stage of several axes, but the loop drives one: refused by name
+  // here rather than run with its other axes held.
+  if (const toml::node* stage = root.at_path("driver.loopback.stage").node()) {
+    ctx.fail("driver.loopback.stage",
+             "hystbenchd's loop drives one axis; the loopback's stage of several axes serves the "
+             "driver's tests (simulate one actuator with [actuator])",
+             line_of(stage));
+  }
   const toml::node* own = root.at_path("driver.loopback.actuator").node();
   if (own && own->is_table()) check_actuator(ctx, "driver.loopback.actuator", *own->as_table());
 }

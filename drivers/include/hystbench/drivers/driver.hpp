@@ -9,12 +9,17 @@
 //     fault (a fault ends with the next fresh read);
 //   - keeps the last value across stale reads: age_ticks, the stale count, and kFault after
 //     DriverInfo::max_stale_reads stale reads in a row;
-//   - turns the stored fault cause into words: diagnostics()["last_fault"].
+//   - turns the stored fault cause into words: diagnostics()["last_fault"];
+//   - serves the axes of a driver of several (write_axes()/read_axes()), their last values kept
+//     per axis, and refuses a configuration that names more axes than the driver serves.
 // Real-time path: write(), read(), safe_state(), set_run_active() and the getters: no allocation,
 // no lock, no exception; they add a few atomic stores to the driver's own bound.
+#include <array>
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string_view>
 
 #include "hystbench/drivers/driver_interface.hpp"
@@ -44,6 +49,15 @@ class Driver final : private FaultSource {
   /// This tick's measurement: fresh (kOk, age 0) or the last one with its age (kStale); on any
   /// other status `out` still holds the last value.
   DriverStatus read(Measurement& out) noexcept;
+  /// Every axis at once (axes() values; see DriverInterface::write_axes/read_axes), as
+  /// write()/read() for one: a stale tick repeats each axis's last value with its age.
+  DriverStatus write_axes(std::span<const double> outputs_v) noexcept;
+  DriverStatus read_axes(std::span<Measurement> out) noexcept;
+  /// Axes the configured driver serves, [1, kMaxAxes] (1 before configure()).
+  std::size_t axes() const noexcept { return axes_; }
+  /// Success when the configured driver serves `wanted` axes (>= 1); otherwise the failure
+  /// names both counts.
+  Result serves(std::size_t wanted) const;
   /// Drives the safe output now, in any state (a no-op before configure()).
   DriverStatus safe_state() noexcept;
   void set_run_active(bool active) noexcept;
@@ -66,6 +80,9 @@ class Driver final : private FaultSource {
   std::string describe_fault(int cause, std::int64_t detail) const override;
   /// A kFault from the driver: on_error() once per fault.
   DriverStatus faulted(DriverStatus s) noexcept;
+  /// A read's outcome for `count` axes: fresh values kept, or the last ones with their age.
+  DriverStatus finish_read(DriverStatus s, std::span<const Measurement> fresh,
+                           std::span<Measurement> out) noexcept;
   Result refuse_rate(const char* when) const;
   /// A lifecycle hook's Result; an exception it throws becomes a failure naming the driver.
   template <typename Hook>
@@ -76,10 +93,11 @@ class Driver final : private FaultSource {
   std::atomic<State> state_{State::kUnconfigured};
   DriverInfo info_;
   double rate_hz_ = 0.0;
+  std::size_t axes_ = 1;
 
   // Loop-thread state.
   bool in_fault_ = false;
-  double last_y_ = 0.0;
+  std::array<double, kMaxAxes> last_y_{};  // per axis
   std::uint64_t age_ = 0;
   std::uint64_t response_ticks_ = 0;
 

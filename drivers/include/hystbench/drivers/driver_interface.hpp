@@ -11,14 +11,19 @@
 // Real-time path: write(), read(), safe_state(), on_error(), set_run_active() never throw, never
 // allocate, never block longer than the driver's documented bound.
 // Units: output in volts (the amplifier command), measurement in micrometres.
+#include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <string_view>
 
 #include "hystbench/drivers/fault_log.hpp"
 
 namespace hystbench::drivers {
+
+/// Axes a driver may serve in one tick (a stage of several axes: XY, tip-tilt, hexapod).
+inline constexpr std::size_t kMaxAxes = 6;
 
 enum class DriverStatus : std::uint8_t {
   kOk = 0,
@@ -87,6 +92,17 @@ class DriverInterface : public FaultSource {
   virtual DriverStatus read(Measurement& out) noexcept = 0;
   /// Drives the configured safe output now.
   virtual DriverStatus safe_state() noexcept = 0;
+
+  /// Axes this configured driver serves, in [1, kMaxAxes]. write() and read() are the first
+  /// axis's (the others hold their safe output); write_axes() and read_axes() serve every one.
+  /// Valid after on_configure(). Default: 1.
+  virtual std::size_t axes() const noexcept { return 1; }
+  /// Commands every axis's output [V] for this tick, outputs_v[i] to axis i (axes() values; an
+  /// axis without one holds its output). Default (one axis): write(outputs_v[0]).
+  virtual DriverStatus write_axes(std::span<const double> outputs_v) noexcept;
+  /// Every axis's measurement of this tick into out[i] (axes() values), with read()'s status
+  /// for the tick as a whole. Default (one axis): read(out[0]).
+  virtual DriverStatus read_axes(std::span<Measurement> out) noexcept;
   /// A run starts (true) or ends (false), called from the loop thread in that tick. For
   /// run-bound outputs such as an amplifier-enable GPIO; the default does nothing.
   virtual void set_run_active(bool /*active*/) noexcept {}

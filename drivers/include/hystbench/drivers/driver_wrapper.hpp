@@ -22,6 +22,13 @@ class DriverWrapper : public DriverInterface {
   DriverStatus write(double output_v) noexcept override { return inner_->write(output_v); }
   DriverStatus read(Measurement& out) noexcept override { return inner_->read(out); }
   DriverStatus safe_state() noexcept override { return inner_->safe_state(); }
+  std::size_t axes() const noexcept override { return inner_->axes(); }
+  DriverStatus write_axes(std::span<const double> outputs_v) noexcept override {
+    return inner_->write_axes(outputs_v);
+  }
+  DriverStatus read_axes(std::span<Measurement> out) noexcept override {
+    return inner_->read_axes(out);
+  }
   void set_run_active(bool active) noexcept override { inner_->set_run_active(active); }
 
   DriverInfo info() const noexcept override { return inner_->info(); }

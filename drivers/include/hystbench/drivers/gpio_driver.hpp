@@ -32,6 +32,9 @@ class GpioDriver final : public DriverWrapper {
   DriverStatus on_error() noexcept override;
 
   DriverStatus write(double output_v) noexcept override;
+  /// As write()/read(), for every axis of the wrapped driver.
+  DriverStatus write_axes(std::span<const double> outputs_v) noexcept override;
+  DriverStatus read_axes(std::span<Measurement> out) noexcept override;
   DriverStatus read(Measurement& out) noexcept override;
   DriverStatus safe_state() noexcept override;
   void set_run_active(bool active) noexcept override;

@@ -33,7 +33,8 @@ class IoThreadDriver final : public DriverWrapper {
   explicit IoThreadDriver(std::unique_ptr<DriverInterface> inner);
   ~IoThreadDriver() override;
 
-  /// Activates the wrapped driver, then starts the I/O thread if its info() asks for one.
+  /// Activates the wrapped driver, then starts the I/O thread if its info() asks for one. The
+  /// thread exchanges one axis: a wrapped driver of several that asks for it is refused.
   Result on_activate() override;
   /// Stops the I/O thread, then deactivates the wrapped driver.
   Result on_deactivate() override;
@@ -41,6 +42,9 @@ class IoThreadDriver final : public DriverWrapper {
 
   DriverStatus write(double output_v) noexcept override;
   DriverStatus read(Measurement& out) noexcept override;
+  /// Without the thread, the wrapped driver's; with it, write()/read() (one axis).
+  DriverStatus write_axes(std::span<const double> outputs_v) noexcept override;
+  DriverStatus read_axes(std::span<Measurement> out) noexcept override;
   DriverStatus safe_state() noexcept override;
 
  private:

@@ -3,7 +3,12 @@
 // write() holds the output for the tick, read() advances the simulation by one sample with it.
 // Params (JSON): {"actuator": {...SimulatedActuatorConfig...}, "safe_output_v": 0,
 //                 "max_rate_hz": 20000, "faults": {...FaultInjection...}}
-// Real-time safe write()/read()/safe_state().
+// or, for a stage of several axes, "stage": {...SimulatedStageConfig...} in place of
+// "actuator" (sim::stage_from_json; its axes share one input range): write_axes()/read_axes()
+// serve every axis, write()/read() the first while the others hold the safe output. Injected
+// faults act on every axis.
+// Real-time safe write()/read()/write_axes()/read_axes()/safe_state().
+#include <array>
 #include <atomic>
 #include <memory>
 #include <optional>
@@ -12,7 +17,8 @@
 
 namespace hystbench::sim {
 class SimulatedActuator;
-}
+class SimulatedStage;
+}  // namespace hystbench::sim
 
 namespace hystbench::drivers {
 
@@ -39,6 +45,10 @@ class LoopbackDriver final : public DriverInterface {
   /// Advances the simulation by one sample with the held output.
   DriverStatus read(Measurement& out) noexcept override;
   DriverStatus safe_state() noexcept override;
+  std::size_t axes() const noexcept override;
+  DriverStatus write_axes(std::span<const double> outputs_v) noexcept override;
+  /// Advances the stage by one sample with the held outputs.
+  DriverStatus read_axes(std::span<Measurement> out) noexcept override;
 
   /// Output range: the actuator's input range; measurement_resolution_um: the simulated ADC's
   /// step (range / (2^bits - 1)), 0 with the ADC off.
@@ -48,15 +58,26 @@ class LoopbackDriver final : public DriverInterface {
 
   /// Arms faults relative to the current tick (thread-safe; takes effect on the next tick).
   void inject(const FaultInjection& faults) noexcept;
-  /// The simulated actuator (for tests that compare against the truth).
-  const sim::SimulatedActuator* actuator() const noexcept { return actuator_.get(); }
+  /// The simulated actuator, or the stage's first axis (for tests that compare against the
+  /// truth).
+  const sim::SimulatedActuator* actuator() const noexcept;
+  /// The simulated stage; null with "actuator".
+  const sim::SimulatedStage* stage() const noexcept { return stage_.get(); }
 
  private:
+  /// One simulated sample with the held outputs into y_ (every axis), with the injected faults;
+  /// the tick's status.
+  DriverStatus advance() noexcept;
+
   std::unique_ptr<sim::SimulatedActuator> actuator_;
+  std::unique_ptr<sim::SimulatedStage> stage_;
+  std::array<double, kMaxAxes> outputs_v_{};  // stage: held per axis
+  std::array<double, kMaxAxes> y_{};          // the last sample's readings, per axis
+  std::array<double, kMaxAxes> last_y_{};     // what read() reports (stuck holds it)
   double safe_output_v_ = 0.0;
   double max_rate_hz_ = 20000.0;
   double output_v_ = 0.0;
-  double last_position_ = 0.0;
+  bool reading_nan_ = false;            // this tick's injected NaN
   std::atomic<std::uint64_t> tick_{0};  // read by inject()/diagnostics() from other threads
   std::atomic<std::uint64_t> read_error_at_{0}, nan_at_{0}, stuck_at_{0}, write_error_at_{0};
 };
