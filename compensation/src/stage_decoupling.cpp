@@ -1,6 +1,8 @@
 #include "hystbench/compensation/stage_decoupling.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -110,6 +112,55 @@ void StageDecoupler::couple(std::span<const double> own, std::span<double> stage
     }
     stage[i] = sum;
   }
+}
+
+StageFit fit_stage(std::span<const OneAxisMotion> records, const StageFitOptions& options) {
+  if (options.stride == 0) fail("stage fit: stride must be >= 1");
+  StageFit fit;
+  fit.coupling = estimate_coupling_gains(records);
+  const StageDecoupler decoupler(fit.coupling.gains);
+  const auto n = static_cast<std::size_t>(fit.coupling.gains.rows());
+  fit.coupling_db =
+      Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n),
+                                -std::numeric_limits<double>::infinity());
+  for (Eigen::Index i = 0; i < fit.coupling.gains.rows(); ++i) {
+    for (Eigen::Index j = 0; j < fit.coupling.gains.cols(); ++j) {
+      const double k = std::abs(fit.coupling.gains(i, j));
+      if (i != j && k > 0.0) fit.coupling_db(i, j) = 20.0 * std::log10(k);
+    }
+  }
+  // Every record checked before the first (slow) fit.
+  for (const OneAxisMotion& rec : records) {
+    const std::string which = "stage fit: axis " + std::to_string(rec.moved) + ": ";
+    if (rec.drive.size() != static_cast<std::size_t>(rec.outputs.cols())) {
+      fail(which + "its drive has " + std::to_string(rec.drive.size()) + " samples, its outputs " +
+           std::to_string(rec.outputs.cols()));
+    }
+    if (!(rec.dt > 0.0)) fail(which + "dt must be > 0");
+  }
+  for (std::size_t axis = 0; axis < n; ++axis) {
+    const auto it = std::find_if(records.begin(), records.end(),
+                                 [&](const OneAxisMotion& r) { return r.moved == axis; });
+    const OneAxisMotion& rec = *it;  // estimate_coupling_gains() found one for every axis
+    const std::string which = "stage fit: axis " + std::to_string(axis) + ": ";
+    std::vector<double> t, u, own;
+    std::vector<double> y(n), s(n);
+    for (std::size_t k = 0; k < rec.drive.size(); k += options.stride) {
+      for (std::size_t i = 0; i < n; ++i) {
+        y[i] = rec.outputs(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k));
+      }
+      decoupler.apply(y, s);
+      t.push_back(static_cast<double>(k) * rec.dt);
+      u.push_back(rec.drive[k]);
+      own.push_back(s[axis]);
+    }
+    try {
+      fit.axes.push_back(fit_model(t, u, own, options.axis));
+    } catch (const std::invalid_argument& e) {
+      fail(which + e.what());
+    }
+  }
+  return fit;
 }
 
 }  // namespace hystbench::compensation

@@ -110,6 +110,25 @@ TEST(StageCouplingEstimate, RefusesRecordsThatCannotName) {
             "coupling: no record");
 }
 
+TEST(StageFit, RefusesRecordsItCannotFitNamingTheAxis) {
+  const Eigen::MatrixXd k = three_axis_gains();
+  std::vector<hc::OneAxisMotion> records;
+  for (std::size_t j = 0; j < 3; ++j) {
+    records.push_back(linear_motion(k, j, 0.0, 20 + j));
+    records.back().drive.assign(static_cast<std::size_t>(records.back().outputs.cols()), 1.0);
+    records.back().dt = 1e-3;
+  }
+  records[1].drive.pop_back();
+  EXPECT_EQ(refusal([&] { hc::fit_stage(records); }),
+            "stage fit: axis 1: its drive has 3999 samples, its outputs 4000");
+  hc::StageFitOptions zero;
+  zero.stride = 0;
+  EXPECT_EQ(refusal([&] { hc::fit_stage(records, zero); }), "stage fit: stride must be >= 1");
+  // A constant drive: fit_model's own refusal, named for the axis.
+  records[1].drive.push_back(1.0);
+  EXPECT_EQ(refusal([&] { hc::fit_stage(records); }).rfind("stage fit: axis 0: ", 0), 0u);
+}
+
 // A raster on the two-axis loopback stage (sim::SimulatedStageConfig::xy(), 10 kHz):
 // each axis identified alone (the other held at the bottom of its range), the coupling
 // estimated from the same records, then a 10 Hz triangle on x over 80 % of its range beside a
@@ -125,15 +144,16 @@ struct StageIdentification {
 };
 
 StageIdentification identify_stage(const hs::SimulatedStageConfig& config) {
-  hs::IdentificationExcitationOptions o;
-  o.rate_frequencies_hz = {2.0};
-  o.rate_cycles = {4};
-  o.hold_levels = {};
-  const hs::Excitation ex = hs::identification_excitation(0.0, 150.0, kDt, o);
+  hs::IdentificationExcitationOptions excitation;
+  excitation.rate_frequencies_hz = {2.0};
+  excitation.rate_cycles = {4};
+  excitation.hold_levels = {};
+  const hs::Excitation ex = hs::identification_excitation(0.0, 150.0, kDt, excitation);
   std::vector<hc::OneAxisMotion> records;
   for (std::size_t moved = 0; moved < 2; ++moved) {
     hs::SimulatedStage stage(config, kDt);
-    hc::OneAxisMotion rec{moved, Eigen::MatrixXd(2, static_cast<Eigen::Index>(ex.samples.size()))};
+    hc::OneAxisMotion rec{moved, Eigen::MatrixXd(2, static_cast<Eigen::Index>(ex.samples.size())),
+                          ex.samples, kDt};
     double u[2] = {0.0, 0.0}, y[2];
     for (std::size_t t = 0; t < ex.samples.size(); ++t) {
       u[moved] = ex.samples[t];
@@ -143,30 +163,22 @@ StageIdentification identify_stage(const hs::SimulatedStageConfig& config) {
     }
     records.push_back(std::move(rec));
   }
+  hc::StageFitOptions o;
+  o.stride = 20;  // 500 Hz: the excitation's fastest cycle is 10 Hz
+  o.axis.kind = hc::ModelKind::kPreisach;
+  o.axis.preisach_rate_law = false;  // the stage's truth has no rate dependence on
+  o.axis.delay_samples = 0;
+  hc::StageFit fit = hc::fit_stage(records, o);
   StageIdentification id;
-  id.coupling = hc::estimate_coupling_gains(records);
-  const hc::StageDecoupler decoupler(id.coupling.gains);
-  // Each axis's model of its own displacement: its record decoupled, every 20th sample.
-  for (std::size_t axis = 0; axis < 2; ++axis) {
-    std::vector<double> t, u, own;
-    const Eigen::MatrixXd& out = records[axis].outputs;
-    for (Eigen::Index k = 0; k < out.cols(); k += 20) {
-      double s[2];
-      const double y[2] = {out(0, k), out(1, k)};
-      decoupler.apply(y, s);
-      t.push_back(static_cast<double>(k) * kDt);
-      u.push_back(ex.samples[static_cast<std::size_t>(k)]);
-      own.push_back(s[axis]);
-    }
-    hc::FitOptions fit;
-    fit.kind = hc::ModelKind::kPreisach;
-    fit.preisach_rate_law = false;  // the stage's truth has no rate dependence on
-    fit.delay_samples = 0;
-    hc::ActuatorModel model = hc::fit_model(t, u, own, fit).model;
-    model.input_min = 0.0;
-    model.input_max = 150.0;
-    id.models.push_back(std::move(model));
+  id.coupling = fit.coupling;
+  for (hc::FitResult& axis : fit.axes) {
+    axis.model.input_min = 0.0;
+    axis.model.input_max = 150.0;
+    id.models.push_back(std::move(axis.model));
   }
+  // -20 and -25 dB.
+  EXPECT_NEAR(fit.coupling_db(1, 0), -20.0, 0.1);
+  EXPECT_NEAR(fit.coupling_db(0, 1), 20.0 * std::log10(0.056), 0.1);
   return id;
 }
 

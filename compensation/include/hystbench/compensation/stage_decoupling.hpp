@@ -8,6 +8,8 @@
 //    intercept, which takes up what the held axes' own displacement adds).
 //  - StageDecoupler: the own displacements s = (I + K)^{-1} r that put the stage at r; each
 //    axis's inverse then turns s_i into its drive.
+//  - fit_stage(): the coupling, then each axis's model fitted (fit_model) on its own
+//    displacement: its record's outputs decoupled, so no axis's model holds another's motion.
 // Units: the outputs' (µm). Estimation and construction allocate and throw; the decoupler's
 // apply()/couple() are real-time safe (no allocation, no exceptions; O(axes^2)).
 #include <Eigen/Dense>
@@ -15,12 +17,17 @@
 #include <span>
 #include <vector>
 
+#include "hystbench/compensation/identification.hpp"
+
 namespace hystbench::compensation {
 
 /// One record of a stage's outputs in which only axis `moved` was driven.
 struct OneAxisMotion {
   std::size_t moved = 0;    ///< the driven axis, < outputs.rows()
   Eigen::MatrixXd outputs;  ///< axes x samples, every axis's measured displacement
+  /// The moved axis's drive, one per sample [V], and the sample period [s] (fit_stage() only).
+  std::vector<double> drive;
+  double dt = 0.0;
 };
 
 struct CouplingEstimate {
@@ -58,5 +65,23 @@ class StageDecoupler {
   Eigen::MatrixXd gains_;
   Eigen::MatrixXd inverse_;  // (I + K)^{-1}
 };
+
+struct StageFitOptions {
+  FitOptions axis;         ///< each axis's fit (family, orders, held-out part)
+  std::size_t stride = 1;  ///< fit every stride-th sample (a 10 kHz record at 1 kHz: 10), >= 1
+};
+
+struct StageFit {
+  CouplingEstimate coupling;
+  std::vector<FitResult> axes;  ///< per axis, its model of its own displacement
+  /// 20 log10 |K_ij| [dB], -inf where a gain is 0 (and on the diagonal).
+  Eigen::MatrixXd coupling_db;
+};
+
+/// One record per axis at least, each moving one axis with its drive given. Throws
+/// std::invalid_argument naming the cause: those of estimate_coupling_gains(), a drive whose
+/// length differs from its outputs', dt <= 0, stride 0; and fit_model()'s, prefixed with the
+/// axis. Where several records moved one axis, its model is fitted on the first.
+StageFit fit_stage(std::span<const OneAxisMotion> records, const StageFitOptions& options = {});
 
 }  // namespace hystbench::compensation
