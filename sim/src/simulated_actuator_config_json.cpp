@@ -246,7 +246,10 @@ void decode(const json& j, const std::string& path, int& out) {
 }
 
 void decode(const json& j, const std::string& path, std::uint64_t& out) {
-  if (!j.is_number_unsigned()) fail(path, "expected a non-negative integer, got " + j.dump());
+  // A non-negative integer built in C++ (json{{"seed", 42}}) is signed; parsed text is not.
+  const bool non_negative =
+      j.is_number_unsigned() || (j.is_number_integer() && j.get<std::int64_t>() >= 0);
+  if (!non_negative) fail(path, "expected a non-negative integer, got " + j.dump());
   out = j.get<std::uint64_t>();
 }
 

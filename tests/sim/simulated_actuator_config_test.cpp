@@ -137,6 +137,18 @@ TEST(SimulatedActuatorConfigJson, UnknownKeysAreNamedWithTheValidOnes) {
   EXPECT_TRUE(mentions(nested, "natural_frequencies_hz")) << nested;
 }
 
+TEST(SimulatedActuatorConfigJson, ASeedBuiltInCodeIsTakenAsParsedTextIs) {
+  // json{{"seed", 42}} holds a signed integer, where parsed text holds an unsigned one.
+  const json built = {{"sensor_noise", {{"seed", 42}}}, {"thermal_drift", {{"seed", 7}}}};
+  ASSERT_TRUE(built["sensor_noise"]["seed"].is_number_integer());
+  ASSERT_FALSE(built["sensor_noise"]["seed"].is_number_unsigned());
+  const hs::SimulatedActuatorConfig c = hs::from_json(built);
+  EXPECT_EQ(c.sensor_noise.seed, 42u);
+  EXPECT_EQ(c.thermal_drift.seed, 7u);
+  EXPECT_TRUE(
+      mentions(from_json_error(json{{"sensor_noise", {{"seed", -3}}}}), "sensor_noise.seed"));
+}
+
 TEST(SimulatedActuatorConfigJson, WrongTypesAreNamed) {
   EXPECT_TRUE(mentions(from_json_error(json::parse(R"({"dynamics": {"damping_ratios": "0.1"}})")),
                        "dynamics.damping_ratios"));
