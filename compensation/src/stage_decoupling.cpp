@@ -97,6 +97,7 @@ StageDecoupler::StageDecoupler(const Eigen::MatrixXd& gains) : gains_(gains) {
     fail("decoupler: I + gains is singular or ill-conditioned (condition number " +
          std::to_string(s(0) / s(s.size() - 1)) + " > 1000)");
   }
+  coupled_ = coupled;
   inverse_ = coupled.inverse();
 }
 
@@ -105,13 +106,7 @@ void StageDecoupler::apply(std::span<const double> stage, std::span<double> own)
 }
 
 void StageDecoupler::couple(std::span<const double> own, std::span<double> stage) const noexcept {
-  for (std::size_t i = 0; i < axes() && i < stage.size(); ++i) {
-    double sum = i < own.size() ? own[i] : 0.0;
-    for (std::size_t j = 0; j < axes() && j < own.size(); ++j) {
-      sum += gains_(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) * own[j];
-    }
-    stage[i] = sum;
-  }
+  multiply(coupled_, own, stage);
 }
 
 StageFit fit_stage(std::span<const OneAxisMotion> records, const StageFitOptions& options) {

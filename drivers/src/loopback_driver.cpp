@@ -120,7 +120,6 @@ Result LoopbackDriver::on_configure(const nlohmann::json& params, double rate_hz
 }
 
 Result LoopbackDriver::on_activate() {
-  output_v_ = safe_output_v_;
   outputs_v_.fill(safe_output_v_);
   if (stage_) {
     stage_->reset(std::span<const double>(outputs_v_).first(stage_->axes()));
@@ -141,7 +140,6 @@ DriverStatus LoopbackDriver::write(double output_v) noexcept {
   if (armed(write_error_at_, tick_.load(std::memory_order_relaxed) + 1)) {
     return DriverStatus::kError;
   }
-  output_v_ = output_v;
   outputs_v_[0] = output_v;
   return DriverStatus::kOk;
 }
@@ -151,7 +149,6 @@ DriverStatus LoopbackDriver::write_axes(std::span<const double> outputs_v) noexc
     return DriverStatus::kError;
   }
   for (std::size_t i = 0; i < outputs_v.size() && i < axes(); ++i) outputs_v_[i] = outputs_v[i];
-  if (!outputs_v.empty()) output_v_ = outputs_v.front();
   return DriverStatus::kOk;
 }
 
@@ -162,7 +159,7 @@ DriverStatus LoopbackDriver::advance() noexcept {
     stage_->step(std::span<const double>(outputs_v_).first(axes()),
                  std::span<double>(y_).first(axes()));
   } else {
-    y_[0] = actuator_->step(output_v_);
+    y_[0] = actuator_->step(outputs_v_[0]);
   }
   if (armed(read_error_at_, tick)) return DriverStatus::kError;
   reading_nan_ = armed(nan_at_, tick);
@@ -189,7 +186,6 @@ DriverStatus LoopbackDriver::read_axes(std::span<Measurement> out) noexcept {
 }
 
 DriverStatus LoopbackDriver::safe_state() noexcept {
-  output_v_ = safe_output_v_;
   outputs_v_.fill(safe_output_v_);
   return DriverStatus::kOk;
 }
@@ -212,7 +208,7 @@ DriverInfo LoopbackDriver::info() const noexcept {
 nlohmann::json LoopbackDriver::diagnostics() const {
   nlohmann::json d = {{"type", "loopback"},
                       {"ticks", tick_.load(std::memory_order_relaxed)},
-                      {"output_v", output_v_}};
+                      {"output_v", outputs_v_[0]}};
   if (stage_) {
     nlohmann::json axes = nlohmann::json::array();
     for (std::size_t i = 0; i < stage_->axes(); ++i) {

@@ -63,6 +63,7 @@ class StageDecoupler {
 
  private:
   Eigen::MatrixXd gains_;
+  Eigen::MatrixXd coupled_;  // I + K
   Eigen::MatrixXd inverse_;  // (I + K)^{-1}
 };
 

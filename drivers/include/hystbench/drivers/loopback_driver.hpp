@@ -71,12 +71,11 @@ class LoopbackDriver final : public DriverInterface {
 
   std::unique_ptr<sim::SimulatedActuator> actuator_;
   std::unique_ptr<sim::SimulatedStage> stage_;
-  std::array<double, kMaxAxes> outputs_v_{};  // stage: held per axis
+  std::array<double, kMaxAxes> outputs_v_{};  // held per axis (one without a stage)
   std::array<double, kMaxAxes> y_{};          // the last sample's readings, per axis
   std::array<double, kMaxAxes> last_y_{};     // what read() reports (stuck holds it)
   double safe_output_v_ = 0.0;
   double max_rate_hz_ = 20000.0;
-  double output_v_ = 0.0;
   bool reading_nan_ = false;            // this tick's injected NaN
   std::atomic<std::uint64_t> tick_{0};  // read by inject()/diagnostics() from other threads
   std::atomic<std::uint64_t> read_error_at_{0}, nan_at_{0}, stuck_at_{0}, write_error_at_{0};
