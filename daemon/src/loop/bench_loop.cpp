@@ -26,15 +26,31 @@ const char* to_string(LoopClock clock) noexcept {
 BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
     : driver_(driver),
       options_(options),
-      limiter_(options.limits, 1.0 / options.rate_hz),
-      stuck_(stuck_options(options.stuck_sensor, driver)),
+      axes_(std::clamp<std::size_t>(driver.axes(), 1, drivers::kMaxAxes)),
+      limiters_(axes_, OutputLimiter(options.limits, 1.0 / options.rate_hz)),
+      stuck_(axes_, StuckSensorDetector(stuck_options(options.stuck_sensor, driver))),
       dt_(1.0 / options.rate_hz),
       period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))),
       simulated_(options.clock == LoopClock::kSimulated),
       held_gap_ticks_(std::max<std::uint64_t>(
           1, static_cast<std::uint64_t>(std::llround(options.held_gap_s * options.rate_hz)))) {
-  limiter_.reset(driver_.safe_output_v());
-  last_u_.store(driver_.safe_output_v());
+  reset_outputs();
+}
+
+void BenchLoop::reset_outputs() noexcept {
+  for (std::size_t a = 0; a < axes_; ++a) {
+    limiters_[a].reset(driver_.safe_output_v());
+    last_u_[a].store(driver_.safe_output_v(), std::memory_order_relaxed);
+  }
+}
+
+drivers::DriverStatus BenchLoop::write_all(const AxisValues& u) noexcept {
+  return axes_ == 1 ? driver_.write(u[0]) : driver_.write_axes(std::span(u).first(axes_));
+}
+
+drivers::DriverStatus BenchLoop::read_all(
+    std::array<drivers::Measurement, drivers::kMaxAxes>& m) noexcept {
+  return axes_ == 1 ? driver_.read(m[0]) : driver_.read_axes(std::span(m).first(axes_));
 }
 
 BenchLoop::~BenchLoop() {
@@ -81,24 +97,25 @@ void BenchLoop::shutdown() {
 }
 
 std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> program) {
-  if (state() != State::kIdle || finished_.load(std::memory_order_acquire) != nullptr) {
+  if (state() != State::kIdle || finished_.load(std::memory_order_acquire) != nullptr ||
+      program->axes() > axes_) {
     return program;
   }
-  // The targets ahead, for an inverse that uses them. Not yet with a dynamics preview, whose
-  // target is already computed from the reference ahead: fed both, the rate inverse tracked worse.
-  if (program->compensator && !program->preview) {
-    program->targets.allocate(program->compensator->preview_samples());
-  }
-  if (program->learned_twin && !program->preview) {
-    program->twin_targets.allocate(program->learned_twin->preview_samples());
-  }
-  program->dt_s = dt_;
-  // The feedback's integral holds while the drive sits at a bound of the output range.
-  if (program->compensator) {
-    program->compensator->set_drive_range(options_.limits.u_min, options_.limits.u_max);
-  }
-  if (program->learned_twin) {
-    program->learned_twin->set_drive_range(options_.limits.u_min, options_.limits.u_max);
+  for (std::size_t a = 0; a < program->axes(); ++a) {
+    RunProgram& p = program->axis(a);
+    // The targets ahead, for an inverse that uses them. Not yet with a dynamics preview, whose
+    // target is already computed from the reference ahead: fed both, the rate inverse tracked
+    // worse.
+    if (p.compensator && !p.preview) p.targets.allocate(p.compensator->preview_samples());
+    if (p.learned_twin && !p.preview) {
+      p.twin_targets.allocate(p.learned_twin->preview_samples());
+    }
+    p.dt_s = dt_;
+    // The feedback's integral holds while the drive sits at a bound of the output range.
+    if (p.compensator) p.compensator->set_drive_range(options_.limits.u_min, options_.limits.u_max);
+    if (p.learned_twin) {
+      p.learned_twin->set_drive_range(options_.limits.u_min, options_.limits.u_max);
+    }
   }
   RunProgram* expected = nullptr;
   RunProgram* raw = program.get();
@@ -213,17 +230,17 @@ BenchLoop::SimulatedStep BenchLoop::next_simulated_step() noexcept {
   return SimulatedStep::kStandStill;
 }
 
-void BenchLoop::log_sample(RunProgram& p, const SampleRecord& rec) noexcept {
+void BenchLoop::log_sample(RunProgram& p, std::span<const SampleRecord> row) noexcept {
   if (!p.log) return;
-  if (!simulated_) {
-    if (!p.log->push(rec)) ++p.counters.log_drops;
+  if (!simulated_ || p.log->row_records() != row.size()) {
+    if (!p.log->push_row(row)) ++p.counters.log_drops;
     return;
   }
   // Back-pressure: virtual time waits for the writer, nothing is dropped. Only a closed log or
-  // a shutting-down daemon gives up (push() then counts the drop).
-  while (!p.log->try_push(rec)) {
+  // a shutting-down daemon gives up (push_row() then counts the drop).
+  while (!p.log->try_push_row(row)) {
     if (p.log->closed() || quit_.load(std::memory_order_acquire)) {
-      (void)p.log->push(rec);
+      (void)p.log->push_row(row);
       ++p.counters.log_drops;
       return;
     }
@@ -240,8 +257,10 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   }
   if (state() == State::kFault) {
     driver_.safe_state();
-    drivers::Measurement m;
-    if (driver_.read(m) == drivers::DriverStatus::kOk) last_y_.store(m.position_um);
+    std::array<drivers::Measurement, drivers::kMaxAxes> m{};
+    if (read_all(m) == drivers::DriverStatus::kOk) {
+      for (std::size_t a = 0; a < axes_; ++a) last_y_[a].store(m[a].position_um);
+    }
     return;
   }
   if (active_ == nullptr && !defer_pending_) {
@@ -249,7 +268,9 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
     if (p != nullptr) {
       active_ = p;
       idle_ticks_ = 0;
-      stuck_.reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
+      for (std::size_t a = 0; a < axes_; ++a) {
+        stuck_[a].reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
+      }
       driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
       active_pub_.store(p, std::memory_order_release);
@@ -259,8 +280,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   if (abort_requested_.exchange(false, std::memory_order_acq_rel)) {
     // Safe output now, not ramped; a run ends as aborted.
     driver_.safe_state();
-    limiter_.reset(driver_.safe_output_v());
-    last_u_.store(driver_.safe_output_v());
+    reset_outputs();
     if (active_ != nullptr) end_run(RunEnd::kAborted, "aborted by request");
     return;
   }
@@ -273,17 +293,20 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
 
 void BenchLoop::idle_tick() noexcept {
   ++idle_ticks_;
-  const auto lim = limiter_.apply(driver_.safe_output_v());
-  if (driver_.write(lim.u) != drivers::DriverStatus::kOk) {
+  AxisValues u{};
+  for (std::size_t a = 0; a < axes_; ++a) u[a] = limiters_[a].apply(driver_.safe_output_v()).u;
+  if (write_all(u) != drivers::DriverStatus::kOk) {
     fault("driver write failed while idle");
     return;
   }
-  last_u_.store(lim.u, std::memory_order_relaxed);
-  drivers::Measurement m;
-  const auto st = driver_.read(m);
+  for (std::size_t a = 0; a < axes_; ++a) last_u_[a].store(u[a], std::memory_order_relaxed);
+  std::array<drivers::Measurement, drivers::kMaxAxes> m{};
+  const auto st = read_all(m);
   if (st == drivers::DriverStatus::kOk || st == drivers::DriverStatus::kStale) {
-    last_y_.store(m.position_um, std::memory_order_relaxed);
-    y_prev_ = m.position_um;
+    for (std::size_t a = 0; a < axes_; ++a) {
+      last_y_[a].store(m[a].position_um, std::memory_order_relaxed);
+      y_prev_[a] = m[a].position_um;
+    }
   } else {
     fault("driver read failed while idle");
   }
@@ -302,7 +325,9 @@ struct BenchLoop::TickDrive {
 /// What the exchange with the driver leaves for the stages after it.
 struct BenchLoop::TickExchange {
   const char* failure = nullptr;  ///< why the run faults at this tick; null when it does not
-  std::uint32_t response = RunRecords::kNoFreshReading;  ///< the fresh reading's response_ticks
+  /// Per axis, the fresh reading's response_ticks.
+  std::array<std::uint32_t, drivers::kMaxAxes> response{};
+  TickExchange() { response.fill(RunRecords::kNoFreshReading); }
 };
 
 namespace {
@@ -323,24 +348,50 @@ void add_tare_sample(RunProgram& p, std::uint64_t k, const drivers::Measurement&
 
 void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   const std::uint64_t k = p.done.load(std::memory_order_relaxed);
-  SampleRecord rec;
-  rec.index = k;
-  rec.scheduled_ns = scheduled_ns - run_start_ns_;
-  rec.wake_ns = wake_ns - run_start_ns_;
-  if (overran_) {
-    rec.flags |= kSampleOverrun;
-    ++p.counters.overruns;
+  const std::size_t n = p.axes();  // submit() refused more than the driver's
+  AxisRecords rec{};
+  std::array<TickDrive, drivers::kMaxAxes> d{};
+  AxisValues u{};
+  bool limited = false;
+  for (std::size_t a = 0; a < axes_; ++a) {
+    if (a >= n) {  // an axis the run does not drive holds its safe output
+      u[a] = limiters_[a].apply(driver_.safe_output_v()).u;
+      continue;
+    }
+    RunProgram& pa = p.axis(a);
+    rec[a].index = k;
+    rec[a].scheduled_ns = scheduled_ns - run_start_ns_;
+    rec[a].wake_ns = wake_ns - run_start_ns_;
+    if (overran_) {
+      rec[a].flags |= kSampleOverrun;
+      ++pa.counters.overruns;
+    }
+    d[a] = drive(a, pa, k, rec[a]);
+    const OutputLimiter::Applied lim = limit(a, pa, k, d[a].u_request, rec[a]);
+    u[a] = lim.u;
+    limited = limited || lim.clamped || lim.slew_limited;
   }
-  const TickDrive d = drive(p, k, rec);
-  const OutputLimiter::Applied lim = limit(p, k, d.u_request, rec);
-  TickExchange x = exchange(p, k, lim, rec);
-  if (x.failure == nullptr && p.oscillation && k >= p.feedback_from && std::isfinite(d.y_ref) &&
-      p.oscillation->update(d.y_ref - rec.y_measured, k)) {
-    x.failure = "the feedback loop oscillates (a growing or sustained oscillation of the error)";
-    rec.flags |= kSampleFault;
+  if (p.coupling && n == p.coupling->axes()) couple_predictions(p, k, rec);
+  TickExchange x = exchange(p, n, k, u, limited, rec);
+  for (std::size_t a = 0; a < n && x.failure == nullptr; ++a) {
+    RunProgram& pa = p.axis(a);
+    if (pa.oscillation && k >= pa.feedback_from && std::isfinite(d[a].y_ref) &&
+        pa.oscillation->update(d[a].y_ref - rec[a].y_measured, k)) {
+      x.failure = "the feedback loop oscillates (a growing or sustained oscillation of the error)";
+      rec[a].flags |= kSampleFault;
+    }
   }
-  const bool last_trial_played = x.failure == nullptr && score(p, k, d, rec);
-  record(p, k, d, x.response, wake_ns - scheduled_ns, rec);
+  bool last_trial_played = false;
+  for (std::size_t a = 0; a < n && x.failure == nullptr; ++a) {
+    const bool played = score(p.axis(a), k, d[a], rec[a]);
+    if (a == 0) last_trial_played = played;
+  }
+  rec[0].exec_ns = now_ns() - exec_start_ns_;
+  for (std::size_t a = 0; a < n; ++a) {
+    rec[a].exec_ns = rec[0].exec_ns;
+    record(p.axis(a), k, d[a], x.response[a], wake_ns - scheduled_ns, rec[a]);
+  }
+  log_sample(p, std::span<const SampleRecord>(rec).first(n));
 
   if (x.failure != nullptr) {
     fault(x.failure);
@@ -351,14 +402,15 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   }
 }
 
-BenchLoop::TickDrive BenchLoop::drive(RunProgram& p, std::uint64_t k, SampleRecord& rec) noexcept {
+BenchLoop::TickDrive BenchLoop::drive(std::size_t a, RunProgram& p, std::uint64_t k,
+                                      SampleRecord& rec) noexcept {
   TickDrive d;
   if (p.kind != RunKind::kTrack || k < p.excitation.size()) {
     // An open-loop drive (identify, excite), or the pre-conditioning prefix of a tracking run.
     d.u_request = p.excitation[k];
     rec.u_ff = d.u_request;
   } else {
-    track_drive(p, k, d, rec);
+    track_drive(a, p, k, d, rec);
   }
   rec.reference = d.y_ref;
   return d;
@@ -375,7 +427,7 @@ double BenchLoop::twin_feedforward(RunProgram& p, double t) const noexcept {
   return p.learned_twin->step(none, none, target_at(t)).u_ff;
 }
 
-void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
+void BenchLoop::track_drive(std::size_t a, RunProgram& p, std::uint64_t k, TickDrive& d,
                             SampleRecord& rec) noexcept {
   const double t = static_cast<double>(k - p.excitation.size()) * dt_;
   d.y_ref = p.reference->value(t);
@@ -396,9 +448,9 @@ void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
   const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : d.y_ref;
   compensation::CompensatorOutput out;
   if (p.targets.capacity() > 1) {
-    out = p.compensator->step(fb_ref, y_prev_, p.targets.advance(t, dt_, target_at));
+    out = p.compensator->step(fb_ref, y_prev_[a], p.targets.advance(t, dt_, target_at));
   } else {
-    out = p.compensator->step(fb_ref, y_prev_, target_at(t));
+    out = p.compensator->step(fb_ref, y_prev_[a], target_at(t));
   }
   const double twin = p.learned_twin ? twin_feedforward(p, t) : kNoTwin;
   rec.u_ff = out.u_ff;
@@ -422,9 +474,9 @@ void BenchLoop::track_drive(RunProgram& p, std::uint64_t k, TickDrive& d,
   }
 }
 
-OutputLimiter::Applied BenchLoop::limit(RunProgram& p, std::uint64_t k, double u_request,
-                                        SampleRecord& rec) noexcept {
-  const OutputLimiter::Applied lim = limiter_.apply(u_request);
+OutputLimiter::Applied BenchLoop::limit(std::size_t a, RunProgram& p, std::uint64_t k,
+                                        double u_request, SampleRecord& rec) noexcept {
+  const OutputLimiter::Applied lim = limiters_[a].apply(u_request);
   if (p.compensator) p.compensator->notify_saturation(lim.direction);
   if (lim.clamped) {
     rec.flags |= kSampleOutputClamped;
@@ -442,50 +494,72 @@ OutputLimiter::Applied BenchLoop::limit(RunProgram& p, std::uint64_t k, double u
   return lim;
 }
 
-BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::uint64_t k,
-                                            const OutputLimiter::Applied& lim,
-                                            SampleRecord& rec) noexcept {
+void BenchLoop::couple_predictions(RunProgram& p, std::uint64_t k, AxisRecords& rec) noexcept {
+  AxisValues own{}, stage{};
+  const std::size_t n = p.axes();
+  for (std::size_t a = 0; a < n; ++a) {
+    if (!p.axis(a).model) return;  // an axis without a prediction: none is coupled
+    own[a] = rec[a].y_model;
+  }
+  p.coupling->couple(std::span(own).first(n), std::span(stage).first(n));
+  for (std::size_t a = 0; a < n; ++a) {
+    rec[a].y_model = stage[a];
+    p.axis(a).tare.y_model_history[k % TareWindow::kHistory] = stage[a];
+  }
+}
+
+BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::uint64_t k,
+                                            const AxisValues& u, bool limited,
+                                            AxisRecords& rec) noexcept {
   TickExchange x;
-  if ((lim.clamped || lim.slew_limited) && options_.fatal_on_limit) {
+  if (limited && options_.fatal_on_limit) {
     x.failure = "output limit reached (limits.fatal_on_limit)";
-  } else if (driver_.write(lim.u) != drivers::DriverStatus::kOk) {
+  } else if (write_all(u) != drivers::DriverStatus::kOk) {
     x.failure = "driver write failed";
   } else {
-    last_u_.store(lim.u, std::memory_order_relaxed);
-    drivers::Measurement m;
-    const auto st = driver_.read(m);
-    if (st == drivers::DriverStatus::kStale) {
-      rec.flags |= kSampleStale;
-      ++p.counters.stale_reads;
-      stuck_.stale(lim.u);
-    } else if (st != drivers::DriverStatus::kOk) {
+    for (std::size_t a = 0; a < axes_; ++a) last_u_[a].store(u[a], std::memory_order_relaxed);
+    std::array<drivers::Measurement, drivers::kMaxAxes> m{};
+    const auto st = read_all(m);
+    if (st != drivers::DriverStatus::kOk && st != drivers::DriverStatus::kStale) {
       x.failure =
           st == drivers::DriverStatus::kTimeout ? "driver read timed out" : "driver read failed";
     }
-    if (x.failure == nullptr && !std::isfinite(m.position_um)) {
-      x.failure = "measurement is not a finite number";
-    } else if (st == drivers::DriverStatus::kOk &&
-               stuck_.update(lim.u, m.position_um, m.response_ticks)) {
-      x.failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
-    }
-    rec.y_measured = m.position_um;
-    if (st == drivers::DriverStatus::kOk) {
-      x.response = static_cast<std::uint32_t>(
-          std::min<std::uint64_t>(m.response_ticks, RunRecords::kNoFreshReading - 1));
+    for (std::size_t a = 0; a < n; ++a) {
+      RunProgram& pa = p.axis(a);
+      if (st == drivers::DriverStatus::kStale) {
+        rec[a].flags |= kSampleStale;
+        ++pa.counters.stale_reads;
+        stuck_[a].stale(u[a]);
+      }
+      if (x.failure == nullptr && !std::isfinite(m[a].position_um)) {
+        x.failure = "measurement is not a finite number";
+      } else if (x.failure == nullptr && st == drivers::DriverStatus::kOk &&
+                 stuck_[a].update(u[a], m[a].position_um, m[a].response_ticks)) {
+        x.failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
+      }
+      rec[a].y_measured = m[a].position_um;
+      if (st == drivers::DriverStatus::kOk) {
+        x.response[a] = static_cast<std::uint32_t>(
+            std::min<std::uint64_t>(m[a].response_ticks, RunRecords::kNoFreshReading - 1));
+      }
     }
     if (x.failure == nullptr) {
-      // A stale reading is the last fresh one again: the feedback must not integrate an error
-      // that only the reading's age makes. It holds until the next fresh one.
-      y_prev_ = st == drivers::DriverStatus::kOk ? m.position_um
-                                                 : std::numeric_limits<double>::quiet_NaN();
-      last_y_.store(m.position_um, std::memory_order_relaxed);
-      if (st == drivers::DriverStatus::kOk) add_tare_sample(p, k, m);
+      for (std::size_t a = 0; a < axes_; ++a) {
+        // A stale reading is the last fresh one again: the feedback must not integrate an error
+        // that only the reading's age makes. It holds until the next fresh one.
+        y_prev_[a] = st == drivers::DriverStatus::kOk ? m[a].position_um
+                                                      : std::numeric_limits<double>::quiet_NaN();
+        last_y_[a].store(m[a].position_um, std::memory_order_relaxed);
+        if (a < n && st == drivers::DriverStatus::kOk) add_tare_sample(p.axis(a), k, m[a]);
+      }
     }
   }
   if (x.failure == nullptr && p.counters.overruns > options_.overrun_budget) {
     x.failure = "overrun budget exceeded (loop.overrun_budget)";
   }
-  if (x.failure != nullptr) rec.flags |= kSampleFault;
+  if (x.failure != nullptr) {
+    for (std::size_t a = 0; a < n; ++a) rec[a].flags |= kSampleFault;
+  }
   return x;
 }
 
@@ -515,7 +589,7 @@ bool BenchLoop::score(RunProgram& p, std::uint64_t k, const TickDrive& d,
 }
 
 void BenchLoop::record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::uint32_t response,
-                       std::int64_t wake_latency_ns, SampleRecord& rec) noexcept {
+                       std::int64_t wake_latency_ns, const SampleRecord& rec) noexcept {
   if (p.records.count < p.records.capacity && k >= p.metrics_from) {
     p.records.u[p.records.count] = rec.u_out;
     p.records.y[p.records.count] = rec.y_measured;
@@ -523,8 +597,6 @@ void BenchLoop::record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::
     if (!p.records.response.empty()) p.records.response[p.records.count] = response;
     ++p.records.count;
   }
-  rec.exec_ns = now_ns() - exec_start_ns_;
-  log_sample(p, rec);
   p.stats.record(wake_latency_ns, rec.exec_ns, overran_);
   p.done.store(k + 1, std::memory_order_release);
   if (d.learning && d.phase + 1 == p.learning->period) signal_event();  // a trial for the learner
@@ -543,8 +615,10 @@ void BenchLoop::await_learned_drive(const LearningExchange& learning, std::uint6
 void BenchLoop::end_run(RunEnd end, const char* reason) noexcept {
   RunProgram* p = active_;
   if (p == nullptr) return;
-  p->end = end;
-  p->end_reason = reason;
+  for (std::size_t a = 0; a < p->axes(); ++a) {
+    p->axis(a).end = end;
+    p->axis(a).end_reason = reason;
+  }
   active_ = nullptr;
   driver_.set_run_active(false);
   active_pub_.store(nullptr, std::memory_order_release);
@@ -555,8 +629,7 @@ void BenchLoop::end_run(RunEnd end, const char* reason) noexcept {
 
 void BenchLoop::fault(const char* reason) noexcept {
   driver_.safe_state();
-  limiter_.reset(driver_.safe_output_v());
-  last_u_.store(driver_.safe_output_v(), std::memory_order_relaxed);
+  reset_outputs();
   fault_reason_.store(reason, std::memory_order_release);
   state_.store(State::kFault, std::memory_order_release);
   end_run(RunEnd::kFault, reason);

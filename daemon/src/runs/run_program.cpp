@@ -33,10 +33,10 @@ const char* to_string(RunEnd end) noexcept {
 }
 
 double RunProgram::feedforward_target(double t_s, double tare_um) const noexcept {
-  if (!preview) return std::clamp(reference->value(t_s), y_ref_min, y_ref_max) - tare_um;
+  const sim::SignalGenerator& r = feedforward_reference ? *feedforward_reference : *reference;
+  if (!preview) return std::clamp(r.value(t_s), y_ref_min, y_ref_max) - tare_um;
   const double tl = t_s + preview->lead_s(), h = preview->step_s();
-  return preview->target(reference->value(tl - h), reference->value(tl), reference->value(tl + h)) -
-         tare_um;
+  return preview->target(r.value(tl - h), r.value(tl), r.value(tl + h)) - tare_um;
 }
 
 }  // namespace hystbench::daemon

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <charconv>
@@ -12,8 +13,8 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "service/details/posix_io.hpp"
 #include "hystbench/daemon/loop/realtime.hpp"
+#include "service/details/posix_io.hpp"
 
 namespace hystbench::daemon {
 
@@ -24,6 +25,8 @@ constexpr std::array<std::string_view, 12> kColumns = {
     "u",     "y", "y_model",        "flags"};
 constexpr std::array<std::string_view, 12> kUnits = {"1", "s", "ns", "ns", "ns", "um",
                                                      "V", "V", "V",  "um", "um", "1"};
+/// A stage's columns per axis (the one-axis columns from yr on, suffixed with the axis' name).
+constexpr std::size_t kFirstAxisColumn = 5;
 constexpr std::size_t kBatch = 1024;
 constexpr std::size_t kWriteThreshold = std::size_t{256} << 10;
 constexpr std::size_t kMaxRowChars = std::size_t{12} * 32;
@@ -51,12 +54,34 @@ std::string comment_line(const nlohmann::json& object) {
   return "# " + object.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
+bool valid_axis_name(const std::string& name) {
+  if (name.empty() || name.size() > 16) return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+  });
+}
+
+/// Each column's name and unit, for these axes.
+std::vector<std::pair<std::string, std::string_view>> columns_with_units(
+    std::span<const std::string> axes) {
+  std::vector<std::pair<std::string, std::string_view>> out;
+  const std::size_t per_axis_end = axes.empty() ? kColumns.size() : kFirstAxisColumn;
+  for (std::size_t i = 0; i < per_axis_end; ++i) out.emplace_back(kColumns[i], kUnits[i]);
+  for (const std::string& axis : axes) {
+    for (std::size_t i = kFirstAxisColumn; i < kColumns.size(); ++i) {
+      out.emplace_back(std::string(kColumns[i]) + "_" + axis, kUnits[i]);
+    }
+  }
+  return out;
+}
+
 std::string make_header(const SampleLogOptions& o) {
   std::string h = comment_line(
       {{"schema", kSampleLogSchema}, {"run_id", o.run_id}, {"created", utc_now_iso8601()}});
   for (const auto& [key, value] : o.header.items()) h += comment_line({{key, value}});
+  const auto columns_units = columns_with_units(o.axes);
   nlohmann::json units = nlohmann::json::object();
-  for (std::size_t i = 0; i < kColumns.size(); ++i) units[std::string(kColumns[i])] = kUnits[i];
+  for (const auto& [name, unit] : columns_units) units[name] = unit;
   h += comment_line({{"units", units}});
   h += comment_line({{"flags",
                       {{"output_clamped", kSampleOutputClamped},
@@ -67,11 +92,11 @@ std::string make_header(const SampleLogOptions& o) {
                        {"fault", kSampleFault},
                        {"stale", kSampleStale}}}});
   nlohmann::json columns = nlohmann::json::array();
-  for (const auto c : kColumns) columns.push_back(c);
+  for (const auto& column : columns_units) columns.push_back(column.first);
   h += comment_line({{"columns", columns}});
-  for (std::size_t i = 0; i < kColumns.size(); ++i) {
+  for (std::size_t i = 0; i < columns_units.size(); ++i) {
     h += (i ? "," : "");
-    h += kColumns[i];
+    h += columns_units[i].first;
   }
   h += "\n";
   return h;
@@ -89,6 +114,22 @@ SampleLogOptions validated(SampleLogOptions o) {
     if (o.header.contains(reserved)) {
       throw std::invalid_argument(std::string("sample log: header key '") + reserved +
                                   "' is reserved");
+    }
+  }
+  if (!o.axes.empty()) {
+    if (o.axes.size() < 2 || o.axes.size() > 6) {
+      throw std::invalid_argument("sample log: a stage has 2 to 6 axes, not " +
+                                  std::to_string(o.axes.size()));
+    }
+    for (std::size_t i = 0; i < o.axes.size(); ++i) {
+      if (!valid_axis_name(o.axes[i])) {
+        throw std::invalid_argument("sample log: axis name '" + o.axes[i] +
+                                    "' must be 1-16 characters of [a-z0-9_]");
+      }
+      if (std::find(o.axes.begin(), o.axes.begin() + static_cast<std::ptrdiff_t>(i), o.axes[i]) !=
+          o.axes.begin() + static_cast<std::ptrdiff_t>(i)) {
+        throw std::invalid_argument("sample log: axis name '" + o.axes[i] + "' is given twice");
+      }
     }
   }
   if (o.poll_interval.count() <= 0 || o.flush_interval.count() <= 0) {
@@ -113,22 +154,26 @@ char* put_double(char* p, double v) {
   return std::to_chars(p, p + 32, v).ptr;
 }
 
-char* format_row(char* p, const SampleRecord& r) {
-  p = put_uint(p, r.index);
+/// One row: the first record's times, then each record's values (one per axis).
+char* format_row(char* p, std::span<const SampleRecord> row) {
+  const SampleRecord& first = row.front();
+  p = put_uint(p, first.index);
   *p++ = ',';
-  p = put_double(p, static_cast<double>(r.scheduled_ns) / 1e9);
+  p = put_double(p, static_cast<double>(first.scheduled_ns) / 1e9);
   *p++ = ',';
-  p = put_int(p, r.scheduled_ns);
+  p = put_int(p, first.scheduled_ns);
   *p++ = ',';
-  p = put_int(p, r.wake_ns);
+  p = put_int(p, first.wake_ns);
   *p++ = ',';
-  p = put_int(p, r.exec_ns);
-  for (const double v : {r.reference, r.u_ff, r.u_fb, r.u_out, r.y_measured, r.y_model}) {
+  p = put_int(p, first.exec_ns);
+  for (const SampleRecord& r : row) {
+    for (const double v : {r.reference, r.u_ff, r.u_fb, r.u_out, r.y_measured, r.y_model}) {
+      *p++ = ',';
+      p = put_double(p, v);
+    }
     *p++ = ',';
-    p = put_double(p, v);
+    p = put_uint(p, r.flags);
   }
-  *p++ = ',';
-  p = put_uint(p, r.flags);
   *p++ = '\n';
   return p;
 }
@@ -137,8 +182,16 @@ char* format_row(char* p, const SampleRecord& r) {
 
 std::span<const std::string_view> sample_log_columns() noexcept { return kColumns; }
 
+std::vector<std::string> sample_log_columns(std::span<const std::string> axes) {
+  std::vector<std::string> out;
+  for (auto& column : columns_with_units(axes)) out.push_back(std::move(column.first));
+  return out;
+}
+
 SampleLogWriter::SampleLogWriter(SampleLogOptions options)
-    : options_(validated(std::move(options))), ring_(options_.ring_capacity) {
+    : options_(validated(std::move(options))),
+      row_records_(std::max<std::size_t>(1, options_.axes.size())),
+      ring_(options_.ring_capacity * row_records_) {
   std::error_code ec;
   std::filesystem::create_directories(options_.log_dir, ec);
   if (ec) throw std::system_error(ec, "sample log: cannot create " + options_.log_dir.string());
@@ -174,8 +227,8 @@ SampleLogWriter::SampleLogWriter(SampleLogOptions options)
 
 SampleLogWriter::~SampleLogWriter() { close(); }
 
-bool SampleLogWriter::push(const SampleRecord& record) noexcept {
-  if (!closed_.load(std::memory_order_relaxed) && ring_.try_push(record)) return true;
+bool SampleLogWriter::push_row(std::span<const SampleRecord> records) noexcept {
+  if (try_push_row(records)) return true;
   dropped_.fetch_add(1, std::memory_order_relaxed);  // rare path: an atomic add is fine
   return false;
 }
@@ -201,13 +254,18 @@ void SampleLogWriter::run() {
 
 void SampleLogWriter::drain_and_format() {
   std::array<SampleRecord, kBatch> batch;
+  // Whole rows only: the loop pushes a row's records at once, so the ring holds whole rows.
+  const std::size_t per_row = row_records_;
+  const std::span<SampleRecord> rows(batch.data(), kBatch / per_row * per_row);
   for (;;) {
-    const std::size_t n = ring_.pop_batch(batch);
+    const std::size_t n = ring_.pop_batch(rows) / per_row;
     if (n == 0) return;
     const std::size_t old = out_.size();
-    out_.resize(old + n * kMaxRowChars);
+    out_.resize(old + n * kMaxRowChars * per_row);
     char* p = out_.data() + old;
-    for (std::size_t i = 0; i < n; ++i) p = format_row(p, batch[i]);
+    for (std::size_t i = 0; i < n; ++i) {
+      p = format_row(p, std::span<const SampleRecord>(batch.data() + i * per_row, per_row));
+    }
     out_.resize(static_cast<std::size_t>(p - out_.data()));
     rows_in_out_ += n;
     if (out_.size() >= kWriteThreshold) write_out();
@@ -237,7 +295,9 @@ SampleLogCounts SampleLogWriter::close() {
   thread_.join();
   // Whatever raced into the ring after the last drain never reaches the file.
   SampleRecord leftover;
-  while (ring_.try_pop(leftover)) dropped_.fetch_add(1, std::memory_order_relaxed);
+  std::uint64_t left_records = 0;
+  while (ring_.try_pop(leftover)) ++left_records;
+  dropped_.fetch_add(left_records / row_records_, std::memory_order_relaxed);
   if (::close(fd_) != 0 && error_.empty()) error_ = details::errno_message("close");
   fd_ = -1;
   final_counts_ = {written(), dropped(), error_};

@@ -10,6 +10,11 @@
 // the loop deterministically, tick by tick, through the same per-tick path. Runs are handed over as
 // whole RunProgram objects (see run_program.hpp); the loop never allocates, locks or throws.
 //
+// A stage of several axes (the driver's axes() > 1): every tick writes every axis and reads every
+// axis at once (write_axes/read_axes), each axis through its own limiter and stuck-sensor
+// watch; a run drives its axes (RunProgram::stage_axes), the others hold their safe output. A
+// fault on any axis faults the run and puts every axis in its safe state.
+//
 // Faults (driver error, non-finite or stuck measurement, overrun budget, a limit hit with fatal
 // limits): the driver goes to its safe state in the same tick, the run ends with the reason and the
 // loop stays in kFault, writing the safe output, until reset_fault().
@@ -29,12 +34,15 @@
 // measured on CLOCK_MONOTONIC. No SCHED_FIFO (a free-running FIFO thread would starve the rest of
 // the process on its CPU) and no memory lock. A full sample-log ring makes the loop wait for room
 // (a short sleep, not real time) instead of dropping the record: every sample is logged.
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <span>
 #include <thread>
+#include <vector>
 
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/loop/output_limiter.hpp"
@@ -93,7 +101,8 @@ class BenchLoop {
   void step() noexcept;
 
   /// Hands a run to the loop. Fails (returns the program back) when a run is active, another
-  /// is pending, a finished one has not been taken yet, or the loop is in kFault.
+  /// is pending, a finished one has not been taken yet, the loop is in kFault, or the run has
+  /// more axes than the driver serves.
   std::unique_ptr<RunProgram> submit(std::unique_ptr<RunProgram> program);
   /// Simulated clock only (ignored on the wall clock and by step()): while on, the idle between
   /// two runs lasts exactly held_gap_s, and then time stands still (no tick) until a run is
@@ -139,8 +148,15 @@ class BenchLoop {
   /// Timing since start (or the last reset_statistics()).
   LoopStatisticsSnapshot statistics() const noexcept { return stats_.snapshot(); }
   void reset_statistics() noexcept { stats_.request_reset(); }
-  double last_measurement() const noexcept { return last_y_.load(std::memory_order_relaxed); }
-  double last_output() const noexcept { return last_u_.load(std::memory_order_relaxed); }
+  /// Axis a's last reading [µm] and output [V] (a < axes()).
+  double last_measurement(std::size_t a = 0) const noexcept {
+    return last_y_[a].load(std::memory_order_relaxed);
+  }
+  double last_output(std::size_t a = 0) const noexcept {
+    return last_u_[a].load(std::memory_order_relaxed);
+  }
+  /// The driver's axes, [1, drivers::kMaxAxes].
+  std::size_t axes() const noexcept { return axes_; }
   /// Increments every tick, and every poll while the simulated clock's time stands still: the
   /// watchdog is fed only while it advances.
   std::uint64_t ticks() const noexcept { return ticks_.load(std::memory_order_relaxed); }
@@ -166,32 +182,46 @@ class BenchLoop {
   // the compiler can keep the tick one function.
   struct TickDrive;
   struct TickExchange;
-  /// The output the run asks for at tick k: its open-loop drive, or the compensator's.
-  inline TickDrive drive(RunProgram& p, std::uint64_t k, SampleRecord& rec) noexcept;
+  /// Per driver axis: what the run's axes asked and got, and the measurements.
+  using AxisRecords = std::array<SampleRecord, drivers::kMaxAxes>;
+  using AxisValues = std::array<double, drivers::kMaxAxes>;
+  /// The output axis a of the run asks for at tick k: its open-loop drive, or the compensator's.
+  inline TickDrive drive(std::size_t a, RunProgram& p, std::uint64_t k, SampleRecord& rec) noexcept;
   /// A tracking tick: the reference, limited to the range, and the compensator's output for it
   /// (or a learned drive's).
-  inline void track_drive(RunProgram& p, std::uint64_t k, TickDrive& d, SampleRecord& rec) noexcept;
+  inline void track_drive(std::size_t a, RunProgram& p, std::uint64_t k, TickDrive& d,
+                          SampleRecord& rec) noexcept;
   /// track --learned: the compensator's twin stepped at run time t [s] on the targets at the
   /// offset the drive was learned at (RunProgram::learned_twin); its feedforward [V].
   inline double twin_feedforward(RunProgram& p, double t) const noexcept;
   static constexpr double kNoTwin = std::numeric_limits<double>::quiet_NaN();
-  /// The requested output through the limits, counted, and the model's prediction for it.
-  inline OutputLimiter::Applied limit(RunProgram& p, std::uint64_t k, double u_request,
-                                      SampleRecord& rec) noexcept;
-  /// Writes the output and reads the measurement: the fault, if any, and the reading's age.
-  inline TickExchange exchange(RunProgram& p, std::uint64_t k, const OutputLimiter::Applied& lim,
-                               SampleRecord& rec) noexcept;
+  /// Axis a's requested output through its limits, counted, and the model's prediction for it.
+  inline OutputLimiter::Applied limit(std::size_t a, RunProgram& p, std::uint64_t k,
+                                      double u_request, SampleRecord& rec) noexcept;
+  /// Writes every axis's output u and reads every axis's measurement; the run's axes [0, n)
+  /// take theirs: the fault, if any, and each reading's age.
+  inline TickExchange exchange(RunProgram& p, std::size_t n, std::uint64_t k, const AxisValues& u,
+                               bool limited, AxisRecords& rec) noexcept;
+  /// A stage's axes' predictions (their own displacements) coupled into the stage's
+  /// (RunProgram::coupling), in the records and each axis's tare history. Real-time safe.
+  void couple_predictions(RunProgram& p, std::uint64_t k, AxisRecords& rec) noexcept;
+  /// Writes u to every axis (write() for one). Real-time safe.
+  drivers::DriverStatus write_all(const AxisValues& u) noexcept;
+  /// Reads every axis into m (read() for one). Real-time safe.
+  drivers::DriverStatus read_all(std::array<drivers::Measurement, drivers::kMaxAxes>& m) noexcept;
+  /// Every axis's limiter and last output back at the safe output.
+  void reset_outputs() noexcept;
   /// Adds a sample that did not fault to the run's errors and to its learning trial; true when
   /// the last trial has played.
   static inline bool score(RunProgram& p, std::uint64_t k, const TickDrive& d,
                            const SampleRecord& rec) noexcept;
-  /// Keeps the sample in the run's record, log and timing, and publishes it as done.
+  /// Keeps axis p's sample in its record and timing, and publishes it as done.
   inline void record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::uint32_t response,
-                     std::int64_t wake_latency_ns, SampleRecord& rec) noexcept;
+                     std::int64_t wake_latency_ns, const SampleRecord& rec) noexcept;
   void idle_tick() noexcept;
-  /// Pushes the record to the run's log: a full ring drops it on the wall clock and waits for
-  /// room on the simulated clock.
-  void log_sample(RunProgram& p, const SampleRecord& rec) noexcept;
+  /// Pushes the tick's row (a record per axis of the run) to the run's log: a full ring drops it
+  /// on the wall clock and waits for room on the simulated clock.
+  void log_sample(RunProgram& p, std::span<const SampleRecord> row) noexcept;
   void end_run(RunEnd end, const char* reason) noexcept;
   void fault(const char* reason) noexcept;
   /// Bumps events() and wakes wait_event(): one non-blocking system call.
@@ -201,8 +231,9 @@ class BenchLoop {
 
   drivers::Driver& driver_;
   BenchLoopOptions options_;
-  OutputLimiter limiter_;
-  StuckSensorDetector stuck_;
+  std::size_t axes_ = 1;                    // the driver's
+  std::vector<OutputLimiter> limiters_;     // per axis
+  std::vector<StuckSensorDetector> stuck_;  // per axis
   LoopStatistics stats_;
   std::thread thread_;
   std::atomic<bool> quit_{false};
@@ -215,8 +246,8 @@ class BenchLoop {
   std::atomic<bool> abort_requested_{false};
   std::atomic<bool> reset_requested_{false};
   std::atomic<bool> hold_gaps_{false};
-  std::atomic<double> last_y_{0.0};
-  std::atomic<double> last_u_{0.0};
+  std::array<std::atomic<double>, drivers::kMaxAxes> last_y_{};  // per axis
+  std::array<std::atomic<double>, drivers::kMaxAxes> last_u_{};
   std::atomic<std::uint64_t> ticks_{0};
   std::atomic<std::uint32_t> events_{0};
   RealtimeReport realtime_report_;
@@ -224,8 +255,8 @@ class BenchLoop {
   // Loop-thread state.
   RunProgram* active_ = nullptr;
   std::int64_t run_start_ns_ = 0;
-  // The last tick's reading for the feedback; NaN after a stale one (the feedback holds).
-  double y_prev_ = 0.0;
+  // Per axis, the last tick's reading for the feedback; NaN after a stale one (it holds).
+  AxisValues y_prev_{};
   double dt_ = 1e-4;
   std::int64_t period_ns_ = 100000;
   bool overran_ = false;

@@ -54,6 +54,20 @@ class SpscRing {
     return true;
   }
 
+  /// Producer only. Copies every one of `values` in, or none when they do not all fit: a
+  /// consumer sees them all at once (a row of several records stays whole).
+  bool try_push_all(std::span<const T> values) noexcept {
+    const std::size_t tail = tail_.load(std::memory_order_relaxed);
+    if (tail + values.size() - producer_.head_cache > mask_ + 1) {
+      producer_.head_cache = head_.load(std::memory_order_acquire);
+      if (tail + values.size() - producer_.head_cache > mask_ + 1) return false;
+    }
+    T* buffer = data();
+    for (std::size_t i = 0; i < values.size(); ++i) buffer[(tail + i) & mask_] = values[i];
+    tail_.store(tail + values.size(), std::memory_order_release);
+    return true;
+  }
+
   /// Consumer only. Moves the oldest record to `out`; false when the ring is empty.
   bool try_pop(T& out) noexcept { return pop_batch(std::span<T>(&out, 1)) == 1; }
 

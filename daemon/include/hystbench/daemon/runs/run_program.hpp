@@ -16,6 +16,7 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
+#include "hystbench/compensation/stage_decoupling.hpp"
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/loop/oscillation_detector.hpp"
 #include "hystbench/daemon/runs/learning_exchange.hpp"
@@ -158,8 +159,28 @@ struct RunProgram {
   std::optional<compensation::Compensator> learned_twin;
   double learned_twin_offset_um = 0.0;
   TargetWindow twin_targets;  ///< the twin's targets ahead, sized as `targets`
-  /// The per-run log (may be null in unit tests).
+  /// The per-run log (may be null in unit tests). On a stage, axis 0's holds every axis's
+  /// columns (its row_records() = axes()); the other axes' stay null.
   std::unique_ptr<SampleLogWriter> log;
+  /// A stage of several axes: the run's axes after the first (1 .. axes() - 1, in the driver's
+  /// order), each a program of this one's kind, length and windows, stepped in the same tick as
+  /// it (one write and one read of every axis). Empty: one axis. A driver's axes beyond the
+  /// run's hold their safe output.
+  std::vector<std::unique_ptr<RunProgram>> stage_axes;
+  /// track on a stage: the feedforward's reference in place of `reference`, the target with the
+  /// coupling taken out (static decoupling); the error and the feedback keep `reference`.
+  /// Null: `reference`.
+  std::unique_ptr<sim::SignalGenerator> feedforward_reference;
+  /// A stage's coupling (axis 0's program): each tick the axes' y_model, their own displacements,
+  /// become the stage's prediction (I + K) y_model, which the log, the model error and each
+  /// axis's tare see. Absent: each axis's y_model is its own.
+  std::optional<compensation::StageDecoupler> coupling;
+  /// The run's axes (1 + stage_axes) and axis a's program (0 = this one). Real-time safe.
+  std::size_t axes() const noexcept { return stage_axes.size() + 1; }
+  RunProgram& axis(std::size_t a) noexcept { return a == 0 ? *this : *stage_axes[a - 1]; }
+  const RunProgram& axis(std::size_t a) const noexcept {
+    return a == 0 ? *this : *stage_axes[a - 1];
+  }
   RunRecords records;
 
   // ---- written by the loop thread ----

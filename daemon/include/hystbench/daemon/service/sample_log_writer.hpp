@@ -11,6 +11,9 @@
 //   # {"columns": ["index", "t", ...]}
 //   index,t,t_scheduled_ns,t_wake_ns,exec_ns,yr,u_ff,u_fb,u,y,y_model,flags
 //   0,0,0,1520,8300,0,0,0,0,0.0123,NaN,0
+// A stage of several axes (SampleLogOptions::axes, 2-6 names) keeps the five time columns once
+// and then, per axis in order, its own yr_<name>,u_ff_<name>,u_fb_<name>,u_<name>,y_<name>,
+// y_model_<name>,flags_<name>; the loop pushes one record per axis per tick (push_row()).
 // Every '#' line is one JSON object; merging the leading ones gives the header
 // (read_sample_log_header()). A run may append one after the rows: a replay of a learned drive
 // whose lead-in ended early gives where its scored part began (# {"scored_from": k, ...}).
@@ -33,6 +36,7 @@
 #include <string>
 #include <string_view>
 #include <thread>
+#include <vector>
 
 #include "hystbench/daemon/loop/sample_record.hpp"
 #include "hystbench/daemon/loop/spsc_ring.hpp"
@@ -57,6 +61,9 @@ struct SampleLogOptions {
   /// How often written rows are handed to the kernel at the latest (and on close()).
   std::chrono::milliseconds flush_interval{500};
   bool update_latest_link = true;
+  /// A stage's axis names, in the driver's order: 2-6 of 1-16 characters of [a-z0-9_], each
+  /// once. Empty = one axis, the columns above.
+  std::vector<std::string> axes;
 };
 
 struct SampleLogCounts {
@@ -78,12 +85,19 @@ class SampleLogWriter {
 
   /// Loop thread. Real-time safe (copies into the ring: no allocation, lock or system call).
   /// Returns false and counts a drop when the ring is full or the log is closed.
-  bool push(const SampleRecord& record) noexcept;
+  bool push(const SampleRecord& record) noexcept { return push_row({&record, 1}); }
+  /// One tick of a stage: a record per axis (axes().size() of them; the first one's times are
+  /// the row's), all kept or all dropped. Real-time safe.
+  bool push_row(std::span<const SampleRecord> records) noexcept;
+  /// As push_row(), but a full ring or a closed log is not counted as a drop: the caller tries
+  /// again or gives up with push_row(). Real-time safe.
+  bool try_push_row(std::span<const SampleRecord> records) noexcept {
+    return !closed_.load(std::memory_order_relaxed) && records.size() == row_records_ &&
+           ring_.try_push_all(records);
+  }
   /// As push(), but a full ring or a closed log is not counted as a drop: the caller tries again
   /// (the simulated clock's back-pressure) or gives up with push(). Real-time safe.
-  bool try_push(const SampleRecord& record) noexcept {
-    return !closed_.load(std::memory_order_relaxed) && ring_.try_push(record);
-  }
+  bool try_push(const SampleRecord& record) noexcept { return try_push_row({&record, 1}); }
   /// True once close() has begun: nothing pushed from then on reaches the file.
   bool closed() const noexcept { return closed_.load(std::memory_order_relaxed); }
 
@@ -95,6 +109,8 @@ class SampleLogWriter {
   std::uint64_t written() const noexcept { return written_.load(std::memory_order_relaxed); }
   std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
   const std::filesystem::path& path() const noexcept { return path_; }
+  /// Records per row: the stage's axes, 1 for one axis.
+  std::size_t row_records() const noexcept { return row_records_; }
 
  private:
   void run();
@@ -103,6 +119,7 @@ class SampleLogWriter {
 
   SampleLogOptions options_;
   std::filesystem::path path_;
+  std::size_t row_records_ = 1;
   int fd_ = -1;
   SpscRing<SampleRecord> ring_;
   std::atomic<bool> closed_{false};
@@ -124,6 +141,8 @@ class SampleLogWriter {
 
 /// Column names of the CSV, in file order.
 std::span<const std::string_view> sample_log_columns() noexcept;
+/// Column names of a stage's CSV with these axes (empty: sample_log_columns()).
+std::vector<std::string> sample_log_columns(std::span<const std::string> axes);
 
 /// Reads the '#' lines at the head of a sample log and merges their JSON objects.
 /// Throws std::runtime_error naming the file and line for a comment that is not a JSON object.
