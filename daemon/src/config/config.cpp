@@ -17,6 +17,7 @@
 #include "config/details/toml_json.hpp"
 #include "hystbench/common/fit_families.hpp"
 #include "hystbench/sim/simulated_actuator_config.hpp"
+#include "hystbench/sim/simulated_stage_config.hpp"
 
 namespace hystbench::daemon {
 
@@ -417,9 +418,12 @@ const toml::node* node_at(const toml::table& table, std::string_view path) {
 
 /// Checks a simulated actuator table (`key` = its dotted path) with sim::from_json; its errors
 /// ("<key path>: <what>") become "<key>.<key path>: <what>" at the offending node's line.
-void check_actuator(const Context& ctx, const std::string& key, const toml::table& table) {
+/// `parse` is sim::from_json or sim::stage_from_json.
+template <typename Parse>
+void check_simulated(const Context& ctx, const std::string& key, const toml::table& table,
+                     Parse parse) {
   try {
-    (void)sim::from_json(details::toml_node_to_json(table));
+    (void)parse(details::toml_node_to_json(table));
   } catch (const std::invalid_argument& e) {
     const std::string message = e.what();
     const std::size_t colon = message.find(": ");
@@ -430,6 +434,10 @@ void check_actuator(const Context& ctx, const std::string& key, const toml::tabl
     if (line == 0) line = line_of(&table);
     ctx.fail(key + "." + path, message.substr(colon + 2), line);
   }
+}
+
+void check_actuator(const Context& ctx, const std::string& key, const toml::table& table) {
+  check_simulated(ctx, key, table, [](const nlohmann::json& j) { return sim::from_json(j); });
 }
 
 /// The simulated actuator's tables, for the loopback driver; refused with another one.
@@ -447,15 +455,23 @@ void check_actuators(const Context& ctx, const toml::table& root, const DaemonCo
     }
     return;
   }
-  if (actuator) check_actuator(ctx, "actuator", *actuator);
-  // The driver simulates a stage of several axes, but the loop drives one: refused by name
-  // here rather than run with its other axes held.
+  // A stage of several axes simulates each axis's actuator in its own table: one [actuator]
+  // beside it would be a second truth.
   if (const toml::node* stage = root.at_path("driver.loopback.stage").node()) {
-    ctx.fail("driver.loopback.stage",
-             "hystbenchd's loop drives one axis; the loopback's stage of several axes serves the "
-             "driver's tests (simulate one actuator with [actuator])",
-             line_of(stage));
+    if (!stage->is_table()) ctx.fail("driver.loopback.stage", "must be a table", line_of(stage));
+    if (actuator && !actuator->empty()) {
+      int line = line_of(actuator);
+      if (line == 0) line = line_of(&actuator->cbegin()->second);
+      ctx.fail("actuator",
+               "[driver.loopback.stage] simulates each axis's actuator (axes[i].actuator): "
+               "remove [actuator] or the stage",
+               line);
+    }
+    check_simulated(ctx, "driver.loopback.stage", *stage->as_table(),
+                    [](const nlohmann::json& j) { return sim::stage_from_json(j); });
+    return;
   }
+  if (actuator) check_actuator(ctx, "actuator", *actuator);
   const toml::node* own = root.at_path("driver.loopback.actuator").node();
   if (own && own->is_table()) check_actuator(ctx, "driver.loopback.actuator", *own->as_table());
 }

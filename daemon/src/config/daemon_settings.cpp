@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hystbench/sim/simulated_stage_config.hpp"
+
 namespace hystbench::daemon {
 
 BenchSettings bench_settings_from(const DaemonConfig& c) {
@@ -27,8 +29,14 @@ BenchSettings bench_settings_from(const DaemonConfig& c) {
   }
   s.driver_type = c.driver.type;
   s.driver_params = c.driver.params();
-  // The loopback driver's actuator is the [actuator] table unless the driver table names one.
-  if (c.driver.type == "loopback" && !s.driver_params.contains("actuator")) {
+  // The loopback driver's actuator is the [actuator] table unless the driver table names one
+  // or simulates a stage of several axes, whose names the bench takes.
+  if (c.driver.type == "loopback" && s.driver_params.contains("stage")) {
+    for (const auto& axis : sim::stage_from_json(s.driver_params["stage"]).axes) {
+      s.axes.push_back(axis.name);
+    }
+    if (s.axes.size() == 1) s.axes.clear();
+  } else if (c.driver.type == "loopback" && !s.driver_params.contains("actuator")) {
     s.driver_params["actuator"] = c.actuator;
   }
   s.log_dir = c.daemon.log_dir;

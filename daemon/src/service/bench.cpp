@@ -15,6 +15,7 @@
 #include "runs/details/learned_drive.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/run_result.hpp"
+#include "runs/details/stage_runs.hpp"
 #include "runs/details/track_program.hpp"
 #include "service/details/command_table.hpp"
 #include "service/details/model_folder.hpp"
@@ -61,6 +62,13 @@ Bench::Bench(BenchSettings settings)
                              std::to_string(lim.u_max) + "] V exceed the driver's output range [" +
                              std::to_string(driver_->output_min_v()) + ", " +
                              std::to_string(driver_->output_max_v()) + "] V");
+  }
+  if (auto r = driver_->serves(std::max<std::size_t>(1, settings_.axes.size())); !r) {
+    throw std::runtime_error(r.message);
+  }
+  if (settings_.axes.empty() && driver_->axes() > 1) {
+    throw std::runtime_error("the driver serves " + std::to_string(driver_->axes()) +
+                             " axes and the configuration names none");
   }
   if (auto r = driver_->activate(); !r) throw std::runtime_error(r.message);
   loop_ = std::make_unique<BenchLoop>(*driver_, settings_.loop);
@@ -168,6 +176,7 @@ void Bench::open_log(RunProgram& p, json header) {
   opt.run_id = p.run_id;
   opt.header = std::move(header);
   opt.ring_capacity = settings_.log_ring_capacity;
+  if (p.axes() > 1) opt.axes.assign(settings_.axes.begin(), settings_.axes.begin() + p.axes());
   try {
     p.log = std::make_unique<SampleLogWriter>(std::move(opt));
   } catch (const std::exception& e) {
@@ -216,6 +225,11 @@ json Bench::reset() {
 
 json Bench::model_get() const {
   std::lock_guard lock(mutex_);
+  if (is_stage()) {
+    if (!stage_)
+      throw common::CommandError("no_model", "no stage model (identify the stage first)");
+    return stage_status();
+  }
   if (!model_)
     throw common::CommandError("no_model", "no active model (identify or model.load first)");
   return {{"path", model_path_}, {"model", hc::to_json(*model_)}};
@@ -233,6 +247,15 @@ json Bench::status() const {
   if (state == BenchLoop::State::kFault) s["fault_reason"] = loop_->fault_reason();
   s["output_v"] = loop_->last_output();
   s["position_um"] = loop_->last_measurement();
+  if (is_stage()) {
+    json axes = json::object();
+    for (std::size_t a = 0; a < settings_.axes.size(); ++a) {
+      axes[settings_.axes[a]] = {{"output_v", loop_->last_output(a)},
+                                 {"position_um", loop_->last_measurement(a)}};
+    }
+    s["axes"] = axes;
+    s["stage_model"] = stage_ ? stage_status() : json(nullptr);
+  }
   if (!active_run_.is_null()) {
     s["run"] = active_run_;
   } else {
@@ -269,6 +292,7 @@ nlohmann::json Bench::load_model(const details::RequestParams& request) {
   }
   // Checked first: a refused request changes nothing (an upload is not kept either).
   std::lock_guard lock(mutex_);
+  refuse_on_stage("model.load");
   if (phase_ != RunPhase::kIdle) {
     throw common::CommandError("busy", "a run is active; load the model after it");
   }
@@ -371,6 +395,7 @@ json Bench::start_identify(const details::RequestParams& request) {
   const details::IdentifyRequest identify = details::parse_identify_request(request, settings_);
   std::lock_guard lock(mutex_);
   require_idle();
+  if (is_stage()) return start_stage_identify(identify);
   details::BuiltRun run = details::make_identify_program(identify, run_context());
   json fit = std::move(run.fit);
   json reply = launch("identify", std::move(run));
@@ -385,6 +410,7 @@ json Bench::start_excite(const details::RequestParams& request, std::uint64_t cl
   }
   const std::string upload_name = request.string("drive_upload", "");
   std::lock_guard lock(mutex_);
+  refuse_on_stage("excite");
   require_idle();
   const auto upload = uploads_.complete(upload_name, client, UploadKind::kDrive);
   json reply = launch("excite", details::make_excite_program(*upload, run_context()));
@@ -395,6 +421,14 @@ json Bench::start_excite(const details::RequestParams& request, std::uint64_t cl
 json Bench::start_track(const details::RequestParams& request, std::uint64_t client) {
   std::lock_guard lock(mutex_);
   require_idle();
+  if (is_stage()) return start_stage_track(request, client);
+  for (const char* key : {"frequencies_hz", "decouple", "reference_uploads"}) {
+    if (request.has(key)) {
+      throw common::CommandError("not_on_stage", std::string(key) +
+                                                     ": a stage's key (several axes); this bench "
+                                                     "drives one axis");
+    }
+  }
   const details::RunContext ctx = run_context();
   const details::TrackRequest track = details::parse_track_request(request, ctx);
   const std::string& upload_name = track.reference_upload;
@@ -643,11 +677,22 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
   set_phase(RunPhase::kFinalizing);
   details::RunResult result = details::collect_result(*run, loop_->last_output());
   finish_learning(*run, result.report);
+  if (run->axes() > 1 && result.kind == RunKind::kFrequencyResponse) {
+    details::replace_with_stage_result(result.report, *run, settings_.axes);
+    axes_responses_measured(*run, std::move(result));
+    return;
+  }
   if (result.kind == RunKind::kFrequencyResponse) {
     responses_finished(std::move(run), std::move(result));
     return;
   }
-  if (result.wants_fit()) {
+  if (run->axes() > 1) {
+    details::replace_with_stage_result(result.report, *run, settings_.axes);
+    if (result.wants_fit()) {
+      stage_identified(*run, std::move(result));
+      return;
+    }
+  } else if (result.wants_fit()) {
     fit_identify(*run, std::move(result));  // delivers when the candidates are verified
     return;
   }

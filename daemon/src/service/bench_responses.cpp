@@ -50,6 +50,7 @@ json Bench::feedback_now(hc::CompensatorKind kind, json* why) {
 json Bench::start_frf(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
   require_idle();
+  if (is_stage()) return start_stage_frf(request);
   const details::RunContext ctx = run_context();
   const sim::FrequencyResponseExcitationOptions o = details::response_options(request, ctx);
   json reply = launch("frf", details::make_response_program(o, ctx));
@@ -97,6 +98,7 @@ void Bench::responses_finished(std::unique_ptr<RunProgram> run, details::RunResu
 
 json Bench::tune(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
+  refuse_on_stage("tune");
   const std::string name = request.string("compensator", model_ ? "inverse+pid" : "pid");
   const auto kind = hc::compensator_kind_from_string(name);
   if (!kind || !hc::uses_feedback(*kind)) {

@@ -398,10 +398,14 @@ TEST(Config, TheActuatorTableIsCheckedWithFileLineAndKey) {
        "a.toml:3: actuator.delay.delay_s: must be in [0, 1] s"},
       {"[actuator]\ndynamics = { enabled = true, mode_gains = [1.0] }\n",
        "actuator.dynamics.mode_gains", 2, "a.toml:2: actuator.dynamics.mode_gains: has 1 "},
-      // A stage of several axes: the loop drives one.
+      // A stage of several axes: its own keys, named at their line.
       {"[driver]\ntype = \"loopback\"\n[driver.loopback.stage]\naxes = []\n",
-       "driver.loopback.stage", 3,
-       "a.toml:3: driver.loopback.stage: hystbenchd's loop drives one axis"},
+       "driver.loopback.stage.axes", 4,
+       "a.toml:4: driver.loopback.stage.axes: a stage has 1 to 6 axes"},
+      // ... and its axes' actuators in it: an [actuator] beside it would be a second truth.
+      {"[driver]\ntype = \"loopback\"\n[driver.loopback.stage]\n[actuator.creep]\n"
+       "enabled = false\n",
+       "actuator", 4, "a.toml:4: actuator: [driver.loopback.stage] simulates each axis's actuator"},
       // The loopback driver's own table, when it names the actuator.
       {"[driver.loopback.actuator.sensor_filter]\nenabled = true\ndamping_ratio = 0.0\n",
        "driver.loopback.actuator.sensor_filter.damping_ratio", 3,

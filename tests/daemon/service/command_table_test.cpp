@@ -35,7 +35,8 @@ TEST(CommandTable, AnUnknownKeyIsNamedWithTheValidOnes) {
   EXPECT_EQ(refusal("track", {{"bogus", 1}}),
             "bad_params: unknown parameter 'bogus' (valid: reference, frequency_hz, periods, "
             "duration_s, compensator, range_fraction, min_um, max_um, kp, ki, kd, force_gains, "
-            "precondition_s, learn_trials, learn_gain, learn_cutoff_hz, learned, lead_in_max_s)");
+            "precondition_s, learn_trials, learn_gain, learn_cutoff_hz, learned, lead_in_max_s, "
+            "frequencies_hz, decouple)");
   EXPECT_EQ(refusal("status", {{"verbose", true}}),
             "bad_params: unknown parameter 'verbose' (valid: )");
   // An uploaded reference has its own keys: the built-in reference's are unknown there.

@@ -31,7 +31,9 @@ void add_rate_law_segment(sim::IdentificationExcitationOptions& options, const s
   options.rate_cycles.push_back(kRateLawCycles);
 }
 
-sim::Excitation excitation(const IdentifyRequest& request, const RunContext& ctx) {
+}  // namespace
+
+sim::Excitation identify_excitation(const IdentifyRequest& request, const RunContext& ctx) {
   const BenchSettings& s = ctx.settings;
   try {
     sim::IdentificationExcitationOptions options = s.identify_excitation;
@@ -46,8 +48,6 @@ sim::Excitation excitation(const IdentifyRequest& request, const RunContext& ctx
     throw common::CommandError("bad_params", e.what());
   }
 }
-
-}  // namespace
 
 IdentifyRequest parse_identify_request(const RequestParams& request,
                                        const BenchSettings& settings) {
@@ -72,7 +72,7 @@ IdentifyRequest parse_identify_request(const RequestParams& request,
 
 BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext& ctx) {
   const BenchSettings& s = ctx.settings;
-  const sim::Excitation exc = excitation(request, ctx);
+  const sim::Excitation exc = identify_excitation(request, ctx);
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kIdentify;
   p->response_delay_ticks = model_delay_ticks(ctx);

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "hystbench/sim/identification_excitation.hpp"
 #include "runs/details/run_context.hpp"
 #include "service/details/request_params.hpp"
 
@@ -27,6 +28,10 @@ struct IdentifyRequest {
 /// The request's keys over settings' identify defaults; bad_params naming the key when the
 /// model is unknown or the span is not inside the output limits.
 IdentifyRequest parse_identify_request(const RequestParams& request, const BenchSettings& settings);
+
+/// identify's excitation for the request (the configured segments, a rate-law segment for a
+/// family that fits one) [V]; bad_params when its options are refused.
+sim::Excitation identify_excitation(const IdentifyRequest& request, const RunContext& ctx);
 
 /// The identify program, with what its fit needs (BuiltRun::fit).
 BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext& ctx);

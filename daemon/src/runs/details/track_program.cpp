@@ -609,22 +609,22 @@ void describe_track_run(BuiltRun& run, const RunProgram& p, const TrackReference
   }
 }
 
-}  // namespace
-
-BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
-                            const Upload* upload) {
+// make_track_program's and make_axis_track_program's run: `ref` built from the request,
+// `feedforward_reference` the feedforward's in its place (null: the reference).
+BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, TrackReference ref,
+                         std::optional<LearningPlan> learn,
+                         std::unique_ptr<sim::SignalGenerator> feedforward_reference) {
   const BenchSettings& s = ctx.settings;
   const auto& lim = s.loop.limits;
   const std::string& comp_name = request.compensator;
   const hc::CompensatorKind kind = request.compensator_kind;
   const ActuatorRange range = known_range(ctx);
-  std::optional<LearningPlan> learn = learning_plan(request, ctx);
-  TrackReference ref = reference(request, ctx, range, upload, learn);
 
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kTrack;
   p->response_delay_ticks = model_delay_ticks(ctx);
   p->reference = std::move(ref.signal);
+  p->feedforward_reference = std::move(feedforward_reference);
   p->y_ref_min = range.y_bottom;
   p->y_ref_max = range.y_top;
   // Pre-conditioning: current output -> u_max -> u_min, open loop.
@@ -695,6 +695,32 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
   run.program = std::move(p);
   run.preparation = std::move(preparation);
   return run;
+}
+
+}  // namespace
+
+TrackReference track_reference(const TrackRequest& request, const RunContext& ctx,
+                               const Upload* reference_upload) {
+  std::optional<LearningPlan> none;
+  return reference(request, ctx, known_range(ctx), reference_upload, none);
+}
+
+BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
+                            const Upload* upload) {
+  std::optional<LearningPlan> learn = learning_plan(request, ctx);
+  TrackReference ref = reference(request, ctx, known_range(ctx), upload, learn);
+  return build_track_run(request, ctx, std::move(ref), std::move(learn), nullptr);
+}
+
+BuiltRun make_axis_track_program(const TrackRequest& request, const RunContext& ctx,
+                                 TrackReference reference,
+                                 std::unique_ptr<sim::SignalGenerator> feedforward_reference) {
+  if (request.learning.any()) {
+    throw common::CommandError("bad_params",
+                               "learn and learned: not on a stage of several axes yet");
+  }
+  return build_track_run(request, ctx, std::move(reference), std::nullopt,
+                         std::move(feedforward_reference));
 }
 
 }  // namespace hystbench::daemon::details

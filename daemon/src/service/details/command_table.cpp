@@ -34,6 +34,12 @@ constexpr ParamSpec kTrackUploaded[] = {{"reference_upload", T::kString},
                                         {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9},
                                         {"learned", T::kString},
                                         {"lead_in_max_s", T::kNumber, 0.0, 600.0}};
+// A stage's (several axes): an uploaded reference per axis, {axis: upload name}.
+constexpr ParamSpec kTrackStageUploaded[] = {{"reference_uploads", T::kObject},
+                                             {"approach_s", T::kNumber, 0.0, 60.0},
+                                             {"compensator", T::kString},
+                                             {"precondition_s", T::kNumber, 0.0, 60.0},
+                                             {"decouple", T::kBoolean}};
 constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"frequency_hz", T::kNumber, 1e-3},
                                        {"periods", T::kNumber, 0.0, 1e7},
@@ -51,7 +57,9 @@ constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"learn_gain", T::kNumber, 1e-3, 20.0},
                                        {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9},
                                        {"learned", T::kString},
-                                       {"lead_in_max_s", T::kNumber, 0.0, 600.0}};
+                                       {"lead_in_max_s", T::kNumber, 0.0, 600.0},
+                                       {"frequencies_hz", T::kArray},
+                                       {"decouple", T::kBoolean}};
 constexpr ParamSpec kExcite[] = {{"drive_upload", T::kString}};
 constexpr ParamSpec kFrf[] = {{"amplitude", T::kNumber, 1e-3, 0.1},
                               {"periods", T::kInteger, 2, 64}};
@@ -90,6 +98,8 @@ std::span<const Command> bench_commands() {
       {"identify", nullptr, kIdentify,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.start_identify(r); }},
       {"track", "reference_upload", kTrackUploaded,
+       [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
+      {"track", "reference_uploads", kTrackStageUploaded,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
       {"track", nullptr, kTrackBuiltin,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
@@ -142,6 +152,8 @@ std::span<const Command> bench_commands() {
   };
   return kCommands;
 }
+
+std::span<const ParamSpec> track_builtin_params() { return kTrackBuiltin; }
 
 const Command& find_command(const std::string& name, const json& params) {
   const Command* fallback = nullptr;

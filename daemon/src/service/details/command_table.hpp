@@ -28,4 +28,8 @@ std::span<const Command> bench_commands();
 /// The row for `name` and these params; throws CommandError unknown_command listing every name.
 const Command& find_command(const std::string& name, const nlohmann::json& params);
 
+/// The parameters of track with a built-in reference: a stage's track reads the keys it shares
+/// with one axis's (compensator, precondition, gains, learning) through them.
+std::span<const ParamSpec> track_builtin_params();
+
 }  // namespace hystbench::daemon::details

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/compensator.hpp"
@@ -39,6 +40,8 @@ struct RunPreparation;
 struct RunResult;
 struct PlanCache;
 struct FeedbackPlanCache;
+struct StageModel;
+struct IdentifyRequest;
 class TrackLearning;
 std::span<const Command> bench_commands();
 }  // namespace details
@@ -46,6 +49,9 @@ std::span<const Command> bench_commands();
 struct BenchSettings {
   BenchLoopOptions loop;
   std::string driver_type = "loopback";
+  /// A stage's axis names, in the driver's order (the loopback's [driver.loopback.stage]); empty:
+  /// one axis. The driver must serve as many.
+  std::vector<std::string> axes;
   nlohmann::json driver_params = nlohmann::json::object();
   std::string log_dir = "/var/lib/hystbench/logs";
   std::string model_dir = "/var/lib/hystbench/models";
@@ -122,6 +128,30 @@ class Bench {
   /// tune: the feedback a track run would get (designed, or given gains checked), with its
   /// loop's curves; runs nothing.
   nlohmann::json tune(const details::RequestParams& request);
+  // A stage of several axes (bench_stage.cpp): identify one axis at a time, track every axis.
+  /// settings_.axes is not empty.
+  bool is_stage() const noexcept { return !settings_.axes.empty(); }
+  /// Throws CommandError not_on_stage for `command`, which drives one axis.
+  void refuse_on_stage(const char* command) const;
+  /// identify on the stage. Caller holds mutex_.
+  nlohmann::json start_stage_identify(const details::IdentifyRequest& request);
+  /// track on the stage. Caller holds mutex_.
+  nlohmann::json start_stage_track(const details::RequestParams& request, std::uint64_t client);
+  /// frf on the stage: each axis's responses, for its feedback. Caller holds mutex_.
+  nlohmann::json start_stage_frf(const details::RequestParams& request);
+  /// A stage's frf run played: each axis's responses kept with its model (supervisor thread);
+  /// after identify's, identify's result is delivered with them.
+  void axes_responses_measured(const RunProgram& run, details::RunResult result);
+  /// identify on a stage, once fitted: its frf run, each axis's responses for its feedback.
+  /// False when it did not start (`why` says so). Supervisor thread.
+  bool measure_axes_responses(const std::string& identify_run_id, std::string& why);
+  /// A stage's identify run played: its fit, the stage model kept and saved, its result
+  /// delivered (supervisor thread).
+  void stage_identified(const RunProgram& run, details::RunResult result);
+  /// Every axis's present output [V].
+  std::vector<double> axis_outputs() const;
+  /// status' and model.get's word on the stage. Caller holds mutex_.
+  nlohmann::json stage_status() const;
   /// A finished frf run: the responses estimated, kept, and its result (supervisor thread).
   void responses_finished(std::unique_ptr<RunProgram> run, details::RunResult result);
   /// identify's last segment: frf's run, once the model is chosen; false when it did not start.
@@ -269,7 +299,12 @@ class Bench {
   std::unique_ptr<RunProgram> preparing_;
   std::unique_ptr<details::RunPreparation> preparation_;
   RunEnd cancel_preparation_ = RunEnd::kCompleted;
-  std::unique_ptr<IdentifySession> session_;  // supervisor thread only
+  std::unique_ptr<IdentifySession> session_;    // supervisor thread only
+  std::unique_ptr<details::StageModel> stage_;  // a stage's model (identify on a stage)
+  // A stage's frf under way: each axis's excitation options and the ticks of each turn.
+  std::vector<sim::FrequencyResponseExcitationOptions> stage_frf_options_;
+  std::size_t stage_frf_turn_ = 0;
+  nlohmann::json stage_identify_report_;  // identify's result while its frf plays
   // The learner of a learning run (set with it, taken by the supervisor when it ends).
   std::unique_ptr<details::TrackLearning> learning_;
   std::string learning_run_id_;

@@ -1,0 +1,245 @@
+// A stage's identify: one axis at a time, then compensation::fit_stage (stage_runs.hpp).
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/common/fit_families.hpp"
+#include "runs/details/stage_runs.hpp"
+
+namespace hystbench::daemon::details {
+
+using nlohmann::json;
+namespace hc = hystbench::compensation;
+
+namespace {
+
+// The ramps into and out of each turn [s]: the held axes see the moved one's ramp back before
+// the next turn begins, outside every record the fit reads.
+constexpr double kRampS = 0.1;
+
+// Axis a's drive over the whole run: its present output, its turn, its present output again.
+std::vector<double> axis_drive(const sim::Excitation& exc, std::size_t a, std::size_t axes,
+                               double u_hold, std::size_t ramp) {
+  const std::size_t turn = 2 * ramp + exc.samples.size();
+  std::vector<double> u;
+  u.reserve(turn * axes);
+  u.assign(turn * a, u_hold);
+  append_ramp(u, u_hold, exc.samples.front(), ramp);
+  u.insert(u.end(), exc.samples.begin(), exc.samples.end());
+  append_ramp(u, exc.samples.back(), u_hold, ramp);
+  u.resize(turn * axes, u_hold);
+  return u;
+}
+
+// "y<-x": the share of x's motion on y.
+std::string pair_name(const std::string& to, const std::string& from) { return to + "<-" + from; }
+
+// Each turn's record: the moved axis's drive and every axis's output over its first `samples`.
+std::vector<hc::OneAxisMotion> turn_records(const RunProgram& run, std::size_t axes,
+                                            std::size_t turn, std::size_t samples, double dt) {
+  std::vector<hc::OneAxisMotion> records;
+  records.reserve(axes);
+  for (std::size_t moved = 0; moved < axes; ++moved) {
+    hc::OneAxisMotion m;
+    m.moved = moved;
+    m.dt = dt;
+    m.outputs.resize(static_cast<Eigen::Index>(axes), static_cast<Eigen::Index>(samples));
+    const std::size_t from = moved * turn;
+    for (std::size_t b = 0; b < axes; ++b) {
+      const auto& y = run.axis(b).records.y;
+      for (std::size_t k = 0; k < samples; ++k) {
+        m.outputs(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(k)) = y[from + k];
+      }
+    }
+    const auto& u = run.axis(moved).records.u;
+    m.drive.assign(u.begin() + static_cast<std::ptrdiff_t>(from),
+                   u.begin() + static_cast<std::ptrdiff_t>(from + samples));
+    records.push_back(std::move(m));
+  }
+  return records;
+}
+
+// The coupling's gains for identify's result, keyed "y<-x".
+json coupling_json(const hc::StageFit& fit, const std::vector<std::string>& axes) {
+  json gains = json::object();
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    for (std::size_t j = 0; j < axes.size(); ++j) {
+      if (i == j) continue;
+      const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
+      const double db = fit.coupling_db(ii, jj);
+      gains[pair_name(axes[i], axes[j])] = {
+          {"gain", fit.coupling.gains(ii, jj)},
+          {"db", std::isfinite(db) ? json(db) : json(nullptr)},
+          {"residual_share", fit.coupling.residual_share(ii, jj)}};
+    }
+  }
+  return {{"gains", gains},
+          {"meaning",
+           "\"y<-x\": the share of x's own displacement that reaches y at low frequency; "
+           "residual_share: what a static gain leaves of it"}};
+}
+
+// identify's fit options for each axis of a stage, at the fit rate.
+hc::StageFitOptions stage_fit_options(const json& fit, const BenchSettings& settings) {
+  hc::StageFitOptions options;
+  options.stride = std::max<std::size_t>(
+      1, static_cast<std::size_t>(
+             std::llround(settings.loop.rate_hz / settings.identify.fit_rate_hz)));
+  options.axis.kind = common::parse_fit_family(fit.value("model", ""));
+  options.axis.operators = fit.value("operators", 0);
+  options.axis.dead_zones = fit.value("dead_zones", -1);
+  options.axis.heldout_fraction = settings.identify.heldout_fraction;
+  options.axis.drift = true;  // the creep of the turns before still settles
+  options.axis.creep = options.axis.kind == hc::ModelKind::kPreisach;
+  // No delay at the fit rate: a tick or two of the driver's exchange is a fraction of a fit
+  // sample there, which a whole sample of delay overstates (fit_identification_record's reason).
+  options.axis.delay_samples = 0;
+  const auto skip = fit.value("skip_samples", std::size_t{0});
+  options.axis.skip_samples = (skip + options.stride - 1) / options.stride;
+  return options;
+}
+
+}  // namespace
+
+RunContext axis_context(const RunContext& ctx, const StageModel* stage, std::size_t a,
+                        double u_now) {
+  RunContext c = ctx;
+  c.model = stage != nullptr && a < stage->models.size() ? &stage->models[a] : nullptr;
+  c.u_now = u_now;
+  c.plans = nullptr;
+  c.responses = nullptr;
+  c.feedback_plans = nullptr;
+  ++c.model_generation;
+  return c;
+}
+
+BuiltRun make_stage_identify_program(const IdentifyRequest& request, const RunContext& ctx,
+                                     std::span<const std::string> axes,
+                                     std::span<const double> u_now) {
+  const BenchSettings& s = ctx.settings;
+  const sim::Excitation exc = identify_excitation(request, ctx);
+  const auto ramp = static_cast<std::size_t>(std::ceil(kRampS / ctx.dt()));
+  const std::size_t turn = 2 * ramp + exc.samples.size();
+  const std::size_t total = turn * axes.size();
+  if (total > kMaxRecordedSamples) {
+    throw common::CommandError(
+        "bad_params", "identify on a stage of " + std::to_string(axes.size()) + " axes lasts " +
+                          std::to_string(total) + " ticks, more than the bench records (" +
+                          std::to_string(kMaxRecordedSamples) +
+                          "): lower [identify] cycles, settle_s or the loop rate");
+  }
+  std::unique_ptr<RunProgram> first;
+  for (std::size_t a = 0; a < axes.size(); ++a) {
+    const RunContext axis_ctx = axis_context(ctx, nullptr, a, u_now[a]);
+    auto p = std::make_unique<RunProgram>();
+    p->kind = RunKind::kIdentify;
+    p->excitation = axis_drive(exc, a, axes.size(), u_now[a], ramp);
+    p->total_samples = total;
+    p->metrics_from = 0;
+    p->model = predictor(axis_ctx, u_now[a]);
+    p->summary["y_model"] = predictor_name(axis_ctx);
+    // Scored from the axis's own major loop: before it, its model has not met its state.
+    const sim::ExcitationSegment* major = exc.find("major_loop");
+    p->model_metrics_from = turn * a + ramp + (major != nullptr ? major->begin : 0);
+    allocate_records(*p);
+    if (a == 0) {
+      first = std::move(p);
+    } else {
+      first->stage_axes.push_back(std::move(p));
+    }
+  }
+  json segments = json::array();
+  for (const auto& seg : exc.segments) {
+    segments.push_back({{"name", seg.name}, {"begin", seg.begin + ramp}, {"end", seg.end + ramp}});
+  }
+  const sim::ExcitationSegment* major = exc.find("major_loop");
+  BuiltRun run;
+  run.program = std::move(first);
+  const json names(std::vector<std::string>(axes.begin(), axes.end()));
+  run.header = {{"run",
+                 {{"kind", "identify"},
+                  {"axes", names},
+                  {"turn_samples", turn},
+                  {"model", request.model},
+                  {"u_min", request.u_min},
+                  {"u_max", request.u_max},
+                  {"rate_hz", s.loop.rate_hz},
+                  {"segments_of_each_turn", segments}}},
+                {"driver", s.driver_type},
+                {"y_model", predictor_name(ctx)}};
+  run.reply = {{"axes", names},
+               {"one_axis_at_a_time", true},
+               {"turn_s", static_cast<double>(turn) * ctx.dt()}};
+  run.fit = {{"model", request.model},
+             {"operators", request.operators},
+             {"dead_zones", request.dead_zones},
+             {"axes", names},
+             {"turn_samples", turn},
+             {"record_samples", ramp + exc.samples.size()},
+             {"skip_samples", ramp + (major != nullptr ? major->begin : 0)},
+             {"u_min", request.u_min},
+             {"u_max", request.u_max}};
+  return run;
+}
+
+StageModel fit_stage_identify(const RunProgram& run, const json& fit,
+                              const BenchSettings& settings) {
+  const std::vector<std::string> axes = fit.at("axes").get<std::vector<std::string>>();
+  const auto turn = fit.at("turn_samples").get<std::size_t>();
+  const auto samples = fit.at("record_samples").get<std::size_t>();
+  const double dt = 1.0 / settings.loop.rate_hz;
+  if (run.axes() != axes.size() || run.records.count < turn * axes.size()) {
+    throw common::CommandError("fit_error", "the stage's identify record is incomplete (" +
+                                                std::to_string(run.records.count) + " of " +
+                                                std::to_string(turn * axes.size()) + " samples)");
+  }
+  const std::vector<hc::OneAxisMotion> records = turn_records(run, axes.size(), turn, samples, dt);
+  const hc::StageFitOptions options = stage_fit_options(fit, settings);
+  hc::StageFit stage_fit;
+  try {
+    stage_fit = hc::fit_stage(records, options);
+  } catch (const std::exception& e) {
+    throw common::CommandError("fit_error", e.what());
+  }
+  StageModel model;
+  model.axes = axes;
+  model.run_id = run.run_id;
+  model.coupling = stage_fit.coupling;
+  try {
+    model.decoupler = hc::StageDecoupler(stage_fit.coupling.gains);
+  } catch (const std::exception& e) {
+    throw common::CommandError("fit_error",
+                               std::string("the coupling cannot be taken out: ") + e.what());
+  }
+  json per_axis = json::object();
+  for (std::size_t a = 0; a < axes.size(); ++a) {
+    hc::FitResult& f = stage_fit.axes[a];
+    f.model.input_min = fit.value("u_min", settings.loop.limits.u_min);
+    f.model.input_max = fit.value("u_max", settings.loop.limits.u_max);
+    const Eigen::RowVectorXd own = records[a].outputs.row(static_cast<Eigen::Index>(a));
+    const double range = own.maxCoeff() - own.minCoeff();
+    const json figures = {
+        {"model", std::string(hc::to_string(f.model.hysteresis().kind()))},
+        {"operators", f.operators},
+        {"heldout_rms_error_um", f.heldout.rmse},
+        {"heldout_rms_error_percent", range > 0.0 ? 100.0 * f.heldout.rmse / range : 0.0},
+        {"fit_rms_error_um", f.fit.rmse},
+        {"range_um", range},
+        {"delay_samples", f.delay_samples},
+        {"creep", f.creep},
+        {"notes", f.notes}};
+    per_axis[axes[a]] = figures;
+    hc::ModelFile file{
+        std::move(f.model),
+        {{"run_id", run.run_id},
+         {"stage_axis", axes[a]},
+         {"fit_rate_hz", settings.loop.rate_hz / static_cast<double>(options.stride)},
+         {"figures", figures}}};
+    model.models.push_back(std::move(file));
+  }
+  model.report = {{"axes", per_axis}, {"coupling", coupling_json(stage_fit, axes)}};
+  return model;
+}
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,107 @@
+#pragma once
+// The runs of a stage of several axes (BenchSettings::axes): identify moves one axis at a time
+// and fits each axis's model of its own displacement and the coupling between them
+// (compensation::fit_stage); track plays a reference per axis, each through its axis's
+// compensator, with the coupling taken out of the feedforward's targets (static decoupling:
+// compensation::StageDecoupler). Each axis's program is the one-axis builder's
+// (make_axis_track_program), stepped together by the loop (RunProgram::stage_axes). Pure (no
+// threads, no files); errors are CommandError naming the cause. Not real-time safe.
+#include <cstddef>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/stage_decoupling.hpp"
+#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/sim/frequency_response_excitation.hpp"
+#include "hystbench/sim/stage_reference.hpp"
+#include "runs/details/identify_program.hpp"
+#include "runs/details/run_context.hpp"
+#include "runs/details/track_request.hpp"
+#include "service/details/request_params.hpp"
+
+namespace hystbench::daemon::details {
+
+/// A stage's identified model: each axis's model of its own displacement, and the coupling.
+struct StageModel {
+  std::vector<std::string> axes;
+  std::vector<compensation::ModelFile> models;  ///< per axis, its input range the output's
+  compensation::CouplingEstimate coupling;
+  compensation::StageDecoupler decoupler;
+  std::string run_id;                                ///< the identify run it was fitted on
+  nlohmann::json report = nlohmann::json::object();  ///< identify's result keys (stage, axes)
+};
+
+/// ctx for axis a: its model in `stage` (null: none), with the responses its frf measured, and
+/// its present output u_now [V]; no plan or feedback cache, no bench-wide responses.
+RunContext axis_context(const RunContext& ctx, const StageModel* stage, std::size_t a,
+                        double u_now);
+
+/// identify on a stage of `axes`: in turn a, axis a ramps from its present output u_now[a] to
+/// identify's excitation, plays it and ramps back, while the others hold theirs. BuiltRun::fit
+/// holds what fit_stage_identify() needs. bad_params when the run is longer than the bench
+/// records.
+BuiltRun make_stage_identify_program(const IdentifyRequest& request, const RunContext& ctx,
+                                     std::span<const std::string> axes,
+                                     std::span<const double> u_now);
+
+/// The stage's model from a completed stage identify run (its `fit` request): each turn's record
+/// (the moved axis's drive, every axis's output) to compensation::fit_stage at identify's fit
+/// rate, each axis's model taking the output range as its input range. Throws CommandError
+/// fit_error naming the cause.
+StageModel fit_stage_identify(const RunProgram& run, const nlohmann::json& fit,
+                              const BenchSettings& settings);
+
+/// frf on a stage: in turn a, axis a plays frf's multisines (options[a], from its present output
+/// u_now[a]) while the others hold theirs; BuiltRun::fit holds the turn's length.
+BuiltRun make_stage_response_program(
+    std::span<const sim::FrequencyResponseExcitationOptions> options, const RunContext& ctx,
+    std::span<const std::string> axes, std::span<const double> u_now);
+
+/// Each axis's frequency responses from its turn of a completed stage frf run (turn ticks
+/// each). Throws CommandError measurement_failed as measure_responses() does.
+std::vector<compensation::StageResponses> measure_stage_responses(
+    const RunProgram& run, std::span<const sim::FrequencyResponseExcitationOptions> options,
+    std::size_t turn);
+
+/// A track request on a stage: what every axis shares (compensator, precondition, approach;
+/// TrackRequest), and either a built-in stage reference or an uploaded reference per axis.
+struct StageTrackRequest {
+  TrackRequest common;
+  sim::StageReferenceSpec builtin;
+  /// Per axis of the stage, in its order, the name of its complete reference upload; empty for a
+  /// built-in reference.
+  std::vector<std::string> uploads;
+  /// The coupling taken out of the feedforward's targets (with an inverse and a stage model).
+  bool decouple = true;
+};
+
+/// The request's keys: reference (raster, lissajous or spiral; default raster), frequencies_hz,
+/// range_fraction, duration_s, or reference_uploads {axis: upload} naming every axis; decouple;
+/// and track's own (compensator, precondition, approach, gains). bad_params naming the key: an
+/// unknown reference, an axis without its upload or an upload for no axis, a one-axis
+/// reference's key, learning (not on a stage yet).
+StageTrackRequest parse_stage_track_request(const RequestParams& request, const RunContext& ctx,
+                                            std::span<const std::string> axes);
+
+/// The stage's track run: axis a's program from make_axis_track_program() over its reference
+/// (uploads[a], else the built-in one sampled over axis a's range) with the feedforward fed the
+/// decoupled targets; axis 0's program holds the others (RunProgram::stage_axes) and the
+/// preparation runs each axis's. bad_params when the axes' references differ in length.
+BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunContext& ctx,
+                                  const StageModel* stage, std::span<const double> u_now,
+                                  std::span<const Upload* const> uploads);
+
+/// The result of a finished stage run: `axes` keyed by name, each its program's tracking error
+/// (rms/max µm and %, track) and model error; for a track run `coupling_error`, what the other
+/// axes' motion left on each axis (compensation::coupling_error_left over the scored samples).
+nlohmann::json stage_result(const RunProgram& run, std::span<const std::string> axes);
+/// A stage run's result (collect_result()'s report): the first axis's figures at its top
+/// replaced by stage_result()'s.
+void replace_with_stage_result(nlohmann::json& report, const RunProgram& run,
+                               std::span<const std::string> axes);
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,371 @@
+// A stage's track and its result (stage_runs.hpp).
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/compensation/stage_coupling_error.hpp"
+#include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "runs/details/stage_runs.hpp"
+#include "runs/details/track_program.hpp"
+#include "service/details/command_table.hpp"
+
+namespace hystbench::daemon::details {
+
+using common::CommandError;
+using nlohmann::json;
+namespace hc = hystbench::compensation;
+
+namespace {
+
+// What each built-in kind plays by default: raster 10 Hz lines over a 0.1 Hz frame, one frame;
+// lissajous 10 and 11 Hz, two of their common periods; spiral ten turns a second, 10 s in.
+sim::StageReferenceSpec builtin_defaults(sim::StageReferenceKind kind, std::size_t axes) {
+  sim::StageReferenceSpec spec;
+  spec.kind = kind;
+  switch (kind) {
+    case sim::StageReferenceKind::kRaster:
+      spec.frequencies_hz = {10.0, 0.1};
+      spec.duration_s = 10.0;
+      break;
+    case sim::StageReferenceKind::kLissajous:
+      spec.frequencies_hz.clear();
+      for (std::size_t a = 0; a < axes; ++a) spec.frequencies_hz.push_back(10.0 + a);
+      spec.duration_s = 2.0;
+      break;
+    case sim::StageReferenceKind::kSpiral:
+      spec.frequencies_hz = {10.0};
+      spec.duration_s = 10.0;
+      break;
+  }
+  return spec;
+}
+
+// The samples of each axis's part of a built-in stage reference, as a reference upload.
+std::vector<Upload> builtin_uploads(const sim::StageReferenceSpec& spec,
+                                    std::span<const sim::AxisRange> ranges, double rate_hz) {
+  std::vector<sim::SignalSpec> signals;
+  try {
+    signals = sim::stage_reference(spec, ranges);
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", e.what());
+  }
+  // A raster's frame or a Lissajous's run: duration_s; a spiral also holds its middle a tenth.
+  const double seconds =
+      spec.kind == sim::StageReferenceKind::kSpiral ? 1.1 * spec.duration_s : spec.duration_s;
+  std::vector<Upload> out;
+  for (std::size_t a = 0; a < signals.size(); ++a) {
+    Upload u;
+    u.name = std::string(sim::to_string(spec.kind)) + "-axis-" + std::to_string(a);
+    u.source = "built-in " + std::string(sim::to_string(spec.kind));
+    u.rate_hz = rate_hz;
+    u.values = sim::sample_signal(*sim::make_signal_generator(signals[a]), 1.0 / rate_hz, seconds);
+    u.values.push_back(sim::make_signal_generator(signals[a])->value(seconds));
+    u.samples = u.values.size();
+    out.push_back(std::move(u));
+  }
+  return out;
+}
+
+// The feedforward's targets with the coupling taken out: every axis's reference sampled over
+// `samples` ticks (and its end held a second past them, for a preview ahead), decoupled.
+std::vector<std::unique_ptr<sim::SignalGenerator>> decoupled_targets(
+    const std::vector<TrackReference>& refs, const hc::StageDecoupler& decoupler, double dt,
+    std::uint64_t samples) {
+  const std::size_t n = refs.size();
+  const std::uint64_t total = samples + static_cast<std::uint64_t>(std::llround(1.0 / dt));
+  std::vector<std::vector<double>> own(n, std::vector<double>(total));
+  std::vector<double> r(n), s(n);
+  for (std::uint64_t k = 0; k < total; ++k) {
+    const double t = static_cast<double>(std::min(k, samples)) * dt;
+    for (std::size_t a = 0; a < n; ++a) r[a] = refs[a].signal->value(t);
+    decoupler.apply(r, s);
+    for (std::size_t a = 0; a < n; ++a) own[a][k] = s[a];
+  }
+  std::vector<std::unique_ptr<sim::SignalGenerator>> out;
+  out.reserve(n);
+  for (auto& values : own) out.push_back(sim::make_uniform_signal(std::move(values), dt));
+  return out;
+}
+
+// Runs each axis's preparation on its program, in turn, the progress spread over them.
+RunPreparation joined(std::vector<RunPreparation> parts) {
+  std::vector<RunPreparation> work;
+  for (auto& p : parts) {
+    if (p.work) work.push_back(std::move(p));
+  }
+  if (work.empty()) return {};
+  std::string stage = work.front().stage + " of every axis";
+  return {std::move(stage), [work = std::move(work)](RunProgram& program,
+                                                     const std::function<void(double)>& progress) {
+            const double n = static_cast<double>(program.axes());
+            for (std::size_t a = 0; a < program.axes() && a < work.size(); ++a) {
+              work[a].work(program.axis(a),
+                           [&](double f) { progress((static_cast<double>(a) + f) / n); });
+            }
+          }};
+}
+
+// Each axis's reference, as track_reference() builds it from its upload (the built-in one's
+// samples over that axis's range); refused when their lengths differ. Sets each request's
+// upload name.
+std::vector<TrackReference> axis_references(const StageTrackRequest& request,
+                                            const std::vector<RunContext>& contexts,
+                                            std::vector<TrackRequest>& requests,
+                                            std::span<const sim::AxisRange> ranges,
+                                            std::span<const Upload* const> uploads,
+                                            double rate_hz) {
+  std::vector<Upload> builtin;
+  std::vector<const Upload*> axis_uploads(uploads.begin(), uploads.end());
+  if (request.uploads.empty()) {
+    builtin = builtin_uploads(request.builtin, ranges, rate_hz);
+    axis_uploads.clear();
+    for (const Upload& u : builtin) axis_uploads.push_back(&u);
+  }
+  std::vector<TrackReference> refs;
+  refs.reserve(contexts.size());
+  for (std::size_t a = 0; a < contexts.size(); ++a) {
+    requests[a].reference_upload = axis_uploads[a]->name;
+    refs.push_back(track_reference(requests[a], contexts[a], axis_uploads[a]));
+    if (refs[a].samples != refs[0].samples) {
+      throw CommandError("bad_params", "the axes' references last " +
+                                           std::to_string(refs[0].samples) + " and " +
+                                           std::to_string(refs[a].samples) +
+                                           " ticks: a stage's axes play one reference together");
+    }
+  }
+  return refs;
+}
+
+json reference_json(const StageTrackRequest& request) {
+  if (!request.uploads.empty()) return {{"kind", "upload"}, {"uploads", request.uploads}};
+  return {{"kind", sim::to_string(request.builtin.kind)},
+          {"frequencies_hz", request.builtin.frequencies_hz},
+          {"range_fraction", request.builtin.span_fraction},
+          {"duration_s", request.builtin.duration_s}};
+}
+
+json decoupling_json(const StageTrackRequest& request, const StageModel* stage, bool decoupled) {
+  if (decoupled) return {{"static", true}, {"from_run", stage->run_id}};
+  return {{"static", false},
+          {"why_not", !request.decouple  ? "decouple = false"
+                      : stage == nullptr ? "no stage model: identify first"
+                                         : "the compensator has no feedforward"}};
+}
+
+double percent(double um, double range) { return range > 0.0 ? 100.0 * um / range : 0.0; }
+
+}  // namespace
+
+StageTrackRequest parse_stage_track_request(const RequestParams& request, const RunContext& ctx,
+                                            std::span<const std::string> axes) {
+  StageTrackRequest r;
+  for (const char* key : {"frequency_hz", "periods", "min_um", "max_um"}) {
+    if (request.has(key)) {
+      throw CommandError("bad_params", std::string(key) +
+                                           ": a one-axis reference's key; a stage's reference "
+                                           "takes frequencies_hz, range_fraction and duration_s");
+    }
+  }
+  // The keys a stage's track reads itself left out; track's own parser reads the rest, as the
+  // row of a built-in reference.
+  json rest = request.params().is_object() ? request.params() : json::object();
+  for (const char* key : {"reference", "frequencies_hz", "range_fraction", "duration_s", "decouple",
+                          "reference_uploads", "approach_s"}) {
+    rest.erase(key);
+  }
+  r.common = parse_track_request(RequestParams(rest, track_builtin_params()), ctx);
+  if (request.has("approach_s")) r.common.approach_s = request.number("approach_s", 0.0);
+  if (r.common.learning.any()) {
+    throw CommandError("bad_params",
+                       "learn_trials and learned: not on a stage of several axes yet (each axis "
+                       "tracks through its feedforward)");
+  }
+  r.decouple = request.boolean("decouple", true);
+  const json& params = request.params();
+  if (params.contains("reference_uploads")) {
+    const json& uploads = params["reference_uploads"];
+    for (const auto& [key, value] : uploads.items()) {
+      if (std::find(axes.begin(), axes.end(), key) == axes.end()) {
+        throw CommandError("bad_params",
+                           "reference_uploads: '" + key + "' is no axis of the stage");
+      }
+      if (!value.is_string() || value.get<std::string>().empty()) {
+        throw CommandError("bad_params", "reference_uploads." + key + ": an upload's name");
+      }
+    }
+    for (const std::string& axis : axes) {
+      if (!uploads.contains(axis)) {
+        throw CommandError("bad_params", "reference_uploads: no reference for axis '" + axis +
+                                             "' (a stage's reference names every axis)");
+      }
+      r.uploads.push_back(uploads[axis].get<std::string>());
+    }
+    return r;
+  }
+  sim::StageReferenceKind kind;
+  try {
+    kind = sim::stage_reference_kind_from_string(request.string("reference", "raster"));
+  } catch (const std::exception& e) {
+    throw CommandError("bad_params", std::string("reference: ") + e.what());
+  }
+  r.builtin = builtin_defaults(kind, axes.size());
+  if (params.contains("frequencies_hz")) {
+    r.builtin.frequencies_hz.clear();
+    for (const json& f : params["frequencies_hz"]) {
+      if (!f.is_number() || !(f.get<double>() > 0.0) ||
+          f.get<double>() > ctx.settings.loop.rate_hz / 20.0) {
+        throw CommandError("bad_params", "frequencies_hz: each in (0, " +
+                                             std::to_string(ctx.settings.loop.rate_hz / 20.0) +
+                                             "] Hz (a twentieth of the loop rate)");
+      }
+      r.builtin.frequencies_hz.push_back(f.get<double>());
+    }
+  }
+  r.builtin.span_fraction = request.number("range_fraction", r.builtin.span_fraction);
+  r.builtin.duration_s = request.number("duration_s", r.builtin.duration_s);
+  if (!(r.builtin.duration_s > 0.0)) throw CommandError("bad_params", "duration_s: must be > 0");
+  return r;
+}
+
+BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunContext& ctx,
+                                  const StageModel* stage, std::span<const double> u_now,
+                                  std::span<const Upload* const> uploads) {
+  const std::size_t n = u_now.size();
+  const double dt = ctx.dt();
+  std::vector<RunContext> contexts;
+  std::vector<TrackRequest> requests(n, request.common);
+  std::vector<sim::AxisRange> ranges;
+  for (std::size_t a = 0; a < n; ++a) {
+    contexts.push_back(axis_context(ctx, stage, a, u_now[a]));
+    const auto range = actuator_range(contexts.back());
+    if (!range) {
+      throw CommandError("no_range",
+                         "no reference range for axis " + std::to_string(a) +
+                             ": identify the stage first, or set limits.y_min and y_max");
+    }
+    ranges.push_back({range->y_bottom, range->y_top});
+  }
+  std::vector<TrackReference> refs =
+      axis_references(request, contexts, requests, ranges, uploads, ctx.settings.loop.rate_hz);
+  const bool decoupled = request.decouple && stage != nullptr && stage->decoupler.axes() == n &&
+                         hc::needs_model(request.common.compensator_kind);
+  std::vector<std::unique_ptr<sim::SignalGenerator>> targets(n);
+  if (decoupled) targets = decoupled_targets(refs, stage->decoupler, dt, refs[0].samples);
+
+  BuiltRun run;
+  std::vector<RunPreparation> preparations;
+  json axis_headers = json::object(), axis_replies = json::object();
+  std::vector<std::string> names;
+  for (std::size_t a = 0; a < n; ++a) {
+    const std::string name = stage != nullptr ? stage->axes[a] : std::to_string(a);
+    names.push_back(name);
+    BuiltRun axis = make_axis_track_program(requests[a], contexts[a], std::move(refs[a]),
+                                            std::move(targets[a]));
+    axis_headers[name] = axis.header;
+    axis_replies[name] = axis.reply;
+    preparations.push_back(std::move(axis.preparation));
+    if (a == 0) {
+      run.program = std::move(axis.program);
+    } else {
+      run.program->stage_axes.push_back(std::move(axis.program));
+    }
+  }
+  const json reference = reference_json(request);
+  const json decoupling = decoupling_json(request, stage, decoupled);
+  run.header = {{"run",
+                 {{"kind", "track"},
+                  {"axes", names},
+                  {"reference", reference},
+                  {"compensator", request.common.compensator},
+                  {"decoupling", decoupling},
+                  {"rate_hz", ctx.settings.loop.rate_hz}}},
+                {"driver", ctx.settings.driver_type},
+                {"axes", axis_headers}};
+  run.reply = {{"axes", axis_replies},
+               {"reference", reference},
+               {"compensator", request.common.compensator},
+               {"decoupling", decoupling}};
+  run.status = {{"compensator", request.common.compensator}, {"axes", names}};
+  run.program->summary["decoupling"] = decoupling;
+  // The stage's prediction couples the axes' models as the stage couples their motion.
+  if (stage != nullptr && stage->decoupler.axes() == n) run.program->coupling = stage->decoupler;
+  run.preparation = joined(std::move(preparations));
+  return run;
+}
+
+void replace_with_stage_result(json& report, const RunProgram& run,
+                               std::span<const std::string> axes) {
+  // The first axis's figures, which collect_result() put at the top, belong under `axes`.
+  for (const char* key :
+       {"rms_error_um", "max_error_um", "max_error_index", "range_um", "rms_error_percent",
+        "max_error_percent", "hysteresis_percent", "error_samples", "tare_um", "startup_offset_um",
+        "step", "model_rms_error_um", "model_max_error_um", "model_rms_error_percent",
+        "model_max_error_percent", "model_max_error_index", "feedback", "feedforward"}) {
+    report.erase(key);
+  }
+  report.update(stage_result(run, axes));
+}
+
+json stage_result(const RunProgram& run, std::span<const std::string> axes) {
+  json per_axis = json::object();
+  for (std::size_t a = 0; a < run.axes() && a < axes.size(); ++a) {
+    const RunProgram& p = run.axis(a);
+    json r = run.kind == RunKind::kTrack ? tracking_error_json(p) : json::object();
+    if (p.model_error.samples > 0) {
+      const double rms = std::sqrt(p.model_error.sum2 / static_cast<double>(p.model_error.samples));
+      r["model_rms_error_um"] = rms;
+      r["model_max_error_um"] = p.model_error.max;
+    }
+    // What the axis's compensator was built with (its feedforward's plan, its loop's design).
+    for (const char* key : {"feedforward", "feedback"}) {
+      if (p.summary.contains(key)) r[key] = p.summary[key];
+    }
+    r["clamps"] = p.counters.clamps;
+    r["slew_limits"] = p.counters.slew_limits;
+    r["reference_clips"] = p.counters.reference_clips;
+    per_axis[axes[a]] = std::move(r);
+  }
+  json out = {{"axes", per_axis}};
+  if (run.kind != RunKind::kTrack || run.axes() < 2) return out;
+  std::size_t samples = run.records.count;
+  for (std::size_t a = 0; a < run.axes(); ++a)
+    samples = std::min(samples, run.axis(a).records.count);
+  if (samples < 10) return out;
+  const auto n = static_cast<Eigen::Index>(run.axes());
+  Eigen::MatrixXd errors(n, static_cast<Eigen::Index>(samples));
+  Eigen::MatrixXd outputs(n, static_cast<Eigen::Index>(samples));
+  for (Eigen::Index a = 0; a < n; ++a) {
+    const RunRecords& rec = run.axis(static_cast<std::size_t>(a)).records;
+    for (std::size_t k = 0; k < samples; ++k) {
+      errors(a, static_cast<Eigen::Index>(k)) = rec.y[k] - rec.yr[k];
+      outputs(a, static_cast<Eigen::Index>(k)) = rec.y[k];
+    }
+  }
+  hc::CouplingErrorLeft left;
+  try {
+    left = hc::coupling_error_left(errors, outputs);
+  } catch (const std::exception& e) {
+    out["coupling_error"] = {{"why_not", e.what()}};
+    return out;
+  }
+  json coupling = json::object();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const std::string& name = axes[static_cast<std::size_t>(i)];
+    const double range = per_axis[name].value("range_um", 0.0);
+    json from = json::object();
+    for (Eigen::Index j = 0; j < n; ++j) {
+      if (i != j) from[axes[static_cast<std::size_t>(j)]] = left.gains(i, j);
+    }
+    coupling[name] = {{"rms_um", left.rms_um(i)},
+                      {"rms_percent", percent(left.rms_um(i), range)},
+                      {"gain_from", from}};
+  }
+  out["coupling_error"] = coupling;
+  out["coupling_error_meaning"] =
+      "per axis, the part of its tracking error the other axes' motion explains (its error "
+      "regressed on their outputs over the scored samples), and the gains of that regression";
+  return out;
+}
+
+}  // namespace hystbench::daemon::details

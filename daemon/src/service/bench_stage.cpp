@@ -1,0 +1,236 @@
+// The bench on a stage of several axes (BenchSettings::axes): identify one axis at a time, track
+// every axis together, their results per axis (runs/details/stage_runs.hpp).
+#include <spdlog/spdlog.h>
+
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/daemon/service/bench.hpp"
+#include "runs/details/identify_program.hpp"
+#include "runs/details/response_program.hpp"
+#include "runs/details/run_result.hpp"
+#include "runs/details/stage_runs.hpp"
+#include "service/details/model_folder.hpp"
+
+namespace hystbench::daemon {
+
+using nlohmann::json;
+
+void Bench::refuse_on_stage(const char* command) const {
+  if (!is_stage()) return;
+  throw common::CommandError(
+      "not_on_stage", std::string(command) + " drives one axis, and this bench is a stage of " +
+                          std::to_string(settings_.axes.size()) +
+                          " axes (identify, track, status, model.get, stop, abort and reset "
+                          "serve every axis)");
+}
+
+std::vector<double> Bench::axis_outputs() const {
+  std::vector<double> u;
+  for (std::size_t a = 0; a < settings_.axes.size(); ++a) u.push_back(loop_->last_output(a));
+  return u;
+}
+
+json Bench::stage_status() const {
+  if (!stage_) return nullptr;
+  json s = stage_->report;
+  s["run_id"] = stage_->run_id;
+  s["axes_order"] = stage_->axes;
+  return s;
+}
+
+json Bench::start_stage_identify(const details::IdentifyRequest& request) {
+  const std::vector<double> u_now = axis_outputs();
+  details::BuiltRun run =
+      details::make_stage_identify_program(request, run_context(), settings_.axes, u_now);
+  json fit = std::move(run.fit);
+  json reply = launch("identify", std::move(run));
+  pending_fit_ = std::move(fit);
+  return reply;
+}
+
+json Bench::start_stage_track(const details::RequestParams& request, std::uint64_t client) {
+  const std::vector<double> u_now = axis_outputs();
+  const details::RunContext ctx = run_context();
+  const details::RunContext first = details::axis_context(ctx, stage_.get(), 0, u_now[0]);
+  const details::StageTrackRequest track =
+      details::parse_stage_track_request(request, first, settings_.axes);
+  std::vector<std::shared_ptr<const Upload>> uploads;
+  std::vector<const Upload*> raw;
+  for (const std::string& name : track.uploads) {
+    uploads.push_back(uploads_.complete(name, client, UploadKind::kReference));
+    raw.push_back(uploads.back().get());
+  }
+  json reply =
+      launch("track", details::make_stage_track_program(track, ctx, stage_.get(), u_now, raw));
+  for (const std::string& name : track.uploads) uploads_.erase(name, client);
+  return reply;
+}
+
+json Bench::start_stage_frf(const details::RequestParams& request) {
+  if (!stage_) {
+    throw common::CommandError("no_model",
+                               "frf on a stage measures each axis's responses for its model: "
+                               "identify the stage first");
+  }
+  const std::vector<double> u_now = axis_outputs();
+  const details::RunContext ctx = run_context();
+  std::vector<sim::FrequencyResponseExcitationOptions> options;
+  for (std::size_t a = 0; a < u_now.size(); ++a) {
+    options.push_back(
+        details::response_options(request, details::axis_context(ctx, stage_.get(), a, u_now[a])));
+  }
+  details::BuiltRun run = details::make_stage_response_program(options, ctx, settings_.axes, u_now);
+  const std::size_t turn = run.fit.value("turn_samples", std::size_t{0});
+  json reply = launch("frf", std::move(run));
+  stage_frf_options_ = std::move(options);
+  stage_frf_turn_ = turn;
+  return reply;
+}
+
+bool Bench::measure_axes_responses(const std::string& identify_run_id, std::string& why) {
+  std::lock_guard lock(mutex_);
+  const std::vector<double> u_now = axis_outputs();
+  const details::RunContext ctx = run_context();
+  std::vector<sim::FrequencyResponseExcitationOptions> options;
+  std::unique_ptr<RunProgram> p;
+  std::size_t turn = 0;
+  try {
+    for (std::size_t a = 0; a < u_now.size(); ++a) {
+      options.push_back(
+          details::response_options(details::axis_context(ctx, stage_.get(), a, u_now[a])));
+    }
+    details::BuiltRun run =
+        details::make_stage_response_program(options, ctx, settings_.axes, u_now);
+    turn = run.fit.value("turn_samples", std::size_t{0});
+    p = std::move(run.program);
+    p->run_id = identify_run_id + "-frf";
+    open_log(*p, run.header);
+  } catch (const std::exception& e) {
+    why = e.what();
+    return false;
+  }
+  if (quit_.load()) {
+    p->log->close();
+    why = "daemon shutting down";
+    return false;
+  }
+  const std::uint64_t total = p->total_samples;
+  const std::string log = p->log->path().string();
+  if (auto refused = loop_->submit(std::move(p))) {
+    refused->log->close();
+    why = "the loop did not accept the run";
+    return false;
+  }
+  stage_frf_options_ = std::move(options);
+  stage_frf_turn_ = turn;
+  active_run_["stage"] = "measuring each axis's frequency responses";
+  active_run_["total"] = total;
+  active_run_["responses_log"] = log;
+  phase_ = RunPhase::kRunning;
+  return true;
+}
+
+void Bench::axes_responses_measured(const RunProgram& run, details::RunResult result) {
+  std::vector<sim::FrequencyResponseExcitationOptions> options;
+  std::size_t turn = 0;
+  {
+    std::lock_guard lock(mutex_);
+    options = std::move(stage_frf_options_);
+    stage_frf_options_.clear();
+    turn = stage_frf_turn_;
+  }
+  json& report = result.report;
+  if (run.end != RunEnd::kCompleted) {
+    report["frequency_response_error"] = "the run did not complete: nothing was measured";
+  } else {
+    try {
+      std::vector<compensation::StageResponses> measured =
+          details::measure_stage_responses(run, options, turn);
+      std::lock_guard lock(mutex_);
+      for (std::size_t a = 0; a < measured.size(); ++a) {
+        const std::string& axis = settings_.axes[a];
+        compensation::ModelFile* model =
+            stage_ && a < stage_->models.size() ? &stage_->models[a] : nullptr;
+        const compensation::StageResponses* before =
+            model != nullptr && model->responses ? &*model->responses : nullptr;
+        report["axes"][axis]["frequency_response"] =
+            details::responses_summary(measured[a], before);
+        if (model != nullptr) model->responses = std::move(measured[a]);
+      }
+      if (stage_) stage_->report["frequency_responses_from"] = run.run_id;
+    } catch (const std::exception& e) {
+      report["frequency_response_error"] = e.what();
+      spdlog::error("run {}: the stage's frequency responses: {}", run.run_id, e.what());
+    }
+  }
+  json identified;
+  {
+    std::lock_guard lock(mutex_);
+    identified = std::move(stage_identify_report_);
+    stage_identify_report_ = nullptr;
+  }
+  if (identified.is_object()) {  // identify's own frf: its result, with what the frf measured
+    json measured = json::object();
+    const json axes = report.value("axes", json::object());
+    for (const auto& [axis, figures] : axes.items()) {
+      if (figures.contains("frequency_response")) measured[axis] = figures["frequency_response"];
+    }
+    identified["stage_model"]["frequency_responses"] = {
+        {"run_id", run.run_id}, {"log", report.value("log", "")}, {"axes", measured}};
+    if (report.contains("frequency_response_error")) {
+      identified["stage_model"]["frequency_responses"]["error"] =
+          report["frequency_response_error"];
+    }
+    deliver_result(std::move(identified));
+    return;
+  }
+  deliver_result(std::move(report));
+}
+
+void Bench::stage_identified(const RunProgram& run, details::RunResult result) {
+  json fit_request;
+  {
+    std::lock_guard lock(mutex_);
+    fit_request = pending_fit_;
+  }
+  try {
+    auto model = std::make_unique<details::StageModel>(
+        details::fit_stage_identify(run, fit_request, settings_));
+    json saved = json::array();
+    for (std::size_t a = 0; a < model->axes.size(); ++a) {
+      const std::string name = run.run_id + "-" + model->axes[a];
+      try {
+        saved.push_back(std::filesystem::path(
+                            details::keep_model_document(settings_.model_dir, name,
+                                                         compensation::to_json(model->models[a]))
+                                .path)
+                            .filename()
+                            .string());
+      } catch (const std::exception& e) {
+        spdlog::warn("stage identify: axis {}'s model not saved: {}", model->axes[a], e.what());
+        result.report["save_error"] = e.what();
+      }
+    }
+    model->report["saved"] = saved;
+    result.report["stage_model"] = model->report;
+    {
+      std::lock_guard lock(mutex_);
+      stage_ = std::move(model);
+    }
+    // Each axis's responses next, as one axis's identify measures its stage's: its feedback is
+    // designed on them.
+    std::string why;
+    {
+      std::lock_guard lock(mutex_);
+      stage_identify_report_ = result.report;
+    }
+    if (measure_axes_responses(run.run_id, why)) return;  // delivered when it has played
+    std::lock_guard lock(mutex_);
+    stage_identify_report_ = nullptr;
+    result.report["stage_model"]["frequency_responses"] = {{"error", why}};
+  } catch (const std::exception& e) {
+    result.report["fit_error"] = e.what();
+  }
+  deliver_result(std::move(result.report));
+}
+
+}  // namespace hystbench::daemon

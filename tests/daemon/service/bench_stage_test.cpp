@@ -1,0 +1,222 @@
+// The bench on a stage of several axes, through the shipped config/loopback-xy.toml on the
+// simulated clock: identify moves each axis alone and names the coupling, track plays a raster
+// through each axis's inverse with the coupling taken out, the results, status and log are given
+// per axis, and what the stage cannot do yet is refused with its cause.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hystbench/common/command_error.hpp"
+#include "support/bench_fixture.hpp"
+
+namespace hd = hystbench::daemon;
+namespace common = hystbench::common;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string shipped_xy_config() {
+  std::ifstream in(fs::path(HYSTBENCH_SOURCE_DIR) / "config" / "loopback-xy.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string toml = text.str();
+  // The simulated clock, as every bench test whose figures are under test.
+  const std::size_t loop = toml.find("[loop]\n");
+  EXPECT_NE(loop, std::string::npos);
+  toml.insert(loop + 7, "clock = \"simulated\"\n");
+  return toml;
+}
+
+class BenchStage : public hystbench::test::BenchFixture {
+ protected:
+  BenchStage() : BenchFixture("bench_stage") {}
+
+  void start_xy() { start(settings_from_toml(shipped_xy_config())); }
+
+  std::pair<std::string, std::string> refused(const std::string& cmd, const json& params,
+                                              std::uint64_t client = 0) {
+    try {
+      bench_->handle(cmd, params, client);
+    } catch (const common::CommandError& e) {
+      return {e.code(), e.what()};
+    }
+    return {"ok", ""};
+  }
+
+  std::string upload(const std::vector<double>& values, double rate_hz) {
+    const json begun = bench_->handle(
+        "upload.begin", {{"kind", "reference"}, {"samples", values.size()}, {"rate_hz", rate_hz}});
+    const std::string name = begun["upload"];
+    for (std::size_t k = 0; k < values.size(); k += 1000) {
+      const std::size_t m = std::min<std::size_t>(1000, values.size() - k);
+      bench_->handle("upload.chunk",
+                     {{"upload", name},
+                      {"offset", k},
+                      {"values", std::vector<double>(values.begin() + k, values.begin() + k + m)}});
+    }
+    return name;
+  }
+};
+
+double rms_um(const json& result, const std::string& axis) {
+  return result["axes"][axis]["rms_error_um"].get<double>();
+}
+
+}  // namespace
+
+TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTenTimesLess) {
+  start_xy();
+  const json st = status();
+  ASSERT_TRUE(st.contains("axes"));
+  EXPECT_TRUE(st["axes"].contains("x") && st["axes"].contains("y"));
+
+  const json id = run_and_wait("identify", json::object(), 600);
+  ASSERT_EQ(id.value("end", ""), "completed") << id.dump();
+  ASSERT_FALSE(id.contains("fit_error")) << id["fit_error"];
+  const json& gains = id["stage_model"]["coupling"]["gains"];
+  // The stage's truth: x reaches y at 0.1, y reaches x at 0.056 (sim::SimulatedStageConfig::xy).
+  EXPECT_NEAR(gains["y<-x"]["gain"].get<double>(), 0.1, 0.01) << gains.dump();
+  EXPECT_NEAR(gains["x<-y"]["gain"].get<double>(), 0.056, 0.01) << gains.dump();
+  for (const char* axis : {"x", "y"}) {
+    const json& fit = id["stage_model"]["axes"][axis];
+    EXPECT_EQ(fit["model"], "preisach");
+    EXPECT_LT(fit["heldout_rms_error_percent"].get<double>(), 1.0) << fit.dump();
+    EXPECT_TRUE(
+        fs::exists(dir_ / "models" / (id["run_id"].get<std::string>() + "-" + axis + ".json")));
+  }
+  EXPECT_TRUE(status()["stage_model"].is_object());
+
+  const json plain = run_and_wait("track", {{"reference", "raster"}, {"decouple", false}}, 600);
+  const json decoupled = run_and_wait("track", {{"reference", "raster"}}, 600);
+  ASSERT_EQ(plain.value("end", ""), "completed") << plain.dump();
+  ASSERT_EQ(decoupled.value("end", ""), "completed") << decoupled.dump();
+  EXPECT_EQ(plain["decoupling"]["static"], false);
+  EXPECT_EQ(decoupled["decoupling"]["static"], true);
+  const double left_plain = plain["coupling_error"]["y"]["rms_um"].get<double>();
+  const double left_decoupled = decoupled["coupling_error"]["y"]["rms_um"].get<double>();
+  RecordProperty("y_coupling_error_um_without", std::to_string(left_plain));
+  RecordProperty("y_coupling_error_um_with", std::to_string(left_decoupled));
+  RecordProperty("x_rms_percent",
+                 std::to_string(decoupled["axes"]["x"]["rms_error_percent"].get<double>()));
+  RecordProperty("y_rms_percent",
+                 std::to_string(decoupled["axes"]["y"]["rms_error_percent"].get<double>()));
+  // x's 10 Hz lines move y by a tenth of their span without the decoupling.
+  EXPECT_GT(left_plain, 0.5);
+  EXPECT_LT(left_decoupled, left_plain / 10.0);
+  // Each axis tracks better decoupled, within a percent of its span through its inverse alone.
+  for (const char* axis : {"x", "y"}) {
+    EXPECT_LT(rms_um(decoupled, axis), rms_um(plain, axis)) << axis;
+    EXPECT_LT(decoupled["axes"][axis]["rms_error_percent"].get<double>(), 1.0) << axis;
+    for (const char* key : {"rms_error_um", "max_error_um", "model_rms_error_um", "range_um"}) {
+      EXPECT_TRUE(std::isfinite(decoupled["axes"][axis][key].get<double>())) << axis << key;
+    }
+  }
+
+  // Each axis's own loop beside the decoupled feedforward, designed on the responses identify
+  // measured for it.
+  for (const char* axis : {"x", "y"}) {
+    EXPECT_TRUE(id["stage_model"]["frequency_responses"]["axes"].contains(axis)) << id.dump();
+  }
+  const json fed =
+      run_and_wait("track", {{"reference", "raster"}, {"compensator", "inverse+pid"}}, 600);
+  ASSERT_EQ(fed.value("end", ""), "completed") << fed.dump();
+  for (const char* axis : {"x", "y"}) {
+    RecordProperty(std::string(axis) + "_rms_percent_with_feedback",
+                   std::to_string(fed["axes"][axis]["rms_error_percent"].get<double>()));
+    EXPECT_GT(fed["axes"][axis]["feedback"]["crossover_hz"].get<double>(), 100.0) << axis;
+    EXPECT_LT(fed["axes"][axis]["rms_error_percent"].get<double>(), 0.1) << axis;
+  }
+
+  // The log: one row per tick, a set of columns per axis.
+  std::ifstream log(decoupled["log"].get<std::string>());
+  std::string line;
+  while (std::getline(log, line) && line.rfind('#', 0) == 0) {
+  }
+  EXPECT_NE(line.find(",yr_x,u_ff_x,u_fb_x,u_x,y_x,y_model_x,flags_x,yr_y,"), std::string::npos)
+      << line;
+  // Every axis's measurement and the stage's prediction for it, from the first tick on (yr is
+  // NaN through the open-loop precondition, as on one axis).
+  std::getline(log, line);
+  std::vector<std::string> cells;
+  std::stringstream row(line);
+  for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+  ASSERT_EQ(cells.size(), 19u) << line;
+  for (const std::size_t column : {9u, 10u, 16u, 17u}) {
+    EXPECT_TRUE(std::isfinite(std::stod(cells[column]))) << column << ": " << line;
+  }
+}
+
+TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) {
+  start_xy();
+  for (const auto& [cmd, params] :
+       std::vector<std::pair<std::string, json>>{{"tune", json::object()},
+                                                 {"excite", {{"drive_upload", "u"}}},
+                                                 {"model.load", {{"stored", "m"}}}}) {
+    const auto [code, message] = refused(cmd, params);
+    EXPECT_EQ(code, "not_on_stage") << cmd << ": " << message;
+    EXPECT_NE(message.find("stage of 2 axes"), std::string::npos) << message;
+  }
+  const std::string x = upload(std::vector<double>(2000, 10.0), 10000.0);
+  EXPECT_EQ(refused("track", {{"reference_uploads", {{"x", x}}}}).second,
+            "reference_uploads: no reference for axis 'y' (a stage's reference names every axis)");
+  EXPECT_EQ(refused("track", {{"reference_uploads", {{"x", x}, {"y", x}, {"z", x}}}}).second,
+            "reference_uploads: 'z' is no axis of the stage");
+  EXPECT_NE(refused("track", {{"reference", "zigzag"}}).second.find("reference: "),
+            std::string::npos);
+  EXPECT_NE(refused("track", {{"reference", "lissajous"}, {"learn_trials", 3}})
+                .second.find("not on a stage"),
+            std::string::npos);
+  // Each axis's responses are measured for its model: identify first.
+  EXPECT_EQ(refused("frf", json::object()).first, "no_model");
+  EXPECT_NE(refused("track", {{"reference", "raster"}, {"frequency_hz", 5.0}})
+                .second.find("frequency_hz: a one-axis reference's key"),
+            std::string::npos);
+  // Nothing ran.
+  EXPECT_TRUE(status()["last_result"].is_null());
+}
+
+TEST_F(BenchStage, TracksAnUploadedReferencePerAxisWithoutAModel) {
+  start_xy();
+  // 1 s of a 2 Hz sine on x beside a held y, each within the configured 0..44 um range.
+  std::vector<double> xs, ys;
+  for (int k = 0; k <= 1000; ++k) {
+    xs.push_back(22.0 + 10.0 * std::sin(2.0 * M_PI * 2.0 * k / 1000.0));
+    ys.push_back(15.0);
+  }
+  const std::string x = upload(xs, 1000.0), y = upload(ys, 1000.0);
+  const json r = run_and_wait("track", {{"reference_uploads", {{"x", x}, {"y", y}}}}, 300);
+  ASSERT_EQ(r.value("end", ""), "completed") << r.dump();
+  EXPECT_EQ(r["compensator"], "none");
+  EXPECT_EQ(r["decoupling"]["static"], false);
+  for (const char* axis : {"x", "y"}) {
+    EXPECT_TRUE(std::isfinite(r["axes"][axis]["rms_error_um"].get<double>())) << axis;
+  }
+  // The other axis's motion shows on y: x moved, y was held.
+  EXPECT_GT(std::abs(r["coupling_error"]["y"]["gain_from"]["x"].get<double>()), 0.02)
+      << r["coupling_error"].dump();
+  // The built-in references of a stage, over the configured range without a model.
+  for (const json& params :
+       {json{{"reference", "lissajous"}}, json{{"reference", "spiral"}, {"duration_s", 2.0}}}) {
+    const json b = run_and_wait("track", params, 300);
+    ASSERT_EQ(b.value("end", ""), "completed") << b.dump();
+    for (const char* axis : {"x", "y"}) {
+      EXPECT_GT(b["axes"][axis]["range_um"].get<double>(), 20.0) << params.dump() << axis;
+    }
+  }
+}
+
+TEST_F(BenchStage, AOneAxisBenchRefusesAStagesKeysByName) {
+  start(settings_from_toml(loopback_toml()));
+  const auto [code, message] = refused("track", {{"reference", "sine"}, {"frequencies_hz", {10}}});
+  EXPECT_EQ(code, "not_on_stage");
+  EXPECT_EQ(message, "frequencies_hz: a stage's key (several axes); this bench drives one axis");
+  EXPECT_EQ(refused("track", {{"reference_uploads", {{"x", "a"}}}}).first, "not_on_stage");
+  EXPECT_FALSE(status().contains("axes"));
+}
