@@ -108,8 +108,10 @@ namespace {
 
 // track: a built-in reference or a reference file, the compensator, learning.
 struct TrackOptions {
-  std::string reference = "triangle", compensator;
-  double frequency = 1.0, periods = 5.0, duration = 0.0, fraction = NAN;
+  std::string reference, compensator;
+  std::vector<double> frequencies;  // a stage's reference
+  bool no_decouple = false;
+  double frequency = NAN, periods = NAN, duration = 0.0, fraction = NAN;
   double min = NAN, max = NAN, precondition = NAN;
   int learn = 0;
   double learn_gain = NAN, learn_cutoff = NAN, lead_in_max = NAN;
@@ -151,10 +153,20 @@ void add_track_reference_options(CLI::App* cmd, TrackOptions& tr) {
   cmd->add_option("--reference", tr.reference,
                   "sine, triangle, sawtooth, step (a square wave: a step up and one down each "
                   "period; the result gives their settling time to 1 % and overshoot), "
-                  "decaying_sine, multi_frequency, chirp")
-      ->capture_default_str();
-  cmd->add_option("--frequency", tr.frequency, "Reference frequency [Hz]")->capture_default_str();
-  cmd->add_option("--periods", tr.periods, "Number of periods")->capture_default_str();
+                  "decaying_sine, multi_frequency, chirp. On a stage of several axes: raster "
+                  "(the first axis's lines at 10 Hz over a 0.1 Hz frame of the second, "
+                  "the default there), lissajous (10, 11, ... Hz), spiral (10 turns/s "
+                  "closing in over --duration); each axis over --range-fraction of its range "
+                  "(default: triangle; raster on a stage)");
+  cmd->add_option("--frequencies", tr.frequencies,
+                  "On a stage: the reference's frequencies [Hz]: raster FAST,SLOW; lissajous "
+                  "one per axis; spiral TURNS_PER_S")
+      ->delimiter(',');
+  cmd->add_flag("--no-decouple", tr.no_decouple,
+                "On a stage: leave the coupling in the feedforward's targets (by default each "
+                "axis's target has the other axes' share taken out, from identify's estimate)");
+  cmd->add_option("--frequency", tr.frequency, "Reference frequency [Hz] (default 1)");
+  cmd->add_option("--periods", tr.periods, "Number of periods (default 5)");
   cmd->add_option("--duration", tr.duration, "Duration [s] (instead of --periods)");
   cmd->add_option("--compensator", tr.compensator,
                   "none, inverse, inverse_multiplicative, inverse+pid, pid (default: inverse "
@@ -261,9 +273,27 @@ int track_reference_file(const TrackOptions& tr, cli::RemoteCommand& remote) {
   if (!std::isnan(tr.approach)) p["approach_s"] = tr.approach;
   add_learning(tr, p);
   add_gains(tr, p);
-  remote.upload =
-      read_upload_or_report(tr.file, "reference", tr.t_column, tr.yr_column, tr.yr_scale, tr.rate);
-  if (!remote.upload) return 1;
+  if (tr.no_decouple) p["decouple"] = false;
+  // Read once the daemon says whether it drives one axis or a stage (its column per axis).
+  remote.reference_file = {tr.file, tr.t_column, tr.yr_column, tr.yr_scale, tr.rate};
+  return send_request(remote, "track", p);
+}
+
+bool is_stage_reference(const std::string& name) {
+  return name == "raster" || name == "lissajous" || name == "spiral";
+}
+
+// track on a stage with one of its built-in references.
+int track_stage_reference(const TrackOptions& tr, cli::RemoteCommand& remote) {
+  nlohmann::json p = {{"reference", tr.reference}};
+  if (!tr.frequencies.empty()) p["frequencies_hz"] = tr.frequencies;
+  if (tr.duration > 0) p["duration_s"] = tr.duration;
+  if (!std::isnan(tr.fraction)) p["range_fraction"] = tr.fraction;
+  if (tr.no_decouple) p["decouple"] = false;
+  if (!tr.compensator.empty()) p["compensator"] = tr.compensator;
+  if (!std::isnan(tr.precondition)) p["precondition_s"] = tr.precondition;
+  add_learning(tr, p);
+  add_gains(tr, p);
   return send_request(remote, "track", p);
 }
 
@@ -274,12 +304,18 @@ int run_track(const TrackOptions& tr, cli::RemoteCommand& remote) {
     return 2;
   }
   if (!tr.file.empty()) return track_reference_file(tr, remote);
-  nlohmann::json p = {{"reference", tr.reference}, {"frequency_hz", tr.frequency}};
+  if (is_stage_reference(tr.reference)) return track_stage_reference(tr, remote);
+  // Only what was given: the daemon fills in its defaults (a stage's differ from one axis's).
+  nlohmann::json p = nlohmann::json::object();
+  if (!tr.reference.empty()) p["reference"] = tr.reference;
+  if (!std::isnan(tr.frequency)) p["frequency_hz"] = tr.frequency;
+  if (!tr.frequencies.empty()) p["frequencies_hz"] = tr.frequencies;
+  if (tr.no_decouple) p["decouple"] = false;
   if (add_learning(tr, p)) {
     // a learning run, or a learned drive's (its start-up period and one scored period)
   } else if (tr.duration > 0) {
     p["duration_s"] = tr.duration;
-  } else {
+  } else if (!std::isnan(tr.periods)) {
     p["periods"] = tr.periods;
   }
   if (!tr.compensator.empty()) p["compensator"] = tr.compensator;

@@ -328,12 +328,56 @@ void print_loop_timing(std::ostream& out, const json& r) {
 
 }  // namespace
 
+namespace {
+
+// A stage's run: each axis's error, what the other axes left on it, and identify's coupling.
+void print_stage(std::ostream& out, const json& r) {
+  const json& axes = r["axes"];
+  for (const auto& [name, a] : axes.items()) {
+    if (!a.contains("rms_error_um") && !a.contains("model_rms_error_um")) continue;
+    out << "  axis " << name;
+    for (std::size_t pad = name.size(); pad < 11; ++pad) out << ' ';
+    if (a.contains("rms_error_um")) {
+      out << "rms " << fixed(a["rms_error_percent"], 3) << " % (" << fixed(a["rms_error_um"], 4)
+          << " um), max " << fixed(a["max_error_percent"], 3) << " % of "
+          << fixed(a.value("range_um", 0.0), 2) << " um";
+    } else if (a.contains("model_rms_error_um")) {
+      out << "model vs bench rms " << fixed(a["model_rms_error_um"], 3) << " um";
+    }
+    if (r.contains("coupling_error") && r["coupling_error"].contains(name)) {
+      out << "; the other axes left " << fixed(r["coupling_error"][name]["rms_um"], 4) << " um";
+    }
+    out << "\n";
+  }
+  if (const auto d = r.find("decoupling"); d != r.end() && d->is_object()) {
+    out << "  decoupling      "
+        << (d->value("static", false) ? "static, from " + d->value("from_run", std::string("?"))
+                                      : "none: " + d->value("why_not", std::string("?")))
+        << "\n";
+  }
+  const auto model = r.find("stage_model");
+  if (model == r.end() || !model->is_object()) return;
+  for (const auto& [name, fit] : (*model)["axes"].items()) {
+    out << "  model " << name << "         " << fit.value("model", "?") << ", held-out rms "
+        << fixed(fit["heldout_rms_error_um"], 4) << " um ("
+        << fixed(fit["heldout_rms_error_percent"], 3) << " %)\n";
+  }
+  for (const auto& [pair, g] : (*model)["coupling"]["gains"].items()) {
+    out << "  coupling " << pair << "    " << fixed(g["gain"], 4);
+    if (g["db"].is_number()) out << " (" << fixed(g["db"], 1) << " dB)";
+    out << "\n";
+  }
+}
+
+}  // namespace
+
 void print_run_result(const json& r, std::ostream& out) {
   out << "run " << r.value("run_id", "?") << " " << r.value("end", "?");
   if (!r.value("reason", std::string()).empty())
     out << " (" << r["reason"].get<std::string>() << ")";
   out << ": " << r.value("samples", 0) << " samples, " << r.value("dropped", 0) << " dropped\n";
   if (r.contains("rms_error_um")) print_tracking_error(out, r);
+  if (r.contains("axes") && r["axes"].is_object()) print_stage(out, r);
   if (const auto l = r.find("learning"); l != r.end() && l->is_object()) print_learning(out, *l);
   if (r.contains("tare_um")) {
     out << "  tare            " << fixed(r["tare_um"], 4)
@@ -451,14 +495,58 @@ namespace {
 
 /// Sends the command, after its upload, and returns the daemon's reply; CommandError when the
 /// daemon refuses either.
+/// A user's file the CLI could not read (a missing column, a bad row): no request was sent.
+struct UnreadableInput : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// The reference file's uploads: one for a one-axis bench (its value column), else one per axis
+/// of the stage (the column named as the axis), keyed by axis ("" for one axis).
+std::vector<std::pair<std::string, RemoteUpload>> reference_file_uploads(
+    BenchClient& client, const RemoteCommand::ReferenceFile& file) {
+  const json status = result_or_throw(client.request("status", json::object()));
+  std::vector<std::pair<std::string, RemoteUpload>> out;
+  try {
+    if (!status.contains("axes") || !status["axes"].is_object()) {
+      out.emplace_back("", read_upload(file.path, "reference", file.t_column, file.value_column,
+                                       file.scale, file.rate_hz));
+      return out;
+    }
+    for (const auto& [axis, value] : status["axes"].items()) {
+      (void)value;
+      out.emplace_back(
+          axis, read_upload(file.path, "reference", file.t_column, axis, file.scale, file.rate_hz));
+    }
+  } catch (const std::exception& e) {
+    std::string why = e.what();
+    if (status.contains("axes")) {
+      why += " (the bench is a stage: the file needs a column per axis, named ";
+      std::string names;
+      for (const auto& item : status["axes"].items())
+        names += (names.empty() ? "" : ", ") + item.key();
+      why += names + ")";
+    }
+    throw UnreadableInput(why);
+  }
+  return out;
+}
+
 json request_command(BenchClient& client, const RemoteCommand& cmd, bool tty, std::ostream& err) {
   json params = cmd.params;
-  if (cmd.upload) {
+  std::vector<std::pair<std::string, RemoteUpload>> uploads;
+  if (cmd.upload) uploads.emplace_back("", *cmd.upload);
+  if (cmd.reference_file) uploads = reference_file_uploads(client, *cmd.reference_file);
+  for (const auto& [axis, upload] : uploads) {
     std::function<void(double)> shown;
-    if (tty && !cmd.json_output && cmd.upload->values.size() > 100'000) {
-      shown = [&](double f) { progress_bar(err, f, "uploading " + cmd.upload->source); };
+    if (tty && !cmd.json_output && upload.values.size() > 100'000) {
+      shown = [&](double f) { progress_bar(err, f, "uploading " + upload.source); };
     }
-    params[cmd.upload->param] = send_upload(client, *cmd.upload, shown);
+    const std::string name = send_upload(client, upload, shown);
+    if (axis.empty()) {
+      params[upload.param] = name;
+    } else {
+      params["reference_uploads"][axis] = name;
+    }
     if (shown) err << "\r\x1b[K" << std::flush;
   }
   json reply = client.request(cmd.cmd, params);
@@ -567,6 +655,9 @@ int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
       reply = request_command(client, cmd, tty, err);
     } catch (const common::CommandError& e) {
       report_refusal(cmd, e, out, err);
+      return 1;
+    } catch (const UnreadableInput& e) {
+      err << "hystbench: error: " << e.what() << "\n";
       return 1;
     }
     json result = reply["result"];

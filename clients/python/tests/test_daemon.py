@@ -423,3 +423,54 @@ class WithModelTest(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class StageTest(unittest.TestCase):
+    """A stage of two axes (the loopback's ``[driver.loopback.stage]``, axes x and y), without a
+    model: each axis's trajectory uploaded, its result per axis."""
+
+    daemon: _support.Daemon
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.daemon = _support.Daemon(
+            "hbpy-xy", _support.SHORT_IDENTIFY + "\n[driver.loopback.stage]\n", clock="simulated"
+        )
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        cls.daemon.stop()
+
+    def setUp(self) -> None:
+        self.bench = self.daemon.bench()
+        self.addCleanup(self.bench.close)
+
+    def test_each_axis_tracks_its_own_trajectory_and_the_coupling_is_named(self) -> None:
+        self.assertEqual(sorted(self.bench.status()["axes"]), ["x", "y"])
+        rate = 1000.0
+        x = [22.0 + 10.0 * math.sin(2.0 * math.pi * 2.0 * k / rate) for k in range(1001)]
+        y = [15.0] * len(x)
+        result = self.bench.track_axes(
+            {"x": x, "y": y}, rate_hz=rate, compensator="none", precondition_s=0.1, wait=True
+        )
+        self.assertTrue(result.completed, result)
+        for axis in ("x", "y"):
+            self.assertTrue(math.isfinite(result["axes"][axis]["rms_error_percent"]), result)
+        # x moved and y was held: x's motion shows on y.
+        self.assertGreater(abs(result["coupling_error"]["y"]["gain_from"]["x"]), 0.02, result)
+        log = read_run(result["log"])
+        self.assertIn("y_y", log.columns)
+        # From a file with a column per axis; one without y's is refused naming it.
+        path = os.path.join(str(self.daemon.dir), "scan.csv")
+        with open(path, "w", encoding="utf-8") as f:
+            f.write("t,x,y\n" + "".join(f"{k / rate},{x[k]},{y[k]}\n" for k in range(len(x))))
+        result = self.bench.track_axes(reference_file=path, compensator="none", wait=True)
+        self.assertTrue(result.completed, result)
+        with open(path, "w", encoding="utf-8") as f:
+            f.write("t,x\n0,10\n0.5,20\n")
+        with self.assertRaises(ValueError) as caught:
+            self.bench.track_axes(reference_file=path, compensator="none")
+        self.assertIn("y", str(caught.exception))
+        with self.assertRaises(ValueError) as caught:
+            self.bench.track_axes({"x": x}, rate_hz=rate)
+        self.assertIn("no reference for axis 'y'", str(caught.exception))

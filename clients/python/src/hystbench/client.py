@@ -582,6 +582,79 @@ class Bench:
         except (BenchError, BenchConnectionError, TimeoutError):
             pass
 
+    def track_axes(
+        self,
+        references: Optional[Dict[str, Iterable[float]]] = None,
+        *,
+        rate_hz: Optional[float] = None,
+        t: Optional[Iterable[float]] = None,
+        reference_file: Optional[PathLike] = None,
+        t_column: Optional[str] = "t",
+        compensator: Optional[str] = None,
+        decouple: Optional[bool] = None,
+        precondition_s: Optional[float] = None,
+        approach_s: Optional[float] = None,
+        wait: bool = False,
+        progress: Optional[Progress] = None,
+        timeout: Optional[float] = None,
+    ) -> Dict[str, Any]:
+        """Tracks your own trajectory on a stage of several axes (``status()["axes"]``).
+
+        ``references={"x": [...], "y": [...]}``: each axis's positions [µm], sampled uniformly
+        at ``rate_hz`` [Hz] or at the times ``t`` [s]; or ``reference_file="scan.csv"`` with the
+        time column ``t_column`` and a column per axis, named as the axes. Every axis needs its
+        reference (``ValueError`` names a missing one). Built-in references go through
+        ``track(reference="raster" | "lissajous" | "spiral", frequencies_hz=[...])``.
+
+        The result holds ``axes`` (each axis's ``rms_error_percent``, ``max_error_percent``,
+        ...), ``coupling_error`` (what the other axes' motion left on each) and
+        ``decoupling``. ``decouple=False`` leaves the coupling in the feedforward's targets.
+        """
+        axes = list(self.status().get("axes", {}))
+        if not axes:
+            raise ValueError("track_axes: the bench drives one axis; use track()")
+        if (references is None) == (reference_file is None):
+            raise ValueError("track_axes: give references or reference_file")
+        if references is not None:
+            unknown = sorted(set(references) - set(axes))
+            if unknown:
+                raise ValueError(f"track_axes: {', '.join(unknown)}: no axis of the stage {axes}")
+        times = list(t) if t is not None else None  # every axis's samples at these times
+        uploads: Dict[str, str] = {}
+        try:
+            for axis in axes:
+                if references is not None:
+                    if axis not in references:
+                        raise ValueError(f"track_axes: no reference for axis {axis!r}")
+                    upload_id, _ = self._upload_signal(
+                        "reference", references[axis], rate_hz, times, None, (None, axis), progress
+                    )
+                else:
+                    upload_id, _ = self._upload_signal(
+                        "reference", None, rate_hz, None, reference_file, (t_column, axis),
+                        progress,
+                    )
+                uploads[axis] = upload_id
+        except Exception:
+            for upload_id in uploads.values():
+                self._cancel_quietly(upload_id)
+            raise
+        request = _without_none(
+            {
+                "reference_uploads": uploads,
+                "compensator": compensator,
+                "decouple": decouple,
+                "precondition_s": precondition_s,
+                "approach_s": approach_s,
+            }
+        )
+        try:
+            return self._start("track", request, wait, progress, timeout)
+        except BenchError:
+            for upload_id in uploads.values():
+                self._cancel_quietly(upload_id)
+            raise
+
     def _upload_signal(
         self,
         kind: str,

@@ -312,7 +312,8 @@ json stage_result(const RunProgram& run, std::span<const std::string> axes) {
   for (std::size_t a = 0; a < run.axes() && a < axes.size(); ++a) {
     const RunProgram& p = run.axis(a);
     json r = run.kind == RunKind::kTrack ? tracking_error_json(p) : json::object();
-    if (p.model_error.samples > 0) {
+    // identify's prediction is the configured range's linear map, not a model: left out.
+    if (run.kind == RunKind::kTrack && p.model_error.samples > 0) {
       const double rms = std::sqrt(p.model_error.sum2 / static_cast<double>(p.model_error.samples));
       r["model_rms_error_um"] = rms;
       r["model_max_error_um"] = p.model_error.max;
