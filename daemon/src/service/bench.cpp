@@ -520,6 +520,7 @@ void Bench::learn() {
   const RunProgram* active = loop_->active();
   if (active == nullptr || active->run_id != run_id) return;
   announce_trials(*learning, run_id);
+  learn_other_axes();
 }
 
 void Bench::announce_trials(details::TrackLearning& learning, const std::string& run_id) {
@@ -676,9 +677,13 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
   }
   set_phase(RunPhase::kFinalizing);
   details::RunResult result = details::collect_result(*run, loop_->last_output());
-  finish_learning(*run, result.report);
-  if (run->axes() > 1 && result.kind == RunKind::kFrequencyResponse) {
+  if (run->axes() > 1) {
     details::replace_with_stage_result(result.report, *run, settings_.axes);
+    finish_axes_learning(*run, result.report);
+  } else {
+    finish_learning(*run, result.report);
+  }
+  if (run->axes() > 1 && result.kind == RunKind::kFrequencyResponse) {
     axes_responses_measured(*run, std::move(result));
     return;
   }
@@ -687,7 +692,6 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
     return;
   }
   if (run->axes() > 1) {
-    details::replace_with_stage_result(result.report, *run, settings_.axes);
     if (result.wants_fit()) {
       stage_identified(*run, std::move(result));
       return;

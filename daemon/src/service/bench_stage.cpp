@@ -59,9 +59,15 @@ json Bench::start_stage_track(const details::RequestParams& request, std::uint64
     uploads.push_back(uploads_.complete(name, client, UploadKind::kReference));
     raw.push_back(uploads.back().get());
   }
-  json reply =
-      launch("track", details::make_stage_track_program(track, ctx, stage_.get(), u_now, raw));
+  details::BuiltRun run = details::make_stage_track_program(track, ctx, stage_.get(), u_now, raw);
+  std::unique_ptr<details::TrackLearning> learning = std::move(run.learning);
+  std::vector<std::unique_ptr<details::TrackLearning>> others = std::move(run.axis_learning);
+  json reply = launch("track", std::move(run));
   for (const std::string& name : track.uploads) uploads_.erase(name, client);
+  // The supervisor takes the lock before it looks.
+  learning_run_id_ = learning ? reply["run_id"].get<std::string>() : std::string();
+  if (learning) axis_learning_ = std::move(others);
+  learning_ = std::move(learning);
   return reply;
 }
 
@@ -84,6 +90,53 @@ json Bench::start_stage_frf(const details::RequestParams& request) {
   stage_frf_options_ = std::move(options);
   stage_frf_turn_ = turn;
   return reply;
+}
+
+void Bench::learn_other_axes() {
+  std::vector<details::TrackLearning*> learners;
+  {
+    std::lock_guard lock(mutex_);
+    for (const auto& l : axis_learning_) learners.push_back(l.get());
+  }
+  // Their exchanges live in the program the loop plays, as axis 0's; only this thread polls.
+  for (details::TrackLearning* l : learners) {
+    try {
+      (void)l->poll();
+    } catch (const std::exception& e) {
+      l->fail(e.what());  // the loop must not wait for a drive that will not come
+      spdlog::error("an axis's learning failed: {}", e.what());
+    }
+  }
+}
+
+void Bench::finish_axes_learning(const RunProgram& run, json& report) {
+  std::vector<std::unique_ptr<details::TrackLearning>> learners;
+  {
+    std::lock_guard lock(mutex_);
+    if (!learning_ || run.run_id != learning_run_id_) return;
+    learners.push_back(std::move(learning_));
+    for (auto& l : axis_learning_) learners.push_back(std::move(l));
+    axis_learning_.clear();
+    learning_run_id_.clear();
+  }
+  for (std::size_t a = 0; a < learners.size() && a < settings_.axes.size(); ++a) {
+    details::TrackLearning& l = *learners[a];
+    try {
+      (void)l.poll();  // the last trial, closed as the run ended
+    } catch (const std::exception& e) {
+      l.fail(e.what());
+    }
+    json& axis = report["axes"][settings_.axes[a]];
+    axis["learning"] = l.result();
+    if (const auto last = l.last_trial()) {
+      // The axis's figures are its last trial's (the log keeps every period).
+      axis["rms_error_um"] = last->rms_um;
+      axis["max_error_um"] = last->max_um;
+      axis["rms_error_percent"] = last->rms_percent;
+      axis["max_error_percent"] = last->max_percent;
+      axis["max_error_index"] = last->max_tick;
+    }
+  }
 }
 
 bool Bench::measure_axes_responses(const std::string& identify_run_id, std::string& why) {

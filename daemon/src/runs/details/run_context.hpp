@@ -83,6 +83,8 @@ struct BuiltRun {
   RunPreparation preparation;
   /// track --learn: the learner of the run's trials (it holds the program's exchange).
   std::unique_ptr<TrackLearning> learning;
+  /// track --learn on a stage: the learners of axes 1, 2, ... (axis 0's is `learning`).
+  std::vector<std::unique_ptr<TrackLearning>> axis_learning;
 };
 
 /// Most samples a run records for its figures and fit (the log keeps every sample).

@@ -107,34 +107,38 @@ RunPreparation joined(std::vector<RunPreparation> parts) {
 }
 
 // Each axis's reference, as track_reference() builds it from its upload (the built-in one's
-// samples over that axis's range); refused when their lengths differ. Sets each request's
-// upload name.
-std::vector<TrackReference> axis_references(const StageTrackRequest& request,
-                                            const std::vector<RunContext>& contexts,
-                                            std::vector<TrackRequest>& requests,
-                                            std::span<const sim::AxisRange> ranges,
-                                            std::span<const Upload* const> uploads,
-                                            double rate_hz) {
-  std::vector<Upload> builtin;
-  std::vector<const Upload*> axis_uploads(uploads.begin(), uploads.end());
-  if (request.uploads.empty()) {
-    builtin = builtin_uploads(request.builtin, ranges, rate_hz);
-    axis_uploads.clear();
-    for (const Upload& u : builtin) axis_uploads.push_back(&u);
-  }
+// samples over that axis's range), with the uploads it was built from; refused when their
+// lengths differ. Sets each request's upload name.
+struct AxisReferences {
+  std::vector<Upload> builtin;         ///< a built-in reference's, per axis
+  std::vector<const Upload*> uploads;  ///< per axis, the upload its reference plays
   std::vector<TrackReference> refs;
-  refs.reserve(contexts.size());
+};
+
+AxisReferences axis_references(const StageTrackRequest& request,
+                               const std::vector<RunContext>& contexts,
+                               std::vector<TrackRequest>& requests,
+                               std::span<const sim::AxisRange> ranges,
+                               std::span<const Upload* const> uploads, double rate_hz) {
+  AxisReferences out;
+  out.uploads.assign(uploads.begin(), uploads.end());
+  if (request.uploads.empty()) {
+    out.builtin = builtin_uploads(request.builtin, ranges, rate_hz);
+    out.uploads.clear();
+    for (const Upload& u : out.builtin) out.uploads.push_back(&u);
+  }
+  out.refs.reserve(contexts.size());
   for (std::size_t a = 0; a < contexts.size(); ++a) {
-    requests[a].reference_upload = axis_uploads[a]->name;
-    refs.push_back(track_reference(requests[a], contexts[a], axis_uploads[a]));
-    if (refs[a].samples != refs[0].samples) {
+    requests[a].reference_upload = out.uploads[a]->name;
+    out.refs.push_back(track_reference(requests[a], contexts[a], out.uploads[a]));
+    if (out.refs[a].samples != out.refs[0].samples) {
       throw CommandError("bad_params", "the axes' references last " +
-                                           std::to_string(refs[0].samples) + " and " +
-                                           std::to_string(refs[a].samples) +
+                                           std::to_string(out.refs[0].samples) + " and " +
+                                           std::to_string(out.refs[a].samples) +
                                            " ticks: a stage's axes play one reference together");
     }
   }
-  return refs;
+  return out;
 }
 
 json reference_json(const StageTrackRequest& request) {
@@ -176,10 +180,10 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
   }
   r.common = parse_track_request(RequestParams(rest, track_builtin_params()), ctx);
   if (request.has("approach_s")) r.common.approach_s = request.number("approach_s", 0.0);
-  if (r.common.learning.any()) {
+  if (r.common.learning.learned) {
     throw CommandError("bad_params",
-                       "learn_trials and learned: not on a stage of several axes yet (each axis "
-                       "tracks through its feedforward)");
+                       "learned: a drive learned before replays on one axis; a stage learns "
+                       "again (learn_trials)");
   }
   r.decouple = request.boolean("decouple", true);
   const json& params = request.params();
@@ -246,8 +250,9 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
     }
     ranges.push_back({range->y_bottom, range->y_top});
   }
-  std::vector<TrackReference> refs =
+  AxisReferences axis_refs =
       axis_references(request, contexts, requests, ranges, uploads, ctx.settings.loop.rate_hz);
+  std::vector<TrackReference>& refs = axis_refs.refs;
   const bool decoupled = request.decouple && stage != nullptr && stage->decoupler.axes() == n &&
                          hc::needs_model(request.common.compensator_kind);
   std::vector<std::unique_ptr<sim::SignalGenerator>> targets(n);
@@ -260,15 +265,17 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   for (std::size_t a = 0; a < n; ++a) {
     const std::string name = stage != nullptr ? stage->axes[a] : std::to_string(a);
     names.push_back(name);
-    BuiltRun axis = make_axis_track_program(requests[a], contexts[a], std::move(refs[a]),
-                                            std::move(targets[a]));
+    BuiltRun axis = make_axis_track_program(requests[a], contexts[a], axis_refs.uploads[a],
+                                            std::move(refs[a]), std::move(targets[a]));
     axis_headers[name] = axis.header;
     axis_replies[name] = axis.reply;
     preparations.push_back(std::move(axis.preparation));
     if (a == 0) {
       run.program = std::move(axis.program);
+      run.learning = std::move(axis.learning);
     } else {
       run.program->stage_axes.push_back(std::move(axis.program));
+      run.axis_learning.push_back(std::move(axis.learning));
     }
   }
   const json reference = reference_json(request);

@@ -609,6 +609,23 @@ void describe_track_run(BuiltRun& run, const RunProgram& p, const TrackReference
   }
 }
 
+// A periodic reference where the loop amplifies (|S| > 1 at its fundamental, above the
+// crossover): the feedback adds to what the feedforward leaves there; `feedback` says so.
+void note_feedback_at_reference(const std::optional<FeedbackPlan>& plan, const TrackReference& ref,
+                                double rate_hz, json& feedback) {
+  if (!plan || !feedback.is_object() || ref.frequency_hz <= 0.0) return;
+  const double s_ref = sensitivity_at(*plan, ref.frequency_hz, 1.0 / rate_hz);
+  if (std::isfinite(s_ref) && s_ref > 1.0) {
+    feedback["at_reference"] = {
+        {"frequency_hz", ref.frequency_hz},
+        {"sensitivity", s_ref},
+        {"note",
+         "the reference's fundamental lies where the loop amplifies what the "
+         "feedforward leaves (|S| above 1, above its crossover): the feedback can track "
+         "it worse than the feedforward alone; --learn learns the repeated error"}};
+  }
+}
+
 // make_track_program's and make_axis_track_program's run: `ref` built from the request,
 // `feedforward_reference` the feedforward's in its place (null: the reference).
 BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, TrackReference ref,
@@ -640,20 +657,7 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
   const std::optional<hc::FeedbackController> pid =
       feedback_controller(request.gains, kind, ctx, feedback, plan);
   const hc::FeedbackPath path = plan ? plan->path : hc::FeedbackPath::kInverse;
-  // A periodic reference where the loop amplifies (|S| > 1 at its fundamental, above the
-  // crossover): the feedback adds to what the feedforward leaves there; the result says so.
-  if (plan && feedback.is_object() && ref.frequency_hz > 0.0) {
-    const double s_ref = sensitivity_at(*plan, ref.frequency_hz, 1.0 / s.loop.rate_hz);
-    if (std::isfinite(s_ref) && s_ref > 1.0) {
-      feedback["at_reference"] = {
-          {"frequency_hz", ref.frequency_hz},
-          {"sensitivity", s_ref},
-          {"note",
-           "the reference's fundamental lies where the loop amplifies what the "
-           "feedforward leaves (|S| above 1, above its crossover): the feedback can track "
-           "it worse than the feedforward alone; --learn learns the repeated error"}};
-    }
-  }
+  note_feedback_at_reference(plan, ref, s.loop.rate_hz, feedback);
   RunPreparation preparation;
   if (inverse) {
     preparation = feedforward_plan(*p, ctx, kind, ref.samples, ref.frequency_hz, feedforward, pid,
@@ -701,8 +705,8 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
 
 TrackReference track_reference(const TrackRequest& request, const RunContext& ctx,
                                const Upload* reference_upload) {
-  std::optional<LearningPlan> none;
-  return reference(request, ctx, known_range(ctx), reference_upload, none);
+  std::optional<LearningPlan> learn = learning_plan(request, ctx);
+  return reference(request, ctx, known_range(ctx), reference_upload, learn);
 }
 
 BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
@@ -713,13 +717,12 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
 }
 
 BuiltRun make_axis_track_program(const TrackRequest& request, const RunContext& ctx,
-                                 TrackReference reference,
+                                 const Upload* reference_upload, TrackReference axis_reference,
                                  std::unique_ptr<sim::SignalGenerator> feedforward_reference) {
-  if (request.learning.any()) {
-    throw common::CommandError("bad_params",
-                               "learn and learned: not on a stage of several axes yet");
-  }
-  return build_track_run(request, ctx, std::move(reference), std::nullopt,
+  std::optional<LearningPlan> learn = learning_plan(request, ctx);
+  // A learning run's plan takes its trials' period from the trajectory's passes.
+  if (learn) (void)reference(request, ctx, known_range(ctx), reference_upload, learn);
+  return build_track_run(request, ctx, std::move(axis_reference), std::move(learn),
                          std::move(feedforward_reference));
 }
 

@@ -20,16 +20,18 @@ namespace hystbench::daemon::details {
 BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
                             const Upload* reference_upload);
 
-/// The reference make_track_program() would play for the request (without learning), over the
-/// range ctx's model gives: for a caller that needs it before the run (a stage's decoupling).
+/// The reference make_track_program() would play for the request (a learning run's passes
+/// too), over the range ctx's model gives: for a caller that needs it before the run (a stage's
+/// decoupling).
 TrackReference track_reference(const TrackRequest& request, const RunContext& ctx,
                                const Upload* reference_upload);
 
-/// One axis of a stage's track: as make_track_program() with `reference` built by
-/// track_reference() for that axis, and the feedforward fed `feedforward_reference` (the axis's
-/// target with the coupling taken out; null: the reference). Learning is refused (bad_params).
+/// One axis of a stage's track: as make_track_program() with `axis_reference` built by
+/// track_reference() for that axis from `reference_upload`, and the feedforward fed
+/// `feedforward_reference` (the axis's target with the coupling taken out; null: the
+/// reference). A learning run's learner is the BuiltRun's.
 BuiltRun make_axis_track_program(const TrackRequest& request, const RunContext& ctx,
-                                 TrackReference reference,
+                                 const Upload* reference_upload, TrackReference axis_reference,
                                  std::unique_ptr<sim::SignalGenerator> feedforward_reference);
 
 }  // namespace hystbench::daemon::details

@@ -148,6 +148,13 @@ class Bench {
   /// A stage's identify run played: its fit, the stage model kept and saved, its result
   /// delivered (supervisor thread).
   void stage_identified(const RunProgram& run, details::RunResult result);
+  /// A stage's learning run: the other axes' learners polled (their trials closed, their next
+  /// drives offered), as learn() does axis 0's (supervisor thread).
+  void learn_other_axes();
+  /// A stage's run ended: for a learning run, each axis's learning and its last trial's
+  /// figures under `axes` (after replace_with_stage_result); no drive is kept (supervisor
+  /// thread).
+  void finish_axes_learning(const RunProgram& run, nlohmann::json& report);
   /// Every axis's present output [V].
   std::vector<double> axis_outputs() const;
   /// status' and model.get's word on the stage. Caller holds mutex_.
@@ -305,8 +312,10 @@ class Bench {
   std::vector<sim::FrequencyResponseExcitationOptions> stage_frf_options_;
   std::size_t stage_frf_turn_ = 0;
   nlohmann::json stage_identify_report_;  // identify's result while its frf plays
-  // The learner of a learning run (set with it, taken by the supervisor when it ends).
+  // The learner of a learning run (set with it, taken by the supervisor when it ends); on a
+  // stage, axis 0's, and axis_learning_ the others'.
   std::unique_ptr<details::TrackLearning> learning_;
+  std::vector<std::unique_ptr<details::TrackLearning>> axis_learning_;
   std::string learning_run_id_;
   std::string announced_run_;  // run_id/stage last announced; supervisor only
   EventSink sink_;
