@@ -665,7 +665,13 @@ void Bench::end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std:
   set_phase(RunPhase::kFinalizing);
   run->end = end;
   json report = details::collect_result(*run, loop_->last_output()).report;
-  finish_learning(*run, report);  // its learner goes with the program it holds
+  // Its learners go with the program that holds their exchanges.
+  if (run->axes() > 1) {
+    details::replace_with_stage_result(report, *run, settings_.axes);
+    finish_axes_learning(*run, report);
+  } else {
+    finish_learning(*run, report);
+  }
   report["reason"] = reason;
   deliver_result(std::move(report));
 }
