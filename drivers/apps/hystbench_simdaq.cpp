@@ -1,5 +1,6 @@
 // hystbench-simdaq: a Modbus TCP or RTU server (libmodbus) in front of the simulated actuator,
-// so the bench can run over real Modbus without hardware. The register map is in
+// or of a simulated stage of several axes (one register block per axis), so the bench can run
+// over real Modbus without hardware. The register map is in
 // drivers/include/hystbench/drivers/simdaq_register_map.hpp and docs/drivers.md.
 // The plant advances with the wall clock at --sim-rate-hz; each request first brings it up to
 // now, then applies what the request wrote (sample and hold).
@@ -16,8 +17,11 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <stdexcept>
+#include <vector>
 
 #include "hystbench/common/run_main.hpp"
 #include "hystbench/drivers/simdaq_register_map.hpp"
@@ -32,13 +36,21 @@ struct Server {
   RealtimePlant& plant;
   modbus_mapping_t* regs;
   int header_length = 0;
-  std::int64_t last_write_ns = RealtimePlant::now_ns();
-  bool tripped = false;
-  bool clamped = false;
+  /// Per axis: its last output write, the watchdog's trip, the output clamp.
+  struct AxisState {
+    std::int64_t last_write_ns = RealtimePlant::now_ns();
+    bool tripped = false;
+    bool clamped = false;
+  };
+  std::vector<AxisState> axes = std::vector<AxisState>(plant.axes());
 
-  std::uint16_t code_of(double v) const {
+  std::uint16_t* holding(std::size_t a) const { return regs->tab_registers + a * map::kAxisBlock; }
+  std::uint16_t* input(std::size_t a) const {
+    return regs->tab_input_registers + a * map::kAxisBlock;
+  }
+  std::uint16_t code_of(double v, std::size_t a) const {
     const double c =
-        std::round((v - plant.input_min()) / (plant.input_max() - plant.input_min()) * 65535.0);
+        std::round((v - plant.input_min(a)) / (plant.input_max(a) - plant.input_min(a)) * 65535.0);
     return static_cast<std::uint16_t>(std::clamp(c, 0.0, 65535.0));
   }
   static void put32(std::uint16_t* r, std::int64_t v) {
@@ -49,32 +61,35 @@ struct Server {
   static std::int32_t get32(const std::uint16_t* r) {
     return static_cast<std::int32_t>((static_cast<std::uint32_t>(r[0]) << 16) | r[1]);
   }
-  void show_output() {
-    regs->tab_registers[map::kHrOutputCode] = code_of(plant.output_v());
-    put32(&regs->tab_registers[map::kHrOutputMv], std::llround(plant.output_v() * 1000.0));
-    regs->tab_input_registers[map::kIrAppliedCode] = code_of(plant.output_v());
+  void show_output(std::size_t a) {
+    holding(a)[map::kHrOutputCode] = code_of(plant.output_v(a), a);
+    put32(&holding(a)[map::kHrOutputMv], std::llround(plant.output_v(a) * 1000.0));
+    input(a)[map::kIrAppliedCode] = code_of(plant.output_v(a), a);
   }
-  // Before a request: the plant up to now, the watchdog, the measurement registers.
+  // Before a request: the plant up to now, the watchdogs, the measurement registers.
   void before() {
     plant.advance();
-    const std::uint16_t wd = regs->tab_registers[map::kHrWatchdogMs];
-    if (wd > 0 && !tripped && RealtimePlant::now_ns() - last_write_ns > wd * 1000000LL) {
-      tripped = true;
-      plant.set_output(plant.input_min());
-      show_output();
+    for (std::size_t a = 0; a < axes.size(); ++a) {
+      AxisState& st = axes[a];
+      std::uint16_t* ir = input(a);
+      std::uint16_t* hr = holding(a);
+      const std::uint16_t wd = hr[map::kHrWatchdogMs];
+      if (wd > 0 && !st.tripped && RealtimePlant::now_ns() - st.last_write_ns > wd * 1000000LL) {
+        st.tripped = true;
+        plant.set_output(plant.input_min(a), a);
+        show_output(a);
+      }
+      const std::int64_t nm = std::llround(plant.position_um(a) * 1000.0);
+      const auto nm16 = static_cast<std::uint16_t>(std::clamp<std::int64_t>(nm, 0, 65535));
+      ir[map::kIrPositionNm16] = hr[map::kHrPositionNm16] = nm16;
+      put32(&ir[map::kIrPositionNm], nm);
+      put32(&hr[map::kHrPositionNm], nm);
+      put32(&ir[map::kIrSamples], static_cast<std::int64_t>(plant.samples() & 0xffffffffu));
+      ir[map::kIrStatus] = static_cast<std::uint16_t>((st.tripped ? map::kStatusWatchdog : 0) |
+                                                      (st.clamped ? map::kStatusClamped : 0));
     }
-    const std::int64_t nm = std::llround(plant.position_um() * 1000.0);
-    const auto nm16 = static_cast<std::uint16_t>(std::clamp<std::int64_t>(nm, 0, 65535));
-    std::uint16_t* ir = regs->tab_input_registers;
-    std::uint16_t* hr = regs->tab_registers;
-    ir[map::kIrPositionNm16] = hr[map::kHrPositionNm16] = nm16;
-    put32(&ir[map::kIrPositionNm], nm);
-    put32(&hr[map::kHrPositionNm], nm);
-    put32(&ir[map::kIrSamples], static_cast<std::int64_t>(plant.samples() & 0xffffffffu));
-    ir[map::kIrStatus] = static_cast<std::uint16_t>((tripped ? map::kStatusWatchdog : 0) |
-                                                    (clamped ? map::kStatusClamped : 0));
   }
-  // After the reply: what the request wrote to the output registers becomes the output.
+  // After the reply: what the request wrote to an axis's output registers becomes its output.
   void after(const std::uint8_t* q) {
     const int fc = q[header_length];
     int addr = -1, count = 0;
@@ -90,20 +105,26 @@ struct Server {
       count = u16(7);
     }
     if (addr < 0) return;
-    const auto covers = [&](int a, int n) { return addr <= a && addr + count >= a + n; };
-    double v = NAN;
-    if (covers(map::kHrOutputMv, 2)) {
-      v = get32(&regs->tab_registers[map::kHrOutputMv]) / 1000.0;
-    } else if (covers(map::kHrOutputCode, 1)) {
-      v = plant.input_min() + regs->tab_registers[map::kHrOutputCode] / 65535.0 *
-                                  (plant.input_max() - plant.input_min());
+    for (std::size_t a = 0; a < axes.size(); ++a) {
+      const int base = static_cast<int>(a) * map::kAxisBlock;
+      const auto covers = [&](int r, int n) {
+        return addr <= base + r && addr + count >= base + r + n;
+      };
+      double v = NAN;
+      if (covers(map::kHrOutputMv, 2)) {
+        v = get32(&holding(a)[map::kHrOutputMv]) / 1000.0;
+      } else if (covers(map::kHrOutputCode, 1)) {
+        v = plant.input_min(a) +
+            holding(a)[map::kHrOutputCode] / 65535.0 * (plant.input_max(a) - plant.input_min(a));
+      }
+      if (std::isnan(v)) continue;
+      AxisState& st = axes[a];
+      st.last_write_ns = RealtimePlant::now_ns();
+      st.tripped = false;
+      st.clamped = v < plant.input_min(a) || v > plant.input_max(a);
+      plant.set_output(v, a);
+      show_output(a);
     }
-    if (std::isnan(v)) return;
-    last_write_ns = RealtimePlant::now_ns();
-    tripped = false;
-    clamped = v < plant.input_min() || v > plant.input_max();
-    plant.set_output(v);
-    show_output();
   }
 };
 
@@ -204,7 +225,7 @@ int run(int argc, char** argv) {
   CLI::App app{
       "hystbench-simdaq - Modbus TCP/RTU server wrapping the simulated piezo actuator\n"
       "Register map: docs/drivers.md. Prints the endpoint on stdout once it serves."};
-  std::string bind = "127.0.0.1", rtu, parity = "none", actuator_file;
+  std::string bind = "127.0.0.1", rtu, parity = "none", actuator_file, stage_file;
   int port = 1502, baud = 115200, stop_bits = 1, slave = 1, watchdog_ms = 0;
   double sim_rate_hz = 10000.0;
   app.add_option("--bind", bind, "TCP address to listen on")->capture_default_str();
@@ -230,27 +251,50 @@ int run(int argc, char** argv) {
                  "holding register 3 changes it)")
       ->check(CLI::Range(0, 65535))
       ->capture_default_str();
-  app.add_option("--actuator", actuator_file, "Simulated actuator config (JSON, sim format)")
-      ->check(CLI::ExistingFile);
+  auto* actuator =
+      app.add_option("--actuator", actuator_file, "Simulated actuator config (JSON, sim format)")
+          ->check(CLI::ExistingFile);
+  app.add_option("--stage", stage_file,
+                 "Simulate a stage of several axes instead: \"xy\" for the default XY stage (as "
+                 "config/loopback-xy.toml), or a JSON file of the [driver.loopback.stage] table. "
+                 "Axis i's registers sit at i * 16 in both tables ([driver.modbus] axes, "
+                 "axis_stride = 16)")
+      ->excludes(actuator);
   CLI11_PARSE(app, argc, argv);
 
-  hystbench::sim::SimulatedActuatorConfig cfg;
+  namespace sim = hystbench::sim;
+  std::unique_ptr<RealtimePlant> plant;
+  const std::string& source = stage_file.empty() ? actuator_file : stage_file;
   try {
-    if (!actuator_file.empty()) {
-      std::ifstream in(actuator_file);
-      cfg = hystbench::sim::from_json(nlohmann::json::parse(in));
+    if (stage_file == "xy") {
+      plant = std::make_unique<RealtimePlant>(sim::SimulatedStageConfig::xy(), sim_rate_hz);
+    } else if (!stage_file.empty()) {
+      std::ifstream in(stage_file);
+      if (!in) throw std::runtime_error("cannot open the file (give \"xy\" or a JSON file)");
+      plant = std::make_unique<RealtimePlant>(sim::stage_from_json(nlohmann::json::parse(in)),
+                                              sim_rate_hz);
+    } else {
+      sim::SimulatedActuatorConfig cfg;
+      if (!actuator_file.empty()) {
+        std::ifstream in(actuator_file);
+        cfg = sim::from_json(nlohmann::json::parse(in));
+      }
+      plant = std::make_unique<RealtimePlant>(cfg, sim_rate_hz);
     }
   } catch (const std::exception& e) {
-    std::cerr << "hystbench-simdaq: " << actuator_file << ": " << e.what() << "\n";
+    std::cerr << "hystbench-simdaq: " << source << ": " << e.what() << "\n";
     return 2;
   }
-  RealtimePlant plant(cfg, sim_rate_hz);
-  modbus_mapping_t* regs = modbus_mapping_new(0, 0, map::kHoldingCount, map::kInputCount);
-  regs->tab_input_registers[map::kIrIdent] = map::kIdent;
-  regs->tab_input_registers[map::kIrMapVersion] = 1;
-  regs->tab_registers[map::kHrWatchdogMs] = static_cast<std::uint16_t>(watchdog_ms);
-  Server s{plant, regs};
-  s.show_output();
+  const auto blocks = static_cast<int>(plant->axes()) * map::kAxisBlock;
+  modbus_mapping_t* regs = modbus_mapping_new(0, 0, blocks, blocks);
+  Server s{*plant, regs};
+  for (std::size_t a = 0; a < plant->axes(); ++a) {
+    s.input(a)[map::kIrIdent] = map::kIdent;
+    s.input(a)[map::kIrMapVersion] = 1;
+    s.holding(a)[map::kHrWatchdogMs] = static_cast<std::uint16_t>(watchdog_ms);
+    s.show_output(a);
+  }
+  s.input(0)[map::kIrAxes] = static_cast<std::uint16_t>(plant->axes());
   s.before();
   if (!rtu.empty()) {
     return serve_rtu(s, rtu, baud,

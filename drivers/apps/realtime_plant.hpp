@@ -1,27 +1,34 @@
 #pragma once
-// The simulated actuator advancing with the wall clock, for the device simulators: before each
-// request the plant is stepped at its own sample rate up to now with the output it had, then the
-// request may change the output (sample and hold, as a real DAQ or amplifier). Long gaps are
-// capped at max_catch_up_s of simulated time.
+// The simulated actuator, or a simulated stage of several axes, advancing with the wall clock,
+// for the device simulators: before each request the plant is stepped at its own sample rate
+// up to now with the outputs it had, then the request may change an axis's output (sample and
+// hold, as a real DAQ or amplifier). Long gaps are capped at max_catch_up_s of simulated time.
+// Units: V in, µm out; `axis` in [0, axes()).
 #include <algorithm>
 #include <cstdint>
 #include <ctime>
-#include <memory>
+#include <vector>
 
-#include "hystbench/sim/simulated_actuator.hpp"
+#include "hystbench/sim/simulated_stage.hpp"
 
 namespace hystbench::apps {
 
 class RealtimePlant {
  public:
+  /// A stage of one axis: exactly the simulated actuator of `config`.
   RealtimePlant(const sim::SimulatedActuatorConfig& config, double rate_hz,
                 double max_catch_up_s = 1.0)
-      : actuator_(config, 1.0 / rate_hz),
+      : RealtimePlant(one_axis(config), rate_hz, max_catch_up_s) {}
+  RealtimePlant(const sim::SimulatedStageConfig& config, double rate_hz,
+                double max_catch_up_s = 1.0)
+      : stage_(config, 1.0 / rate_hz),
         period_ns_(static_cast<std::int64_t>(1e9 / rate_hz)),
-        max_steps_(static_cast<std::uint64_t>(max_catch_up_s * rate_hz)) {
-    output_v_ = actuator_.input_min();
-    actuator_.reset(output_v_);
-    position_um_ = actuator_.step(output_v_);
+        max_steps_(static_cast<std::uint64_t>(max_catch_up_s * rate_hz)),
+        output_v_(stage_.axes()),
+        position_um_(stage_.axes()) {
+    for (std::size_t i = 0; i < axes(); ++i) output_v_[i] = input_min(i);
+    stage_.reset(output_v_);
+    stage_.step(output_v_, position_um_);
     last_ns_ = now_ns();
   }
   static std::int64_t now_ns() {
@@ -29,7 +36,7 @@ class RealtimePlant {
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
   }
-  /// Steps the plant up to now with the held output.
+  /// Steps the plant up to now with the held outputs.
   void advance() {
     const std::int64_t now = now_ns();
     auto steps = static_cast<std::uint64_t>((now - last_ns_) / period_ns_);
@@ -38,23 +45,33 @@ class RealtimePlant {
       steps = max_steps_;
       last_ns_ = now;
     }
-    for (std::uint64_t i = 0; i < steps; ++i) position_um_ = actuator_.step(output_v_);
+    for (std::uint64_t i = 0; i < steps; ++i) stage_.step(output_v_, position_um_);
     samples_ += steps;
   }
-  void set_output(double v) { output_v_ = std::clamp(v, input_min(), input_max()); }
-  double output_v() const { return output_v_; }
-  double position_um() const { return position_um_; }
+  std::size_t axes() const { return stage_.axes(); }
+  void set_output(double v, std::size_t axis = 0) {
+    output_v_[axis] = std::clamp(v, input_min(axis), input_max(axis));
+  }
+  double output_v(std::size_t axis = 0) const { return output_v_[axis]; }
+  double position_um(std::size_t axis = 0) const { return position_um_[axis]; }
   std::uint64_t samples() const { return samples_; }
-  double input_min() const { return actuator_.input_min(); }
-  double input_max() const { return actuator_.input_max(); }
+  double input_min(std::size_t axis = 0) const { return stage_.axis(axis).input_min(); }
+  double input_max(std::size_t axis = 0) const { return stage_.axis(axis).input_max(); }
 
  private:
-  sim::SimulatedActuator actuator_;
+  static sim::SimulatedStageConfig one_axis(const sim::SimulatedActuatorConfig& config) {
+    sim::SimulatedStageConfig stage;
+    stage.axes.push_back({"x", config});
+    stage.coupling.enabled = false;
+    return stage;
+  }
+
+  sim::SimulatedStage stage_;
   std::int64_t period_ns_;
   std::uint64_t max_steps_;
   std::int64_t last_ns_ = 0;
-  double output_v_ = 0.0;
-  double position_um_ = 0.0;
+  std::vector<double> output_v_;
+  std::vector<double> position_um_;
   std::uint64_t samples_ = 0;
 };
 

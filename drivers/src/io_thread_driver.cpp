@@ -1,5 +1,6 @@
 #include "hystbench/drivers/io_thread_driver.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <ctime>
 #include <string>
@@ -26,17 +27,13 @@ Result IoThreadDriver::on_activate() {
   Result r = inner_->on_activate();
   threaded_ = r.ok && inner_->info().io_thread;
   if (!threaded_) return r;
-  if (inner_->axes() > 1) {
-    threaded_ = false;
-    inner_->on_deactivate();
-    return Result::failure("driver." + std::string(inner_->type()) +
-                           ": its I/O thread serves one axis, this driver " +
-                           std::to_string(inner_->axes()));
-  }
-  samples_->reset(Sample{inner_->activation_position_um(), 0});
+  axes_ = std::min(inner_->axes(), kMaxAxes);
+  Sample first;
+  first.position_um[0] = inner_->activation_position_um();
+  samples_->reset(first);
   io_status_.store(DriverStatus::kStale);
   safe_output_v_ = inner_->info().safe_output_v;
-  command_v_.store(safe_output_v_);
+  for (auto& c : command_v_) c.store(safe_output_v_);
   writes_.store(0);
   while (sem_trywait(&wake_) == 0) {
   }
@@ -70,65 +67,79 @@ void IoThreadDriver::run() noexcept {
     }
     if (quit_.load(std::memory_order_acquire)) break;
     std::uint64_t command = 0;
-    const double u = load_command(command);
-    DriverStatus s = inner_->write(u);
-    Measurement m;
-    if (s == DriverStatus::kOk) s = inner_->read(m);
-    if (s == DriverStatus::kOk) samples_->publish(Sample{m.position_um, command});
+    std::array<double, kMaxAxes> u{};
+    load_command(std::span<double>(u).first(axes_), command);
+    DriverStatus s = inner_->write_axes(std::span<const double>(u).first(axes_));
+    std::array<Measurement, kMaxAxes> m{};
+    if (s == DriverStatus::kOk) s = inner_->read_axes(std::span<Measurement>(m).first(axes_));
+    if (s == DriverStatus::kOk) {
+      Sample sample;
+      for (std::size_t a = 0; a < axes_; ++a) sample.position_um[a] = m[a].position_um;
+      sample.command = command;
+      samples_->publish(sample);
+    }
     io_status_.store(s == DriverStatus::kOk ? DriverStatus::kStale : s, std::memory_order_relaxed);
   }
 }
 
-void IoThreadDriver::command(double output_v, bool count) noexcept {
+void IoThreadDriver::command(std::span<const double> outputs_v, bool count) noexcept {
   const std::uint64_t seq = command_seq_.load(std::memory_order_relaxed);
   command_seq_.store(seq + 1, std::memory_order_relaxed);
   std::atomic_thread_fence(std::memory_order_release);
-  command_v_.store(output_v, std::memory_order_relaxed);
+  for (std::size_t a = 0; a < outputs_v.size() && a < axes_; ++a) {
+    command_v_[a].store(outputs_v[a], std::memory_order_relaxed);
+  }
   if (count) writes_.store(writes_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
   command_seq_.store(seq + 2, std::memory_order_release);
   sem_post(&wake_);
 }
 
-double IoThreadDriver::load_command(std::uint64_t& writes) const noexcept {
+void IoThreadDriver::load_command(std::span<double> outputs_v,
+                                  std::uint64_t& writes) const noexcept {
   for (;;) {
     const std::uint64_t before = command_seq_.load(std::memory_order_acquire);
-    const double v = command_v_.load(std::memory_order_relaxed);
+    for (std::size_t a = 0; a < outputs_v.size(); ++a) {
+      outputs_v[a] = command_v_[a].load(std::memory_order_relaxed);
+    }
     writes = writes_.load(std::memory_order_relaxed);
     std::atomic_thread_fence(std::memory_order_acquire);
-    if ((before & 1) == 0 && command_seq_.load(std::memory_order_relaxed) == before) return v;
+    if ((before & 1) == 0 && command_seq_.load(std::memory_order_relaxed) == before) return;
   }
 }
 
 DriverStatus IoThreadDriver::write(double output_v) noexcept {
   if (!threaded_) return inner_->write(output_v);
-  command(output_v, true);
-  return DriverStatus::kOk;
+  return write_axes(std::span<const double>(&output_v, 1));
 }
 
 DriverStatus IoThreadDriver::read(Measurement& out) noexcept {
   if (!threaded_) return inner_->read(out);
-  Sample s;
-  if (!samples_->take(s)) return io_status_.load(std::memory_order_relaxed);
-  const std::uint64_t writes = writes_.load(std::memory_order_relaxed);
-  out.position_um = s.position_um;
-  out.response_ticks = writes > s.command ? writes - s.command : 0;
-  return DriverStatus::kOk;
+  return read_axes(std::span<Measurement>(&out, 1));
 }
 
 DriverStatus IoThreadDriver::write_axes(std::span<const double> outputs_v) noexcept {
   if (!threaded_) return inner_->write_axes(outputs_v);
-  return outputs_v.empty() ? DriverStatus::kOk : write(outputs_v.front());
+  command(outputs_v, true);
+  return DriverStatus::kOk;
 }
 
 DriverStatus IoThreadDriver::read_axes(std::span<Measurement> out) noexcept {
   if (!threaded_) return inner_->read_axes(out);
-  Measurement unused;
-  return read(out.empty() ? unused : out.front());
+  Sample s;
+  if (!samples_->take(s)) return io_status_.load(std::memory_order_relaxed);
+  const std::uint64_t writes = writes_.load(std::memory_order_relaxed);
+  for (std::size_t a = 0; a < out.size() && a < axes_; ++a) {
+    out[a].position_um = s.position_um[a];
+    out[a].response_ticks = writes > s.command ? writes - s.command : 0;
+  }
+  return DriverStatus::kOk;
 }
 
 DriverStatus IoThreadDriver::safe_state() noexcept {
   if (!threaded_) return inner_->safe_state();
-  command(safe_output_v_, false);
+  std::array<double, kMaxAxes> safe{};
+  safe.fill(safe_output_v_);
+  command(std::span<const double>(safe).first(axes_), false);
   return DriverStatus::kOk;
 }
 

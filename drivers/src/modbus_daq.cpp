@@ -63,7 +63,8 @@ ModbusDaqDriver::Link ModbusDaqDriver::link_up(std::int64_t now_ns) noexcept {
   return Link::kUp;
 }
 
-bool ModbusDaqDriver::exchange(double output_v, bool write, bool read, double& y) noexcept {
+bool ModbusDaqDriver::exchange(std::size_t axis, double output_v, bool write, bool read,
+                               double& y) noexcept {
   const Link link = link_up(monotonic_ns());
   if (link == Link::kWaiting) return false;  // nothing was tried
   bool ok = link == Link::kUp;
@@ -71,7 +72,7 @@ bool ModbusDaqDriver::exchange(double output_v, bool write, bool read, double& y
     std::uint16_t out[2] = {0, 0}, in[2] = {0, 0};
     config_.output.encode(output_v, out);
     std::int64_t rtt[2] = {0, 0};
-    const int n = link_->exchange(out, in, write, read, rtt);
+    const int n = link_->exchange(out, in, write, read, rtt, config_.axis_offset(axis));
     ok = n >= 0;
     for (int i = 0; i < n; ++i) rtt_->record(rtt[i]);
     transactions_.fetch_add(n > 0 ? n : 1, std::memory_order_relaxed);
@@ -84,6 +85,7 @@ bool ModbusDaqDriver::exchange(double output_v, bool write, bool read, double& y
     consecutive_failures_.fetch_add(1, std::memory_order_relaxed);
     last_errno_.store(link_->last_errno(), std::memory_order_relaxed);
     last_op_.store(static_cast<int>(link_->last_op()), std::memory_order_relaxed);
+    last_offset_.store(config_.axis_offset(axis), std::memory_order_relaxed);
     connected_.store(link_->connected(), std::memory_order_relaxed);
   }
   return ok;
@@ -96,23 +98,27 @@ Result ModbusDaqDriver::on_activate() {
                                                                     link_->last_errno(), config_));
   }
   connected_.store(true);
-  // Both registers must answer, and the round trip decides the rate in io = "loop".
+  // Both registers of every axis must answer, and the round trip of a tick (every axis's
+  // exchange) decides the rate in io = "loop".
   std::vector<std::int64_t> times;
   double y = 0.0;
   for (int i = 0; i < kActivationExchanges; ++i) {
-    std::uint16_t out[2] = {0, 0}, in[2] = {0, 0};
-    config_.output.encode(config_.safe_output_v, out);
-    std::int64_t rtt[2] = {0, 0};
     const std::int64_t t0 = monotonic_ns();
-    const int n = link_->exchange(out, in, true, true, rtt);
-    if (n < 0) {
-      const std::string why = ModbusLink::describe(link_->last_op(), link_->last_errno(), config_);
-      link_->close();
-      connected_.store(false);
-      return Result::failure("driver.modbus: " + why);
+    for (std::size_t a = 0; a < axes(); ++a) {
+      std::uint16_t out[2] = {0, 0}, in[2] = {0, 0};
+      config_.output.encode(config_.safe_output_v, out);
+      std::int64_t rtt[2] = {0, 0};
+      const int offset = config_.axis_offset(a);
+      if (link_->exchange(out, in, true, true, rtt, offset) < 0) {
+        const std::string why =
+            ModbusLink::describe(link_->last_op(), link_->last_errno(), config_, offset);
+        link_->close();
+        connected_.store(false);
+        return Result::failure("driver.modbus: " + why);
+      }
+      if (a == 0) y = config_.measurement.decode(in);
     }
     times.push_back(monotonic_ns() - t0);
-    y = config_.measurement.decode(in);
   }
   std::sort(times.begin(), times.end());
   const auto pct = [&](double q) {
@@ -142,19 +148,19 @@ Result ModbusDaqDriver::on_activate() {
   reconnects_ = 0;
   last_errno_ = 0;
   last_op_ = 0;
+  last_offset_ = 0;
   activation_y_ = y;
-  command_v_ = config_.safe_output_v;
+  command_v_.fill(config_.safe_output_v);
   write_failed_ = false;
   return Result::success();
 }
 
 Result ModbusDaqDriver::write_safe_now() {
-  double y = 0.0;
-  command_v_ = config_.safe_output_v;
-  if (exchange(config_.safe_output_v, true, false, y)) return Result::success();
-  return Result::failure(
-      "driver.modbus: could not write the safe output " + fixed(config_.safe_output_v, 3) +
-      " V: " + ModbusLink::describe(link_->last_op(), link_->last_errno(), config_));
+  if (safe_state() == DriverStatus::kOk) return Result::success();
+  return Result::failure("driver.modbus: could not write the safe output " +
+                         fixed(config_.safe_output_v, 3) + " V: " +
+                         ModbusLink::describe(link_->last_op(), link_->last_errno(), config_,
+                                              last_offset_.load(std::memory_order_relaxed)));
 }
 
 Result ModbusDaqDriver::on_deactivate() {
@@ -166,20 +172,38 @@ Result ModbusDaqDriver::on_deactivate() {
 }
 
 DriverStatus ModbusDaqDriver::write(double output_v) noexcept {
-  command_v_ = output_v;
-  // With write_read the output goes out with the measurement, in read()'s function 23.
-  double y = 0.0;
-  write_failed_ = !config_.write_read && !exchange(output_v, true, false, y);
-  return DriverStatus::kOk;  // a failure counts; read() reports it
+  return write_axes(std::span<const double>(&output_v, 1));
+}
+
+DriverStatus ModbusDaqDriver::write_axes(std::span<const double> outputs_v) noexcept {
+  // With write_read the output goes out with the measurement, in read_axes()'s function 23.
+  write_failed_ = false;
+  for (std::size_t a = 0; a < outputs_v.size() && a < axes(); ++a) {
+    command_v_[a] = outputs_v[a];
+    double y = 0.0;
+    if (!config_.write_read && !exchange(a, outputs_v[a], true, false, y)) {
+      write_failed_ = true;
+      break;
+    }
+  }
+  return DriverStatus::kOk;  // a failure counts; read_axes() reports it
 }
 
 DriverStatus ModbusDaqDriver::read(Measurement& out) noexcept {
-  double y = 0.0;
-  // One exchange per tick: after a failed write the read is not tried.
-  const bool fresh = !write_failed_ && exchange(command_v_, config_.write_read, true, y);
+  return read_axes(std::span<Measurement>(&out, 1));
+}
+
+DriverStatus ModbusDaqDriver::read_axes(std::span<Measurement> out) noexcept {
+  // One exchange per axis and tick: after a failed write or read the rest is not tried.
+  std::array<double, kMaxAxes> y{};
+  const std::size_t n = std::min(out.size(), axes());
+  bool fresh = !write_failed_;
+  for (std::size_t a = 0; fresh && a < n; ++a) {
+    fresh = exchange(a, command_v_[a], config_.write_read, true, y[a]);
+  }
   write_failed_ = false;
   if (fresh) {
-    out.position_um = y;
+    for (std::size_t a = 0; a < n; ++a) out[a].position_um = y[a];
     return DriverStatus::kOk;
   }
   const std::uint64_t failures = consecutive_failures_.load(std::memory_order_relaxed);
@@ -189,9 +213,13 @@ DriverStatus ModbusDaqDriver::read(Measurement& out) noexcept {
 }
 
 DriverStatus ModbusDaqDriver::safe_state() noexcept {
-  double y = 0.0;
-  command_v_ = config_.safe_output_v;
-  return exchange(config_.safe_output_v, true, false, y) ? DriverStatus::kOk : DriverStatus::kError;
+  DriverStatus s = DriverStatus::kOk;
+  for (std::size_t a = 0; a < axes(); ++a) {
+    double y = 0.0;
+    command_v_[a] = config_.safe_output_v;
+    if (!exchange(a, config_.safe_output_v, true, false, y)) s = DriverStatus::kError;
+  }
+  return s;
 }
 
 DriverInfo ModbusDaqDriver::info() const noexcept {
@@ -216,13 +244,15 @@ std::string ModbusDaqDriver::describe_fault(int cause, std::int64_t detail) cons
   }
   const auto op = static_cast<ModbusLink::Op>(last_op_.load(std::memory_order_relaxed));
   return std::to_string(detail) + " failed transactions in a row (max_failed_transactions = " +
-         std::to_string(config_.max_failed_transactions) +
-         "): " + ModbusLink::describe(op, last_errno_.load(std::memory_order_relaxed), config_);
+         std::to_string(config_.max_failed_transactions) + "): " +
+         ModbusLink::describe(op, last_errno_.load(std::memory_order_relaxed), config_,
+                              last_offset_.load(std::memory_order_relaxed));
 }
 
 nlohmann::json ModbusDaqDriver::diagnostics() const {
   const int err = last_errno_.load(std::memory_order_relaxed);
   const auto op = static_cast<ModbusLink::Op>(last_op_.load(std::memory_order_relaxed));
+  const int offset = last_offset_.load(std::memory_order_relaxed);
   return {{"type", "modbus"},
           {"endpoint", config_.endpoint()},
           {"io", config_.io == ModbusDaqConfig::IoMode::kThread ? "thread" : "loop"},
@@ -232,7 +262,9 @@ nlohmann::json ModbusDaqDriver::diagnostics() const {
           {"failed_transactions", failed_.load(std::memory_order_relaxed)},
           {"consecutive_failures", consecutive_failures_.load(std::memory_order_relaxed)},
           {"reconnects", reconnects_.load(std::memory_order_relaxed)},
-          {"last_error", err == 0 ? "" : ModbusLink::describe(op, err, config_)},
+          {"last_error", err == 0 ? "" : ModbusLink::describe(op, err, config_, offset)},
+          {"axis_names", config_.axes},
+          {"axis_stride", config_.axis_stride},
           {"rtt_us",
            {{"count", rtt_->count()},
             {"p50", static_cast<double>(rtt_->quantile_ns(0.5)) / 1e3},

@@ -1,9 +1,12 @@
 #include "hystbench/drivers/modbus_daq_config.hpp"
 
 #include <cmath>
+#include <set>
 #include <stdexcept>
 
 #include "details/json_params.hpp"
+#include "hystbench/drivers/driver_interface.hpp"
+#include "hystbench/sim/simulated_stage_config.hpp"
 
 namespace hystbench::drivers {
 
@@ -42,6 +45,42 @@ RegisterChannel parse_channel(const Params& p, const RegisterChannel& defaults, 
   return c;
 }
 
+/// The `axes` names and `axis_stride`: every axis's block within the register tables.
+void parse_axes(const Params& p, ModbusDaqConfig& c) {
+  c.axes = p.strings("axes", {});
+  if (p.has("axes") && (c.axes.empty() || c.axes.size() > kMaxAxes)) {
+    throw ParamError(p.key_path("axes") + ": 1 to " + std::to_string(kMaxAxes) +
+                     " axis names, got " + std::to_string(c.axes.size()));
+  }
+  std::set<std::string> seen;
+  for (const std::string& name : c.axes) {
+    if (!sim::is_axis_name(name)) {
+      throw ParamError(p.key_path("axes") + ": \"" + name + "\": 1 to 16 of a-z, 0-9 and _");
+    }
+    if (!seen.insert(name).second) {
+      throw ParamError(p.key_path("axes") + ": \"" + name + "\" names two axes");
+    }
+  }
+  if (p.has("axis_stride") && !p.has("axes")) {
+    throw ParamError(p.key_path("axis_stride") + ": only with axes (a stage of several axes)");
+  }
+  c.axis_stride = static_cast<int>(p.integer("axis_stride", c.axis_stride, 1, 65535));
+  const std::size_t last = c.axis_count() - 1;
+  for (const auto& [name, ch] : {std::pair{"output", &c.output}, {"measurement", &c.measurement}}) {
+    if (last > 0 && c.axis_stride < ch->registers()) {
+      throw ParamError(p.key_path("axis_stride") + ": " + std::to_string(c.axis_stride) +
+                       " register(s) would overlap the axes' " + name + " values of " +
+                       std::to_string(ch->registers()) + " registers");
+    }
+    const int end = ch->address + c.axis_offset(last) + ch->registers() - 1;
+    if (end > 65535) {
+      throw ParamError(p.key_path("axes") + ": axis \"" + c.axes[last] + "\"'s " + name +
+                       " would end at register " + std::to_string(end) +
+                       ", past the table (65535): lower axis_stride or the address");
+    }
+  }
+}
+
 }  // namespace
 
 std::string ModbusDaqConfig::endpoint() const {
@@ -64,17 +103,35 @@ double ModbusDaqConfig::rtu_wire_time_s() const noexcept {
     frames += 4;
   }
   const int bits_per_char = 1 + data_bits + (parity == 'N' ? 0 : 1) + stop_bits;
-  // Each frame is followed by at least 3.5 character times of silence.
-  return (bytes + 3.5 * frames) * bits_per_char / static_cast<double>(baud);
+  // Each frame is followed by at least 3.5 character times of silence; each axis has its own.
+  return static_cast<double>(axis_count()) * (bytes + 3.5 * frames) * bits_per_char /
+         static_cast<double>(baud);
 }
 
 ModbusDaqConfig parse_modbus_daq_config(const nlohmann::json& params) {
   try {
     const Params p(params, "driver.modbus");
-    p.allow_only({"transport", "host", "port", "device", "baud", "parity", "data_bits", "stop_bits",
-                  "slave_id", "response_timeout_ms", "io", "write_read", "max_rate_hz",
-                  "max_stale_reads", "max_failed_transactions", "reconnect_interval_ms",
-                  "safe_output_v", "output", "measurement"});
+    p.allow_only({"transport",
+                  "host",
+                  "port",
+                  "device",
+                  "baud",
+                  "parity",
+                  "data_bits",
+                  "stop_bits",
+                  "slave_id",
+                  "response_timeout_ms",
+                  "io",
+                  "write_read",
+                  "max_rate_hz",
+                  "max_stale_reads",
+                  "max_failed_transactions",
+                  "reconnect_interval_ms",
+                  "safe_output_v",
+                  "output",
+                  "measurement",
+                  "axes",
+                  "axis_stride"});
     ModbusDaqConfig c;
     c.transport = p.choice("transport", "tcp", {"tcp", "rtu"}) == "tcp"
                       ? ModbusDaqConfig::Transport::kTcp
@@ -130,6 +187,7 @@ ModbusDaqConfig parse_modbus_daq_config(const nlohmann::json& params) {
       }
     }
     c.measurement = parse_channel(p.table("measurement"), c.measurement, false);
+    parse_axes(p, c);
     c.safe_output_v = p.number("safe_output_v", c.output_min_v, -1e6, 1e6);
     if (c.safe_output_v < c.output_min_v || c.safe_output_v > c.output_max_v) {
       throw ParamError(p.key_path("safe_output_v") + ": must be within [output.min_v, " +

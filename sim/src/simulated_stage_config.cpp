@@ -18,14 +18,6 @@ using json = nlohmann::json;
 
 std::string axis_path(std::size_t i) { return "axes[" + std::to_string(i) + "]"; }
 
-bool valid_name(const std::string& name) {
-  if (name.empty() || name.size() > 16) return false;
-  for (const char ch : name) {
-    if (!((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_')) return false;
-  }
-  return true;
-}
-
 void validate_coupling(const StageCouplingConfig& c, std::size_t n) {
   if (!c.enabled) return;
   if (!(std::isfinite(c.shared_mode_hz) && c.shared_mode_hz > 0.0)) {
@@ -123,6 +115,14 @@ StageAxisConfig axis_from_json(const json& j, std::size_t i) {
 
 }  // namespace
 
+bool is_axis_name(std::string_view name) noexcept {
+  if (name.empty() || name.size() > 16) return false;
+  for (const char ch : name) {
+    if (!((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_')) return false;
+  }
+  return true;
+}
+
 SimulatedStageConfig SimulatedStageConfig::xy() {
   SimulatedStageConfig c;
   StageAxisConfig x{"x", SimulatedActuatorConfig{}};
@@ -154,7 +154,7 @@ void validate(const SimulatedStageConfig& config) {
   std::set<std::string> names;
   for (std::size_t i = 0; i < n; ++i) {
     const StageAxisConfig& axis = config.axes[i];
-    if (!valid_name(axis.name)) {
+    if (!is_axis_name(axis.name)) {
       fail(axis_path(i) + ".name", "\"" + axis.name + "\": 1 to 16 of a-z, 0-9 and _");
     }
     if (!names.insert(axis.name).second) {

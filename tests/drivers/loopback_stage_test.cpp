@@ -4,10 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "hystbench/drivers/driver.hpp"
@@ -134,14 +137,23 @@ TEST(LoopbackStage, BadStageConfigurationsAreRefusedNamingTheKey) {
 
 namespace {
 
-// A driver of two axes whose exchanges block: it asks for the I/O thread.
+// A driver of two axes whose exchanges block: it asks for the I/O thread, and echoes each
+// axis's output as its position, doubled.
 class TwoAxesOnAThread final : public hd::DriverInterface {
  public:
   hd::Result on_configure(const json&, double) override { return hd::Result::success(); }
   hd::Result on_activate() override { return hd::Result::success(); }
-  hd::DriverStatus write(double) noexcept override { return hd::DriverStatus::kOk; }
-  hd::DriverStatus read(hd::Measurement&) noexcept override { return hd::DriverStatus::kOk; }
-  hd::DriverStatus safe_state() noexcept override { return hd::DriverStatus::kOk; }
+  hd::DriverStatus write(double u) noexcept override { return write_axes({&u, 1}); }
+  hd::DriverStatus read(hd::Measurement& m) noexcept override { return read_axes({&m, 1}); }
+  hd::DriverStatus write_axes(std::span<const double> u) noexcept override {
+    for (std::size_t a = 0; a < u.size() && a < 2; ++a) u_[a] = u[a];
+    return hd::DriverStatus::kOk;
+  }
+  hd::DriverStatus read_axes(std::span<hd::Measurement> m) noexcept override {
+    for (std::size_t a = 0; a < m.size() && a < 2; ++a) m[a].position_um = 2.0 * u_[a];
+    return hd::DriverStatus::kOk;
+  }
+  hd::DriverStatus safe_state() noexcept override { return write_axes(std::array{0.0, 0.0}); }
   std::size_t axes() const noexcept override { return 2; }
   hd::DriverInfo info() const noexcept override {
     hd::DriverInfo i;
@@ -151,14 +163,40 @@ class TwoAxesOnAThread final : public hd::DriverInterface {
     return i;
   }
   std::string_view type() const noexcept override { return "two_axes"; }
+
+ private:
+  std::array<double, 2> u_{};
 };
+
+/// Ticks write_axes(u) then read_axes() until a fresh reading comes (at most 2 s).
+std::array<double, 2> fresh_reading(hd::Driver& d, std::span<const double> u) {
+  std::array<hd::Measurement, 2> m{};
+  for (int k = 0; k < 2000; ++k) {
+    if (u.size() == 1) {
+      d.write(u[0]);
+    } else {
+      d.write_axes(u);
+    }
+    if (d.read_axes(m) == hd::DriverStatus::kOk) return {m[0].position_um, m[1].position_um};
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ADD_FAILURE() << "no fresh reading in 2 s";
+  return {NAN, NAN};
+}
 
 }  // namespace
 
-TEST(LoopbackStage, TheIoThreadRefusesADriverOfSeveralAxes) {
+// The I/O thread exchanges every axis of the driver it wraps: write_axes() sets every axis's
+// command, write() the first one's while the others hold theirs.
+TEST(LoopbackStage, TheIoThreadExchangesEveryAxisOfTheDriverItWraps) {
   hd::Driver driver(std::make_unique<hd::IoThreadDriver>(std::make_unique<TwoAxesOnAThread>()));
   ASSERT_TRUE(driver.configure(json::object(), 1000.0).ok);
-  const hd::Result r = driver.activate();
-  EXPECT_EQ(r.message, "driver.two_axes: its I/O thread serves one axis, this driver 2");
-  EXPECT_NE(driver.state(), hd::Driver::State::kActive);
+  ASSERT_TRUE(driver.activate().ok);
+  ASSERT_EQ(driver.axes(), 2u);
+  EXPECT_EQ(fresh_reading(driver, std::array{1.0, 3.0}), (std::array{2.0, 6.0}));
+  // A fresh reading may answer the command before; the one after it answers this one.
+  fresh_reading(driver, std::array{5.0});
+  EXPECT_EQ(fresh_reading(driver, std::array{5.0}), (std::array{10.0, 6.0}));
+  EXPECT_EQ(driver.safe_state(), hd::DriverStatus::kOk);
+  EXPECT_TRUE(driver.deactivate().ok);
 }

@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <thread>
 
 #include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/config/daemon_settings.hpp"
 #include "hystbench/daemon/service/bench.hpp"
 #include "peer_process.hpp"
 #include "support/bench_fixture.hpp"
@@ -29,10 +32,11 @@ class ModbusBenchTest : public ht::BenchFixture {
     simdaq_.reset();
     BenchFixture::TearDown();
   }
-  /// Starts hystbench-simdaq on `port` (0: a free one) and remembers the port.
-  void start_simdaq(int port = 0) {
-    simdaq_ = std::make_unique<ht::PeerProcess>(
-        std::vector<std::string>{ht::bin("hystbench-simdaq"), "--port", std::to_string(port)});
+  /// Starts hystbench-simdaq on `port` (0: a free one) with `args`, and remembers the port.
+  void start_simdaq(int port = 0, const std::vector<std::string>& args = {}) {
+    std::vector<std::string> argv{ht::bin("hystbench-simdaq"), "--port", std::to_string(port)};
+    argv.insert(argv.end(), args.begin(), args.end());
+    simdaq_ = std::make_unique<ht::PeerProcess>(argv);
     const auto line = simdaq_->wait_for("listening on tcp", 10s);
     ASSERT_TRUE(line) << "hystbench-simdaq did not start";
     port_ = std::stoi(line->substr(line->rfind(':') + 1));
@@ -126,6 +130,40 @@ TEST_F(ModbusBenchTest, ServerKilledMidRunFaultsSafeKeepsTheLogAndRecoversAfterR
   const json again = run_and_wait("track", {{"compensator", "none"}, {"periods", 1}});
   EXPECT_EQ(again["end"], "completed") << again.dump(2);
   EXPECT_EQ(again["dropped"], 0);
+}
+
+// A stage of two axes over Modbus TCP, as config/modbus-xy.toml sets it up against
+// hystbench-simdaq --stage xy: every tick exchanges both axes' register blocks, the built-in
+// Lissajous moves each axis over its range, and the result is given per axis.
+TEST_F(ModbusBenchTest, AStageOverModbusTcpTracksEveryAxis) {
+  start_simdaq(0, {"--stage", "xy"});
+  hdm::BenchSettings s = hdm::bench_settings_from(
+      hdm::load_config(std::filesystem::path(HYSTBENCH_SOURCE_DIR) / "config/modbus-xy.toml"));
+  const hdm::BenchSettings base = base_settings(s.loop.rate_hz);
+  s.loop.realtime = base.loop.realtime;
+  s.log_dir = base.log_dir;
+  s.model_dir = base.model_dir;
+  s.precondition_s = base.precondition_s;
+  s.driver_params["port"] = port_;
+  // A loaded CI machine stalls the server now and then, as in driver_params() above.
+  s.driver_params["response_timeout_ms"] = 250;
+  s.driver_params["max_stale_reads"] = 2500;
+  start(s);
+  EXPECT_EQ(status()["driver"]["axis_names"], json({"x", "y"}));
+  const json r = run_and_wait("track", {{"reference", "lissajous"}});
+  ASSERT_EQ(r["end"], "completed") << r.dump(2);
+  EXPECT_EQ(r["dropped"], 0);
+  EXPECT_EQ(r["logged"], r["samples"]);
+  for (const char* axis : {"x", "y"}) {
+    SCOPED_TRACE(axis);
+    EXPECT_GT(r["axes"][axis]["range_um"].get<double>(), 20.0) << r["axes"].dump();
+    EXPECT_TRUE(std::isfinite(r["axes"][axis]["rms_error_um"].get<double>()));
+  }
+  EXPECT_TRUE(r["coupling_error"].contains("y")) << r.dump(2);
+  const auto table = cli::DataTable::read_csv(r["log"].get<std::string>());
+  EXPECT_EQ(table.rows(), r["samples"].get<std::size_t>());
+  EXPECT_TRUE(table.has("y_x") && table.has("y_y") && table.has("u_y"));
+  EXPECT_EQ(status()["driver"]["failed_transactions"], 0);
 }
 
 TEST_F(ModbusBenchTest, LoopModeRefusesARateItsRoundTripDoesNotFit) {

@@ -64,3 +64,46 @@ TEST(ModbusDaqConfig, LoopModeRefusesARateAboveTheDeclaredMaximum) {
   EXPECT_NE(r.message.find("io = \"thread\""), std::string::npos) << r.message;
   EXPECT_TRUE(d.configure({{"io", "thread"}, {"max_rate_hz", 500}}, 10000.0).ok);
 }
+
+TEST(ModbusDaqConfig, AStageNamesItsAxesAndTheirRegisterBlocks) {
+  const auto c = hd::parse_modbus_daq_config(
+      {{"axes", {"x", "y", "z"}}, {"axis_stride", 32}, {"output", {{"address", 1}}}});
+  EXPECT_EQ(c.axis_count(), 3u);
+  EXPECT_EQ(c.axis_offset(2), 64);
+  EXPECT_EQ(c.transactions_per_tick(), 6);
+  hd::Driver d(hd::make_interface<hd::ModbusDaqDriver, hd::IoThreadDriver>());
+  ASSERT_TRUE(d.configure({{"axes", {"x", "y"}}}, 1000.0).ok);
+  EXPECT_EQ(d.axes(), 2u);
+  EXPECT_TRUE(d.serves(2).ok);
+  EXPECT_FALSE(d.serves(3).ok);
+  // Without axes: one axis, as before.
+  EXPECT_EQ(hd::parse_modbus_daq_config(json()).axis_count(), 1u);
+  // Each axis's frames go over the serial line in turn.
+  const json rtu = {{"transport", "rtu"},
+                    {"write_read", true},
+                    {"measurement", {{"table", "holding"}, {"address", 10}}}};
+  json rtu_xy = rtu;
+  rtu_xy["axes"] = {"x", "y"};
+  EXPECT_NEAR(hd::parse_modbus_daq_config(rtu_xy).rtu_wire_time_s(),
+              2.0 * hd::parse_modbus_daq_config(rtu).rtu_wire_time_s(), 1e-12);
+}
+
+TEST(ModbusDaqConfig, AStageRefusesAxesItsRegistersCannotHold) {
+  EXPECT_EQ(error_of({{"axes", {"x", "X"}}}),
+            "driver.modbus.axes: \"X\": 1 to 16 of a-z, 0-9 and _");
+  EXPECT_EQ(error_of({{"axes", {"x", "x"}}}), "driver.modbus.axes: \"x\" names two axes");
+  EXPECT_EQ(error_of({{"axes", json::array()}}), "driver.modbus.axes: 1 to 6 axis names, got 0");
+  EXPECT_EQ(error_of({{"axes", {"a", "b", "c", "d", "e", "f", "g"}}}),
+            "driver.modbus.axes: 1 to 6 axis names, got 7");
+  EXPECT_EQ(error_of({{"axes", {"x", 2}}}),
+            "driver.modbus.axes: every element must be a string, got 2");
+  EXPECT_EQ(error_of({{"axis_stride", 16}}),
+            "driver.modbus.axis_stride: only with axes (a stage of several axes)");
+  EXPECT_EQ(
+      error_of({{"axes", {"x", "y"}}, {"axis_stride", 1}, {"measurement", {{"format", "s32"}}}}),
+      "driver.modbus.axis_stride: 1 register(s) would overlap the axes' measurement "
+      "values of 2 registers");
+  EXPECT_EQ(error_of({{"axes", {"x", "y"}}, {"axis_stride", 65535}, {"output", {{"address", 1}}}}),
+            "driver.modbus.axes: axis \"y\"'s output would end at register 65536, past the "
+            "table (65535): lower axis_stride or the address");
+}

@@ -7,6 +7,10 @@
 
 #include <array>
 #include <chrono>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "example_driver.hpp"
 #include "hystbench/drivers/can_amplifier.hpp"
@@ -41,6 +45,25 @@ Ticks tick(hd::Driver& d, int n, std::chrono::microseconds period = 0us) {
     if (period > 0us) std::this_thread::sleep_for(period);
   }
   return t;
+}
+
+/// hystbench-simdaq on a free port with `args`; its port (0 when it did not start).
+int start_simdaq(std::unique_ptr<ht::PeerProcess>& simdaq, std::vector<std::string> args) {
+  args.insert(args.begin(), {ht::bin("hystbench-simdaq"), "--port", "0"});
+  simdaq = std::make_unique<ht::PeerProcess>(args);
+  const auto line = simdaq->wait_for("listening on tcp", 10s);
+  return line ? std::stoi(line->substr(line->rfind(':') + 1)) : 0;
+}
+
+/// The simdaq map's s32 millivolt output and s32 nanometre position in holding registers.
+json simdaq_params(int port, const std::string& io, bool write_read) {
+  return {{"port", port},
+          {"io", io},
+          {"response_timeout_ms", 250},
+          {"write_read", write_read},
+          {"output", {{"address", 1}, {"format", "s32"}, {"scale", 0.001}}},
+          {"measurement",
+           {{"table", "holding"}, {"address", 11}, {"format", "s32"}, {"scale", 0.001}}}};
 }
 
 }  // namespace
@@ -95,22 +118,13 @@ TEST(RealTimePath, TheFrameworksStaleAndFaultPathsAllocateNothing) {
 }
 
 TEST(RealTimePath, ModbusAllocatesNothingInLoopAndThreadMode) {
-  ht::PeerProcess simdaq({ht::bin("hystbench-simdaq"), "--port", "0"});
-  const auto line = simdaq.wait_for("listening on tcp", 10s);
-  ASSERT_TRUE(line) << "hystbench-simdaq did not start";
-  const int port = std::stoi(line->substr(line->rfind(':') + 1));
-  for (const char* io : {"loop", "thread"}) {
+  std::unique_ptr<ht::PeerProcess> simdaq;
+  const int port = start_simdaq(simdaq, {});
+  ASSERT_GT(port, 0) << "hystbench-simdaq did not start";
+  for (const std::string io : {"loop", "thread"}) {
     SCOPED_TRACE(io);
     const auto d = hd::make_driver("modbus");
-    const json params = {
-        {"port", port},
-        {"io", io},
-        {"response_timeout_ms", 250},
-        {"write_read", std::string(io) == "loop"},
-        {"output", {{"address", 1}, {"format", "s32"}, {"scale", 0.001}}},
-        {"measurement",
-         {{"table", "holding"}, {"address", 11}, {"format", "s32"}, {"scale", 0.001}}}};
-    ASSERT_TRUE(d->configure(params, 500.0).ok);
+    ASSERT_TRUE(d->configure(simdaq_params(port, io, io == "loop"), 500.0).ok);
     const auto r = d->activate();
     ASSERT_TRUE(r.ok) << r.message;
     const Ticks t = tick(*d, 1000, 1000us);
@@ -119,6 +133,38 @@ TEST(RealTimePath, ModbusAllocatesNothingInLoopAndThreadMode) {
     EXPECT_EQ(d->diagnostics()["failed_transactions"], 0) << d->diagnostics().dump();
     std::cout << "[ modbus io = " << io << " ] " << t.allocations << " allocations in 1000 ticks, "
               << t.fresh << " fresh\n";
+    EXPECT_TRUE(d->deactivate().ok);
+  }
+}
+
+TEST(RealTimePath, AModbusStageAllocatesNothingInLoopAndThreadMode) {
+  std::unique_ptr<ht::PeerProcess> simdaq;
+  const int port = start_simdaq(simdaq, {"--stage", "xy"});
+  ASSERT_GT(port, 0) << "hystbench-simdaq did not start";
+  for (const std::string io : {"loop", "thread"}) {
+    SCOPED_TRACE(io);
+    const auto d = hd::make_driver("modbus");
+    json params = simdaq_params(port, io, io == "thread");
+    params["axes"] = {"x", "y"};
+    ASSERT_TRUE(d->configure(params, 500.0).ok);
+    const auto r = d->activate();
+    ASSERT_TRUE(r.ok) << r.message;
+    std::array<double, 2> u{};
+    std::array<hd::Measurement, 2> m{};
+    long allocations = 0;
+    int fresh = 0;
+    for (int k = 0; k < 1000; ++k) {
+      allocations += ht::allocations_during([&] {
+        u = {50.0 + k % 10, 80.0 - k % 10};
+        d->write_axes(u);
+        if (d->read_axes(m) == hd::DriverStatus::kOk) ++fresh;
+        if (k % 100 == 99) d->safe_state();
+      });
+      std::this_thread::sleep_for(1000us);
+    }
+    EXPECT_EQ(allocations, 0);
+    EXPECT_GT(fresh, 100);
+    EXPECT_EQ(d->diagnostics()["failed_transactions"], 0) << d->diagnostics().dump();
     EXPECT_TRUE(d->deactivate().ok);
   }
 }

@@ -30,12 +30,18 @@ BenchSettings bench_settings_from(const DaemonConfig& c) {
   s.driver_type = c.driver.type;
   s.driver_params = c.driver.params();
   // The loopback driver's actuator is the [actuator] table unless the driver table names one
-  // or simulates a stage of several axes, whose names the bench takes.
+  // or simulates a stage of several axes, whose names the bench takes; another driver of
+  // several axes names them in its `axes` key (its configure checks them).
   if (c.driver.type == "loopback" && s.driver_params.contains("stage")) {
     for (const auto& axis : sim::stage_from_json(s.driver_params["stage"]).axes) {
       s.axes.push_back(axis.name);
     }
     if (s.axes.size() == 1) s.axes.clear();
+  } else if (const auto axes = s.driver_params.find("axes");
+             axes != s.driver_params.end() && axes->is_array() && axes->size() > 1) {
+    for (const auto& name : *axes) {
+      if (name.is_string()) s.axes.push_back(name.get<std::string>());
+    }
   } else if (c.driver.type == "loopback" && !s.driver_params.contains("actuator")) {
     s.driver_params["actuator"] = c.actuator;
   }

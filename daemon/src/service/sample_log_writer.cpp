@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "hystbench/daemon/loop/realtime.hpp"
+#include "hystbench/sim/simulated_stage_config.hpp"
 #include "service/details/posix_io.hpp"
 
 namespace hystbench::daemon {
@@ -52,13 +53,6 @@ std::string utc_now_iso8601() {
 
 std::string comment_line(const nlohmann::json& object) {
   return "# " + object.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
-}
-
-bool valid_axis_name(const std::string& name) {
-  if (name.empty() || name.size() > 16) return false;
-  return std::all_of(name.begin(), name.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
-  });
 }
 
 /// Each column's name and unit, for these axes.
@@ -122,7 +116,7 @@ SampleLogOptions validated(SampleLogOptions o) {
                                   std::to_string(o.axes.size()));
     }
     for (std::size_t i = 0; i < o.axes.size(); ++i) {
-      if (!valid_axis_name(o.axes[i])) {
+      if (!sim::is_axis_name(o.axes[i])) {
         throw std::invalid_argument("sample log: axis name '" + o.axes[i] +
                                     "' must be 1-16 characters of [a-z0-9_]");
       }

@@ -110,6 +110,20 @@ std::vector<std::int64_t> Params::integers(const char* key, std::vector<std::int
   return out;
 }
 
+std::vector<std::string> Params::strings(const char* key, std::vector<std::string> fallback) const {
+  const nlohmann::json* v = get(key);
+  if (v == nullptr) return fallback;
+  if (!v->is_array()) throw ParamError(key_path(key) + ": must be an array of strings");
+  std::vector<std::string> out;
+  for (const auto& e : *v) {
+    if (!e.is_string()) {
+      throw ParamError(key_path(key) + ": every element must be a string, got " + e.dump());
+    }
+    out.push_back(e.get<std::string>());
+  }
+  return out;
+}
+
 Params Params::table(const char* key) const {
   const nlohmann::json* v = get(key);
   if (v == nullptr) return Params(nlohmann::json::object(), key_path(key));

@@ -38,6 +38,8 @@ class Params {
   /// An array of integers, each in [lo, hi].
   std::vector<std::int64_t> integers(const char* key, std::vector<std::int64_t> fallback,
                                      std::int64_t lo, std::int64_t hi) const;
+  /// An array of strings.
+  std::vector<std::string> strings(const char* key, std::vector<std::string> fallback) const;
   /// A sub-table (empty when absent); throws when the key holds something else.
   Params table(const char* key) const;
 

@@ -71,7 +71,7 @@ void ModbusLink::fail(Op op) noexcept {
 }
 
 int ModbusLink::exchange(const std::uint16_t* out, std::uint16_t* in, bool write, bool read,
-                         std::int64_t* rtt_ns) noexcept {
+                         std::int64_t* rtt_ns, int offset) noexcept {
   if (!connected_) {
     errno = ENOTCONN;
     fail(Op::kConnect);
@@ -79,10 +79,11 @@ int ModbusLink::exchange(const std::uint16_t* out, std::uint16_t* in, bool write
   }
   const RegisterChannel& o = config_.output;
   const RegisterChannel& m = config_.measurement;
+  const int out_address = o.address + offset, in_address = m.address + offset;
   int done = 0;
   if (write && read && config_.write_read) {
     const std::int64_t t0 = monotonic_ns();
-    if (modbus_write_and_read_registers(ctx_, o.address, o.registers(), out, m.address,
+    if (modbus_write_and_read_registers(ctx_, out_address, o.registers(), out, in_address,
                                         m.registers(), in) != m.registers()) {
       fail(Op::kWriteRead);
       return -1;
@@ -92,8 +93,8 @@ int ModbusLink::exchange(const std::uint16_t* out, std::uint16_t* in, bool write
   }
   if (write) {
     const std::int64_t t0 = monotonic_ns();
-    const int rc = o.registers() == 1 ? modbus_write_register(ctx_, o.address, out[0])
-                                      : modbus_write_registers(ctx_, o.address, 2, out);
+    const int rc = o.registers() == 1 ? modbus_write_register(ctx_, out_address, out[0])
+                                      : modbus_write_registers(ctx_, out_address, 2, out);
     if (rc != 1 && rc != 2) {
       fail(Op::kWrite);
       return -1;
@@ -103,8 +104,8 @@ int ModbusLink::exchange(const std::uint16_t* out, std::uint16_t* in, bool write
   if (read) {
     const std::int64_t t0 = monotonic_ns();
     const int rc = m.table == RegisterTable::kInput
-                       ? modbus_read_input_registers(ctx_, m.address, m.registers(), in)
-                       : modbus_read_registers(ctx_, m.address, m.registers(), in);
+                       ? modbus_read_input_registers(ctx_, in_address, m.registers(), in)
+                       : modbus_read_registers(ctx_, in_address, m.registers(), in);
     if (rc != m.registers()) {
       fail(Op::kRead);
       return -1;
@@ -114,12 +115,18 @@ int ModbusLink::exchange(const std::uint16_t* out, std::uint16_t* in, bool write
   return done;
 }
 
-std::string ModbusLink::describe(Op op, int err, const ModbusDaqConfig& c) {
-  const auto regs = [](const RegisterChannel& ch) {
+std::string ModbusLink::describe(Op op, int err, const ModbusDaqConfig& c, int offset) {
+  const auto regs = [&](const RegisterChannel& ch) {
+    const int a = ch.address + offset;
     return std::string(to_string(ch.table)) + " register" + (ch.registers() > 1 ? "s " : " ") +
-           std::to_string(ch.address) +
-           (ch.registers() > 1 ? "-" + std::to_string(ch.address + 1) : "");
+           std::to_string(a) + (ch.registers() > 1 ? "-" + std::to_string(a + 1) : "");
   };
+  // A stage names the axis whose block failed.
+  std::string axis;
+  if (op != Op::kConnect && !c.axes.empty() && offset % c.axis_stride == 0) {
+    const auto i = static_cast<std::size_t>(offset / c.axis_stride);
+    if (i < c.axes.size()) axis = " of axis " + c.axes[i];
+  }
   std::string what;
   switch (op) {
     case Op::kNone:
@@ -137,7 +144,7 @@ std::string ModbusLink::describe(Op op, int err, const ModbusDaqConfig& c) {
       what = "function 23 (write " + regs(c.output) + ", read " + regs(c.measurement) + ")";
       break;
   }
-  return what + " (slave " + std::to_string(c.slave_id) + "): " + modbus_strerror(err);
+  return what + axis + " (slave " + std::to_string(c.slave_id) + "): " + modbus_strerror(err);
 }
 
 }  // namespace hystbench::drivers::details

@@ -30,17 +30,19 @@ class ModbusLink {
   bool connected() const noexcept { return connected_; }
 
   /// Writes `out` (output.registers() words) when `write`, then reads the measurement into
-  /// `in` (measurement.registers() words) when `read`; one function-23 transaction when the
-  /// config says write_read and both are asked for. Each Modbus transaction's round-trip time
+  /// `in` (measurement.registers() words) when `read`, both at their addresses plus `offset`
+  /// (an axis's block: config.axis_offset(i)); one function-23 transaction when the config
+  /// says write_read and both are asked for. Each Modbus transaction's round-trip time
   /// goes to `rtt_ns[i]` (up to 2). Returns the number of transactions done, or -1 on failure
   /// (last_errno(), last_op() say why; a broken link is closed).
   int exchange(const std::uint16_t* out, std::uint16_t* in, bool write, bool read,
-               std::int64_t* rtt_ns) noexcept;
+               std::int64_t* rtt_ns, int offset = 0) noexcept;
 
   int last_errno() const noexcept { return last_errno_; }
   Op last_op() const noexcept { return last_op_; }
-  /// "reading input register 0: Illegal data address" and the like.
-  static std::string describe(Op op, int err, const ModbusDaqConfig& config);
+  /// "reading input register 0: Illegal data address" and the like; `offset` as exchange()'s
+  /// (the registers named are the axis's, with its name).
+  static std::string describe(Op op, int err, const ModbusDaqConfig& config, int offset = 0);
 
  private:
   void fail(Op op) noexcept;

@@ -16,7 +16,11 @@
 // as kFault (and max_stale_reads stale reads in a row, counted by the framework). A fault clears
 // by itself once fresh values arrive again (the link reconnects every reconnect_interval_ms).
 // safe_state() writes safe_output_v at once.
+// A stage (config `axes`): each axis has its register block; write_axes()/read_axes() exchange
+// every axis in turn in one tick (2 transactions per axis, 1 with write_read), fresh only when
+// every axis answered; write()/read() serve the first axis while the others hold their output.
 // diagnostics(): connection, counters, the last error in words, round-trip percentiles.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -49,7 +53,13 @@ class ModbusDaqDriver final : public DriverInterface {
   DriverStatus write(double output_v) noexcept override;
   /// Reads the measurement (with write_read: function 23 with the command).
   DriverStatus read(Measurement& out) noexcept override;
+  /// Every axis's output registers, axis by axis (with write_read: only takes the commands).
+  DriverStatus write_axes(std::span<const double> outputs_v) noexcept override;
+  /// Every axis's measurement, axis by axis: kOk only when all of them answered.
+  DriverStatus read_axes(std::span<Measurement> out) noexcept override;
+  /// The safe output on every axis.
   DriverStatus safe_state() noexcept override;
+  std::size_t axes() const noexcept override { return config_.axis_count(); }
 
   /// measurement_resolution_um = |measurement.scale| (one register count); max_rate_hz with
   /// io = "loop": driver.modbus.max_rate_hz, after activation at most what the round trip allows.
@@ -65,8 +75,8 @@ class ModbusDaqDriver final : public DriverInterface {
   enum class Link : std::uint8_t { kUp, kWaiting, kFailed };
   /// Connects when it is time to; kWaiting until the next attempt.
   Link link_up(std::int64_t now_ns) noexcept;
-  /// One exchange on the calling thread; true and `y` on success.
-  bool exchange(double output_v, bool write, bool read, double& y) noexcept;
+  /// One exchange with axis `axis`'s block on the calling thread; true and `y` on success.
+  bool exchange(std::size_t axis, double output_v, bool write, bool read, double& y) noexcept;
   Result write_safe_now();
 
   ModbusDaqConfig config_;
@@ -76,7 +86,7 @@ class ModbusDaqDriver final : public DriverInterface {
   std::unique_ptr<details::RttHistogram> rtt_;
 
   // The thread doing the transactions (the loop's or the I/O thread).
-  double command_v_ = 0.0;
+  std::array<double, kMaxAxes> command_v_{};
   bool write_failed_ = false;  ///< this tick's write(); read() then does not try
   std::int64_t next_connect_ns_ = 0;
 
@@ -86,6 +96,7 @@ class ModbusDaqDriver final : public DriverInterface {
   std::atomic<std::uint64_t> reconnects_{0};
   std::atomic<int> last_errno_{0};
   std::atomic<int> last_op_{0};
+  std::atomic<int> last_offset_{0};  ///< the register block of the last failure
 
   // Measured at activation.
   double activation_y_ = 0.0;

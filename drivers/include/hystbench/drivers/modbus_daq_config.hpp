@@ -22,14 +22,23 @@
 //   max_failed_transactions                        [1, 1e9] failed ones in a row = fault (3)
 //   reconnect_interval_ms                          [1, 60000] between connection attempts (200)
 //   safe_output_v                                  the output on fault and when idle (output.min_v)
+//   axes = ["x", "y"]                              a stage of several axes: their names (1 to 6,
+//                                                  a-z 0-9 _), in the order of their register
+//                                                  blocks. Axis i's output and measurement are at
+//                                                  the addresses below plus i * axis_stride, with
+//                                                  the same encoding and scaling. (one axis)
+//   axis_stride                                    [1, 65535] registers from one axis's block to
+//                                                  the next (16: hystbench-simdaq --stage)
 //   [output]       table = "holding", address, format ("u16" | "s16" | "u32" | "s32"),
 //                  word_order ("big" | "little"), scale [V/count], offset [V], min_v, max_v
 //   [measurement]  table ("input" | "holding"), address, format, word_order,
 //                  scale [µm/count], offset [µm]
 // Not real-time: parse_modbus_daq_config() allocates and throws std::invalid_argument.
+#include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "hystbench/drivers/modbus_registers.hpp"
 
@@ -56,6 +65,8 @@ struct ModbusDaqConfig {
   std::uint64_t max_failed_transactions = 3;
   double reconnect_interval_ms = 200.0;
   double safe_output_v = 0.0;
+  std::vector<std::string> axes;  ///< names of a stage's axes; empty = one axis
+  int axis_stride = 16;           ///< registers between axis blocks
   double output_min_v = 0.0;
   double output_max_v = 150.0;
   /// Default: holding register 0, u16, 0..150 V over 0..65535.
@@ -65,10 +76,16 @@ struct ModbusDaqConfig {
   RegisterChannel measurement{RegisterTable::kInput, 0,     RegisterFormat::kU16,
                               WordOrder::kHighFirst, 0.001, 0.0};
 
+  /// Axes served: axes.size(), at least 1.
+  std::size_t axis_count() const noexcept { return axes.empty() ? 1 : axes.size(); }
+  /// The register offset of axis `i`'s block: i * axis_stride.
+  int axis_offset(std::size_t i) const noexcept { return static_cast<int>(i) * axis_stride; }
   /// "tcp 127.0.0.1:502" or "rtu /dev/ttyUSB0 115200 8N1", for messages.
   std::string endpoint() const;
-  /// Modbus transactions per tick: 1 with write_read, else 2.
-  int transactions_per_tick() const noexcept { return write_read ? 1 : 2; }
+  /// Modbus transactions per tick: per axis 1 with write_read, else 2.
+  int transactions_per_tick() const noexcept {
+    return static_cast<int>(axis_count()) * (write_read ? 1 : 2);
+  }
   /// Shortest time the serial line needs for one tick's frames [s] (0 for TCP).
   double rtu_wire_time_s() const noexcept;
 };

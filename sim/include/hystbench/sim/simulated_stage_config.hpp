@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hystbench/sim/simulated_actuator_config.hpp"
@@ -17,6 +18,10 @@ namespace hystbench::sim {
 
 /// Axes a stage may have: [1, kMaxStageAxes].
 inline constexpr std::size_t kMaxStageAxes = 6;
+
+/// An axis name: 1 to 16 of a-z, 0-9 and _ ("x", "tip"), as the log's columns and the request
+/// keys name axes. Every place that takes axis names (a stage, a driver of several) checks it.
+bool is_axis_name(std::string_view name) noexcept;
 
 struct StageAxisConfig {
   std::string name;  ///< [a-z0-9_], 1..16 characters, unique in the stage ("x", "tip")
