@@ -5,6 +5,7 @@
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/common/fit_families.hpp"
+#include "hystbench/daemon/runs/identification_fit.hpp"
 #include "runs/details/stage_runs.hpp"
 
 namespace hystbench::daemon::details {
@@ -35,9 +36,12 @@ std::vector<double> axis_drive(const sim::Excitation& exc, std::size_t a, std::s
 // "y<-x": the share of x's motion on y.
 std::string pair_name(const std::string& to, const std::string& from) { return to + "<-" + from; }
 
-// Each turn's record: the moved axis's drive and every axis's output over its first `samples`.
-std::vector<hc::OneAxisMotion> turn_records(const RunProgram& run, std::size_t axes,
+// Each turn's record: the moved axis's drive and every axis's output (`ys`, each put at the
+// output it answers) over its first `samples`.
+std::vector<hc::OneAxisMotion> turn_records(const RunProgram& run,
+                                            std::span<const std::vector<double>> ys,
                                             std::size_t turn, std::size_t samples, double dt) {
+  const std::size_t axes = ys.size();
   std::vector<hc::OneAxisMotion> records;
   records.reserve(axes);
   for (std::size_t moved = 0; moved < axes; ++moved) {
@@ -47,7 +51,7 @@ std::vector<hc::OneAxisMotion> turn_records(const RunProgram& run, std::size_t a
     m.outputs.resize(static_cast<Eigen::Index>(axes), static_cast<Eigen::Index>(samples));
     const std::size_t from = moved * turn;
     for (std::size_t b = 0; b < axes; ++b) {
-      const auto& y = run.axis(b).records.y;
+      const std::vector<double>& y = ys[b];
       for (std::size_t k = 0; k < samples; ++k) {
         m.outputs(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(k)) = y[from + k];
       }
@@ -142,7 +146,7 @@ BuiltRun make_stage_identify_program(const IdentifyRequest& request, const RunCo
     // Scored from the axis's own major loop: before it, its model has not met its state.
     const sim::ExcitationSegment* major = exc.find("major_loop");
     p->model_metrics_from = turn * a + ramp + (major != nullptr ? major->begin : 0);
-    allocate_records(*p);
+    allocate_records(*p, true);  // with each reading's response: the fit aligns them
     if (a == 0) {
       first = std::move(p);
     } else {
@@ -194,7 +198,23 @@ StageModel fit_stage_identify(const RunProgram& run, const json& fit,
                                                 std::to_string(run.records.count) + " of " +
                                                 std::to_string(turn * axes.size()) + " samples)");
   }
-  const std::vector<hc::OneAxisMotion> records = turn_records(run, axes.size(), turn, samples, dt);
+  // Each axis's readings put at the outputs they answer (a thread-mode Modbus exchange answers
+  // an earlier tick's), as a one-axis identify does; the model then carries that latency as
+  // its delay, which the feedforward previews.
+  std::vector<std::vector<double>> ys(axes.size());
+  std::vector<int> exchange_ticks(axes.size(), 0);
+  for (std::size_t b = 0; b < axes.size(); ++b) {
+    const RunRecords& r = run.axis(b).records;
+    const std::size_t n = std::min<std::size_t>(r.count, r.y.size());
+    const std::span<const double> u(r.u.data(), std::min(n, r.u.size()));
+    const std::span<const double> y(r.y.data(), n);
+    const std::span<const std::uint32_t> response(r.response.data(),
+                                                  std::min(n, r.response.size()));
+    ys[b] = response.empty() ? std::vector<double>(y.begin(), y.end())
+                             : align_to_outputs(u, y, response);
+    exchange_ticks[b] = median_response_ticks(response);
+  }
+  const std::vector<hc::OneAxisMotion> records = turn_records(run, ys, turn, samples, dt);
   const hc::StageFitOptions options = stage_fit_options(fit, settings);
   hc::StageFit stage_fit;
   try {
@@ -217,6 +237,12 @@ StageModel fit_stage_identify(const RunProgram& run, const json& fit,
     hc::FitResult& f = stage_fit.axes[a];
     f.model.input_min = fit.value("u_min", settings.loop.limits.u_min);
     f.model.input_max = fit.value("u_max", settings.loop.limits.u_max);
+    if (exchange_ticks[a] > 0) {
+      f.delay_samples = exchange_ticks[a];
+      f.model.set_delay(static_cast<double>(exchange_ticks[a]) * dt);
+      f.notes.push_back("delay " + std::to_string(exchange_ticks[a]) +
+                        " ticks: the driver's exchange (its readings' median response_ticks)");
+    }
     const Eigen::RowVectorXd own = records[a].outputs.row(static_cast<Eigen::Index>(a));
     const double range = own.maxCoeff() - own.minCoeff();
     const json figures = {
