@@ -221,6 +221,28 @@ int serve_rtu(Server& s, const std::string& device, int baud, char parity, int s
   }
 }
 
+// The plant: the stage of --stage ("xy" or a JSON file), else the actuator of --actuator (a
+// JSON file) or the default one. Throws naming what is wrong with the file.
+std::unique_ptr<RealtimePlant> make_plant(const std::string& stage_file,
+                                          const std::string& actuator_file, double rate_hz) {
+  namespace sim = hystbench::sim;
+  if (stage_file == "xy") {
+    return std::make_unique<RealtimePlant>(sim::SimulatedStageConfig::xy(), rate_hz);
+  }
+  if (!stage_file.empty()) {
+    std::ifstream in(stage_file);
+    if (!in) throw std::runtime_error("cannot open the file (give \"xy\" or a JSON file)");
+    return std::make_unique<RealtimePlant>(sim::stage_from_json(nlohmann::json::parse(in)),
+                                           rate_hz);
+  }
+  sim::SimulatedActuatorConfig cfg;
+  if (!actuator_file.empty()) {
+    std::ifstream in(actuator_file);
+    cfg = sim::from_json(nlohmann::json::parse(in));
+  }
+  return std::make_unique<RealtimePlant>(cfg, rate_hz);
+}
+
 int run(int argc, char** argv) {
   CLI::App app{
       "hystbench-simdaq - Modbus TCP/RTU server wrapping the simulated piezo actuator\n"
@@ -262,27 +284,12 @@ int run(int argc, char** argv) {
       ->excludes(actuator);
   CLI11_PARSE(app, argc, argv);
 
-  namespace sim = hystbench::sim;
   std::unique_ptr<RealtimePlant> plant;
-  const std::string& source = stage_file.empty() ? actuator_file : stage_file;
   try {
-    if (stage_file == "xy") {
-      plant = std::make_unique<RealtimePlant>(sim::SimulatedStageConfig::xy(), sim_rate_hz);
-    } else if (!stage_file.empty()) {
-      std::ifstream in(stage_file);
-      if (!in) throw std::runtime_error("cannot open the file (give \"xy\" or a JSON file)");
-      plant = std::make_unique<RealtimePlant>(sim::stage_from_json(nlohmann::json::parse(in)),
-                                              sim_rate_hz);
-    } else {
-      sim::SimulatedActuatorConfig cfg;
-      if (!actuator_file.empty()) {
-        std::ifstream in(actuator_file);
-        cfg = sim::from_json(nlohmann::json::parse(in));
-      }
-      plant = std::make_unique<RealtimePlant>(cfg, sim_rate_hz);
-    }
+    plant = make_plant(stage_file, actuator_file, sim_rate_hz);
   } catch (const std::exception& e) {
-    std::cerr << "hystbench-simdaq: " << source << ": " << e.what() << "\n";
+    std::cerr << "hystbench-simdaq: " << (stage_file.empty() ? actuator_file : stage_file) << ": "
+              << e.what() << "\n";
     return 2;
   }
   const auto blocks = static_cast<int>(plant->axes()) * map::kAxisBlock;

@@ -19,7 +19,15 @@ Result GpioDriver::on_configure(const nlohmann::json& params, double rate_hz) {
     }
     rest.erase("gpio");
   }
-  return inner_->on_configure(rest, rate_hz);
+  Result r = inner_->on_configure(rest, rate_hz);
+  const std::size_t lines = config_.enable.size(), axes = inner_->axes();
+  if (r && lines > 1 && lines != axes) {
+    return Result::failure("driver." + std::string(inner_->type()) +
+                           ".gpio.enable: " + std::to_string(lines) + " lines for a driver of " +
+                           std::to_string(axes) + (axes == 1 ? " axis" : " axes") +
+                           ": give one line (every axis) or one per axis");
+  }
+  return r;
 }
 
 Result GpioDriver::on_activate() {
@@ -105,10 +113,17 @@ nlohmann::json GpioDriver::diagnostics() const {
   nlohmann::json d = inner_->diagnostics();
   if (!config_.any()) return d;
   nlohmann::json lines = nlohmann::json::object();
-  const auto add = [&](const char* name, const std::optional<GpioLineConfig>& l) {
-    if (l) lines[name] = l->describe() + (l->active_low ? " (active low)" : "");
+  const auto words = [](const GpioLineConfig& l) {
+    return l.describe() + (l.active_low ? " (active low)" : "");
   };
-  add("enable", config_.enable);
+  const auto add = [&](const char* name, const std::optional<GpioLineConfig>& l) {
+    if (l) lines[name] = words(*l);
+  };
+  if (config_.enable.size() == 1) lines["enable"] = words(config_.enable.front());
+  if (config_.enable.size() > 1) {
+    lines["enable"] = nlohmann::json::array();
+    for (const GpioLineConfig& l : config_.enable) lines["enable"].push_back(words(l));
+  }
   add("estop", config_.estop);
   add("run_active", config_.run_active);
   add("sync_pulse", config_.sync_pulse);

@@ -101,15 +101,15 @@ GpioConfig parse_gpio_config(const nlohmann::json& table, const std::string& pat
     c.sync_pulse_ticks = static_cast<std::uint32_t>(p.integer("sync_pulse_ticks", 1, 1, 1000000));
     c.sync_every_ticks =
         static_cast<std::uint64_t>(p.integer("sync_every_ticks", 0, 0, 1000000000));
-    const auto line = [&](const char* key,
-                          bool active_low_default) -> std::optional<GpioLineConfig> {
-      if (!p.has(key)) return std::nullopt;
-      const Params t = p.table(key);
+    // One line's table `j` at `where`.
+    const auto one_line = [&](const nlohmann::json& j, const std::string& where,
+                              bool active_low_default) {
+      const Params t(j, where);
       t.allow_only({"chip", "line", "active_low"});
       GpioLineConfig l;
       l.chip = t.string("chip", chip);
       if (!t.has("line")) throw ParamError(t.key_path("line") + ": required (name or offset)");
-      const nlohmann::json& v = table[key]["line"];
+      const nlohmann::json& v = j["line"];
       if (v.is_number_unsigned() || (v.is_number_integer() && v.get<std::int64_t>() >= 0)) {
         l.line = std::to_string(v.get<std::int64_t>());
       } else if (v.is_string() && !v.get<std::string>().empty()) {
@@ -120,7 +120,23 @@ GpioConfig parse_gpio_config(const nlohmann::json& table, const std::string& pat
       l.active_low = t.boolean("active_low", active_low_default);
       return l;
     };
-    c.enable = line("enable", false);
+    const auto line = [&](const char* key,
+                          bool active_low_default) -> std::optional<GpioLineConfig> {
+      if (!p.has(key)) return std::nullopt;
+      return one_line(table[key], p.key_path(key), active_low_default);
+    };
+    if (p.has("enable") && table["enable"].is_array()) {
+      const nlohmann::json& lines = table["enable"];
+      if (lines.empty()) {
+        throw ParamError(p.key_path("enable") + ": an array of one line table per axis, got none");
+      }
+      for (std::size_t i = 0; i < lines.size(); ++i) {
+        c.enable.push_back(
+            one_line(lines[i], p.key_path("enable") + "[" + std::to_string(i) + "]", false));
+      }
+    } else if (auto enable = line("enable", false)) {
+      c.enable.push_back(*enable);
+    }
     c.estop = line("estop", true);
     c.run_active = line("run_active", false);
     c.sync_pulse = line("sync_pulse", false);
@@ -137,7 +153,9 @@ void GpioLines::request(const GpioConfig& config, GpioBackend& backend) {
   config_ = config;
   try {
     if (config.estop) estop_ = backend.request_input(*config.estop, config.consumer);
-    if (config.enable) enable_ = backend.request_output(*config.enable, false, config.consumer);
+    for (const GpioLineConfig& l : config.enable) {
+      enable_.push_back(backend.request_output(l, false, config.consumer));
+    }
     if (config.run_active) {
       run_active_line_ = backend.request_output(*config.run_active, false, config.consumer);
     }
@@ -151,7 +169,7 @@ void GpioLines::request(const GpioConfig& config, GpioBackend& backend) {
 
 void GpioLines::release() noexcept {
   safe();
-  enable_.reset();
+  enable_.clear();
   estop_.reset();
   run_active_line_.reset();
   sync_.reset();
@@ -160,7 +178,7 @@ void GpioLines::release() noexcept {
 void GpioLines::set_run_active(bool active) noexcept {
   run_active_ = active;
   run_ticks_ = 0;
-  if (enable_) enable_->set(active);
+  for (const auto& enable : enable_) enable->set(active);
   if (run_active_line_) run_active_line_->set(active);
   if (sync_) sync_->set(active);  // high for sample 0 and the next sync_pulse_ticks - 1
   pulse_off_at_ = config_.sync_pulse_ticks;
@@ -179,7 +197,7 @@ void GpioLines::tick() noexcept {
 bool GpioLines::estop_asserted() noexcept { return estop_ && estop_->get() != 0; }
 
 void GpioLines::safe() noexcept {
-  if (enable_) enable_->set(false);
+  for (const auto& enable : enable_) enable->set(false);
   if (run_active_line_) run_active_line_->set(false);
   if (sync_) sync_->set(false);
   run_active_ = false;

@@ -175,8 +175,9 @@ TEST(GpioConfig, ErrorsNameTheKey) {
                                        "g");
   EXPECT_EQ(c.estop->describe(), "gpiochip2:7");
   EXPECT_TRUE(c.estop->active_low);
-  EXPECT_EQ(c.enable->describe(), "1:EN");
-  EXPECT_FALSE(c.enable->active_low);
+  ASSERT_EQ(c.enable.size(), 1u);
+  EXPECT_EQ(c.enable[0].describe(), "1:EN");
+  EXPECT_FALSE(c.enable[0].active_low);
 }
 
 TEST(GpioLibgpiod, NamesTheMissingChipOrLine) {
@@ -218,4 +219,38 @@ TEST(GpioDriver, TheEstopGuardsEveryAxisOfAStage) {
   EXPECT_EQ(d.write_axes(u), hd::DriverStatus::kFault);
   EXPECT_EQ(d.read_axes(m), hd::DriverStatus::kFault);
   d.deactivate();
+}
+
+// A stage's amplifier channels each have their enable line: every one follows the run and goes
+// off on the e-stop; a count other than one or the axes is refused, naming the key.
+TEST(GpioDriver, AStageHasAnEnableLinePerAxis) {
+  auto gpio = std::make_shared<hd::MemoryGpioBackend>();
+  gpio->set_level("sim0:4", true);
+  json lines = kGpio;
+  lines["enable"] = {{{"line", "X_EN"}}, {{"line", "Y_EN"}, {"active_low", true}}};
+  hd::Driver d(std::make_unique<hd::GpioDriver>(std::make_unique<hd::LoopbackDriver>(), gpio));
+  ASSERT_TRUE(d.configure({{"gpio", lines}, {"stage", json::object()}}, 1000.0).ok);
+  ASSERT_TRUE(d.activate().ok);
+  EXPECT_FALSE(gpio->level("sim0:X_EN"));
+  EXPECT_TRUE(gpio->level("sim0:Y_EN"));  // active low: high is off
+  d.set_run_active(true);
+  EXPECT_TRUE(gpio->level("sim0:X_EN"));
+  EXPECT_FALSE(gpio->level("sim0:Y_EN"));
+  EXPECT_EQ(d.diagnostics()["gpio"]["lines"]["enable"],
+            json({"sim0:X_EN", "sim0:Y_EN (active low)"}));
+  gpio->set_level("sim0:4", false);  // e-stop asserted: every axis's amplifier off
+  const double u[2] = {50.0, 60.0};
+  EXPECT_EQ(d.write_axes(u), hd::DriverStatus::kFault);
+  EXPECT_FALSE(gpio->level("sim0:X_EN"));
+  EXPECT_TRUE(gpio->level("sim0:Y_EN"));
+  d.deactivate();
+  EXPECT_EQ(gpio->requested(), 0);
+
+  lines["enable"] = {{{"line", "X_EN"}}, {{"line", "Y_EN"}}, {{"line", "Z_EN"}}};
+  EXPECT_EQ(d.configure({{"gpio", lines}, {"stage", json::object()}}, 1000.0).message,
+            "driver.loopback.gpio.enable: 3 lines for a driver of 2 axes: give one line (every "
+            "axis) or one per axis");
+  lines["enable"] = {{{"line", "X_EN"}}, {{"chip", "sim1"}}};
+  EXPECT_EQ(d.configure({{"gpio", lines}, {"stage", json::object()}}, 1000.0).message,
+            "driver.loopback.gpio.enable[1].line: required (name or offset)");
 }

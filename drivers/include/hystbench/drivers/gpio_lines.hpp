@@ -1,6 +1,7 @@
 #pragma once
 // Optional GPIO lines of the bench (libgpiod v1), on any driver:
-//   enable      output: the amplifier enable, on only while a run is active
+//   enable      output: the amplifier enable, on only while a run is active; one line for
+//               every axis, or one per axis of a stage (an amplifier channel each)
 //   estop       input: the emergency stop; asserted = safe output within the tick and FAULT
 //   run_active  output: on while a run is active (for scopes)
 //   sync_pulse  output: a pulse of sync_pulse_ticks at the start of each run, and every
@@ -12,6 +13,8 @@
 //   [gpio.enable] [gpio.estop] [gpio.run_active] [gpio.sync_pulse]
 //       line = "AMP_EN" | 17      line name or offset;  chip = ... (overrides);
 //       active_low = false        (estop defaults to true: a pulled-up, normally-closed switch)
+//   enable = [{line = "X_EN"}, {line = "Y_EN"}]   a stage: one table per axis, in axis order
+//                                 (GpioDriver refuses a count other than 1 or the axes)
 // Values below are logical (true = asserted); active_low maps them to the pin level.
 // The line backend is abstract so tests own the lines (MemoryGpioBackend); set()/get() are
 // real-time safe (libgpiod: one ioctl).
@@ -22,6 +25,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace hystbench::drivers {
 
@@ -78,11 +82,13 @@ class MemoryGpioBackend final : public GpioBackend {
 };
 
 struct GpioConfig {
-  std::optional<GpioLineConfig> enable, estop, run_active, sync_pulse;
+  /// The enable lines: none, one for every axis, or one per axis (in axis order).
+  std::vector<GpioLineConfig> enable;
+  std::optional<GpioLineConfig> estop, run_active, sync_pulse;
   std::string consumer = "hystbench";
   std::uint32_t sync_pulse_ticks = 1;
   std::uint64_t sync_every_ticks = 0;
-  bool any() const { return enable || estop || run_active || sync_pulse; }
+  bool any() const { return !enable.empty() || estop || run_active || sync_pulse; }
 };
 
 /// Parses the gpio table at `path` ("driver.modbus.gpio"); throws std::invalid_argument naming
@@ -108,7 +114,8 @@ class GpioLines {
 
  private:
   GpioConfig config_;
-  std::unique_ptr<GpioLine> enable_, estop_, run_active_line_, sync_;
+  std::vector<std::unique_ptr<GpioLine>> enable_;
+  std::unique_ptr<GpioLine> estop_, run_active_line_, sync_;
   bool run_active_ = false;
   std::uint64_t run_ticks_ = 0;
   std::uint64_t pulse_off_at_ = 0;
