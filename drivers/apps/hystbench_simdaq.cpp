@@ -221,28 +221,6 @@ int serve_rtu(Server& s, const std::string& device, int baud, char parity, int s
   }
 }
 
-// The plant: the stage of --stage ("xy" or a JSON file), else the actuator of --actuator (a
-// JSON file) or the default one. Throws naming what is wrong with the file.
-std::unique_ptr<RealtimePlant> make_plant(const std::string& stage_file,
-                                          const std::string& actuator_file, double rate_hz) {
-  namespace sim = hystbench::sim;
-  if (stage_file == "xy") {
-    return std::make_unique<RealtimePlant>(sim::SimulatedStageConfig::xy(), rate_hz);
-  }
-  if (!stage_file.empty()) {
-    std::ifstream in(stage_file);
-    if (!in) throw std::runtime_error("cannot open the file (give \"xy\" or a JSON file)");
-    return std::make_unique<RealtimePlant>(sim::stage_from_json(nlohmann::json::parse(in)),
-                                           rate_hz);
-  }
-  sim::SimulatedActuatorConfig cfg;
-  if (!actuator_file.empty()) {
-    std::ifstream in(actuator_file);
-    cfg = sim::from_json(nlohmann::json::parse(in));
-  }
-  return std::make_unique<RealtimePlant>(cfg, rate_hz);
-}
-
 int run(int argc, char** argv) {
   CLI::App app{
       "hystbench-simdaq - Modbus TCP/RTU server wrapping the simulated piezo actuator\n"
@@ -286,7 +264,7 @@ int run(int argc, char** argv) {
 
   std::unique_ptr<RealtimePlant> plant;
   try {
-    plant = make_plant(stage_file, actuator_file, sim_rate_hz);
+    plant = hystbench::apps::make_plant(stage_file, actuator_file, sim_rate_hz);
   } catch (const std::exception& e) {
     std::cerr << "hystbench-simdaq: " << (stage_file.empty() ? actuator_file : stage_file) << ": "
               << e.what() << "\n";

@@ -7,6 +7,11 @@
 #include <algorithm>
 #include <cstdint>
 #include <ctime>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "hystbench/sim/simulated_stage.hpp"
@@ -74,5 +79,28 @@ class RealtimePlant {
   std::vector<double> position_um_;
   std::uint64_t samples_ = 0;
 };
+
+/// The device simulators' plant: the stage of `stage_file` ("xy": SimulatedStageConfig::xy(),
+/// else a JSON file in the [driver.loopback.stage] form) when given, else the actuator of
+/// `actuator_file` (a JSON file in the sim format; the default actuator when empty). Throws
+/// naming what is wrong with the file.
+inline std::unique_ptr<RealtimePlant> make_plant(const std::string& stage_file,
+                                                 const std::string& actuator_file, double rate_hz) {
+  if (stage_file == "xy") {
+    return std::make_unique<RealtimePlant>(sim::SimulatedStageConfig::xy(), rate_hz);
+  }
+  if (!stage_file.empty()) {
+    std::ifstream in(stage_file);
+    if (!in) throw std::runtime_error("cannot open the file (give \"xy\" or a JSON file)");
+    return std::make_unique<RealtimePlant>(sim::stage_from_json(nlohmann::json::parse(in)),
+                                           rate_hz);
+  }
+  sim::SimulatedActuatorConfig cfg;
+  if (!actuator_file.empty()) {
+    std::ifstream in(actuator_file);
+    cfg = sim::from_json(nlohmann::json::parse(in));
+  }
+  return std::make_unique<RealtimePlant>(cfg, rate_hz);
+}
 
 }  // namespace hystbench::apps

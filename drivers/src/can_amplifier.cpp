@@ -39,7 +39,7 @@ Result CanAmplifierDriver::on_configure(const nlohmann::json& params, double rat
     const Params p(params, "driver.can");
     p.allow_only({"interface", "socket_fd", "heartbeat_timeout_ms", "restart_on_bus_off",
                   "max_rate_hz", "safe_output_v", "output_min_v", "output_max_v", "setpoint",
-                  "feedback", "enable", "disable"});
+                  "feedback", "enable", "disable", "axes", "node_step"});
     interface_ = p.string("interface", "");
     socket_fd_ = static_cast<int>(p.integer("socket_fd", -1, 0, 1 << 20));
     if (interface_.empty() && socket_fd_ < 0) {
@@ -57,6 +57,17 @@ Result CanAmplifierDriver::on_configure(const nlohmann::json& params, double rat
     }
     safe_output_v_ = p.number("safe_output_v", output_min_v_, output_min_v_, output_max_v_);
     protocol_ = parse_can_protocol(params, "driver.can");
+    axis_names_ = p.axis_names("axes");
+    if (p.has("node_step") && !p.has("axes")) {
+      throw ParamError("driver.can.node_step: only with axes (a stage of several axes)");
+    }
+    node_step_ = static_cast<std::uint32_t>(p.integer("node_step", 1, 1, 0x1000000));
+    const std::size_t n = std::max<std::size_t>(1, axis_names_.size());
+    check_can_nodes(protocol_, n, node_step_, "driver.can");
+    nodes_.clear();
+    for (std::size_t a = 0; a < n; ++a) {
+      nodes_.push_back(protocol_.at_node(static_cast<std::uint32_t>(a) * node_step_));
+    }
   } catch (const ParamError& e) {
     return Result::failure(e.what());
   } catch (const std::invalid_argument& e) {
@@ -82,7 +93,8 @@ Result CanAmplifierDriver::on_activate() {
   if (auto r = open_socket(); !r) return r;
   if (auto r = enable_amplifier(where); !r) return r;
   consecutive_send_failures_ = 0;
-  last_feedback_ns_ = monotonic_ns();
+  answered_ = 0;
+  for (auto& t : last_feedback_ns_) t = monotonic_ns();
   bus_off_ = false;
   socket_dead_ = false;
   if (restart_on_bus_off_ && controller_) {
@@ -125,15 +137,16 @@ Result CanAmplifierDriver::check_controller(const std::string& where) {
 
 Result CanAmplifierDriver::check_bus_rate(const std::string& where) {
   if (bitrate_ == 0) return Result::success();
-  const int bits = can_frame_bits(protocol_.setpoint_length, protocol_.setpoint_id.extended) +
-                   can_frame_bits(protocol_.feedback_length, protocol_.feedback_id.extended);
+  const int bits = static_cast<int>(axes()) *
+                   (can_frame_bits(protocol_.setpoint_length, protocol_.setpoint_id.extended) +
+                    can_frame_bits(protocol_.feedback_length, protocol_.feedback_id.extended));
   const double bus_max = std::floor(static_cast<double>(bitrate_) / bits);
   max_rate_hz_ = declared_max_rate_hz_ > 0.0 ? std::min(declared_max_rate_hz_, bus_max) : bus_max;
   if (rate_hz_ > max_rate_hz_) {
     return Result::failure("loop.rate_hz: " + fixed(rate_hz_, 0) + " Hz is beyond what " + where +
                            " carries at " + std::to_string(bitrate_) + " bit/s: a setpoint and " +
-                           "a feedback frame take up to " + std::to_string(bits) +
-                           " bits, so at most " + fixed(bus_max, 0) + " Hz");
+                           "a feedback frame" + (axes() > 1 ? " per axis" : "") + " take up to " +
+                           std::to_string(bits) + " bits, so at most " + fixed(bus_max, 0) + " Hz");
   }
   return Result::success();
 }
@@ -156,52 +169,75 @@ Result CanAmplifierDriver::open_socket() {
   return Result::success();
 }
 
+std::string CanAmplifierDriver::axis_words(std::size_t a) const {
+  return axis_names_.empty() ? "" : "axis " + axis_names_[a] + ": ";
+}
+
+bool CanAmplifierDriver::send_setpoints(double volts) noexcept {
+  bool ok = true;
+  for (const CanProtocol& node : nodes_) ok = socket_->send(node.setpoint_frame(volts)) && ok;
+  return ok;
+}
+
 Result CanAmplifierDriver::enable_amplifier(const std::string& where) {
   can_frame f{};
   while (socket_->receive(f) == 1) {
   }
-  // Enable, then setpoints at the safe output until the amplifier answers.
-  if (!socket_->send(protocol_.enable_frame())) {
-    return release(("driver.can: cannot send the enable frame " + protocol_.enable_id.describe() +
-                    " on " + where + ": " + std::strerror(errno)));
+  // Enable every axis, then setpoints at the safe output until each one answers.
+  for (std::size_t a = 0; a < nodes_.size(); ++a) {
+    if (!socket_->send(nodes_[a].enable_frame())) {
+      return release(("driver.can: " + axis_words(a) + "cannot send the enable frame " +
+                      nodes_[a].enable_id.describe() + " on " + where + ": " +
+                      std::strerror(errno)));
+    }
   }
   const std::int64_t wait_ns = std::max<std::int64_t>(heartbeat_ns_, 200'000'000);
   const std::int64_t until = monotonic_ns() + wait_ns;
-  bool answered = false;
-  double y = 0.0;
-  std::uint8_t status = 0;
-  while (!answered && monotonic_ns() < until) {
-    socket_->send(protocol_.setpoint_frame(safe_output_v_));
+  std::vector<bool> answered(nodes_.size(), false);
+  std::vector<std::uint8_t> status(nodes_.size(), 0);
+  const auto all = [&] {
+    return std::find(answered.begin(), answered.end(), false) == answered.end();
+  };
+  while (!all() && monotonic_ns() < until) {
+    send_setpoints(safe_output_v_);
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     int rc = 0;
-    while (!answered && (rc = socket_->receive(f)) == 1) {
-      answered = protocol_.decode_feedback(f, y, status) == CanProtocol::Decoded::kFeedback;
+    while ((rc = socket_->receive(f)) == 1) {
+      for (std::size_t a = 0; a < nodes_.size(); ++a) {
+        double y = 0.0;
+        std::uint8_t st = 0;
+        if (nodes_[a].decode_feedback(f, y, st) != CanProtocol::Decoded::kFeedback) continue;
+        if (a == 0) activation_y_ = y;
+        answered[a] = true;
+        status[a] = st;
+      }
     }
     if (rc < 0) {
       return release(("driver.can: " + where + " failed while waiting for feedback: " +
                       (errno == 0 ? "the peer closed the socket" : std::strerror(errno))));
     }
   }
-  if (!answered) {
-    return release(("driver.can: no feedback frame " + protocol_.feedback_id.describe() + " on " +
-                    where + " within " + fixed(wait_ns / 1e6, 0) + " ms of the enable frame " +
-                    protocol_.enable_id.describe() + ": is the amplifier powered and on the bus?"));
+  for (std::size_t a = 0; a < nodes_.size(); ++a) {
+    if (!answered[a]) {
+      return release((
+          "driver.can: " + axis_words(a) + "no feedback frame " + nodes_[a].feedback_id.describe() +
+          " on " + where + " within " + fixed(wait_ns / 1e6, 0) + " ms of the enable frame " +
+          nodes_[a].enable_id.describe() + ": is the amplifier powered and on the bus?"));
+    }
+    if ((status[a] & protocol_.fault_mask) != 0) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "%02X", status[a]);
+      return release("driver.can: " + axis_words(a) + "the amplifier reports a fault (status 0x" +
+                     hex + ") on " + where);
+    }
   }
-  if ((status & protocol_.fault_mask) != 0) {
-    return release(("driver.can: the amplifier reports a fault (status 0x" + [&] {
-      char b[8];
-      std::snprintf(b, sizeof b, "%02X", status);
-      return std::string(b);
-    }() + ") on " + where));
-  }
-  activation_y_ = y;
   return Result::success();
 }
 
 Result CanAmplifierDriver::release(const std::string& message) {
   if (socket_) {
-    socket_->send(protocol_.setpoint_frame(safe_output_v_));
-    socket_->send(protocol_.disable_frame());
+    send_setpoints(safe_output_v_);
+    for (const CanProtocol& node : nodes_) socket_->send(node.disable_frame());
   }
   socket_.reset();
   return Result::failure(message);
@@ -215,9 +251,11 @@ void CanAmplifierDriver::supervise() noexcept {
     try {
       if (controller_->restart()) {
         restarts_.fetch_add(1);
-        last_feedback_ns_.store(monotonic_ns());
+        for (auto& t : last_feedback_ns_) t.store(monotonic_ns());
         bus_off_.store(false);
-        if (socket_) socket_->send(protocol_.enable_frame());
+        if (socket_) {
+          for (const CanProtocol& node : nodes_) socket_->send(node.enable_frame());
+        }
       }
     } catch (...) {
     }
@@ -232,8 +270,8 @@ void CanAmplifierDriver::stop_supervisor() noexcept {
 
 Result CanAmplifierDriver::on_deactivate() {
   stop_supervisor();
-  const bool ok = socket_->send(protocol_.setpoint_frame(safe_output_v_)) &&
-                  socket_->send(protocol_.disable_frame());
+  bool ok = send_setpoints(safe_output_v_);
+  for (const CanProtocol& node : nodes_) ok = socket_->send(node.disable_frame()) && ok;
   const int err = errno;
   socket_.reset();
   if (!ok) {
@@ -244,11 +282,19 @@ Result CanAmplifierDriver::on_deactivate() {
 }
 
 DriverStatus CanAmplifierDriver::write(double output_v) noexcept {
+  return write_axes(std::span<const double>(&output_v, 1));
+}
+
+DriverStatus CanAmplifierDriver::write_axes(std::span<const double> outputs_v) noexcept {
   if (socket_dead_.load(std::memory_order_relaxed) || bus_off_.load(std::memory_order_relaxed)) {
     return DriverStatus::kFault;
   }
-  if (socket_->send(protocol_.setpoint_frame(output_v))) {
-    sent_.fetch_add(1, std::memory_order_relaxed);
+  std::size_t n = 0, sent = 0;
+  for (; n < outputs_v.size() && n < nodes_.size(); ++n) {
+    sent += socket_->send(nodes_[n].setpoint_frame(outputs_v[n])) ? 1 : 0;
+  }
+  sent_.fetch_add(sent, std::memory_order_relaxed);
+  if (sent == n) {
     consecutive_send_failures_ = 0;
     return DriverStatus::kOk;
   }
@@ -261,8 +307,13 @@ DriverStatus CanAmplifierDriver::write(double output_v) noexcept {
 }
 
 DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
-  bool fresh = false, malformed = false, amp_fault = false;
+  return read_axes(std::span<Measurement>(&out, 1));
+}
+
+DriverStatus CanAmplifierDriver::read_axes(std::span<Measurement> out) noexcept {
+  bool malformed = false, amp_fault = false;
   std::int64_t detail = 0;
+  const std::int64_t now = monotonic_ns();
   can_frame f{};
   for (int i = 0; i < kMaxFramesPerRead && !socket_dead_.load(std::memory_order_relaxed); ++i) {
     const int rc = socket_->receive(f);
@@ -283,33 +334,28 @@ DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
       }
       continue;
     }
-    double y = 0.0;
-    std::uint8_t status = 0;
-    switch (protocol_.decode_feedback(f, y, status)) {
-      case CanProtocol::Decoded::kFeedback:
-        feedback_.fetch_add(1, std::memory_order_relaxed);
-        if ((status & protocol_.fault_mask) != 0) {
-          amp_fault = true;
-          detail = status;
-        } else {
-          out.position_um = y;
-          fresh = true;
-        }
-        break;
-      case CanProtocol::Decoded::kMalformed:
+    for (std::size_t a = 0; a < nodes_.size(); ++a) {
+      double y = 0.0;
+      std::uint8_t status = 0;
+      const CanProtocol::Decoded d = nodes_[a].decode_feedback(f, y, status);
+      if (d == CanProtocol::Decoded::kOther) continue;
+      if (d == CanProtocol::Decoded::kMalformed) {
         malformed_.fetch_add(1, std::memory_order_relaxed);
         malformed = true;
         detail = f.can_dlc;
-        break;
-      case CanProtocol::Decoded::kOther:
-        break;
+      } else if ((status & protocol_.fault_mask) != 0) {
+        feedback_.fetch_add(1, std::memory_order_relaxed);
+        amp_fault = true;
+        detail = status;
+      } else {
+        feedback_.fetch_add(1, std::memory_order_relaxed);
+        newest_um_[a] = y;
+        answered_ |= 1u << a;
+        last_feedback_ns_[a].store(now, std::memory_order_relaxed);
+      }
+      break;
     }
   }
-  const std::int64_t now = monotonic_ns();
-  if (fresh) last_feedback_ns_.store(now, std::memory_order_relaxed);
-  // A feedback frame read in the tick of a setpoint answers an earlier one: the amplifier
-  // cannot sample and send within the microseconds between write() and read().
-  out.response_ticks = 1;
   if (socket_dead_.load(std::memory_order_relaxed) || bus_off_.load(std::memory_order_relaxed)) {
     return DriverStatus::kFault;
   }
@@ -321,19 +367,32 @@ DriverStatus CanAmplifierDriver::read(Measurement& out) noexcept {
     report_fault(Fault::kAmplifier, detail);
     return DriverStatus::kFault;
   }
-  const std::int64_t silent = now - last_feedback_ns_.load(std::memory_order_relaxed);
-  if (silent > heartbeat_ns_) {
-    report_fault(Fault::kHeartbeat, silent);
-    return DriverStatus::kFault;
+  for (std::size_t a = 0; a < nodes_.size(); ++a) {
+    const std::int64_t silent = now - last_feedback_ns_[a].load(std::memory_order_relaxed);
+    if (silent > heartbeat_ns_) {
+      silent_axis_.store(static_cast<int>(a), std::memory_order_relaxed);
+      report_fault(Fault::kHeartbeat, silent);
+      return DriverStatus::kFault;
+    }
   }
-  return fresh ? DriverStatus::kOk : DriverStatus::kStale;
+  // Fresh once every axis asked for has answered since the last fresh read. A feedback frame
+  // read in the tick of a setpoint answers an earlier one: the amplifier cannot sample and send
+  // within the microseconds between write() and read().
+  const std::size_t n = std::min(out.size(), nodes_.size());
+  const std::uint32_t wanted = (1u << n) - 1u;
+  if ((answered_ & wanted) != wanted) return DriverStatus::kStale;
+  answered_ = 0;
+  for (std::size_t a = 0; a < n; ++a) {
+    out[a].position_um = newest_um_[a];
+    out[a].response_ticks = 1;
+  }
+  return DriverStatus::kOk;
 }
 
 DriverStatus CanAmplifierDriver::safe_state() noexcept {
   if (socket_dead_.load(std::memory_order_relaxed)) return DriverStatus::kFault;
   // Sent even when bus-off: the frame waits in the queue for the restart.
-  return socket_->send(protocol_.setpoint_frame(safe_output_v_)) ? DriverStatus::kOk
-                                                                 : DriverStatus::kError;
+  return send_setpoints(safe_output_v_) ? DriverStatus::kOk : DriverStatus::kError;
 }
 
 DriverInfo CanAmplifierDriver::info() const noexcept {
@@ -350,10 +409,13 @@ std::string CanAmplifierDriver::describe_fault(int cause, std::int64_t detail) c
   switch (static_cast<Fault>(cause)) {
     case Fault::kNone:
       break;
-    case Fault::kHeartbeat:
-      return "no feedback frame " + protocol_.feedback_id.describe() + " for " +
+    case Fault::kHeartbeat: {
+      const auto a = static_cast<std::size_t>(silent_axis_.load(std::memory_order_relaxed));
+      return axis_words(std::min(a, nodes_.size() - 1)) + "no feedback frame " +
+             nodes_[std::min(a, nodes_.size() - 1)].feedback_id.describe() + " for " +
              fixed(detail / 1e6, 1) +
              " ms (heartbeat_timeout_ms = " + fixed(heartbeat_ns_ / 1e6, 1) + ")";
+    }
     case Fault::kMalformed:
       return "malformed feedback frame " + protocol_.feedback_id.describe() + ": " +
              std::to_string(detail) + " data bytes, expected " +
@@ -387,7 +449,9 @@ nlohmann::json CanAmplifierDriver::diagnostics() const {
           {"malformed_frames", malformed_.load()},
           {"bus_offs", bus_offs_.load()},
           {"restarts", restarts_.load()},
-          {"send_failures", send_failures_.load()}};
+          {"send_failures", send_failures_.load()},
+          {"axis_names", axis_names_},
+          {"node_step", node_step_}};
 }
 
 }  // namespace hystbench::drivers

@@ -105,6 +105,39 @@ bool CanProtocol::decode_setpoint(const can_frame& f, double& volts) const noexc
   return true;
 }
 
+CanProtocol CanProtocol::at_node(std::uint32_t offset) const {
+  CanProtocol p = *this;
+  for (CanFrameId* id : {&p.setpoint_id, &p.feedback_id, &p.enable_id, &p.disable_id}) {
+    id->id += offset;
+  }
+  return p;
+}
+
+void check_can_nodes(const CanProtocol& protocol, std::size_t nodes, std::uint32_t node_step,
+                     const std::string& path) {
+  const std::uint32_t last = static_cast<std::uint32_t>(nodes - 1) * node_step;
+  for (const CanFrameId& id :
+       {protocol.setpoint_id, protocol.feedback_id, protocol.enable_id, protocol.disable_id}) {
+    const std::uint32_t mask = id.extended ? CAN_EFF_MASK : CAN_SFF_MASK;
+    if (id.id + last > mask) {
+      throw std::invalid_argument(path + ".node_step: the last axis's frame " + id.describe() +
+                                  " + " + std::to_string(last) + " is beyond the id range (" +
+                                  CanFrameId{mask, id.extended}.describe() + ")");
+    }
+  }
+  for (std::size_t a = 0; a < nodes; ++a) {
+    for (std::size_t b = 0; b < nodes; ++b) {
+      const CanFrameId sp = protocol.at_node(static_cast<std::uint32_t>(a) * node_step).setpoint_id;
+      const CanFrameId fb = protocol.at_node(static_cast<std::uint32_t>(b) * node_step).feedback_id;
+      if (sp.can_id() == fb.can_id()) {
+        throw std::invalid_argument(path + ".node_step: axis " + std::to_string(a) +
+                                    "'s setpoint id " + sp.describe() + " is axis " +
+                                    std::to_string(b) + "'s feedback id");
+      }
+    }
+  }
+}
+
 int can_frame_bits(int n, bool extended) noexcept {
   // Worst case with stuff bits (CAN 2.0): 8n + 44 + floor((34 + 8n - 1) / 4) for 11-bit ids,
   // 8n + 64 + floor((54 + 8n - 1) / 4) for 29-bit ids, plus 3 bits of interframe space.

@@ -1,12 +1,9 @@
 #include "hystbench/drivers/modbus_daq_config.hpp"
 
 #include <cmath>
-#include <set>
 #include <stdexcept>
 
 #include "details/json_params.hpp"
-#include "hystbench/drivers/driver_interface.hpp"
-#include "hystbench/sim/simulated_stage_config.hpp"
 
 namespace hystbench::drivers {
 
@@ -47,20 +44,7 @@ RegisterChannel parse_channel(const Params& p, const RegisterChannel& defaults, 
 
 /// The `axes` names and `axis_stride`: every axis's block within the register tables.
 void parse_axes(const Params& p, ModbusDaqConfig& c) {
-  c.axes = p.strings("axes", {});
-  if (p.has("axes") && (c.axes.empty() || c.axes.size() > kMaxAxes)) {
-    throw ParamError(p.key_path("axes") + ": 1 to " + std::to_string(kMaxAxes) +
-                     " axis names, got " + std::to_string(c.axes.size()));
-  }
-  std::set<std::string> seen;
-  for (const std::string& name : c.axes) {
-    if (!sim::is_axis_name(name)) {
-      throw ParamError(p.key_path("axes") + ": \"" + name + "\": 1 to 16 of a-z, 0-9 and _");
-    }
-    if (!seen.insert(name).second) {
-      throw ParamError(p.key_path("axes") + ": \"" + name + "\" names two axes");
-    }
-  }
+  c.axes = p.axis_names("axes");
   if (p.has("axis_stride") && !p.has("axes")) {
     throw ParamError(p.key_path("axis_stride") + ": only with axes (a stage of several axes)");
   }

@@ -8,6 +8,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstring>
@@ -249,6 +250,88 @@ TEST(CanAmplifier, ConfigErrorsNameTheKey) {
   EXPECT_EQ(d.configure({{"interface", "can0"}, {"bitrate", 5}}, 1000.0)
                 .message.rfind("driver.can.bitrate: unknown key", 0),
             0u);
+}
+
+// A stage: a node per axis, node_step ids apart. Every axis is enabled and answers, each
+// setpoint goes to its own node, the reading is fresh with every axis's newest, and a silent
+// axis faults naming it.
+TEST(CanAmplifier, AStageHasANodePerAxis) {
+  TestAmplifier amp(2);
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
+  ASSERT_TRUE(d.configure(params(amp.driver_fd, {{"axes", {"x", "y"}}}), 1000.0).ok);
+  ASSERT_EQ(d.axes(), 2u);
+  const auto r = d.activate();
+  ASSERT_TRUE(r.ok) << r.message;
+  std::set<canid_t> enabled;
+  for (const can_frame& f : amp.frames()) {
+    if (f.can_dlc == 1 && f.data[0] == 1) enabled.insert(f.can_id);
+  }
+  EXPECT_EQ(enabled, (std::set<canid_t>{0x100, 0x101}));
+  const std::array<double, 2> u = {100.0, 50.0};
+  std::array<hd::Measurement, 2> m{};
+  hd::DriverStatus s = hd::DriverStatus::kStale;
+  for (int k = 0; k < 100 && !(s == hd::DriverStatus::kOk && m[1].position_um > 14.0); ++k) {
+    d.write_axes(u);
+    s = d.read_axes(m);
+    std::this_thread::sleep_for(1ms);
+  }
+  ASSERT_EQ(s, hd::DriverStatus::kOk);
+  EXPECT_NEAR(m[0].position_um, 30.0, 1e-3);  // 0.3 um/V on each node
+  EXPECT_NEAR(m[1].position_um, 15.0, 1e-3);
+  std::set<canid_t> setpoints;
+  for (const can_frame& f : amp.frames()) {
+    if (f.can_dlc == 4) setpoints.insert(f.can_id);
+  }
+  EXPECT_EQ(setpoints, (std::set<canid_t>{0x200, 0x201}));
+  EXPECT_EQ(d.diagnostics()["axis_names"], json({"x", "y"}));
+
+  amp.set_silent_node(1);
+  for (int k = 0; k < 500 && s != hd::DriverStatus::kFault; ++k) {
+    d.write_axes(u);
+    s = d.read_axes(m);
+    std::this_thread::sleep_for(1ms);
+  }
+  ASSERT_EQ(s, hd::DriverStatus::kFault);
+  EXPECT_EQ(d.diagnostics()["last_fault"].get<std::string>().rfind(
+                "axis y: no feedback frame 0x181 for", 0),
+            0u)
+      << d.diagnostics().dump();
+  d.deactivate();
+  std::set<canid_t> disabled;
+  std::this_thread::sleep_for(5ms);
+  for (const can_frame& f : amp.frames()) {
+    if (f.can_dlc == 1 && f.data[0] == 0) disabled.insert(f.can_id);
+  }
+  EXPECT_EQ(disabled, (std::set<canid_t>{0x100, 0x101}));
+}
+
+TEST(CanAmplifier, AStageWhoseNodeDoesNotAnswerIsRefusedNamingTheAxis) {
+  TestAmplifier amp(1);  // one node on the bus, two configured
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
+  ASSERT_TRUE(d.configure(params(amp.driver_fd, {{"axes", {"x", "y"}}}), 1000.0).ok);
+  const auto r = d.activate();
+  ASSERT_FALSE(r.ok);
+  EXPECT_EQ(r.message.rfind("driver.can: axis y: no feedback frame 0x181 on socket", 0), 0u)
+      << r.message;
+}
+
+TEST(CanAmplifier, AStagesNodesMustFitTheIdsAndNotOverlap) {
+  hd::Driver d(std::make_unique<hd::CanAmplifierDriver>());
+  const json can0 = {{"interface", "can0"}};
+  const auto refusal = [&](const json& extra) {
+    json p = can0;
+    p.update(extra);
+    return d.configure(p, 1000.0).message;
+  };
+  EXPECT_EQ(refusal({{"node_step", 2}}),
+            "driver.can.node_step: only with axes (a stage of several axes)");
+  EXPECT_EQ(refusal({{"axes", {"x", "x"}}}), "driver.can.axes: \"x\" names two axes");
+  EXPECT_EQ(refusal({{"axes", {"x", "y"}}, {"node_step", 0x700}}),
+            "driver.can.node_step: the last axis's frame 0x200 + 1792 is beyond the id range "
+            "(0x7FF)");
+  EXPECT_EQ(refusal({{"axes", {"x", "y"}}, {"node_step", 0x80}}),
+            "driver.can.node_step: axis 0's setpoint id 0x200 is axis 1's feedback id");
+  EXPECT_TRUE(d.configure(json{{"interface", "can0"}, {"axes", {"x", "y", "z"}}}, 1000.0).ok);
 }
 
 TEST(CanProtocol, FieldsEncodeBothByteOrdersAndSigns) {

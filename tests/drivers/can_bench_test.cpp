@@ -7,10 +7,13 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <thread>
 
 #include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/daemon/config/config.hpp"
+#include "hystbench/daemon/config/daemon_settings.hpp"
 #include "hystbench/daemon/service/bench.hpp"
 #include "peer_process.hpp"
 
@@ -36,7 +39,8 @@ class CanBenchTest : public ::testing::Test {
     if (fd_ >= 0) ::close(fd_);
     std::filesystem::remove_all(dir_);
   }
-  void start(std::vector<std::string> amp_args) {
+  /// hystbench-simamp with `amp_args` on the other end of a socketpair (fd_ is the bench's).
+  void start_amplifier(std::vector<std::string> amp_args) {
     int sv[2];
     ASSERT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, sv), 0);
     std::vector<std::string> argv{ht::bin("hystbench-simamp"), "--fd", "3"};
@@ -45,19 +49,10 @@ class CanBenchTest : public ::testing::Test {
     ::close(sv[1]);
     fd_ = sv[0];
     ASSERT_TRUE(amp_->wait_for("ready on fd 3", 5s));
-    hdm::BenchSettings s;
-    s.loop.rate_hz = 2000.0;
-    s.loop.realtime.fifo = false;
-    s.loop.realtime.lock_memory = false;
-    s.loop.overrun_budget = 1000000;
-    s.driver_type = "can";
-    // Generous: a loaded CI machine may not schedule the simulator for tens of milliseconds.
-    s.driver_params = {{"socket_fd", fd_}, {"heartbeat_timeout_ms", 200}};
+  }
+  void start_bench(hdm::BenchSettings s) {
     s.log_dir = (dir_ / "logs").string();
     s.model_dir = (dir_ / "models").string();
-    s.y_min = 0.0;
-    s.y_max = 40.0;
-    s.precondition_s = 0.2;
     bench_ = std::make_unique<hdm::Bench>(s);
     bench_->set_event_sink([this](const json& e) {
       if (e["event"] == "run.finished") {
@@ -66,6 +61,21 @@ class CanBenchTest : public ::testing::Test {
       }
     });
     bench_->start();
+  }
+  void start(std::vector<std::string> amp_args) {
+    start_amplifier(std::move(amp_args));
+    hdm::BenchSettings s;
+    s.loop.rate_hz = 2000.0;
+    s.loop.realtime.fifo = false;
+    s.loop.realtime.lock_memory = false;
+    s.loop.overrun_budget = 1000000;
+    s.driver_type = "can";
+    // Generous: a loaded CI machine may not schedule the simulator for tens of milliseconds.
+    s.driver_params = {{"socket_fd", fd_}, {"heartbeat_timeout_ms", 200}};
+    s.y_min = 0.0;
+    s.y_max = 40.0;
+    s.precondition_s = 0.2;
+    start_bench(s);
   }
   json track(double periods) {
     bench_->handle("track", {{"compensator", "none"}, {"periods", periods}});
@@ -106,6 +116,45 @@ TEST_F(CanBenchTest, TrackRunOverCanFrames) {
   const json st = bench_->handle("status", json::object());
   EXPECT_EQ(st["driver"]["malformed_frames"], 0);
   EXPECT_GT(st["driver"]["feedback_frames"].get<int>(), 1000);
+}
+
+// A stage over CAN, a node per axis, configured as a user writes it ([driver.can] axes):
+// hystbench-simamp --stage xy answers each axis's node, the Lissajous moves each axis over its
+// range, and the result is given per axis.
+TEST_F(CanBenchTest, AStageOfANodePerAxisTracksEveryAxis) {
+  start_amplifier({"--stage", "xy"});
+  // Generous heartbeat as above: a loaded CI machine may not schedule the simulator in time.
+  const std::string toml =
+      "[loop]\nrate_hz = 2000\noverrun_budget = 1000000\n"
+      "[limits]\ny_min = 0.0\ny_max = 44.0\n"
+      "[driver]\ntype = \"can\"\n"
+      "[driver.can]\nsocket_fd = " +
+      std::to_string(fd_) + "\nheartbeat_timeout_ms = 200\naxes = [\"x\", \"y\"]\n";
+  hdm::BenchSettings s = hdm::bench_settings_from(hdm::parse_config(toml));
+  ASSERT_EQ(s.axes, (std::vector<std::string>{"x", "y"}));
+  s.loop.realtime.fifo = false;
+  s.loop.realtime.lock_memory = false;
+  s.precondition_s = 0.2;
+  start_bench(s);
+  bench_->handle("track", {{"reference", "lissajous"}});
+  ASSERT_TRUE(bench_->wait_idle(30s));
+  json r;
+  {
+    std::lock_guard lock(m_);
+    ASSERT_FALSE(results_.empty());
+    r = results_.back();
+  }
+  ASSERT_EQ(r["end"], "completed") << r.dump(2);
+  EXPECT_EQ(r["dropped"], 0);
+  for (const char* axis : {"x", "y"}) {
+    EXPECT_GT(r["axes"][axis]["range_um"].get<double>(), 20.0) << axis << r["axes"].dump();
+  }
+  // y's motion shows on x and x's on y: each node is its own axis of the coupled stage.
+  EXPECT_GT(std::abs(r["coupling_error"]["y"]["gain_from"]["x"].get<double>()), 0.02)
+      << r["coupling_error"].dump();
+  const json st = bench_->handle("status", json::object());
+  EXPECT_EQ(st["driver"]["malformed_frames"], 0);
+  EXPECT_EQ(st["driver"]["axis_names"], json({"x", "y"}));
 }
 
 TEST_F(CanBenchTest, MissingFeedbackFaults) {

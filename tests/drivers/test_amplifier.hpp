@@ -17,11 +17,12 @@
 
 namespace hystbench::test {
 
-/// The amplifier's end of the socketpair, answered from a thread.
+/// The amplifier's end of the socketpair, answered from a thread: `nodes` amplifier nodes (a
+/// stage's axes), node i at the default ids plus i, each answering 0.3 um per V.
 class TestAmplifier {
  public:
   enum class Mode { kAnswer, kSilent, kMalformed, kFaultBit };
-  TestAmplifier() {
+  explicit TestAmplifier(int nodes = 1) : nodes_(nodes) {
     int sv[2];
     EXPECT_EQ(::socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, sv), 0);
     driver_fd = sv[0];
@@ -35,6 +36,8 @@ class TestAmplifier {
     ::close(driver_fd);
   }
   void set_mode(Mode m) { mode_ = m; }
+  /// Node i stops answering (-1: every node answers).
+  void set_silent_node(int i) { silent_node_ = i; }
   /// Answer only one setpoint in `n` (a slow amplifier; 1 = every one).
   void set_answer_every(int n) { answer_every_ = n; }
   void send(const can_frame& f) { ::send(amp_fd_, &f, sizeof f, MSG_NOSIGNAL); }
@@ -46,7 +49,9 @@ class TestAmplifier {
 
  private:
   void run() {
-    const drivers::CanProtocol p;  // the defaults
+    const drivers::CanProtocol defaults;
+    std::vector<drivers::CanProtocol> nodes;
+    for (int i = 0; i < nodes_; ++i) nodes.push_back(defaults.at_node(i));
     while (!quit_) {
       can_frame f{};
       const ssize_t n = ::recv(amp_fd_, &f, sizeof f, MSG_DONTWAIT);
@@ -59,14 +64,19 @@ class TestAmplifier {
         frames_.push_back(f);
       }
       double v = 0.0;
-      if (!p.decode_setpoint(f, v)) continue;
-      can_frame fb = p.feedback_frame(0.3 * v, mode_ == Mode::kFaultBit ? 0x1 : 0x2);
+      int node = 0;
+      while (node < nodes_ && !nodes[node].decode_setpoint(f, v)) ++node;
+      if (node == nodes_) continue;
+      can_frame fb = nodes[node].feedback_frame(0.3 * v, mode_ == Mode::kFaultBit ? 0x1 : 0x2);
+      if (node == silent_node_) continue;
       if (mode_ == Mode::kSilent || ++setpoints_ % answer_every_ != 0) continue;
       if (mode_ == Mode::kMalformed) fb.can_dlc = 3;
       send(fb);
     }
   }
   int amp_fd_ = -1;
+  const int nodes_;
+  std::atomic<int> silent_node_{-1};
   std::atomic<bool> quit_{false};
   std::atomic<Mode> mode_{Mode::kAnswer};
   std::atomic<int> answer_every_{1};

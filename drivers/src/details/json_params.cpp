@@ -1,6 +1,10 @@
 #include "details/json_params.hpp"
 
 #include <cmath>
+#include <set>
+
+#include "hystbench/drivers/driver_interface.hpp"
+#include "hystbench/sim/simulated_stage_config.hpp"
 
 namespace hystbench::drivers::details {
 
@@ -122,6 +126,24 @@ std::vector<std::string> Params::strings(const char* key, std::vector<std::strin
     out.push_back(e.get<std::string>());
   }
   return out;
+}
+
+std::vector<std::string> Params::axis_names(const char* key) const {
+  std::vector<std::string> names = strings(key, {});
+  if (has(key) && (names.empty() || names.size() > kMaxAxes)) {
+    throw ParamError(key_path(key) + ": 1 to " + std::to_string(kMaxAxes) + " axis names, got " +
+                     std::to_string(names.size()));
+  }
+  std::set<std::string> seen;
+  for (const std::string& name : names) {
+    if (!sim::is_axis_name(name)) {
+      throw ParamError(key_path(key) + ": \"" + name + "\": 1 to 16 of a-z, 0-9 and _");
+    }
+    if (!seen.insert(name).second) {
+      throw ParamError(key_path(key) + ": \"" + name + "\" names two axes");
+    }
+  }
+  return names;
 }
 
 Params Params::table(const char* key) const {

@@ -40,6 +40,9 @@ class Params {
                                      std::int64_t lo, std::int64_t hi) const;
   /// An array of strings.
   std::vector<std::string> strings(const char* key, std::vector<std::string> fallback) const;
+  /// A stage's axis names: 1 to kMaxAxes strings, each sim::is_axis_name, none twice (empty
+  /// when absent: one axis).
+  std::vector<std::string> axis_names(const char* key) const;
   /// A sub-table (empty when absent); throws when the key holds something else.
   Params table(const char* key) const;
 

@@ -16,17 +16,26 @@
 //                                 frames must fit in a tick), 20000 without a bitrate
 //   safe_output_v, output_min_v, output_max_v   [V] (0, 0, 150)
 //   [setpoint] [feedback] [enable] [disable]    the frames: see can_protocol.hpp
+//   axes = ["x", "y"]             a stage of several axes, a node each: axis i's four frames
+//                                 are the ones above with i * node_step added to each id (one)
+//   node_step = 1                 [1, 0x1000000] ids from one axis's node to the next
 // activate() refuses a down, stopped or bus-off interface, a loop rate the bitrate cannot
 // carry, and an amplifier that does not answer the enable frame and a setpoint with feedback
 // within max(heartbeat_timeout_ms, 200 ms); every message names the interface and the cause.
+// A stage: write_axes() sends every axis's setpoint, read_axes() is fresh once every axis's
+// feedback has come since the last fresh one (each axis's newest); activation enables and waits
+// for every axis, naming the one that does not answer; the heartbeat watches each axis.
 // Faults (read() returns kFault): feedback silent beyond the heartbeat timeout, a malformed
 // feedback frame (wrong length), bus-off (error frame), the amplifier's fault bit, the socket
 // closed, 3 failed sends in a row. describe_fault() says which, in words.
 // Real-time: write()/read()/safe_state() make non-blocking socket calls only.
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "hystbench/drivers/can_bus.hpp"
 #include "hystbench/drivers/can_protocol.hpp"
@@ -53,7 +62,14 @@ class CanAmplifierDriver final : public DriverInterface {
   DriverStatus write(double output_v) noexcept override;
   /// Takes every frame that arrived (at most 64, non-blocking); fresh when one was feedback.
   DriverStatus read(Measurement& out) noexcept override;
+  /// Every axis's setpoint frame, in axis order.
+  DriverStatus write_axes(std::span<const double> outputs_v) noexcept override;
+  /// As read(), fresh once each of the first out.size() axes has answered since the last
+  /// fresh read.
+  DriverStatus read_axes(std::span<Measurement> out) noexcept override;
+  /// The safe setpoint on every axis.
   DriverStatus safe_state() noexcept override;
+  std::size_t axes() const noexcept override { return nodes_.size(); }
 
   /// max_rate_hz from max_rate_hz and, after activation, the bitrate; measurement_resolution_um
   /// = |feedback.scale| (one count of the position field).
@@ -74,15 +90,23 @@ class CanAmplifierDriver final : public DriverInterface {
   /// The interface is up and its controller (when there is one) neither bus-off, after a
   /// restart where configured, nor stopped; reads its bitrate (0 without a controller).
   Result check_controller(const std::string& where);
-  /// The loop rate fits on the bus: a setpoint and a feedback frame per tick at the bitrate.
+  /// The loop rate fits on the bus: a setpoint and a feedback frame per axis and tick at the
+  /// bitrate.
   Result check_bus_rate(const std::string& where);
   /// The socket: a duplicate of socket_fd, else the interface's.
   Result open_socket();
-  /// Sends the enable frame, then safe setpoints until the amplifier's feedback answers
-  /// without a fault; keeps its position as the activation position.
+  /// Sends every axis's enable frame, then safe setpoints until each axis's feedback answers
+  /// without a fault; keeps the first axis's position as the activation position.
   Result enable_amplifier(const std::string& where);
+  /// "axis y: " on a stage, "" on one axis (for messages).
+  std::string axis_words(std::size_t a) const;
+  /// Sends every axis's setpoint at `volts`; false when one send failed.
+  bool send_setpoints(double volts) noexcept;
 
   CanProtocol protocol_;
+  std::vector<CanProtocol> nodes_{CanProtocol{}};  ///< per axis: protocol_ at its node
+  std::vector<std::string> axis_names_;            ///< empty: one axis
+  std::uint32_t node_step_ = 1;
   std::string interface_;
   int socket_fd_ = -1;
   std::int64_t heartbeat_ns_ = 50'000'000;
@@ -101,9 +125,12 @@ class CanAmplifierDriver final : public DriverInterface {
 
   // Loop-thread state.
   int consecutive_send_failures_ = 0;
+  std::array<double, kMaxAxes> newest_um_{};  ///< each axis's newest feedback
+  std::uint32_t answered_ = 0;                ///< bit a: axis a answered since the last fresh
 
   // Shared with diagnostics() and the supervisor.
-  std::atomic<std::int64_t> last_feedback_ns_{0};
+  std::array<std::atomic<std::int64_t>, kMaxAxes> last_feedback_ns_{};
+  std::atomic<int> silent_axis_{0};  ///< the axis of the last heartbeat fault
   std::atomic<bool> bus_off_{false};
   std::atomic<bool> socket_dead_{false};
   std::atomic<std::uint64_t> sent_{0}, received_{0}, feedback_{0}, malformed_{0}, bus_offs_{0};

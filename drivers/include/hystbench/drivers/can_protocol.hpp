@@ -13,6 +13,7 @@
 // fault. encode/decode are real-time safe; parse_can_protocol() allocates and throws.
 #include <linux/can.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -72,7 +73,17 @@ struct CanProtocol {
   int enable_command(const can_frame& f) const noexcept;
   /// The setpoint [V] of a setpoint frame, false for any other (for the amplifier side).
   bool decode_setpoint(const can_frame& f, double& volts) const noexcept;
+  /// The same frames for the node `offset` ids further on: each of the four ids plus `offset`
+  /// (a stage's axis i at i * node_step). The caller keeps the ids in range
+  /// (check_can_nodes()).
+  CanProtocol at_node(std::uint32_t offset) const;
 };
+
+/// Checks that `nodes` copies of `protocol`, `node_step` ids apart, keep every id within its
+/// 11 or 29 bits and no setpoint id on any node's feedback id; throws std::invalid_argument at
+/// `path` ("driver.can.node_step: ...") naming the ids.
+void check_can_nodes(const CanProtocol& protocol, std::size_t nodes, std::uint32_t node_step,
+                     const std::string& path);
 
 /// Longest time a frame of `data_bytes` needs on the bus, bit stuffing included, in bits.
 int can_frame_bits(int data_bytes, bool extended) noexcept;
