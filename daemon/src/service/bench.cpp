@@ -292,10 +292,10 @@ nlohmann::json Bench::load_model(const details::RequestParams& request) {
   }
   // Checked first: a refused request changes nothing (an upload is not kept either).
   std::lock_guard lock(mutex_);
-  refuse_on_stage("model.load");
   if (phase_ != RunPhase::kIdle) {
     throw common::CommandError("busy", "a run is active; load the model after it");
   }
+  if (is_stage()) return load_stage_model(request);
   details::FolderModel m =
       stored ? details::load_stored_model(settings_.model_dir, request.string("stored", ""))
              : details::keep_model_document(settings_.model_dir, request.string("name", "uploaded"),

@@ -2,6 +2,8 @@
 // every axis together, their results per axis (runs/details/stage_runs.hpp).
 #include <spdlog/spdlog.h>
 
+#include <filesystem>
+
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/daemon/service/bench.hpp"
 #include "runs/details/identify_program.hpp"
@@ -35,6 +37,48 @@ json Bench::stage_status() const {
   s["run_id"] = stage_->run_id;
   s["axes_order"] = stage_->axes;
   return s;
+}
+
+json Bench::save_stage_models() {
+  json saved = json::array();
+  for (std::size_t a = 0; a < stage_->axes.size(); ++a) {
+    const std::string name = stage_->run_id + "-" + stage_->axes[a];
+    const details::FolderModel kept = details::keep_model_document(
+        settings_.model_dir, name, compensation::to_json(stage_->models[a]));
+    saved.push_back(std::filesystem::path(kept.path).filename().string());
+  }
+  return saved;
+}
+
+json Bench::load_stage_model(const details::RequestParams& request) {
+  if (!request.has("stored")) {
+    throw common::CommandError(
+        "not_on_stage",
+        "model.load on a stage of " + std::to_string(settings_.axes.size()) +
+            " axes takes 'stored': the stage identify's run id, whose axes' models (RUN-AXIS.json) "
+            "load together with their coupling");
+  }
+  const std::string run_id = request.string("stored", "");
+  std::vector<compensation::ModelFile> files;
+  std::vector<std::string> names;
+  for (const std::string& axis : settings_.axes) {
+    names.push_back(run_id + "-" + axis + ".json");
+    files.push_back(details::load_stored_model(settings_.model_dir, names.back()).file);
+  }
+  auto model = std::make_unique<details::StageModel>(
+      details::stage_model_from_files(std::move(files), settings_.axes, names));
+  stage_ = std::move(model);
+  ++model_generation_;
+  json axes = json::object();
+  for (std::size_t a = 0; a < stage_->axes.size(); ++a) {
+    const compensation::ModelFile& f = stage_->models[a];
+    axes[stage_->axes[a]] = {
+        {"name", names[a]},
+        {"type", std::string(compensation::to_string(f.model.hysteresis().kind()))},
+        {"responses", f.responses.has_value()}};
+  }
+  return {
+      {"stage_run_id", stage_->run_id}, {"axes", axes}, {"coupling", stage_->report["coupling"]}};
 }
 
 json Bench::start_stage_identify(const details::IdentifyRequest& request) {
@@ -209,7 +253,15 @@ void Bench::axes_responses_measured(const RunProgram& run, details::RunResult re
             details::responses_summary(measured[a], before);
         if (model != nullptr) model->responses = std::move(measured[a]);
       }
-      if (stage_) stage_->report["frequency_responses_from"] = run.run_id;
+      if (stage_) {
+        stage_->report["frequency_responses_from"] = run.run_id;
+        // Kept with each axis's model, so that a stage loaded back designs its loops on them.
+        try {
+          save_stage_models();
+        } catch (const std::exception& e) {
+          report["save_error"] = e.what();
+        }
+      }
     } catch (const std::exception& e) {
       report["frequency_response_error"] = e.what();
       spdlog::error("run {}: the stage's frequency responses: {}", run.run_id, e.what());
@@ -248,26 +300,16 @@ void Bench::stage_identified(const RunProgram& run, details::RunResult result) {
   try {
     auto model = std::make_unique<details::StageModel>(
         details::fit_stage_identify(run, fit_request, settings_));
-    json saved = json::array();
-    for (std::size_t a = 0; a < model->axes.size(); ++a) {
-      const std::string name = run.run_id + "-" + model->axes[a];
-      try {
-        saved.push_back(std::filesystem::path(
-                            details::keep_model_document(settings_.model_dir, name,
-                                                         compensation::to_json(model->models[a]))
-                                .path)
-                            .filename()
-                            .string());
-      } catch (const std::exception& e) {
-        spdlog::warn("stage identify: axis {}'s model not saved: {}", model->axes[a], e.what());
-        result.report["save_error"] = e.what();
-      }
-    }
-    model->report["saved"] = saved;
-    result.report["stage_model"] = model->report;
     {
       std::lock_guard lock(mutex_);
       stage_ = std::move(model);
+      try {
+        stage_->report["saved"] = save_stage_models();
+      } catch (const std::exception& e) {
+        spdlog::warn("stage identify: the axes' models not saved: {}", e.what());
+        result.report["save_error"] = e.what();
+      }
+      result.report["stage_model"] = stage_->report;
     }
     // Each axis's responses next, as one axis's identify measures its stage's: its feedback is
     // designed on them.

@@ -167,6 +167,25 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
   for (const std::size_t column : {9u, 10u, 16u, 17u}) {
     EXPECT_TRUE(std::isfinite(std::stod(cells[column]))) << column << ": " << line;
   }
+
+  // A daemon restarted loads the stage back by its identify's run id: each axis's model with the
+  // responses its loop is designed on, and the coupling, as they were.
+  bench_.reset();
+  start_xy();
+  EXPECT_TRUE(status()["stage_model"].is_null());
+  const json loaded = bench_->handle("model.load", {{"stored", id["run_id"]}});
+  EXPECT_EQ(loaded["stage_run_id"], id["run_id"]);
+  for (const char* axis : {"x", "y"}) EXPECT_EQ(loaded["axes"][axis]["responses"], true) << axis;
+  EXPECT_NEAR(loaded["coupling"]["gains"]["y<-x"]["gain"].get<double>(),
+              gains["y<-x"]["gain"].get<double>(), 1e-12);
+  const json again =
+      run_and_wait("track", {{"reference", "raster"}, {"compensator", "inverse+pid"}}, 600);
+  ASSERT_EQ(again.value("end", ""), "completed") << again.dump();
+  EXPECT_EQ(again["decoupling"]["static"], true);
+  for (const char* axis : {"x", "y"}) {
+    EXPECT_GT(again["axes"][axis]["feedback"]["crossover_hz"].get<double>(), 100.0) << axis;
+    EXPECT_LT(again["axes"][axis]["rms_error_percent"].get<double>(), 0.1) << axis;
+  }
 }
 
 TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) {
@@ -174,7 +193,7 @@ TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) 
   for (const auto& [cmd, params] :
        std::vector<std::pair<std::string, json>>{{"tune", json::object()},
                                                  {"excite", {{"drive_upload", "u"}}},
-                                                 {"model.load", {{"stored", "m"}}}}) {
+                                                 {"model.load", {{"model", json::object()}}}}) {
     const auto [code, message] = refused(cmd, params);
     EXPECT_EQ(code, "not_on_stage") << cmd << ": " << message;
     EXPECT_NE(message.find("stage of 2 axes"), std::string::npos) << message;

@@ -1,6 +1,8 @@
 // A stage's identify: one axis at a time, then compensation::fit_stage (stage_runs.hpp).
 #include <algorithm>
 #include <cmath>
+#include <span>
+#include <stdexcept>
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
@@ -65,23 +67,66 @@ std::vector<hc::OneAxisMotion> turn_records(const RunProgram& run,
 }
 
 // The coupling's gains for identify's result, keyed "y<-x".
-json coupling_json(const hc::StageFit& fit, const std::vector<std::string>& axes) {
+json coupling_json(const hc::CouplingEstimate& coupling, std::span<const std::string> axes) {
   json gains = json::object();
   for (std::size_t i = 0; i < axes.size(); ++i) {
     for (std::size_t j = 0; j < axes.size(); ++j) {
       if (i == j) continue;
       const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
-      const double db = fit.coupling_db(ii, jj);
+      const double g = coupling.gains(ii, jj);
       gains[pair_name(axes[i], axes[j])] = {
-          {"gain", fit.coupling.gains(ii, jj)},
-          {"db", std::isfinite(db) ? json(db) : json(nullptr)},
-          {"residual_share", fit.coupling.residual_share(ii, jj)}};
+          {"gain", g},
+          {"db", g != 0.0 ? json(20.0 * std::log10(std::abs(g))) : json(nullptr)},
+          {"residual_share", coupling.residual_share(ii, jj)}};
     }
   }
   return {{"gains", gains},
           {"meaning",
            "\"y<-x\": the share of x's own displacement that reaches y at low frequency; "
            "residual_share: what a static gain leaves of it"}};
+}
+
+// The stage every axis's model file carries: its axes, its identify run and the coupling.
+json stage_json(const hc::CouplingEstimate& coupling, std::span<const std::string> axes,
+                const std::string& run_id) {
+  json gains = json::array(), shares = json::array();
+  for (Eigen::Index i = 0; i < coupling.gains.rows(); ++i) {
+    json g = json::array(), r = json::array();
+    for (Eigen::Index j = 0; j < coupling.gains.cols(); ++j) {
+      g.push_back(coupling.gains(i, j));
+      r.push_back(coupling.residual_share(i, j));
+    }
+    gains.push_back(std::move(g));
+    shares.push_back(std::move(r));
+  }
+  return {{"axes", std::vector<std::string>(axes.begin(), axes.end())},
+          {"run_id", run_id},
+          {"coupling", {{"gains", gains}, {"residual_share", shares}}}};
+}
+
+// stage_json()'s coupling back, `n` axes square; throws naming what is wrong.
+hc::CouplingEstimate coupling_from_json(const json& j, std::size_t n) {
+  hc::CouplingEstimate c;
+  const auto n_idx = static_cast<Eigen::Index>(n);
+  c.gains = Eigen::MatrixXd::Zero(n_idx, n_idx);
+  c.residual_share = Eigen::MatrixXd::Zero(n_idx, n_idx);
+  for (const auto& [key, m] :
+       {std::pair{"gains", &c.gains}, {"residual_share", &c.residual_share}}) {
+    const json& rows = j.at(key);
+    if (!rows.is_array() || rows.size() != n) {
+      throw std::invalid_argument(std::string(key) + ": " + std::to_string(n) + " rows expected");
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!rows[i].is_array() || rows[i].size() != n) {
+        throw std::invalid_argument(std::string(key) + "[" + std::to_string(i) +
+                                    "]: " + std::to_string(n) + " numbers expected");
+      }
+      for (std::size_t k = 0; k < n; ++k) {
+        (*m)(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = rows[i][k].get<double>();
+      }
+    }
+  }
+  return c;
 }
 
 // identify's fit options for each axis of a stage, at the fit rate.
@@ -264,7 +309,51 @@ StageModel fit_stage_identify(const RunProgram& run, const json& fit,
          {"figures", figures}}};
     model.models.push_back(std::move(file));
   }
-  model.report = {{"axes", per_axis}, {"coupling", coupling_json(stage_fit, axes)}};
+  const json stage = stage_json(model.coupling, axes, run.run_id);
+  for (hc::ModelFile& file : model.models) file.identification["stage"] = stage;
+  model.report = {{"axes", per_axis}, {"coupling", coupling_json(model.coupling, axes)}};
+  return model;
+}
+
+StageModel stage_model_from_files(std::vector<hc::ModelFile> files,
+                                  std::span<const std::string> axes,
+                                  std::span<const std::string> names) {
+  const auto refuse = [&](std::size_t a, const std::string& why) {
+    throw common::CommandError("bad_model", names[a] + ": " + why);
+  };
+  StageModel model;
+  model.axes.assign(axes.begin(), axes.end());
+  json per_axis = json::object();
+  for (std::size_t a = 0; a < files.size(); ++a) {
+    const json& id = files[a].identification;
+    if (!id.contains("stage") || id.value("stage_axis", "") != axes[a]) {
+      refuse(a, "not axis " + axes[a] +
+                    "'s model of a stage identify (no identification.stage "
+                    "naming it)");
+    }
+    const json& stage = id["stage"];
+    if (stage.value("axes", json::array()) != json(model.axes)) {
+      refuse(a, "a model of a stage of axes " + stage.value("axes", json::array()).dump() +
+                    ", this bench's are " + json(model.axes).dump());
+    }
+    if (a == 0) {
+      model.run_id = stage.value("run_id", "");
+      try {
+        model.coupling = coupling_from_json(stage.at("coupling"), axes.size());
+        model.decoupler = hc::StageDecoupler(model.coupling.gains);
+      } catch (const std::exception& e) {
+        refuse(a, std::string("its coupling: ") + e.what());
+      }
+    } else if (stage.value("run_id", "") != model.run_id) {
+      refuse(a, "of stage identify " + stage.value("run_id", "") + ", " + names[0] + " of " +
+                    model.run_id + ": load one identify's models together");
+    }
+    per_axis[axes[a]] = id.value("figures", json::object());
+  }
+  model.models = std::move(files);
+  model.report = {{"axes", per_axis},
+                  {"coupling", coupling_json(model.coupling, axes)},
+                  {"loaded_from", json(std::vector<std::string>(names.begin(), names.end()))}};
   return model;
 }
 

@@ -50,8 +50,17 @@ BuiltRun make_stage_identify_program(const IdentifyRequest& request, const RunCo
 
 /// The stage's model from a completed stage identify run (its `fit` request): each turn's record
 /// (the moved axis's drive, every axis's output) to compensation::fit_stage at identify's fit
-/// rate, each axis's model taking the output range as its input range. Throws CommandError
-/// fit_error naming the cause.
+/// rate, each axis's model taking the output range as its input range. Each axis's model file
+/// carries the stage (its axes and the coupling) under identification.stage, so that
+/// stage_model_from_files() builds the stage again. Throws CommandError fit_error naming the
+/// cause.
+/// The stage of `axes` again from its axes' model files, in axis order (`names`: the files'
+/// names, for the report): each must be of the same stage identify and name its axis; the
+/// coupling is the one they carry. Throws CommandError bad_model naming the file and the cause.
+StageModel stage_model_from_files(std::vector<compensation::ModelFile> files,
+                                  std::span<const std::string> axes,
+                                  std::span<const std::string> names);
+
 StageModel fit_stage_identify(const RunProgram& run, const nlohmann::json& fit,
                               const BenchSettings& settings);
 

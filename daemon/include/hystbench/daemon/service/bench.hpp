@@ -159,6 +159,13 @@ class Bench {
   std::vector<double> axis_outputs() const;
   /// status' and model.get's word on the stage. Caller holds mutex_.
   nlohmann::json stage_status() const;
+  /// model.load on a stage: `stored` names the stage identify's run; each axis's model file
+  /// RUN-AXIS.json (with its responses and the coupling it carries) becomes the stage's model.
+  /// Caller holds mutex_.
+  nlohmann::json load_stage_model(const details::RequestParams& request);
+  /// Writes each axis's model file of stage_ (RUN-AXIS.json, its responses with it) to the model
+  /// folder; the file names. Throws CommandError io_error. Caller holds mutex_.
+  nlohmann::json save_stage_models();
   /// A finished frf run: the responses estimated, kept, and its result (supervisor thread).
   void responses_finished(std::unique_ptr<RunProgram> run, details::RunResult result);
   /// identify's last segment: frf's run, once the model is chosen; false when it did not start.
