@@ -43,8 +43,19 @@ json Bench::save_stage_models() {
   json saved = json::array();
   for (std::size_t a = 0; a < stage_->axes.size(); ++a) {
     const std::string name = stage_->run_id + "-" + stage_->axes[a];
-    const details::FolderModel kept = details::keep_model_document(
-        settings_.model_dir, name, compensation::to_json(stage_->models[a]));
+    json document = compensation::to_json(stage_->models[a]);
+    // What the other axes' drives left on this axis, measured with the responses.
+    if (a < stage_->cross.size()) {
+      json cross = json::object();
+      for (std::size_t j = 0; j < stage_->cross[a].size(); ++j) {
+        if (j != a && !stage_->cross[a][j].responses.empty()) {
+          cross[stage_->axes[j]] = compensation::to_json(stage_->cross[a][j]);
+        }
+      }
+      if (!cross.empty()) document["identification"]["stage"]["cross_responses"] = cross;
+    }
+    const details::FolderModel kept =
+        details::keep_model_document(settings_.model_dir, name, document);
     saved.push_back(std::filesystem::path(kept.path).filename().string());
   }
   return saved;
@@ -242,6 +253,9 @@ void Bench::axes_responses_measured(const RunProgram& run, details::RunResult re
     try {
       std::vector<compensation::StageResponses> measured =
           details::measure_stage_responses(run, options, turn);
+      // What each axis's drive left on the others, for the loops' check together.
+      std::vector<std::vector<compensation::StageResponses>> cross =
+          details::measure_stage_cross_responses(run, options, turn);
       std::lock_guard lock(mutex_);
       for (std::size_t a = 0; a < measured.size(); ++a) {
         const std::string& axis = settings_.axes[a];
@@ -255,6 +269,7 @@ void Bench::axes_responses_measured(const RunProgram& run, details::RunResult re
       }
       if (stage_) {
         stage_->report["frequency_responses_from"] = run.run_id;
+        stage_->cross = std::move(cross);
         // Kept with each axis's model, so that a stage loaded back designs its loops on them.
         try {
           save_stage_models();

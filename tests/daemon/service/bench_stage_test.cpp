@@ -133,6 +133,14 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
     EXPECT_GT(fed["axes"][axis]["feedback"]["crossover_hz"].get<double>(), 100.0) << axis;
     EXPECT_LT(fed["axes"][axis]["rms_error_percent"].get<double>(), 0.1) << axis;
   }
+  // The loops, each designed alone, checked together through the cross responses identify
+  // measured: the stage's -20 and -25 dB keep them well inside dominance.
+  const json& interaction = fed["feedback_interaction"];
+  ASSERT_TRUE(interaction.is_object()) << fed.dump();
+  EXPECT_EQ(interaction["dominant"], true) << interaction.dump();
+  EXPECT_GT(interaction["peak"].get<double>(), 0.01) << interaction.dump();
+  EXPECT_LT(interaction["peak"].get<double>(), 0.5) << interaction.dump();
+  RecordProperty("feedback_interaction_peak", std::to_string(interaction["peak"].get<double>()));
 
   // Both axes learned at once over the default Lissajous (10 and 11 Hz, a trial its 2 s) from
   // each axis's decoupled inverse: each within 0.03 % rms after ten updates.
@@ -186,6 +194,8 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
     EXPECT_GT(again["axes"][axis]["feedback"]["crossover_hz"].get<double>(), 100.0) << axis;
     EXPECT_LT(again["axes"][axis]["rms_error_percent"].get<double>(), 0.1) << axis;
   }
+  EXPECT_NEAR(again["feedback_interaction"]["peak"].get<double>(),
+              interaction["peak"].get<double>(), 1e-9);
 }
 
 TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) {

@@ -23,6 +23,7 @@
 namespace hystbench::daemon::details {
 
 struct FeedbackPlanCache;  // feedback_design.hpp
+struct FeedbackPlan;       // feedback_design.hpp
 
 /// The last feedforward plan and what it was planned from: a track run with the same model, the
 /// same start (output, open-loop prefix) and the same targets (another compensator over the same
@@ -85,6 +86,8 @@ struct BuiltRun {
   std::unique_ptr<TrackLearning> learning;
   /// track --learn on a stage: the learners of axes 1, 2, ... (axis 0's is `learning`).
   std::vector<std::unique_ptr<TrackLearning>> axis_learning;
+  /// track with feedback: the loop's design (a stage checks its axes' loops together).
+  std::shared_ptr<const FeedbackPlan> feedback_plan;
 };
 
 /// Most samples a run records for its figures and fit (the log keeps every sample).

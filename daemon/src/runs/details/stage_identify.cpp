@@ -350,6 +350,21 @@ StageModel stage_model_from_files(std::vector<hc::ModelFile> files,
     }
     per_axis[axes[a]] = id.value("figures", json::object());
   }
+  // The cross responses each file kept (what the other axes' drives left on its axis).
+  const std::size_t n = axes.size();
+  model.cross.assign(n, std::vector<hc::StageResponses>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    const json cross = files[i].identification["stage"].value("cross_responses", json::object());
+    for (std::size_t j = 0; j < n; ++j) {
+      if (i == j || !cross.contains(axes[j])) continue;
+      try {
+        model.cross[i][j] = hc::stage_responses_from_json(
+            cross[axes[j]], "identification.stage.cross_responses." + axes[j]);
+      } catch (const std::exception& e) {
+        refuse(i, e.what());
+      }
+    }
+  }
   model.models = std::move(files);
   model.report = {{"axes", per_axis},
                   {"coupling", coupling_json(model.coupling, axes)},

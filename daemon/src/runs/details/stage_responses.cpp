@@ -1,5 +1,6 @@
 // A stage's frf: each axis's frequency responses measured in its own turn (stage_runs.hpp).
 #include <algorithm>
+#include <memory>
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
@@ -60,30 +61,59 @@ BuiltRun make_stage_response_program(
   return run;
 }
 
+namespace {
+
+// Axis `moved`'s turn as a run of its own, as measure_responses() reads one: its drive, and
+// axis `seen`'s output.
+std::unique_ptr<RunProgram> turn_record(const RunProgram& run, std::size_t moved, std::size_t seen,
+                                        std::size_t turn) {
+  const RunRecords& drive = run.axis(moved).records;
+  const RunRecords& output = run.axis(seen).records;
+  const std::size_t from = moved * turn;
+  if (drive.count < from + turn || output.count < from + turn) {
+    throw common::CommandError(
+        "measurement_failed",
+        "the stage's frf run ended before axis " + std::to_string(moved) + "'s turn was played");
+  }
+  auto alone = std::make_unique<RunProgram>();
+  alone->run_id = run.run_id;
+  alone->records.u.assign(drive.u.begin() + static_cast<std::ptrdiff_t>(from),
+                          drive.u.begin() + static_cast<std::ptrdiff_t>(from + turn));
+  alone->records.y.assign(output.y.begin() + static_cast<std::ptrdiff_t>(from),
+                          output.y.begin() + static_cast<std::ptrdiff_t>(from + turn));
+  alone->records.count = turn;
+  alone->records.capacity = turn;
+  return alone;
+}
+
+}  // namespace
+
 std::vector<hc::StageResponses> measure_stage_responses(
     const RunProgram& run, std::span<const sim::FrequencyResponseExcitationOptions> options,
     std::size_t turn) {
   std::vector<hc::StageResponses> out;
   for (std::size_t a = 0; a < run.axes() && a < options.size(); ++a) {
-    const RunRecords& all = run.axis(a).records;
-    const std::size_t from = a * turn;
-    if (all.count < from + turn) {
-      throw common::CommandError(
-          "measurement_failed",
-          "the stage's frf run ended before axis " + std::to_string(a) + "'s turn was played");
-    }
-    // The axis's turn as a run of its own, as measure_responses() reads one.
-    RunProgram alone;
-    alone.run_id = run.run_id;
-    alone.records.u.assign(all.u.begin() + static_cast<std::ptrdiff_t>(from),
-                           all.u.begin() + static_cast<std::ptrdiff_t>(from + turn));
-    alone.records.y.assign(all.y.begin() + static_cast<std::ptrdiff_t>(from),
-                           all.y.begin() + static_cast<std::ptrdiff_t>(from + turn));
-    alone.records.count = turn;
-    alone.records.capacity = turn;
-    out.push_back(measure_responses(alone, options[a]));
+    out.push_back(measure_responses(*turn_record(run, a, a, turn), options[a]));
   }
   return out;
+}
+
+std::vector<std::vector<hc::StageResponses>> measure_stage_cross_responses(
+    const RunProgram& run, std::span<const sim::FrequencyResponseExcitationOptions> options,
+    std::size_t turn) {
+  const std::size_t n = std::min(run.axes(), options.size());
+  std::vector<std::vector<hc::StageResponses>> cross(n, std::vector<hc::StageResponses>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      if (i == j) continue;
+      try {
+        cross[i][j] = measure_responses(*turn_record(run, j, i, turn), options[j]);
+      } catch (const std::exception&) {
+        // Too little of axis j reaches axis i to measure: that pair stays empty.
+      }
+    }
+  }
+  return cross;
 }
 
 }  // namespace hystbench::daemon::details

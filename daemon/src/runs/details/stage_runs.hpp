@@ -31,6 +31,10 @@ struct StageModel {
   std::vector<compensation::ModelFile> models;  ///< per axis, its input range the output's
   compensation::CouplingEstimate coupling;
   compensation::StageDecoupler decoupler;
+  /// cross[i][j] (i != j): axis j's drive to axis i's output, measured with the axes'
+  /// responses (frf, identify); empty until measured, a pair's responses empty where they
+  /// could not be measured.
+  std::vector<std::vector<compensation::StageResponses>> cross;
   std::string run_id;                                ///< the identify run it was fitted on
   nlohmann::json report = nlohmann::json::object();  ///< identify's result keys (stage, axes)
 };
@@ -73,6 +77,12 @@ BuiltRun make_stage_response_program(
 /// Each axis's frequency responses from its turn of a completed stage frf run (turn ticks
 /// each). Throws CommandError measurement_failed as measure_responses() does.
 std::vector<compensation::StageResponses> measure_stage_responses(
+    const RunProgram& run, std::span<const sim::FrequencyResponseExcitationOptions> options,
+    std::size_t turn);
+
+/// The stage's cross responses from the same run: cross[i][j] from axis j's turn and axis i's
+/// output (i != j; the diagonal left empty). A pair that cannot be measured is left empty.
+std::vector<std::vector<compensation::StageResponses>> measure_stage_cross_responses(
     const RunProgram& run, std::span<const sim::FrequencyResponseExcitationOptions> options,
     std::size_t turn);
 

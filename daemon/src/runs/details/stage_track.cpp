@@ -1,11 +1,18 @@
 // A stage's track and its result (stage_runs.hpp).
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <limits>
+#include <memory>
+#include <optional>
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
+#include "hystbench/compensation/loop_analysis.hpp"
 #include "hystbench/compensation/stage_coupling_error.hpp"
+#include "hystbench/compensation/stage_interaction.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "runs/details/feedback_design.hpp"
 #include "runs/details/stage_runs.hpp"
 #include "runs/details/track_program.hpp"
 #include "service/details/command_table.hpp"
@@ -149,6 +156,58 @@ json reference_json(const StageTrackRequest& request) {
           {"duration_s", request.builtin.duration_s}};
 }
 
+// The axes' loops, each designed on its own response, checked together through the stage's
+// measured cross responses (compensation/stage_interaction.hpp), the worst over the responses
+// every axis measured alike; null without a loop on every axis, or without cross responses.
+json feedback_interaction(const StageModel* stage,
+                          const std::vector<std::shared_ptr<const FeedbackPlan>>& plans,
+                          double dt) {
+  const std::size_t n = plans.size();
+  if (stage == nullptr || stage->cross.size() != n || n < 2) return nullptr;
+  std::size_t responses = std::numeric_limits<std::size_t>::max();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!plans[i] || !stage->models[i].responses) return nullptr;
+    responses = std::min(
+        {responses, stage->models[i].responses->responses.size(), plans[i]->plants.size()});
+    for (std::size_t j = 0; j < n; ++j) {
+      if (i != j) responses = std::min(responses, stage->cross[i][j].responses.size());
+    }
+  }
+  if (responses == 0 || responses == std::numeric_limits<std::size_t>::max()) return nullptr;
+  std::optional<hc::StageInteraction> worst;
+  std::string where;
+  for (std::size_t k = 0; k < responses; ++k) {
+    std::vector<std::vector<hc::MeasuredResponse>> g(n, std::vector<hc::MeasuredResponse>(n));
+    std::vector<std::vector<std::complex<double>>> loops;
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < n; ++j) {
+        g[i][j] =
+            i == j ? stage->models[i].responses->responses[k] : stage->cross[i][j].responses[k];
+      }
+      const hc::FeedbackController c(plans[i]->law, dt);
+      loops.push_back(hc::loop_response(plans[i]->plants[k], c, dt));
+    }
+    try {
+      hc::StageInteraction s = hc::stage_interaction(g, loops);
+      if (!worst || s.peak > worst->peak) {
+        worst = std::move(s);
+        where = stage->models[0].responses->responses[k].label;
+      }
+    } catch (const std::invalid_argument&) {
+      // The axes' responses do not share lines at this operating point: not comparable.
+    }
+  }
+  if (!worst) return nullptr;
+  return {{"peak", worst->peak},
+          {"peak_hz", worst->peak_hz},
+          {"on", where},
+          {"dominant", worst->dominant()},
+          {"meaning",
+           "the largest spectral radius of E T over the measured lines (E: each cross response "
+           "over the driven axis's own, T: each axis's complementary sensitivity); below 1 the "
+           "axes' loops, each stable alone, are stable together"}};
+}
+
 json decoupling_json(const StageTrackRequest& request, const StageModel* stage, bool decoupled) {
   if (decoupled) return {{"static", true}, {"from_run", stage->run_id}};
   return {{"static", false},
@@ -260,6 +319,7 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
 
   BuiltRun run;
   std::vector<RunPreparation> preparations;
+  std::vector<std::shared_ptr<const FeedbackPlan>> plans;
   json axis_headers = json::object(), axis_replies = json::object();
   std::vector<std::string> names;
   for (std::size_t a = 0; a < n; ++a) {
@@ -270,6 +330,7 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
     axis_headers[name] = axis.header;
     axis_replies[name] = axis.reply;
     preparations.push_back(std::move(axis.preparation));
+    plans.push_back(axis.feedback_plan);
     if (a == 0) {
       run.program = std::move(axis.program);
       run.learning = std::move(axis.learning);
@@ -295,6 +356,10 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
                {"decoupling", decoupling}};
   run.status = {{"compensator", request.common.compensator}, {"axes", names}};
   run.program->summary["decoupling"] = decoupling;
+  if (json interaction = feedback_interaction(stage, plans, dt); !interaction.is_null()) {
+    run.reply["feedback_interaction"] = interaction;
+    run.program->summary["feedback_interaction"] = std::move(interaction);
+  }
   // The stage's prediction couples the axes' models as the stage couples their motion.
   if (stage != nullptr && stage->decoupler.axes() == n) run.program->coupling = stage->decoupler;
   run.preparation = joined(std::move(preparations));

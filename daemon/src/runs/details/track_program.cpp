@@ -695,6 +695,7 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
     run.learning = arm_learning(*p, *learn, ctx, ref, preparation, plan ? &*plan : nullptr);
   }
   describe_track_run(run, *p, ref, ctx, comp_name, feedback, learn);
+  if (plan) run.feedback_plan = std::make_shared<const FeedbackPlan>(std::move(*plan));
   run.status = {{"compensator", comp_name}};
   run.program = std::move(p);
   run.preparation = std::move(preparation);
