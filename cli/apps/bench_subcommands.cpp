@@ -476,7 +476,9 @@ CliCommand add_model(CLI::App& app, cli::RemoteCommand& remote) {
       load->add_option("file", model->model_path, "Model file (JSON, from fit, diagnose, identify)")
           ->check(CLI::ExistingFile);
   load->add_option("--stored", model->stored_model,
-                   "Name of a model in the daemon's model folder (see `hystbench model list`)")
+                   "Name of a model in the daemon's model folder (see `hystbench model list`); "
+                   "on a stage of several axes, the stage identify's run id (every axis's "
+                   "RUN-AXIS.json loads, with the coupling)")
       ->excludes(file_opt);
   add_output_flags(load, remote, false);
   const CliCommand list = add_plain_request(

@@ -438,20 +438,24 @@ std::string CanAmplifierDriver::describe_fault(int cause, std::int64_t detail) c
 }
 
 nlohmann::json CanAmplifierDriver::diagnostics() const {
-  return {{"type", "can"},
-          {"interface", interface_},
-          {"controller_state", controller_state_},
-          {"bitrate", bitrate_},
-          {"bus_off", bus_off_.load()},
-          {"frames_sent", sent_.load()},
-          {"frames_received", received_.load()},
-          {"feedback_frames", feedback_.load()},
-          {"malformed_frames", malformed_.load()},
-          {"bus_offs", bus_offs_.load()},
-          {"restarts", restarts_.load()},
-          {"send_failures", send_failures_.load()},
-          {"axis_names", axis_names_},
-          {"node_step", node_step_}};
+  nlohmann::json d = {{"type", "can"},
+                      {"interface", interface_},
+                      {"controller_state", controller_state_},
+                      {"bitrate", bitrate_},
+                      {"bus_off", bus_off_.load()},
+                      {"frames_sent", sent_.load()},
+                      {"frames_received", received_.load()},
+                      {"feedback_frames", feedback_.load()},
+                      {"malformed_frames", malformed_.load()},
+                      {"bus_offs", bus_offs_.load()},
+                      {"restarts", restarts_.load()},
+                      {"send_failures", send_failures_.load()}};
+  // A stage's nodes.
+  if (!axis_names_.empty()) {
+    d["axis_names"] = axis_names_;
+    d["node_step"] = node_step_;
+  }
+  return d;
 }
 
 }  // namespace hystbench::drivers

@@ -253,27 +253,32 @@ nlohmann::json ModbusDaqDriver::diagnostics() const {
   const int err = last_errno_.load(std::memory_order_relaxed);
   const auto op = static_cast<ModbusLink::Op>(last_op_.load(std::memory_order_relaxed));
   const int offset = last_offset_.load(std::memory_order_relaxed);
-  return {{"type", "modbus"},
-          {"endpoint", config_.endpoint()},
-          {"io", config_.io == ModbusDaqConfig::IoMode::kThread ? "thread" : "loop"},
-          {"write_read", config_.write_read},
-          {"connected", connected_.load(std::memory_order_relaxed)},
-          {"transactions", transactions_.load(std::memory_order_relaxed)},
-          {"failed_transactions", failed_.load(std::memory_order_relaxed)},
-          {"consecutive_failures", consecutive_failures_.load(std::memory_order_relaxed)},
-          {"reconnects", reconnects_.load(std::memory_order_relaxed)},
-          {"last_error", err == 0 ? "" : ModbusLink::describe(op, err, config_, offset)},
-          {"axis_names", config_.axes},
-          {"axis_stride", config_.axis_stride},
-          {"rtt_us",
-           {{"count", rtt_->count()},
-            {"p50", static_cast<double>(rtt_->quantile_ns(0.5)) / 1e3},
-            {"p99", static_cast<double>(rtt_->quantile_ns(0.99)) / 1e3},
-            {"max", static_cast<double>(rtt_->max_ns()) / 1e3}}},
-          {"activation_rtt_us",
-           {{"p50", activation_rtt_p50_us_},
-            {"p90", activation_rtt_p90_us_},
-            {"p99", activation_rtt_p99_us_}}}};
+  nlohmann::json d = {
+      {"type", "modbus"},
+      {"endpoint", config_.endpoint()},
+      {"io", config_.io == ModbusDaqConfig::IoMode::kThread ? "thread" : "loop"},
+      {"write_read", config_.write_read},
+      {"connected", connected_.load(std::memory_order_relaxed)},
+      {"transactions", transactions_.load(std::memory_order_relaxed)},
+      {"failed_transactions", failed_.load(std::memory_order_relaxed)},
+      {"consecutive_failures", consecutive_failures_.load(std::memory_order_relaxed)},
+      {"reconnects", reconnects_.load(std::memory_order_relaxed)},
+      {"last_error", err == 0 ? "" : ModbusLink::describe(op, err, config_, offset)},
+      {"rtt_us",
+       {{"count", rtt_->count()},
+        {"p50", static_cast<double>(rtt_->quantile_ns(0.5)) / 1e3},
+        {"p99", static_cast<double>(rtt_->quantile_ns(0.99)) / 1e3},
+        {"max", static_cast<double>(rtt_->max_ns()) / 1e3}}},
+      {"activation_rtt_us",
+       {{"p50", activation_rtt_p50_us_},
+        {"p90", activation_rtt_p90_us_},
+        {"p99", activation_rtt_p99_us_}}}};
+  // A stage's blocks.
+  if (!config_.axes.empty()) {
+    d["axis_names"] = config_.axes;
+    d["axis_stride"] = config_.axis_stride;
+  }
+  return d;
 }
 
 }  // namespace hystbench::drivers

@@ -313,13 +313,13 @@ nlohmann::json Bench::load_model(const details::RequestParams& request) {
 
 nlohmann::json Bench::list_models() const {
   std::lock_guard lock(mutex_);
-  return details::list_model_folder(settings_.model_dir, model_path_);
+  return details::list_model_folder(settings_.model_dir, active_model_paths());
 }
 
 nlohmann::json Bench::delete_model(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
   return details::delete_from_model_folder(settings_.model_dir, request.string("name", ""),
-                                           model_path_);
+                                           active_model_paths());
 }
 
 void Bench::require_idle() const {

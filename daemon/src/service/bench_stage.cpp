@@ -39,6 +39,18 @@ json Bench::stage_status() const {
   return s;
 }
 
+std::vector<std::string> Bench::active_model_paths() const {
+  if (!is_stage()) return {model_path_};
+  std::vector<std::string> paths;
+  if (!stage_) return paths;
+  for (const std::string& axis : stage_->axes) {
+    paths.push_back(
+        (std::filesystem::path(settings_.model_dir) / (stage_->run_id + "-" + axis + ".json"))
+            .string());
+  }
+  return paths;
+}
+
 json Bench::save_stage_models() {
   json saved = json::array();
   for (std::size_t a = 0; a < stage_->axes.size(); ++a) {

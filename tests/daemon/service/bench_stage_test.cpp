@@ -186,6 +186,13 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
   for (const char* axis : {"x", "y"}) EXPECT_EQ(loaded["axes"][axis]["responses"], true) << axis;
   EXPECT_NEAR(loaded["coupling"]["gains"]["y<-x"]["gain"].get<double>(),
               gains["y<-x"]["gain"].get<double>(), 1e-12);
+  // Both axes' files are the active models: listed so, and not deleted under the stage.
+  for (const json& m : bench_->handle("model.list", json::object())["models"]) {
+    EXPECT_EQ(m["active"], true) << m.dump();
+  }
+  const std::string x_file = id["run_id"].get<std::string>() + "-x.json";
+  EXPECT_EQ(refused("model.delete", {{"name", x_file}}).first, "bad_params");
+  EXPECT_TRUE(fs::exists(dir_ / "models" / x_file));
   const json again =
       run_and_wait("track", {{"reference", "raster"}, {"compensator", "inverse+pid"}}, 600);
   ASSERT_EQ(again.value("end", ""), "completed") << again.dump();

@@ -73,7 +73,15 @@ FolderModel keep_model_document(const std::string& dir, const std::string& name,
   return m;
 }
 
-json list_model_folder(const std::string& dir, const std::string& active_path) {
+namespace {
+
+bool is_active(const fs::path& path, std::span<const std::string> active_paths) {
+  return std::find(active_paths.begin(), active_paths.end(), path.string()) != active_paths.end();
+}
+
+}  // namespace
+
+json list_model_folder(const std::string& dir, std::span<const std::string> active_paths) {
   std::error_code ec;
   std::vector<fs::directory_entry> entries;
   for (const auto& e : fs::directory_iterator(dir, ec)) {
@@ -97,14 +105,14 @@ json list_model_folder(const std::string& dir, const std::string& active_path) {
     } catch (const std::exception&) {
       m["type"] = "unreadable";  // never the file's text
     }
-    m["active"] = e.path().string() == active_path;
+    m["active"] = is_active(e.path(), active_paths);
     models.push_back(std::move(m));
   }
   return {{"folder", fs::path(dir).string()}, {"models", models}};
 }
 
 json delete_from_model_folder(const std::string& dir, const std::string& name,
-                              const std::string& active_path) {
+                              std::span<const std::string> active_paths) {
   const std::string file_name = model_file_name("name", name);
   const fs::path path = fs::path(dir) / file_name;
   if (!fs::is_regular_file(fs::symlink_status(path))) {
@@ -112,7 +120,7 @@ json delete_from_model_folder(const std::string& dir, const std::string& name,
                                "name: no model or learned drive '" + file_name +
                                    "' in the daemon's model folder (hystbench model list)");
   }
-  if (path.string() == active_path) {
+  if (is_active(path, active_paths)) {
     throw common::CommandError(
         "bad_params", "name: '" + file_name + "' is the active model; load another one first");
   }

@@ -4,6 +4,7 @@
 // ".json" appended when missing. Errors are CommandError naming the key (bad_params,
 // bad_model, io_error). File I/O: control thread only, not real-time safe.
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 
 #include "hystbench/compensation/model_file.hpp"
@@ -25,12 +26,13 @@ FolderModel load_stored_model(const std::string& dir, const std::string& name);
 FolderModel keep_model_document(const std::string& dir, const std::string& name,
                                 const nlohmann::json& document);
 /// model.list: {"folder", "models": [{name, bytes, type, operators, active}]} by name;
-/// `active_path` is the active model's path ("type": "unreadable" for a file that is not one).
-nlohmann::json list_model_folder(const std::string& dir, const std::string& active_path);
+/// `active_paths` are the active models' paths (one; a stage's, one per axis) ("type":
+/// "unreadable" for a file that is not one).
+nlohmann::json list_model_folder(const std::string& dir, std::span<const std::string> active_paths);
 /// model.delete: removes model `name` from the folder, or a learned drive (RUN-learned.json and
-/// its CSV); {"deleted": [file names]}. Refuses (bad_params) a name that is not there and the
-/// active model (`active_path`).
+/// its CSV); {"deleted": [file names]}. Refuses (bad_params) a name that is not there and an
+/// active model (`active_paths`).
 nlohmann::json delete_from_model_folder(const std::string& dir, const std::string& name,
-                                        const std::string& active_path);
+                                        std::span<const std::string> active_paths);
 
 }  // namespace hystbench::daemon::details

@@ -163,6 +163,9 @@ class Bench {
   /// RUN-AXIS.json (with its responses and the coupling it carries) becomes the stage's model.
   /// Caller holds mutex_.
   nlohmann::json load_stage_model(const details::RequestParams& request);
+  /// The active models' files: the one active model's, or on a stage each axis's RUN-AXIS.json.
+  /// Caller holds mutex_.
+  std::vector<std::string> active_model_paths() const;
   /// Writes each axis's model file of stage_ (RUN-AXIS.json, its responses with it) to the model
   /// folder; the file names. Throws CommandError io_error. Caller holds mutex_.
   nlohmann::json save_stage_models();
