@@ -42,6 +42,35 @@ RegisterChannel parse_channel(const Params& p, const RegisterChannel& defaults, 
   return c;
 }
 
+/// The TCP keys on an RTU line and the RTU keys on TCP are errors naming them.
+void refuse_other_transports_keys(const Params& p, bool tcp) {
+  for (const char* k : {"host", "port"}) {
+    if (!tcp && p.has(k)) throw ParamError(p.key_path(k) + ": only for transport = \"tcp\"");
+  }
+  for (const char* k : {"device", "baud", "parity", "data_bits", "stop_bits"}) {
+    if (tcp && p.has(k)) throw ParamError(p.key_path(k) + ": only for transport = \"rtu\"");
+  }
+}
+
+/// The [output] table: its register, and its range in volts, which the format must hold.
+void parse_output(const Params& out, ModbusDaqConfig& c) {
+  c.output = parse_channel(out, c.output, true);
+  c.output_min_v = out.number("min_v", c.output_min_v, -1e6, 1e6);
+  c.output_max_v = out.number("max_v", c.output_max_v, -1e6, 1e6);
+  if (!(c.output_max_v > c.output_min_v)) {
+    throw ParamError(out.key_path("max_v") + ": must be greater than min_v");
+  }
+  for (const double v : {c.output_min_v, c.output_max_v}) {
+    const double count = (v - c.output.offset) / c.output.scale;
+    if (count < static_cast<double>(c.output.count_min()) - 0.5 ||
+        count > static_cast<double>(c.output.count_max()) + 0.5) {
+      throw ParamError(out.path() + ": " + std::to_string(v) + " V needs count " +
+                       std::to_string(count) + ", beyond the " +
+                       std::string(to_string(c.output.format)) + " range");
+    }
+  }
+}
+
 /// The `axes` names and `axis_stride`: every axis's block within the register tables.
 void parse_axes(const Params& p, ModbusDaqConfig& c) {
   c.axes = p.axis_names("axes");
@@ -121,12 +150,7 @@ ModbusDaqConfig parse_modbus_daq_config(const nlohmann::json& params) {
                       ? ModbusDaqConfig::Transport::kTcp
                       : ModbusDaqConfig::Transport::kRtu;
     const bool tcp = c.transport == ModbusDaqConfig::Transport::kTcp;
-    for (const char* k : {"host", "port"}) {
-      if (!tcp && p.has(k)) throw ParamError(p.key_path(k) + ": only for transport = \"tcp\"");
-    }
-    for (const char* k : {"device", "baud", "parity", "data_bits", "stop_bits"}) {
-      if (tcp && p.has(k)) throw ParamError(p.key_path(k) + ": only for transport = \"rtu\"");
-    }
+    refuse_other_transports_keys(p, tcp);
     c.host = p.string("host", c.host);
     if (c.host.empty()) throw ParamError(p.key_path("host") + ": must not be empty");
     c.port = static_cast<int>(p.integer("port", c.port, 1, 65535));
@@ -154,22 +178,7 @@ ModbusDaqConfig parse_modbus_daq_config(const nlohmann::json& params) {
         static_cast<std::uint64_t>(p.integer("max_failed_transactions", 3, 1, 1000000000));
     c.reconnect_interval_ms = p.number("reconnect_interval_ms", 200.0, 1.0, 60000.0);
 
-    const Params out = p.table("output");
-    c.output = parse_channel(out, c.output, true);
-    c.output_min_v = out.number("min_v", c.output_min_v, -1e6, 1e6);
-    c.output_max_v = out.number("max_v", c.output_max_v, -1e6, 1e6);
-    if (!(c.output_max_v > c.output_min_v)) {
-      throw ParamError(out.key_path("max_v") + ": must be greater than min_v");
-    }
-    for (const double v : {c.output_min_v, c.output_max_v}) {
-      const double count = (v - c.output.offset) / c.output.scale;
-      if (count < static_cast<double>(c.output.count_min()) - 0.5 ||
-          count > static_cast<double>(c.output.count_max()) + 0.5) {
-        throw ParamError(out.path() + ": " + std::to_string(v) + " V needs count " +
-                         std::to_string(count) + ", beyond the " +
-                         std::string(to_string(c.output.format)) + " range");
-      }
-    }
+    parse_output(p.table("output"), c);
     c.measurement = parse_channel(p.table("measurement"), c.measurement, false);
     parse_axes(p, c);
     c.safe_output_v = p.number("safe_output_v", c.output_min_v, -1e6, 1e6);

@@ -85,7 +85,9 @@ json Bench::load_stage_model(const details::RequestParams& request) {
   std::vector<compensation::ModelFile> files;
   std::vector<std::string> names;
   for (const std::string& axis : settings_.axes) {
-    names.push_back(run_id + "-" + axis + ".json");
+    std::string name = run_id;
+    name.append("-").append(axis).append(".json");
+    names.push_back(std::move(name));
     files.push_back(details::load_stored_model(settings_.model_dir, names.back()).file);
   }
   auto model = std::make_unique<details::StageModel>(
