@@ -109,6 +109,10 @@ void StageDecoupler::couple(std::span<const double> own, std::span<double> stage
   multiply(coupled_, own, stage);
 }
 
+double gain_db(double gain) noexcept {
+  return gain != 0.0 ? 20.0 * std::log10(std::abs(gain)) : -std::numeric_limits<double>::infinity();
+}
+
 StageFit fit_stage(std::span<const OneAxisMotion> records, const StageFitOptions& options) {
   if (options.stride == 0) fail("stage fit: stride must be >= 1");
   StageFit fit;
@@ -120,8 +124,7 @@ StageFit fit_stage(std::span<const OneAxisMotion> records, const StageFitOptions
                                 -std::numeric_limits<double>::infinity());
   for (Eigen::Index i = 0; i < fit.coupling.gains.rows(); ++i) {
     for (Eigen::Index j = 0; j < fit.coupling.gains.cols(); ++j) {
-      const double k = std::abs(fit.coupling.gains(i, j));
-      if (i != j && k > 0.0) fit.coupling_db(i, j) = 20.0 * std::log10(k);
+      if (i != j) fit.coupling_db(i, j) = gain_db(fit.coupling.gains(i, j));
     }
   }
   // Every record checked before the first (slow) fit.

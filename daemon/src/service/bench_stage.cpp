@@ -44,9 +44,9 @@ std::vector<std::string> Bench::active_model_paths() const {
   std::vector<std::string> paths;
   if (!stage_) return paths;
   for (const std::string& axis : stage_->axes) {
-    paths.push_back(
-        (std::filesystem::path(settings_.model_dir) / (stage_->run_id + "-" + axis + ".json"))
-            .string());
+    paths.push_back((std::filesystem::path(settings_.model_dir) /
+                     details::stage_model_file(stage_->run_id, axis))
+                        .string());
   }
   return paths;
 }
@@ -54,7 +54,7 @@ std::vector<std::string> Bench::active_model_paths() const {
 json Bench::save_stage_models() {
   json saved = json::array();
   for (std::size_t a = 0; a < stage_->axes.size(); ++a) {
-    const std::string name = stage_->run_id + "-" + stage_->axes[a];
+    const std::string name = details::stage_model_file(stage_->run_id, stage_->axes[a]);
     json document = compensation::to_json(stage_->models[a]);
     // What the other axes' drives left on this axis, measured with the responses.
     if (a < stage_->cross.size()) {
@@ -85,9 +85,7 @@ json Bench::load_stage_model(const details::RequestParams& request) {
   std::vector<compensation::ModelFile> files;
   std::vector<std::string> names;
   for (const std::string& axis : settings_.axes) {
-    std::string name = run_id;
-    name.append("-").append(axis).append(".json");
-    names.push_back(std::move(name));
+    names.push_back(details::stage_model_file(run_id, axis));
     files.push_back(details::load_stored_model(settings_.model_dir, names.back()).file);
   }
   auto model = std::make_unique<details::StageModel>(

@@ -72,6 +72,9 @@ struct StageFitOptions {
   std::size_t stride = 1;  ///< fit every stride-th sample (a 10 kHz record at 1 kHz: 10), >= 1
 };
 
+/// A coupling gain in dB: 20 log10 |gain|, -inf for a gain of 0.
+double gain_db(double gain) noexcept;
+
 struct StageFit {
   CouplingEstimate coupling;
   std::vector<FitResult> axes;  ///< per axis, its model of its own displacement

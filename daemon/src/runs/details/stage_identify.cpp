@@ -74,10 +74,10 @@ json coupling_json(const hc::CouplingEstimate& coupling, std::span<const std::st
       if (i == j) continue;
       const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
       const double g = coupling.gains(ii, jj);
-      gains[pair_name(axes[i], axes[j])] = {
-          {"gain", g},
-          {"db", g != 0.0 ? json(20.0 * std::log10(std::abs(g))) : json(nullptr)},
-          {"residual_share", coupling.residual_share(ii, jj)}};
+      const double db = hc::gain_db(g);
+      gains[pair_name(axes[i], axes[j])] = {{"gain", g},
+                                            {"db", std::isfinite(db) ? json(db) : json(nullptr)},
+                                            {"residual_share", coupling.residual_share(ii, jj)}};
     }
   }
   return {{"gains", gains},
@@ -150,6 +150,12 @@ hc::StageFitOptions stage_fit_options(const json& fit, const BenchSettings& sett
 }
 
 }  // namespace
+
+std::string stage_model_file(const std::string& run_id, const std::string& axis) {
+  std::string name = run_id;
+  name.append("-").append(axis).append(".json");
+  return name;
+}
 
 RunContext axis_context(const RunContext& ctx, const StageModel* stage, std::size_t a,
                         double u_now) {

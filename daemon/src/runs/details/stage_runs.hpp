@@ -39,6 +39,9 @@ struct StageModel {
   nlohmann::json report = nlohmann::json::object();  ///< identify's result keys (stage, axes)
 };
 
+/// The model folder's file of a stage identify's axis: "RUN-AXIS.json".
+std::string stage_model_file(const std::string& run_id, const std::string& axis);
+
 /// ctx for axis a: its model in `stage` (null: none), with the responses its frf measured, and
 /// its present output u_now [V]; no plan or feedback cache, no bench-wide responses.
 RunContext axis_context(const RunContext& ctx, const StageModel* stage, std::size_t a,

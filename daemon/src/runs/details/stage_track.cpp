@@ -174,6 +174,8 @@ json feedback_interaction(const StageModel* stage,
     }
   }
   if (responses == 0 || responses == std::numeric_limits<std::size_t>::max()) return nullptr;
+  std::vector<hc::FeedbackController> controllers;
+  for (const auto& plan : plans) controllers.emplace_back(plan->law, dt);
   std::optional<hc::StageInteraction> worst;
   std::string where;
   for (std::size_t k = 0; k < responses; ++k) {
@@ -184,8 +186,7 @@ json feedback_interaction(const StageModel* stage,
         g[i][j] =
             i == j ? stage->models[i].responses->responses[k] : stage->cross[i][j].responses[k];
       }
-      const hc::FeedbackController c(plans[i]->law, dt);
-      loops.push_back(hc::loop_response(plans[i]->plants[k], c, dt));
+      loops.push_back(hc::loop_response(plans[i]->plants[k], controllers[i], dt));
     }
     try {
       hc::StageInteraction s = hc::stage_interaction(g, loops);
