@@ -136,6 +136,22 @@ class Daemon:
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
+class DaemonTestCase(unittest.TestCase):
+    """Tests against one hystbenchd per class: setUpClass starts `daemon`; each test gets a
+    connected `bench`, closed after it; the daemon stops after the class."""
+
+    daemon: Daemon
+    bench: Bench
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        cls.daemon.stop()
+
+    def setUp(self) -> None:
+        self.bench = self.daemon.bench()
+        self.addCleanup(self.bench.close)
+
+
 def supports(bench: Bench, cmd: str) -> bool:
     """Whether the daemon knows ``cmd``: a request with an unknown parameter is refused as
     bad_params by a command the daemon has (and starts nothing), as unknown_command else."""

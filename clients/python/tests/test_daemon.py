@@ -34,20 +34,10 @@ def ramps(points: List[Tuple[float, float]], rate_hz: float) -> List[float]:
     return out
 
 
-class WithoutModelTest(unittest.TestCase):
-    daemon: _support.Daemon
-
+class WithoutModelTest(_support.DaemonTestCase):
     @classmethod
     def setUpClass(cls) -> None:
         cls.daemon = _support.Daemon("hbpy-a")
-
-    @classmethod
-    def tearDownClass(cls) -> None:
-        cls.daemon.stop()
-
-    def setUp(self) -> None:
-        self.bench = self.daemon.bench()
-        self.addCleanup(self.bench.close)
 
     def test_greeting_status_config_and_model_list(self) -> None:
         self.assertEqual(self.bench.greeting["hello"], "hystbenchd")
@@ -289,8 +279,7 @@ class WithoutModelTest(unittest.TestCase):
         self.assertEqual((e.code, e.details.get("sample")), ("slew_limit", 2), e)
 
 
-class WithModelTest(unittest.TestCase):
-    daemon: _support.Daemon
+class WithModelTest(_support.DaemonTestCase):
     identified: RunResult
     progress: List[Tuple[float, str]]
 
@@ -306,14 +295,6 @@ class WithModelTest(unittest.TestCase):
         except BaseException:
             cls.daemon.stop()
             raise
-
-    @classmethod
-    def tearDownClass(cls) -> None:
-        cls.daemon.stop()
-
-    def setUp(self) -> None:
-        self.bench = self.daemon.bench()
-        self.addCleanup(self.bench.close)
 
     def test_identify_reports_progress_and_adopts_its_model(self) -> None:
         r = self.identified
@@ -425,25 +406,15 @@ if __name__ == "__main__":
     unittest.main()
 
 
-class StageTest(unittest.TestCase):
+class StageTest(_support.DaemonTestCase):
     """A stage of two axes (the loopback's ``[driver.loopback.stage]``, axes x and y), without a
     model: each axis's trajectory uploaded, its result per axis."""
-
-    daemon: _support.Daemon
 
     @classmethod
     def setUpClass(cls) -> None:
         cls.daemon = _support.Daemon(
             "hbpy-xy", _support.SHORT_IDENTIFY + "\n[driver.loopback.stage]\n", clock="simulated"
         )
-
-    @classmethod
-    def tearDownClass(cls) -> None:
-        cls.daemon.stop()
-
-    def setUp(self) -> None:
-        self.bench = self.daemon.bench()
-        self.addCleanup(self.bench.close)
 
     def test_each_axis_tracks_its_own_trajectory_and_the_coupling_is_named(self) -> None:
         self.assertEqual(sorted(self.bench.status()["axes"]), ["x", "y"])
