@@ -111,6 +111,7 @@ struct TrackOptions {
   std::string reference, compensator;
   std::vector<double> frequencies;  // a stage's reference
   bool no_decouple = false;
+  std::string decoupling;
   double frequency = NAN, periods = NAN, duration = 0.0, fraction = NAN;
   double min = NAN, max = NAN, precondition = NAN;
   int learn = 0;
@@ -165,6 +166,12 @@ void add_track_reference_options(CLI::App* cmd, TrackOptions& tr) {
   cmd->add_flag("--no-decouple", tr.no_decouple,
                 "On a stage: leave the coupling in the feedforward's targets (by default each "
                 "axis's target has the other axes' share taken out, from identify's estimate)");
+  cmd->add_option("--decoupling", tr.decoupling,
+                  "On a stage: static (the default: the coupling's gains, from identify's "
+                  "estimate) or dynamic (each coupling path's modes and lag too, fitted to the "
+                  "responses identify measured; the result's decoupling.dynamic names them)")
+      ->check(CLI::IsMember({"static", "dynamic"}))
+      ->excludes("--no-decouple");
   cmd->add_option("--frequency", tr.frequency, "Reference frequency [Hz] (default 1)");
   cmd->add_option("--periods", tr.periods, "Number of periods (default 5)");
   cmd->add_option("--duration", tr.duration, "Duration [s] (instead of --periods)");
@@ -274,6 +281,7 @@ int track_reference_file(const TrackOptions& tr, cli::RemoteCommand& remote) {
   add_learning(tr, p);
   add_gains(tr, p);
   if (tr.no_decouple) p["decouple"] = false;
+  if (!tr.decoupling.empty()) p["decoupling"] = tr.decoupling;
   // Read once the daemon says whether it drives one axis or a stage (its column per axis).
   remote.reference_file = {tr.file, tr.t_column, tr.yr_column, tr.yr_scale, tr.rate};
   return send_request(remote, "track", p);
@@ -290,6 +298,7 @@ int track_stage_reference(const TrackOptions& tr, cli::RemoteCommand& remote) {
   if (tr.duration > 0) p["duration_s"] = tr.duration;
   if (!std::isnan(tr.fraction)) p["range_fraction"] = tr.fraction;
   if (tr.no_decouple) p["decouple"] = false;
+  if (!tr.decoupling.empty()) p["decoupling"] = tr.decoupling;
   if (!tr.compensator.empty()) p["compensator"] = tr.compensator;
   if (!std::isnan(tr.precondition)) p["precondition_s"] = tr.precondition;
   add_learning(tr, p);
@@ -311,6 +320,7 @@ int run_track(const TrackOptions& tr, cli::RemoteCommand& remote) {
   if (!std::isnan(tr.frequency)) p["frequency_hz"] = tr.frequency;
   if (!tr.frequencies.empty()) p["frequencies_hz"] = tr.frequencies;
   if (tr.no_decouple) p["decouple"] = false;
+  if (!tr.decoupling.empty()) p["decoupling"] = tr.decoupling;
   if (add_learning(tr, p)) {
     // a learning run, or a learned drive's (its start-up period and one scored period)
   } else if (tr.duration > 0) {

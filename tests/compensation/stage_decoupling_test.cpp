@@ -22,20 +22,14 @@
 #include "hystbench/sim/frequency_response_excitation.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "hystbench/sim/simulated_stage.hpp"
+#include "support/refusal.hpp"
 
 namespace hc = hystbench::compensation;
 namespace hs = hystbench::sim;
 
 namespace {
 
-std::string refusal(const auto& make) {
-  try {
-    make();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string refusal(const auto& make) { return hystbench::test::invalid_argument_message(make); }
 
 // Outputs of a linear stage r = (I + K) s for own displacements s: axis `moved` follows a
 // random walk, the others hold their levels; noise of `sigma` on every output.

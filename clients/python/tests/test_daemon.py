@@ -445,3 +445,7 @@ class StageTest(_support.DaemonTestCase):
         with self.assertRaises(ValueError) as caught:
             self.bench.track_axes({"x": x}, rate_hz=rate)
         self.assertIn("no reference for axis 'y'", str(caught.exception))
+        # The decoupling's kind reaches the daemon, which names what it takes.
+        with self.assertRaises(BenchError) as refused:
+            self.bench.track_axes({"x": x, "y": y}, rate_hz=rate, decoupling="full")
+        self.assertIn("decoupling: 'static' (the default", str(refused.exception))

@@ -422,7 +422,7 @@ json Bench::start_track(const details::RequestParams& request, std::uint64_t cli
   std::lock_guard lock(mutex_);
   require_idle();
   if (is_stage()) return start_stage_track(request, client);
-  for (const char* key : {"frequencies_hz", "decouple", "reference_uploads"}) {
+  for (const char* key : {"frequencies_hz", "decouple", "decoupling", "reference_uploads"}) {
     if (request.has(key)) {
       throw common::CommandError("not_on_stage", std::string(key) +
                                                      ": a stage's key (several axes); this bench "

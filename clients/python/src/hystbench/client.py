@@ -592,6 +592,7 @@ class Bench:
         t_column: Optional[str] = "t",
         compensator: Optional[str] = None,
         decouple: Optional[bool] = None,
+        decoupling: Optional[str] = None,
         precondition_s: Optional[float] = None,
         approach_s: Optional[float] = None,
         wait: bool = False,
@@ -608,7 +609,9 @@ class Bench:
 
         The result holds ``axes`` (each axis's ``rms_error_percent``, ``max_error_percent``,
         ...), ``coupling_error`` (what the other axes' motion left on each) and
-        ``decoupling``. ``decouple=False`` leaves the coupling in the feedforward's targets.
+        ``decoupling``. ``decouple=False`` leaves the coupling in the feedforward's targets;
+        ``decoupling="dynamic"`` takes out each coupling path's modes and lag too, fitted to the
+        responses identify measured (by default, ``"static"``, its gains).
         """
         axes = list(self.status().get("axes", {}))
         if not axes:
@@ -644,6 +647,7 @@ class Bench:
                 "reference_uploads": uploads,
                 "compensator": compensator,
                 "decouple": decouple,
+                "decoupling": decoupling,
                 "precondition_s": precondition_s,
                 "approach_s": approach_s,
             }

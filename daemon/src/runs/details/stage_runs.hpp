@@ -3,7 +3,8 @@
 // and fits each axis's model of its own displacement and the coupling between them
 // (compensation::fit_stage); track plays a reference per axis, each through its axis's
 // compensator, with the coupling taken out of the feedforward's targets (static decoupling:
-// compensation::StageDecoupler). Each axis's program is the one-axis builder's
+// compensation::StageDecoupler; or, asked for, dynamic where the stage's measured responses
+// show the coupling's modes: compensation::DynamicStageDecoupler). Each axis's program is the one-axis builder's
 // (make_axis_track_program), stepped together by the loop (RunProgram::stage_axes). Pure (no
 // threads, no files); errors are CommandError naming the cause. Not real-time safe.
 #include <cstddef>
@@ -99,11 +100,15 @@ struct StageTrackRequest {
   std::vector<std::string> uploads;
   /// The coupling taken out of the feedforward's targets (with an inverse and a stage model).
   bool decouple = true;
+  /// With its dynamics (each path's shape from the stage's measured responses:
+  /// compensation::DynamicStageDecoupler) where they were measured; else (the default) its
+  /// static gains.
+  bool dynamic = false;
 };
 
 /// The request's keys: reference (raster, lissajous or spiral; default raster), frequencies_hz,
-/// range_fraction, duration_s, or reference_uploads {axis: upload} naming every axis; decouple;
-/// and track's own (compensator, precondition, approach, gains). bad_params naming the key: an
+/// range_fraction, duration_s, or reference_uploads {axis: upload} naming every axis; decouple,
+/// decoupling ("static", the default, or "dynamic"); and track's own (compensator, precondition, approach, gains). bad_params naming the key: an
 /// unknown reference, an axis without its upload or an upload for no axis, a one-axis
 /// reference's key, learning (not on a stage yet).
 StageTrackRequest parse_stage_track_request(const RequestParams& request, const RunContext& ctx,

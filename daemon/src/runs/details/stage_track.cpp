@@ -8,8 +8,10 @@
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
+#include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/loop_analysis.hpp"
 #include "hystbench/compensation/stage_coupling_error.hpp"
+#include "hystbench/compensation/stage_dynamic_decoupling.hpp"
 #include "hystbench/compensation/stage_interaction.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "runs/details/feedback_design.hpp"
@@ -74,24 +76,135 @@ std::vector<Upload> builtin_uploads(const sim::StageReferenceSpec& spec,
   return out;
 }
 
+// What axis a's feedforward commands for own targets s (compensation::DynamicStageDecoupler::
+// StrokeOf): its model's dynamics inverted as the feedforward inverts them (the reference's
+// derivatives over +-h, linear between samples); empty for a model without dynamics.
+hc::DynamicStageDecoupler::StrokeOf stroke_of(const RunContext& ctx) {
+  if (ctx.model == nullptr || !ctx.model->model.dynamics()) return {};
+  const hc::DynamicsInversion inversion(ctx.model->model, ctx.dt(),
+                                        ctx.settings.feedforward_bandwidth_hz);
+  const double h = inversion.step_s() / ctx.dt();  // [samples]
+  return [inversion, h](std::span<const double> own, std::span<double> stroke) {
+    const auto last = static_cast<double>(own.size() - 1);
+    const auto at = [&](double k) {
+      k = std::clamp(k, 0.0, last);
+      const auto i = static_cast<std::size_t>(std::floor(k));
+      const double f = k - static_cast<double>(i);
+      return i + 1 < own.size() ? (1.0 - f) * own[i] + f * own[i + 1] : own[i];
+    };
+    for (std::size_t k = 0; k < own.size(); ++k) {
+      const auto t = static_cast<double>(k);
+      stroke[k] = inversion.target(at(t - h), own[k], at(t + h));
+    }
+  };
+}
+
+// The coupling's paths as the stage's cross responses show them (nullopt where a path is flat
+// or was not measured), and the result's account of them.
+struct CouplingPaths {
+  hc::DynamicStageDecoupler::PathShapes shapes;
+  json described = json::array();
+  bool measured = false;  ///< some path's cross responses were measured
+};
+
+CouplingPaths coupling_paths(const StageModel& stage, double dt) {
+  const std::size_t n = stage.axes.size();
+  CouplingPaths out;
+  out.shapes.assign(n, std::vector<std::optional<hc::CouplingPathShape>>(n));
+  for (std::size_t i = 0; i < n && i < stage.cross.size(); ++i) {
+    for (std::size_t j = 0; j < n && j < stage.cross[i].size(); ++j) {
+      if (i == j || stage.cross[i][j].responses.empty()) continue;
+      out.measured = true;
+      const hc::ModelFile& own = stage.models[i];
+      std::span<const hc::MeasuredResponse> own_responses;
+      if (own.responses) own_responses = own.responses->responses;
+      std::optional<hc::DynamicsParameters> inverted;
+      if (own.model.dynamics()) inverted = *own.model.dynamics();
+      out.shapes[i][j] =
+          hc::coupling_path(stage.cross[i][j].responses, own_responses, inverted, dt);
+      if (!out.shapes[i][j]) continue;
+      const hc::CouplingPathShape& p = *out.shapes[i][j];
+      json modes = json::array();
+      for (const auto& m : p.modes) {
+        modes.push_back({{"frequency_hz", m.parameters.natural_frequency_hz},
+                         {"damping_ratio", m.parameters.damping_ratio},
+                         {"share", m.share}});
+      }
+      out.described.push_back({{"into", stage.axes[i]},
+                               {"from", stage.axes[j]},
+                               {"gain", stage.decoupler.gains()(static_cast<Eigen::Index>(i),
+                                                                static_cast<Eigen::Index>(j))},
+                               {"direct_share", p.direct},
+                               {"modes", modes},
+                               {"lag_samples", p.lag_samples},
+                               {"slope", p.slope},
+                               {"curvature", p.curvature},
+                               {"over_own_response", !own_responses.empty()},
+                               {"misfit", p.misfit}});
+    }
+  }
+  return out;
+}
+
 // The feedforward's targets with the coupling taken out: every axis's reference sampled over
-// `samples` ticks (and its end held a second past them, for a preview ahead), decoupled.
+// `samples` ticks (and its end held a second past them, for a preview ahead), decoupled with
+// the paths' dynamics where the request asks for them and the stage's cross responses show
+// them, else with the static gains; `how` says which (the result's decoupling.dynamic).
 std::vector<std::unique_ptr<sim::SignalGenerator>> decoupled_targets(
-    const std::vector<TrackReference>& refs, const hc::StageDecoupler& decoupler, double dt,
-    std::uint64_t samples) {
+    const std::vector<TrackReference>& refs, const StageModel& stage,
+    const std::vector<RunContext>& contexts, bool dynamic, double dt, std::uint64_t samples,
+    json& how) {
   const std::size_t n = refs.size();
   const std::uint64_t total = samples + static_cast<std::uint64_t>(std::llround(1.0 / dt));
-  std::vector<std::vector<double>> own(n, std::vector<double>(total));
-  std::vector<double> r(n), s(n);
+  Eigen::MatrixXd r(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(total));
   for (std::uint64_t k = 0; k < total; ++k) {
     const double t = static_cast<double>(std::min(k, samples)) * dt;
-    for (std::size_t a = 0; a < n; ++a) r[a] = refs[a].signal->value(t);
-    decoupler.apply(r, s);
-    for (std::size_t a = 0; a < n; ++a) own[a][k] = s[a];
+    for (std::size_t a = 0; a < n; ++a) {
+      r(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(k)) = refs[a].signal->value(t);
+    }
+  }
+  std::optional<Eigen::MatrixXd> own;
+  CouplingPaths paths = coupling_paths(stage, dt);
+  how = {{"used", false}};
+  if (!paths.measured) {
+    how["why_not"] = "the stage's cross responses were not measured: identify again";
+  } else if (paths.described.empty()) {
+    how["why_not"] =
+        "no coupling path shows a mode over its measured lines: the static gains are its "
+        "coupling";
+  } else if (!dynamic) {
+    how["why_not"] = "decoupling = static (the default; dynamic takes these paths out too)";
+    how["paths"] = paths.described;
+  } else {
+    std::vector<hc::DynamicStageDecoupler::StrokeOf> strokes;
+    strokes.reserve(contexts.size());
+    for (const RunContext& c : contexts) strokes.push_back(stroke_of(c));
+    try {
+      const hc::DynamicStageDecoupler decoupler(stage.decoupler.gains(), std::move(paths.shapes),
+                                                dt);
+      hc::DynamicStageDecoupler::Solution solved = decoupler.own_targets(r, strokes);
+      how = {{"used", true}, {"paths", paths.described}, {"sweeps", solved.sweeps}};
+      own = std::move(solved.own);
+    } catch (const std::invalid_argument& e) {
+      how["why_not"] = e.what();
+      how["paths"] = paths.described;
+    }
+  }
+  if (!own) {
+    own.emplace(r.rows(), r.cols());
+    std::vector<double> in(n), out(n);
+    for (Eigen::Index k = 0; k < r.cols(); ++k) {
+      for (std::size_t a = 0; a < n; ++a) in[a] = r(static_cast<Eigen::Index>(a), k);
+      stage.decoupler.apply(in, out);
+      for (std::size_t a = 0; a < n; ++a) (*own)(static_cast<Eigen::Index>(a), k) = out[a];
+    }
   }
   std::vector<std::unique_ptr<sim::SignalGenerator>> out;
   out.reserve(n);
-  for (auto& values : own) out.push_back(sim::make_uniform_signal(std::move(values), dt));
+  for (std::size_t a = 0; a < n; ++a) {
+    const Eigen::RowVectorXd row = own->row(static_cast<Eigen::Index>(a));
+    out.push_back(sim::make_uniform_signal(std::vector<double>(row.begin(), row.end()), dt));
+  }
   return out;
 }
 
@@ -175,6 +288,7 @@ json feedback_interaction(const StageModel* stage,
   }
   if (responses == 0 || responses == std::numeric_limits<std::size_t>::max()) return nullptr;
   std::vector<hc::FeedbackController> controllers;
+  controllers.reserve(plans.size());
   for (const auto& plan : plans) controllers.emplace_back(plan->law, dt);
   std::optional<hc::StageInteraction> worst;
   std::string where;
@@ -209,9 +323,13 @@ json feedback_interaction(const StageModel* stage,
            "axes' loops, each stable alone, are stable together"}};
 }
 
-json decoupling_json(const StageTrackRequest& request, const StageModel* stage, bool decoupled) {
-  if (decoupled) return {{"static", true}, {"from_run", stage->run_id}};
+json decoupling_json(const StageTrackRequest& request, const StageModel* stage, bool decoupled,
+                     json dynamic) {
+  if (decoupled) {
+    return {{"static", true}, {"dynamic", std::move(dynamic)}, {"from_run", stage->run_id}};
+  }
   return {{"static", false},
+          {"dynamic", {{"used", false}, {"why_not", "no decoupling"}}},
           {"why_not", !request.decouple  ? "decouple = false"
                       : stage == nullptr ? "no stage model: identify first"
                                          : "the compensator has no feedforward"}};
@@ -235,7 +353,7 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
   // row of a built-in reference.
   json rest = request.params().is_object() ? request.params() : json::object();
   for (const char* key : {"reference", "frequencies_hz", "range_fraction", "duration_s", "decouple",
-                          "reference_uploads", "approach_s"}) {
+                          "decoupling", "reference_uploads", "approach_s"}) {
     rest.erase(key);
   }
   r.common = parse_track_request(RequestParams(rest, track_builtin_params()), ctx);
@@ -246,6 +364,14 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
                        "again (learn_trials)");
   }
   r.decouple = request.boolean("decouple", true);
+  const std::string decoupling = request.string("decoupling", "static");
+  if (decoupling != "dynamic" && decoupling != "static") {
+    throw CommandError("bad_params",
+                       "decoupling: 'static' (the default: the coupling's gains) or 'dynamic' "
+                       "(its paths' modes too, where identify's responses show them), not '" +
+                           decoupling + "'");
+  }
+  r.dynamic = decoupling == "dynamic";
   const json& params = request.params();
   if (params.contains("reference_uploads")) {
     const json& uploads = params["reference_uploads"];
@@ -316,7 +442,11 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   const bool decoupled = request.decouple && stage != nullptr && stage->decoupler.axes() == n &&
                          hc::needs_model(request.common.compensator_kind);
   std::vector<std::unique_ptr<sim::SignalGenerator>> targets(n);
-  if (decoupled) targets = decoupled_targets(refs, stage->decoupler, dt, refs[0].samples);
+  json dynamic;
+  if (decoupled) {
+    targets =
+        decoupled_targets(refs, *stage, contexts, request.dynamic, dt, refs[0].samples, dynamic);
+  }
 
   BuiltRun run;
   std::vector<RunPreparation> preparations;
@@ -341,7 +471,7 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
     }
   }
   const json reference = reference_json(request);
-  const json decoupling = decoupling_json(request, stage, decoupled);
+  const json decoupling = decoupling_json(request, stage, decoupled, std::move(dynamic));
   run.header = {{"run",
                  {{"kind", "track"},
                   {"axes", names},

@@ -35,11 +35,10 @@ constexpr ParamSpec kTrackUploaded[] = {{"reference_upload", T::kString},
                                         {"learned", T::kString},
                                         {"lead_in_max_s", T::kNumber, 0.0, 600.0}};
 // A stage's (several axes): an uploaded reference per axis, {axis: upload name}.
-constexpr ParamSpec kTrackStageUploaded[] = {{"reference_uploads", T::kObject},
-                                             {"approach_s", T::kNumber, 0.0, 60.0},
-                                             {"compensator", T::kString},
-                                             {"precondition_s", T::kNumber, 0.0, 60.0},
-                                             {"decouple", T::kBoolean}};
+constexpr ParamSpec kTrackStageUploaded[] = {
+    {"reference_uploads", T::kObject}, {"approach_s", T::kNumber, 0.0, 60.0},
+    {"compensator", T::kString},       {"precondition_s", T::kNumber, 0.0, 60.0},
+    {"decouple", T::kBoolean},         {"decoupling", T::kString}};
 constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"frequency_hz", T::kNumber, 1e-3},
                                        {"periods", T::kNumber, 0.0, 1e7},
@@ -59,7 +58,8 @@ constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"learned", T::kString},
                                        {"lead_in_max_s", T::kNumber, 0.0, 600.0},
                                        {"frequencies_hz", T::kArray},
-                                       {"decouple", T::kBoolean}};
+                                       {"decouple", T::kBoolean},
+                                       {"decoupling", T::kString}};
 constexpr ParamSpec kExcite[] = {{"drive_upload", T::kString}};
 constexpr ParamSpec kFrf[] = {{"amplitude", T::kNumber, 1e-3, 0.1},
                               {"periods", T::kInteger, 2, 64}};
