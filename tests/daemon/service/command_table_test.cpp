@@ -36,7 +36,7 @@ TEST(CommandTable, AnUnknownKeyIsNamedWithTheValidOnes) {
             "bad_params: unknown parameter 'bogus' (valid: reference, frequency_hz, periods, "
             "duration_s, compensator, range_fraction, min_um, max_um, kp, ki, kd, force_gains, "
             "precondition_s, learn_trials, learn_gain, learn_cutoff_hz, learned, lead_in_max_s, "
-            "frequencies_hz, decouple)");
+            "frequencies_hz, decouple, decoupling)");
   EXPECT_EQ(refusal("status", {{"verbose", true}}),
             "bad_params: unknown parameter 'verbose' (valid: )");
   // An uploaded reference has its own keys: the built-in reference's are unknown there.
