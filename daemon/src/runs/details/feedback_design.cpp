@@ -286,6 +286,34 @@ std::string refusal(const hc::LoopEvaluation& e, const std::vector<hc::MeasuredR
   return s + " `hystbench tune` prints the designed loop; force_gains runs them anyway";
 }
 
+bool gains_by_hand(const RunContext& ctx, const FeedbackGainsRequest& gains) {
+  const PidSection& c = ctx.settings.pid;
+  return gains.any() || c.kp || c.ki || c.kd;
+}
+
+// What a plan is kept under: the model, the compensator, the responses and the gains.
+std::string plan_key(const RunContext& ctx, hc::CompensatorKind kind,
+                     const FeedbackGainsRequest& gains, const hc::StageResponses& r) {
+  const PidSection& c = ctx.settings.pid;
+  auto number = [](const std::optional<double>& a, const std::optional<double>& b) {
+    return a ? text(*a) : b ? text(*b) : "-";
+  };
+  return std::to_string(ctx.model_generation) + "/" + std::string(hc::to_string(kind)) + "/" +
+         r.run_id + "/" +
+         (gains_by_hand(ctx, gains) ? number(gains.kp, c.kp) + "," + number(gains.ki, c.ki) + "," +
+                                          number(gains.kd, c.kd) + (gains.force ? "!" : "")
+                                    : "designed");
+}
+
+void keep_plan(const RunContext& ctx, const std::string& key, const FeedbackPlan& p) {
+  if (!ctx.feedback_plans) return;
+  std::lock_guard lock(ctx.feedback_plans->mutex);
+  auto& plans = ctx.feedback_plans->plans;
+  std::erase_if(plans, [&](const auto& kept) { return kept.first == key; });
+  if (plans.size() >= FeedbackPlanCache::kPlans) plans.erase(plans.begin());
+  plans.emplace_back(key, p);
+}
+
 }  // namespace
 
 FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
@@ -294,15 +322,8 @@ FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
   const PidSection& c = ctx.settings.pid;
   const double gain = mean_slope(ctx);
   const hc::LoopDesignOptions o = design_options(ctx, r, gain);
-  const bool by_hand = gains.any() || c.kp || c.ki || c.kd;
-  auto number = [](const std::optional<double>& a, const std::optional<double>& b) {
-    return a ? text(*a) : b ? text(*b) : "-";
-  };
-  const std::string key = std::to_string(ctx.model_generation) + "/" +
-                          std::string(hc::to_string(kind)) + "/" + r.run_id + "/" +
-                          (by_hand ? number(gains.kp, c.kp) + "," + number(gains.ki, c.ki) + "," +
-                                         number(gains.kd, c.kd) + (gains.force ? "!" : "")
-                                   : "designed");
+  const bool by_hand = gains_by_hand(ctx, gains);
+  const std::string key = plan_key(ctx, kind, gains, r);
   if (ctx.feedback_plans) {
     std::lock_guard lock(ctx.feedback_plans->mutex);
     for (const auto& [k, plan] : ctx.feedback_plans->plans) {
@@ -340,12 +361,23 @@ FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
     }
     p.summary["modes"] = modes;
   }
-  if (ctx.feedback_plans) {
-    std::lock_guard lock(ctx.feedback_plans->mutex);
-    auto& plans = ctx.feedback_plans->plans;
-    if (plans.size() >= FeedbackPlanCache::kPlans) plans.erase(plans.begin());
-    plans.emplace_back(key, p);
-  }
+  keep_plan(ctx, key, p);
+  return p;
+}
+
+FeedbackPlan lowered_plan(const RunContext& ctx, hc::CompensatorKind kind,
+                          const FeedbackGainsRequest& gains, const FeedbackPlan& plan,
+                          double factor, const nlohmann::json& why) {
+  const hc::StageResponses& r = measured_responses(ctx);
+  const hc::LoopDesignOptions o = design_options(ctx, r, mean_slope(ctx));
+  FeedbackPlan p = plan;
+  p.law.pid.kp *= factor;
+  p.law.pid.ki *= factor;
+  p.law.pid.kd *= factor;
+  p.evaluation = hc::check_loop(p.plants, p.law, o);
+  p.summary.update(summary_json(p, r, o));
+  p.summary["lowered"] = {{"by", factor}, {"why", why}};
+  keep_plan(ctx, plan_key(ctx, kind, gains, r), p);
   return p;
 }
 

@@ -59,6 +59,14 @@ struct FeedbackPlanCache {
 FeedbackPlan plan_feedback(const RunContext& ctx, compensation::CompensatorKind kind,
                            const FeedbackGainsRequest& gains);
 
+/// `plan` (plan_feedback()'s for the same inputs) with its loop's gain times `factor` in
+/// (0, 1]: its PID's gains scaled, its margins checked again on its responses; its summary's
+/// `lowered` gives the factor and `why`. Kept in ctx's cache in place of `plan`, so that
+/// plan_feedback() returns it for the same inputs.
+FeedbackPlan lowered_plan(const RunContext& ctx, compensation::CompensatorKind kind,
+                          const FeedbackGainsRequest& gains, const FeedbackPlan& plan,
+                          double factor, const nlohmann::json& why);
+
 /// The loop on each response the plan saw, for plots: frequency, |L|, arg L [deg], |S|, |T|,
 /// and its margins' marks.
 nlohmann::json loop_curves(const FeedbackPlan& plan, double dt_s);

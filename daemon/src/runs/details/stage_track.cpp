@@ -269,29 +269,39 @@ json reference_json(const StageTrackRequest& request) {
           {"duration_s", request.builtin.duration_s}};
 }
 
-// The axes' loops, each designed on its own response, checked together through the stage's
-// measured cross responses (compensation/stage_interaction.hpp), the worst over the responses
-// every axis measured alike; null without a loop on every axis, or without cross responses.
-json feedback_interaction(const StageModel* stage,
-                          const std::vector<std::shared_ptr<const FeedbackPlan>>& plans,
-                          double dt) {
+// The check of the axes' loops together (compensation/stage_interaction.hpp): the worst over
+// the responses every axis measured alike, each loop's gain times `factor`; nullopt without a
+// loop on every axis, or without cross responses.
+struct Interaction {
+  hc::StageInteraction worst;
+  std::string on;  ///< the response it was worst on
+};
+
+std::optional<Interaction> worst_interaction(
+    const StageModel* stage, const std::vector<std::shared_ptr<const FeedbackPlan>>& plans,
+    double factor, double dt) {
   const std::size_t n = plans.size();
-  if (stage == nullptr || stage->cross.size() != n || n < 2) return nullptr;
+  if (stage == nullptr || stage->cross.size() != n || n < 2) return std::nullopt;
   std::size_t responses = std::numeric_limits<std::size_t>::max();
   for (std::size_t i = 0; i < n; ++i) {
-    if (!plans[i] || !stage->models[i].responses) return nullptr;
+    if (!plans[i] || !stage->models[i].responses) return std::nullopt;
     responses = std::min(
         {responses, stage->models[i].responses->responses.size(), plans[i]->plants.size()});
     for (std::size_t j = 0; j < n; ++j) {
       if (i != j) responses = std::min(responses, stage->cross[i][j].responses.size());
     }
   }
-  if (responses == 0 || responses == std::numeric_limits<std::size_t>::max()) return nullptr;
+  if (responses == 0 || responses == std::numeric_limits<std::size_t>::max()) return std::nullopt;
   std::vector<hc::FeedbackController> controllers;
-  controllers.reserve(plans.size());
-  for (const auto& plan : plans) controllers.emplace_back(plan->law, dt);
-  std::optional<hc::StageInteraction> worst;
-  std::string where;
+  controllers.reserve(n);
+  for (const auto& plan : plans) {
+    hc::FeedbackLaw law = plan->law;
+    law.pid.kp *= factor;
+    law.pid.ki *= factor;
+    law.pid.kd *= factor;
+    controllers.emplace_back(law, dt);
+  }
+  std::optional<Interaction> out;
   for (std::size_t k = 0; k < responses; ++k) {
     std::vector<std::vector<hc::MeasuredResponse>> g(n, std::vector<hc::MeasuredResponse>(n));
     std::vector<std::vector<std::complex<double>>> loops;
@@ -304,19 +314,91 @@ json feedback_interaction(const StageModel* stage,
     }
     try {
       hc::StageInteraction s = hc::stage_interaction(g, loops);
-      if (!worst || s.peak > worst->peak) {
-        worst = std::move(s);
-        where = stage->models[0].responses->responses[k].label;
+      if (!out || s.peak > out->worst.peak) {
+        out = Interaction{std::move(s), stage->models[0].responses->responses[k].label};
       }
     } catch (const std::invalid_argument&) {
       // The axes' responses do not share lines at this operating point: not comparable.
     }
   }
+  return out;
+}
+
+// The largest the check may reach for the loops to run as designed: below 1 they are stable
+// together; 0.7 leaves what the cross responses' estimates and each loop's own gain
+// uncertainty (the design's +/-30 %: 1 / 1.3) may take.
+constexpr double kInteractionLimit = 0.7;
+
+// The axes' loops designed for the coupling: each axis's loop designed on its own responses
+// (kept in its context's cache, where its track program takes it), then checked together; where
+// the check passes the limit, every loop's gain is lowered by the one factor (bisection) that
+// brings it back under, their margins checked again. Null without a loop on every axis or
+// cross responses; else what it did. Gains given by hand run as given (the check reports
+// them); no_design when not even a fiftieth of the designed gain passes.
+json design_loops_together(const StageTrackRequest& request, std::vector<RunContext>& contexts,
+                           const StageModel* stage, double dt) {
+  const hc::CompensatorKind kind = request.common.compensator_kind;
+  if (!hc::uses_feedback(kind) || stage == nullptr || contexts.size() < 2 ||
+      stage->cross.size() != contexts.size()) {
+    return nullptr;
+  }
+  std::vector<std::shared_ptr<const FeedbackPlan>> plans;
+  for (RunContext& c : contexts) {
+    c.feedback_plans = std::make_shared<FeedbackPlanCache>();
+    plans.push_back(
+        std::make_shared<const FeedbackPlan>(plan_feedback(c, kind, request.common.gains)));
+  }
+  const std::optional<Interaction> alone = worst_interaction(stage, plans, 1.0, dt);
+  if (!alone) return nullptr;
+  json out = {{"peak_alone", alone->worst.peak},
+              {"peak_alone_hz", alone->worst.peak_hz},
+              {"limit", kInteractionLimit}};
+  if (alone->worst.peak <= kInteractionLimit) {
+    out["lowered_by"] = 1.0;
+    return out;
+  }
+  if (plans.front()->summary.value("gains", "") != "designed") {
+    out["lowered_by"] = 1.0;
+    out["as_given"] = "gains given by hand run as given: the check above says what they risk";
+    return out;
+  }
+  double low = 0.0, high = 1.0;
+  for (int i = 0; i < 20; ++i) {
+    const double mid = 0.5 * (low + high);
+    const std::optional<Interaction> at = worst_interaction(stage, plans, mid, dt);
+    (at && at->worst.peak <= kInteractionLimit ? low : high) = mid;
+  }
+  if (low < 0.02) {
+    throw CommandError("no_design",
+                       "the axes' loops checked together through the coupling stay "
+                       "above " +
+                           std::to_string(kInteractionLimit) +
+                           " down to a fiftieth of their gain: the coupling is too "
+                           "strong for a loop per axis");
+  }
+  const json why = {{"peak_alone", alone->worst.peak},
+                    {"limit", kInteractionLimit},
+                    {"meaning",
+                     "every axis's loop lowered by one factor until the loops checked "
+                     "together through the coupling stay under the limit"}};
+  for (std::size_t a = 0; a < contexts.size(); ++a) {
+    lowered_plan(contexts[a], kind, request.common.gains, *plans[a], low, why);
+  }
+  out["lowered_by"] = low;
+  return out;
+}
+
+// The axes' loops checked together, as they run; null without a loop on every axis, or
+// without cross responses.
+json feedback_interaction(const StageModel* stage,
+                          const std::vector<std::shared_ptr<const FeedbackPlan>>& plans,
+                          double dt) {
+  const std::optional<Interaction> worst = worst_interaction(stage, plans, 1.0, dt);
   if (!worst) return nullptr;
-  return {{"peak", worst->peak},
-          {"peak_hz", worst->peak_hz},
-          {"on", where},
-          {"dominant", worst->dominant()},
+  return {{"peak", worst->worst.peak},
+          {"peak_hz", worst->worst.peak_hz},
+          {"on", worst->on},
+          {"dominant", worst->worst.dominant()},
           {"meaning",
            "the largest spectral radius of E T over the measured lines (E: each cross response "
            "over the driven axis's own, T: each axis's complementary sensitivity); below 1 the "
@@ -438,6 +520,7 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   }
   AxisReferences axis_refs =
       axis_references(request, contexts, requests, ranges, uploads, ctx.settings.loop.rate_hz);
+  json designed_together = design_loops_together(request, contexts, stage, dt);
   std::vector<TrackReference>& refs = axis_refs.refs;
   const bool decoupled = request.decouple && stage != nullptr && stage->decoupler.axes() == n &&
                          hc::needs_model(request.common.compensator_kind);
@@ -488,6 +571,7 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   run.status = {{"compensator", request.common.compensator}, {"axes", names}};
   run.program->summary["decoupling"] = decoupling;
   if (json interaction = feedback_interaction(stage, plans, dt); !interaction.is_null()) {
+    if (!designed_together.is_null()) interaction["designed_together"] = designed_together;
     run.reply["feedback_interaction"] = interaction;
     run.program->summary["feedback_interaction"] = std::move(interaction);
   }
