@@ -99,6 +99,7 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
   ASSERT_EQ(decoupled.value("end", ""), "completed") << decoupled.dump();
   EXPECT_EQ(plain["decoupling"]["static"], false);
   EXPECT_EQ(decoupled["decoupling"]["static"], true);
+  EXPECT_FALSE(decoupled["decoupling"].contains("beyond_reach")) << decoupled["decoupling"];
   const double left_plain = plain["coupling_error"]["y"]["rms_um"].get<double>();
   const double left_decoupled = decoupled["coupling_error"]["y"]["rms_um"].get<double>();
   RecordProperty("y_coupling_error_um_without", std::to_string(left_plain));
@@ -280,6 +281,14 @@ TEST_F(BenchStage, LoopsOnAStronglyCoupledStageAreLoweredUntilTheyHoldTogether) 
                    std::to_string(a["rms_error_percent"].get<double>()));
     EXPECT_LT(a["rms_error_percent"].get<double>(), 0.2) << axis;
   }
+  // Over 80 % of each range the coupling taken out asks an axis for less than its stroke's
+  // floor: the run says so (its reply too, before it starts), naming how far.
+  const json wide = run_and_wait(
+      "track", {{"reference", "raster"}, {"compensator", "inverse"}, {"duration_s", 0.2}}, 600);
+  const json& beyond = wide["decoupling"]["beyond_reach"];
+  ASSERT_TRUE(beyond.is_object()) << wide["decoupling"].dump();
+  // y, at x's top, would have to go 14 µm under its floor.
+  EXPECT_GT(beyond["y"]["below_um"].get<double>(), 10.0) << beyond.dump();
 }
 
 TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) {

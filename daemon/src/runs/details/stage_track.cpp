@@ -146,14 +146,41 @@ CouplingPaths coupling_paths(const StageModel& stage, double dt) {
   return out;
 }
 
+// Where each axis's own displacement targets go against its stroke (its model's range): the
+// coupling taken out can ask an axis for more than it has (a stage coupled strongly, a
+// reference over most of each range), which its inverse cannot give. An object per axis
+// beyond its stroke by more than kReachTolerance of it, with how far [µm]; empty when every
+// axis stays within. (The approach from rest starts each axis at its stroke's floor, where the
+// others' share taken out dips a few hundredths of a µm below it: within the tolerance.)
+constexpr double kReachTolerance = 0.01;
+
+json own_reach(const Eigen::MatrixXd& own, std::span<const std::string> axes,
+               std::span<const sim::AxisRange> ranges) {
+  json out = json::object();
+  for (Eigen::Index a = 0; a < own.rows(); ++a) {
+    const auto au = static_cast<std::size_t>(a);
+    if (au >= ranges.size() || au >= axes.size()) break;
+    const double below = ranges[au].min - own.row(a).minCoeff();
+    const double above = own.row(a).maxCoeff() - ranges[au].max;
+    if (std::max(below, above) <= kReachTolerance * (ranges[au].max - ranges[au].min)) continue;
+    out[axes[au]] = {{"below_um", std::max(below, 0.0)},
+                     {"above_um", std::max(above, 0.0)},
+                     {"stroke_um", {ranges[au].min, ranges[au].max}},
+                     {"meaning",
+                      "the other axes' share taken out asks this axis for more than its stroke: "
+                      "it cannot follow there; lower range_fraction or move the reference"}};
+  }
+  return out;
+}
+
 // The feedforward's targets with the coupling taken out: every axis's reference sampled over
 // `samples` ticks (and its end held a second past them, for a preview ahead), decoupled with
 // the paths' dynamics where the request asks for them and the stage's cross responses show
 // them, else with the static gains; `how` says which (the result's decoupling.dynamic).
 std::vector<std::unique_ptr<sim::SignalGenerator>> decoupled_targets(
     const std::vector<TrackReference>& refs, const StageModel& stage,
-    const std::vector<RunContext>& contexts, bool dynamic, double dt, std::uint64_t samples,
-    json& how) {
+    const std::vector<RunContext>& contexts, std::span<const sim::AxisRange> ranges, bool dynamic,
+    double dt, std::uint64_t samples, json& how) {
   const std::size_t n = refs.size();
   const std::uint64_t total = samples + static_cast<std::uint64_t>(std::llround(1.0 / dt));
   Eigen::MatrixXd r(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(total));
@@ -205,6 +232,7 @@ std::vector<std::unique_ptr<sim::SignalGenerator>> decoupled_targets(
     const Eigen::RowVectorXd row = own->row(static_cast<Eigen::Index>(a));
     out.push_back(sim::make_uniform_signal(std::vector<double>(row.begin(), row.end()), dt));
   }
+  how["reach"] = own_reach(*own, stage.axes, ranges);
   return out;
 }
 
@@ -527,8 +555,8 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   std::vector<std::unique_ptr<sim::SignalGenerator>> targets(n);
   json dynamic;
   if (decoupled) {
-    targets =
-        decoupled_targets(refs, *stage, contexts, request.dynamic, dt, refs[0].samples, dynamic);
+    targets = decoupled_targets(refs, *stage, contexts, ranges, request.dynamic, dt,
+                                refs[0].samples, dynamic);
   }
 
   BuiltRun run;
@@ -554,7 +582,13 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
     }
   }
   const json reference = reference_json(request);
-  const json decoupling = decoupling_json(request, stage, decoupled, std::move(dynamic));
+  json reach = json::object();
+  if (dynamic.is_object() && dynamic.contains("reach")) {
+    reach = std::move(dynamic["reach"]);
+    dynamic.erase("reach");
+  }
+  json decoupling = decoupling_json(request, stage, decoupled, std::move(dynamic));
+  if (!reach.empty()) decoupling["beyond_reach"] = std::move(reach);
   run.header = {{"run",
                  {{"kind", "track"},
                   {"axes", names},
