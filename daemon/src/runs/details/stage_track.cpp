@@ -447,6 +447,37 @@ json decoupling_json(const StageTrackRequest& request, const StageModel* stage, 
 
 double percent(double um, double range) { return range > 0.0 ? 100.0 * um / range : 0.0; }
 
+// Each axis's feedforward target (null where the compensator takes the reference itself) and
+// the result's `decoupling`.
+struct StageTargets {
+  std::vector<std::unique_ptr<sim::SignalGenerator>> signals;
+  json decoupling = json::object();
+};
+
+StageTargets stage_targets(const StageTrackRequest& request, const StageModel* stage,
+                           const std::vector<RunContext>& contexts,
+                           std::span<const sim::AxisRange> ranges,
+                           const std::vector<TrackReference>& refs, double dt) {
+  const std::size_t n = contexts.size();
+  const bool decoupled = request.decouple && stage != nullptr && stage->decoupler.axes() == n &&
+                         hc::needs_model(request.common.compensator_kind);
+  StageTargets out;
+  out.signals.resize(n);
+  json dynamic;
+  if (decoupled) {
+    out.signals = decoupled_targets(refs, *stage, contexts, ranges, request.dynamic, dt,
+                                    refs[0].samples, dynamic);
+  }
+  json reach = json::object();
+  if (dynamic.is_object() && dynamic.contains("reach")) {
+    reach = std::move(dynamic["reach"]);
+    dynamic.erase("reach");
+  }
+  out.decoupling = decoupling_json(request, stage, decoupled, std::move(dynamic));
+  if (!reach.empty()) out.decoupling["beyond_reach"] = std::move(reach);
+  return out;
+}
+
 }  // namespace
 
 StageTrackRequest parse_stage_track_request(const RequestParams& request, const RunContext& ctx,
@@ -550,14 +581,8 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
       axis_references(request, contexts, requests, ranges, uploads, ctx.settings.loop.rate_hz);
   json designed_together = design_loops_together(request, contexts, stage, dt);
   std::vector<TrackReference>& refs = axis_refs.refs;
-  const bool decoupled = request.decouple && stage != nullptr && stage->decoupler.axes() == n &&
-                         hc::needs_model(request.common.compensator_kind);
-  std::vector<std::unique_ptr<sim::SignalGenerator>> targets(n);
-  json dynamic;
-  if (decoupled) {
-    targets = decoupled_targets(refs, *stage, contexts, ranges, request.dynamic, dt,
-                                refs[0].samples, dynamic);
-  }
+  StageTargets targets = stage_targets(request, stage, contexts, ranges, refs, dt);
+  const json& decoupling = targets.decoupling;
 
   BuiltRun run;
   std::vector<RunPreparation> preparations;
@@ -568,7 +593,7 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
     const std::string name = stage != nullptr ? stage->axes[a] : std::to_string(a);
     names.push_back(name);
     BuiltRun axis = make_axis_track_program(requests[a], contexts[a], axis_refs.uploads[a],
-                                            std::move(refs[a]), std::move(targets[a]));
+                                            std::move(refs[a]), std::move(targets.signals[a]));
     axis_headers[name] = axis.header;
     axis_replies[name] = axis.reply;
     preparations.push_back(std::move(axis.preparation));
@@ -582,13 +607,6 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
     }
   }
   const json reference = reference_json(request);
-  json reach = json::object();
-  if (dynamic.is_object() && dynamic.contains("reach")) {
-    reach = std::move(dynamic["reach"]);
-    dynamic.erase("reach");
-  }
-  json decoupling = decoupling_json(request, stage, decoupled, std::move(dynamic));
-  if (!reach.empty()) decoupling["beyond_reach"] = std::move(reach);
   run.header = {{"run",
                  {{"kind", "track"},
                   {"axes", names},
