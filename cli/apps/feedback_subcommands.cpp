@@ -71,7 +71,10 @@ CliCommand add_tune(CLI::App& app, cli::RemoteCommand& remote) {
       "feedforward), its parts, crossover and bandwidths, its margins on every response "
       "against the targets ([pid] gain_margin_db, phase_margin_deg, peak_sensitivity_db) and "
       "what limited it; or with --kp/--ki/--kd the margins of those gains (a track refuses "
-      "gains that break a target unless --force-gains).\n"
+      "gains that break a target unless --force-gains). On a stage of several axes: each "
+      "axis's loop, and the loops checked together through the coupling (lowered together "
+      "where they would not hold), as a track runs them; --plot writes each axis's pictures "
+      "in DIR/AXIS.\n"
       "Example: hystbench tune --plot tune/");
   cmd->add_option("--compensator", o->compensator,
                   "inverse+pid or pid (default: inverse+pid with a model, pid without)")

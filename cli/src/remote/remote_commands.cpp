@@ -604,24 +604,8 @@ bool plot_run(const RemoteCommand& cmd, json& r, std::ostream& err) {
 
 /// tune's reply: the design in words (or as JSON), its plots with --plot. 0, or 1 when the
 /// plots failed.
-int print_tune(const RemoteCommand& cmd, json& result, std::ostream& out, std::ostream& err) {
-  int status = 0;
-  if (!cmd.plot_dir.empty()) {
-    try {
-      json files = json::array();
-      for (const auto& png : plot_loop(result, cmd.plot_dir)) files.push_back(png.string());
-      result["plots"] = files;
-    } catch (const std::exception& e) {
-      err << "hystbench: error: --plot: " << e.what() << "\n";
-      status = 1;
-    }
-  }
-  if (cmd.json_output) {
-    out << result.dump() << "\n";
-    return status;
-  }
-  out << "tune " << result.value("compensator", std::string("?")) << " on the responses of "
-      << result.value("responses_from", std::string("?")) << "\n";
+// One loop's design as tune prints it (one axis's on a stage).
+void print_loop_design(std::ostream& out, const json& result) {
   details::print_feedback(out, result);
   for (const json& m : result.value("margins", json::array())) {
     out << "  on " << m.value("response", std::string("?")) << ": crossover "
@@ -636,10 +620,69 @@ int print_tune(const RemoteCommand& cmd, json& result, std::ostream& out, std::o
   for (const auto& png : result.value("plots", json::array())) {
     out << "  plot            " << png.get<std::string>() << "\n";
   }
+}
+
+// --plot: a loop's pictures in dir (on a stage, each axis's in dir/AXIS); false on failure.
+bool plot_tune(json& design, const std::filesystem::path& dir, std::ostream& err) {
+  try {
+    json files = json::array();
+    for (const auto& png : plot_loop(design, dir)) files.push_back(png.string());
+    design["plots"] = files;
+    return true;
+  } catch (const std::exception& e) {
+    err << "hystbench: error: --plot: " << e.what() << "\n";
+    return false;
+  }
+}
+
+int print_tune(const RemoteCommand& cmd, json& result, std::ostream& out, std::ostream& err) {
+  int status = 0;
+  const bool stage = result.contains("axes") && result["axes"].is_object();
+  if (!cmd.plot_dir.empty()) {
+    if (stage) {
+      for (auto& [axis, design] : result["axes"].items()) {
+        if (!plot_tune(design, std::filesystem::path(cmd.plot_dir) / axis, err)) status = 1;
+      }
+    } else if (!plot_tune(result, cmd.plot_dir, err)) {
+      status = 1;
+    }
+  }
+  if (cmd.json_output) {
+    out << result.dump() << "\n";
+  } else {
+    print_tune_result(result, out);
+  }
   return status;
 }
 
 }  // namespace
+
+void print_tune_result(const json& result, std::ostream& out) {
+  if (!result.contains("axes") || !result["axes"].is_object()) {
+    out << "tune " << result.value("compensator", std::string("?")) << " on the responses of "
+        << result.value("responses_from", std::string("?")) << "\n";
+    print_loop_design(out, result);
+    return;
+  }
+  out << "tune " << result.value("compensator", std::string("?")) << " on each axis of the stage\n";
+  for (const auto& [axis, design] : result["axes"].items()) {
+    out << "axis " << axis << " (responses of " << design.value("responses_from", std::string("?"))
+        << ")\n";
+    print_loop_design(out, design);
+  }
+  const json& together = result.value("feedback_interaction", json());
+  if (together.is_object()) {
+    out << "the loops together through the coupling: " << fixed(together.value("peak", 0.0), 2)
+        << " at " << fixed(together.value("peak_hz", 0.0), 0) << " Hz ("
+        << (together.value("dominant", false) ? "below 1: stable together" : "NOT below 1") << ")";
+    const json& designed = together.value("designed_together", json());
+    if (designed.is_object() && designed.value("lowered_by", 1.0) < 1.0) {
+      out << "; each loop lowered by " << fixed(designed.value("lowered_by", 1.0), 2) << " from "
+          << fixed(designed.value("peak_alone", 0.0), 2);
+    }
+    out << "\n";
+  }
+}
 
 int run_remote(const RemoteCommand& cmd, std::ostream& out, std::ostream& err) {
   try {

@@ -11,6 +11,7 @@
 #include "runs/details/response_program.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/run_result.hpp"
+#include "runs/details/stage_runs.hpp"
 #include "service/details/request_params.hpp"
 
 namespace hystbench::daemon {
@@ -98,14 +99,14 @@ void Bench::responses_finished(std::unique_ptr<RunProgram> run, details::RunResu
 
 json Bench::tune(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
-  refuse_on_stage("tune");
-  const std::string name = request.string("compensator", model_ ? "inverse+pid" : "pid");
+  const bool has_model = is_stage() ? stage_ != nullptr : model_.has_value();
+  const std::string name = request.string("compensator", has_model ? "inverse+pid" : "pid");
   const auto kind = hc::compensator_kind_from_string(name);
   if (!kind || !hc::uses_feedback(*kind)) {
     throw common::CommandError("bad_params",
                                "compensator: '" + name + "' has no feedback (inverse+pid, pid)");
   }
-  if (hc::needs_model(*kind) && !model_) {
+  if (hc::needs_model(*kind) && !has_model) {
     throw common::CommandError("no_model", "inverse+pid needs a model: identify or load one");
   }
   details::FeedbackGainsRequest gains;
@@ -114,6 +115,11 @@ json Bench::tune(const details::RequestParams& request) {
   if (request.has("kd")) gains.kd = request.number("kd", 0.0);
   gains.force = true;  // tune states a hand law's margins; it refuses nothing, as it runs nothing
   const details::RunContext ctx = run_context();
+  if (is_stage()) {
+    json out = details::stage_tune(ctx, stage_.get(), axis_outputs(), settings_.axes, *kind, gains);
+    out["compensator"] = name;
+    return out;
+  }
   const details::FeedbackPlan plan = details::plan_feedback(ctx, *kind, gains);
   json out = plan.summary;
   out["compensator"] = name;

@@ -121,3 +121,41 @@ TEST(PrintRunResult, SaysWhichPartsOfTheExtensionWereAdopted) {
             std::string::npos)
       << text;
 }
+
+// tune on a stage: each axis's loop, then the loops together, with the factor they were lowered
+// by where the coupling asked for it.
+TEST(PrintTuneResult, OnAStageGivesEachAxisAndTheLoopsTogether) {
+  const nlohmann::json axis = {{"responses_from", "r1-frf"},
+                               {"structure", "integral, notch at 2930 Hz"},
+                               {"gains", "designed"},
+                               {"crossover_hz", 271.0},
+                               {"limited_by", "coupling"},
+                               {"limit", "lowered x0.592 from its design alone"},
+                               {"margins", nlohmann::json::array()}};
+  nlohmann::json r = {{"compensator", "inverse+pid"},
+                      {"axes", {{"x", axis}, {"y", axis}}},
+                      {"feedback_interaction",
+                       {{"peak", 0.7},
+                        {"peak_hz", 1490.0},
+                        {"dominant", true},
+                        {"designed_together", {{"peak_alone", 1.62}, {"lowered_by", 0.592}}}}}};
+  std::ostringstream out;
+  cli::print_tune_result(r, out);
+  const std::string text = out.str();
+  EXPECT_NE(text.find("axis x (responses of r1-frf)"), std::string::npos) << text;
+  EXPECT_NE(text.find("axis y (responses of r1-frf)"), std::string::npos) << text;
+  EXPECT_NE(text.find("coupling: lowered x0.592"), std::string::npos) << text;
+  EXPECT_NE(text.find("0.70 at 1490 Hz (below 1: stable together); each loop lowered by 0.59 "
+                      "from 1.62"),
+            std::string::npos)
+      << text;
+  // Loops that needed no lowering, and no cross responses: nothing said of either.
+  r["feedback_interaction"]["designed_together"]["lowered_by"] = 1.0;
+  std::ostringstream unlowered;
+  cli::print_tune_result(r, unlowered);
+  EXPECT_EQ(unlowered.str().find("lowered by"), std::string::npos) << unlowered.str();
+  r.erase("feedback_interaction");
+  std::ostringstream alone;
+  cli::print_tune_result(r, alone);
+  EXPECT_EQ(alone.str().find("together"), std::string::npos) << alone.str();
+}

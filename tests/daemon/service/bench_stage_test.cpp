@@ -178,6 +178,16 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
   RecordProperty("feedback_interaction_peak", std::to_string(interaction["peak"].get<double>()));
   // Under the limit as designed: each loop runs as designed alone.
   EXPECT_EQ(interaction["designed_together"]["lowered_by"], 1.0) << interaction.dump();
+  // tune states the loops the track ran, nothing run: each axis's, and the check together.
+  const json tuned = bench_->handle("tune", json::object());
+  for (const char* axis : {"x", "y"}) {
+    EXPECT_NEAR(tuned["axes"][axis]["crossover_hz"].get<double>(),
+                fed["axes"][axis]["feedback"]["crossover_hz"].get<double>(), 1e-9)
+        << axis;
+    EXPECT_FALSE(tuned["axes"][axis]["curves"].empty()) << axis;
+  }
+  EXPECT_NEAR(tuned["feedback_interaction"]["peak"].get<double>(),
+              interaction["peak"].get<double>(), 1e-9);
 
   // Both axes learned at once over the default Lissajous (10 and 11 Hz, a trial its 2 s) from
   // each axis's decoupled inverse: each within 0.03 % rms after ten updates.
@@ -281,6 +291,11 @@ TEST_F(BenchStage, LoopsOnAStronglyCoupledStageAreLoweredUntilTheyHoldTogether) 
                    std::to_string(a["rms_error_percent"].get<double>()));
     EXPECT_LT(a["rms_error_percent"].get<double>(), 0.2) << axis;
   }
+  // tune designs them the same way, nothing run.
+  const json tuned = bench_->handle("tune", json::object());
+  EXPECT_NEAR(tuned["feedback_interaction"]["designed_together"]["lowered_by"].get<double>(), by,
+              1e-12)
+      << tuned["feedback_interaction"].dump();
   // Over 80 % of each range the coupling taken out asks an axis for less than its stroke's
   // floor: the run says so (its reply too, before it starts), naming how far.
   const json wide = run_and_wait(
@@ -293,10 +308,8 @@ TEST_F(BenchStage, LoopsOnAStronglyCoupledStageAreLoweredUntilTheyHoldTogether) 
 
 TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) {
   start_xy();
-  for (const auto& [cmd, params] :
-       std::vector<std::pair<std::string, json>>{{"tune", json::object()},
-                                                 {"excite", {{"drive_upload", "u"}}},
-                                                 {"model.load", {{"model", json::object()}}}}) {
+  for (const auto& [cmd, params] : std::vector<std::pair<std::string, json>>{
+           {"excite", {{"drive_upload", "u"}}}, {"model.load", {{"model", json::object()}}}}) {
     const auto [code, message] = refused(cmd, params);
     EXPECT_EQ(code, "not_on_stage") << cmd << ": " << message;
     EXPECT_NE(message.find("stage of 2 axes"), std::string::npos) << message;
@@ -316,6 +329,8 @@ TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) 
             std::string::npos);
   // Each axis's responses are measured for its model: identify first.
   EXPECT_EQ(refused("frf", json::object()).first, "no_model");
+  EXPECT_EQ(refused("tune", json::object()).first, "no_frequency_response");
+  EXPECT_EQ(refused("tune", {{"compensator", "inverse+pid"}}).first, "no_model");
   EXPECT_NE(refused("track", {{"reference", "raster"}, {"frequency_hz", 5.0}})
                 .second.find("frequency_hz: a one-axis reference's key"),
             std::string::npos);

@@ -377,6 +377,9 @@ FeedbackPlan lowered_plan(const RunContext& ctx, hc::CompensatorKind kind,
   p.evaluation = hc::check_loop(p.plants, p.law, o);
   p.summary.update(summary_json(p, r, o));
   p.summary["lowered"] = {{"by", factor}, {"why", why}};
+  p.summary["limited_by"] = "coupling";
+  p.summary["limit"] = "lowered x" + text(factor) + " from its design alone: " +
+                       why.value("meaning", std::string("the stage's coupling"));
   keep_plan(ctx, plan_key(ctx, kind, gains, r), p);
   return p;
 }

@@ -61,7 +61,8 @@ FeedbackPlan plan_feedback(const RunContext& ctx, compensation::CompensatorKind 
 
 /// `plan` (plan_feedback()'s for the same inputs) with its loop's gain times `factor` in
 /// (0, 1]: its PID's gains scaled, its margins checked again on its responses; its summary's
-/// `lowered` gives the factor and `why`. Kept in ctx's cache in place of `plan`, so that
+/// `lowered` gives the factor and `why` (whose "meaning" its `limit` quotes; `limited_by`
+/// "coupling"). Kept in ctx's cache in place of `plan`, so that
 /// plan_feedback() returns it for the same inputs.
 FeedbackPlan lowered_plan(const RunContext& ctx, compensation::CompensatorKind kind,
                           const FeedbackGainsRequest& gains, const FeedbackPlan& plan,

@@ -4,9 +4,10 @@
 // (compensation::fit_stage); track plays a reference per axis, each through its axis's
 // compensator, with the coupling taken out of the feedforward's targets (static decoupling:
 // compensation::StageDecoupler; or, asked for, dynamic where the stage's measured responses
-// show the coupling's modes: compensation::DynamicStageDecoupler). Each axis's program is the one-axis builder's
-// (make_axis_track_program), stepped together by the loop (RunProgram::stage_axes). Pure (no
-// threads, no files); errors are CommandError naming the cause. Not real-time safe.
+// show the coupling's modes: compensation::DynamicStageDecoupler). Each axis's program is the
+// one-axis builder's (make_axis_track_program), stepped together by the loop
+// (RunProgram::stage_axes). Pure (no threads, no files); errors are CommandError naming the cause.
+// Not real-time safe.
 #include <cstddef>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -108,9 +109,9 @@ struct StageTrackRequest {
 
 /// The request's keys: reference (raster, lissajous or spiral; default raster), frequencies_hz,
 /// range_fraction, duration_s, or reference_uploads {axis: upload} naming every axis; decouple,
-/// decoupling ("static", the default, or "dynamic"); and track's own (compensator, precondition, approach, gains). bad_params naming the key: an
-/// unknown reference, an axis without its upload or an upload for no axis, a one-axis
-/// reference's key, learning (not on a stage yet).
+/// decoupling ("static", the default, or "dynamic"); and track's own (compensator, precondition,
+/// approach, gains). bad_params naming the key: an unknown reference, an axis without its upload or
+/// an upload for no axis, a one-axis reference's key, learning (not on a stage yet).
 StageTrackRequest parse_stage_track_request(const RequestParams& request, const RunContext& ctx,
                                             std::span<const std::string> axes);
 
@@ -121,6 +122,15 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
 BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunContext& ctx,
                                   const StageModel* stage, std::span<const double> u_now,
                                   std::span<const Upload* const> uploads);
+
+/// `tune` on a stage: each axis's loop designed on its responses and for the coupling (as a
+/// track of `kind` would run them: lowered together where the check asks; gains by hand
+/// checked), nothing run. {"axes": {axis: the loop's summary with its `curves`},
+/// "feedback_interaction": the check together, absent without cross responses}. Errors are
+/// plan_feedback()'s (no_frequency_response, no_design, unsafe_gains unless gains.force).
+nlohmann::json stage_tune(const RunContext& ctx, const StageModel* stage,
+                          std::span<const double> u_now, std::span<const std::string> axes,
+                          compensation::CompensatorKind kind, const FeedbackGainsRequest& gains);
 
 /// The result of a finished stage run: `axes` keyed by name, each its program's tracking error
 /// (rms/max µm and %, track) and model error; for a track run `coupling_error`, what the other

@@ -2,9 +2,11 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <iomanip>
 #include <limits>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
@@ -363,9 +365,8 @@ constexpr double kInteractionLimit = 0.7;
 // brings it back under, their margins checked again. Null without a loop on every axis or
 // cross responses; else what it did. Gains given by hand run as given (the check reports
 // them); no_design when not even a fiftieth of the designed gain passes.
-json design_loops_together(const StageTrackRequest& request, std::vector<RunContext>& contexts,
-                           const StageModel* stage, double dt) {
-  const hc::CompensatorKind kind = request.common.compensator_kind;
+json design_loops_together(hc::CompensatorKind kind, const FeedbackGainsRequest& gains,
+                           std::vector<RunContext>& contexts, const StageModel* stage, double dt) {
   if (!hc::uses_feedback(kind) || stage == nullptr || contexts.size() < 2 ||
       stage->cross.size() != contexts.size()) {
     return nullptr;
@@ -373,8 +374,7 @@ json design_loops_together(const StageTrackRequest& request, std::vector<RunCont
   std::vector<std::shared_ptr<const FeedbackPlan>> plans;
   for (RunContext& c : contexts) {
     c.feedback_plans = std::make_shared<FeedbackPlanCache>();
-    plans.push_back(
-        std::make_shared<const FeedbackPlan>(plan_feedback(c, kind, request.common.gains)));
+    plans.push_back(std::make_shared<const FeedbackPlan>(plan_feedback(c, kind, gains)));
   }
   const std::optional<Interaction> alone = worst_interaction(stage, plans, 1.0, dt);
   if (!alone) return nullptr;
@@ -404,13 +404,15 @@ json design_loops_together(const StageTrackRequest& request, std::vector<RunCont
                            " down to a fiftieth of their gain: the coupling is too "
                            "strong for a loop per axis");
   }
-  const json why = {{"peak_alone", alone->worst.peak},
-                    {"limit", kInteractionLimit},
-                    {"meaning",
-                     "every axis's loop lowered by one factor until the loops checked "
-                     "together through the coupling stay under the limit"}};
+  std::ostringstream meaning;
+  meaning << "the axes' loops designed alone reach " << std::setprecision(3) << alone->worst.peak
+          << " together through the coupling (at " << std::setprecision(4) << alone->worst.peak_hz
+          << " Hz); every loop is lowered by one factor until they stay "
+          << "under " << kInteractionLimit;
+  const json why = {
+      {"peak_alone", alone->worst.peak}, {"limit", kInteractionLimit}, {"meaning", meaning.str()}};
   for (std::size_t a = 0; a < contexts.size(); ++a) {
-    lowered_plan(contexts[a], kind, request.common.gains, *plans[a], low, why);
+    lowered_plan(contexts[a], kind, gains, *plans[a], low, why);
   }
   out["lowered_by"] = low;
   return out;
@@ -579,7 +581,8 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   }
   AxisReferences axis_refs =
       axis_references(request, contexts, requests, ranges, uploads, ctx.settings.loop.rate_hz);
-  json designed_together = design_loops_together(request, contexts, stage, dt);
+  json designed_together = design_loops_together(request.common.compensator_kind,
+                                                 request.common.gains, contexts, stage, dt);
   std::vector<TrackReference>& refs = axis_refs.refs;
   StageTargets targets = stage_targets(request, stage, contexts, ranges, refs, dt);
   const json& decoupling = targets.decoupling;
@@ -631,6 +634,30 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   if (stage != nullptr && stage->decoupler.axes() == n) run.program->coupling = stage->decoupler;
   run.preparation = joined(std::move(preparations));
   return run;
+}
+
+json stage_tune(const RunContext& ctx, const StageModel* stage, std::span<const double> u_now,
+                std::span<const std::string> axes, hc::CompensatorKind kind,
+                const FeedbackGainsRequest& gains) {
+  const std::size_t n = u_now.size();
+  std::vector<RunContext> contexts;
+  for (std::size_t a = 0; a < n; ++a) contexts.push_back(axis_context(ctx, stage, a, u_now[a]));
+  json designed_together = design_loops_together(kind, gains, contexts, stage, ctx.dt());
+  json out = {{"axes", json::object()}};
+  std::vector<std::shared_ptr<const FeedbackPlan>> plans;
+  for (std::size_t a = 0; a < n; ++a) {
+    // The plan design_loops_together() kept (lowered where it had to be), or designed here.
+    plans.push_back(std::make_shared<const FeedbackPlan>(plan_feedback(contexts[a], kind, gains)));
+    json axis = plans.back()->summary;
+    axis["curves"] = loop_curves(*plans.back(), ctx.dt());
+    out["axes"][a < axes.size() ? axes[a] : std::to_string(a)] = std::move(axis);
+  }
+  json interaction = feedback_interaction(stage, plans, ctx.dt());
+  if (!interaction.is_null() && !designed_together.is_null()) {
+    interaction["designed_together"] = std::move(designed_together);
+  }
+  if (!interaction.is_null()) out["feedback_interaction"] = std::move(interaction);
+  return out;
 }
 
 void replace_with_stage_result(json& report, const RunProgram& run,

@@ -82,4 +82,8 @@ void progress_bar(std::ostream& err, double fraction, const std::string& label);
 /// Human-readable summary of a run result (as in the run.finished event).
 void print_run_result(const nlohmann::json& result, std::ostream& out);
 
+/// Human-readable account of tune's reply: the loop, its margins and limit; on a stage each
+/// axis's, then the loops checked together through the coupling.
+void print_tune_result(const nlohmann::json& result, std::ostream& out);
+
 }  // namespace hystbench::cli
