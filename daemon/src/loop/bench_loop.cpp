@@ -23,6 +23,16 @@ const char* to_string(LoopClock clock) noexcept {
   return clock == LoopClock::kSimulated ? "simulated" : "wall";
 }
 
+namespace {
+
+// What each per-axis fault says, after "on axis NAME: " on a driver of several.
+constexpr std::array<const char*, 3> kAxisFaultWhat = {
+    "the feedback loop oscillates (a growing or sustained oscillation of the error)",
+    "measurement is not a finite number",
+    "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)"};
+
+}  // namespace
+
 BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
     : driver_(driver),
       options_(options),
@@ -34,6 +44,16 @@ BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
       simulated_(options.clock == LoopClock::kSimulated),
       held_gap_ticks_(std::max<std::uint64_t>(
           1, static_cast<std::uint64_t>(std::llround(options.held_gap_s * options.rate_hz)))) {
+  if (axes_ > 1) {
+    axis_faults_.resize(axes_);
+    for (std::size_t a = 0; a < axes_; ++a) {
+      const std::string name =
+          a < options_.axis_names.size() ? options_.axis_names[a] : std::to_string(a);
+      for (std::size_t f = 0; f < kAxisFaults; ++f) {
+        axis_faults_[a][f] = "on axis " + name + ": " + kAxisFaultWhat[f];
+      }
+    }
+  }
   reset_outputs();
 }
 
@@ -377,7 +397,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
     RunProgram& pa = p.axis(a);
     if (pa.oscillation && k >= pa.feedback_from && std::isfinite(d[a].y_ref) &&
         pa.oscillation->update(d[a].y_ref - rec[a].y_measured, k)) {
-      x.failure = "the feedback loop oscillates (a growing or sustained oscillation of the error)";
+      x.failure = axis_fault(a, kOscillates);
       rec[a].flags |= kSampleFault;
     }
   }
@@ -532,10 +552,10 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
         stuck_[a].stale(u[a]);
       }
       if (x.failure == nullptr && !std::isfinite(m[a].position_um)) {
-        x.failure = "measurement is not a finite number";
+        x.failure = axis_fault(a, kNotFinite);
       } else if (x.failure == nullptr && st == drivers::DriverStatus::kOk &&
                  stuck_[a].update(u[a], m[a].position_um, m[a].response_ticks)) {
-        x.failure = "sensor stuck: the same reading while the output moved (loop.stuck_sensor_ms)";
+        x.failure = axis_fault(a, kStuck);
       }
       rec[a].y_measured = m[a].position_um;
       if (st == drivers::DriverStatus::kOk) {
@@ -625,6 +645,11 @@ void BenchLoop::end_run(RunEnd end, const char* reason) noexcept {
   if (end != RunEnd::kFault) state_.store(State::kIdle, std::memory_order_release);
   finished_.store(p, std::memory_order_release);
   signal_event();
+}
+
+const char* BenchLoop::axis_fault(std::size_t a, AxisFault f) const noexcept {
+  if (a < axis_faults_.size()) return axis_faults_[a][f].c_str();
+  return kAxisFaultWhat[f];
 }
 
 void BenchLoop::fault(const char* reason) noexcept {

@@ -71,7 +71,9 @@ Bench::Bench(BenchSettings settings)
                              " axes and the configuration names none");
   }
   if (auto r = driver_->activate(); !r) throw std::runtime_error(r.message);
-  loop_ = std::make_unique<BenchLoop>(*driver_, settings_.loop);
+  BenchLoopOptions loop = settings_.loop;
+  loop.axis_names = settings_.axes;
+  loop_ = std::make_unique<BenchLoop>(*driver_, std::move(loop));
 }
 
 Bench::~Bench() {

@@ -203,3 +203,36 @@ TEST(BenchLoopStage, ALogOfStageColumnsRefusesBadAxisNames) {
     }
   }
 }
+
+// A fault of one axis names it: here y's sensor tops out at 5 µm while its drive keeps
+// rising, so its reading repeats bit for bit and the run faults on y, by its name.
+TEST(BenchLoopStage, AnAxisFaultNamesTheAxis) {
+  auto driver = hystbench::drivers::make_driver("loopback");
+  const json stage = {
+      {"axes", {{{"name", "x"}}, {{"name", "y"}, {"actuator", {{"adc", {{"range_max", 5.0}}}}}}}}};
+  ASSERT_TRUE(driver->configure({{"stage", stage}}, kRate).ok);
+  ASSERT_TRUE(driver->activate().ok);
+  hd::BenchLoopOptions o = options();
+  o.stuck_sensor.ticks = 200;
+  o.stuck_sensor.output_span_v = 3.0;
+  o.axis_names = {"x", "y"};
+  hd::BenchLoop loop(*driver, o);
+  loop.step();  // an idle tick: the loop takes runs once it runs
+  auto done = play(loop, excite_stage(2));
+  ASSERT_NE(done, nullptr);
+  EXPECT_EQ(done->end, hd::RunEnd::kFault);
+  EXPECT_EQ(std::string(done->end_reason),
+            "on axis y: sensor stuck: the same reading while the output moved "
+            "(loop.stuck_sensor_ms)");
+  // Without names, the axis's index.
+  auto unnamed_driver = hystbench::drivers::make_driver("loopback");
+  ASSERT_TRUE(unnamed_driver->configure({{"stage", stage}}, kRate).ok);
+  ASSERT_TRUE(unnamed_driver->activate().ok);
+  o.axis_names.clear();
+  hd::BenchLoop unnamed(*unnamed_driver, o);
+  unnamed.step();
+  auto again = play(unnamed, excite_stage(2));
+  ASSERT_NE(again, nullptr);
+  EXPECT_EQ(std::string(again->end_reason).rfind("on axis 1: sensor stuck", 0), 0u)
+      << again->end_reason;
+}

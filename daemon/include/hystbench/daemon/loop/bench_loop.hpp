@@ -41,6 +41,7 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -77,6 +78,9 @@ struct BenchLoopOptions {
   /// Simulated clock, while hold_time_between_runs(true): the idle between two runs [s] of
   /// virtual time, > 0 (about what a fit between two of identify's segments takes).
   double held_gap_s = 1.0;
+  /// The axes' names, for the fault reasons of a driver of several ("sensor stuck on axis y:
+  /// ..."); an axis without one is named by its index. Unused with one axis.
+  std::vector<std::string> axis_names;
 };
 
 class BenchLoop {
@@ -234,6 +238,11 @@ class BenchLoop {
   std::size_t axes_ = 1;                    // the driver's
   std::vector<OutputLimiter> limiters_;     // per axis
   std::vector<StuckSensorDetector> stuck_;  // per axis
+  // Per axis of several, each per-axis fault's reason naming it (built once: the tick only
+  // points at them). Empty with one axis, whose reasons are the plain ones.
+  enum AxisFault : std::size_t { kOscillates = 0, kNotFinite, kStuck, kAxisFaults };
+  std::vector<std::array<std::string, kAxisFaults>> axis_faults_;
+  const char* axis_fault(std::size_t a, AxisFault f) const noexcept;
   LoopStatistics stats_;
   std::thread thread_;
   std::atomic<bool> quit_{false};

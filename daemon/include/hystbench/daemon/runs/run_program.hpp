@@ -186,7 +186,8 @@ struct RunProgram {
   // ---- written by the loop thread ----
   std::atomic<std::uint64_t> done{0};  ///< samples completed (any thread may read)
   RunEnd end = RunEnd::kCompleted;
-  const char* end_reason = "";  ///< static string, set when the run did not complete
+  /// Set when the run did not complete: a static string, or one its loop keeps while it lives.
+  const char* end_reason = "";
   RunCounters counters;
   ErrorFigures error;        ///< tracking error, from metrics_from on
   ErrorFigures model_error;  ///< y - y_model, from model_metrics_from on (see there)
