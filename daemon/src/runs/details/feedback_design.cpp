@@ -80,8 +80,10 @@ bool rate_dependent(const RunContext& ctx) {
 }
 
 // Where the loop's correction enters the drive (compensator.hpp).
-hc::FeedbackPath feedback_path(const RunContext& ctx, hc::CompensatorKind kind) {
-  return kind == hc::CompensatorKind::kPid || ctx.model == nullptr || rate_dependent(ctx)
+hc::FeedbackPath feedback_path(const RunContext& ctx, hc::CompensatorKind kind,
+                               const FeedbackGainsRequest& gains) {
+  return kind == hc::CompensatorKind::kPid || ctx.model == nullptr || rate_dependent(ctx) ||
+                 gains.through_linear_map
              ? hc::FeedbackPath::kLinearMap
              : hc::FeedbackPath::kInverse;
 }
@@ -145,9 +147,8 @@ std::optional<hc::MeasuredResponse> along_the_loop(const RunContext& ctx,
 }
 
 // The responses as the loop of `kind` sees them.
-std::vector<hc::MeasuredResponse> plants(const RunContext& ctx, hc::CompensatorKind kind,
+std::vector<hc::MeasuredResponse> plants(const RunContext& ctx, hc::FeedbackPath path,
                                          const hc::StageResponses& r, double gain) {
-  const hc::FeedbackPath path = feedback_path(ctx, kind);
   std::vector<hc::MeasuredResponse> out = seen_through(ctx, path, r, gain);
   if (path == hc::FeedbackPath::kLinearMap) {
     if (auto moving = along_the_loop(ctx, r, gain)) out.push_back(std::move(*moving));
@@ -302,7 +303,8 @@ std::string plan_key(const RunContext& ctx, hc::CompensatorKind kind,
          r.run_id + "/" +
          (gains_by_hand(ctx, gains) ? number(gains.kp, c.kp) + "," + number(gains.ki, c.ki) + "," +
                                           number(gains.kd, c.kd) + (gains.force ? "!" : "")
-                                    : "designed");
+                                    : "designed") +
+         (gains.through_linear_map ? "/linear" : "");
 }
 
 void keep_plan(const RunContext& ctx, const std::string& key, const FeedbackPlan& p) {
@@ -331,8 +333,8 @@ FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
     }
   }
   FeedbackPlan p;
-  p.path = feedback_path(ctx, kind);
-  p.plants = plants(ctx, kind, r, gain);
+  p.path = feedback_path(ctx, kind, gains);
+  p.plants = plants(ctx, p.path, r, gain);
   if (by_hand) {
     p.law = hand_law(c, gains, gain, o.output_limit);
     p.evaluation = hc::check_loop(p.plants, p.law, o);
@@ -360,6 +362,13 @@ FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
                        {"peak_db", m.peak_db}});
     }
     p.summary["modes"] = modes;
+  }
+  if (gains.through_linear_map && kind != hc::CompensatorKind::kPid && ctx.model != nullptr &&
+      !rate_dependent(ctx)) {
+    p.summary["through_why"] =
+        "a stage's learning run: through each axis's inverse the correction jumps where its "
+        "target crosses the model's cells, at ticks that differ from trial to trial, and rings "
+        "the mode the axes share; the learned drive takes the hysteresis";
   }
   keep_plan(ctx, key, p);
   return p;

@@ -34,6 +34,10 @@ struct RunContext;
 struct FeedbackGainsRequest {
   std::optional<double> kp, ki, kd;
   bool force = false;
+  /// The correction through the linear map whatever the model: a stage's learning run, whose
+  /// loops through each axis's plane inverse jump where their targets cross its cells at ticks
+  /// that differ from trial to trial, and ring the mode the axes share.
+  bool through_linear_map = false;
   bool any() const { return kp || ki || kd; }
 };
 

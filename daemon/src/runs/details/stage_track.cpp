@@ -506,6 +506,8 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
                        "learned: a drive learned before replays on one axis; a stage learns "
                        "again (learn_trials)");
   }
+  // Beside a learned drive each axis's loop corrects through the linear map (FeedbackGainsRequest).
+  if (r.common.learning.trials > 0) r.common.gains.through_linear_map = true;
   r.decouple = request.boolean("decouple", true);
   const std::string decoupling = request.string("decoupling", "static");
   if (decoupling != "dynamic" && decoupling != "static") {
