@@ -33,24 +33,6 @@ int send_request(cli::RemoteCommand& remote, const std::string& cmd, nlohmann::j
   return cli::run_remote(remote, std::cout, std::cerr);
 }
 
-namespace {
-
-// cli::read_upload, or nullopt after printing why the file cannot be read.
-std::optional<cli::RemoteUpload> read_upload_or_report(const std::string& path,
-                                                       const std::string& kind,
-                                                       const std::string& t_column,
-                                                       const std::string& value_column,
-                                                       double scale, double rate_hz) {
-  try {
-    return cli::read_upload(path, kind, t_column, value_column, scale, rate_hz);
-  } catch (const std::exception& e) {
-    std::cerr << "hystbench: error: " << e.what() << "\n";
-    return std::nullopt;
-  }
-}
-
-}  // namespace
-
 CliCommand add_plain_request(CLI::App& parent, cli::RemoteCommand& remote, const std::string& name,
                              const std::string& description, const std::string& request) {
   auto* cmd = parent.add_subcommand(name, description);
@@ -376,7 +358,8 @@ CliCommand add_excite(CLI::App& app, cli::RemoteCommand& remote) {
       "record that `hystbench fit` and `diagnose` read as it is");
   cmd->add_option("--input-file", ex->input_file,
                   "CSV with columns t [s] and u [V]; refused, naming the first offending row, "
-                  "when it leaves [u_min, u_max] or moves faster than the slew limit")
+                  "when it leaves [u_min, u_max] or moves faster than the slew limit. On a "
+                  "stage, a drive column per axis, named as the axes (t,x,y)")
       ->required()
       ->check(CLI::ExistingFile);
   cli::RecordColumns& drive = ex->columns;
@@ -387,9 +370,8 @@ CliCommand add_excite(CLI::App& app, cli::RemoteCommand& remote) {
   add_output_flags(cmd, remote, true);
   return {cmd, [ex, &remote] {
             const cli::RecordColumns& c = ex->columns;
-            remote.upload =
-                read_upload_or_report(ex->input_file, "drive", c.t, c.u, c.u_scale, c.rate_hz);
-            if (!remote.upload) return 1;
+            // Read once the daemon says whether it drives one axis or a stage (a column each).
+            remote.reference_file = {ex->input_file, c.t, c.u, c.u_scale, c.rate_hz, "drive"};
             return send_request(remote, "excite", nlohmann::json::object());
           }};
 }

@@ -348,6 +348,20 @@ void print_stage(std::ostream& out, const json& r) {
       out << "; the other axes left " << fixed(r["coupling_error"][name]["rms_um"], 4) << " um";
     }
     out << "\n";
+    if (const auto l = a.find("learning"); l != a.end() && l->is_object()) {
+      out << "    learning      rms %";
+      for (const json& t : (*l)["trials"]) out << " " << fixed(t["rms_error_percent"], 3);
+      out << "\n                  " << l->value("why", std::string());
+      if (l->value("lead_in_periods", 0) > 0) {
+        out << "; lead-in " << (*l)["lead_in_periods"].get<int>() << " periods";
+      }
+      out << "\n";
+    }
+  }
+  if (r.contains("learned_drive")) {
+    const std::string run = r["learned_drive"].get<std::string>();
+    out << "  learned drives  " << run << "-AXIS-learned: track --learned " << run
+        << " replays every axis's\n";
   }
   if (const auto d = r.find("decoupling"); d != r.end() && d->is_object()) {
     out << "  decoupling      "
@@ -508,14 +522,14 @@ std::vector<std::pair<std::string, RemoteUpload>> reference_file_uploads(
   std::vector<std::pair<std::string, RemoteUpload>> out;
   try {
     if (!status.contains("axes") || !status["axes"].is_object()) {
-      out.emplace_back("", read_upload(file.path, "reference", file.t_column, file.value_column,
+      out.emplace_back("", read_upload(file.path, file.kind, file.t_column, file.value_column,
                                        file.scale, file.rate_hz));
       return out;
     }
     for (const auto& [axis, value] : status["axes"].items()) {
       (void)value;
       out.emplace_back(
-          axis, read_upload(file.path, "reference", file.t_column, axis, file.scale, file.rate_hz));
+          axis, read_upload(file.path, file.kind, file.t_column, axis, file.scale, file.rate_hz));
     }
   } catch (const std::exception& e) {
     std::string why = e.what();
@@ -545,7 +559,7 @@ json request_command(BenchClient& client, const RemoteCommand& cmd, bool tty, st
     if (axis.empty()) {
       params[upload.param] = name;
     } else {
-      params["reference_uploads"][axis] = name;
+      params[upload.kind == "drive" ? "drive_uploads" : "reference_uploads"][axis] = name;
     }
     if (shown) err << "\r\x1b[K" << std::flush;
   }

@@ -449,3 +449,26 @@ class StageTest(_support.DaemonTestCase):
         with self.assertRaises(BenchError) as refused:
             self.bench.track_axes({"x": x, "y": y}, rate_hz=rate, decoupling="full")
         self.assertIn("decoupling: 'static' (the default", str(refused.exception))
+
+    def test_each_axis_plays_its_own_drive_open_loop(self) -> None:
+        rate = 1000.0
+        x = [75.0 + 40.0 * math.sin(2.0 * math.pi * 3.0 * k / rate) for k in range(1001)]
+        y = [40.0] * 600  # shorter: y holds its last drive while x plays on
+        result = self.bench.excite_axes({"x": x, "y": y}, rate_hz=rate, wait=True)
+        self.assertTrue(result.completed, result)
+        log = read_run(result["log"])
+        self.assertEqual(log.header["run"]["kind"], "excite")
+        for column in ("u_x", "y_x", "u_y", "y_y"):
+            self.assertIn(column, log.columns)
+            self.assertTrue(all(math.isfinite(v) for v in log[column]), column)
+        # Each axis played its own drive: x swept 80 V, y held 40 V from its ramp's end on.
+        self.assertGreater(max(log["u_x"]) - min(log["u_x"]), 70.0)
+        self.assertAlmostEqual(log["u_y"][-1], 40.0, places=9)
+        self.assertLess(max(log["u_y"][-300:]) - min(log["u_y"][-300:]), 1e-9)
+        with self.assertRaises(ValueError) as caught:
+            self.bench.excite_axes({"x": x}, rate_hz=rate)
+        self.assertIn("no drive for axis 'y'", str(caught.exception))
+        # A drive beyond the output range is refused naming its axis.
+        with self.assertRaises(BenchError) as refused:
+            self.bench.excite_axes({"x": x, "y": [200.0] * 10}, rate_hz=rate)
+        self.assertIn("axis y's drive", str(refused.exception))

@@ -89,17 +89,38 @@ void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, doub
   const bool longer = follow_.follow_periods > 0 && std::isfinite(follow_.learned_offset) &&
                       follow_.tolerance > 0.0;
   if (std::isnan(checkpoint_gap_)) checkpoint_gap_ = gap(tare);
+  LeadInEnd end = LeadInEnd::kLongest;
   if (!longer) {
-    end_ = LeadInEnd::kMinimum;
+    end = LeadInEnd::kMinimum;
   } else if (gap(tare) <= follow_.tolerance) {
-    end_ = LeadInEnd::kOffsetReached;
+    end = LeadInEnd::kOffsetReached;
   } else if (begun + 1 >= lead_in_periods) {
-    end_ = LeadInEnd::kLongest;
+    end = LeadInEnd::kLongest;
   } else if (stalled_) {
-    end_ = LeadInEnd::kOffsetStalled;
+    end = LeadInEnd::kOffsetStalled;
   } else {
     return;
   }
+  if (together_ == nullptr) {
+    end_lead_in(k, begun, end);
+    return;
+  }
+  // With the other axes: counted here, ended on the next tick if every axis would end here
+  // (each axis's first tick of the period comes in turn within this tick). The longest lead-in
+  // is every axis's at the same period, so the count is whole there at the latest.
+  if (together_->tick != k) {
+    together_->tick = k;
+    together_->ending = 0;
+  }
+  ++together_->ending;
+  pending_ = true;
+  pending_tick_ = k;
+  pending_begun_ = begun;
+  pending_end_ = end;
+}
+
+void LearningExchange::end_lead_in(std::uint64_t k, std::uint64_t begun, LeadInEnd end) noexcept {
+  end_ = end;
   decided_ = true;
   start_ = k + period;
   // A single lead-in period's first half still leaves the rest the run started from; after
@@ -110,7 +131,20 @@ void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, doub
 void LearningExchange::lead_in_error(std::uint64_t k, double error, double tare) noexcept {
   if (started_from_ == 0 || k >= start_ || k < lead_start_) return;
   const std::uint64_t since = k - lead_start_;
-  if (!decided_ && since % period == 0) decide_lead_in(k, since / period, tare);
+  if (pending_ && k == pending_tick_ + 1) {
+    pending_ = false;
+    if (together_->tick == pending_tick_ && together_->ending >= together_->axes) {
+      end_lead_in(pending_tick_, pending_begun_, pending_end_);
+      if (start_ - pending_tick_ <= window_) {  // the period's first tick, before it was decided
+        lead_in_error_sum_ += pending_error_;
+        ++lead_in_samples_;
+      }
+    }
+  }
+  if (!decided_ && since % period == 0) {
+    decide_lead_in(k, since / period, tare);
+    if (pending_) pending_error_ = error;
+  }
   if (decided_) {
     if (start_ - k <= window_) {
       lead_in_error_sum_ += error;

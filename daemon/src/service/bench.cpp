@@ -406,13 +406,21 @@ json Bench::start_identify(const details::RequestParams& request) {
 }
 
 json Bench::start_excite(const details::RequestParams& request, std::uint64_t client) {
+  std::lock_guard lock(mutex_);
+  if (is_stage()) {
+    require_idle();
+    return start_stage_excite(request, client);
+  }
+  if (request.has("drive_uploads")) {
+    throw common::CommandError("not_on_stage",
+                               "drive_uploads: a stage's key (several axes); this bench drives "
+                               "one axis (drive_upload)");
+  }
   if (!request.has("drive_upload")) {
     throw common::CommandError("bad_params",
                                "drive_upload: missing (the name of a complete drive upload)");
   }
   const std::string upload_name = request.string("drive_upload", "");
-  std::lock_guard lock(mutex_);
-  refuse_on_stage("excite");
   require_idle();
   const auto upload = uploads_.complete(upload_name, client, UploadKind::kDrive);
   json reply = launch("excite", details::make_excite_program(*upload, run_context()));
@@ -579,28 +587,34 @@ void Bench::finish_learning(const RunProgram& run, json& report) {
     report["max_error_percent"] = last->max_percent;
     report["max_error_index"] = last->max_tick;
   }
-  const std::vector<double>& drive = learning->kept_drive();
-  const details::LearningRequest& r = learning->request();
-  // A replay (no trial learned) keeps nothing new: its drive is the one it started from.
-  if (!drive.empty() && r.trials > 0) {
-    try {
-      const json meta = {
-          {"range_um", r.range_um},
-          {"model", model_path.empty()
-                        ? json()
-                        : json(std::filesystem::path(model_path).filename().string())},
-          {"started_from", r.start_name.empty() ? json() : json(r.start_name)},
-          {"compensator_offset_um", learning->target_offset(report.value("tare_um", 0.0))},
-          {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
-      l["drive_file"] = details::save_learned_drive(settings_.model_dir, run.run_id, drive,
-                                                    learning->kept_compensator(), dt_,
-                                                    details::learned_for(r, drive.size()), meta);
-      l["drive"] = run.run_id + "-learned";
-    } catch (const std::exception& e) {
-      l["drive_file_error"] = e.what();
-    }
-  }
+  keep_learned_drive(
+      *learning, run.run_id,
+      model_path.empty() ? std::string() : std::filesystem::path(model_path).filename().string(),
+      report.value("tare_um", 0.0), json::object(), l);
   report["learning"] = std::move(l);
+}
+
+void Bench::keep_learned_drive(const details::TrackLearning& learning, const std::string& name,
+                               const std::string& model_file, double tare_um, const json& more,
+                               json& l) const {
+  const std::vector<double>& drive = learning.kept_drive();
+  const details::LearningRequest& r = learning.request();
+  // A replay (no trial learned) keeps nothing new: its drive is the one it started from.
+  if (drive.empty() || r.trials == 0) return;
+  try {
+    json meta = {{"range_um", r.range_um},
+                 {"model", model_file.empty() ? json() : json(model_file)},
+                 {"started_from", r.start_name.empty() ? json() : json(r.start_name)},
+                 {"compensator_offset_um", learning.target_offset(tare_um)},
+                 {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
+    meta.update(more);
+    l["drive_file"] =
+        details::save_learned_drive(settings_.model_dir, name, drive, learning.kept_compensator(),
+                                    dt_, details::learned_for(r, drive.size()), meta);
+    l["drive"] = name + "-learned";
+  } catch (const std::exception& e) {
+    l["drive_file_error"] = e.what();
+  }
 }
 
 bool Bench::preparation_queued() const {

@@ -21,8 +21,8 @@ void Bench::refuse_on_stage(const char* command) const {
   throw common::CommandError(
       "not_on_stage", std::string(command) + " drives one axis, and this bench is a stage of " +
                           std::to_string(settings_.axes.size()) +
-                          " axes (identify, track, status, model.get, stop, abort and reset "
-                          "serve every axis)");
+                          " axes (identify, track, excite, frf, tune, status, model.get, stop, "
+                          "abort and reset serve every axis)");
 }
 
 std::vector<double> Bench::axis_outputs() const {
@@ -138,6 +138,29 @@ json Bench::start_stage_track(const details::RequestParams& request, std::uint64
   return reply;
 }
 
+json Bench::start_stage_excite(const details::RequestParams& request, std::uint64_t client) {
+  if (!request.has("drive_uploads")) {
+    throw common::CommandError("bad_params",
+                               "drive_uploads: missing; a stage's excite names a complete drive "
+                               "upload per axis ({axis: upload}: hystbench excite --input-file "
+                               "with a column per axis)");
+  }
+  const std::vector<std::string> names =
+      details::upload_per_axis(request.params()["drive_uploads"], "drive_uploads", settings_.axes,
+                               "drive", "a stage's excite drives every axis");
+  std::vector<std::shared_ptr<const Upload>> uploads;
+  std::vector<const Upload*> raw;
+  for (const std::string& name : names) {
+    uploads.push_back(uploads_.complete(name, client, UploadKind::kDrive));
+    raw.push_back(uploads.back().get());
+  }
+  details::BuiltRun run = details::make_stage_excite_program(raw, run_context(), stage_.get(),
+                                                             settings_.axes, axis_outputs());
+  json reply = launch("excite", std::move(run));
+  for (const std::string& name : names) uploads_.erase(name, client);  // the run has them now
+  return reply;
+}
+
 json Bench::start_stage_frf(const details::RequestParams& request) {
   if (!stage_) {
     throw common::CommandError("no_model",
@@ -178,6 +201,7 @@ void Bench::learn_other_axes() {
 
 void Bench::finish_axes_learning(const RunProgram& run, json& report) {
   std::vector<std::unique_ptr<details::TrackLearning>> learners;
+  std::string model_run;  // the stage identify whose models the run played with
   {
     std::lock_guard lock(mutex_);
     if (!learning_ || run.run_id != learning_run_id_) return;
@@ -185,6 +209,7 @@ void Bench::finish_axes_learning(const RunProgram& run, json& report) {
     for (auto& l : axis_learning_) learners.push_back(std::move(l));
     axis_learning_.clear();
     learning_run_id_.clear();
+    if (stage_) model_run = stage_->run_id;
   }
   for (std::size_t a = 0; a < learners.size() && a < settings_.axes.size(); ++a) {
     details::TrackLearning& l = *learners[a];
@@ -193,8 +218,9 @@ void Bench::finish_axes_learning(const RunProgram& run, json& report) {
     } catch (const std::exception& e) {
       l.fail(e.what());
     }
-    json& axis = report["axes"][settings_.axes[a]];
-    axis["learning"] = l.result();
+    const std::string& name = settings_.axes[a];
+    json& axis = report["axes"][name];
+    json learned = l.result();
     if (const auto last = l.last_trial()) {
       // The axis's figures are its last trial's (the log keeps every period).
       axis["rms_error_um"] = last->rms_um;
@@ -203,6 +229,17 @@ void Bench::finish_axes_learning(const RunProgram& run, json& report) {
       axis["max_error_percent"] = last->max_percent;
       axis["max_error_index"] = last->max_tick;
     }
+    // Each axis's drive as RUN-AXIS-learned: `track --learned RUN` replays them together.
+    keep_learned_drive(
+        l, run.run_id + "-" + name,
+        model_run.empty() ? std::string() : details::stage_model_file(model_run, name),
+        axis.value("tare_um", 0.0),
+        {{"stage", {{"run_id", run.run_id}, {"axis", name}, {"axes", settings_.axes}}}}, learned);
+    axis["learning"] = std::move(learned);
+  }
+  if (report["axes"].contains(settings_.axes.front()) &&
+      report["axes"][settings_.axes.front()]["learning"].contains("drive")) {
+    report["learned_drive"] = run.run_id;  // the name `track --learned` takes on this stage
   }
 }
 

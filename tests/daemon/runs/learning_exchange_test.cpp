@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace hd = hystbench::daemon;
@@ -271,6 +272,54 @@ TEST(LearningExchange, ALeadInEndsAtItsLongest) {
   EXPECT_EQ(r.end, hd::LearningExchange::LeadInEnd::kLongest);
   EXPECT_EQ(r.played, 200 * kPeriod);
   EXPECT_EQ(r.first_scored, 1000u);
+}
+
+// Two axes of a stage: x's offset is its learned one at once, y's creeps toward its own. Alone,
+// x's lead-in ends at its minimum while y's goes on; deciding together, both end at the first
+// period where y's would, their trial 0 at one tick, and x follows its offset until then.
+TEST(LearningExchange, AStagesLeadInsEndTogetherWhereEveryAxisWould) {
+  constexpr std::uint64_t first = 1000;
+  const auto creep = [](std::uint64_t k) {
+    return 1.0 - 0.5 * std::exp(-static_cast<double>(k - 200) / 30.0);
+  };
+  const auto settled = [](std::uint64_t) { return 1.02; };
+  auto lead_in = [&](hd::LearningExchange::LeadInTogether* together) {
+    std::vector<std::unique_ptr<hd::LearningExchange>> axes;
+    for (int a = 0; a < 2; ++a) {
+      axes.push_back(std::make_unique<hd::LearningExchange>(kPeriod, first, 200));
+      hd::LearningLeadIn l;
+      l.learned_offset = 1.0;
+      l.tolerance = 0.05;
+      l.follow_periods = 2;
+      l.stall_steps = 5;
+      axes.back()->follow_offset(3, l);
+      EXPECT_TRUE(axes.back()->start_from({7, 8, 9, 10}, {}, true));
+      axes.back()->decide_together(together);
+    }
+    const double tare[2] = {settled(200), creep(200)};
+    for (std::uint64_t k = first - 200 * kPeriod; k < first; ++k) {
+      for (int a = 0; a < 2; ++a) {
+        double u = 0.0;
+        if (!axes[a]->lead_in(k, u)) continue;
+        const double offset = a == 0 ? settled(k) : creep(k);
+        axes[a]->lead_in_error(k, axes[a]->target_offset(k, tare[a]) - offset, tare[a]);
+      }
+    }
+    return axes;
+  };
+  const auto alone = lead_in(nullptr);
+  EXPECT_EQ(alone[0]->lead_in_played(), 3u);
+  EXPECT_GT(alone[1]->lead_in_played(), 3u);
+  EXPECT_LT(alone[1]->lead_in_played(), 200u);
+
+  hd::LearningExchange::LeadInTogether together;
+  together.axes = 2;
+  const auto both = lead_in(&together);
+  EXPECT_EQ(both[0]->first_scored_tick(), both[1]->first_scored_tick());
+  EXPECT_EQ(both[1]->lead_in_played(), alone[1]->lead_in_played());
+  EXPECT_EQ(both[0]->lead_in_end(), hd::LearningExchange::LeadInEnd::kOffsetReached);
+  // x measured its offset on its own last period, as an axis alone does.
+  EXPECT_NEAR(both[0]->target_offset(both[0]->first_scored_tick(), settled(200)), 1.02, 1e-9);
 }
 
 // A drive learned before moves by how far the compensator's feedforward moved: from its twin's

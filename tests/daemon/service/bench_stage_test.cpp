@@ -50,9 +50,10 @@ class BenchStage : public hystbench::test::BenchFixture {
     return {"ok", ""};
   }
 
-  std::string upload(const std::vector<double>& values, double rate_hz) {
+  std::string upload(const std::vector<double>& values, double rate_hz,
+                     const std::string& kind = "reference") {
     const json begun = bench_->handle(
-        "upload.begin", {{"kind", "reference"}, {"samples", values.size()}, {"rate_hz", rate_hz}});
+        "upload.begin", {{"kind", kind}, {"samples", values.size()}, {"rate_hz", rate_hz}});
     std::string name = begun["upload"];
     for (std::size_t k = 0; k < values.size(); k += 1000) {
       const std::size_t m = std::min<std::size_t>(1000, values.size() - k);
@@ -203,13 +204,36 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
     RecordProperty(std::string(axis) + "_lissajous_learned_rms_percent", std::to_string(last));
     EXPECT_LT(last, trials.front()["rms_error_percent"].get<double>() / 10.0) << trials.dump();
     EXPECT_LT(last, 0.03) << axis << ": " << trials.dump();
+    EXPECT_EQ(a["learning"]["drive"],
+              learned["run_id"].get<std::string>() + "-" + axis + "-learned");
+  }
+  // Each axis's drive kept; the run's id replays them all, twice in a row, each axis's trial 0
+  // after a lead-in that ended for every axis at once.
+  ASSERT_EQ(learned["learned_drive"], learned["run_id"]) << learned.dump();
+  for (int replay = 0; replay < 2; ++replay) {
+    const json again = run_and_wait(
+        "track", {{"reference", "lissajous"}, {"learned", learned["learned_drive"]}}, 600);
+    ASSERT_EQ(again.value("end", ""), "completed") << again.dump();
+    EXPECT_EQ(again["axes"]["x"]["learning"]["lead_in_periods"],
+              again["axes"]["y"]["learning"]["lead_in_periods"]);
+    for (const char* axis : {"x", "y"}) {
+      const double replayed = again["axes"][axis]["rms_error_percent"].get<double>();
+      RecordProperty(
+          std::string(axis) + "_lissajous_replayed_rms_percent_" + std::to_string(replay),
+          std::to_string(replayed));
+      EXPECT_LT(replayed, 0.05) << axis << " replay " << replay << ": "
+                                << again["axes"][axis]["learning"].dump();
+      EXPECT_EQ(again["axes"][axis]["learning"]["started_from"],
+                learned["run_id"].get<std::string>() + "-" + axis + "-learned");
+    }
+    EXPECT_FALSE(again.contains("learned_drive"));  // a replay keeps nothing new
   }
   // And beside each axis's loop: the loops then correct through the linear map (through each
   // axis's plane inverse their corrections jump at ticks that differ from trial to trial, ring
   // the shared mode, and the learning stalled at 0.09-0.15 %, three to five times its floor).
   const json beside_loops = run_and_wait(
-      "track",
-      {{"reference", "lissajous"}, {"compensator", "inverse+pid"}, {"learn_trials", 10}}, 600);
+      "track", {{"reference", "lissajous"}, {"compensator", "inverse+pid"}, {"learn_trials", 10}},
+      600);
   ASSERT_EQ(beside_loops.value("end", ""), "completed") << beside_loops.dump();
   for (const char* axis : {"x", "y"}) {
     const json& a = beside_loops["axes"][axis];
@@ -329,12 +353,19 @@ TEST_F(BenchStage, LoopsOnAStronglyCoupledStageAreLoweredUntilTheyHoldTogether) 
 
 TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) {
   start_xy();
-  for (const auto& [cmd, params] : std::vector<std::pair<std::string, json>>{
-           {"excite", {{"drive_upload", "u"}}}, {"model.load", {{"model", json::object()}}}}) {
-    const auto [code, message] = refused(cmd, params);
-    EXPECT_EQ(code, "not_on_stage") << cmd << ": " << message;
+  {
+    const auto [code, message] = refused("model.load", {{"model", json::object()}});
+    EXPECT_EQ(code, "not_on_stage") << message;
     EXPECT_NE(message.find("stage of 2 axes"), std::string::npos) << message;
   }
+  // excite drives every axis: one drive is refused, naming what a stage's takes.
+  EXPECT_NE(refused("excite", {{"drive_upload", "u"}})
+                .second.find("drive_uploads: missing; a stage's excite names a complete drive "
+                             "upload per axis"),
+            std::string::npos);
+  const std::string u = upload(std::vector<double>(100, 10.0), 1000.0, "drive");
+  EXPECT_EQ(refused("excite", {{"drive_uploads", {{"x", u}}}}).second,
+            "drive_uploads: no drive for axis 'y' (a stage's excite drives every axis)");
   const std::string x = upload(std::vector<double>(2000, 10.0), 10000.0);
   EXPECT_EQ(refused("track", {{"reference_uploads", {{"x", x}}}}).second,
             "reference_uploads: no reference for axis 'y' (a stage's reference names every axis)");
@@ -345,9 +376,17 @@ TEST_F(BenchStage, RefusesWhatDrivesOneAxisAndReferencesThatDoNotNameEveryAxis) 
   EXPECT_NE(refused("track", {{"reference", "raster"}, {"decoupling", "full"}})
                 .second.find("decoupling: 'static' (the default"),
             std::string::npos);
-  EXPECT_NE(refused("track", {{"reference", "lissajous"}, {"learned", "20260101T000000Z-track-1"}})
-                .second.find("learned: a drive learned before replays on one axis"),
-            std::string::npos);
+  // A stage's learned drive is its learning run's, one file per axis; each is looked for.
+  const std::string none =
+      refused("track", {{"reference", "lissajous"}, {"learned", "20260101T000000Z-track-1"}})
+          .second;
+  EXPECT_NE(none.find("learned: no learned drive '20260101T000000Z-track-1-x-learned'"),
+            std::string::npos)
+      << none;
+  EXPECT_NE(
+      refused("track", {{"reference", "lissajous"}, {"learned", "20260101T000000Z-track-1-y"}})
+          .second.find("learned: on a stage, the learning run's id (20260101T000000Z-track-1)"),
+      std::string::npos);
   // Each axis's responses are measured for its model: identify first.
   EXPECT_EQ(refused("frf", json::object()).first, "no_model");
   EXPECT_EQ(refused("tune", json::object()).first, "no_frequency_response");
@@ -389,6 +428,50 @@ TEST_F(BenchStage, TracksAnUploadedReferencePerAxisWithoutAModel) {
   }
 }
 
+// excite on a stage: each axis plays its own drive open loop in one run, the shorter one
+// holding its last value, and the log holds every axis's drive and reading.
+TEST_F(BenchStage, ExcitesEachAxisWithItsOwnDrive) {
+  start_xy();
+  std::vector<double> xs, ys;
+  for (int k = 0; k <= 1000; ++k) {
+    xs.push_back(75.0 + 40.0 * std::sin(2.0 * M_PI * 3.0 * k / 1000.0));
+    if (k < 600) ys.push_back(40.0 + 20.0 * k / 600.0);
+  }
+  const json r = run_and_wait(
+      "excite",
+      {{"drive_uploads", {{"x", upload(xs, 1000.0, "drive")}, {"y", upload(ys, 1000.0, "drive")}}}},
+      300);
+  ASSERT_EQ(r.value("end", ""), "completed") << r.dump();
+  std::ifstream log(r["log"].get<std::string>());
+  std::string line;
+  while (std::getline(log, line) && line.rfind('#', 0) == 0) {
+  }
+  std::vector<std::string> names;
+  {
+    std::stringstream header(line);
+    for (std::string cell; std::getline(header, cell, ',');) names.push_back(cell);
+  }
+  const auto column = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  ASSERT_LT(column("u_y"), names.size()) << line;
+  double x_lo = 1e9, x_hi = -1e9, y_last = 0.0;
+  std::size_t rows = 0;
+  while (std::getline(log, line)) {
+    std::vector<std::string> cells;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    const double ux = std::stod(cells[column("u_x")]);
+    x_lo = std::min(x_lo, ux), x_hi = std::max(x_hi, ux);
+    y_last = std::stod(cells[column("u_y")]);
+    for (const char* y : {"y_x", "y_y"}) EXPECT_TRUE(std::isfinite(std::stod(cells[column(y)])));
+    ++rows;
+  }
+  EXPECT_GT(rows, 10000u);  // 1 s of drive at the 10 kHz loop, after the ramps
+  EXPECT_GT(x_hi - x_lo, 75.0);
+  EXPECT_NEAR(y_last, ys.back(), 1e-9);  // y held its last drive while x played on
+}
+
 TEST_F(BenchStage, AOneAxisBenchRefusesAStagesKeysByName) {
   start(settings_from_toml(loopback_toml()));
   const auto [code, message] = refused("track", {{"reference", "sine"}, {"frequencies_hz", {10}}});
@@ -397,5 +480,6 @@ TEST_F(BenchStage, AOneAxisBenchRefusesAStagesKeysByName) {
   EXPECT_EQ(refused("track", {{"reference_uploads", {{"x", "a"}}}}).first, "not_on_stage");
   EXPECT_EQ(refused("track", {{"reference", "sine"}, {"decoupling", "dynamic"}}).first,
             "not_on_stage");
+  EXPECT_EQ(refused("excite", {{"drive_uploads", {{"x", "a"}}}}).first, "not_on_stage");
   EXPECT_FALSE(status().contains("axes"));
 }

@@ -613,35 +613,9 @@ class Bench:
         ``decoupling="dynamic"`` takes out each coupling path's modes and lag too, fitted to the
         responses identify measured (by default, ``"static"``, its gains).
         """
-        axes = list(self.status().get("axes", {}))
-        if not axes:
-            raise ValueError("track_axes: the bench drives one axis; use track()")
-        if (references is None) == (reference_file is None):
-            raise ValueError("track_axes: give references or reference_file")
-        if references is not None:
-            unknown = sorted(set(references) - set(axes))
-            if unknown:
-                raise ValueError(f"track_axes: {', '.join(unknown)}: no axis of the stage {axes}")
-        times = list(t) if t is not None else None  # every axis's samples at these times
-        uploads: Dict[str, str] = {}
-        try:
-            for axis in axes:
-                if references is not None:
-                    if axis not in references:
-                        raise ValueError(f"track_axes: no reference for axis {axis!r}")
-                    upload_id, _ = self._upload_signal(
-                        "reference", references[axis], rate_hz, times, None, (None, axis), progress
-                    )
-                else:
-                    upload_id, _ = self._upload_signal(
-                        "reference", None, rate_hz, None, reference_file, (t_column, axis),
-                        progress,
-                    )
-                uploads[axis] = upload_id
-        except Exception:
-            for upload_id in uploads.values():
-                self._cancel_quietly(upload_id)
-            raise
+        uploads = self._upload_per_axis(
+            "track_axes", "reference", references, rate_hz, t, reference_file, t_column, progress
+        )
         request = _without_none(
             {
                 "reference_uploads": uploads,
@@ -652,8 +626,92 @@ class Bench:
                 "approach_s": approach_s,
             }
         )
+        return self._start_on_axes("track", request, uploads, wait, progress, timeout)
+
+    def _upload_per_axis(
+        self,
+        caller: str,
+        kind: str,
+        signals: Optional[Dict[str, Iterable[float]]],
+        rate_hz: Optional[float],
+        t: Optional[Iterable[float]],
+        path: Optional[PathLike],
+        t_column: Optional[str],
+        progress: Optional[Progress],
+    ) -> Dict[str, str]:
+        """Uploads each axis's signal (or the file's column named as the axis); returns the
+        upload ids by axis. ``ValueError`` names a missing or unknown axis; on any failure the
+        uploads already made are cancelled."""
+        axes = list(self.status().get("axes", {}))
+        if not axes:
+            raise ValueError(f"{caller}: the bench drives one axis")
+        if (signals is None) == (path is None):
+            raise ValueError(f"{caller}: give the samples per axis or a file")
+        if signals is not None:
+            unknown = sorted(set(signals) - set(axes))
+            if unknown:
+                raise ValueError(f"{caller}: {', '.join(unknown)}: no axis of the stage {axes}")
+        times = list(t) if t is not None else None  # every axis's samples at these times
+        uploads: Dict[str, str] = {}
         try:
-            return self._start("track", request, wait, progress, timeout)
+            for axis in axes:
+                if signals is not None:
+                    if axis not in signals:
+                        raise ValueError(f"{caller}: no {kind} for axis {axis!r}")
+                    upload_id, _ = self._upload_signal(
+                        kind, signals[axis], rate_hz, times, None, (None, axis), progress
+                    )
+                else:
+                    upload_id, _ = self._upload_signal(
+                        kind, None, rate_hz, None, path, (t_column, axis), progress
+                    )
+                uploads[axis] = upload_id
+        except Exception:
+            for upload_id in uploads.values():
+                self._cancel_quietly(upload_id)
+            raise
+        return uploads
+
+    def excite_axes(
+        self,
+        drives: Optional[Dict[str, Iterable[float]]] = None,
+        *,
+        rate_hz: Optional[float] = None,
+        t: Optional[Iterable[float]] = None,
+        input_file: Optional[PathLike] = None,
+        t_column: Optional[str] = "t",
+        wait: bool = False,
+        progress: Optional[Progress] = None,
+        timeout: Optional[float] = None,
+    ) -> Dict[str, Any]:
+        """Plays an open-loop drive on every axis of a stage at once and records the responses.
+
+        ``drives={"x": [...], "y": [...]}``: each axis's output [V] sampled uniformly at
+        ``rate_hz`` [Hz] or at the times ``t`` [s]; or ``input_file="drive.csv"`` with the time
+        column ``t_column`` and a column per axis, named as the axes. Every axis needs its drive
+        (``ValueError`` names a missing one). Each axis ramps from where it is to its drive's
+        first sample; an axis whose drive ends first holds its last value. The log has a set of
+        columns per axis (``u_x``, ``y_x``, ...), a record ``hystbench fit`` reads.
+        """
+        uploads = self._upload_per_axis(
+            "excite_axes", "drive", drives, rate_hz, t, input_file, t_column, progress
+        )
+        return self._start_on_axes(
+            "excite", {"drive_uploads": uploads}, uploads, wait, progress, timeout
+        )
+
+    def _start_on_axes(
+        self,
+        cmd: str,
+        request: Dict[str, Any],
+        uploads: Dict[str, str],
+        wait: bool,
+        progress: Optional[Progress],
+        timeout: Optional[float],
+    ) -> Dict[str, Any]:
+        """Starts a stage's run on its per-axis uploads; a refusal cancels them."""
+        try:
+            return self._start(cmd, request, wait, progress, timeout)
         except BenchError:
             for upload_id in uploads.values():
                 self._cancel_quietly(upload_id)
@@ -885,7 +943,9 @@ class Bench:
                 after a restart of the daemon): after the start-up period it plays instead of
                 the compensator's drive, for one scored period, or as the first trial with
                 ``learn``. Only for the waveform, range and loop rate it was learned for, or
-                the same uploaded trajectory (``bad_params`` names both otherwise).
+                the same uploaded trajectory (``bad_params`` names both otherwise). On a stage,
+                the learning run's id (``learned_drive`` of its result) starts every axis from
+                its own drive.
             **params: further request parameters, sent as given (``kp``, ``ki``, ``kd``,
                 ``learn_cutoff_hz``; ``lead_in_max_s``: with ``learned``, the longest lead-in
                 [s] while the actuator's offset moves toward the one the drive was learned at,

@@ -105,13 +105,33 @@ struct StageTrackRequest {
   /// compensation::DynamicStageDecoupler) where they were measured; else (the default) its
   /// static gains.
   bool dynamic = false;
+  /// `learned` RUN, a stage's learning run: per axis of the stage, in its order, the drive it
+  /// starts from (RUN-AXIS); empty for none.
+  std::vector<std::string> learned_drives;
 };
+
+/// The upload names of `uploads` ({axis: upload}, request key `key`) in the stage's axis order;
+/// bad_params naming an axis that is not the stage's, a name that is not one, or the axis
+/// without its `what` (`why`: the rule, for the message).
+std::vector<std::string> upload_per_axis(const nlohmann::json& uploads, const std::string& key,
+                                         std::span<const std::string> axes, const std::string& what,
+                                         const std::string& why);
+
+/// excite on a stage: each axis's complete drive upload (`drives`, in the stage's order)
+/// played as make_excite_program() plays one, from the axis's present output `u_now` [V]
+/// within its slew limit; the shorter drives hold their last value to the longest's end.
+/// bad_params naming the axis whose drive the limits refuse, or a run longer than the bench
+/// records. With the stage's coupling (`stage`), each axis's prediction is coupled as track's.
+BuiltRun make_stage_excite_program(std::span<const Upload* const> drives, const RunContext& ctx,
+                                   const StageModel* stage, std::span<const std::string> axes,
+                                   std::span<const double> u_now);
 
 /// The request's keys: reference (raster, lissajous or spiral; default raster), frequencies_hz,
 /// range_fraction, duration_s, or reference_uploads {axis: upload} naming every axis; decouple,
 /// decoupling ("static", the default, or "dynamic"); and track's own (compensator, precondition,
-/// approach, gains). bad_params naming the key: an unknown reference, an axis without its upload or
-/// an upload for no axis, a one-axis reference's key, learning (not on a stage yet).
+/// approach, gains, learning: learn_trials, learned RUN). bad_params naming the key: an unknown
+/// reference, an axis without its upload or an upload for no axis, a one-axis reference's key,
+/// one axis's learned drive in place of the learning run's.
 StageTrackRequest parse_stage_track_request(const RequestParams& request, const RunContext& ctx,
                                             std::span<const std::string> axes);
 

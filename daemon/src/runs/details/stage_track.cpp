@@ -480,7 +480,49 @@ StageTargets stage_targets(const StageTrackRequest& request, const StageModel* s
   return out;
 }
 
+// The learning run a stage's `learned` names (RUN, as its result's learned_drive gives it;
+// RUN-learned is taken too), each of whose axes' drives is RUN-AXIS-learned. An axis's own
+// drive is refused: the stage replays every axis.
+std::string stage_learning_run(std::string name, std::span<const std::string> axes) {
+  for (const std::string tail : {".json", ".csv", "-learned"}) {
+    if (name.size() > tail.size() && name.ends_with(tail)) name.resize(name.size() - tail.size());
+  }
+  for (const std::string& axis : axes) {
+    if (name.ends_with("-" + axis)) {
+      throw CommandError("bad_params", "learned: on a stage, the learning run's id (" +
+                                           name.substr(0, name.size() - axis.size() - 1) +
+                                           "), which names every axis's drive, not one axis's");
+    }
+  }
+  return name;
+}
+
 }  // namespace
+
+std::vector<std::string> upload_per_axis(const json& uploads, const std::string& key,
+                                         std::span<const std::string> axes, const std::string& what,
+                                         const std::string& why) {
+  if (!uploads.is_object()) {
+    throw CommandError("bad_params", key + ": {axis: upload} naming every axis (" + why + ")");
+  }
+  for (const auto& [axis, value] : uploads.items()) {
+    if (std::find(axes.begin(), axes.end(), axis) == axes.end()) {
+      throw CommandError("bad_params", key + ": '" + axis + "' is no axis of the stage");
+    }
+    if (!value.is_string() || value.get<std::string>().empty()) {
+      throw CommandError("bad_params", key + "." + axis + ": an upload's name");
+    }
+  }
+  std::vector<std::string> names;
+  for (const std::string& axis : axes) {
+    if (!uploads.contains(axis)) {
+      throw CommandError("bad_params",
+                         key + ": no " + what + " for axis '" + axis + "' (" + why + ")");
+    }
+    names.push_back(uploads[axis].get<std::string>());
+  }
+  return names;
+}
 
 StageTrackRequest parse_stage_track_request(const RequestParams& request, const RunContext& ctx,
                                             std::span<const std::string> axes) {
@@ -502,12 +544,13 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
   r.common = parse_track_request(RequestParams(rest, track_builtin_params()), ctx);
   if (request.has("approach_s")) r.common.approach_s = request.number("approach_s", 0.0);
   if (r.common.learning.learned) {
-    throw CommandError("bad_params",
-                       "learned: a drive learned before replays on one axis; a stage learns "
-                       "again (learn_trials)");
+    const std::string run = stage_learning_run(*r.common.learning.learned, axes);
+    for (const std::string& axis : axes) r.learned_drives.push_back(run + "-" + axis);
   }
   // Beside a learned drive each axis's loop corrects through the linear map (FeedbackGainsRequest).
-  if (r.common.learning.trials > 0) r.common.gains.through_linear_map = true;
+  if (r.common.learning.trials > 0 || r.common.learning.learned) {
+    r.common.gains.through_linear_map = true;
+  }
   r.decouple = request.boolean("decouple", true);
   const std::string decoupling = request.string("decoupling", "static");
   if (decoupling != "dynamic" && decoupling != "static") {
@@ -519,23 +562,8 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
   r.dynamic = decoupling == "dynamic";
   const json& params = request.params();
   if (params.contains("reference_uploads")) {
-    const json& uploads = params["reference_uploads"];
-    for (const auto& [key, value] : uploads.items()) {
-      if (std::find(axes.begin(), axes.end(), key) == axes.end()) {
-        throw CommandError("bad_params",
-                           "reference_uploads: '" + key + "' is no axis of the stage");
-      }
-      if (!value.is_string() || value.get<std::string>().empty()) {
-        throw CommandError("bad_params", "reference_uploads." + key + ": an upload's name");
-      }
-    }
-    for (const std::string& axis : axes) {
-      if (!uploads.contains(axis)) {
-        throw CommandError("bad_params", "reference_uploads: no reference for axis '" + axis +
-                                             "' (a stage's reference names every axis)");
-      }
-      r.uploads.push_back(uploads[axis].get<std::string>());
-    }
+    r.uploads = upload_per_axis(params["reference_uploads"], "reference_uploads", axes, "reference",
+                                "a stage's reference names every axis");
     return r;
   }
   sim::StageReferenceKind kind;
@@ -572,6 +600,8 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   std::vector<TrackRequest> requests(n, request.common);
   std::vector<sim::AxisRange> ranges;
   for (std::size_t a = 0; a < n; ++a) {
+    // Each axis starts from its own drive of the learning run (RUN-AXIS-learned).
+    if (a < request.learned_drives.size()) requests[a].learning.learned = request.learned_drives[a];
     contexts.push_back(axis_context(ctx, stage, a, u_now[a]));
     const auto range = actuator_range(contexts.back());
     if (!range) {
@@ -609,6 +639,15 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
     } else {
       run.program->stage_axes.push_back(std::move(axis.program));
       run.axis_learning.push_back(std::move(axis.learning));
+    }
+  }
+  if (!request.learned_drives.empty()) {
+    // Every axis's lead-in ends at one period, trial 0 beginning together.
+    run.program->lead_in_together = std::make_unique<LearningExchange::LeadInTogether>();
+    run.program->lead_in_together->axes = n;
+    for (std::size_t a = 0; a < n; ++a) {
+      if (auto& l = run.program->axis(a).learning)
+        l->decide_together(run.program->lead_in_together.get());
     }
   }
   const json reference = reference_json(request);

@@ -61,6 +61,7 @@ constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
                                        {"decouple", T::kBoolean},
                                        {"decoupling", T::kString}};
 constexpr ParamSpec kExcite[] = {{"drive_upload", T::kString}};
+constexpr ParamSpec kExciteStage[] = {{"drive_uploads", T::kObject}};
 constexpr ParamSpec kFrf[] = {{"amplitude", T::kNumber, 1e-3, 0.1},
                               {"periods", T::kInteger, 2, 64}};
 constexpr ParamSpec kTune[] = {{"compensator", T::kString},
@@ -103,6 +104,8 @@ std::span<const Command> bench_commands() {
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
       {"track", nullptr, kTrackBuiltin,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
+      {"excite", "drive_uploads", kExciteStage,
+       [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_excite(r, c); }},
       {"excite", nullptr, kExcite,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_excite(r, c); }},
       {"frf", nullptr, kFrf,

@@ -49,13 +49,15 @@ struct RemoteCommand {
   std::string plot_dir;
   /// Sent first on the same connection; its name goes into params[upload->param].
   std::optional<RemoteUpload> upload;
-  /// track --reference-file: the file, read once the daemon says what it drives. One axis: its
-  /// value column, sent as `upload`. A stage of several axes (status' "axes"): a column per axis,
-  /// named as the axis, each sent as its own upload under params["reference_uploads"][axis]; a
-  /// file without an axis's column is refused naming it.
+  /// track --reference-file, excite --input-file: the file, read once the daemon says what it
+  /// drives. One axis: its value column, sent as `upload`. A stage of several axes (status'
+  /// "axes"): a column per axis, named as the axis, each sent as its own upload under
+  /// params["reference_uploads" or "drive_uploads"][axis]; a file without an axis's column is
+  /// refused naming it.
   struct ReferenceFile {
     std::string path, t_column = "t", value_column = "yr";
     double scale = 1.0, rate_hz = 0.0;
+    std::string kind = "reference";  ///< "reference" (µm, track) or "drive" (V, excite)
   };
   std::optional<ReferenceFile> reference_file;
 };

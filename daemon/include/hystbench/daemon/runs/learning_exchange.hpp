@@ -48,6 +48,17 @@ struct LearningExchange {
   /// Before the run: the lead-in plays at least `min_periods` (<= lead_in_periods), and longer
   /// as `lead_in` says, up to lead_in_periods.
   void follow_offset(std::size_t min_periods, const LearningLeadIn& lead_in) noexcept;
+  /// The lead-in's end decided by every axis of a stage together (loop thread only): an axis's
+  /// lead-in ends only at a period where every axis's would, so that their trial 0 begins at
+  /// one tick. An axis whose offset was within its tolerance at once would otherwise be
+  /// scored while another still followed its own, its creep meanwhile left unfollowed.
+  struct LeadInTogether {
+    std::size_t axes = 0;    ///< the axes that decide (each exchange given this)
+    std::uint64_t tick = 0;  ///< the period start the count is of
+    std::size_t ending = 0;  ///< the axes whose lead-in would end there
+  };
+  /// Before the run: decide with the others through `together` (outlives the run).
+  void decide_together(LeadInTogether* together) noexcept { together_ = together; }
   /// Why the lead-in ended where it did: its minimum, with no following (none asked for or the
   /// learned offset not known); the offset within the tolerance (at once, or followed there);
   /// followed, it would not get there before the longest; the longest.
@@ -172,6 +183,13 @@ struct LearningExchange {
   std::size_t follow_steps_ = 0;
   double checkpoint_gap_ = std::numeric_limits<double>::quiet_NaN();
   bool stalled_ = false;
+  // Deciding with the other axes: the end this axis would take at pending_tick_.
+  LeadInTogether* together_ = nullptr;
+  bool pending_ = false;
+  std::uint64_t pending_tick_ = 0, pending_begun_ = 0;
+  LeadInEnd pending_end_ = LeadInEnd::kLongest;
+  double pending_error_ = 0.0;
+  void end_lead_in(std::uint64_t k, std::uint64_t begun, LeadInEnd end) noexcept;
 };
 
 }  // namespace hystbench::daemon

@@ -151,6 +151,8 @@ struct RunProgram {
   /// From its first_tick on, a period that plays a learned drive plays it in place of the
   /// compensator's feedforward (its feedback stays on).
   std::unique_ptr<LearningExchange> learning;
+  /// A stage's replay (axis 0's program holds it): its axes' lead-ins end together.
+  std::unique_ptr<LearningExchange::LeadInTogether> lead_in_together;
   /// track --learned: the compensator again, fed the targets at the offset the drive was learned
   /// at (learned_twin_offset_um) with its feedback held; the drive moves by how far the
   /// compensator's feedforward is from its twin's at the same tick: the target offset's effect

@@ -151,9 +151,13 @@ class Bench {
   /// A stage's learning run: the other axes' learners polled (their trials closed, their next
   /// drives offered), as learn() does axis 0's (supervisor thread).
   void learn_other_axes();
+  /// excite on a stage: drive_uploads names a complete drive upload per axis, each played open
+  /// loop from its axis's present output, every axis's record as long as the longest (the
+  /// others hold their last drive). Caller holds mutex_, the bench idle.
+  nlohmann::json start_stage_excite(const details::RequestParams& request, std::uint64_t client);
   /// A stage's run ended: for a learning run, each axis's learning and its last trial's
-  /// figures under `axes` (after replace_with_stage_result); no drive is kept (supervisor
-  /// thread).
+  /// figures under `axes` (after replace_with_stage_result), and each axis's drive kept as
+  /// RUN-AXIS-learned (`track --learned RUN` replays them all; supervisor thread).
   void finish_axes_learning(const RunProgram& run, nlohmann::json& report);
   /// Every axis's present output [V].
   std::vector<double> axis_outputs() const;
@@ -224,6 +228,12 @@ class Bench {
   /// A learning run's result: `learning` (its trials), the last trial's errors as the run's,
   /// and the kept drive saved in the model folder (supervisor thread).
   void finish_learning(const RunProgram& run, nlohmann::json& report);
+  /// Saves `learning`'s kept drive as NAME-learned in the model folder (nothing for a replay),
+  /// `more` added to its metadata; `l` (the learning's result) gets drive and drive_file, or
+  /// drive_file_error (supervisor thread).
+  void keep_learned_drive(const details::TrackLearning& learning, const std::string& name,
+                          const std::string& model_file, double tare_um, const nlohmann::json& more,
+                          nlohmann::json& l) const;
   /// run.progress of the active run; `started`: also when the loop no longer (or not yet)
   /// plays it, with done = 0.
   void emit_progress(bool started = false);
