@@ -5,12 +5,14 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/remote/remote_commands.hpp"
 #include "hystbench/cli/remote/sweep_command.hpp"
 #include "hystbench/common/fit_families.hpp"
 #include "hystbench/common/model_file_io.hpp"
+#include "hystbench/common/request_limits.hpp"
 #include "subcommands.hpp"
 
 namespace cli = hystbench::cli;
@@ -424,31 +426,64 @@ CliCommand add_sweep(CLI::App& app, cli::RemoteCommand& remote) {
 
 namespace {
 
-// model load: a model file (read here, its document sent) or a model stored in the daemon's folder.
-int load_model(const std::string& model_path, const std::string& stored_model,
+// model load: model files (read here, their documents sent) or a model stored in the daemon's
+// folder. A stage's files (each naming its axis: identification.stage_axis) go together, keyed
+// by axis.
+int load_model(const std::vector<std::string>& model_paths, const std::string& stored_model,
                cli::RemoteCommand& remote) {
   if (!stored_model.empty()) return send_request(remote, "model.load", {{"stored", stored_model}});
-  if (model_path.empty()) {
+  if (model_paths.empty()) {
     std::cerr << "hystbench: error: model load: give a model file or --stored NAME\n";
     return 2;
   }
-  // The file is read here, with the user's rights, and its document travels over the
+  // The files are read here, with the user's rights, and their documents travel over the
   // socket: the daemon (its own user, its own /tmp and no /home) never opens a client's path.
-  nlohmann::json document;
+  std::vector<nlohmann::json> documents;
   try {
-    document = common::read_model_document(model_path);
+    for (const std::string& path : model_paths) {
+      documents.push_back(common::read_model_document(path));
+    }
   } catch (const std::exception& e) {
     std::cerr << "hystbench: error: " << e.what() << "\n";
     return 1;
   }
-  return send_request(remote, "model.load",
-                      {{"model", std::move(document)},
-                       {"name", std::filesystem::path(model_path).filename().string()}});
+  const auto stage_axis = [](const nlohmann::json& d) {
+    const nlohmann::json id = d.value("identification", nlohmann::json::object());
+    return id.contains("stage") ? id.value("stage_axis", std::string()) : std::string();
+  };
+  if (documents.size() == 1 && stage_axis(documents.front()).empty()) {
+    return send_request(remote, "model.load",
+                        {{"model", std::move(documents.front())},
+                         {"name", std::filesystem::path(model_paths.front()).filename().string()}});
+  }
+  nlohmann::json models = nlohmann::json::object();
+  std::size_t bytes = 0;
+  for (std::size_t i = 0; i < documents.size(); ++i) {
+    const std::string axis = stage_axis(documents[i]);
+    if (axis.empty() || models.contains(axis)) {
+      std::cerr << "hystbench: error: " << model_paths[i]
+                << (axis.empty() ? ": not one axis's model of a stage identify (several files "
+                                   "load together only as a stage's, one per axis)"
+                                 : ": a second model for axis " + axis)
+                << "\n";
+      return 1;
+    }
+    bytes += documents[i].dump().size();
+    models[axis] = std::move(documents[i]);
+  }
+  if (bytes > common::kMaxModelFileBytes) {
+    std::cerr << "hystbench: error: the stage's model files hold " << bytes
+              << " bytes together, more than one request carries (" << common::kMaxModelFileBytes
+              << "); copy them into the daemon's model folder and use --stored RUN\n";
+    return 1;
+  }
+  return send_request(remote, "model.load", {{"models", std::move(models)}});
 }
 
 // model: get, load, list, delete.
 struct ModelOptions {
-  std::string model_path, stored_model, deleted_model;
+  std::vector<std::string> model_paths;
+  std::string stored_model, deleted_model;
 };
 
 }  // namespace
@@ -463,9 +498,11 @@ CliCommand add_model(CLI::App& app, cli::RemoteCommand& remote) {
   auto* load = cmd->add_subcommand(
       "load",
       "Make a model active: a model file here (read by this command and sent to the daemon, "
-      "which keeps a copy in its model folder), or --stored NAME from that folder");
+      "which keeps a copy in its model folder), or --stored NAME from that folder. On a stage "
+      "of several axes, every axis's file of one stage identify (RUN-x.json RUN-y.json)");
   auto* file_opt =
-      load->add_option("file", model->model_path, "Model file (JSON, from fit, diagnose, identify)")
+      load->add_option("files", model->model_paths,
+                       "Model file (JSON, from fit, diagnose, identify); on a stage, one per axis")
           ->check(CLI::ExistingFile);
   load->add_option("--stored", model->stored_model,
                    "Name of a model in the daemon's model folder (see `hystbench model list`); "
@@ -486,6 +523,6 @@ CliCommand add_model(CLI::App& app, cli::RemoteCommand& remote) {
             if (*get.app) return get.run();
             if (*list.app) return list.run();
             if (*del) return send_request(remote, "model.delete", {{"name", model->deleted_model}});
-            return load_model(model->model_path, model->stored_model, remote);
+            return load_model(model->model_paths, model->stored_model, remote);
           }};
 }

@@ -287,10 +287,16 @@ json Bench::status() const {
 nlohmann::json Bench::load_model(const details::RequestParams& request) {
   const bool stored = request.has("stored");
   const bool document = request.has("model");
-  if (stored == document) {
+  const bool documents = request.has("models");
+  if (static_cast<int>(stored) + static_cast<int>(document) + static_cast<int>(documents) != 1) {
     throw common::CommandError("bad_params",
-                               "give either 'model' (the model document) or 'stored' (a name from "
-                               "model.list)");
+                               "give one of 'model' (the model document), 'models' (a stage's, by "
+                               "axis) or 'stored' (a name from model.list)");
+  }
+  if (documents && !is_stage()) {
+    throw common::CommandError("not_on_stage",
+                               "models: a stage's key (several axes); this bench drives one axis "
+                               "(model)");
   }
   // Checked first: a refused request changes nothing (an upload is not kept either).
   std::lock_guard lock(mutex_);

@@ -2,6 +2,7 @@
 // every axis together, their results per axis (runs/details/stage_runs.hpp).
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "hystbench/common/command_error.hpp"
@@ -74,22 +75,53 @@ json Bench::save_stage_models() {
 }
 
 json Bench::load_stage_model(const details::RequestParams& request) {
-  if (!request.has("stored")) {
+  if (!request.has("stored") && !request.has("models")) {
     throw common::CommandError(
         "not_on_stage",
         "model.load on a stage of " + std::to_string(settings_.axes.size()) +
             " axes takes 'stored': the stage identify's run id, whose axes' models (RUN-AXIS.json) "
-            "load together with their coupling");
+            "load together with their coupling, or 'models': those files' documents by axis");
   }
-  const std::string run_id = request.string("stored", "");
   std::vector<compensation::ModelFile> files;
   std::vector<std::string> names;
-  for (const std::string& axis : settings_.axes) {
-    names.push_back(details::stage_model_file(run_id, axis));
-    files.push_back(details::load_stored_model(settings_.model_dir, names.back()).file);
+  if (request.has("models")) {
+    // Every axis's document checked first: a refused request keeps nothing.
+    const json& documents = request.params()["models"];
+    for (const std::string& axis : settings_.axes) {
+      names.push_back("models." + axis);
+      if (!documents.contains(axis)) {
+        throw common::CommandError("bad_params", "models: no model for axis '" + axis +
+                                                     "' (a stage's models load together)");
+      }
+      try {
+        files.push_back(compensation::model_file_from_json(documents[axis]));
+      } catch (const std::exception& e) {
+        throw common::CommandError("bad_model", names.back() + ": " + e.what());
+      }
+    }
+    for (const auto& [axis, document] : documents.items()) {
+      (void)document;
+      if (std::find(settings_.axes.begin(), settings_.axes.end(), axis) == settings_.axes.end()) {
+        throw common::CommandError("bad_params", "models: '" + axis + "' is no axis of the stage");
+      }
+    }
+  } else {
+    const std::string run_id = request.string("stored", "");
+    for (const std::string& axis : settings_.axes) {
+      names.push_back(details::stage_model_file(run_id, axis));
+      files.push_back(details::load_stored_model(settings_.model_dir, names.back()).file);
+    }
   }
   auto model = std::make_unique<details::StageModel>(
       details::stage_model_from_files(std::move(files), settings_.axes, names));
+  if (request.has("models")) {
+    // Kept as their identify's files: model list shows them, --stored RUN loads them again.
+    for (std::size_t a = 0; a < settings_.axes.size(); ++a) {
+      names[a] = details::stage_model_file(model->run_id, settings_.axes[a]);
+      (void)details::keep_model_document(settings_.model_dir, names[a],
+                                         request.params()["models"][settings_.axes[a]]);
+    }
+  }
   stage_ = std::move(model);
   ++model_generation_;
   json axes = json::object();

@@ -269,7 +269,23 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
   }
 
   // A daemon restarted loads the stage back by its identify's run id: each axis's model with the
-  // responses its loop is designed on, and the coupling, as they were.
+  // responses its loop is designed on, and the coupling, as they were. Or from the files'
+  // documents sent by axis (`hystbench model load RUN-x.json RUN-y.json` from elsewhere), which
+  // it keeps as the identify's files again; one axis's alone is refused, keeping nothing.
+  bench_.reset();
+  json documents = json::object();
+  for (const char* axis : {"x", "y"}) {
+    const fs::path file =
+        dir_ / "models" / (id["run_id"].get<std::string>() + "-" + axis + ".json");
+    std::ifstream in(file);
+    documents[axis] = json::parse(in);
+    fs::remove(file);
+  }
+  start_xy();
+  EXPECT_EQ(refused("model.load", {{"models", {{"x", documents["x"]}}}}).second,
+            "models: no model for axis 'y' (a stage's models load together)");
+  EXPECT_FALSE(fs::exists(dir_ / "models" / (id["run_id"].get<std::string>() + "-x.json")));
+  EXPECT_EQ(bench_->handle("model.load", {{"models", documents}})["stage_run_id"], id["run_id"]);
   bench_.reset();
   start_xy();
   EXPECT_TRUE(status()["stage_model"].is_null());
@@ -481,5 +497,6 @@ TEST_F(BenchStage, AOneAxisBenchRefusesAStagesKeysByName) {
   EXPECT_EQ(refused("track", {{"reference", "sine"}, {"decoupling", "dynamic"}}).first,
             "not_on_stage");
   EXPECT_EQ(refused("excite", {{"drive_uploads", {{"x", "a"}}}}).first, "not_on_stage");
+  EXPECT_EQ(refused("model.load", {{"models", {{"x", json::object()}}}}).first, "not_on_stage");
   EXPECT_FALSE(status().contains("axes"));
 }

@@ -76,7 +76,7 @@ TEST(CommandTable, ARefusedKeySaysWhy) {
               AllOf(StartsWith("bad_params: path: model.load takes the model document"),
                     HasSubstr("never opens a path")));
   // A refused key is not offered among the valid ones.
-  EXPECT_THAT(refusal("model.load", {{"file", "x"}}), HasSubstr("(valid: model, name, stored)"));
+  EXPECT_THAT(refusal("model.load", {{"file", "x"}}), HasSubstr("(valid: model, models, name, stored)"));
 }
 
 TEST(CommandTable, AnUnknownCommandListsEveryCommandOnce) {

@@ -80,6 +80,7 @@ constexpr ParamSpec kUploadCancel[] = {{"upload", T::kString}};
 constexpr ParamSpec kModelDelete[] = {{"name", T::kString}};
 constexpr ParamSpec kModelLoad[] = {
     {"model", T::kObject, 0, 0, "the model file's JSON object"},
+    {"models", T::kObject, 0, 0, "a stage's model files' JSON objects by axis"},
     {"name", T::kString},
     {"stored", T::kString},
     {"path", T::kString, 0, 0, nullptr,
