@@ -450,6 +450,16 @@ class StageTest(_support.DaemonTestCase):
             self.bench.track_axes({"x": x, "y": y}, rate_hz=rate, decoupling="full")
         self.assertIn("decoupling: 'static' (the default", str(refused.exception))
 
+    def test_a_stages_model_files_go_by_the_axis_each_names(self) -> None:
+        with self.assertRaises(ValueError) as caught:
+            self.bench.model_load([{"schema": "hystbench.model/1"}])
+        self.assertIn("not one axis's model of a stage identify", str(caught.exception))
+        # Sent keyed by its axis; the daemon checks the document before it keeps anything.
+        with self.assertRaises(BenchError) as refused:
+            self.bench.model_load([{"identification": {"stage": {}, "stage_axis": "x"}}])
+        self.assertEqual(refused.exception.code, "bad_model")
+        self.assertIn("models.x", str(refused.exception))
+
     def test_each_axis_plays_its_own_drive_open_loop(self) -> None:
         rate = 1000.0
         x = [75.0 + 40.0 * math.sin(2.0 * math.pi * 3.0 * k / rate) for k in range(1001)]

@@ -443,7 +443,11 @@ class Bench:
             name: the name the daemon keeps it under (letters, digits, ``.``, ``_``, ``-``;
                 ``.json`` added); default the file's name, or ``uploaded.json`` for a dict.
             stored: instead of ``model``: the name of a model in the daemon's model folder
-                (see ``model_list()``).
+                (see ``model_list()``); on a stage, the stage identify's run id.
+
+        On a stage of several axes, ``model`` is a list of every axis's file (or document) of
+        one stage identify (``RUN-x.json``, ``RUN-y.json``), each sent keyed by the axis it
+        names; the reply gives ``stage_run_id``, ``axes`` and ``coupling``.
 
         Returns:
             ``path``, ``name``, ``type``, ``invertible``, ``reason``.
@@ -454,6 +458,8 @@ class Bench:
             return self.request("model.load", {"stored": stored})
         if model is None:
             raise ValueError("model_load: give a model document, a model file, or stored=NAME")
+        if isinstance(model, (list, tuple)):
+            return self._load_stage_models(model)
         if isinstance(model, Mapping):
             document = dict(model)
             if "schema" not in document and isinstance(document.get("model"), Mapping):
@@ -478,6 +484,27 @@ class Bench:
         if name is not None:
             params["name"] = name
         return self.request("model.load", params)
+
+    def _load_stage_models(self, models: Iterable[Any]) -> Dict[str, Any]:
+        """model.load of a stage's files or documents, keyed by their stage_axis."""
+        by_axis: Dict[str, Any] = {}
+        for m in models:
+            if isinstance(m, Mapping):
+                document, source = dict(m), "a document"
+            else:
+                source = os.fspath(m)
+                with open(source, "r", encoding="utf-8") as f:
+                    document = json.load(f)
+            ident = document.get("identification") or {}
+            axis = ident.get("stage_axis") if "stage" in ident else None
+            if not isinstance(axis, str) or axis in by_axis:
+                raise ValueError(
+                    f"model_load: {source}: "
+                    + ("a second model for axis " + axis if axis in by_axis else
+                       "not one axis's model of a stage identify")
+                )
+            by_axis[axis] = document
+        return self.request("model.load", {"models": by_axis})
 
     # ---- uploads ------------------------------------------------------------------------------
 
