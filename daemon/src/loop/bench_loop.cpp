@@ -33,7 +33,7 @@ constexpr std::array<const char*, 3> kAxisFaultWhat = {
 
 }  // namespace
 
-BenchLoop::BenchLoop(drivers::Driver& driver, BenchLoopOptions options)
+BenchLoop::BenchLoop(drivers::Driver& driver, const BenchLoopOptions& options)
     : driver_(driver),
       options_(options),
       axes_(std::clamp<std::size_t>(driver.axes(), 1, drivers::kMaxAxes)),

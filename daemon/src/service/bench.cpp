@@ -73,7 +73,7 @@ Bench::Bench(BenchSettings settings)
   if (auto r = driver_->activate(); !r) throw std::runtime_error(r.message);
   BenchLoopOptions loop = settings_.loop;
   loop.axis_names = settings_.axes;
-  loop_ = std::make_unique<BenchLoop>(*driver_, std::move(loop));
+  loop_ = std::make_unique<BenchLoop>(*driver_, loop);
 }
 
 Bench::~Bench() {

@@ -2,12 +2,14 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <initializer_list>
 #include <iomanip>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
@@ -480,6 +482,37 @@ StageTargets stage_targets(const StageTrackRequest& request, const StageModel* s
   return out;
 }
 
+// A stage's replay: every axis's lead-in ends at one period, trial 0 beginning together.
+void decide_lead_ins_together(RunProgram& program) {
+  program.lead_in_together = std::make_unique<LearningExchange::LeadInTogether>();
+  program.lead_in_together->axes = program.axes();
+  for (std::size_t a = 0; a < program.axes(); ++a) {
+    if (auto& l = program.axis(a).learning) l->decide_together(program.lead_in_together.get());
+  }
+}
+
+// The stage track's header, reply and status: the run's reference, compensator and
+// decoupling, each axis's own under `axes`.
+void describe_stage_track(BuiltRun& run, const StageTrackRequest& request,
+                          const std::vector<std::string>& names, json axis_headers,
+                          json axis_replies, const json& decoupling, const RunContext& ctx) {
+  const json reference = reference_json(request);
+  run.header = {{"run",
+                 {{"kind", "track"},
+                  {"axes", names},
+                  {"reference", reference},
+                  {"compensator", request.common.compensator},
+                  {"decoupling", decoupling},
+                  {"rate_hz", ctx.settings.loop.rate_hz}}},
+                {"driver", ctx.settings.driver_type},
+                {"axes", std::move(axis_headers)}};
+  run.reply = {{"axes", std::move(axis_replies)},
+               {"reference", reference},
+               {"compensator", request.common.compensator},
+               {"decoupling", decoupling}};
+  run.status = {{"compensator", request.common.compensator}, {"axes", names}};
+}
+
 // The learning run a stage's `learned` names (RUN, as its result's learned_drive gives it;
 // RUN-learned is taken too), each of whose axes' drives is RUN-AXIS-learned. An axis's own
 // drive is refused: the stage replays every axis.
@@ -502,23 +535,24 @@ std::string stage_learning_run(std::string name, std::span<const std::string> ax
 std::vector<std::string> upload_per_axis(const json& uploads, const std::string& key,
                                          std::span<const std::string> axes, const std::string& what,
                                          const std::string& why) {
-  if (!uploads.is_object()) {
-    throw CommandError("bad_params", key + ": {axis: upload} naming every axis (" + why + ")");
-  }
+  // The message: the key, then what is wrong with it.
+  const auto refuse = [&key](std::initializer_list<std::string_view> parts) {
+    std::string message = key;
+    for (const std::string_view part : parts) message.append(part);
+    throw CommandError("bad_params", message);
+  };
+  if (!uploads.is_object()) refuse({": {axis: upload} naming every axis (", why, ")"});
   for (const auto& [axis, value] : uploads.items()) {
     if (std::find(axes.begin(), axes.end(), axis) == axes.end()) {
-      throw CommandError("bad_params", key + ": '" + axis + "' is no axis of the stage");
+      refuse({": '", axis, "' is no axis of the stage"});
     }
     if (!value.is_string() || value.get<std::string>().empty()) {
-      throw CommandError("bad_params", key + "." + axis + ": an upload's name");
+      refuse({".", axis, ": an upload's name"});
     }
   }
   std::vector<std::string> names;
   for (const std::string& axis : axes) {
-    if (!uploads.contains(axis)) {
-      throw CommandError("bad_params",
-                         key + ": no " + what + " for axis '" + axis + "' (" + why + ")");
-    }
+    if (!uploads.contains(axis)) refuse({": no ", what, " for axis '", axis, "' (", why, ")"});
     names.push_back(uploads[axis].get<std::string>());
   }
   return names;
@@ -545,7 +579,8 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
   if (request.has("approach_s")) r.common.approach_s = request.number("approach_s", 0.0);
   if (r.common.learning.learned) {
     const std::string run = stage_learning_run(*r.common.learning.learned, axes);
-    for (const std::string& axis : axes) r.learned_drives.push_back(run + "-" + axis);
+    for (const std::string& axis : axes)
+      r.learned_drives.push_back(std::string(run).append("-").append(axis));
   }
   // Beside a learned drive each axis's loop corrects through the linear map (FeedbackGainsRequest).
   if (r.common.learning.trials > 0 || r.common.learning.learned) {
@@ -641,30 +676,9 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
       run.axis_learning.push_back(std::move(axis.learning));
     }
   }
-  if (!request.learned_drives.empty()) {
-    // Every axis's lead-in ends at one period, trial 0 beginning together.
-    run.program->lead_in_together = std::make_unique<LearningExchange::LeadInTogether>();
-    run.program->lead_in_together->axes = n;
-    for (std::size_t a = 0; a < n; ++a) {
-      if (auto& l = run.program->axis(a).learning)
-        l->decide_together(run.program->lead_in_together.get());
-    }
-  }
-  const json reference = reference_json(request);
-  run.header = {{"run",
-                 {{"kind", "track"},
-                  {"axes", names},
-                  {"reference", reference},
-                  {"compensator", request.common.compensator},
-                  {"decoupling", decoupling},
-                  {"rate_hz", ctx.settings.loop.rate_hz}}},
-                {"driver", ctx.settings.driver_type},
-                {"axes", axis_headers}};
-  run.reply = {{"axes", axis_replies},
-               {"reference", reference},
-               {"compensator", request.common.compensator},
-               {"decoupling", decoupling}};
-  run.status = {{"compensator", request.common.compensator}, {"axes", names}};
+  if (!request.learned_drives.empty()) decide_lead_ins_together(*run.program);
+  describe_stage_track(run, request, names, std::move(axis_headers), std::move(axis_replies),
+                       decoupling, ctx);
   run.program->summary["decoupling"] = decoupling;
   if (json interaction = feedback_interaction(stage, plans, dt); !interaction.is_null()) {
     if (!designed_together.is_null()) interaction["designed_together"] = designed_together;

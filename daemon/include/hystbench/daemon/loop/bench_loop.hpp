@@ -88,7 +88,7 @@ class BenchLoop {
   enum class State : int { kStopped = 0, kIdle, kRunning, kFault };
 
   /// The driver must be configured and active; it must outlive the loop.
-  BenchLoop(drivers::Driver& driver, BenchLoopOptions options);
+  BenchLoop(drivers::Driver& driver, const BenchLoopOptions& options);
   ~BenchLoop();
   BenchLoop(const BenchLoop&) = delete;
   BenchLoop& operator=(const BenchLoop&) = delete;
