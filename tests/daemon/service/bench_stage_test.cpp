@@ -228,6 +228,12 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
     }
     EXPECT_FALSE(again.contains("learned_drive"));  // a replay keeps nothing new
   }
+  // A Lissajous's drives asked to replay a raster: refused in the stage's words.
+  const std::string other =
+      refused("track", {{"reference", "raster"}, {"learned", learned["learned_drive"]}}).second;
+  EXPECT_NE(other.find("was learned for another reference or range than this raster"),
+            std::string::npos)
+      << other;
   // And beside each axis's loop: the loops then correct through the linear map (through each
   // axis's plane inverse their corrections jump at ticks that differ from trial to trial, ring
   // the shared mode, and the learning stalled at 0.09-0.15 %, three to five times its floor).

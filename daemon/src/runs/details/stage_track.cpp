@@ -482,6 +482,30 @@ StageTargets stage_targets(const StageTrackRequest& request, const StageModel* s
   return out;
 }
 
+// make_axis_track_program(); a learned drive refused for another built-in reference is named
+// in the stage's words (its built-in references play as uploads, whose refusal speaks of files).
+BuiltRun axis_track_program(const StageTrackRequest& stage, const TrackRequest& request,
+                            const RunContext& ctx, const Upload* upload, TrackReference ref,
+                            std::unique_ptr<sim::SignalGenerator> targets) {
+  try {
+    return make_axis_track_program(request, ctx, upload, std::move(ref), std::move(targets));
+  } catch (const CommandError& e) {
+    const std::string what = e.what();
+    if (!stage.uploads.empty() || !request.learning.learned ||
+        what.find("' was learned for ") == std::string::npos) {
+      throw;
+    }
+    throw CommandError(e.code(), "learned: '" + *request.learning.learned +
+                                     "-learned' was learned for another reference or range than "
+                                     "this " +
+                                     std::string(sim::to_string(stage.builtin.kind)) +
+                                     ": a stage's learned drive replays only the reference it "
+                                     "was learned on (the same reference, frequencies_hz, "
+                                     "range_fraction and duration_s, and the same model's "
+                                     "range), or learn this one with --learn N");
+  }
+}
+
 // A stage's replay: every axis's lead-in ends at one period, trial 0 beginning together.
 void decide_lead_ins_together(RunProgram& program) {
   program.lead_in_together = std::make_unique<LearningExchange::LeadInTogether>();
@@ -662,8 +686,8 @@ BuiltRun make_stage_track_program(const StageTrackRequest& request, const RunCon
   for (std::size_t a = 0; a < n; ++a) {
     const std::string name = stage != nullptr ? stage->axes[a] : std::to_string(a);
     names.push_back(name);
-    BuiltRun axis = make_axis_track_program(requests[a], contexts[a], axis_refs.uploads[a],
-                                            std::move(refs[a]), std::move(targets.signals[a]));
+    BuiltRun axis = axis_track_program(request, requests[a], contexts[a], axis_refs.uploads[a],
+                                       std::move(refs[a]), std::move(targets.signals[a]));
     axis_headers[name] = axis.header;
     axis_replies[name] = axis.reply;
     preparations.push_back(std::move(axis.preparation));
