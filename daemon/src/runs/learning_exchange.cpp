@@ -115,7 +115,6 @@ void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, doub
   ++together_->ending;
   pending_ = true;
   pending_tick_ = k;
-  pending_begun_ = begun;
   pending_end_ = end;
 }
 
@@ -134,7 +133,7 @@ void LearningExchange::lead_in_error(std::uint64_t k, double error, double tare)
   if (pending_ && k == pending_tick_ + 1) {
     pending_ = false;
     if (together_->tick == pending_tick_ && together_->ending >= together_->axes) {
-      end_lead_in(pending_tick_, pending_begun_, pending_end_);
+      end_lead_in(pending_tick_, (pending_tick_ - lead_start_) / period, pending_end_);
       if (start_ - pending_tick_ <= window_) {  // the period's first tick, before it was decided
         lead_in_error_sum_ += pending_error_;
         ++lead_in_samples_;

@@ -17,15 +17,6 @@ namespace hystbench::daemon {
 
 using nlohmann::json;
 
-void Bench::refuse_on_stage(const char* command) const {
-  if (!is_stage()) return;
-  throw common::CommandError(
-      "not_on_stage", std::string(command) + " drives one axis, and this bench is a stage of " +
-                          std::to_string(settings_.axes.size()) +
-                          " axes (identify, track, excite, frf, tune, status, model.get, stop, "
-                          "abort and reset serve every axis)");
-}
-
 std::vector<double> Bench::axis_outputs() const {
   std::vector<double> u;
   for (std::size_t a = 0; a < settings_.axes.size(); ++a) u.push_back(loop_->last_output(a));

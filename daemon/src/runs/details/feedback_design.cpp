@@ -374,15 +374,20 @@ FeedbackPlan plan_feedback(const RunContext& ctx, hc::CompensatorKind kind,
   return p;
 }
 
+hc::FeedbackLaw with_loop_gain(hc::FeedbackLaw law, double factor) {
+  law.pid.kp *= factor;
+  law.pid.ki *= factor;
+  law.pid.kd *= factor;
+  return law;
+}
+
 FeedbackPlan lowered_plan(const RunContext& ctx, hc::CompensatorKind kind,
                           const FeedbackGainsRequest& gains, const FeedbackPlan& plan,
                           double factor, const nlohmann::json& why) {
   const hc::StageResponses& r = measured_responses(ctx);
   const hc::LoopDesignOptions o = design_options(ctx, r, mean_slope(ctx));
   FeedbackPlan p = plan;
-  p.law.pid.kp *= factor;
-  p.law.pid.ki *= factor;
-  p.law.pid.kd *= factor;
+  p.law = with_loop_gain(plan.law, factor);
   p.evaluation = hc::check_loop(p.plants, p.law, o);
   p.summary.update(summary_json(p, r, o));
   p.summary["lowered"] = {{"by", factor}, {"why", why}};

@@ -63,6 +63,10 @@ struct FeedbackPlanCache {
 FeedbackPlan plan_feedback(const RunContext& ctx, compensation::CompensatorKind kind,
                            const FeedbackGainsRequest& gains);
 
+/// `law` with its loop gain times `factor`: the PID's kp, ki and kd scaled, its boost and
+/// shaping as they are (how lowered_plan() lowers a loop, and how its check together is tried).
+compensation::FeedbackLaw with_loop_gain(compensation::FeedbackLaw law, double factor);
+
 /// `plan` (plan_feedback()'s for the same inputs) with its loop's gain times `factor` in
 /// (0, 1]: its PID's gains scaled, its margins checked again on its responses; its summary's
 /// `lowered` gives the factor and `why` (whose "meaning" its `limit` quotes; `limited_by`

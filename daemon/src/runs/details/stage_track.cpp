@@ -326,13 +326,7 @@ std::optional<Interaction> worst_interaction(
   if (responses == 0 || responses == std::numeric_limits<std::size_t>::max()) return std::nullopt;
   std::vector<hc::FeedbackController> controllers;
   controllers.reserve(n);
-  for (const auto& plan : plans) {
-    hc::FeedbackLaw law = plan->law;
-    law.pid.kp *= factor;
-    law.pid.ki *= factor;
-    law.pid.kd *= factor;
-    controllers.emplace_back(law, dt);
-  }
+  for (const auto& plan : plans) controllers.emplace_back(with_loop_gain(plan->law, factor), dt);
   std::optional<Interaction> out;
   for (std::size_t k = 0; k < responses; ++k) {
     std::vector<std::vector<hc::MeasuredResponse>> g(n, std::vector<hc::MeasuredResponse>(n));

@@ -186,7 +186,7 @@ struct LearningExchange {
   // Deciding with the other axes: the end this axis would take at pending_tick_.
   LeadInTogether* together_ = nullptr;
   bool pending_ = false;
-  std::uint64_t pending_tick_ = 0, pending_begun_ = 0;
+  std::uint64_t pending_tick_ = 0;  // its lead-in period's first tick
   LeadInEnd pending_end_ = LeadInEnd::kLongest;
   double pending_error_ = 0.0;
   void end_lead_in(std::uint64_t k, std::uint64_t begun, LeadInEnd end) noexcept;

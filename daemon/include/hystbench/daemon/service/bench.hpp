@@ -131,8 +131,6 @@ class Bench {
   // A stage of several axes (bench_stage.cpp): identify one axis at a time, track every axis.
   /// settings_.axes is not empty.
   bool is_stage() const noexcept { return !settings_.axes.empty(); }
-  /// Throws CommandError not_on_stage for `command`, which drives one axis.
-  void refuse_on_stage(const char* command) const;
   /// identify on the stage. Caller holds mutex_.
   nlohmann::json start_stage_identify(const details::IdentifyRequest& request);
   /// track on the stage. Caller holds mutex_.
