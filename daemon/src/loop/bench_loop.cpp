@@ -269,7 +269,8 @@ void BenchLoop::log_sample(RunProgram& p, std::span<const SampleRecord> row) noe
 }
 
 void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
-  ticks_.fetch_add(1, std::memory_order_relaxed);
+  const std::uint64_t tick_number = ticks_.fetch_add(1, std::memory_order_relaxed);
+  if (options_.scope != nullptr) tap_scope(tick_number, scheduled_ns);
   if (reset_requested_.exchange(false, std::memory_order_acq_rel) && state() == State::kFault) {
     fault_reason_.store("", std::memory_order_release);
     state_.store(State::kIdle, std::memory_order_release);
@@ -309,6 +310,22 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   } else {
     idle_tick();
   }
+}
+
+void BenchLoop::tap_scope(std::uint64_t tick, std::int64_t scheduled_ns) noexcept {
+  // The previous tick's exchange: its output, the reading it got and the reference it drove.
+  if (!options_.scope->due(tick)) return;
+  ScopeSample s;
+  s.tick = tick;
+  s.time_ns = scheduled_ns;
+  s.axes = static_cast<std::uint32_t>(axes_);
+  s.running = active_ != nullptr;
+  for (std::size_t a = 0; a < axes_; ++a) {
+    s.y[a] = last_y_[a].load(std::memory_order_relaxed);
+    s.u[a] = last_u_[a].load(std::memory_order_relaxed);
+    s.yr[a] = s.running ? last_yr_[a] : std::numeric_limits<double>::quiet_NaN();
+  }
+  options_.scope->offer(s);
 }
 
 void BenchLoop::idle_tick() noexcept {
@@ -387,6 +404,7 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
       ++pa.counters.overruns;
     }
     d[a] = drive(a, pa, k, rec[a]);
+    last_yr_[a] = d[a].y_ref;
     const OutputLimiter::Applied lim = limit(a, pa, k, d[a].u_request, rec[a]);
     u[a] = lim.u;
     limited = limited || lim.clamped || lim.slew_limited;

@@ -48,6 +48,7 @@
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/loop/output_limiter.hpp"
 #include "hystbench/daemon/loop/realtime.hpp"
+#include "hystbench/daemon/loop/scope_tap.hpp"
 #include "hystbench/daemon/loop/stuck_sensor_detector.hpp"
 #include "hystbench/daemon/runs/run_program.hpp"
 #include "hystbench/drivers/driver.hpp"
@@ -81,6 +82,9 @@ struct BenchLoopOptions {
   /// The axes' names, for the fault reasons of a driver of several ("sensor stuck on axis y:
   /// ..."); an axis without one is named by its index. Unused with one axis.
   std::vector<std::string> axis_names;
+  /// A live view's tap: every tap->decimation()-th tick's sample is offered to it (wait-free);
+  /// null = none. Must outlive the loop.
+  ScopeTap* scope = nullptr;
 };
 
 class BenchLoop {
@@ -223,6 +227,8 @@ class BenchLoop {
   inline void record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::uint32_t response,
                      std::int64_t wake_latency_ns, const SampleRecord& rec) noexcept;
   void idle_tick() noexcept;
+  /// Offers the tick's sample to options_.scope when one is due (loop thread, real-time safe).
+  void tap_scope(std::uint64_t tick, std::int64_t scheduled_ns) noexcept;
   /// Pushes the tick's row (a record per axis of the run) to the run's log: a full ring drops it
   /// on the wall clock and waits for room on the simulated clock.
   void log_sample(RunProgram& p, std::span<const SampleRecord> row) noexcept;
@@ -266,6 +272,8 @@ class BenchLoop {
   std::int64_t run_start_ns_ = 0;
   // Per axis, the last tick's reading for the feedback; NaN after a stale one (it holds).
   AxisValues y_prev_{};
+  // Per axis, the last tick's reference for the scope; NaN while none is driven.
+  AxisValues last_yr_{};
   double dt_ = 1e-4;
   std::int64_t period_ns_ = 100000;
   bool overran_ = false;
