@@ -19,6 +19,7 @@
 #include "runs/details/track_program.hpp"
 #include "service/details/command_table.hpp"
 #include "service/details/model_folder.hpp"
+#include "service/details/run_history.hpp"
 
 namespace hystbench::daemon {
 
@@ -45,6 +46,7 @@ const char* state_name(BenchLoop::State s) {
 
 Bench::Bench(BenchSettings settings)
     : settings_(std::move(settings)),
+      history_(std::make_unique<details::RunHistory>()),
       plans_(std::make_shared<details::PlanCache>()),
       feedback_plans_(std::make_shared<details::FeedbackPlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;
@@ -124,6 +126,11 @@ void Bench::set_event_sink(EventSink sink) {
   sink_ = std::move(sink);
 }
 
+void Bench::set_web_view_status(nlohmann::json view) {
+  std::lock_guard lock(mutex_);
+  web_view_ = std::move(view);
+}
+
 void Bench::emit(const json& event) {
   EventSink sink;
   {
@@ -187,6 +194,7 @@ void Bench::open_log(RunProgram& p, json header) {
 }
 
 json Bench::handle(const std::string& cmd, const json& params, std::uint64_t client) {
+  const std::lock_guard one_at_a_time(commands_mutex_);
   const details::Command& command = details::find_command(cmd, params);
   const details::RequestParams request(params, command.params);
   return command.handle(*this, request, client);
@@ -281,6 +289,8 @@ json Bench::status() const {
                   {"max_samples", uploads_.limits().max_samples}};
   s["feedback"] = last_feedback_;
   s["last_result"] = last_result_;
+  s["faults"] = history_->faults();
+  s["http"] = web_view_;
   return s;
 }
 
@@ -735,6 +745,7 @@ void Bench::deliver_result(json result) {
   {
     std::lock_guard lock(mutex_);
     last_result_ = result;
+    history_->add(result);
     active_run_ = nullptr;
     phase_ = RunPhase::kIdle;
     delivering_result_ = true;

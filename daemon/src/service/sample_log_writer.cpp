@@ -16,6 +16,7 @@
 #include "hystbench/daemon/loop/realtime.hpp"
 #include "hystbench/sim/simulated_stage_config.hpp"
 #include "service/details/posix_io.hpp"
+#include "service/details/utc_clock.hpp"
 
 namespace hystbench::daemon {
 
@@ -31,25 +32,6 @@ constexpr std::size_t kFirstAxisColumn = 5;
 constexpr std::size_t kBatch = 1024;
 constexpr std::size_t kWriteThreshold = std::size_t{256} << 10;
 constexpr std::size_t kMaxRowChars = std::size_t{12} * 32;
-
-bool valid_run_id(const std::string& id) {
-  if (id.empty() || id.size() > 128 || id.front() == '.' || id == "latest") return false;
-  for (const char c : id) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '.' || c == '_' || c == '-';
-    if (!ok) return false;
-  }
-  return true;
-}
-
-std::string utc_now_iso8601() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
 
 std::string comment_line(const nlohmann::json& object) {
   return "# " + object.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
@@ -70,8 +52,9 @@ std::vector<std::pair<std::string, std::string_view>> columns_with_units(
 }
 
 std::string make_header(const SampleLogOptions& o) {
-  std::string h = comment_line(
-      {{"schema", kSampleLogSchema}, {"run_id", o.run_id}, {"created", utc_now_iso8601()}});
+  std::string h = comment_line({{"schema", kSampleLogSchema},
+                                {"run_id", o.run_id},
+                                {"created", details::utc_now_iso8601()}});
   for (const auto& [key, value] : o.header.items()) h += comment_line({{key, value}});
   const auto columns_units = columns_with_units(o.axes);
   nlohmann::json units = nlohmann::json::object();
@@ -97,7 +80,7 @@ std::string make_header(const SampleLogOptions& o) {
 }
 
 SampleLogOptions validated(SampleLogOptions o) {
-  if (!valid_run_id(o.run_id)) {
+  if (!valid_sample_log_id(o.run_id)) {
     throw std::invalid_argument("sample log: run id '" + o.run_id +
                                 "' must be 1-128 characters of [A-Za-z0-9._-], not starting "
                                 "with '.', and not 'latest'");
@@ -173,6 +156,14 @@ char* format_row(char* p, std::span<const SampleRecord> row) {
 }
 
 }  // namespace
+
+bool valid_sample_log_id(std::string_view id) noexcept {
+  if (id.empty() || id.size() > 128 || id.front() == '.' || id == "latest") return false;
+  return std::all_of(id.begin(), id.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+           c == '_' || c == '-';
+  });
+}
 
 std::span<const std::string_view> sample_log_columns() noexcept { return kColumns; }
 

@@ -76,14 +76,15 @@ TEST(CommandTable, ARefusedKeySaysWhy) {
               AllOf(StartsWith("bad_params: path: model.load takes the model document"),
                     HasSubstr("never opens a path")));
   // A refused key is not offered among the valid ones.
-  EXPECT_THAT(refusal("model.load", {{"file", "x"}}), HasSubstr("(valid: model, models, name, stored)"));
+  EXPECT_THAT(refusal("model.load", {{"file", "x"}}),
+              HasSubstr("(valid: model, models, name, stored)"));
 }
 
 TEST(CommandTable, AnUnknownCommandListsEveryCommandOnce) {
   EXPECT_EQ(refusal("fly", json::object()),
             "unknown_command: unknown command 'fly' (status, identify, track, excite, frf, tune, "
             "upload.begin, upload.chunk, upload.cancel, stop, abort, reset, model.get, "
-            "model.load, model.delete, model.list, config.get)");
+            "model.load, model.delete, model.list, runs, run.get, config.get)");
   for (const hdd::Command& c : hdd::bench_commands()) {
     ASSERT_NE(c.handle, nullptr) << c.name;
     EXPECT_THAT(refusal(c.name, {{"no_such_key", 0}}),

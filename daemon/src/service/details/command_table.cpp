@@ -3,6 +3,7 @@
 #include <string_view>
 
 #include "hystbench/common/command_error.hpp"
+#include "service/details/run_history.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -78,6 +79,7 @@ constexpr ParamSpec kUploadChunk[] = {
     {"upload", T::kString}, {"offset", T::kInteger}, {"values", T::kArray}, {"t", T::kArray}};
 constexpr ParamSpec kUploadCancel[] = {{"upload", T::kString}};
 constexpr ParamSpec kModelDelete[] = {{"name", T::kString}};
+constexpr ParamSpec kRunGet[] = {{"run_id", T::kString}};
 constexpr ParamSpec kModelLoad[] = {
     {"model", T::kObject, 0, 0, "the model file's JSON object"},
     {"models", T::kObject, 0, 0, "a stage's model files' JSON objects by axis"},
@@ -149,6 +151,17 @@ std::span<const Command> bench_commands() {
        nullptr,
        {},
        [](Bench& b, const RequestParams&, std::uint64_t) { return b.list_models(); }},
+      {"runs",
+       nullptr,
+       {},
+       [](Bench& b, const RequestParams&, std::uint64_t) { return b.history_->runs(); }},
+      {"run.get", nullptr, kRunGet,
+       [](Bench& b, const RequestParams& r, std::uint64_t) {
+         if (!r.has("run_id")) {
+           throw common::CommandError("bad_params", "run_id: missing (`runs` lists them)");
+         }
+         return b.history_->run(r.string("run_id", ""));
+       }},
       {"config.get",
        nullptr,
        {},

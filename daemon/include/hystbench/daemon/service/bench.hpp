@@ -43,6 +43,7 @@ struct FeedbackPlanCache;
 struct StageModel;
 struct IdentifyRequest;
 class TrackLearning;
+class RunHistory;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -95,7 +96,7 @@ class Bench {
   void shutdown();
 
   /// Executes one command of connection `client` (its uploads are its own); returns its result
-  /// object. Throws CommandError.
+  /// object. Throws CommandError. Any thread: commands run one at a time, in arrival order.
   nlohmann::json handle(const std::string& cmd, const nlohmann::json& params,
                         std::uint64_t client = 0);
   /// Connection `client` went away: its uploads are discarded (a run already started keeps
@@ -103,6 +104,9 @@ class Bench {
   void client_closed(std::uint64_t client);
   /// Receives progress and run events (from the supervisor thread).
   void set_event_sink(EventSink sink);
+  /// What status shows under "http": the live view's address and whether it controls runs
+  /// (null, the default: no view).
+  void set_web_view_status(nlohmann::json view);
 
   /// True when the loop has ticked since the previous call (for the systemd watchdog).
   bool loop_advanced();
@@ -302,7 +306,10 @@ class Bench {
   RealtimeReport realtime_;
   double dt_;
 
-  mutable std::mutex mutex_;  // guards everything below
+  std::mutex commands_mutex_;  // one command at a time, whichever thread sends it
+  std::unique_ptr<details::RunHistory> history_;  // the runs since start (its own lock)
+  mutable std::mutex mutex_;                      // guards everything below
+  nlohmann::json web_view_;                       // status "http"
   std::optional<compensation::ModelFile> model_;
   std::string model_path_;
   std::uint64_t model_generation_ = 0;         // bumped with every change of model_

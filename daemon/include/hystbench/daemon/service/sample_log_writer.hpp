@@ -141,6 +141,9 @@ class SampleLogWriter {
 
 /// Column names of the CSV, in file order.
 std::span<const std::string_view> sample_log_columns() noexcept;
+/// Whether `id` may name a sample log (SampleLogOptions::run_id's rule): 1-128 characters of
+/// [A-Za-z0-9._-], not starting with '.', not "latest".
+bool valid_sample_log_id(std::string_view id) noexcept;
 /// Column names of a stage's CSV with these axes (empty: sample_log_columns()).
 std::vector<std::string> sample_log_columns(std::span<const std::string> axes);
 

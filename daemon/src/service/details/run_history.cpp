@@ -1,0 +1,85 @@
+#include "service/details/run_history.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "hystbench/common/command_error.hpp"
+#include "service/details/utc_clock.hpp"
+
+namespace hystbench::daemon::details {
+
+using nlohmann::json;
+
+namespace {
+
+// The figure a list shows for a run: its tracking error, else its model's, else none.
+json headline_error(const json& result) {
+  for (const char* key : {"rms_error_percent", "model_rms_error_percent"}) {
+    const auto it = result.find(key);
+    if (it != result.end() && it->is_number() && std::isfinite(it->get<double>())) return *it;
+  }
+  return nullptr;
+}
+
+json string_or_null(const json& result, const char* key) {
+  const auto it = result.find(key);
+  return it != result.end() && it->is_string() && !it->get<std::string>().empty() ? *it
+                                                                                  : json(nullptr);
+}
+
+}  // namespace
+
+RunHistory::RunHistory(std::size_t max_runs, std::size_t max_faults)
+    : max_runs_(max_runs), max_faults_(max_faults) {
+  if (max_runs == 0 || max_faults == 0) {
+    throw std::invalid_argument("run history: keeps at least one run and one fault");
+  }
+}
+
+void RunHistory::add(const json& result) {
+  const std::string finished = utc_now_iso8601();
+  json summary = {{"run_id", result.value("run_id", "")},
+                  {"kind", result.value("kind", "")},
+                  {"end", result.value("end", "")},
+                  {"reason", result.value("reason", "")},
+                  {"finished", finished},
+                  {"rms_error_percent", headline_error(result)},
+                  {"log", string_or_null(result, "log")}};
+  std::lock_guard lock(mutex_);
+  if (summary["end"] == "fault") {
+    faults_.push_front({{"time", finished},
+                        {"run_id", summary["run_id"]},
+                        {"kind", summary["kind"]},
+                        {"reason", summary["reason"]}});
+    if (faults_.size() > max_faults_) faults_.pop_back();
+  }
+  runs_.push_front({std::move(summary), result});
+  if (runs_.size() > max_runs_) runs_.pop_back();
+}
+
+json RunHistory::runs() const {
+  json list = json::array();
+  std::lock_guard lock(mutex_);
+  for (const Entry& e : runs_) list.push_back(e.summary);
+  return {{"runs", std::move(list)}};
+}
+
+json RunHistory::run(const std::string& run_id) const {
+  std::lock_guard lock(mutex_);
+  const auto it = std::find_if(runs_.begin(), runs_.end(),
+                               [&](const Entry& e) { return e.summary["run_id"] == run_id; });
+  if (it != runs_.end()) return it->result;
+  throw common::CommandError("unknown_run", "no run '" + run_id + "' since the daemon started (" +
+                                                std::to_string(runs_.size()) +
+                                                " kept; `runs` lists them)");
+}
+
+json RunHistory::faults() const {
+  std::lock_guard lock(mutex_);
+  json list = json::array();
+  for (const json& f : faults_) list.push_back(f);
+  return list;
+}
+
+}  // namespace hystbench::daemon::details
