@@ -179,7 +179,7 @@ class Section {
 };
 
 const std::vector<std::string> kSections = {"daemon",   "loop",     "limits", "driver",
-                                            "actuator", "identify", "pid"};
+                                            "actuator", "identify", "pid",    "http"};
 
 const toml::table* section_table(const Context& ctx, const toml::table& root,
                                  const std::string& name) {
@@ -284,6 +284,15 @@ void visit_pid(S& p, Visit&& visit, const LoopSection& loop) {
   visit("oscillation_trip", p.oscillation_trip);
 }
 
+template <class S, class Visit>
+void visit_http(S& h, Visit&& visit) {
+  visit("listen", h.listen);
+  visit("control", h.control);
+  visit("token_file", h.token_file);
+  visit("max_clients", h.max_clients, std::int64_t{2}, std::int64_t{64});
+  visit("scope_rate_hz", h.scope_rate_hz, Bounds{10.0, 2000.0});
+}
+
 /// Reads each visited key from a Section with the checks its type and bounds call for.
 class Reader {
  public:
@@ -327,6 +336,14 @@ class Writer {
 
 void check_daemon(const Section& s, const DaemonSection& d) {
   if (d.socket_path.size() > 107) s.fail("socket_path", "must be at most 107 bytes long");
+}
+
+void check_http(const Section& s, const HttpSection& h) {
+  if (!h.listen.empty()) {
+    if (const ListenAddress a = parse_listen_address(h.listen); !a.error.empty()) {
+      s.fail("listen", a.error);
+    }
+  }
 }
 
 void check_limits(const Section& s, const LimitsSection& l) {
@@ -541,6 +558,12 @@ DaemonConfig parse_config(std::string_view toml_text, std::string_view origin) {
     check_pid(s, c.pid, c.loop);
     s.finish();
   }
+  {
+    Section s = section("http");
+    visit_http(c.http, Reader(s));
+    check_http(s, c.http);
+    s.finish();
+  }
   return c;
 }
 
@@ -566,7 +589,29 @@ nlohmann::json to_json(const DaemonConfig& c) {
   j["identify"]["offset_v"] = 0.5 * (low + high);
   j["identify"]["amplitude_v"] = 0.5 * (high - low);
   visit_pid(c.pid, Writer(j["pid"]), c.loop);
+  visit_http(c.http, Writer(j["http"]));
   return j;
+}
+
+ListenAddress parse_listen_address(std::string_view text) {
+  ListenAddress a;
+  const std::size_t colon = text.rfind(':');
+  if (colon == std::string_view::npos || colon == 0) {
+    a.error = "must be HOST:PORT (e.g. 127.0.0.1:8080), got '" + std::string(text) + "'";
+    return a;
+  }
+  a.host = std::string(text.substr(0, colon));
+  if (a.host.size() > 2 && a.host.front() == '[' && a.host.back() == ']') {
+    a.host = a.host.substr(1, a.host.size() - 2);  // [::1]:8080
+  }
+  const std::string_view port = text.substr(colon + 1);
+  const auto r = std::from_chars(port.data(), port.data() + port.size(), a.port);
+  if (port.empty() || r.ec != std::errc() || r.ptr != port.data() + port.size() || a.port < 0 ||
+      a.port > 65535) {
+    a.error =
+        "the port must be a number in [0, 65535] (0: a free one), got '" + std::string(port) + "'";
+  }
+  return a;
 }
 
 nlohmann::json toml_to_json(std::string_view toml_text) {

@@ -117,9 +117,13 @@ TEST(Config, EmptyTextGivesTheDocumentedDefaults) {
   EXPECT_EQ(c.identify.span_v(c.limits.u_min, c.limits.u_max), std::pair(0.0, 150.0));
   EXPECT_EQ(c.pid.u_fb_min, -30.0);
   EXPECT_EQ(c.pid.u_fb_max, 30.0);
+  EXPECT_EQ(c.http.listen, "");  // the live view is off
+  EXPECT_FALSE(c.http.control);
+  EXPECT_EQ(c.http.max_clients, 8);
+  EXPECT_EQ(c.http.scope_rate_hz, 500.0);
   // Empty sections are the same as absent ones.
   EXPECT_EQ(hd::to_json(hd::parse_config("[daemon]\n[loop]\n[limits]\n[driver]\n[actuator]\n"
-                                         "[identify]\n[pid]\n")),
+                                         "[identify]\n[pid]\n[http]\n")),
             hd::to_json(c));
 }
 
@@ -241,6 +245,14 @@ TEST(Config, EveryErrorNamesItsKey) {
        "pid.derivative_filter_hz: must be below loop.rate_hz / 2 = 5000 Hz, got 6000"},
       {"[pid]\nu_fb_min = 5\nu_fb_max = -5", "pid.u_fb_max",
        "pid.u_fb_max: must be at least pid.u_fb_min (5), got -5"},
+      {"[http]\nlisten = \"localhost\"", "http.listen",
+       "http.listen: must be HOST:PORT (e.g. 127.0.0.1:8080), got 'localhost'"},
+      {"[http]\nlisten = \"127.0.0.1:99999\"", "http.listen",
+       "http.listen: the port must be a number in [0, 65535] (0: a free one), got '99999'"},
+      {"[http]\nmax_clients = 0", "http.max_clients",
+       "http.max_clients: must be in [2, 64], got 0"},
+      {"[http]\ncontrol = \"yes\"", "http.control",
+       "http.control: must be true or false, got string"},
   };
   for (const auto& c : cases) {
     const hd::ConfigError e = error_of(c.toml);

@@ -20,6 +20,7 @@
 //              precondition_s, settle_s, heldout_fraction, fit_rate_hz
 //   [pid]      kp, ki, kd, bandwidth_hz, output_filter_hz, derivative_filter_hz, u_fb_min,
 //              u_fb_max
+//   [http]     listen, control, token_file, max_clients, scope_rate_hz (the live view)
 // Not real-time safe (allocates, throws); read once at start-up.
 #include <cstddef>
 #include <cstdint>
@@ -153,6 +154,24 @@ struct PidSection {
   bool oscillation_trip = true;
 };
 
+/// The live view in a browser (docs/reference/web-view.md). Off while listen is empty.
+struct HttpSection {
+  std::string listen;    ///< "HOST:PORT" (port 0: a free one), "" = off
+  bool control = false;  ///< runs may be started and stopped from the page, with the token
+  /// The token's file; "" = $CREDENTIALS_DIRECTORY/http-token (systemd LoadCredential=).
+  std::string token_file;
+  std::int64_t max_clients = 8;  ///< connections served at once, [2, 64]
+  double scope_rate_hz = 500.0;  ///< scope samples per second [10, 2000], at most the loop rate
+};
+
+/// listen's host and port, or why it is not "HOST:PORT" with a port in [0, 65535].
+struct ListenAddress {
+  std::string host;
+  int port = 0;
+  std::string error;  ///< empty when valid
+};
+ListenAddress parse_listen_address(std::string_view text);
+
 struct DaemonConfig {
   DaemonSection daemon;
   LoopSection loop;
@@ -161,6 +180,7 @@ struct DaemonConfig {
   nlohmann::json actuator = nlohmann::json::object();  ///< the [actuator] table as JSON
   IdentifySection identify;
   PidSection pid;
+  HttpSection http;
 };
 
 /// Why `clock` cannot run with `driver_type` (empty when it can): the simulated clock needs the
