@@ -9,10 +9,11 @@ BUILD_PKGS=(
   libeigen3-dev libspdlog-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
   libsystemd-dev libmodbus-dev libgpiod-dev libsocketcan-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  gnuplot-nox
+  gnuplot-nox libcpp-httplib-dev
 )
 # Peers and tools used only by the test suite (independent implementations to test against).
-TEST_PKGS=(python3 python3-pip python3-setuptools python3-wheel socat python3-pymodbus python3-serial python3-serial-asyncio mbpoll can-utils)
+# chromium and python3-websocket: the live view's test in a real browser (headless).
+TEST_PKGS=(python3 python3-pip python3-setuptools python3-wheel socat python3-pymodbus python3-serial python3-serial-asyncio mbpoll can-utils chromium python3-websocket)
 # clang with the libFuzzer and sanitizer runtimes, for scripts/fuzz.sh only.
 FUZZ_PKGS=(clang libclang-rt-14-dev)
 # JSON and arithmetic on the command line, for the measurement scripts only.

@@ -5,14 +5,19 @@
 #include <systemd/sd-daemon.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <optional>
 
 #include "hystbench/common/run_main.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/config/daemon_settings.hpp"
+#include "hystbench/daemon/http/access_token.hpp"
+#include "hystbench/daemon/http/scope_feed.hpp"
+#include "hystbench/daemon/http/web_view.hpp"
 #include "hystbench/daemon/service/bench.hpp"
 #include "hystbench/daemon/service/socket_server.hpp"
 
@@ -23,7 +28,7 @@ namespace {
 
 // The command line: a configuration file and the settings that override it.
 struct DaemonOptions {
-  std::string config_path, socket_path, log_dir, model_dir, clock;
+  std::string config_path, socket_path, log_dir, model_dir, clock, http;
   bool check_only = false;
 };
 
@@ -38,6 +43,10 @@ void add_daemon_options(CLI::App& app, DaemonOptions& options) {
                  "Loop clock (overrides loop.clock): wall, or simulated (loopback driver only:\n"
                  "virtual time, runs tick as fast as they compute, idle ticks stay paced)")
       ->check(CLI::IsMember({"wall", "simulated"}));
+  app.add_option("--http", options.http,
+                 "Serve the live view in a browser on HOST:PORT (overrides http.listen), e.g.\n"
+                 "127.0.0.1:8080; port 0 picks a free one (status shows it). Read-only unless\n"
+                 "http.control = true (docs/reference/web-view.md)");
   app.add_flag("--check-config", options.check_only,
                "Validate the configuration, print it and exit");
   app.set_version_flag("--version", std::string(HYSTBENCH_VERSION));
@@ -63,6 +72,13 @@ std::optional<hd::DaemonConfig> load_daemon_config(const DaemonOptions& options)
       return std::nullopt;
     }
     config.loop.clock = options.clock;
+  }
+  if (!options.http.empty()) {
+    if (const hd::ListenAddress a = hd::parse_listen_address(options.http); !a.error.empty()) {
+      std::cerr << "hystbenchd: configuration error: --http: " << a.error << "\n";
+      return std::nullopt;
+    }
+    config.http.listen = options.http;
   }
   return config;
 }
@@ -118,9 +134,10 @@ hd::SocketServer::Dispatcher bench_dispatcher(hd::Bench& bench) {
   };
 }
 
-// Logs every finished run and sends every event of the bench to the socket's clients.
-void forward_events(hd::Bench& bench, hd::SocketServer& server) {
-  bench.set_event_sink([&server](const nlohmann::json& event) {
+// Logs every finished run and sends every event of the bench to the socket's clients and the
+// live view's streams.
+void forward_events(hd::Bench& bench, hd::SocketServer& server, hd::WebView* view) {
+  bench.set_event_sink([&server, view](const nlohmann::json& event) {
     if (event.value("event", "") == "run.finished") {
       const auto& r = event["result"];
       spdlog::info("run {} {}{}{}", r.value("run_id", "?"), r.value("end", "?"),
@@ -128,6 +145,7 @@ void forward_events(hd::Bench& bench, hd::SocketServer& server) {
                    r.value("reason", std::string()));
     }
     server.broadcast_event(event);
+    if (view != nullptr) view->publish(event);
   });
 }
 
@@ -155,9 +173,68 @@ int wait_for_stop_signal(const sigset_t& signals, hd::Bench& bench) {
   return received;
 }
 
-// Runs the bench and its command socket until a stop signal; returns the exit code.
-int run_daemon(const hd::DaemonConfig& config, const hd::BenchSettings& settings,
+// The live view ([http]): the loop's scope tap, the feed that drains it and the HTTP server.
+// All null while http.listen is empty.
+struct LiveView {
+  std::unique_ptr<hd::ScopeTap> tap;
+  std::unique_ptr<hd::ScopeFeed> feed;
+  std::unique_ptr<hd::WebView> view;
+};
+
+// The tap the loop offers its samples to, when the view is on (before the bench starts).
+std::unique_ptr<hd::ScopeTap> make_scope_tap(const hd::DaemonConfig& config) {
+  if (config.http.listen.empty()) return nullptr;
+  const auto decimation = static_cast<std::uint32_t>(
+      std::max(1.0, std::round(config.loop.rate_hz / config.http.scope_rate_hz)));
+  // Two seconds of scope samples: the feed drains it every 10 ms.
+  return std::make_unique<hd::ScopeTap>(decimation,
+                                        static_cast<std::size_t>(2 * config.http.scope_rate_hz));
+}
+
+// Starts the feed and the HTTP server; false after logging why the address cannot be served.
+bool start_live_view(const hd::DaemonConfig& config, const hd::BenchSettings& settings,
+                     const std::string& token, hd::Bench& bench, LiveView& live) {
+  if (!live.tap) return true;
+  std::vector<std::string> axes =
+      settings.axes.empty() ? std::vector<std::string>{""} : settings.axes;
+  hd::ScopeFeedOptions feed;
+  feed.loop_rate_hz = config.loop.rate_hz;
+  feed.axes = axes;
+  live.feed = std::make_unique<hd::ScopeFeed>(*live.tap, feed);
+  const hd::ListenAddress address = hd::parse_listen_address(config.http.listen);
+  hd::WebViewOptions options;
+  options.host = address.host;
+  options.port = address.port;
+  options.control = config.http.control;
+  options.token = token;
+  options.max_clients = static_cast<std::size_t>(config.http.max_clients);
+  options.log_dir = config.daemon.log_dir;
+  options.driver = config.driver.type;
+  options.rate_hz = config.loop.rate_hz;
+  options.scope_rate_hz = config.loop.rate_hz / live.tap->decimation();
+  options.axes = axes;
+  try {
+    live.view = std::make_unique<hd::WebView>(options, bench, live.feed.get());
+    live.feed->start();
+    live.view->start();
+  } catch (const std::exception& e) {
+    spdlog::critical("{}", e.what());
+    return false;
+  }
+  bench.set_web_view_status({{"address", live.view->address()}, {"control", options.control}});
+  spdlog::info("live view on http://{}/ ({}; scope {} samples/s)", live.view->address(),
+               options.control ? "runs may be started from it with the token" : "read-only",
+               options.scope_rate_hz);
+  return true;
+}
+
+// Runs the bench, its command socket and the live view until a stop signal; returns the exit
+// code.
+int run_daemon(const hd::DaemonConfig& config, hd::BenchSettings settings, const std::string& token,
                const sigset_t& signals) {
+  LiveView live;  // outlives the bench: the loop offers samples to its tap
+  live.tap = make_scope_tap(config);
+  settings.loop.scope = live.tap.get();
   std::unique_ptr<hd::Bench> bench = start_bench(config, settings);
   if (!bench) return 1;
   hd::SocketServer server({config.daemon.socket_path}, bench_dispatcher(*bench),
@@ -170,7 +247,11 @@ int run_daemon(const hd::DaemonConfig& config, const hd::BenchSettings& settings
     bench->shutdown();
     return 1;
   }
-  forward_events(*bench, server);
+  if (!start_live_view(config, settings, token, *bench, live)) {
+    bench->shutdown();
+    return 1;
+  }
+  forward_events(*bench, server, live.view.get());
   spdlog::info("hystbenchd {} ready: driver {}, {} Hz, {} clock, socket {}, logs {}",
                HYSTBENCH_VERSION, config.driver.type, config.loop.rate_hz, config.loop.clock,
                config.daemon.socket_path, config.daemon.log_dir);
@@ -180,10 +261,22 @@ int run_daemon(const hd::DaemonConfig& config, const hd::BenchSettings& settings
   const int received = wait_for_stop_signal(signals, *bench);
   spdlog::info("{} received: safe output, ending the run, closing the log", strsignal(received));
   sd_notify(0, "STOPPING=1");
+  if (live.view) live.view->stop();
   bench->shutdown();
   server.stop();
   spdlog::info("hystbenchd stopped");
   return 0;
+}
+
+// The live view's token, when it controls runs; nullopt after printing why it cannot be read.
+std::optional<std::string> live_view_token(const hd::DaemonConfig& config) {
+  if (config.http.listen.empty() || !config.http.control) return std::string();
+  try {
+    return hd::read_access_token(hd::access_token_path(config.http.token_file));
+  } catch (const hd::AccessTokenError& e) {
+    std::cerr << "hystbenchd: configuration error: http.control: " << e.what() << "\n";
+    return std::nullopt;
+  }
 }
 
 int run(int argc, char** argv) {
@@ -213,7 +306,9 @@ int run(int argc, char** argv) {
     std::cout << settings.config_json.dump(2) << "\n";
     return 0;
   }
-  return run_daemon(*config, settings, block_stop_signals());
+  const std::optional<std::string> token = live_view_token(*config);
+  if (!token) return 2;
+  return run_daemon(*config, std::move(settings), *token, block_stop_signals());
 }
 
 }  // namespace
