@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <string_view>
+#include <utility>
 
 #include "http/details/run_samples.hpp"
 #include "http/details/web_assets.hpp"
@@ -149,7 +150,7 @@ void WebView::start() {
   s.set_exception_handler(
       [](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
         try {
-          std::rethrow_exception(ep);
+          std::rethrow_exception(std::move(ep));
         } catch (const std::exception& e) {
           refuse(res, 500, "internal", e.what());
         } catch (...) {
