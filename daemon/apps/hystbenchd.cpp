@@ -184,8 +184,8 @@ struct LiveView {
 // The tap the loop offers its samples to, when the view is on (before the bench starts).
 std::unique_ptr<hd::ScopeTap> make_scope_tap(const hd::DaemonConfig& config) {
   if (config.http.listen.empty()) return nullptr;
-  const auto decimation = static_cast<std::uint32_t>(
-      std::max(1.0, std::round(config.loop.rate_hz / config.http.scope_rate_hz)));
+  const std::uint32_t decimation =
+      hd::ScopeTap::decimation_for(config.loop.rate_hz, config.http.scope_rate_hz);
   // Two seconds of scope samples: the feed drains it every 10 ms.
   return std::make_unique<hd::ScopeTap>(decimation,
                                         static_cast<std::size_t>(2 * config.http.scope_rate_hz));

@@ -98,6 +98,9 @@
   }
 
   let modelKey = null;  // the model the panel shows, as the status names it
+  let feedbackKey = null;  // the feedback loop the panel shows (status.feedback)
+  let feedback = null;
+  let shownModel = null;
 
   function showStatus(s) {
     const st = $("state");
@@ -115,6 +118,12 @@
     }
     showFaults(s.faults);
     const key = JSON.stringify((s.model && s.model.path) || (s.stage_model ? "stage" : null));
+    const fb = JSON.stringify(s.feedback || null);
+    if (fb !== feedbackKey) {
+      feedbackKey = fb;
+      feedback = s.feedback || null;
+      if (key === modelKey) showModel(shownModel);
+    }
     if (key !== modelKey) {
       modelKey = key;
       loadModel();
@@ -418,23 +427,58 @@
     return parts;
   }
 
+  // The loop the compensator closes around the model (the last track, tune or frf's design).
+  function feedbackRows() {
+    const f = feedback;
+    if (!f) return [["feedback", "none designed yet"]];
+    return [
+      ["feedback", text(f.compensator) + (f.gains ? " (" + text(f.gains) + " gains)" : "")],
+      ["crossover", finite(f.crossover_hz) ? fmt(f.crossover_hz, 0) + " Hz" : null],
+      ["bandwidth", finite(f.bandwidth_hz) ? fmt(f.bandwidth_hz, 0) + " Hz" : null],
+      ["limited by", f.limited_by],
+    ];
+  }
+
+  // A stage's model: one row per axis.
+  function stageRows(r) {
+    const rows = [];
+    for (const name of r.axes_order || Object.keys(r.axes)) {
+      const a = r.axes[name] || {};
+      const parts = [text(a.model), text(a.operators) + " operators"];
+      if (a.creep) parts.push("creep");
+      if (finite(a.delay_samples) && a.delay_samples > 0) parts.push(a.delay_samples + " ticks delay");
+      parts.push("held-out " + fmt(a.heldout_rms_error_percent, 3) + " %");
+      rows.push(["axis " + name, parts.join(" · ")]);
+    }
+    rows.push(["coupling", r.coupling ? "measured between the axes" : "none"]);
+    return rows;
+  }
+
   function showModel(r) {
+    shownModel = r;
     const body = $("model-body");
     const m = r && (r.model || (r.type ? r : null));
-    if (!m) {
+    const stage = r && !m && r.axes && typeof r.axes === "object";
+    if (!m && !stage) {
       body.replaceChildren(el("p", { class: "muted", text: "no model loaded" }));
       return;
     }
-    const range = Array.isArray(m.input_range) ? m.input_range.map((v) => fmt(v, 3)).join(" … ")
-      : null;
-    const rows = [
-      ["family", m.type],
-      ["loop", modelLoop(m)],
-      ["parts", modelParts(m).join("; ") || "none"],
-      ["units", m.units ? text(m.units.input) + " → " + text(m.units.output) : null],
-      ["input range", range],
-      ["file", r.path],
-    ];
+    let rows;
+    if (stage) {
+      rows = stageRows(r).concat([["identify", r.run_id]]);
+    } else {
+      const range = Array.isArray(m.input_range) ? m.input_range.map((v) => fmt(v, 3)).join(" … ")
+        : null;
+      rows = [
+        ["family", m.type],
+        ["loop", modelLoop(m)],
+        ["parts", modelParts(m).join("; ") || "none"],
+        ["units", m.units ? text(m.units.input) + " → " + text(m.units.output) : null],
+        ["input range", range],
+        ["file", r.path],
+      ];
+    }
+    rows = rows.concat(feedbackRows());
     const dl = el("dl", { class: "kv" });
     for (const [k, v] of rows) dl.append(el("dt", { text: k }), el("dd", { text: text(v) }));
     const summary = el("summary", { text: "raw JSON" });

@@ -1,5 +1,7 @@
 #include "hystbench/daemon/loop/scope_tap.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace hystbench::daemon {
@@ -10,6 +12,10 @@ std::uint32_t checked_decimation(std::uint32_t decimation) {
   return decimation;
 }
 }  // namespace
+
+std::uint32_t ScopeTap::decimation_for(double loop_rate_hz, double scope_rate_hz) noexcept {
+  return static_cast<std::uint32_t>(std::max(1.0, std::round(loop_rate_hz / scope_rate_hz)));
+}
 
 ScopeTap::ScopeTap(std::uint32_t decimation, std::size_t capacity)
     : decimation_(checked_decimation(decimation)), ring_(capacity) {}

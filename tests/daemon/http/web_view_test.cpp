@@ -39,13 +39,18 @@ class WebViewTest : public hystbench::test::BenchFixture {
     BenchFixture::TearDown();
   }
 
-  /// The loopback bench on the simulated clock (0-44 um), its scope tap, feed and view.
-  void start_view(bool control, std::chrono::seconds io_timeout = std::chrono::seconds(5)) {
-    tap_ = std::make_unique<hd::ScopeTap>(20, 4096);
-    hd::BenchSettings s = settings_from_toml(loopback_toml());
+  /// The loopback bench on the simulated clock (0-44 um; `toml`, the 10 kHz default), its scope
+  /// tap at 500 samples/s as hystbenchd makes it, the feed and the view.
+  void start_view(bool control, std::chrono::seconds io_timeout = std::chrono::seconds(5),
+                  const std::string& toml = loopback_toml()) {
+    hd::BenchSettings s = settings_from_toml(toml);
+    tap_ =
+        std::make_unique<hd::ScopeTap>(hd::ScopeTap::decimation_for(s.loop.rate_hz, 500.0), 4096);
     s.loop.scope = tap_.get();
+    hd::ScopeFeedOptions feed;
+    feed.loop_rate_hz = s.loop.rate_hz;
     start(std::move(s));
-    feed_ = std::make_unique<hd::ScopeFeed>(*tap_, hd::ScopeFeedOptions{});
+    feed_ = std::make_unique<hd::ScopeFeed>(*tap_, feed);
     feed_->start();
     hd::WebViewOptions o;
     o.control = control;
@@ -228,10 +233,41 @@ TEST_F(WebViewTest, ARunStartedWithTheTokenAppearsInTheListWithItsPlot) {
   EXPECT_EQ(both[0]["run_id"], reply2["result"]["run_id"]);
 }
 
-TEST_F(WebViewTest, TheStreamCarriesScopeFramesAndTheBenchsEvents) {
-  start_view(true);
-  bench_->set_event_sink([this](const json& e) { view_->publish(e); });
-  httplib::Client c = client();
+namespace {
+
+// What a stream carried while a run played on the bench: its scope frames in order, the spacing
+// of their samples, whether any was the run's, and the run's events.
+struct StreamSeen {
+  std::size_t frames = 0;
+  double dt = 0.0;
+  bool running = false;
+  bool ordered = true;
+  bool progress = false;
+  bool finished = false;
+};
+
+StreamSeen parse_stream(const std::string& received) {
+  StreamSeen seen;
+  long last_seq = -1;
+  for (std::size_t at = received.find("event: scope\ndata: "); at != std::string::npos;
+       at = received.find("event: scope\ndata: ", at + 1)) {
+    const std::size_t from = at + 19;
+    const json f = json::parse(received.substr(from, received.find('\n', from) - from));
+    seen.ordered = seen.ordered && f["seq"].get<long>() > last_seq;
+    last_seq = f["seq"].get<long>() + static_cast<long>(f["y"][0].size()) - 1;
+    seen.running = seen.running || f["running"].get<bool>();
+    seen.dt = f["dt"].get<double>();
+    ++seen.frames;
+  }
+  seen.progress = received.find("\"event\":\"run.progress\"") != std::string::npos;
+  seen.finished = received.find("\"event\":\"run.finished\"") != std::string::npos;
+  return seen;
+}
+
+// Reads the stream while a short track plays; what it carried.
+StreamSeen stream_during_a_track(int port, const json& track) {
+  httplib::Client c("127.0.0.1", port);
+  c.set_read_timeout(10);
   std::string received;
   std::thread reader([&] {
     c.Get("/api/stream", [&](const char* data, std::size_t n) {
@@ -241,26 +277,39 @@ TEST_F(WebViewTest, TheStreamCarriesScopeFramesAndTheBenchsEvents) {
     });
   });
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  auto [started, reply] = command(kShortTrack, kToken);
-  ASSERT_EQ(started, 200) << reply.dump();
+  httplib::Client post("127.0.0.1", port);
+  auto r = post.Post("/api/command", {{"Authorization", std::string("Bearer ") + kToken}},
+                     track.dump(), "application/json");
+  EXPECT_TRUE(r && r->status == 200) << (r ? r->body : "no reply");
   reader.join();
-  // Scope frames numbered in order, with samples, and the run's progress and end as events.
-  std::size_t frames = 0;
-  long last_seq = -1;
-  bool running_seen = false;
-  for (std::size_t at = received.find("event: scope\ndata: "); at != std::string::npos;
-       at = received.find("event: scope\ndata: ", at + 1)) {
-    const std::size_t from = at + 19;
-    const json f = json::parse(received.substr(from, received.find('\n', from) - from));
-    EXPECT_GT(f["seq"].get<long>(), last_seq);
-    last_seq = f["seq"].get<long>() + static_cast<long>(f["y"][0].size()) - 1;
-    running_seen = running_seen || f["running"].get<bool>();
-    ++frames;
-  }
-  EXPECT_GE(frames, 3u);
-  EXPECT_TRUE(running_seen);
-  EXPECT_NE(received.find("\"event\":\"run.progress\""), std::string::npos);
-  EXPECT_NE(received.find("\"event\":\"run.finished\""), std::string::npos);
+  return parse_stream(received);
+}
+
+}  // namespace
+
+TEST_F(WebViewTest, TheStreamCarriesScopeFramesAndTheBenchsEvents) {
+  start_view(true);
+  bench_->set_event_sink([this](const json& e) { view_->publish(e); });
+  const StreamSeen seen = stream_during_a_track(port_, kShortTrack);
+  EXPECT_GE(seen.frames, 3u);
+  EXPECT_TRUE(seen.ordered);
+  EXPECT_TRUE(seen.running);
+  EXPECT_DOUBLE_EQ(seen.dt, 0.002);  // every 20th tick of 10 kHz
+  EXPECT_TRUE(seen.progress);
+  EXPECT_TRUE(seen.finished);
+}
+
+TEST_F(WebViewTest, OnASlowBenchTheScopeTakesEveryOtherTick) {
+  start_view(true, std::chrono::seconds(5), slow_bench_toml());  // 1 kHz, a 190 Hz mode
+  bench_->set_event_sink([this](const json& e) { view_->publish(e); });
+  json track = kShortTrack;
+  track["params"]["frequency_hz"] = 10.0;
+  const StreamSeen seen = stream_during_a_track(port_, track);
+  EXPECT_GE(seen.frames, 3u);
+  EXPECT_TRUE(seen.ordered);
+  EXPECT_TRUE(seen.running);
+  EXPECT_DOUBLE_EQ(seen.dt, 0.002);  // 500 samples/s from 1 kHz
+  EXPECT_TRUE(seen.finished);
 }
 
 TEST_F(WebViewTest, AClientThatStopsReadingIsDroppedAndTheOthersAreServed) {

@@ -13,13 +13,30 @@ using nlohmann::json;
 
 namespace {
 
-// The figure a list shows for a run: its tracking error, else its model's, else none.
+json finite_number(const json& object, const char* key) {
+  if (!object.is_object()) return nullptr;
+  const auto it = object.find(key);
+  return it != object.end() && it->is_number() && std::isfinite(it->get<double>()) ? *it
+                                                                                   : json(nullptr);
+}
+
+// The figure a list shows for a run: its tracking error, else its model's; identify's, the
+// verification's through its model; a stage's, its worst axis's; else none.
 json headline_error(const json& result) {
   for (const char* key : {"rms_error_percent", "model_rms_error_percent"}) {
-    const auto it = result.find(key);
-    if (it != result.end() && it->is_number() && std::isfinite(it->get<double>())) return *it;
+    if (json v = finite_number(result, key); !v.is_null()) return v;
   }
-  return nullptr;
+  if (const auto v = result.find("verification"); v != result.end()) {
+    if (json e = finite_number(*v, "rms_error_percent"); !e.is_null()) return e;
+  }
+  json worst = nullptr;
+  if (const auto axes = result.find("axes"); axes != result.end() && axes->is_object()) {
+    for (const auto& [name, axis] : axes->items()) {
+      json e = finite_number(axis, "rms_error_percent");
+      if (!e.is_null() && (worst.is_null() || e.get<double>() > worst.get<double>())) worst = e;
+    }
+  }
+  return worst;
 }
 
 json string_or_null(const json& result, const char* key) {

@@ -45,6 +45,9 @@ class ScopeTap {
   std::size_t drain(std::span<ScopeSample> out) noexcept { return ring_.pop_batch(out); }
 
   std::uint32_t decimation() const noexcept { return decimation_; }
+  /// The decimation that gives about scope_rate_hz samples per second from a loop at
+  /// loop_rate_hz: every tick when the loop is slower. Both rates > 0.
+  static std::uint32_t decimation_for(double loop_rate_hz, double scope_rate_hz) noexcept;
   /// Samples the ring could not take (any thread).
   std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
 
