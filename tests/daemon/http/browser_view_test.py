@@ -8,10 +8,12 @@ Checks: the page paints within 1 s and its stream connects; a track run started 
 the scope (frames and the newest seq grow, at least 20 redraws a second while it runs); the
 finished run appears in the runs table and its row plots the run; a screenshot (PNG, in --out) is
 not blank; an unknown path is a JSON 404; a command that changes the bench is refused (403) without
-control; the daemon is still alive at the end. Prints `figure name=value ...` lines.
+control; the daemon is still alive at the end. Then a second daemon with `[http] control = true`
+and a token file: the page's control panel is refused with a wrong token and starts a track with
+the right one, which ends in the list. Prints `figure name=value ...` lines.
 
 Exit 0 pass, 1 fail, 77 skipped (no chromium or no python3-websocket). Standard library plus
-python3-websocket only. About 20 s.
+python3-websocket only. About 15 s.
 """
 
 import argparse
@@ -73,6 +75,16 @@ class Processes:
         log.close()
         self.procs.append(p)
         return p
+
+    def stop(self, p):
+        """Ends one of them (SIGTERM, then SIGKILL after 5 s)."""
+        if p.poll() is None:
+            p.terminate()
+            try:
+                p.wait(5)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
 
     def stop_all(self):
         """SIGTERM to each leader (chromium then ends its own children; the daemon its run), then
@@ -232,7 +244,7 @@ def find_chromium():
 
 def launch_browser(procs, chromium, tmp, websocket):
     profile = os.path.join(tmp, "chromium")
-    os.mkdir(profile)
+    os.makedirs(profile)
     command = chromium if isinstance(chromium, list) else [chromium]  # e.g. under taskset
     browser = procs.start(command + ["--headless=new", "--no-sandbox", "--disable-gpu",
                            "--hide-scrollbars", "--no-first-run", "--no-default-browser-check",
@@ -429,6 +441,62 @@ def run(args, procs, tmp, websocket):
           "hystbenchd does not answer status")
     print("figure first_paint_ms=%.0f scope_fps=%.1f screenshot_colours=%d runs_shown=%d"
           % (first_paint, fps, colours, shown))
+    procs.stop(daemon)
+    run_with_control(args, procs, tmp, websocket)
+
+
+TOKEN = "test-token-0123456789abcdef"
+
+
+def run_with_control(args, procs, tmp, websocket):
+    """A second daemon with `[http] control = true` and a token file: the page's control panel
+    refuses a wrong token, then starts a track with the right one, which ends in the list."""
+    token_file = os.path.join(tmp, "http-token")
+    with open(token_file, "w") as f:
+        f.write(TOKEN + "\n")
+    config = os.path.join(tmp, "control.toml")
+    with open(config, "w") as f:
+        if args.config:
+            with open(args.config) as shipped:
+                f.write(shipped.read())
+        f.write("\n[http]\ncontrol = true\ntoken_file = %s\n" % json.dumps(token_file))
+    socket_path = os.path.join(tmp, "control.sock")
+    log = os.path.join(tmp, "hystbenchd-control.log")
+    daemon = procs.start([args.daemon, "--config", config, "--socket", socket_path, "--log-dir",
+                          os.path.join(tmp, "logs2"), "--model-dir", os.path.join(tmp, "models2"),
+                          "--http", "127.0.0.1:0"] + args.daemon_arg, log)
+    base = "http://" + http_address(args, socket_path, daemon, log)
+    dev = launch_browser(procs, args.chromium, os.path.join(tmp, "b2"), websocket)
+    dev.call("Page.enable")
+    dev.call("Page.navigate", url=base + "/")
+    dev.wait_for("!document.getElementById('control').hidden", 10, "the control panel")
+
+    def press(token, button):
+        dev.eval("(() => { const t = document.getElementById('token'); t.value = %s;"
+                 " t.dispatchEvent(new Event('input'));"
+                 " document.getElementById('trk-ref').value = 'sine';"
+                 " document.getElementById('trk-freq').value = '5';"
+                 " document.getElementById('trk-periods').value = '5';"
+                 " document.getElementById(%s).click(); return 1; })()"
+                 % (json.dumps(token), json.dumps(button)))
+
+    press("not-the-token-at-all", "btn-track")
+    dev.wait_for("document.getElementById('control-reply').textContent.indexOf('bad_token') >= 0",
+                 5, "the refusal of a wrong token")
+    check(cli_json(args, socket_path, "status", "--json").get("run") is None,
+          "a wrong token started a run")
+    press(TOKEN, "btn-track")
+    dev.wait_for("document.getElementById('control-reply').textContent.indexOf('run_id') >= 0",
+                 5, "the track's start from the page")
+    dev.wait_for("!!document.querySelector('#runs tbody tr[data-run-id]')", 30,
+                 "the page's track in the list")
+    result = cli_json(args, socket_path, "status", "--json").get("last_result") or {}
+    check(result.get("kind") == "track" and result.get("end") == "completed",
+          "the page's track: %s" % json.dumps(result)[:300])
+    print("control: a wrong token refused, the page's track %s %s"
+          % (result.get("run_id"), result.get("end")))
+    dev.close()
+    check(daemon.poll() is None, "hystbenchd exited:\n%s" % tail(log))
 
 
 def main():
