@@ -115,6 +115,11 @@ class WithoutModelTest(_support.DaemonTestCase):
         self.assertAlmostEqual(peak, result["max_error_um"], places=9)
         last = self.bench.status()["last_result"]
         self.assertEqual(last["run_id"], result["run_id"])
+        listed = self.bench.runs()
+        self.assertEqual(listed[0]["run_id"], result["run_id"])
+        self.assertEqual(listed[0]["kind"], "track")
+        self.assertAlmostEqual(listed[0]["rms_error_percent"], result["rms_error_percent"])
+        self.assertEqual(self.bench.run_get(result["run_id"])["samples"], result["samples"])
 
     def test_track_learns_over_trials_and_reports_each(self) -> None:
         seen: List[str] = []

@@ -389,6 +389,19 @@ class Bench:
         (``last_result``)."""
         return self.request("status")
 
+    def runs(self) -> List[Dict[str, Any]]:
+        """The runs since the daemon started, newest first (the last 200): each ``{"run_id",
+        "kind", "end", "reason", "finished"`` (UTC), ``"rms_error_percent"`` (or None), ``"log"``
+        (the sample log's path, or None)``}``."""
+        return self.request("runs")["runs"]
+
+    def run_get(self, run_id: str) -> Dict[str, Any]:
+        """One of ``runs()``' results, whole, as the run's end gave it.
+
+        Raises BenchError ``unknown_run`` for a run the daemon does not keep.
+        """
+        return self.request("run.get", {"run_id": run_id})
+
     def config_get(self) -> Dict[str, Any]:
         """The daemon's effective configuration (``loop.rate_hz`` [Hz], ``limits``, ...)."""
         return self.request("config.get")
