@@ -58,6 +58,10 @@ int run(int argc, char** argv) {
                  "hystbenchd socket (default $HYSTBENCH_SOCKET or /run/hystbench/hystbench.sock)");
   commands.push_back(add_plain_request(
       app, remote, "status", "State, active run, model, loop timing, last result", "status"));
+  commands.push_back(add_plain_request(
+      app, remote, "runs",
+      "The runs since the daemon started, newest first: id, kind, end, figure, log (JSON)",
+      "runs"));
   commands.push_back(add_identify(app, remote));
   commands.push_back(add_track(app, remote));
   commands.push_back(add_excite(app, remote));
