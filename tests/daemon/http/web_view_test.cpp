@@ -42,7 +42,7 @@ class WebViewTest : public hystbench::test::BenchFixture {
   /// The loopback bench on the simulated clock (0-44 um; `toml`, the 10 kHz default), its scope
   /// tap at 500 samples/s as hystbenchd makes it, the feed and the view.
   void start_view(bool control, std::chrono::seconds io_timeout = std::chrono::seconds(5),
-                  const std::string& toml = loopback_toml()) {
+                  const std::string& toml = loopback_toml(), int send_buffer_bytes = 64 << 10) {
     hd::BenchSettings s = settings_from_toml(toml);
     tap_ =
         std::make_unique<hd::ScopeTap>(hd::ScopeTap::decimation_for(s.loop.rate_hz, 500.0), 4096);
@@ -57,6 +57,7 @@ class WebViewTest : public hystbench::test::BenchFixture {
     o.token = control ? kToken : "";
     o.log_dir = dir_ / "logs";
     o.io_timeout = io_timeout;
+    o.send_buffer_bytes = send_buffer_bytes;
     view_ = std::make_unique<hd::WebView>(o, *bench_, feed_.get());
     view_->start();
     port_ = std::stoi(view_->address().substr(view_->address().rfind(':') + 1));
@@ -313,7 +314,8 @@ TEST_F(WebViewTest, OnASlowBenchTheScopeTakesEveryOtherTick) {
 }
 
 TEST_F(WebViewTest, AClientThatStopsReadingIsDroppedAndTheOthersAreServed) {
-  start_view(false, std::chrono::seconds(1));
+  // A small send buffer fills in a fraction of a second of idle frames.
+  start_view(false, std::chrono::seconds(1), loopback_toml(), 4096);
   const int stalled = open_stream_socket(port_, 4096);  // sends its request, never reads
   EXPECT_TRUE(eventually([&] { return view_->counters().streams_dropped >= 1; }))
       << "the stalled stream is still open";

@@ -26,7 +26,16 @@ TEST(RunHistory, ListsNewestFirstWithTheFigureEachKindOfRunStates) {
          {"axes", {{"x", {{"rms_error_percent", 0.1}}}, {"y", {{"rms_error_percent", 0.3}}}}}});
   h.add(
       {{"run_id", "d"}, {"kind", "excite"}, {"end", "stopped"}, {"reason", "stopped by request"}});
-  const json runs = h.runs()["runs"];
+  h.add({{"run_id", "e"},
+         {"kind", "identify"},
+         {"end", "completed"},
+         {"stage_model",
+          {{"axes",
+            {{"x", {{"heldout_rms_error_percent", 0.25}}},
+             {"y", {{"heldout_rms_error_percent", 0.08}}}}}}}});
+  EXPECT_EQ(h.runs()["runs"][0]["rms_error_percent"], 0.25);  // a stage's fits: the worst
+  const json all = h.runs()["runs"];
+  const json runs(all.begin() + 1, all.end());
   ASSERT_EQ(runs.size(), 4u);
   EXPECT_EQ(runs[0]["run_id"], "d");
   EXPECT_TRUE(runs[0]["rms_error_percent"].is_null());  // nothing tracked

@@ -20,7 +20,7 @@ class RunHistory {
   void add(const nlohmann::json& result);
   /// {"runs": [{"run_id", "kind", "end", "reason", "finished", "rms_error_percent", "log"}, ...]},
   /// newest first. rms_error_percent: a tracking run's, else the model's; identify's
-  /// verification's; a stage's worst axis's; else null.
+  /// verification's; a stage's worst axis's (a stage identify's fits' held-out); else null.
   nlohmann::json runs() const;
   /// The result of run `run_id`; throws CommandError unknown_run naming the ones kept.
   nlohmann::json run(const std::string& run_id) const;
