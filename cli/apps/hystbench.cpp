@@ -60,7 +60,8 @@ int run(int argc, char** argv) {
       app, remote, "status", "State, active run, model, loop timing, last result", "status"));
   commands.push_back(add_plain_request(
       app, remote, "runs",
-      "The runs since the daemon started, newest first: id, kind, end, figure, log (JSON)",
+      "The last 200 runs, newest first, also from before a restart: id, kind, end, figure,\n"
+      "log (JSON)",
       "runs"));
   commands.push_back(add_identify(app, remote));
   commands.push_back(add_track(app, remote));

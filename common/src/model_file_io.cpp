@@ -56,24 +56,19 @@ nlohmann::json read_model_document(const std::string& path) {
   return json::parse(text);
 }
 
-namespace {
-
-// Writes a JSON document atomically (temp file + rename).
-void save_document(const std::string& path, const json& doc) {
+void save_json_document(const std::string& path, const json& doc) {
   const std::string tmp = path + ".tmp";
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path + ": cannot write model file");
+    if (!out) throw std::runtime_error(path + ": cannot write the file");
     out << std::setw(2) << doc << "\n";
     if (!out) throw std::runtime_error(path + ": write failed");
   }
   std::filesystem::rename(tmp, path);
 }
 
-}  // namespace
-
 void save_model_file(const std::string& path, const hc::ModelFile& file) {
-  save_document(path, hc::to_json(file));
+  save_json_document(path, hc::to_json(file));
 }
 
 std::optional<hc::MimoModelFile> load_mimo_model_file(const std::string& path) {
@@ -93,7 +88,7 @@ std::optional<hc::MimoModelFile> load_mimo_model_file(const std::string& path) {
 }
 
 void save_mimo_model_file(const std::string& path, const hc::MimoModelFile& file) {
-  save_document(path, hc::to_json(file));
+  save_json_document(path, hc::to_json(file));
 }
 
 }  // namespace hystbench::common

@@ -46,7 +46,7 @@ const char* state_name(BenchLoop::State s) {
 
 Bench::Bench(BenchSettings settings)
     : settings_(std::move(settings)),
-      history_(std::make_unique<details::RunHistory>()),
+      history_(std::make_unique<details::RunHistory>(settings_.log_dir)),
       plans_(std::make_shared<details::PlanCache>()),
       feedback_plans_(std::make_shared<details::FeedbackPlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;

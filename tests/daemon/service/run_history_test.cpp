@@ -1,10 +1,13 @@
-// The runs since start (service/details/run_history.hpp): summaries newest first with the figure
+// The runs kept (service/details/run_history.hpp): summaries newest first with the figure
 // a list shows, each result whole, the faults among them, all bounded.
 #include "service/details/run_history.hpp"
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "hystbench/common/command_error.hpp"
+#include "support/temp_dir_test.hpp"
 
 namespace hdd = hystbench::daemon::details;
 using nlohmann::json;
@@ -51,7 +54,7 @@ TEST(RunHistory, ListsNewestFirstWithTheFigureEachKindOfRunStates) {
 }
 
 TEST(RunHistory, KeepsTheLastRunsAndFaultsAndNamesAnUnknownRun) {
-  hdd::RunHistory h(3, 2);
+  hdd::RunHistory h({}, 3, 2);
   for (int i = 0; i < 5; ++i) {
     // Appended, not "r" + ...: GCC 12 warns falsely (-Wrestrict) on the latter.
     const std::string n = std::to_string(i);
@@ -74,6 +77,36 @@ TEST(RunHistory, KeepsTheLastRunsAndFaultsAndNamesAnUnknownRun) {
     ADD_FAILURE() << "a run that left the history was found";
   } catch (const hystbench::common::CommandError& e) {
     EXPECT_EQ(e.code(), "unknown_run");
-    EXPECT_NE(std::string(e.what()).find("3 kept"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("3 are"), std::string::npos);
   }
+}
+
+class RunHistoryFolder : public hystbench::test::TempDirTest {
+ protected:
+  RunHistoryFolder() : TempDirTest("run_history") {}
+};
+
+TEST_F(RunHistoryFolder, TheListOutlivesARestartAndSkipsWhatIsNotAResult) {
+  {
+    hdd::RunHistory h(dir_, 2, 5);
+    h.add({{"run_id", "20260101T000000Z-track-1"},
+           {"kind", "track"},
+           {"end", "completed"},
+           {"rms_error_percent", 0.5}});
+    h.add({{"run_id", "20260101T000001Z-track-2"},
+           {"kind", "track"},
+           {"end", "fault"},
+           {"reason", "sensor stuck"}});
+    h.add({{"run_id", "20260101T000002Z-excite-3"}, {"kind", "excite"}, {"end", "completed"}});
+  }
+  std::ofstream(dir_ / "20260101T000003Z-track-4.result.json") << "{ not json";
+  const hdd::RunHistory again(dir_, 2, 5);  // the daemon started again
+  const json runs = again.runs()["runs"];
+  ASSERT_EQ(runs.size(), 2u);  // the newest two of the three kept, the broken file skipped
+  EXPECT_EQ(runs[0]["run_id"], "20260101T000002Z-excite-3");
+  EXPECT_EQ(runs[1]["run_id"], "20260101T000001Z-track-2");
+  EXPECT_EQ(again.run("20260101T000001Z-track-2")["reason"], "sensor stuck");
+  ASSERT_EQ(again.faults().size(), 1u);
+  EXPECT_EQ(again.faults()[0]["reason"], "sensor stuck");
+  EXPECT_EQ(runs[1]["finished"].get<std::string>().size(), 20u);
 }

@@ -390,7 +390,7 @@ class Bench:
         return self.request("status")
 
     def runs(self) -> List[Dict[str, Any]]:
-        """The runs since the daemon started, newest first (the last 200): each ``{"run_id",
+        """The last 200 runs, newest first, kept across restarts: each ``{"run_id",
         "kind", "end", "reason", "finished"`` (UTC), ``"rms_error_percent"`` (or None), ``"log"``
         (the sample log's path, or None)``}``."""
         return self.request("runs")["runs"]

@@ -26,4 +26,8 @@ std::optional<compensation::MimoModelFile> load_mimo_model_file(const std::strin
 /// Writes one atomically.
 void save_mimo_model_file(const std::string& path, const compensation::MimoModelFile& file);
 
+/// Writes any JSON document atomically (temp file + rename), indented; throws
+/// std::runtime_error naming the file.
+void save_json_document(const std::string& path, const nlohmann::json& doc);
+
 }  // namespace hystbench::common

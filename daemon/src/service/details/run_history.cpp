@@ -1,10 +1,16 @@
 #include "service/details/run_history.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <stdexcept>
+#include <vector>
 
 #include "hystbench/common/command_error.hpp"
+#include "hystbench/common/model_file_io.hpp"
+#include "hystbench/daemon/service/sample_log_writer.hpp"
 #include "service/details/utc_clock.hpp"
 
 namespace hystbench::daemon::details {
@@ -12,6 +18,8 @@ namespace hystbench::daemon::details {
 using nlohmann::json;
 
 namespace {
+
+constexpr std::string_view kSuffix = ".result.json";
 
 json finite_number(const json& object, const char* key) {
   if (!object.is_object()) return nullptr;
@@ -55,15 +63,61 @@ json string_or_null(const json& result, const char* key) {
 
 }  // namespace
 
-RunHistory::RunHistory(std::size_t max_runs, std::size_t max_faults)
-    : max_runs_(max_runs), max_faults_(max_faults) {
+RunHistory::RunHistory(std::filesystem::path folder, std::size_t max_runs, std::size_t max_faults)
+    : folder_(std::move(folder)), max_runs_(max_runs), max_faults_(max_faults) {
   if (max_runs == 0 || max_faults == 0) {
     throw std::invalid_argument("run history: keeps at least one run and one fault");
+  }
+  if (!folder_.empty()) read_folder();
+}
+
+void RunHistory::read_folder() {
+  std::error_code ec;
+  std::vector<std::pair<std::filesystem::file_time_type, std::filesystem::path>> files;
+  for (const auto& entry : std::filesystem::directory_iterator(folder_, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() > kSuffix.size() && name.ends_with(kSuffix)) {
+      files.emplace_back(entry.last_write_time(ec), entry.path());
+    }
+  }
+  // The newest max_runs results, read newest first; kept oldest first, so that each keep() puts
+  // the newer in front.
+  std::sort(files.rbegin(), files.rend());
+  std::vector<json> docs;
+  for (std::size_t i = 0; i < files.size() && docs.size() < max_runs_; ++i) {
+    std::ifstream in(files[i].second);
+    json doc = json::parse(in, nullptr, false);
+    if (doc.is_discarded() || !doc.is_object() || !doc.contains("result") ||
+        !doc["result"].is_object() || !doc.value("finished", json()).is_string()) {
+      spdlog::warn("run history: {} is not a run's result; skipped", files[i].second.string());
+      continue;
+    }
+    docs.push_back(std::move(doc));
+  }
+  for (auto it = docs.rbegin(); it != docs.rend(); ++it) {
+    keep((*it)["result"], (*it)["finished"].get<std::string>());
   }
 }
 
 void RunHistory::add(const json& result) {
   const std::string finished = utc_now_iso8601();
+  {
+    std::lock_guard lock(mutex_);
+    keep(result, finished);
+  }
+  const std::string run_id = result.value("run_id", "");
+  if (folder_.empty() || !valid_sample_log_id(run_id)) return;
+  try {
+    std::filesystem::create_directories(folder_);
+    common::save_json_document((folder_ / (run_id + std::string(kSuffix))).string(),
+                               {{"finished", finished}, {"result", result}});
+  } catch (const std::exception& e) {
+    spdlog::warn("run history: the result of {} is not kept across a restart: {}", run_id,
+                 e.what());
+  }
+}
+
+void RunHistory::keep(const json& result, const std::string& finished) {
   json summary = {{"run_id", result.value("run_id", "")},
                   {"kind", result.value("kind", "")},
                   {"end", result.value("end", "")},
@@ -71,7 +125,6 @@ void RunHistory::add(const json& result) {
                   {"finished", finished},
                   {"rms_error_percent", headline_error(result)},
                   {"log", string_or_null(result, "log")}};
-  std::lock_guard lock(mutex_);
   if (summary["end"] == "fault") {
     faults_.push_front({{"time", finished},
                         {"run_id", summary["run_id"]},
@@ -95,9 +148,9 @@ json RunHistory::run(const std::string& run_id) const {
   const auto it = std::find_if(runs_.begin(), runs_.end(),
                                [&](const Entry& e) { return e.summary["run_id"] == run_id; });
   if (it != runs_.end()) return it->result;
-  throw common::CommandError("unknown_run", "no run '" + run_id + "' since the daemon started (" +
-                                                std::to_string(runs_.size()) +
-                                                " kept; `runs` lists them)");
+  throw common::CommandError(
+      "unknown_run",
+      "no run '" + run_id + "' kept (" + std::to_string(runs_.size()) + " are; `runs` lists them)");
 }
 
 json RunHistory::faults() const {

@@ -1,9 +1,12 @@
 #pragma once
-// The runs since the daemon started, newest first: each run's result as run.finished gave it,
-// a one-line summary of it for lists, and the faults among them. Bounded (the oldest go first).
-// Thread-safe (its own lock); not real-time safe.
+// The runs, newest first: each run's result as run.finished gave it, a one-line summary of it
+// for lists, and the faults among them. Bounded (the oldest go first). With a folder, each
+// result is also kept there as <run_id>.result.json ({"finished", "result"}) and the newest of
+// them are read back at construction: the list outlives a restart. Thread-safe (its own lock);
+// not real-time safe.
 #include <cstddef>
 #include <deque>
+#include <filesystem>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -12,11 +15,15 @@ namespace hystbench::daemon::details {
 
 class RunHistory {
  public:
-  /// Keeps the last max_runs results and the last max_faults faults, both >= 1.
-  explicit RunHistory(std::size_t max_runs = 200, std::size_t max_faults = 50);
+  /// Keeps the last max_runs results and the last max_faults faults, both >= 1; `folder` (empty:
+  /// none) holds them across restarts: the newest max_runs there are read now (a file that is not
+  /// one of them is skipped, named in the log).
+  explicit RunHistory(std::filesystem::path folder = {}, std::size_t max_runs = 200,
+                      std::size_t max_faults = 50);
 
   /// A finished run's result (an object with run_id, kind, end, reason, ...). Stamped with the
-  /// time it is added (UTC).
+  /// time it is added (UTC) and written to the folder (a failure is logged: the run's own log
+  /// holds its samples whatever happens here).
   void add(const nlohmann::json& result);
   /// {"runs": [{"run_id", "kind", "end", "reason", "finished", "rms_error_percent", "log"}, ...]},
   /// newest first. rms_error_percent: a tracking run's, else the model's; identify's
@@ -32,6 +39,11 @@ class RunHistory {
     nlohmann::json summary;
     nlohmann::json result;
   };
+  /// The entry and, for a fault, the fault log's line (mutex_ held).
+  void keep(const nlohmann::json& result, const std::string& finished);
+  void read_folder();
+
+  std::filesystem::path folder_;
   std::size_t max_runs_;
   std::size_t max_faults_;
   mutable std::mutex mutex_;

@@ -307,7 +307,7 @@ class Bench {
   double dt_;
 
   std::mutex commands_mutex_;  // one command at a time, whichever thread sends it
-  std::unique_ptr<details::RunHistory> history_;  // the runs since start (its own lock)
+  std::unique_ptr<details::RunHistory> history_;  // the runs, kept in log_dir (its own lock)
   mutable std::mutex mutex_;                      // guards everything below
   nlohmann::json web_view_;                       // status "http"
   std::optional<compensation::ModelFile> model_;
