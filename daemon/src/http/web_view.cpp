@@ -3,7 +3,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <string_view>
@@ -16,6 +15,7 @@
 #include "hystbench/daemon/http/scope_feed.hpp"
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/service/bench.hpp"
+#include "service/details/command_table.hpp"
 
 // After Eigen (through bench.hpp): httplib.h brings <resolv.h>, whose _res macro breaks Eigen's
 // declarations that follow it.
@@ -31,10 +31,6 @@ namespace {
 // numbers count up from 1).
 constexpr std::uint64_t kWebViewClient = std::numeric_limits<std::uint64_t>::max();
 constexpr std::size_t kKeptEvents = 64;
-
-// Commands that only read: the view answers them without control and without the token.
-constexpr std::array<std::string_view, 6> kReadOnlyCommands = {
-    "status", "runs", "run.get", "model.get", "model.list", "config.get"};
 
 constexpr const char* kPaths =
     "/, /api/view, /api/status, /api/runs, /api/runs/RUN_ID, /api/runs/RUN_ID/samples, "
@@ -149,8 +145,11 @@ void WebView::start() {
       }));
   s.set_exception_handler(
       [](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+        // A route's refusal is the bench's CommandError, answered as the socket names it.
         try {
           std::rethrow_exception(std::move(ep));
+        } catch (const common::CommandError& e) {
+          refuse(res, status_of(e), e.code(), e.what());
         } catch (const std::exception& e) {
           refuse(res, 500, "internal", e.what());
         } catch (...) {
@@ -211,11 +210,7 @@ void WebView::add_routes() {
   // Reads through the bench's command table, as the socket's clients do.
   auto read_command = [this](const char* cmd) {
     return [this, cmd](const httplib::Request&, httplib::Response& res) {
-      try {
-        reply_json(res, bench_.handle(cmd, json::object(), kWebViewClient));
-      } catch (const common::CommandError& e) {
-        refuse(res, status_of(e), e.code(), e.what());
-      }
+      reply_json(res, bench_.handle(cmd, json::object(), kWebViewClient));
     };
   };
   s.Get("/api/status", read_command("status"));
@@ -238,11 +233,7 @@ void WebView::add_routes() {
   });
   s.Get(R"(/api/runs/([A-Za-z0-9._-]{1,128}))", [this](const httplib::Request& req,
                                                        httplib::Response& res) {
-    try {
-      reply_json(res, bench_.handle("run.get", {{"run_id", req.matches[1].str()}}, kWebViewClient));
-    } catch (const common::CommandError& e) {
-      refuse(res, status_of(e), e.code(), e.what());
-    }
+    reply_json(res, bench_.handle("run.get", {{"run_id", req.matches[1].str()}}, kWebViewClient));
   });
   s.Get(R"(/api/runs/([A-Za-z0-9._-]{1,128})/samples)", [this](const httplib::Request& req,
                                                                httplib::Response& res) {
@@ -257,11 +248,7 @@ void WebView::add_routes() {
       }
       points = static_cast<std::size_t>(v);
     }
-    try {
-      reply_json(res, details::decimated_run_log(options_.log_dir, req.matches[1].str(), points));
-    } catch (const common::CommandError& e) {
-      refuse(res, status_of(e), e.code(), e.what());
-    }
+    reply_json(res, details::decimated_run_log(options_.log_dir, req.matches[1].str(), points));
   });
   s.Get("/api/timing", [this](const httplib::Request&, httplib::Response& res) {
     const LoopStatisticsSnapshot t = bench_.loop().statistics();
@@ -294,8 +281,8 @@ void WebView::command(const httplib::Request& req, httplib::Response& res) {
     refuse(res, 400, "bad_request", "params: not an object");
     return;
   }
-  const bool read_only =
-      std::find(kReadOnlyCommands.begin(), kReadOnlyCommands.end(), cmd) != kReadOnlyCommands.end();
+  // Commands that only read are answered without control and without the token.
+  const bool read_only = details::command_reads_only(cmd);
   if (!read_only) {
     if (!options_.control) {
       refuse(res, 403, "control_off",

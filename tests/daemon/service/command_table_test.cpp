@@ -112,3 +112,14 @@ TEST(CommandTable, RequestGettersGiveTheFallbackOrTheCheckedValue) {
   const hdd::RequestParams none(json(), track.params);
   EXPECT_DOUBLE_EQ(none.number("kp", 0.5), 0.5);
 }
+
+TEST(CommandTable, OnlyTheCommandsThatReadAreMarkedSo) {
+  for (const char* reads : {"status", "runs", "run.get", "model.get", "model.list", "config.get"}) {
+    EXPECT_TRUE(hdd::command_reads_only(reads)) << reads;
+  }
+  for (const char* changes : {"identify", "track", "excite", "frf", "tune", "stop", "abort",
+                              "reset", "model.load", "model.delete", "upload.begin"}) {
+    EXPECT_FALSE(hdd::command_reads_only(changes)) << changes;
+  }
+  EXPECT_FALSE(hdd::command_reads_only("fly"));
+}

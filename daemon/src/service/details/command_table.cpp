@@ -98,7 +98,8 @@ std::span<const Command> bench_commands() {
       {"status",
        nullptr,
        {},
-       [](Bench& b, const RequestParams&, std::uint64_t) { return b.status(); }},
+       [](Bench& b, const RequestParams&, std::uint64_t) { return b.status(); },
+       true},
       {"identify", nullptr, kIdentify,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.start_identify(r); }},
       {"track", "reference_upload", kTrackUploaded,
@@ -142,7 +143,8 @@ std::span<const Command> bench_commands() {
       {"model.get",
        nullptr,
        {},
-       [](Bench& b, const RequestParams&, std::uint64_t) { return b.model_get(); }},
+       [](Bench& b, const RequestParams&, std::uint64_t) { return b.model_get(); },
+       true},
       {"model.load", nullptr, kModelLoad,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.load_model(r); }},
       {"model.delete", nullptr, kModelDelete,
@@ -150,27 +152,41 @@ std::span<const Command> bench_commands() {
       {"model.list",
        nullptr,
        {},
-       [](Bench& b, const RequestParams&, std::uint64_t) { return b.list_models(); }},
+       [](Bench& b, const RequestParams&, std::uint64_t) { return b.list_models(); },
+       true},
       {"runs",
        nullptr,
        {},
-       [](Bench& b, const RequestParams&, std::uint64_t) { return b.history_->runs(); }},
+       [](Bench& b, const RequestParams&, std::uint64_t) { return b.history_->runs(); },
+       true},
       {"run.get", nullptr, kRunGet,
        [](Bench& b, const RequestParams& r, std::uint64_t) {
          if (!r.has("run_id")) {
            throw common::CommandError("bad_params", "run_id: missing (`runs` lists them)");
          }
          return b.history_->run(r.string("run_id", ""));
-       }},
+       },
+       true},
       {"config.get",
        nullptr,
        {},
-       [](Bench& b, const RequestParams&, std::uint64_t) { return b.settings_.config_json; }},
+       [](Bench& b, const RequestParams&, std::uint64_t) { return b.settings_.config_json; },
+       true},
   };
   return kCommands;
 }
 
 std::span<const ParamSpec> track_builtin_params() { return kTrackBuiltin; }
+
+bool command_reads_only(const std::string& name) {
+  bool found = false;
+  for (const Command& c : bench_commands()) {
+    if (name != c.name) continue;
+    if (!c.reads_only) return false;
+    found = true;
+  }
+  return found;
+}
 
 const Command& find_command(const std::string& name, const json& params) {
   const Command* fallback = nullptr;

@@ -20,6 +20,9 @@ struct Command {
   const char* when_key;
   std::span<const ParamSpec> params;
   nlohmann::json (*handle)(Bench& bench, const RequestParams& request, std::uint64_t client);
+  /// The command only reads: it changes neither the bench nor its models (a read-only front
+  /// end, such as the live view without control, answers it).
+  bool reads_only = false;
 };
 
 /// Every command, in the order unknown_command lists them.
@@ -27,6 +30,9 @@ std::span<const Command> bench_commands();
 
 /// The row for `name` and these params; throws CommandError unknown_command listing every name.
 const Command& find_command(const std::string& name, const nlohmann::json& params);
+
+/// Whether command `name` only reads (every row of it does); false for an unknown name.
+bool command_reads_only(const std::string& name);
 
 /// The parameters of track with a built-in reference: a stage's track reads the keys it shares
 /// with one axis's (compensator, precondition, gains, learning) through them.
