@@ -469,7 +469,9 @@ def run_with_control(args, procs, tmp, websocket):
     dev = launch_browser(procs, args.chromium, os.path.join(tmp, "b2"), websocket)
     dev.call("Page.enable")
     dev.call("Page.navigate", url=base + "/")
-    dev.wait_for("!document.getElementById('control').hidden", 10, "the control panel")
+    # Until the navigation commits the tab still shows about:blank, which has no panel.
+    dev.wait_for("(() => { const c = document.getElementById('control');"
+                 " return !!c && !c.hidden; })()", 10, "the control panel")
 
     def press(token, button):
         dev.eval("(() => { const t = document.getElementById('token'); t.value = %s;"
