@@ -90,6 +90,14 @@ constexpr ParamSpec kModelLoad[] = {
      "sends) or the name of a model in the daemon's model folder ('stored'); the daemon never "
      "opens a path a client names"}};
 
+// run.get: the kept result of run_id, which the request must name.
+json run_get(const RunHistory& history, const RequestParams& request) {
+  if (!request.has("run_id")) {
+    throw common::CommandError("bad_params", "run_id: missing (`runs` lists them)");
+  }
+  return history.run(request.string("run_id", ""));
+}
+
 }  // namespace
 
 std::span<const Command> bench_commands() {
@@ -160,12 +168,7 @@ std::span<const Command> bench_commands() {
        [](Bench& b, const RequestParams&, std::uint64_t) { return b.history_->runs(); },
        true},
       {"run.get", nullptr, kRunGet,
-       [](Bench& b, const RequestParams& r, std::uint64_t) {
-         if (!r.has("run_id")) {
-           throw common::CommandError("bad_params", "run_id: missing (`runs` lists them)");
-         }
-         return b.history_->run(r.string("run_id", ""));
-       },
+       [](Bench& b, const RequestParams& r, std::uint64_t) { return run_get(*b.history_, r); },
        true},
       {"config.get",
        nullptr,
