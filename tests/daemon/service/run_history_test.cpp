@@ -22,6 +22,7 @@ TEST(RunHistory, ListsNewestFirstWithTheFigureEachKindOfRunStates) {
   h.add({{"run_id", "b"},
          {"kind", "identify"},
          {"end", "completed"},
+         {"model_rms_error_percent", 5.0},  // the straight line's before any model
          {"verification", {{"rms_error_percent", 0.2}}}});
   h.add({{"run_id", "c"},
          {"kind", "track"},
@@ -109,4 +110,17 @@ TEST_F(RunHistoryFolder, TheListOutlivesARestartAndSkipsWhatIsNotAResult) {
   ASSERT_EQ(again.faults().size(), 1u);
   EXPECT_EQ(again.faults()[0]["reason"], "sensor stuck");
   EXPECT_EQ(runs[1]["finished"].get<std::string>().size(), 20u);
+}
+
+TEST(RunHistory, IdentifysOwnModelErrorIsNotItsFigureButAnExcitesIs) {
+  hdd::RunHistory h;
+  h.add(
+      {{"run_id", "i"}, {"kind", "identify"}, {"end", "fault"}, {"model_rms_error_percent", 5.0}});
+  h.add({{"run_id", "e"},
+         {"kind", "excite"},
+         {"end", "completed"},
+         {"model_rms_error_percent", 0.7}});
+  const json runs = h.runs()["runs"];
+  EXPECT_EQ(runs[0]["rms_error_percent"], 0.7);         // the model's error on the excitation
+  EXPECT_TRUE(runs[1]["rms_error_percent"].is_null());  // a model before it, or none: not its own
 }

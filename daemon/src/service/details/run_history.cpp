@@ -28,31 +28,33 @@ json finite_number(const json& object, const char* key) {
                                                                                    : json(nullptr);
 }
 
-// The figure a list shows for a run: its tracking error, else its model's; identify's, the
-// verification's through its model; a stage's, its worst axis's (a stage identify's, the worst
-// held-out error of its axes' fits); else none.
-json headline_error(const json& result) {
-  for (const char* key : {"rms_error_percent", "model_rms_error_percent"}) {
-    if (json v = finite_number(result, key); !v.is_null()) return v;
+// The worst of a stage's axes' `key` (holder["axes"][axis][key]); null when none has it.
+json worst_axis(const json& holder, const char* key) {
+  json worst = nullptr;
+  const auto axes = holder.is_object() ? holder.find("axes") : holder.end();
+  if (axes == holder.end() || !axes->is_object()) return worst;
+  for (const auto& [name, axis] : axes->items()) {
+    json e = finite_number(axis, key);
+    if (!e.is_null() && (worst.is_null() || e.get<double>() > worst.get<double>())) worst = e;
   }
+  return worst;
+}
+
+// The figure a list shows for a run, the first there is of: its tracking error (a stage's worst
+// axis's); identify's verification through its model (a stage identify's worst held-out fit);
+// the model's error on the run (excite). Identify's own model error is not one: it is the
+// previous model's, or the straight line's before any.
+json headline_error(const json& result) {
+  if (json e = finite_number(result, "rms_error_percent"); !e.is_null()) return e;
+  if (json e = worst_axis(result, "rms_error_percent"); !e.is_null()) return e;
   if (const auto v = result.find("verification"); v != result.end()) {
     if (json e = finite_number(*v, "rms_error_percent"); !e.is_null()) return e;
   }
-  // A stage: its worst axis's tracking error, or (identify) its worst axis's held-out error.
-  const auto worst_axis = [](const json& holder, const char* key) {
-    json worst = nullptr;
-    const auto axes = holder.is_object() ? holder.find("axes") : holder.end();
-    if (axes == holder.end() || !axes->is_object()) return worst;
-    for (const auto& [name, axis] : axes->items()) {
-      json e = finite_number(axis, key);
-      if (!e.is_null() && (worst.is_null() || e.get<double>() > worst.get<double>())) worst = e;
-    }
-    return worst;
-  };
-  if (json e = worst_axis(result, "rms_error_percent"); !e.is_null()) return e;
-  const auto stage_model = result.find("stage_model");
-  return stage_model == result.end() ? json(nullptr)
-                                     : worst_axis(*stage_model, "heldout_rms_error_percent");
+  if (const auto stage_model = result.find("stage_model"); stage_model != result.end()) {
+    if (json e = worst_axis(*stage_model, "heldout_rms_error_percent"); !e.is_null()) return e;
+  }
+  if (result.value("kind", "") == "identify") return nullptr;
+  return finite_number(result, "model_rms_error_percent");
 }
 
 json string_or_null(const json& result, const char* key) {

@@ -26,8 +26,8 @@ class RunHistory {
   /// holds its samples whatever happens here).
   void add(const nlohmann::json& result);
   /// {"runs": [{"run_id", "kind", "end", "reason", "finished", "rms_error_percent", "log"}, ...]},
-  /// newest first. rms_error_percent: a tracking run's, else the model's; identify's
-  /// verification's; a stage's worst axis's (a stage identify's fits' held-out); else null.
+  /// newest first. rms_error_percent: see headline_error() in run_history.cpp (a track's, an
+  /// identify's verification, an excite's model error, a stage's worst axis); else null.
   nlohmann::json runs() const;
   /// The result of run `run_id`; throws CommandError unknown_run naming the ones kept.
   nlohmann::json run(const std::string& run_id) const;
