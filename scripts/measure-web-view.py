@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The loop's execution time with the live view open in a browser, against none (issue: exec p99
+"""The loop's execution time with the live view open in a browser, against none (target: exec p99
 within 10 % of its value without a browser).
 
   scripts/measure-web-view.py [--daemon build/bin/hystbenchd] [--cli build/bin/hystbench]

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The service's sandbox with the live view's drop-in (systemd/hystbenchd-http.conf) merged in:
-# `systemd-analyze security --offline=true` must score it at most 2.5 (the issue's bound).
+# `systemd-analyze security --offline=true` must score it at most 2.5.
 # Usage: tests/systemd_security.sh SOURCE_DIR. Exit 77 (skipped) without systemd-analyze.
 set -euo pipefail
 src=$1

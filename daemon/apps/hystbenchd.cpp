@@ -5,10 +5,8 @@
 #include <systemd/sd-daemon.h>
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <cerrno>
 #include <chrono>
-#include <cmath>
 #include <iostream>
 #include <optional>
 

@@ -1,6 +1,6 @@
 // The live view over HTTP (http/web_view.hpp) on an in-process bench: the page from memory, the
 // bench's reads through the command table, a run in the list with its plot, the scope stream,
-// and every refusal the issue names: no token, bad token, read-only, oversized, unknown path,
+// and every refusal of bad input: no token, bad token, read-only, oversized, unknown path,
 // a client that stops reading (dropped, the others served), one that vanishes.
 #include "hystbench/daemon/http/web_view.hpp"
 
