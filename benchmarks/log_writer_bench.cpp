@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <thread>
 
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 
 namespace hd = hystbench::daemon;
 

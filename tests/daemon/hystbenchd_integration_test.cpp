@@ -300,8 +300,8 @@ TEST(HystbenchdService, AnIdentifiedModelWithItsResponsesLoadsIntoAnotherDaemon)
   const fs::path config = dir / "simulated.toml";
   std::ofstream(config) << toml.str();
   auto cli_json = [](const std::string& socket, const std::string& args) {
-    const std::string cmd = std::string(HYSTBENCH_BIN_DIR) + "/hystbench --socket " + socket +
-                            " " + args + " --json 2>&1";
+    const std::string cmd = std::string(HYSTBENCH_BIN_DIR) + "/hystbench --socket " + socket + " " +
+                            args + " --json 2>&1";
     std::string output;
     FILE* p = ::popen(cmd.c_str(), "r");
     char buf[4096];

@@ -11,14 +11,15 @@
 #include "runs/details/excite_program.hpp"
 #include "runs/details/feedback_design.hpp"
 #include "runs/details/identify_program.hpp"
-#include "runs/details/identify_session.hpp"
 #include "runs/details/learned_drive.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/run_result.hpp"
 #include "runs/details/stage_runs.hpp"
 #include "runs/details/track_program.hpp"
 #include "service/details/command_table.hpp"
+#include "service/details/identify_session.hpp"
 #include "service/details/model_folder.hpp"
+#include "service/details/model_store.hpp"
 #include "service/details/run_history.hpp"
 
 namespace hystbench::daemon {
@@ -47,6 +48,7 @@ const char* state_name(BenchLoop::State s) {
 Bench::Bench(BenchSettings settings)
     : settings_(std::move(settings)),
       history_(std::make_unique<details::RunHistory>(settings_.log_dir)),
+      models_(std::make_unique<details::ModelStore>(settings_.model_dir)),
       plans_(std::make_shared<details::PlanCache>()),
       feedback_plans_(std::make_shared<details::FeedbackPlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;
@@ -240,9 +242,7 @@ json Bench::model_get() const {
       throw common::CommandError("no_model", "no stage model (identify the stage first)");
     return stage_status();
   }
-  if (!model_)
-    throw common::CommandError("no_model", "no active model (identify or model.load first)");
-  return {{"path", model_path_}, {"model", hc::to_json(*model_)}};
+  return models_->get();
 }
 
 void Bench::client_closed(std::uint64_t client) { uploads_.drop_client(client); }
@@ -271,13 +271,7 @@ json Bench::status() const {
   } else {
     s["run"] = nullptr;
   }
-  if (model_) {
-    s["model"] = {{"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
-                  {"path", model_path_},
-                  {"operators", model_->model.hysteresis().operator_count()}};
-  } else {
-    s["model"] = nullptr;
-  }
+  s["model"] = models_->summary();
   s["loop"] = {{"rate_hz", settings_.loop.rate_hz},
                {"clock", to_string(settings_.loop.clock)},
                {"realtime", realtime_.summary(settings_.loop.realtime)},
@@ -314,30 +308,18 @@ nlohmann::json Bench::load_model(const details::RequestParams& request) {
     throw common::CommandError("busy", "a run is active; load the model after it");
   }
   if (is_stage()) return load_stage_model(request);
-  details::FolderModel m =
-      stored ? details::load_stored_model(settings_.model_dir, request.string("stored", ""))
-             : details::keep_model_document(settings_.model_dir, request.string("name", "uploaded"),
-                                            request.params()["model"]);
-  const auto inv = m.file.model.hysteresis().invertibility();
-  model_ = std::move(m.file);
-  model_path_ = m.path;
-  ++model_generation_;
-  return {{"path", model_path_},
-          {"name", std::filesystem::path(m.path).filename().string()},
-          {"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
-          {"invertible", inv.invertible},
-          {"reason", inv.reason}};
+  if (stored) return models_->load(request.string("stored", ""), "", nullptr);
+  return models_->load(std::nullopt, request.string("name", "uploaded"), request.params()["model"]);
 }
 
 nlohmann::json Bench::list_models() const {
   std::lock_guard lock(mutex_);
-  return details::list_model_folder(settings_.model_dir, active_model_paths());
+  return models_->list(active_model_paths());
 }
 
 nlohmann::json Bench::delete_model(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
-  return details::delete_from_model_folder(settings_.model_dir, request.string("name", ""),
-                                           active_model_paths());
+  return models_->remove(request.string("name", ""), active_model_paths());
 }
 
 void Bench::require_idle() const {
@@ -359,8 +341,13 @@ Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json&
 }
 
 details::RunContext Bench::run_context() const {
-  return {settings_, model_ ? &*model_ : nullptr,         loop_->last_output(), model_generation_,
-          plans_,    responses_ ? &*responses_ : nullptr, feedback_plans_};
+  return {settings_,
+          models_->active(),
+          loop_->last_output(),
+          models_->generation(),
+          plans_,
+          models_->measured_responses(),
+          feedback_plans_};
 }
 
 json Bench::launch(const char* kind, details::BuiltRun run) {
@@ -531,106 +518,6 @@ void Bench::emit_progress(bool started) {
       {"total", total},          {"fraction", total ? static_cast<double>(done) / total : 0.0}};
   if (run.contains("stage")) event["stage"] = run["stage"];  // identify's verification
   emit(event);
-}
-
-void Bench::learn() {
-  details::TrackLearning* learning = nullptr;
-  std::string run_id;
-  {
-    std::lock_guard lock(mutex_);
-    if (!learning_ || phase_ != RunPhase::kRunning) return;
-    learning = learning_.get();
-    run_id = learning_run_id_;
-  }
-  // Its exchange lives in the program the loop plays (handed back to this thread when it ends).
-  const RunProgram* active = loop_->active();
-  if (active == nullptr || active->run_id != run_id) return;
-  announce_trials(*learning, run_id);
-  learn_other_axes();
-}
-
-void Bench::announce_trials(details::TrackLearning& learning, const std::string& run_id) {
-  // The last trial's number: trial 0, its repeat (trial 1), then the learned ones.
-  const std::size_t learned = learning.request().trials;
-  const std::size_t asked = learned > 0 ? learned + 1 : 0;
-  std::vector<details::TrackLearning::Trial> scored;
-  try {
-    scored = learning.poll();
-  } catch (const std::exception& e) {
-    learning.fail(e.what());  // the loop must not wait for a drive that will not come
-    spdlog::error("run {}: the learning failed: {}", run_id, e.what());
-  }
-  for (const details::TrackLearning::Trial& t : scored) {
-    char rms[32];
-    std::snprintf(rms, sizeof rms, "%.3f", t.rms_percent);
-    const std::string stage = "learning: trial " + std::to_string(t.trial) + " of " +
-                              std::to_string(asked) + ", rms " + rms + " %";
-    {
-      std::lock_guard lock(mutex_);
-      if (!active_run_.is_null()) active_run_["stage"] = stage;
-    }
-    emit({{"event", "run.progress"},
-          {"run_id", run_id},
-          {"kind", "track"},
-          {"stage", stage},
-          {"fraction", static_cast<double>(t.trial + 1) / static_cast<double>(asked + 1)},
-          {"learning",
-           {{"trial", t.trial},
-            {"trials", asked},
-            {"rms_error_percent", t.rms_percent},
-            {"max_error_percent", t.max_percent},
-            {"drive", t.drive}}}});
-  }
-}
-
-void Bench::finish_learning(const RunProgram& run, json& report) {
-  std::unique_ptr<details::TrackLearning> learning;
-  std::string model_path;  // the model the run played with (a run holds model.load off)
-  {
-    std::lock_guard lock(mutex_);
-    if (!learning_ || run.run_id != learning_run_id_) return;
-    learning = std::move(learning_);
-    learning_run_id_.clear();
-    model_path = model_path_;
-  }
-  announce_trials(*learning, run.run_id);  // the last trial, closed as the run ended
-  json l = learning->result();
-  if (const auto last = learning->last_trial()) {
-    // The run's figures are its last trial's (the log keeps every period).
-    report["rms_error_um"] = last->rms_um;
-    report["max_error_um"] = last->max_um;
-    report["rms_error_percent"] = last->rms_percent;
-    report["max_error_percent"] = last->max_percent;
-    report["max_error_index"] = last->max_tick;
-  }
-  keep_learned_drive(
-      *learning, run.run_id,
-      model_path.empty() ? std::string() : std::filesystem::path(model_path).filename().string(),
-      report.value("tare_um", 0.0), json::object(), l);
-  report["learning"] = std::move(l);
-}
-
-void Bench::keep_learned_drive(const details::TrackLearning& learning, const std::string& name,
-                               const std::string& model_file, double tare_um, const json& more,
-                               json& l) const {
-  const std::vector<double>& drive = learning.kept_drive();
-  const details::LearningRequest& r = learning.request();
-  // A replay (no trial learned) keeps nothing new: its drive is the one it started from.
-  if (drive.empty() || r.trials == 0) return;
-  try {
-    json meta = {{"range_um", r.range_um},
-                 {"model", model_file.empty() ? json() : json(model_file)},
-                 {"started_from", r.start_name.empty() ? json() : json(r.start_name)},
-                 {"compensator_offset_um", learning.target_offset(tare_um)},
-                 {"last_trial", l["trials"].empty() ? json() : l["trials"].back()}};
-    meta.update(more);
-    l["drive_file"] =
-        details::save_learned_drive(settings_.model_dir, name, drive, learning.kept_compensator(),
-                                    dt_, details::learned_for(r, drive.size()), meta);
-    l["drive"] = name + "-learned";
-  } catch (const std::exception& e) {
-    l["drive_file_error"] = e.what();
-  }
 }
 
 bool Bench::preparation_queued() const {

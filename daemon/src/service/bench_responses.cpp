@@ -7,12 +7,13 @@
 
 #include "hystbench/common/model_file_io.hpp"
 #include "runs/details/feedback_design.hpp"
-#include "runs/details/identify_session.hpp"
+#include "runs/details/request_params.hpp"
 #include "runs/details/response_program.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/run_result.hpp"
 #include "runs/details/stage_runs.hpp"
-#include "service/details/request_params.hpp"
+#include "service/details/identify_session.hpp"
+#include "service/details/model_store.hpp"
 
 namespace hystbench::daemon {
 
@@ -20,13 +21,6 @@ namespace hc = compensation;
 using nlohmann::json;
 
 namespace {
-
-// The responses the bench would design on: the active model's, else its last measured.
-const hc::StageResponses* current_responses(const std::optional<hc::ModelFile>& model,
-                                            const std::optional<hc::StageResponses>& bench) {
-  if (model && model->responses) return &*model->responses;
-  return bench ? &*bench : nullptr;
-}
 
 // The compensator a result's design is for: inverse+pid with a model, pid without.
 hc::CompensatorKind default_feedback(bool model) {
@@ -71,21 +65,11 @@ void Bench::responses_finished(std::unique_ptr<RunProgram> run, details::RunResu
     try {
       hc::StageResponses r = details::measure_responses(*run, *options);
       std::lock_guard lock(mutex_);
-      report["frequency_response"] =
-          details::responses_summary(r, current_responses(model_, responses_));
+      report["frequency_response"] = details::responses_summary(r, models_->design_responses());
       report["frequency_response"]["measured"] = hc::to_json(r);
-      responses_ = r;
-      if (model_) {
-        model_->responses = std::move(r);
-        try {
-          if (!model_path_.empty()) common::save_model_file(model_path_, *model_);
-          report["frequency_response"]["kept_in"] = model_path_;
-        } catch (const std::exception& e) {
-          report["frequency_response"]["save_error"] = e.what();
-        }
-      }
+      models_->keep_frf_responses(std::move(r), report["frequency_response"]);
       json why;
-      report["feedback"] = feedback_now(default_feedback(model_.has_value()), &why);
+      report["feedback"] = feedback_now(default_feedback(models_->active() != nullptr), &why);
       if (report["feedback"].is_null()) report["feedback_error"] = why;
     } catch (const std::exception& e) {
       report["frequency_response_error"] = e.what();
@@ -99,7 +83,7 @@ void Bench::responses_finished(std::unique_ptr<RunProgram> run, details::RunResu
 
 json Bench::tune(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
-  const bool has_model = is_stage() ? stage_ != nullptr : model_.has_value();
+  const bool has_model = is_stage() ? stage_ != nullptr : models_->active() != nullptr;
   const std::string name = request.string("compensator", has_model ? "inverse+pid" : "pid");
   const auto kind = hc::compensator_kind_from_string(name);
   if (!kind || !hc::uses_feedback(*kind)) {

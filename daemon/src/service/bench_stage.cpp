@@ -12,6 +12,7 @@
 #include "runs/details/run_result.hpp"
 #include "runs/details/stage_runs.hpp"
 #include "service/details/model_folder.hpp"
+#include "service/details/model_store.hpp"
 
 namespace hystbench::daemon {
 
@@ -32,7 +33,7 @@ json Bench::stage_status() const {
 }
 
 std::vector<std::string> Bench::active_model_paths() const {
-  if (!is_stage()) return {model_path_};
+  if (!is_stage()) return {models_->active_path()};
   std::vector<std::string> paths;
   if (!stage_) return paths;
   for (const std::string& axis : stage_->axes) {
@@ -114,7 +115,7 @@ json Bench::load_stage_model(const details::RequestParams& request) {
     }
   }
   stage_ = std::move(model);
-  ++model_generation_;
+  models_->changed();
   json axes = json::object();
   for (std::size_t a = 0; a < stage_->axes.size(); ++a) {
     const compensation::ModelFile& f = stage_->models[a];

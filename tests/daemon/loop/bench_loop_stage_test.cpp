@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "hystbench/daemon/loop/bench_loop.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 #include "hystbench/drivers/driver.hpp"
 #include "hystbench/sim/simulated_stage.hpp"
 

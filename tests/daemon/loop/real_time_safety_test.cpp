@@ -10,8 +10,8 @@
 
 #include "hystbench/compensation/pid_controller.hpp"
 #include "hystbench/daemon/loop/bench_loop.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 #include "support/allocation_counter.hpp"
 

@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "runs/details/identify_session.hpp"
+#include "service/details/identify_session.hpp"
 
 namespace hd = hystbench::daemon;
 using nlohmann::json;

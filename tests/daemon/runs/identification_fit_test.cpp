@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <vector>
 
-#include "runs/details/identify_session.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
+#include "service/details/identify_session.hpp"
 
 namespace hc = hystbench::compensation;
 namespace hd = hystbench::daemon;

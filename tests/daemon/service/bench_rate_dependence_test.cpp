@@ -30,7 +30,7 @@
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/config/daemon_settings.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hc = hystbench::compensation;

@@ -11,8 +11,8 @@
 #include <thread>
 
 #include "hystbench/cli/offline/data_table.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 #include "hystbench/daemon/service/bench.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
 #include "support/bench_fixture.hpp"
 
 namespace hd = hystbench::daemon;

@@ -16,7 +16,7 @@
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/pi_model.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 #include "support/bench_fixture.hpp"
 

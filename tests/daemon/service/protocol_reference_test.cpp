@@ -123,7 +123,8 @@ TEST(ProtocolReference, ListsEveryCommandAndParameterAsTheDaemonChecksThem) {
     for (const auto& [key, cells] : s.params) {
       bool listed = false;
       for (const auto& name : s.commands) listed = listed || known[name].count(key) != 0;
-      EXPECT_TRUE(listed) << "the page lists '" << key << "', which no command in its section takes";
+      EXPECT_TRUE(listed) << "the page lists '" << key
+                          << "', which no command in its section takes";
     }
   }
 }

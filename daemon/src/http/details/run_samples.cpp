@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "hystbench/common/command_error.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 
 namespace hystbench::daemon::details {
 

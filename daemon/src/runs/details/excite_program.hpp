@@ -2,7 +2,7 @@
 // excite's run: a complete drive upload played open loop after a ramp from the present output
 // within the slew limit, logged for fit and diagnose. Pure (no threads, no files); errors are
 // CommandError naming the offending sample. Not real-time safe.
-#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/daemon/runs/upload_store.hpp"
 #include "runs/details/run_context.hpp"
 
 namespace hystbench::daemon::details {

@@ -6,8 +6,8 @@
 #include <string>
 
 #include "hystbench/sim/identification_excitation.hpp"
+#include "runs/details/request_params.hpp"
 #include "runs/details/run_context.hpp"
-#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 

@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "hystbench/common/command_error.hpp"
-#include "service/details/model_folder.hpp"
+#include "runs/details/folder_name.hpp"
 
 namespace hystbench::daemon::details {
 

@@ -10,8 +10,8 @@
 
 #include "hystbench/compensation/stage_responses.hpp"
 #include "hystbench/sim/frequency_response_excitation.hpp"
+#include "runs/details/request_params.hpp"
 #include "runs/details/run_context.hpp"
-#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 

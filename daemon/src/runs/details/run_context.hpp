@@ -16,8 +16,8 @@
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/stage_responses.hpp"
-#include "hystbench/daemon/runs/run_program.hpp"
-#include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/daemon/config/bench_settings.hpp"
+#include "hystbench/daemon/loop/run_program.hpp"
 #include "runs/details/track_learning.hpp"
 
 namespace hystbench::daemon::details {

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "hystbench/daemon/runs/run_program.hpp"
+#include "hystbench/daemon/loop/run_program.hpp"
 
 namespace hystbench::daemon::details {
 

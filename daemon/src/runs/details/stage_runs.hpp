@@ -17,13 +17,13 @@
 
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/stage_decoupling.hpp"
-#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/daemon/runs/upload_store.hpp"
 #include "hystbench/sim/frequency_response_excitation.hpp"
 #include "hystbench/sim/stage_reference.hpp"
 #include "runs/details/identify_program.hpp"
+#include "runs/details/request_params.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/track_request.hpp"
-#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 

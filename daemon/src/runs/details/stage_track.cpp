@@ -19,9 +19,10 @@
 #include "hystbench/compensation/stage_interaction.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "runs/details/feedback_design.hpp"
+#include "runs/details/run_requests.hpp"
+#include "runs/details/stage_loops_together.hpp"
 #include "runs/details/stage_runs.hpp"
 #include "runs/details/track_program.hpp"
-#include "service/details/command_table.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -301,136 +302,6 @@ json reference_json(const StageTrackRequest& request) {
           {"duration_s", request.builtin.duration_s}};
 }
 
-// The check of the axes' loops together (compensation/stage_interaction.hpp): the worst over
-// the responses every axis measured alike, each loop's gain times `factor`; nullopt without a
-// loop on every axis, or without cross responses.
-struct Interaction {
-  hc::StageInteraction worst;
-  std::string on;  ///< the response it was worst on
-};
-
-std::optional<Interaction> worst_interaction(
-    const StageModel* stage, const std::vector<std::shared_ptr<const FeedbackPlan>>& plans,
-    double factor, double dt) {
-  const std::size_t n = plans.size();
-  if (stage == nullptr || stage->cross.size() != n || n < 2) return std::nullopt;
-  std::size_t responses = std::numeric_limits<std::size_t>::max();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!plans[i] || !stage->models[i].responses) return std::nullopt;
-    responses = std::min(
-        {responses, stage->models[i].responses->responses.size(), plans[i]->plants.size()});
-    for (std::size_t j = 0; j < n; ++j) {
-      if (i != j) responses = std::min(responses, stage->cross[i][j].responses.size());
-    }
-  }
-  if (responses == 0 || responses == std::numeric_limits<std::size_t>::max()) return std::nullopt;
-  std::vector<hc::FeedbackController> controllers;
-  controllers.reserve(n);
-  for (const auto& plan : plans) controllers.emplace_back(with_loop_gain(plan->law, factor), dt);
-  std::optional<Interaction> out;
-  for (std::size_t k = 0; k < responses; ++k) {
-    std::vector<std::vector<hc::MeasuredResponse>> g(n, std::vector<hc::MeasuredResponse>(n));
-    std::vector<std::vector<std::complex<double>>> loops;
-    for (std::size_t i = 0; i < n; ++i) {
-      for (std::size_t j = 0; j < n; ++j) {
-        g[i][j] =
-            i == j ? stage->models[i].responses->responses[k] : stage->cross[i][j].responses[k];
-      }
-      loops.push_back(hc::loop_response(plans[i]->plants[k], controllers[i], dt));
-    }
-    try {
-      hc::StageInteraction s = hc::stage_interaction(g, loops);
-      if (!out || s.peak > out->worst.peak) {
-        out = Interaction{std::move(s), stage->models[0].responses->responses[k].label};
-      }
-    } catch (const std::invalid_argument&) {
-      // The axes' responses do not share lines at this operating point: not comparable.
-    }
-  }
-  return out;
-}
-
-// The largest the check may reach for the loops to run as designed: below 1 they are stable
-// together; 0.7 leaves what the cross responses' estimates and each loop's own gain
-// uncertainty (the design's +/-30 %: 1 / 1.3) may take.
-constexpr double kInteractionLimit = 0.7;
-
-// The axes' loops designed for the coupling: each axis's loop designed on its own responses
-// (kept in its context's cache, where its track program takes it), then checked together; where
-// the check passes the limit, every loop's gain is lowered by the one factor (bisection) that
-// brings it back under, their margins checked again. Null without a loop on every axis or
-// cross responses; else what it did. Gains given by hand run as given (the check reports
-// them); no_design when not even a fiftieth of the designed gain passes.
-json design_loops_together(hc::CompensatorKind kind, const FeedbackGainsRequest& gains,
-                           std::vector<RunContext>& contexts, const StageModel* stage, double dt) {
-  if (!hc::uses_feedback(kind) || stage == nullptr || contexts.size() < 2 ||
-      stage->cross.size() != contexts.size()) {
-    return nullptr;
-  }
-  std::vector<std::shared_ptr<const FeedbackPlan>> plans;
-  for (RunContext& c : contexts) {
-    c.feedback_plans = std::make_shared<FeedbackPlanCache>();
-    plans.push_back(std::make_shared<const FeedbackPlan>(plan_feedback(c, kind, gains)));
-  }
-  const std::optional<Interaction> alone = worst_interaction(stage, plans, 1.0, dt);
-  if (!alone) return nullptr;
-  json out = {{"peak_alone", alone->worst.peak},
-              {"peak_alone_hz", alone->worst.peak_hz},
-              {"limit", kInteractionLimit}};
-  if (alone->worst.peak <= kInteractionLimit) {
-    out["lowered_by"] = 1.0;
-    return out;
-  }
-  if (plans.front()->summary.value("gains", "") != "designed") {
-    out["lowered_by"] = 1.0;
-    out["as_given"] = "gains given by hand run as given: the check above says what they risk";
-    return out;
-  }
-  double low = 0.0, high = 1.0;
-  for (int i = 0; i < 20; ++i) {
-    const double mid = 0.5 * (low + high);
-    const std::optional<Interaction> at = worst_interaction(stage, plans, mid, dt);
-    (at && at->worst.peak <= kInteractionLimit ? low : high) = mid;
-  }
-  if (low < 0.02) {
-    throw CommandError("no_design",
-                       "the axes' loops checked together through the coupling stay "
-                       "above " +
-                           std::to_string(kInteractionLimit) +
-                           " down to a fiftieth of their gain: the coupling is too "
-                           "strong for a loop per axis");
-  }
-  std::ostringstream meaning;
-  meaning << "the axes' loops designed alone reach " << std::setprecision(3) << alone->worst.peak
-          << " together through the coupling (at " << std::setprecision(4) << alone->worst.peak_hz
-          << " Hz); every loop is lowered by one factor until they stay "
-          << "under " << kInteractionLimit;
-  const json why = {
-      {"peak_alone", alone->worst.peak}, {"limit", kInteractionLimit}, {"meaning", meaning.str()}};
-  for (std::size_t a = 0; a < contexts.size(); ++a) {
-    lowered_plan(contexts[a], kind, gains, *plans[a], low, why);
-  }
-  out["lowered_by"] = low;
-  return out;
-}
-
-// The axes' loops checked together, as they run; null without a loop on every axis, or
-// without cross responses.
-json feedback_interaction(const StageModel* stage,
-                          const std::vector<std::shared_ptr<const FeedbackPlan>>& plans,
-                          double dt) {
-  const std::optional<Interaction> worst = worst_interaction(stage, plans, 1.0, dt);
-  if (!worst) return nullptr;
-  return {{"peak", worst->worst.peak},
-          {"peak_hz", worst->worst.peak_hz},
-          {"on", worst->on},
-          {"dominant", worst->worst.dominant()},
-          {"meaning",
-           "the largest spectral radius of E T over the measured lines (E: each cross response "
-           "over the driven axis's own, T: each axis's complementary sensitivity); below 1 the "
-           "axes' loops, each stable alone, are stable together"}};
-}
-
 json decoupling_json(const StageTrackRequest& request, const StageModel* stage, bool decoupled,
                      json dynamic) {
   if (decoupled) {
@@ -442,8 +313,6 @@ json decoupling_json(const StageTrackRequest& request, const StageModel* stage, 
                       : stage == nullptr ? "no stage model: identify first"
                                          : "the compensator has no feedforward"}};
 }
-
-double percent(double um, double range) { return range > 0.0 ? 100.0 * um / range : 0.0; }
 
 // Each axis's feedforward target (null where the compensator takes the reference itself) and
 // the result's `decoupling`.
@@ -730,81 +599,6 @@ json stage_tune(const RunContext& ctx, const StageModel* stage, std::span<const 
     interaction["designed_together"] = std::move(designed_together);
   }
   if (!interaction.is_null()) out["feedback_interaction"] = std::move(interaction);
-  return out;
-}
-
-void replace_with_stage_result(json& report, const RunProgram& run,
-                               std::span<const std::string> axes) {
-  // The first axis's figures, which collect_result() put at the top, belong under `axes`.
-  for (const char* key :
-       {"rms_error_um", "max_error_um", "max_error_index", "range_um", "rms_error_percent",
-        "max_error_percent", "hysteresis_percent", "error_samples", "tare_um", "startup_offset_um",
-        "step", "model_rms_error_um", "model_max_error_um", "model_rms_error_percent",
-        "model_max_error_percent", "model_max_error_index", "feedback", "feedforward"}) {
-    report.erase(key);
-  }
-  report.update(stage_result(run, axes));
-}
-
-json stage_result(const RunProgram& run, std::span<const std::string> axes) {
-  json per_axis = json::object();
-  for (std::size_t a = 0; a < run.axes() && a < axes.size(); ++a) {
-    const RunProgram& p = run.axis(a);
-    json r = run.kind == RunKind::kTrack ? tracking_error_json(p) : json::object();
-    // identify's prediction is the configured range's linear map, not a model: left out.
-    if (run.kind == RunKind::kTrack && p.model_error.samples > 0) {
-      const double rms = std::sqrt(p.model_error.sum2 / static_cast<double>(p.model_error.samples));
-      r["model_rms_error_um"] = rms;
-      r["model_max_error_um"] = p.model_error.max;
-    }
-    // What the axis's compensator was built with (its feedforward's plan, its loop's design).
-    for (const char* key : {"feedforward", "feedback"}) {
-      if (p.summary.contains(key)) r[key] = p.summary[key];
-    }
-    r["clamps"] = p.counters.clamps;
-    r["slew_limits"] = p.counters.slew_limits;
-    r["reference_clips"] = p.counters.reference_clips;
-    per_axis[axes[a]] = std::move(r);
-  }
-  json out = {{"axes", per_axis}};
-  if (run.kind != RunKind::kTrack || run.axes() < 2) return out;
-  std::size_t samples = run.records.count;
-  for (std::size_t a = 0; a < run.axes(); ++a)
-    samples = std::min(samples, run.axis(a).records.count);
-  if (samples < 10) return out;
-  const auto n = static_cast<Eigen::Index>(run.axes());
-  Eigen::MatrixXd errors(n, static_cast<Eigen::Index>(samples));
-  Eigen::MatrixXd outputs(n, static_cast<Eigen::Index>(samples));
-  for (Eigen::Index a = 0; a < n; ++a) {
-    const RunRecords& rec = run.axis(static_cast<std::size_t>(a)).records;
-    for (std::size_t k = 0; k < samples; ++k) {
-      errors(a, static_cast<Eigen::Index>(k)) = rec.y[k] - rec.yr[k];
-      outputs(a, static_cast<Eigen::Index>(k)) = rec.y[k];
-    }
-  }
-  hc::CouplingErrorLeft left;
-  try {
-    left = hc::coupling_error_left(errors, outputs);
-  } catch (const std::exception& e) {
-    out["coupling_error"] = {{"why_not", e.what()}};
-    return out;
-  }
-  json coupling = json::object();
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const std::string& name = axes[static_cast<std::size_t>(i)];
-    const double range = per_axis[name].value("range_um", 0.0);
-    json from = json::object();
-    for (Eigen::Index j = 0; j < n; ++j) {
-      if (i != j) from[axes[static_cast<std::size_t>(j)]] = left.gains(i, j);
-    }
-    coupling[name] = {{"rms_um", left.rms_um(i)},
-                      {"rms_percent", percent(left.rms_um(i), range)},
-                      {"gain_from", from}};
-  }
-  out["coupling_error"] = coupling;
-  out["coupling_error_meaning"] =
-      "per axis, the part of its tracking error the other axes' motion explains (its error "
-      "regressed on their outputs over the scored samples), and the gains of that regression";
   return out;
 }
 

@@ -6,7 +6,7 @@
 // out_of_range, slew_limit). Not real-time safe.
 #include <memory>
 
-#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/daemon/runs/upload_store.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/track_reference.hpp"

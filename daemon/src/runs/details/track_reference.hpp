@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/daemon/runs/upload_store.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 #include "runs/details/track_request.hpp"
 

@@ -10,8 +10,8 @@
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 #include "runs/details/feedback_design.hpp"
+#include "runs/details/request_params.hpp"
 #include "runs/details/run_context.hpp"
-#include "service/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 

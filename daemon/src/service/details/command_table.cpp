@@ -3,6 +3,7 @@
 #include <string_view>
 
 #include "hystbench/common/command_error.hpp"
+#include "runs/details/run_requests.hpp"
 #include "service/details/run_history.hpp"
 
 namespace hystbench::daemon::details {
@@ -12,63 +13,6 @@ using T = ParamType;
 
 namespace {
 
-constexpr double kWeekS = 7.0 * 24 * 3600;
-
-// Ranges that depend on the bench (frequency_hz up to a twentieth of the loop rate, identify's
-// u_min/u_max within the output limits) are checked by the run builders on top of these.
-constexpr ParamSpec kIdentify[] = {{"model", T::kString},
-                                   {"operators", T::kInteger, 0, 500},
-                                   {"dead_zones", T::kInteger, -1, 100},
-                                   {"u_min", T::kNumber},
-                                   {"u_max", T::kNumber},
-                                   {"extend", T::kBoolean}};
-constexpr ParamSpec kTrackUploaded[] = {{"reference_upload", T::kString},
-                                        {"approach_s", T::kNumber, 0.0, 60.0},
-                                        {"compensator", T::kString},
-                                        {"kp", T::kNumber, 0.0, 1e6},
-                                        {"ki", T::kNumber, 0.0, 1e9},
-                                        {"kd", T::kNumber, 0.0, 1e3},
-                                        {"force_gains", T::kBoolean},
-                                        {"precondition_s", T::kNumber, 0.0, 60.0},
-                                        {"learn_trials", T::kInteger, 0, 1000},
-                                        {"learn_gain", T::kNumber, 1e-3, 20.0},
-                                        {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9},
-                                        {"learned", T::kString},
-                                        {"lead_in_max_s", T::kNumber, 0.0, 600.0}};
-// A stage's (several axes): an uploaded reference per axis, {axis: upload name}.
-constexpr ParamSpec kTrackStageUploaded[] = {
-    {"reference_uploads", T::kObject}, {"approach_s", T::kNumber, 0.0, 60.0},
-    {"compensator", T::kString},       {"precondition_s", T::kNumber, 0.0, 60.0},
-    {"decouple", T::kBoolean},         {"decoupling", T::kString}};
-constexpr ParamSpec kTrackBuiltin[] = {{"reference", T::kString},
-                                       {"frequency_hz", T::kNumber, 1e-3},
-                                       {"periods", T::kNumber, 0.0, 1e7},
-                                       {"duration_s", T::kNumber, 0.0, kWeekS},
-                                       {"compensator", T::kString},
-                                       {"range_fraction", T::kNumber, 0.01, 1.0},
-                                       {"min_um", T::kNumber, -1e9, 1e9},
-                                       {"max_um", T::kNumber, -1e9, 1e9},
-                                       {"kp", T::kNumber, 0.0, 1e6},
-                                       {"ki", T::kNumber, 0.0, 1e9},
-                                       {"kd", T::kNumber, 0.0, 1e3},
-                                       {"force_gains", T::kBoolean},
-                                       {"precondition_s", T::kNumber, 0.0, 60.0},
-                                       {"learn_trials", T::kInteger, 0, 1000},
-                                       {"learn_gain", T::kNumber, 1e-3, 20.0},
-                                       {"learn_cutoff_hz", T::kNumber, 1e-3, 1e9},
-                                       {"learned", T::kString},
-                                       {"lead_in_max_s", T::kNumber, 0.0, 600.0},
-                                       {"frequencies_hz", T::kArray},
-                                       {"decouple", T::kBoolean},
-                                       {"decoupling", T::kString}};
-constexpr ParamSpec kExcite[] = {{"drive_upload", T::kString}};
-constexpr ParamSpec kExciteStage[] = {{"drive_uploads", T::kObject}};
-constexpr ParamSpec kFrf[] = {{"amplitude", T::kNumber, 1e-3, 0.1},
-                              {"periods", T::kInteger, 2, 64}};
-constexpr ParamSpec kTune[] = {{"compensator", T::kString},
-                               {"kp", T::kNumber, 0.0, 1e6},
-                               {"ki", T::kNumber, 0.0, 1e9},
-                               {"kd", T::kNumber, 0.0, 1e3}};
 // The upload store checks the ranges (and what is missing) itself, with the same validator.
 constexpr ParamSpec kUploadBegin[] = {{"kind", T::kString},
                                       {"samples", T::kInteger},
@@ -108,21 +52,21 @@ std::span<const Command> bench_commands() {
        {},
        [](Bench& b, const RequestParams&, std::uint64_t) { return b.status(); },
        true},
-      {"identify", nullptr, kIdentify,
+      {"identify", nullptr, kIdentifyParams,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.start_identify(r); }},
-      {"track", "reference_upload", kTrackUploaded,
+      {"track", "reference_upload", kTrackUploadedParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
-      {"track", "reference_uploads", kTrackStageUploaded,
+      {"track", "reference_uploads", kTrackStageUploadedParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
-      {"track", nullptr, kTrackBuiltin,
+      {"track", nullptr, kTrackBuiltinParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
-      {"excite", "drive_uploads", kExciteStage,
+      {"excite", "drive_uploads", kExciteStageParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_excite(r, c); }},
-      {"excite", nullptr, kExcite,
+      {"excite", nullptr, kExciteParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_excite(r, c); }},
-      {"frf", nullptr, kFrf,
+      {"frf", nullptr, kFrfParams,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.start_frf(r); }},
-      {"tune", nullptr, kTune,
+      {"tune", nullptr, kTuneParams,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.tune(r); }},
       {"upload.begin", nullptr, kUploadBegin,
        [](Bench& b, const RequestParams& r, std::uint64_t c) {
@@ -178,8 +122,6 @@ std::span<const Command> bench_commands() {
   };
   return kCommands;
 }
-
-std::span<const ParamSpec> track_builtin_params() { return kTrackBuiltin; }
 
 bool command_reads_only(const std::string& name) {
   bool found = false;

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "hystbench/daemon/service/bench.hpp"
-#include "service/details/request_params.hpp"
+#include "runs/details/request_params.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -33,9 +33,5 @@ const Command& find_command(const std::string& name, const nlohmann::json& param
 
 /// Whether command `name` only reads (every row of it does); false for an unknown name.
 bool command_reads_only(const std::string& name);
-
-/// The parameters of track with a built-in reference: a stage's track reads the keys it shares
-/// with one axis's (compensator, precondition, gains, learning) through them.
-std::span<const ParamSpec> track_builtin_params();
 
 }  // namespace hystbench::daemon::details

@@ -7,6 +7,7 @@
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/common/model_file_io.hpp"
+#include "runs/details/folder_name.hpp"
 #include "runs/details/learned_drive.hpp"
 
 namespace hystbench::daemon::details {
@@ -30,13 +31,6 @@ std::string model_file_name(const std::string& key, const std::string& name) {
 }
 
 }  // namespace
-
-bool is_folder_name(const std::string& name) {
-  return !name.empty() && name.size() <= 128 && name.front() != '.' &&
-         std::all_of(name.begin(), name.end(), [](unsigned char c) {
-           return std::isalnum(c) || c == '.' || c == '_' || c == '-';
-         });
-}
 
 FolderModel load_stored_model(const std::string& dir, const std::string& name) {
   const std::string file_name = model_file_name("stored", name);

@@ -8,11 +8,9 @@
 #include <string>
 
 #include "hystbench/compensation/model_file.hpp"
+#include "runs/details/folder_name.hpp"
 
 namespace hystbench::daemon::details {
-
-/// True for a name a client may give for a file in the model folder (see above).
-bool is_folder_name(const std::string& name);
 
 struct FolderModel {
   compensation::ModelFile file;

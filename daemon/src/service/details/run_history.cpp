@@ -10,8 +10,8 @@
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/common/model_file_io.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
-#include "service/details/utc_clock.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
+#include "loop/details/utc_clock.hpp"
 
 namespace hystbench::daemon::details {
 

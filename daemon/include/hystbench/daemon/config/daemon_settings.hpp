@@ -1,6 +1,6 @@
 #pragma once
 // Maps the daemon configuration file onto the bench's settings.
-#include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/daemon/config/bench_settings.hpp"
 #include "hystbench/daemon/config/config.hpp"
 
 namespace hystbench::daemon {

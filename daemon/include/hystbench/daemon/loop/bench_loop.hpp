@@ -48,9 +48,9 @@
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/loop/output_limiter.hpp"
 #include "hystbench/daemon/loop/realtime.hpp"
+#include "hystbench/daemon/loop/run_program.hpp"
 #include "hystbench/daemon/loop/scope_tap.hpp"
 #include "hystbench/daemon/loop/stuck_sensor_detector.hpp"
-#include "hystbench/daemon/runs/run_program.hpp"
 #include "hystbench/drivers/driver.hpp"
 
 namespace hystbench::daemon {

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "hystbench/compensation/identification.hpp"
-#include "hystbench/daemon/runs/run_program.hpp"
+#include "hystbench/daemon/loop/run_program.hpp"
 
 namespace hystbench::daemon {
 

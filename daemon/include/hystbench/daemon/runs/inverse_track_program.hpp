@@ -12,7 +12,7 @@
 
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/daemon/loop/output_limiter.hpp"
-#include "hystbench/daemon/runs/run_program.hpp"
+#include "hystbench/daemon/loop/run_program.hpp"
 
 namespace hystbench::daemon {
 

@@ -22,9 +22,10 @@
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/stage_responses.hpp"
+#include "hystbench/daemon/config/bench_settings.hpp"
 #include "hystbench/daemon/config/config.hpp"
 #include "hystbench/daemon/loop/bench_loop.hpp"
-#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/daemon/runs/upload_store.hpp"
 #include "hystbench/drivers/driver.hpp"
 #include "hystbench/sim/frequency_response_excitation.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
@@ -44,41 +45,9 @@ struct StageModel;
 struct IdentifyRequest;
 class TrackLearning;
 class RunHistory;
+class ModelStore;
 std::span<const Command> bench_commands();
 }  // namespace details
-
-struct BenchSettings {
-  BenchLoopOptions loop;
-  std::string driver_type = "loopback";
-  /// A stage's axis names, in the driver's order (the loopback's [driver.loopback.stage]); empty:
-  /// one axis. The driver must serve as many.
-  std::vector<std::string> axes;
-  nlohmann::json driver_params = nlohmann::json::object();
-  std::string log_dir = "/var/lib/hystbench/logs";
-  std::string model_dir = "/var/lib/hystbench/models";
-  std::size_t log_ring_capacity = std::size_t{1} << 16;
-  /// Reference range without a model [µm]; with a model its major loop defines the range.
-  double y_min = 0.0;
-  double y_max = 0.0;
-  /// identify's defaults (a request overrides model, operators, dead_zones and the span): the
-  /// configuration's [identify] section, the same struct and defaults, so tests identify as the
-  /// daemon does.
-  IdentifySection identify;
-  /// The excitation's other segments (minor loops, rates, holds, reversals); `identify` sets
-  /// its major-loop and preconditioning options. The standard one by default.
-  sim::IdentificationExcitationOptions identify_excitation;
-  /// track's feedback: the configuration's [pid] section (no gains = designed per run on the
-  /// stage's measured frequency responses, compensation::design_loop, unless a request gives kp,
-  /// ki or kd; given ones are checked against its targets).
-  PidSection pid;
-  /// Open-loop sweep to u_max and back to u_min before every track run [s], so the actuator's
-  /// hysteresis state is known and the inverse starts consistent with it.
-  double precondition_s = 1.0;
-  /// Roll-off of the feedforward's dynamics inversion [Hz]; 0 = the default (DynamicsInversion).
-  double feedforward_bandwidth_hz = 0.0;
-  /// The effective configuration, returned by config.get.
-  nlohmann::json config_json = nlohmann::json::object();
-};
 
 class Bench {
  public:
@@ -310,13 +279,9 @@ class Bench {
   std::unique_ptr<details::RunHistory> history_;  // the runs, kept in log_dir (its own lock)
   mutable std::mutex mutex_;                      // guards everything below
   nlohmann::json web_view_;                       // status "http"
-  std::optional<compensation::ModelFile> model_;
-  std::string model_path_;
-  std::uint64_t model_generation_ = 0;         // bumped with every change of model_
-  std::shared_ptr<details::PlanCache> plans_;  // track's last plan (its own lock)
-  // The stage's frequency responses measured last (frf, identify): the feedback's where the
-  // active model holds none; the options of the frf run under way; the feedback's last design.
-  std::optional<compensation::StageResponses> responses_;
+  std::unique_ptr<details::ModelStore> models_;   // the active model and responses, the folder
+  std::shared_ptr<details::PlanCache> plans_;     // track's last plan (its own lock)
+  // The options of the frf run under way; the feedback's last design.
   std::optional<sim::FrequencyResponseExcitationOptions> frf_options_;
   std::shared_ptr<details::FeedbackPlanCache> feedback_plans_;
   nlohmann::json last_feedback_;  // the feedback of the last track, tune or frf (status)

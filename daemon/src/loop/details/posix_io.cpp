@@ -1,4 +1,4 @@
-#include "service/details/posix_io.hpp"
+#include "loop/details/posix_io.hpp"
 
 #include <unistd.h>
 

@@ -17,11 +17,11 @@
 #include "hystbench/compensation/compensator.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/stage_decoupling.hpp"
+#include "hystbench/daemon/loop/learning_exchange.hpp"
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/loop/oscillation_detector.hpp"
-#include "hystbench/daemon/runs/learning_exchange.hpp"
-#include "hystbench/daemon/runs/target_window.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/target_window.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 
 namespace hystbench::daemon {

@@ -1,4 +1,4 @@
-#include "hystbench/daemon/runs/target_window.hpp"
+#include "hystbench/daemon/loop/target_window.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/daemon/runs/upload_store.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "hystbench/common/command_error.hpp"
-#include "service/details/request_params.hpp"
+#include "runs/details/request_params.hpp"
 
 namespace hystbench::daemon {
 

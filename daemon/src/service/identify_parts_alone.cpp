@@ -12,7 +12,7 @@
 #include <algorithm>
 #include <string>
 
-#include "runs/details/identify_session.hpp"
+#include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
 

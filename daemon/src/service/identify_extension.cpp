@@ -13,7 +13,7 @@
 #include "hystbench/compensation/diagnosis.hpp"
 #include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/preisach_model.hpp"
-#include "runs/details/identify_session.hpp"
+#include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
 

@@ -1,4 +1,4 @@
-#include "service/details/request_params.hpp"
+#include "runs/details/request_params.hpp"
 
 #include <algorithm>
 #include <cmath>

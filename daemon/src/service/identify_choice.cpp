@@ -13,7 +13,8 @@
 #include "hystbench/common/model_file_io.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
-#include "runs/details/identify_session.hpp"
+#include "service/details/identify_session.hpp"
+#include "service/details/model_store.hpp"
 
 namespace hystbench::daemon {
 
@@ -305,10 +306,8 @@ void Bench::finish_identify() {
     if (s.candidates.size() > 1) result["candidates"] = candidates;
     if (!s.responses_result.is_null()) result["frequency_response"] = s.responses_result;
     std::lock_guard lock(mutex_);
-    if (s.responses) responses_ = s.responses;
-    model_ = std::move(file);
-    model_path_ = path;
-    ++model_generation_;
+    if (s.responses) models_->set_measured_responses(*s.responses);
+    models_->adopt(std::move(file), path);
     // The loop a track through the new model's inverse gets, designed now (a track reuses it).
     json why;
     result["feedback"] = feedback_now(hc::CompensatorKind::kInversePid, &why);

@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <string>
 
-#include "runs/details/identify_session.hpp"
+#include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
 

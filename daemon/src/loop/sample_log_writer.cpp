@@ -1,4 +1,4 @@
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -15,8 +15,8 @@
 
 #include "hystbench/daemon/loop/realtime.hpp"
 #include "hystbench/sim/simulated_stage_config.hpp"
-#include "service/details/posix_io.hpp"
-#include "service/details/utc_clock.hpp"
+#include "loop/details/posix_io.hpp"
+#include "loop/details/utc_clock.hpp"
 
 namespace hystbench::daemon {
 

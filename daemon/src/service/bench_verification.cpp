@@ -12,7 +12,7 @@
 
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
-#include "runs/details/identify_session.hpp"
+#include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
 

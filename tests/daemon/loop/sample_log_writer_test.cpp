@@ -1,4 +1,4 @@
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "service/details/utc_clock.hpp"
+#include "loop/details/utc_clock.hpp"
 
 #include <ctime>
 

@@ -1,4 +1,4 @@
-#include "hystbench/daemon/runs/run_program.hpp"
+#include "hystbench/daemon/loop/run_program.hpp"
 
 #include <algorithm>
 

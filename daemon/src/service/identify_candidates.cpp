@@ -13,8 +13,8 @@
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/runs/identification_fit.hpp"
-#include "runs/details/identify_session.hpp"
 #include "runs/details/run_result.hpp"
+#include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
 

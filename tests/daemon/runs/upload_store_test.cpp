@@ -1,5 +1,5 @@
 // UploadStore: chunks in order, bounds named, a connection's uploads are its own and go with it.
-#include "hystbench/daemon/service/upload_store.hpp"
+#include "hystbench/daemon/runs/upload_store.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,72 @@
+#include "service/details/model_store.hpp"
+
+#include <filesystem>
+
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/common/model_file_io.hpp"
+
+namespace hystbench::daemon::details {
+
+namespace hc = compensation;
+using nlohmann::json;
+
+void ModelStore::adopt(hc::ModelFile file, std::string path) {
+  model_ = std::move(file);
+  path_ = std::move(path);
+  ++generation_;
+}
+
+json ModelStore::load(const std::optional<std::string>& stored, const std::string& name,
+                      const json& document) {
+  FolderModel m =
+      stored ? load_stored_model(folder_, *stored) : keep_model_document(folder_, name, document);
+  const auto inv = m.file.model.hysteresis().invertibility();
+  const std::string file_name = std::filesystem::path(m.path).filename().string();
+  adopt(std::move(m.file), m.path);
+  return {{"path", path_},
+          {"name", file_name},
+          {"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
+          {"invertible", inv.invertible},
+          {"reason", inv.reason}};
+}
+
+json ModelStore::get() const {
+  if (!model_) {
+    throw common::CommandError("no_model", "no active model (identify or model.load first)");
+  }
+  return {{"path", path_}, {"model", hc::to_json(*model_)}};
+}
+
+json ModelStore::summary() const {
+  if (!model_) return nullptr;
+  return {{"type", std::string(hc::to_string(model_->model.hysteresis().kind()))},
+          {"path", path_},
+          {"operators", model_->model.hysteresis().operator_count()}};
+}
+
+json ModelStore::list(std::span<const std::string> active_paths) const {
+  return list_model_folder(folder_, active_paths);
+}
+
+json ModelStore::remove(const std::string& name, std::span<const std::string> active_paths) {
+  return delete_from_model_folder(folder_, name, active_paths);
+}
+
+const hc::StageResponses* ModelStore::design_responses() const noexcept {
+  if (model_ && model_->responses) return &*model_->responses;
+  return measured_responses();
+}
+
+void ModelStore::keep_frf_responses(hc::StageResponses r, json& report) {
+  responses_ = r;
+  if (!model_) return;
+  model_->responses = std::move(r);
+  try {
+    if (!path_.empty()) common::save_model_file(path_, *model_);
+    report["kept_in"] = path_;
+  } catch (const std::exception& e) {
+    report["save_error"] = e.what();
+  }
+}
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,70 @@
+#pragma once
+// The bench's model store: the active model of a single-axis bench (its file and where it is
+// kept), the stage's frequency responses measured last, the generation that counts the changes
+// runs see, and the model folder's commands (load, list, delete). A stage's model is the stage
+// component's (bench_stage.cpp); it bumps the generation here. Not thread-safe: the Bench holds
+// its mutex around every call. File I/O: never on the loop thread.
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/stage_responses.hpp"
+#include "service/details/model_folder.hpp"
+
+namespace hystbench::daemon::details {
+
+class ModelStore {
+ public:
+  /// `folder`: BenchSettings::model_dir, where models are kept and read by name.
+  explicit ModelStore(std::string folder) : folder_(std::move(folder)) {}
+
+  const std::string& folder() const noexcept { return folder_; }
+  /// The active model, or null (none yet, or a stage bench).
+  const compensation::ModelFile* active() const noexcept { return model_ ? &*model_ : nullptr; }
+  /// Where the active model is kept (empty without one).
+  const std::string& active_path() const noexcept { return path_; }
+  /// Counts the changes of the models and responses runs see: a plan kept for one generation is
+  /// not another's.
+  std::uint64_t generation() const noexcept { return generation_; }
+  /// A change the store does not hold (a stage's model): the next generation.
+  void changed() noexcept { ++generation_; }
+
+  /// Makes `file`, kept at `path`, the active model.
+  void adopt(compensation::ModelFile file, std::string path);
+  /// model.load on one axis: the stored model `stored` (a name in the folder), else `document`
+  /// kept under `name`; {path, name, type, invertible, reason}. Throws CommandError
+  /// (bad_params, bad_model, io_error); nothing changes then.
+  nlohmann::json load(const std::optional<std::string>& stored, const std::string& name,
+                      const nlohmann::json& document);
+  /// model.get: {path, model}. Throws CommandError no_model without one.
+  nlohmann::json get() const;
+  /// status' "model": {type, path, operators}, or null.
+  nlohmann::json summary() const;
+  /// model.list and model.delete over the folder; `active_paths` are never deleted.
+  nlohmann::json list(std::span<const std::string> active_paths) const;
+  nlohmann::json remove(const std::string& name, std::span<const std::string> active_paths);
+
+  /// The responses a feedback is designed on: the active model's, else the last measured; null.
+  const compensation::StageResponses* design_responses() const noexcept;
+  /// The responses measured last (frf, identify), null when none.
+  const compensation::StageResponses* measured_responses() const noexcept {
+    return responses_ ? &*responses_ : nullptr;
+  }
+  /// Keeps responses identify measured for the model it adopts next.
+  void set_measured_responses(compensation::StageResponses r) { responses_ = std::move(r); }
+  /// Keeps responses frf measured: with the bench, and with the active model, whose file is
+  /// saved again. Writes "kept_in" or "save_error" into `report`.
+  void keep_frf_responses(compensation::StageResponses r, nlohmann::json& report);
+
+ private:
+  std::string folder_;
+  std::optional<compensation::ModelFile> model_;
+  std::string path_;
+  std::uint64_t generation_ = 0;
+  std::optional<compensation::StageResponses> responses_;
+};
+
+}  // namespace hystbench::daemon::details

@@ -1,0 +1,118 @@
+// The bench's model store: what it adopts, loads and keeps, and the generation runs key on.
+#include "service/details/model_store.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "hystbench/common/command_error.hpp"
+#include "hystbench/common/model_file_io.hpp"
+#include "hystbench/compensation/pi_model.hpp"
+
+namespace hc = hystbench::compensation;
+namespace hd = hystbench::daemon::details;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+hc::ModelFile pi_model(double slope) {
+  hc::ActuatorModel m(
+      std::make_unique<hc::PiModel>(hc::PiParameters{{0.0, 20.0}, {slope, 0.1}, 0.0}));
+  m.input_min = 0.0;
+  m.input_max = 150.0;
+  return hc::ModelFile{std::move(m), json::object()};
+}
+
+hc::StageResponses responses(const std::string& run_id) {
+  hc::StageResponses r;
+  r.rate_hz = 10000.0;
+  r.run_id = run_id;
+  return r;
+}
+
+class ModelStoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("hystbench-model-store-" +
+            std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(ModelStoreTest, WithoutAModelGetRefusesAndStatusSaysNull) {
+  hd::ModelStore store(dir_.string());
+  EXPECT_EQ(store.active(), nullptr);
+  EXPECT_TRUE(store.summary().is_null());
+  try {
+    (void)store.get();
+    FAIL() << "model.get without a model answered";
+  } catch (const hystbench::common::CommandError& e) {
+    EXPECT_EQ(e.code(), "no_model");
+  }
+}
+
+TEST_F(ModelStoreTest, EveryChangeRunsSeeIsANewGeneration) {
+  hd::ModelStore store(dir_.string());
+  const auto g0 = store.generation();
+  store.adopt(pi_model(0.3), (dir_ / "a.json").string());
+  EXPECT_GT(store.generation(), g0);
+  const auto g1 = store.generation();
+  store.changed();  // a stage's model
+  EXPECT_GT(store.generation(), g1);
+  EXPECT_EQ(store.active_path(), (dir_ / "a.json").string());
+  EXPECT_EQ(store.summary()["type"], "pi");
+}
+
+TEST_F(ModelStoreTest, ADocumentIsKeptUnderItsNameAndLoadsAgainByThatName) {
+  hd::ModelStore store(dir_.string());
+  const json loaded = store.load(std::nullopt, "mine", hc::to_json(pi_model(0.4)));
+  EXPECT_EQ(loaded["name"], "mine.json");
+  EXPECT_TRUE(fs::exists(dir_ / "mine.json"));
+  const auto g = store.generation();
+  hd::ModelStore again(dir_.string());
+  const json stored = again.load(std::string("mine"), "", nullptr);
+  EXPECT_EQ(stored["path"], (dir_ / "mine.json").string());
+  EXPECT_EQ(again.get()["model"], store.get()["model"]);
+  EXPECT_EQ(store.generation(), g);  // loading into another store changes nothing here
+}
+
+TEST_F(ModelStoreTest, ARefusedLoadChangesNothing) {
+  hd::ModelStore store(dir_.string());
+  store.adopt(pi_model(0.3), (dir_ / "a.json").string());
+  const auto g = store.generation();
+  EXPECT_THROW((void)store.load(std::string("../etc/passwd"), "", nullptr),
+               hystbench::common::CommandError);
+  EXPECT_THROW((void)store.load(std::string("absent"), "", nullptr),
+               hystbench::common::CommandError);
+  EXPECT_EQ(store.generation(), g);
+  EXPECT_EQ(store.active_path(), (dir_ / "a.json").string());
+}
+
+TEST_F(ModelStoreTest, MeasuredResponsesGoWithTheActiveModelAndItsFile) {
+  hd::ModelStore store(dir_.string());
+  json report = json::object();
+  store.keep_frf_responses(responses("frf-1"), report);
+  ASSERT_NE(store.design_responses(), nullptr);  // the bench's, without a model
+  EXPECT_EQ(store.design_responses()->run_id, "frf-1");
+  EXPECT_FALSE(report.contains("kept_in"));
+
+  const fs::path path = dir_ / "m.json";
+  hystbench::common::save_model_file(path.string(), pi_model(0.3));
+  store.adopt(hystbench::common::load_model_file(path.string()), path.string());
+  EXPECT_EQ(store.design_responses()->run_id, "frf-1");  // the model holds none
+  store.keep_frf_responses(responses("frf-2"), report);
+  EXPECT_EQ(report["kept_in"], path.string());
+  EXPECT_EQ(store.design_responses()->run_id, "frf-2");
+  const hc::ModelFile saved = hystbench::common::load_model_file(path.string());
+  ASSERT_TRUE(saved.responses.has_value());
+  EXPECT_EQ(saved.responses->run_id, "frf-2");
+}
+
+}  // namespace
