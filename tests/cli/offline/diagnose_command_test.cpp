@@ -19,7 +19,7 @@
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/offline_commands.hpp"
 #include "hystbench/compensation/model_check.hpp"
-#include "hystbench/daemon/service/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_log_writer.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 #include "support/simulated_record.hpp"
