@@ -163,6 +163,17 @@ void print_planned_feedforward(std::ostream& out, const json& p) {
   }
 }
 
+// Whether a model predicted y_model over the run, from the result's `y_model` (the daemon's
+// predictor_name()): not where no model was active and the daemon stepped the straight line of
+// limits.y_min..y_max ("linear map of limits...") or nothing ("none..."): y - y_model then
+// measures the line, not a model. A result without the key counts as a model's.
+bool model_predicted(const json& r) {
+  const auto by = r.find("y_model");
+  if (by == r.end() || !by->is_string()) return true;
+  const std::string& name = by->get_ref<const std::string&>();
+  return name.rfind("linear map of limits", 0) != 0 && name.rfind("none", 0) != 0;
+}
+
 // The bench's output against the model's prediction over the run.
 void print_model_error(std::ostream& out, const json& r) {
   out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
@@ -194,14 +205,17 @@ namespace {
 void print_stage(std::ostream& out, const json& r) {
   const json& axes = r["axes"];
   for (const auto& [name, a] : axes.items()) {
-    if (!a.contains("rms_error_um") && !a.contains("model_rms_error_um")) continue;
+    // An axis's own y_model where the result gives one, else the run's (the first axis's).
+    const bool model_error =
+        a.contains("model_rms_error_um") && model_predicted(a.contains("y_model") ? a : r);
+    if (!a.contains("rms_error_um") && !model_error) continue;
     out << "  axis " << name;
     for (std::size_t pad = name.size(); pad < 11; ++pad) out << ' ';
     if (a.contains("rms_error_um")) {
       out << "rms " << fixed(a["rms_error_percent"], 3) << " % (" << fixed(a["rms_error_um"], 4)
           << " um), max " << fixed(a["max_error_percent"], 3) << " % of "
           << fixed(a.value("range_um", 0.0), 2) << " um";
-    } else if (a.contains("model_rms_error_um")) {
+    } else if (model_error) {
       out << "model vs bench rms " << fixed(a["model_rms_error_um"], 3) << " um";
     }
     if (r.contains("coupling_error") && r["coupling_error"].contains(name)) {
@@ -266,7 +280,7 @@ void print_run_result(const json& r, std::ostream& out) {
   if (const auto ff = r.find("feedforward"); ff != r.end() && ff->contains("planned")) {
     print_planned_feedforward(out, (*ff)["planned"]);
   }
-  if (r.contains("model_rms_error_um")) print_model_error(out, r);
+  if (r.contains("model_rms_error_um") && model_predicted(r)) print_model_error(out, r);
   details::print_identification(out, r);
   if (r.contains("fit_error"))
     out << "  fit failed      " << r["fit_error"].get<std::string>() << "\n";
