@@ -7,46 +7,38 @@ from __future__ import annotations
 import collections
 import json
 import os
-from typing import TYPE_CHECKING, Any, Deque, Dict, Iterable, List, Mapping, Optional, Union
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Callable,
+    Deque,
+    Dict,
+    Iterable,
+    List,
+    Mapping,
+    Optional,
+    Union,
+)
 
-from ._shared import PathLike, Progress
+from ._shared import PathLike
 from .results import RunResult
 
 
 class _Commands:
     """The base of ``Bench``'s commands; ``Bench`` (client.py) adds the connection and uploads."""
 
-    if TYPE_CHECKING:  # what Bench's connection gives the commands, for type checkers
+    if TYPE_CHECKING:  # what Bench's connection and uploads give the commands, for type checkers
         socket_path: str
         _events: Deque[Dict[str, Any]]
         _own_runs: Deque[str]
         _finished: "collections.OrderedDict[str, RunResult]"
+        request: Callable[..., Any]
+        upload: Callable[..., str]
+        _read_message: Callable[[Optional[float]], Optional[Dict[str, Any]]]
+        _cancel_quietly: Callable[[str], None]
 
         @property
         def closed(self) -> bool: ...
-
-        def request(
-            self,
-            cmd: str,
-            params: Optional[Mapping[str, Any]] = None,
-            *,
-            timeout: Optional[float] = None,
-        ) -> Any: ...
-
-        def _read_message(self, deadline: Optional[float]) -> Optional[Dict[str, Any]]: ...
-
-        def upload(
-            self,
-            kind: str,
-            values: Iterable[float],
-            *,
-            rate_hz: Optional[float] = None,
-            t: Optional[Iterable[float]] = None,
-            progress: Optional[Progress] = None,
-            source: Optional[str] = None,
-        ) -> str: ...
-
-        def _cancel_quietly(self, upload_id: str) -> None: ...
 
     # ---- simple commands ----------------------------------------------------------------------
 
