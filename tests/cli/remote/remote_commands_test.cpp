@@ -82,6 +82,36 @@ TEST(PrintRunResult, SaysWhereTheLargestErrorsFell) {
   EXPECT_NE(older.str().find("0.3000 um (3.000 %)"), std::string::npos) << older.str();
 }
 
+// Without an active model the daemon predicts y with the straight line of the configured
+// limits: the report leaves out the model's error then (it measures the line), on one axis and
+// on each axis of a stage, and gives it where a model predicted.
+TEST(PrintRunResult, GivesTheModelErrorOnlyWhereAModelPredicted) {
+  nlohmann::json r = {{"run_id", "r3"},
+                      {"kind", "identify"},
+                      {"end", "completed"},
+                      {"samples", 100},
+                      {"model_rms_error_um", 2.55},
+                      {"model_rms_error_percent", 4.2},
+                      {"model_max_error_um", 16.3},
+                      {"model_max_error_percent", 26.861},
+                      {"y_model", "linear map of limits.y_min..y_max, stepped with u"}};
+  std::ostringstream line;
+  cli::print_run_result(r, line);
+  EXPECT_EQ(line.str().find("model vs bench"), std::string::npos) << line.str();
+  r["y_model"] = "the model active before this identification";
+  std::ostringstream model;
+  cli::print_run_result(r, model);
+  EXPECT_NE(model.str().find("model vs bench  rms 2.5500 um (4.200 %)"), std::string::npos)
+      << model.str();
+  const nlohmann::json stage = {{"run_id", "r4"},
+                                {"end", "completed"},
+                                {"axes", {{"x", {{"model_rms_error_um", 2.55}}}}},
+                                {"y_model", "linear map of limits.y_min..y_max, stepped with u"}};
+  std::ostringstream axes;
+  cli::print_run_result(stage, axes);
+  EXPECT_EQ(axes.str().find("model vs bench"), std::string::npos) << axes.str();
+}
+
 // identify's extension adopted in part: its model's check, and its fast parts alone with their
 // verified figures and the decision, one line each.
 TEST(PrintRunResult, SaysWhichPartsOfTheExtensionWereAdopted) {

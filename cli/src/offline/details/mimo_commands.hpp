@@ -1,7 +1,8 @@
 #pragma once
 // fit, simulate and diagnose for records of several inputs and outputs (a Hammerstein MIMO
 // model); the offline commands hand over to these when the columns name several (or fit's
-// --model hammerstein).
+// --model hammerstein). fit and simulate are in mimo_commands.cpp, the cross-coupling diagnosis
+// in cross_coupling_diagnosis.cpp, the records at several amplitudes in amplitude_commands.cpp.
 #include <iosfwd>
 #include <nlohmann/json.hpp>
 #include <optional>

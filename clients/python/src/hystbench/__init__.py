@@ -11,15 +11,9 @@
 Units: positions in µm, drive in V, times in s, frequencies and rates in Hz.
 """
 
-from .client import (
-    DEFAULT_SOCKET,
-    MAX_LINE_BYTES,
-    Bench,
-    RunResult,
-    SweepResult,
-    default_socket_path,
-)
+from .client import DEFAULT_SOCKET, MAX_LINE_BYTES, Bench, default_socket_path
 from .errors import BenchConnectionError, BenchError, RunEndedError
+from .results import RunResult, SweepResult
 from .runlog import RunLog, read_run, read_signal
 
 __version__ = "0.1.0"
