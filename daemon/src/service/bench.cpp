@@ -3,11 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 
+#include "hystbench/compensation/number_text.hpp"
 #include "runs/details/excite_program.hpp"
 #include "runs/details/feedback_design.hpp"
 #include "runs/details/identify_program.hpp"
@@ -561,10 +561,8 @@ void Bench::announce_trials(details::TrackLearning& learning, const std::string&
     spdlog::error("run {}: the learning failed: {}", run_id, e.what());
   }
   for (const details::TrackLearning::Trial& t : scored) {
-    char rms[32];
-    std::snprintf(rms, sizeof rms, "%.3f", t.rms_percent);
     const std::string stage = "learning: trial " + std::to_string(t.trial) + " of " +
-                              std::to_string(asked) + ", rms " + rms + " %";
+                              std::to_string(asked) + ", rms " + hc::fixed(t.rms_percent, 3) + " %";
     {
       std::lock_guard lock(mutex_);
       if (!active_run_.is_null()) active_run_["stage"] = stage;
