@@ -6,7 +6,7 @@ set -euo pipefail
 
 BUILD_PKGS=(
   build-essential cmake pkg-config
-  libeigen3-dev libspdlog-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
+  libeigen3-dev libspdlog-dev libfmt-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
   libsystemd-dev libmodbus-dev libgpiod-dev libsocketcan-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox libcpp-httplib-dev

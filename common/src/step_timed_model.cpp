@@ -1,8 +1,9 @@
 #include "hystbench/common/step_timed_model.hpp"
 
 #include <algorithm>
-#include <cstdio>
+#include <string>
 
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/compensation/step_timing.hpp"
 
 namespace hystbench::common {
@@ -35,12 +36,10 @@ json time_on_steps(hc::ActuatorModel& model, std::span<const double> u, std::spa
 }
 
 std::string timing_text(const json& t) {
-  char text[160];
-  std::snprintf(text, sizeof text,
-                "timed on %zu step responses: %.4g Hz, damping %.3g, delay %.3g samples",
-                t["steps"].get<std::size_t>(), t["natural_frequency_hz"].get<double>(),
-                t["damping_ratio"].get<double>(), t["delay_samples"].get<double>());
-  return text;
+  return "timed on " + std::to_string(t["steps"].get<std::size_t>()) +
+         " step responses: " + hc::significant(t["natural_frequency_hz"].get<double>(), 4) +
+         " Hz, damping " + hc::significant(t["damping_ratio"].get<double>(), 3) + ", delay " +
+         hc::significant(t["delay_samples"].get<double>(), 3) + " samples";
 }
 
 }  // namespace hystbench::common

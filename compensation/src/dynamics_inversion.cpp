@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "details/validate.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::compensation {
 
@@ -41,13 +42,13 @@ DynamicsInversion::DynamicsInversion(const ActuatorModel& model, double dt_s, do
 std::string DynamicsInversion::describe() const {
   std::string s;
   if (delay_samples_ > 0) {
-    s += "delay " + details::fmt(delay_samples_) + " samples (reference previewed)";
+    s += "delay " + significant(delay_samples_, 6) + " samples (reference previewed)";
   }
   if (dynamics_) {
     if (!s.empty()) s += ", ";
-    s += "dynamics " + details::fmt(p_.natural_frequency_hz) + " Hz / " +
-         details::fmt(p_.damping_ratio) + " (reference derivatives, rolled off above " +
-         details::fmt(bandwidth_hz_) + " Hz)";
+    s += "dynamics " + significant(p_.natural_frequency_hz, 6) + " Hz / " +
+         significant(p_.damping_ratio, 6) + " (reference derivatives, rolled off above " +
+         significant(bandwidth_hz_, 6) + " Hz)";
   }
   return s.empty() ? "nothing (a static model)" : s;
 }

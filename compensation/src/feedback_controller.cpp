@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "details/validate.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::compensation {
 
@@ -13,9 +14,9 @@ FeedbackController::FeedbackController(const FeedbackLaw& law, double dt_s)
   if (b.frequency_hz > 0.0) {
     details::require(std::isfinite(b.frequency_hz) && b.frequency_hz < 0.5 / dt_s,
                      "feedback.boost.frequency_hz must be below the Nyquist frequency, got " +
-                         details::fmt(b.frequency_hz));
+                         significant(b.frequency_hz, 6));
     details::require(std::isfinite(b.gain) && b.gain > 1.0,
-                     "feedback.boost.gain must be > 1, got " + details::fmt(b.gain));
+                     "feedback.boost.gain must be > 1, got " + significant(b.gain, 6));
     // (s + w) / (s + w / g), s = K (1 - 1/z) / (1 + 1/z), K = w / tan(w dt / 2).
     const double w = 2.0 * std::numbers::pi * b.frequency_hz;
     const double k = w / std::tan(w * dt_s / 2.0), wp = w / b.gain;

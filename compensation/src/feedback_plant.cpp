@@ -6,6 +6,7 @@
 #include <string>
 
 #include "details/validate.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::compensation {
 
@@ -47,7 +48,7 @@ std::vector<MeasuredResponse> model_responses(std::span<const MeasuredResponse> 
     for (std::size_t j = 0; j < m.size(); ++j) {
       details::require(std::abs(m.response[j]) > 0.0,
                        what + ": the model does not respond at " +
-                           details::fmt(measured[i].frequency_hz[j]) + " Hz");
+                           significant(measured[i].frequency_hz[j], 6) + " Hz");
     }
     out.push_back(std::move(m));
   }

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "details/validate.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::compensation {
 
@@ -38,7 +39,7 @@ struct Shape {
 
 std::string near_mode(double f, const std::vector<MeasuredMode>& modes) {
   for (const MeasuredMode& m : modes) {
-    if (std::abs(f / m.frequency_hz - 1.0) <= kNearMode) return details::fmt(m.frequency_hz);
+    if (std::abs(f / m.frequency_hz - 1.0) <= kNearMode) return significant(m.frequency_hz, 6);
   }
   return "";
 }
@@ -66,9 +67,9 @@ std::vector<MeasuredResponse> robust_variants(std::span<const MeasuredResponse> 
     const std::string of = " (" + responses[i].label + ")";
     if (o.gain_uncertainty > 0.0) {
       out.push_back(scaled(responses[i], up));
-      names.push_back("the gain x" + details::fmt(up) + of);
+      names.push_back("the gain x" + significant(up, 6) + of);
       out.push_back(scaled(responses[i], down));
-      names.push_back("the gain x" + details::fmt(down) + of);
+      names.push_back("the gain x" + significant(down, 6) + of);
     }
     if (o.rhp_zero_hz > 0.0) {
       MeasuredResponse z = responses[i];
@@ -77,15 +78,15 @@ std::vector<MeasuredResponse> robust_variants(std::span<const MeasuredResponse> 
       }
       out.push_back(std::move(z));
       names.push_back("rate_law:" + o.rhp_zero_reason + ", a zero at " +
-                      details::fmt(o.rhp_zero_hz) + " Hz" + of);
+                      significant(o.rhp_zero_hz, 6) + " Hz" + of);
     }
     if (o.mode_uncertainty <= 0.0) continue;
     for (std::size_t k = 0; k < std::min<std::size_t>(modes.size(), 2); ++k) {
       for (const double f : {1.0 - o.mode_uncertainty, 1.0 + o.mode_uncertainty}) {
         out.push_back(scaled(with_mode_moved(responses[i], modes[k], f, o.dt_s), up));
-        names.push_back("the gain x" + details::fmt(up) + " and the mode at " +
-                        details::fmt(modes[k].frequency_hz) + " Hz moved to " +
-                        details::fmt(modes[k].frequency_hz * f) + " Hz" + of);
+        names.push_back("the gain x" + significant(up, 6) + " and the mode at " +
+                        significant(modes[k].frequency_hz, 6) + " Hz moved to " +
+                        significant(modes[k].frequency_hz * f, 6) + " Hz" + of);
       }
     }
   }
@@ -143,17 +144,17 @@ class Evaluator {
           e.meets_targets = false;
           e.failure_kind = "rate_law";
           e.failure_hz = m.crossover_hz;
-          e.failure = "the crossover " + details::fmt(m.crossover_hz) + " Hz is above " +
-                      details::fmt(o_.max_crossover_hz) + " Hz (" + o_.max_crossover_reason + ")";
+          e.failure = "the crossover " + significant(m.crossover_hz, 6) + " Hz is above " +
+                      significant(o_.max_crossover_hz, 6) + " Hz (" + o_.max_crossover_reason + ")";
         }
       }
     }
     e.quiet = e.drive_noise_rms <= o_.output_noise_budget * e.output_noise_rms;
     if (!e.quiet && e.failure.empty()) {
       e.failure_kind = "sensor";
-      e.failure = "the drive noise " + details::fmt(e.drive_noise_rms) + " is above " +
-                  details::fmt(o_.output_noise_budget) + " x the sensor's " +
-                  details::fmt(e.output_noise_rms);
+      e.failure = "the drive noise " + significant(e.drive_noise_rms, 6) + " is above " +
+                  significant(o_.output_noise_budget, 6) + " x the sensor's " +
+                  significant(e.output_noise_rms, 6);
     }
     e.robust = true;
     if (!e.meets_targets) return e;  // a variant check is for a loop that holds as measured
@@ -172,8 +173,8 @@ class Evaluator {
             name = name.substr(9);
           }
           e.failure = (m.stable ? "too close to instability (gain margin " +
-                                      details::fmt(m.gain_margin_db) + " dB, peak |S| " +
-                                      details::fmt(m.peak_sensitivity_db) + " dB)"
+                                      significant(m.gain_margin_db, 6) + " dB, peak |S| " +
+                                      significant(m.peak_sensitivity_db, 6) + " dB)"
                                 : std::string("unstable")) +
                       " with " + name;
         }
@@ -197,19 +198,19 @@ class Evaluator {
       const std::string mode = kind_at(m.peak_sensitivity_hz, "delay");
       e.failure = "unstable" + on + ": " + std::to_string(m.unstable_poles) +
                   " closed-loop poles outside the unit circle, |S| peaks at " +
-                  details::fmt(m.peak_sensitivity_hz) + " Hz" + mode;
+                  significant(m.peak_sensitivity_hz, 6) + " Hz" + mode;
     } else if (m.gain_margin_db < t.gain_margin_db) {
       const std::string mode = kind_at(m.gain_margin_hz, "delay");
-      e.failure = "gain margin " + details::fmt(m.gain_margin_db) + " dB at " +
-                  details::fmt(m.gain_margin_hz) + " Hz" + mode + on;
+      e.failure = "gain margin " + significant(m.gain_margin_db, 6) + " dB at " +
+                  significant(m.gain_margin_hz, 6) + " Hz" + mode + on;
     } else if (m.phase_margin_deg < t.phase_margin_deg) {
       const std::string mode = kind_at(m.crossover_hz, "delay");
-      e.failure = "phase margin " + details::fmt(m.phase_margin_deg) + " deg at the " +
-                  details::fmt(m.crossover_hz) + " Hz crossover" + mode + on;
+      e.failure = "phase margin " + significant(m.phase_margin_deg, 6) + " deg at the " +
+                  significant(m.crossover_hz, 6) + " Hz crossover" + mode + on;
     } else {
       const std::string mode = kind_at(m.peak_sensitivity_hz, "sensitivity");
-      e.failure = "peak |S| " + details::fmt(m.peak_sensitivity_db) + " dB at " +
-                  details::fmt(m.peak_sensitivity_hz) + " Hz" + mode + on;
+      e.failure = "peak |S| " + significant(m.peak_sensitivity_db, 6) + " dB at " +
+                  significant(m.peak_sensitivity_hz, 6) + " Hz" + mode + on;
     }
   }
 
@@ -236,13 +237,13 @@ FeedbackLaw law_for(const Shape& s, double fn_hz, double g, const LoopDesignOpti
 std::string describe(const FeedbackLaw& law) {
   std::string s = law.pid.kp > 0.0 ? "PI" : "integral";
   if (law.boost.frequency_hz > 0.0) {
-    s += ", boost x" + details::fmt(law.boost.gain) + " below " +
-         details::fmt(law.boost.frequency_hz) + " Hz";
+    s += ", boost x" + significant(law.boost.gain, 6) + " below " +
+         significant(law.boost.frequency_hz, 6) + " Hz";
   }
   for (const Notch& n : law.shaping.notches)
-    s += ", notch at " + details::fmt(n.frequency_hz) + " Hz";
+    s += ", notch at " + significant(n.frequency_hz, 6) + " Hz";
   if (law.shaping.low_pass.frequency_hz > 0.0)
-    s += ", low-pass " + details::fmt(law.shaping.low_pass.frequency_hz) + " Hz";
+    s += ", low-pass " + significant(law.shaping.low_pass.frequency_hz, 6) + " Hz";
   return s;
 }
 
@@ -342,7 +343,7 @@ LoopDesign design_loop(std::span<const MeasuredResponse> responses, const LoopDe
   if (!d.found) {
     d.limited_by = "targets";
     d.limit = "no loop meets the targets on the measured responses, even at a crossover of " +
-              details::fmt(kScanStartFraction * rate) + " Hz";
+              significant(kScanStartFraction * rate, 6) + " Hz";
     return d;
   }
   d.law = law_for(best_shape, best_fn, g, o);
@@ -351,10 +352,10 @@ LoopDesign design_loop(std::span<const MeasuredResponse> responses, const LoopDe
   if (best_fn * kScanStep >= kScanTopFraction * rate || above.ok()) {
     d.limited_by = "loop_rate";
     d.limit =
-        "the scan's top, a crossover of " + details::fmt(kScanTopFraction) + " x the loop rate";
+        "the scan's top, a crossover of " + significant(kScanTopFraction, 6) + " x the loop rate";
   } else {
     d.limited_by = above.failure_kind;
-    d.limit = details::fmt((kLimitProbe - 1.0) * 100.0) +
+    d.limit = significant((kLimitProbe - 1.0) * 100.0, 6) +
               " % more gain breaks a target: " + above.failure;
   }
   return d;

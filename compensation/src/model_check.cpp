@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
-#include <iomanip>
-#include <sstream>
 #include <vector>
 
 #include "details/validate.hpp"
 #include "hystbench/compensation/inverse_model.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::compensation {
 namespace {
@@ -25,13 +24,6 @@ ModelCheck failure(std::string part, std::string reason) {
   return c;
 }
 
-std::string number(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v;
-  return s.str();
-}
-
 // The unit triangle 0 -> 1 -> 0 over n samples, at sample k (periodic).
 double triangle(std::size_t k, std::size_t n) {
   const double phase = static_cast<double>(k % n) / static_cast<double>(n);
@@ -45,8 +37,8 @@ ModelCheck check_parameters(const ActuatorModel& model) {
   if (!model.valid()) return failure("hysteresis", "the model has no hysteresis part");
   if (!(std::isfinite(model.input_min) && std::isfinite(model.input_max) &&
         model.input_max > model.input_min)) {
-    return failure("input_range", "its input range [" + number(model.input_min) + ", " +
-                                      number(model.input_max) + "] is not an interval");
+    return failure("input_range", "its input range [" + significant(model.input_min, 3) + ", " +
+                                      significant(model.input_max, 3) + "] is not an interval");
   }
   const Invertibility inv = model.hysteresis().invertibility();
   if (!inv.invertible) return failure("hysteresis", inv.reason);
@@ -63,13 +55,6 @@ std::pair<double, double> output_range(ActuatorModel model, std::size_t per_peri
   const std::vector<double> y = model.simulate(u, model.sample_period());
   const auto [lo, hi] = std::minmax_element(y.begin() + per_period, y.end());
   return {*lo, *hi};
-}
-
-// A percentage with three decimals ("0.000" for a solver's round-off).
-std::string percent(double v) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(3) << v;
-  return s.str();
 }
 
 }  // namespace
@@ -89,7 +74,7 @@ ModelCheck check_model(const ActuatorModel& model, double dt_s) {
     const double range = hi - lo;
     if (!(std::isfinite(range) && range > 0.0)) {
       return failure("hysteresis", "its output does not rise over its input range (from " +
-                                       number(lo) + " to " + number(hi) + ")");
+                                       significant(lo, 3) + " to " + significant(hi, 3) + ")");
     }
     std::vector<double> targets(2 * per_period);
     for (std::size_t k = 0; k < targets.size(); ++k) {
@@ -116,7 +101,7 @@ ModelCheck check_model(const ActuatorModel& model, double dt_s) {
       c.reason =
           "its inverse does not reach its own output over its input range: driven by it, "
           "the model misses a 1 Hz triangle over 90 % of its range by " +
-          percent(c.inverse_rms_percent) + " % rms, " + percent(c.inverse_max_percent) + " % max";
+          fixed(c.inverse_rms_percent, 3) + " % rms, " + fixed(c.inverse_max_percent, 3) + " % max";
     }
     return c;
   } catch (const NotInvertibleError& e) {
@@ -140,7 +125,7 @@ nlohmann::json to_json(const ModelCheck& check) {
 std::string describe(const ModelCheck& check) {
   if (!check.passed) return "failed: " + check.reason;
   return "passed (driven by its inverse it tracks a triangle over 90 % of its range at " +
-         percent(check.inverse_rms_percent) + " % rms)";
+         fixed(check.inverse_rms_percent, 3) + " % rms)";
 }
 
 }  // namespace hystbench::compensation

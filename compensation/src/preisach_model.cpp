@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "details/validate.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::compensation {
 
@@ -273,13 +274,13 @@ Invertibility PreisachModel::invertibility() const {
     if (p_.densities[i] < 0.0) {
       return Invertibility::failure("preisach", static_cast<int>(i), p_.densities[i],
                                     "preisach density[" + std::to_string(i) +
-                                        "] = " + details::fmt(p_.densities[i]) +
+                                        "] = " + significant(p_.densities[i], 6) +
                                         " is negative: the output would fall as the input rises");
     }
   }
   if (p_.slope < 0.0) {
     return Invertibility::failure("preisach", -1, p_.slope,
-                                  "preisach slope = " + details::fmt(p_.slope) + " is negative");
+                                  "preisach slope = " + significant(p_.slope, 6) + " is negative");
   }
   if (Invertibility map = map_.invertibility(); !map.invertible) {
     map.block = "preisach.output_map";

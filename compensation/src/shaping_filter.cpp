@@ -5,6 +5,7 @@
 #include <string>
 
 #include "details/validate.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::compensation {
 
@@ -13,10 +14,10 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 void require_section(double f_hz, double damping, double dt, const std::string& what) {
   details::require(std::isfinite(f_hz) && f_hz > 0.0 && f_hz < 0.5 / dt,
-                   what + ".frequency_hz must be in (0, " + details::fmt(0.5 / dt) +
-                       ") Hz (below the Nyquist frequency), got " + details::fmt(f_hz));
+                   what + ".frequency_hz must be in (0, " + significant(0.5 / dt, 6) +
+                       ") Hz (below the Nyquist frequency), got " + significant(f_hz, 6));
   details::require(std::isfinite(damping) && damping > 0.0 && damping <= 2.0,
-                   what + ".damping must be in (0, 2], got " + details::fmt(damping));
+                   what + ".damping must be in (0, 2], got " + significant(damping, 6));
 }
 }  // namespace
 
@@ -46,7 +47,7 @@ ShapingFilter::ShapingFilter(const ShapingFilterSpec& spec, double dt_s) : dt_(d
     const std::string what = "feedback.notches[" + std::to_string(i) + "]";
     require_section(n.frequency_hz, n.damping, dt_s, what);
     details::require(std::isfinite(n.depth) && n.depth > 0.0 && n.depth <= 1.0,
-                     what + ".depth must be in (0, 1], got " + details::fmt(n.depth));
+                     what + ".depth must be in (0, 1], got " + significant(n.depth, 6));
     sections_[count_++] = bilinear(kTwoPi * n.frequency_hz, dt_s, 1.0, 2.0 * n.depth * n.damping,
                                    1.0, 2.0 * n.damping, 1.0);
   }

@@ -12,12 +12,12 @@
 #include <thread>
 
 #include "details/clock.hpp"
-#include "details/format.hpp"
 #include "details/json_params.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::drivers {
 
-using details::fixed;
+using compensation::fixed;
 using details::monotonic_ns;
 using details::ParamError;
 using details::Params;

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <string>
 
-#include "details/format.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::drivers {
 
-using details::fixed;
+using compensation::fixed;
 
 Driver::Driver(std::unique_ptr<DriverInterface> driver) : driver_(std::move(driver)) {
   driver_->attach(faults_);

@@ -4,13 +4,13 @@
 #include <cmath>
 #include <vector>
 
-#include "details/format.hpp"
 #include "details/modbus_link.hpp"
 #include "details/rtt_histogram.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::drivers {
 
-using details::fixed;
+using compensation::fixed;
 using details::ModbusLink;
 using details::monotonic_ns;
 

@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
 #include <stdexcept>
+
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::sim {
 
@@ -84,12 +85,6 @@ void append_moving(FrequencyResponseExcitation& x, const FrequencyResponseExcita
   }
 }
 
-std::string percent(double fraction) {
-  char text[16];
-  std::snprintf(text, sizeof text, "%.3g", fraction * 100.0);
-  return text;
-}
-
 }  // namespace
 
 FrequencyResponseExcitation make_frequency_response_excitation(
@@ -150,8 +145,8 @@ FrequencyResponseExcitation make_frequency_response_excitation(
     for (std::size_t p = 0; p < o.transient_periods + o.periods; ++p) {
       if (p == o.transient_periods) {
         x.segments.push_back({x.u.size(), o.periods, centre, amplitude,
-                              percent(rc.operating_fraction) + " % of the span, " +
-                                  percent(amplitude / span) + " % peak"});
+                              compensation::percent(rc.operating_fraction, 3) + " of the span, " +
+                                  compensation::percent(amplitude / span, 3) + " peak"});
       }
       for (std::size_t k = 0; k < x.period; ++k) x.u.push_back(centre + amplitude * shape[k]);
     }

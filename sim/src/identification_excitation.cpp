@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
 
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/sim/signal_generator.hpp"
 
 namespace hystbench::sim {
@@ -26,12 +26,6 @@ std::string indexed(const std::string& field, std::size_t k) {
 
 void require_fraction(double value, const std::string& field) {
   require(value >= 0.0 && value <= 1.0, field, "must be in [0, 1]");
-}
-
-std::string frequency_label(double hz) {
-  std::ostringstream s;
-  s << hz;
-  return s.str();
 }
 
 /// Cosine cycles from `low` up to `low + span` and back, starting and ending at `low`.
@@ -80,7 +74,7 @@ void validate(double range_min, double range_max, double dt_s,
   for (const double f : o.rate_frequencies_hz) fastest_hz = std::max(fastest_hz, f);
   require(dt_s * fastest_hz * o.min_samples_per_period <= 1.0, "dt_s",
           "too coarse: fewer than " + std::to_string(o.min_samples_per_period) +
-              " samples per period at " + frequency_label(fastest_hz) + " Hz");
+              " samples per period at " + compensation::significant(fastest_hz, 6) + " Hz");
 }
 
 class ExcitationBuilder {
@@ -153,7 +147,7 @@ void append_loops(ExcitationBuilder& builder, double range_min, double span,
 
   for (std::size_t k = 0; k < o.rate_frequencies_hz.size(); ++k) {
     const double f = o.rate_frequencies_hz[k];
-    builder.append("rate_" + frequency_label(f) + "hz",
+    builder.append("rate_" + compensation::significant(f, 6) + "hz",
                    cycles_from_bottom(range_min, o.rate_span_fraction * span, f, o.rate_cycles[k]));
   }
 }

@@ -9,6 +9,7 @@
 
 #include "hystbench/common/model_file_io.hpp"
 #include "hystbench/compensation/amplitude_dependence.hpp"
+#include "hystbench/compensation/number_text.hpp"
 #include "offline/details/mimo_commands.hpp"
 #include "offline/details/progress_line.hpp"
 
@@ -74,10 +75,8 @@ AmplitudeRecords amplitude_records(const std::vector<std::string>& paths,
       throw DataFileError(path + ": its columns' units differ from " + paths.front() + "'s");
     } else if (const double dt = r.records.front().dt;
                std::abs(d.sample_period_s - dt) > 1e-9 * dt) {
-      std::ostringstream msg;
-      msg << path << ": sampled at " << 1.0 / d.sample_period_s << " Hz, " << paths.front()
-          << " at " << 1.0 / dt << " Hz";
-      throw DataFileError(msg.str());
+      throw DataFileError(path + ": sampled at " + hc::significant(1.0 / d.sample_period_s, 6) +
+                          " Hz, " + paths.front() + " at " + hc::significant(1.0 / dt, 6) + " Hz");
     }
     r.records.push_back(dynamic_record(d, path));
   }

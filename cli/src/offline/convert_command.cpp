@@ -3,15 +3,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <iomanip>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 
 #include "hystbench/cli/offline/data_table.hpp"
 #include "hystbench/cli/offline/npy_file.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::cli {
 
@@ -147,10 +146,9 @@ int run_convert(const ConvertCommand& cmd, std::ostream& out, std::ostream& err)
     std::vector<const std::vector<double>*> column_pointers;
     column_pointers.reserve(columns.size());
     for (const auto& column : columns) column_pointers.push_back(&column);
-    std::ostringstream rate;
-    rate << std::setprecision(10) << cmd.rate_hz;
+    const std::string rate = compensation::significant(cmd.rate_hz, 10);
     write_csv(cmd.output_path, names, column_pointers,
-              {"hystbench convert u=" + cmd.u_path + " y=" + cmd.y_path + " rate_hz=" + rate.str(),
+              {"hystbench convert u=" + cmd.u_path + " y=" + cmd.y_path + " rate_hz=" + rate,
                "t [s] = (period * " + std::to_string(layout.samples) +
                    " + n_in_period) / rate, from 0 in each realization"},
               kExactDigits);
@@ -170,7 +168,7 @@ int run_convert(const ConvertCommand& cmd, std::ostream& out, std::ostream& err)
       out << "wrote " << cmd.output_path << ": " << rows << " rows, " << u_layout.channels
           << " input and " << y_layout.channels << " output channels, " << layout.realizations
           << " realizations x " << layout.periods << " periods x " << layout.samples
-          << " samples at " << rate.str() << " Hz\n";
+          << " samples at " << rate << " Hz\n";
     }
     return 0;
   } catch (const std::exception& e) {

@@ -12,6 +12,8 @@
 #include <string_view>
 #include <utility>
 
+#include "hystbench/compensation/number_text.hpp"
+
 namespace hystbench::cli {
 
 namespace {
@@ -319,11 +321,10 @@ std::optional<std::string> unit_of(const DataTable& data, const std::string& pat
   }
   auto scaled = scaled_unit(*header, scale);
   if (!scaled) {
-    char factor[32];
-    std::snprintf(factor, sizeof factor, "%g", scale);
-    throw DataFileError(
-        path + ": column '" + name + "' is in " + *header + ", and " + scale_option + " " + factor +
-        " turns it into a unit that cannot be named from it; name it with " + unit_option);
+    throw DataFileError(path + ": column '" + name + "' is in " + *header + ", and " +
+                        scale_option + " " + compensation::significant(scale, 6) +
+                        " turns it into a unit that cannot be named from it; name it with " +
+                        unit_option);
   }
   return scaled;
 }

@@ -8,10 +8,10 @@
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <ostream>
-#include <sstream>
 
 #include "hystbench/cli/remote/bench_client.hpp"
 #include "hystbench/cli/remote/remote_commands.hpp"
+#include "hystbench/compensation/number_text.hpp"
 #include "report/details/gnuplot.hpp"
 
 namespace hystbench::cli {
@@ -22,11 +22,7 @@ namespace {
 
 constexpr const char* kLearned = "learned";
 
-std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
+using compensation::fixed;
 
 double number_or_nan(const json& r, const char* key) {
   return r.contains(key) && r[key].is_number() ? r[key].get<double>() : std::nan("");

@@ -3,10 +3,11 @@
 // with a message that names the offending field and index.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <span>
 #include <stdexcept>
 #include <string>
+
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::compensation::details {
 
@@ -14,19 +15,15 @@ inline void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
 }
 
-/// A value for a message: 6 significant digits.
-inline std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+/// significant(v, 6), by the name identification.cpp and details/diagnosis_record.cpp call it.
+inline std::string fmt(double v) { return significant(v, 6); }
 
 // The messages are built only on failure: these run over whole data columns.
 inline void require_finite(std::span<const double> v, const std::string& field) {
   for (std::size_t i = 0; i < v.size(); ++i) {
     if (!std::isfinite(v[i])) {
       throw std::invalid_argument(field + "[" + std::to_string(i) + "] is not a finite number (" +
-                                  fmt(v[i]) + ")");
+                                  significant(v[i], 6) + ")");
     }
   }
 }
@@ -56,14 +53,14 @@ inline void require_record(std::span<const double> t, std::span<const double> u,
   for (std::size_t k = 1; k < t.size(); ++k) {
     if (!(t[k] > t[k - 1])) {
       throw std::invalid_argument("t must be strictly increasing: t[" + std::to_string(k) +
-                                  "] = " + fmt(t[k]) + " <= t[" + std::to_string(k - 1) +
-                                  "] = " + fmt(t[k - 1]));
+                                  "] = " + significant(t[k], 6) + " <= t[" + std::to_string(k - 1) +
+                                  "] = " + significant(t[k - 1], 6));
     }
   }
   double lo = u.empty() ? 0.0 : u[0], hi = lo;
   for (const double v : u) lo = std::min(lo, v), hi = std::max(hi, v);
-  require(hi > lo,
-          "input u is constant (" + fmt(lo) + "): a constant input does not excite any hysteresis");
+  require(hi > lo, "input u is constant (" + significant(lo, 6) +
+                       "): a constant input does not excite any hysteresis");
 }
 
 inline void require_same_size(std::size_t a, std::size_t b, const std::string& fa,

@@ -16,6 +16,7 @@
 
 #include "config/details/toml_json.hpp"
 #include "hystbench/common/fit_families.hpp"
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/sim/simulated_actuator_config.hpp"
 #include "hystbench/sim/simulated_stage_config.hpp"
 
@@ -25,18 +26,15 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-std::string number_text(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
+// A figure in a message in its shortest exact form: the value the file gave reads as it was.
+using compensation::shortest;
 
 template <typename T>
 std::string range_text(T lo, T hi) {
   // Appended piece by piece: "[" + a + ", " + b + "]" trips GCC 12's -Wrestrict false positive.
   std::string s = "[";
   if constexpr (std::is_floating_point_v<T>) {
-    s.append(number_text(lo)).append(", ").append(number_text(hi));
+    s.append(shortest(lo)).append(", ").append(shortest(hi));
   } else {
     s.append(std::to_string(lo)).append(", ").append(std::to_string(hi));
   }
@@ -47,11 +45,11 @@ std::string number_requirement(double lo, double hi, bool open_low) {
   const bool has_lo = std::isfinite(lo);
   const bool has_hi = std::isfinite(hi);
   if (has_lo && has_hi) {
-    return std::string("must be in ") + (open_low ? "(" : "[") + number_text(lo) + ", " +
-           number_text(hi) + "]";
+    return std::string("must be in ") + (open_low ? "(" : "[") + shortest(lo) + ", " +
+           shortest(hi) + "]";
   }
-  if (has_lo) return (open_low ? "must be > " : "must be >= ") + number_text(lo);
-  if (has_hi) return "must be <= " + number_text(hi);
+  if (has_lo) return (open_low ? "must be > " : "must be >= ") + shortest(lo);
+  if (has_hi) return "must be <= " + shortest(hi);
   return "must be a finite number";
 }
 
@@ -119,7 +117,7 @@ class Section {
       fail(key, std::string("must be a number, got ") + details::toml_type_name(*node));
     }
     const bool in_range = std::isfinite(v) && (open_low ? v > lo : v >= lo) && v <= hi;
-    if (!in_range) fail(key, number_requirement(lo, hi, open_low) + ", got " + number_text(v));
+    if (!in_range) fail(key, number_requirement(lo, hi, open_low) + ", got " + shortest(v));
     out = v;
   }
 
@@ -348,15 +346,15 @@ void check_http(const Section& s, const HttpSection& h) {
 
 void check_limits(const Section& s, const LimitsSection& l) {
   if (!(l.u_min < l.u_max)) {
-    s.fail("u_max", "must be greater than limits.u_min (" + number_text(l.u_min) + "), got " +
-                        number_text(l.u_max));
+    s.fail("u_max", "must be greater than limits.u_min (" + shortest(l.u_min) + "), got " +
+                        shortest(l.u_max));
   }
   if (l.y_min.has_value() != l.y_max.has_value()) {
     s.fail(l.y_min ? "y_max" : "y_min", "limits.y_min and limits.y_max must be given together");
   }
   if (l.y_min && !(*l.y_min < *l.y_max)) {
-    s.fail("y_max", "must be greater than limits.y_min (" + number_text(*l.y_min) + "), got " +
-                        number_text(*l.y_max));
+    s.fail("y_max", "must be greater than limits.y_min (" + shortest(*l.y_min) + "), got " +
+                        shortest(*l.y_max));
   }
 }
 
@@ -374,13 +372,13 @@ void check_pid(const Section& s, const PidSection& p, const LoopSection& loop) {
   for (const auto& [key, hz] : {std::pair{"output_filter_hz", p.output_filter_hz.value_or(0.0)},
                                 std::pair{"derivative_filter_hz", p.derivative_filter_hz}}) {
     if (hz >= nyquist) {
-      s.fail(key, "must be below loop.rate_hz / 2 = " + number_text(nyquist) + " Hz, got " +
-                      number_text(hz));
+      s.fail(key,
+             "must be below loop.rate_hz / 2 = " + shortest(nyquist) + " Hz, got " + shortest(hz));
     }
   }
   if (!(p.u_fb_min <= p.u_fb_max)) {
-    s.fail("u_fb_max", "must be at least pid.u_fb_min (" + number_text(p.u_fb_min) + "), got " +
-                           number_text(p.u_fb_max));
+    s.fail("u_fb_max", "must be at least pid.u_fb_min (" + shortest(p.u_fb_min) + "), got " +
+                           shortest(p.u_fb_max));
   }
 }
 

@@ -3,11 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 
+#include "hystbench/compensation/number_text.hpp"
 #include "runs/details/excite_program.hpp"
 #include "runs/details/feedback_design.hpp"
 #include "runs/details/identify_program.hpp"

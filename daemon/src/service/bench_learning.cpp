@@ -5,6 +5,7 @@
 
 #include <mutex>
 
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/daemon/service/bench.hpp"
 #include "runs/details/learned_drive.hpp"
 #include "runs/details/track_learning.hpp"
@@ -42,10 +43,9 @@ void Bench::announce_trials(details::TrackLearning& learning, const std::string&
     spdlog::error("run {}: the learning failed: {}", run_id, e.what());
   }
   for (const details::TrackLearning::Trial& t : scored) {
-    char rms[32];
-    std::snprintf(rms, sizeof rms, "%.3f", t.rms_percent);
     const std::string stage = "learning: trial " + std::to_string(t.trial) + " of " +
-                              std::to_string(asked) + ", rms " + rms + " %";
+                              std::to_string(asked) + ", rms " +
+                              compensation::fixed(t.rms_percent, 3) + " %";
     {
       std::lock_guard lock(mutex_);
       if (!active_run_.is_null()) active_run_["stage"] = stage;

@@ -4,12 +4,12 @@
 // identify_session.hpp).
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <mutex>
 #include <span>
 #include <string>
 
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "service/details/identify_session.hpp"
@@ -24,13 +24,6 @@ namespace {
 // The precondition sweep of a short segment [s]: 150 V in 50 ms, still slow against a mode of a
 // few hundred Hz and beyond.
 constexpr double kShortPreconditionS = 0.1;
-
-// A sine's frequency in a run id and a stage: "500", "200.027".
-std::string frequency_text(double hz) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", hz);
-  return text;
-}
 
 }  // namespace
 
@@ -62,9 +55,9 @@ bool Bench::verify_next_candidate() {
       ++s.next;
       continue;
     }
-    // Six digits: a mode's quarter (200.027 Hz) and a twentieth of the loop rate (200 Hz) are
-    // two segments, two logs.
-    const std::string hz = sine ? frequency_text(job.sine_hz) : "";
+    // Its frequency in the run id to six digits ("500", "200.027"): a mode's quarter (200.027 Hz)
+    // and a twentieth of the loop rate (200 Hz) are two segments, two logs.
+    const std::string hz = sine ? hc::significant(job.sine_hz, 6) : "";
     const std::string sine_label = sine ? "-sine-" + hz + "hz" : "";
     p->run_id = s.result["run_id"].get<std::string>() + "-verify-" + c.label + sine_label;
     json header = {{"run",

@@ -7,9 +7,9 @@
 // middle sine then plays the model kept (Bench members on the supervisor thread;
 // identify_session.hpp).
 #include <cmath>
-#include <cstdio>
 #include <string>
 
+#include "hystbench/compensation/number_text.hpp"
 #include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
@@ -91,10 +91,9 @@ void Bench::settle_delay_trim() {
     const double samples = trimmed.fit.model.delay_s() / dt_;
     ext.fit.model = std::move(trimmed.fit.model);
     ext.fit.delay_samples = static_cast<int>(std::lround(samples));
-    char note[96];
-    std::snprintf(note, sizeof note, "delay trimmed on the bench's %.6g Hz sine to %.3f samples",
-                  s.fast_hz, samples);
-    ext.fit.notes.emplace_back(note);
+    ext.fit.notes.push_back("delay trimmed on the bench's " +
+                            compensation::significant(s.fast_hz, 6) + " Hz sine to " +
+                            compensation::fixed(samples, 3) + " samples");
   }
   s.candidates.resize(*s.trim);
   s.trim.reset();

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <set>
 
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/drivers/driver_interface.hpp"
 #include "hystbench/sim/simulated_stage_config.hpp"
 
@@ -13,11 +14,6 @@ std::string join(std::initializer_list<const char*> names) {
   std::string out;
   for (const char* n : names) out += (out.empty() ? "" : ", ") + std::string(n);
   return out;
-}
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
 }
 }  // namespace
 
@@ -52,8 +48,9 @@ double Params::number(const char* key, double fallback, double lo, double hi) co
   }
   const double d = v->get<double>();
   if (!std::isfinite(d) || d < lo || d > hi) {
-    throw ParamError(key_path(key) + ": must be in [" + fmt(lo) + ", " + fmt(hi) + "], got " +
-                     fmt(d));
+    throw ParamError(key_path(key) + ": must be in [" + compensation::significant(lo, 6) + ", " +
+                     compensation::significant(hi, 6) + "], got " +
+                     compensation::significant(d, 6));
   }
   return d;
 }

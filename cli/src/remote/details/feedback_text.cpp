@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <limits>
-#include <sstream>
 #include <string>
+
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::cli::details {
 
@@ -13,11 +13,9 @@ using nlohmann::json;
 
 namespace {
 
-std::string num(const json& v, int digits) {
-  if (!v.is_number()) return "-";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v.get<double>();
-  return s.str();
+// A figure with `digits` decimals, "-" where the reply holds none.
+std::string fixed_or_dash(const json& v, int digits) {
+  return v.is_number() ? compensation::fixed(v.get<double>(), digits) : "-";
 }
 
 // The least (or most) of `key` over the margins, "-" where none is finite.
@@ -29,7 +27,7 @@ std::string extreme(const json& margins, const char* key, bool least, int digits
     const double v = m[key].get<double>();
     best = least ? std::min(best, v) : std::max(best, v);
   }
-  return std::isfinite(best) ? num(best, digits) : "-";
+  return std::isfinite(best) ? compensation::fixed(best, digits) : "-";
 }
 
 }  // namespace
@@ -44,26 +42,27 @@ void print_feedback(std::ostream& out, const json& f) {
     out << ": " << f.value("structure", std::string("?"));
   } else {
     const json& law = f.value("law", json::object());
-    out << " gains: kp " << num(law.value("kp", json()), 4) << ", ki "
-        << num(law.value("ki", json()), 1) << " /s, kd " << num(law.value("kd", json()), 6)
-        << " s on the target";
+    out << " gains: kp " << fixed_or_dash(law.value("kp", json()), 4) << ", ki "
+        << fixed_or_dash(law.value("ki", json()), 1) << " /s, kd "
+        << fixed_or_dash(law.value("kd", json()), 6) << " s on the target";
   }
   out << ", through " << f.value("through", std::string("?")) << "\n"
       << "  loop            crossover " << extreme(margins, "crossover_hz", true, 0) << "-"
       << extreme(margins, "crossover_hz", false, 0) << " Hz, closed-loop bandwidth "
-      << num(f.value("bandwidth_hz", json()), 0) << " Hz; |S| at -3 dB from "
-      << num(f.value("rejection_bandwidth_hz", json()), 0) << " Hz, at -20 dB from "
-      << num(f.value("tenfold_rejection_hz", json()), 0) << " Hz\n"
+      << fixed_or_dash(f.value("bandwidth_hz", json()), 0) << " Hz; |S| at -3 dB from "
+      << fixed_or_dash(f.value("rejection_bandwidth_hz", json()), 0) << " Hz, at -20 dB from "
+      << fixed_or_dash(f.value("tenfold_rejection_hz", json()), 0) << " Hz\n"
       << "  margins         gain >= " << extreme(margins, "gain_margin_db", true, 1)
       << " dB, phase >= " << extreme(margins, "phase_margin_deg", true, 1)
       << " deg, peak |S| <= " << extreme(margins, "peak_sensitivity_db", false, 1) << " dB on "
-      << margins.size() << " responses (targets " << num(t.value("gain_margin_db", json()), 0)
-      << " dB, " << num(t.value("phase_margin_deg", json()), 0) << " deg, "
-      << num(t.value("peak_sensitivity_db", json()), 0) << " dB)";
+      << margins.size() << " responses (targets "
+      << fixed_or_dash(t.value("gain_margin_db", json()), 0) << " dB, "
+      << fixed_or_dash(t.value("phase_margin_deg", json()), 0) << " deg, "
+      << fixed_or_dash(t.value("peak_sensitivity_db", json()), 0) << " dB)";
   const json& robust = f.value("robust", json::object());
   if (robust.value("stable", false)) {
-    out << "; stable with the gain +/-" << num(robust.value("gain", json()), 2)
-        << " and the modes moved +/-" << num(robust.value("mode", json()), 2);
+    out << "; stable with the gain +/-" << fixed_or_dash(robust.value("gain", json()), 2)
+        << " and the modes moved +/-" << fixed_or_dash(robust.value("mode", json()), 2);
   }
   out << "\n";
   if (f.contains("limited_by")) {
@@ -71,9 +70,9 @@ void print_feedback(std::ostream& out, const json& f) {
         << f.value("limit", std::string()) << "\n";
   }
   if (const json& at = f.value("at_reference", json()); at.is_object()) {
-    out << "  at reference    |S| " << num(at.value("sensitivity", json()), 2) << " at "
-        << num(at.value("frequency_hz", json()), 0) << " Hz: " << at.value("note", std::string())
-        << "\n";
+    out << "  at reference    |S| " << fixed_or_dash(at.value("sensitivity", json()), 2) << " at "
+        << fixed_or_dash(at.value("frequency_hz", json()), 0)
+        << " Hz: " << at.value("note", std::string()) << "\n";
   }
   if (f.value("forced", false)) {
     out << "  forced          these gains break a target: " << f.value("broken", std::string())
@@ -98,28 +97,28 @@ void print_frequency_response(std::ostream& out, const json& s) {
       f_hi = std::max(f_hi, band[1].get<double>());
     }
   }
-  out << "  response        " << list.size() << " measured, " << num(f_lo, 0) << "-" << num(f_hi, 0)
-      << " Hz: low-frequency gain " << num(g_lo, 3) << "-" << num(g_hi, 3)
-      << " um/V, coherence >= " << num(coherence, 3) << ", output noise " << num(noise * 1e3, 1)
-      << " nm rms\n";
+  out << "  response        " << list.size() << " measured, " << fixed_or_dash(f_lo, 0) << "-"
+      << fixed_or_dash(f_hi, 0) << " Hz: low-frequency gain " << fixed_or_dash(g_lo, 3) << "-"
+      << fixed_or_dash(g_hi, 3) << " um/V, coherence >= " << fixed_or_dash(coherence, 3)
+      << ", output noise " << fixed_or_dash(noise * 1e3, 1) << " nm rms\n";
   const json& modes = s.value("modes", json::array());
   if (!modes.empty()) {
     out << "  modes          ";
     for (const json& m : modes) {
-      out << " " << num(m.value("frequency_hz", json()), 0) << " Hz (zeta "
-          << num(m.value("damping_ratio", json()), 3) << ", +" << num(m.value("peak_db", json()), 1)
-          << " dB)";
+      out << " " << fixed_or_dash(m.value("frequency_hz", json()), 0) << " Hz (zeta "
+          << fixed_or_dash(m.value("damping_ratio", json()), 3) << ", +"
+          << fixed_or_dash(m.value("peak_db", json()), 1) << " dB)";
     }
     out << "\n";
   }
   if (s.contains("moving")) {
     const json& m = s["moving"];
-    out << "  while moving    at " << num(m.value("frequency_hz", json()), 0) << " Hz the "
-        << m.value("lagging", std::string("?")) << " ramps lag by "
-        << num(m.value("lag_deg", json()), 2) << " +/- " << num(m.value("lag_noise_deg", json()), 2)
-        << " deg: ";
+    out << "  while moving    at " << fixed_or_dash(m.value("frequency_hz", json()), 0)
+        << " Hz the " << m.value("lagging", std::string("?")) << " ramps lag by "
+        << fixed_or_dash(m.value("lag_deg", json()), 2) << " +/- "
+        << fixed_or_dash(m.value("lag_noise_deg", json()), 2) << " deg: ";
     if (m.value("zero_hz", json()).is_number()) {
-      out << "a rate law's zero at " << num(m["zero_hz"], 0) << " Hz\n";
+      out << "a rate law's zero at " << fixed_or_dash(m["zero_hz"], 0) << " Hz\n";
     } else {
       out << "no rate law's zero\n";
     }
@@ -127,10 +126,10 @@ void print_frequency_response(std::ostream& out, const json& s) {
   if (s.contains("change")) {
     const json& c = s["change"];
     out << "  since           " << c.value("since", std::string("?")) << ": gain x"
-        << num(c.value("gain_ratio", json()), 3);
+        << fixed_or_dash(c.value("gain_ratio", json()), 3);
     if (c.contains("mode_hz")) {
-      out << ", first mode " << num(c["mode_hz"][0], 0) << " -> " << num(c["mode_hz"][1], 0)
-          << " Hz";
+      out << ", first mode " << fixed_or_dash(c["mode_hz"][0], 0) << " -> "
+          << fixed_or_dash(c["mode_hz"][1], 0) << " Hz";
     }
     out << "\n";
   }

@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <numbers>
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/feedback_plant.hpp"
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/sim/frequency_response_excitation.hpp"
 #include "runs/details/response_program.hpp"
@@ -24,12 +24,6 @@ constexpr double kDeg = 180.0 / std::numbers::pi;
 
 // A figure for JSON: an infinite margin (no crossing in the band) as null.
 json finite_or_null(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
-
-std::string text(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
 
 // The responses the bench designs on: the active model's, else its last measured; null if none.
 const hc::StageResponses* stored_responses(const RunContext& ctx) {
@@ -54,8 +48,9 @@ const hc::StageResponses& measured_responses(const RunContext& ctx) {
   if (std::abs(r->rate_hz - ctx.settings.loop.rate_hz) > 1e-9 * r->rate_hz) {
     throw common::CommandError("stale_frequency_response",
                                "the frequency response was measured at a loop rate of " +
-                                   text(r->rate_hz) + " Hz and the loop runs at " +
-                                   text(ctx.settings.loop.rate_hz) + " Hz: run `hystbench frf`");
+                                   hc::significant(r->rate_hz, 3) + " Hz and the loop runs at " +
+                                   hc::significant(ctx.settings.loop.rate_hz, 3) +
+                                   " Hz: run `hystbench frf`");
   }
   return *r;
 }
@@ -141,7 +136,8 @@ std::optional<hc::MeasuredResponse> along_the_loop(const RunContext& ctx,
   hc::MeasuredResponse moving = r.responses[m.response];
   for (auto& v : moving.response) v *= m.ratio / gain;
   for (auto& v : moving.noise) v *= m.ratio / gain;
-  moving.label = r.responses[m.response].label + ", along the loop (x" + text(m.ratio) +
+  moving.label = r.responses[m.response].label + ", along the loop (x" +
+                 hc::significant(m.ratio, 3) +
                  ": the model's steepest branch over its slope at rest)";
   return moving;
 }
@@ -172,8 +168,9 @@ hc::LoopDesignOptions design_options(const RunContext& ctx, const hc::StageRespo
     if (r.moving->zero_hz > 0.0) {
       o.rhp_zero_hz = r.moving->zero_hz;
       o.rhp_zero_reason = "the stage while it moves (its " + r.moving->lagging +
-                          " ramps lag the others by " + text(r.moving->lag_deg) + " deg at " +
-                          text(r.moving->frequency_hz) + " Hz: a rate law)";
+                          " ramps lag the others by " + hc::significant(r.moving->lag_deg, 3) +
+                          " deg at " + hc::significant(r.moving->frequency_hz, 3) +
+                          " Hz: a rate law)";
     }
   } else if (rate_dependent(ctx)) {
     // Responses from before the moving part was measured: the model's law stands for it.
@@ -272,17 +269,19 @@ hc::FeedbackLaw hand_law(const PidSection& c, const FeedbackGainsRequest& g, dou
 
 std::string refusal(const hc::LoopEvaluation& e, const std::vector<hc::MeasuredResponse>& plants,
                     const hc::LoopTargets& t) {
-  std::string s = "these gains break the loop's targets (gain margin >= " + text(t.gain_margin_db) +
-                  " dB, phase margin >= " + text(t.phase_margin_deg) +
-                  " deg, peak |S| <= " + text(t.peak_sensitivity_db) +
+  std::string s = "these gains break the loop's targets (gain margin >= " +
+                  hc::significant(t.gain_margin_db, 3) +
+                  " dB, phase margin >= " + hc::significant(t.phase_margin_deg, 3) +
+                  " deg, peak |S| <= " + hc::significant(t.peak_sensitivity_db, 3) +
                   " dB) on the measured responses: " + e.failure + ". Margins:";
   for (std::size_t i = 0; i < e.margins.size(); ++i) {
     const hc::LoopMargins& m = e.margins[i];
     s += " " + plants[i].label + ": " + (m.stable ? "stable" : "UNSTABLE") + ", gain margin " +
-         (std::isfinite(m.gain_margin_db) ? text(m.gain_margin_db) + " dB" : "none") +
+         (std::isfinite(m.gain_margin_db) ? hc::significant(m.gain_margin_db, 3) + " dB" : "none") +
          ", phase margin " +
-         (std::isfinite(m.phase_margin_deg) ? text(m.phase_margin_deg) + " deg" : "none") +
-         ", peak |S| " + text(m.peak_sensitivity_db) + " dB;";
+         (std::isfinite(m.phase_margin_deg) ? hc::significant(m.phase_margin_deg, 3) + " deg"
+                                            : "none") +
+         ", peak |S| " + hc::significant(m.peak_sensitivity_db, 3) + " dB;";
   }
   return s + " `hystbench tune` prints the designed loop; force_gains runs them anyway";
 }
@@ -297,7 +296,7 @@ std::string plan_key(const RunContext& ctx, hc::CompensatorKind kind,
                      const FeedbackGainsRequest& gains, const hc::StageResponses& r) {
   const PidSection& c = ctx.settings.pid;
   auto number = [](const std::optional<double>& a, const std::optional<double>& b) {
-    return a ? text(*a) : b ? text(*b) : "-";
+    return a ? hc::significant(*a, 3) : b ? hc::significant(*b, 3) : "-";
   };
   return std::to_string(ctx.model_generation) + "/" + std::string(hc::to_string(kind)) + "/" +
          r.run_id + "/" +
@@ -392,7 +391,7 @@ FeedbackPlan lowered_plan(const RunContext& ctx, hc::CompensatorKind kind,
   p.summary.update(summary_json(p, r, o));
   p.summary["lowered"] = {{"by", factor}, {"why", why}};
   p.summary["limited_by"] = "coupling";
-  p.summary["limit"] = "lowered x" + text(factor) + " from its design alone: " +
+  p.summary["limit"] = "lowered x" + hc::significant(factor, 3) + " from its design alone: " +
                        why.value("meaning", std::string("the stage's coupling"));
   keep_plan(ctx, plan_key(ctx, kind, gains, r), p);
   return p;

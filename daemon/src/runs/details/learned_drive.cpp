@@ -5,9 +5,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include "hystbench/common/command_error.hpp"
+#include "hystbench/compensation/number_text.hpp"
 #include "runs/details/folder_name.hpp"
 
 namespace hystbench::daemon::details {
@@ -40,24 +40,15 @@ std::string drive_name(const std::string& name) {
   return ends_with(base, kSuffix) ? base : base + kSuffix;
 }
 
-std::string number(double v) {
-  std::ostringstream s;
-  s.precision(17);
-  s << v;
-  return s.str();
-}
-
 std::string describe(const LearnedFor& f) {
-  std::ostringstream s;
-  s.precision(6);
-  if (f.reference == "upload") {
-    s << "an uploaded trajectory " << f.signature << " (passes of " << f.period_samples
-      << " ticks)";
-  } else {
-    s << "a " << f.frequency_hz << " Hz " << f.reference << " (" << f.period_samples << " ticks)";
-  }
-  s << " from " << f.min_um << " to " << f.max_um << " um at " << f.rate_hz << " Hz";
-  return s.str();
+  using compensation::significant;
+  const std::string ticks = std::to_string(f.period_samples) + " ticks";
+  const std::string what =
+      f.reference == "upload"
+          ? "an uploaded trajectory " + f.signature + " (passes of " + ticks + ")"
+          : "a " + significant(f.frequency_hz, 6) + " Hz " + f.reference + " (" + ticks + ")";
+  return what + " from " + significant(f.min_um, 6) + " to " + significant(f.max_um, 6) +
+         " um at " + significant(f.rate_hz, 6) + " Hz";
 }
 
 // The u and u_compensator columns of a drive's CSV as save_learned_drive writes it.
@@ -177,7 +168,8 @@ void check_learned_drive(const LearnedDrive& drive, const LearnedFor& run) {
       f.reference == "upload" || run.reference == "upload"
           ? "upload the same trajectory (the same file, --approach and resampling), or learn "
             "this one"
-          : "give its extremes (--min " + number(f.min_um) + " --max " + number(f.max_um) +
+          : "give its extremes (--min " + compensation::significant(f.min_um, 17) + " --max " +
+                compensation::significant(f.max_um, 17) +
                 "), or load the model it was learned with, whose range they come from; or "
                 "learn this reference";
   throw common::CommandError("bad_params",

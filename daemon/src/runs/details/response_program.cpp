@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <optional>
 #include <span>
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/measured_modes.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -208,9 +208,8 @@ hc::StageResponses measure_responses(const RunProgram& run,
     }
     const std::span<const double> y = std::span(run.records.y).subspan(s.first, length);
     if (const auto level = clip_level(y)) {
-      char text[64];
-      std::snprintf(text, sizeof text, "%.4g", *level);
-      clipped += (clipped.empty() ? "" : "; ") + s.label + " at " + text + " um";
+      clipped +=
+          (clipped.empty() ? "" : "; ") + s.label + " at " + hc::significant(*level, 4) + " um";
       continue;
     }
     try {

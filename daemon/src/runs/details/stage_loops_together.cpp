@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
-#include <sstream>
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/loop_analysis.hpp"
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/compensation/stage_interaction.hpp"
 
 namespace hystbench::daemon::details {
@@ -113,13 +113,13 @@ json design_loops_together(hc::CompensatorKind kind, const FeedbackGainsRequest&
                            " down to a fiftieth of their gain: the coupling is too "
                            "strong for a loop per axis");
   }
-  std::ostringstream meaning;
-  meaning << "the axes' loops designed alone reach " << std::setprecision(3) << alone->worst.peak
-          << " together through the coupling (at " << std::setprecision(4) << alone->worst.peak_hz
-          << " Hz); every loop is lowered by one factor until they stay "
-          << "under " << kInteractionLimit;
+  const std::string meaning =
+      "the axes' loops designed alone reach " + hc::significant(alone->worst.peak, 3) +
+      " together through the coupling (at " + hc::significant(alone->worst.peak_hz, 4) +
+      " Hz); every loop is lowered by one factor until they stay under " +
+      hc::significant(kInteractionLimit, 4);
   const json why = {
-      {"peak_alone", alone->worst.peak}, {"limit", kInteractionLimit}, {"meaning", meaning.str()}};
+      {"peak_alone", alone->worst.peak}, {"limit", kInteractionLimit}, {"meaning", meaning}};
   for (std::size_t a = 0; a < contexts.size(); ++a) {
     lowered_plan(contexts[a], kind, gains, *plans[a], low, why);
   }

@@ -3,17 +3,16 @@
 #include <cmath>
 #include <complex>
 #include <initializer_list>
-#include <iomanip>
 #include <limits>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <string_view>
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/loop_analysis.hpp"
+#include "hystbench/compensation/number_text.hpp"
 #include "hystbench/compensation/stage_coupling_error.hpp"
 #include "hystbench/compensation/stage_dynamic_decoupling.hpp"
 #include "hystbench/compensation/stage_interaction.hpp"

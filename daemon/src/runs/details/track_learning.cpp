@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "hystbench/compensation/number_text.hpp"
+
 namespace hystbench::daemon::details {
 
 namespace hc = compensation;
@@ -137,7 +139,7 @@ bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
                                     : "twice (the first settles the actuator)";
   if (!stopped_) {
     why_ = at_floor ? "trial " + std::to_string(t.trial) + " reached the bench's floor (" +
-                          std::to_string(t.rms_um / floor_um_).substr(0, 4) +
+                          hc::significant(t.rms_um / floor_um_, 3) +
                           "x the part of the error that does not repeat, measured on trials "
                           "0 and 1, the same drive): learning on would learn what does not "
                           "repeat; the best trial's drive plays " +

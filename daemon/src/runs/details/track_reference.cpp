@@ -3,27 +3,21 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::daemon::details {
 
+using compensation::significant;
 using nlohmann::json;
 
 namespace {
 
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
-
 /// Names the upload's sample k as the client knows it (the k-th value it sent).
 std::string sample_words(const Upload& u, std::size_t k) {
-  return "sample " + std::to_string(k) + " (t = " + num(u.time_of(k)) + " s" +
+  return "sample " + std::to_string(k) + " (t = " + significant(u.time_of(k), 6) + " s" +
          (u.source.empty() ? "" : " of " + u.source) + ")";
 }
 
@@ -32,12 +26,12 @@ void check_range(const Upload& u, double lo, double hi, const char* unit, const 
   for (std::size_t k = 0; k < u.values.size(); ++k) {
     const double v = u.values[k];
     if (v < lo - 1e-9 || v > hi + 1e-9) {
-      throw common::CommandError("out_of_range",
-                                 std::string(what) + " " + sample_words(u, k) + ": " + num(v) +
-                                     " " + unit + " is beyond the " +
-                                     (unit[0] == 'V' ? "output" : "actuator") + " range [" +
-                                     num(lo) + ", " + num(hi) + "] " + unit + "; nothing ran",
-                                 {{"sample", k}, {"t_s", u.time_of(k)}});
+      throw common::CommandError(
+          "out_of_range",
+          std::string(what) + " " + sample_words(u, k) + ": " + significant(v, 6) + " " + unit +
+              " is beyond the " + (unit[0] == 'V' ? "output" : "actuator") + " range [" +
+              significant(lo, 6) + ", " + significant(hi, 6) + "] " + unit + "; nothing ran",
+          {{"sample", k}, {"t_s", u.time_of(k)}});
     }
   }
 }
@@ -51,9 +45,9 @@ void check_slew(const Upload& u, const std::vector<double>& v, double max_step, 
       const std::size_t s = u.sample_from(static_cast<double>(k) * dt_s);
       throw common::CommandError("slew_limit",
                                  std::string(what) + " " + sample_words(u, s) + ": moves " +
-                                     num(step / dt_s) + " " + unit +
-                                     "/s, faster than the slew limit " + num(limit_per_s) + " " +
-                                     unit + "/s; nothing ran",
+                                     significant(step / dt_s, 6) + " " + unit +
+                                     "/s, faster than the slew limit " +
+                                     significant(limit_per_s, 6) + " " + unit + "/s; nothing ran",
                                  {{"sample", s}, {"t_s", u.time_of(s)}});
     }
   }
@@ -221,7 +215,7 @@ TrackReference uploaded_reference(const Upload& upload, const ReferenceLimits& l
   std::vector<double> traj = upload.resampled(dt);
   if (traj.size() < 2) {
     throw common::CommandError("bad_params", "reference upload '" + upload.name + "' lasts " +
-                                                 num(upload.duration_s()) +
+                                                 significant(upload.duration_s(), 6) +
                                                  " s: shorter than two loop periods");
   }
   const double max_step = limits.slew_um_per_s * dt;
@@ -310,7 +304,7 @@ std::vector<double> checked_drive(const Upload& upload, double u_min, double u_m
   std::vector<double> drive = upload.resampled(dt_s);
   if (drive.size() < 2) {
     throw common::CommandError("bad_params", "drive upload '" + upload.name + "' lasts " +
-                                                 num(upload.duration_s()) +
+                                                 significant(upload.duration_s(), 6) +
                                                  " s: shorter than two loop periods");
   }
   check_slew(upload, drive, slew_v_per_s * dt_s, dt_s, slew_v_per_s, "V", "drive");
