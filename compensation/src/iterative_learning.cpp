@@ -55,7 +55,8 @@ constexpr double kWrapShare = 0.5;
 // and that delay, exactly at its frequency (a trial holds whole harmonics). Not where they leave
 // less than this gain (an inverse would amplify the noise there). A trial pair's changes do not
 // show the bench's answer there: a hysteresis answers the fundamental's change with every
-// harmonic (their coherence at the sixth was 0.45 on the loopback).
+// harmonic, so a change above Q is only partly the drive's (docs/measurements.md, "Learning a
+// repeated reference"; IterativeLearning.AFastTrialLearnsAboveQThroughTheTimedMode).
 constexpr double kHighBandOfRate = 0.45;
 constexpr double kHighBandMinGain = 0.25;
 constexpr std::size_t kHighBandDelayPairs = 3;
@@ -107,10 +108,10 @@ std::optional<double> clearest_lag(const std::vector<double>& cu, const std::vec
   return static_cast<double>(from + static_cast<std::ptrdiff_t>(best)) +
          std::clamp(vertex, -0.5, 0.5);
 }
-// ... and once the error Q leaves out is at least this share of what it passes (rms): before,
+// ... and once the error Q leaves out is at least this share of what it passes (rms): below it,
 // the error there is mostly what the fundamental's changes make of it, which the next trial's
-// change remakes (at 500 Hz with every effect on, learning it from the start took ten trials to
-// 0.25 % against 0.16 % with this share, and twenty to 0.069 against 0.057 %).
+// change remakes, and learning it slows the learning (docs/measurements.md, "Learning a repeated
+// reference": the fast trials with every effect on).
 constexpr double kHighBandShare = 0.5;
 // The circular run of a section starts this many of its slowest time constants early.
 constexpr double kWarmupTimeConstants = 20.0;

@@ -1,3 +1,6 @@
+// The simulated actuator's effects one at a time: its modified-PI truth, creep, delay, modes,
+// the sensor's filter and noise, the converters' grids, saturation, drift, rate dependence,
+// reset, and the configuration it refuses.
 #include "hystbench/sim/simulated_actuator.hpp"
 
 #include <gtest/gtest.h>
@@ -5,57 +8,21 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <iostream>
 #include <numeric>
 #include <random>
 #include <set>
 #include <vector>
 
-#include "hystbench/compensation/diagnosis.hpp"
-#include "hystbench/compensation/identification.hpp"
-#include "hystbench/compensation/preisach_identification.hpp"
-#include "hystbench/sim/identification_excitation.hpp"
 #include "hystbench/sim/major_loop_metrics.hpp"
+#include "support/simulated_actuator_runs.hpp"
 
 namespace hs = hystbench::sim;
+using hystbench::testing::every_effect_off;
+using hystbench::testing::ramp;
+using hystbench::testing::run;
+using hystbench::testing::run_held;
 
 namespace {
-
-/// A perfect linear actuator: every effect off (the hysteresis becomes its linear equivalent).
-hs::SimulatedActuatorConfig bare() {
-  hs::SimulatedActuatorConfig c;
-  c.hysteresis.enabled = false;
-  c.rate_dependence.enabled = false;
-  c.creep.enabled = false;
-  c.dynamics.enabled = false;
-  c.sensor_filter.enabled = false;
-  c.delay.enabled = false;
-  c.sensor_noise.enabled = false;
-  c.dac.enabled = false;
-  c.adc.enabled = false;
-  c.thermal_drift.enabled = false;
-  c.input_saturation.enabled = false;
-  c.displacement_saturation.enabled = false;
-  return c;
-}
-
-struct Run {
-  std::vector<double> measured;
-  std::vector<double> truth;
-};
-
-Run run(hs::SimulatedActuator& actuator, const std::vector<double>& u) {
-  Run r;
-  for (const double v : u) {
-    r.measured.push_back(actuator.step(v));
-    r.truth.push_back(actuator.true_position());
-  }
-  return r;
-}
-
-Run run_held(hs::SimulatedActuator& actuator, double u, std::size_t n) {
-  return run(actuator, std::vector<double>(n, u));
-}
 
 double rms(const std::vector<double>& x) {
   return std::sqrt(std::inner_product(x.begin(), x.end(), x.begin(), 0.0) / x.size());
@@ -84,224 +51,7 @@ std::vector<double> random_input(std::size_t n, double lo, double hi) {
   return u;
 }
 
-std::vector<double> ramp(double from, double to, std::size_t n) {
-  std::vector<double> u(n);
-  for (std::size_t k = 0; k < n; ++k) u[k] = from + (to - from) * k / (n - 1.0);
-  return u;
-}
-
 }  // namespace
-
-TEST(SimulatedActuatorDefault, Resembles150VStackWith45umRangeAnd15To20PercentHysteresis) {
-  const hs::SimulatedActuatorConfig config;
-  EXPECT_EQ(config.input.min_v, 0.0);
-  EXPECT_EQ(config.input.max_v, 150.0);
-  const auto m = hs::measure_major_loop(config, 1e-4, 1.0, 3);
-  RecordProperty("range_um", std::to_string(m.range_um));
-  RecordProperty("hysteresis_percent", std::to_string(m.hysteresis_percent));
-  EXPECT_GT(m.range_um, 40.0);
-  EXPECT_LT(m.range_um, 50.0);
-  EXPECT_GE(m.hysteresis_percent, 15.0);
-  EXPECT_LE(m.hysteresis_percent, 20.0);
-  // Modes well above the tracking band, lightly damped; a sensor of its own bandwidth; creep.
-  EXPECT_TRUE(config.dynamics.enabled);
-  ASSERT_EQ(config.dynamics.natural_frequencies_hz.size(), 2u);
-  for (std::size_t i = 0; i < 2; ++i) {
-    EXPECT_GE(config.dynamics.natural_frequencies_hz[i], 2000.0);
-    EXPECT_LE(config.dynamics.natural_frequencies_hz[i], 10000.0);
-    EXPECT_LE(config.dynamics.damping_ratios[i], 0.1);
-  }
-  EXPECT_TRUE(config.sensor_filter.enabled);
-  EXPECT_TRUE(config.creep.enabled);
-  EXPECT_EQ(config.creep.law, hs::CreepLaw::kLogarithmic);
-  EXPECT_EQ(config.hysteresis.kind, hs::HysteresisKind::kPreisach);
-}
-
-/// Largest departure from point symmetry of the periodic major loop, over its range: a classical
-/// PI loop is point-symmetric about its center, y_up(u) + y_down(u_min + u_max - u) = const.
-double loop_asymmetry(const hs::SimulatedActuatorConfig& c) {
-  hs::SimulatedActuator a(c, 1e-3);
-  const auto up = ramp(0.0, 150.0, 1501), down = ramp(150.0, 0.0, 1501);
-  run(a, up);
-  run(a, down);
-  const auto y_up = run(a, up).truth;
-  const auto y_down = run(a, down).truth;  // y_down[k] is at u = 150 - up[k]
-  const double reference = y_up.front() + y_down.front();
-  double worst = 0.0;
-  for (std::size_t k = 0; k < y_up.size(); ++k) {
-    worst = std::max(worst, std::abs(y_up[k] + y_down[k] - reference));
-  }
-  return worst / (y_up.back() - y_up.front());
-}
-
-TEST(SimulatedActuatorDefault, TheLoopIsAsymmetricAndItsTopSaturates) {
-  auto c = bare();
-  c.hysteresis.enabled = true;
-  EXPECT_GT(loop_asymmetry(c), 0.01);
-  // The ascending branch flattens over the top tenth of the range: few relays are left there.
-  hs::SimulatedActuator a(c, 1e-3);
-  run(a, ramp(0.0, 150.0, 1501));
-  run(a, ramp(150.0, 0.0, 1501));
-  const auto up = run(a, ramp(0.0, 150.0, 1501)).truth;
-  const double slope_mid = (up[825] - up[675]) / 15.0;
-  const double slope_top = (up[1500] - up[1350]) / 15.0;
-  EXPECT_LT(slope_top, 0.85 * slope_mid) << "mid " << slope_mid << " top " << slope_top;
-
-  // The modified PI's loop is asymmetric through its dead zones, and symmetric without them.
-  auto m = bare();
-  m.hysteresis = hs::SimulatedActuatorConfig::modified_pi_truth().hysteresis;
-  EXPECT_GT(loop_asymmetry(m), 0.01);
-  m.hysteresis.dead_zone_thresholds_um = {0.0};
-  m.hysteresis.dead_zone_weights = {1.0};
-  EXPECT_LT(loop_asymmetry(m), 1e-9);
-}
-
-TEST(SimulatedActuatorDefault, NoModelFamilyIsTheTruth) {
-  const hs::SimulatedActuatorConfig c;
-  EXPECT_THROW(hs::make_truth_model(c, 1e-4), std::invalid_argument);
-  for (const auto& [what, change] :
-       std::vector<std::pair<std::string, void (*)(hs::SimulatedActuatorConfig&)>>{
-           {"creep.law",
-            [](hs::SimulatedActuatorConfig& x) { x.creep.law = hs::CreepLaw::kLogarithmic; }},
-           {"sensor_filter",
-            [](hs::SimulatedActuatorConfig& x) { x.sensor_filter.enabled = true; }},
-           {"mode", [](hs::SimulatedActuatorConfig& x) {
-              x.dynamics.natural_frequencies_hz = {3000.0, 8000.0};
-              x.dynamics.damping_ratios = {0.05, 0.03};
-              x.dynamics.mode_gains = {0.9, 0.1};
-            }}}) {
-    auto m = hs::SimulatedActuatorConfig::modified_pi_truth();
-    change(m);
-    EXPECT_THROW(hs::make_truth_model(m, 1e-4), std::invalid_argument) << what;
-  }
-  EXPECT_NO_THROW(hs::make_truth_model(hs::SimulatedActuatorConfig::modified_pi_truth(), 1e-4));
-}
-
-/// Held-out rms error [µm] of the bench's model family `kind` fitted to a noise-free record of
-/// the static hysteresis of `c` (every other effect off) at 1 kHz.
-double heldout_rms_of_fit(hs::SimulatedActuatorConfig c, hystbench::compensation::ModelKind kind) {
-  const auto h = c.hysteresis;
-  c = bare();
-  c.hysteresis = h;
-  const double dt = 1e-3;
-  hs::SimulatedActuator a(c, dt);
-  const auto x = hs::identification_excitation(0.0, 150.0, dt, {});
-  a.reset(x.samples.front());
-  std::vector<double> t, y;
-  for (std::size_t k = 0; k < x.samples.size(); ++k) {
-    t.push_back(static_cast<double>(k) * dt);
-    y.push_back(a.step(x.samples[k]));
-  }
-  hystbench::compensation::FitOptions o;
-  o.kind = kind;
-  o.delay_samples = 0;
-  return hystbench::compensation::fit_model(t, x.samples, y, o).heldout.rmse;
-}
-
-TEST(SimulatedActuatorDefault, NoModelFamilyFitsItsHysteresisExactly) {
-  namespace hc = hystbench::compensation;
-  // The modified-PI truth is recovered to within the fit's numerics; the Preisach truth is not,
-  // by any family: what a fit leaves is the model's error, not noise.
-  const auto mpi = hs::SimulatedActuatorConfig::modified_pi_truth();
-  const double own = heldout_rms_of_fit(mpi, hc::ModelKind::kModifiedPi);
-  EXPECT_LT(own, 0.01);
-  for (const auto kind :
-       {hc::ModelKind::kPi, hc::ModelKind::kModifiedPi, hc::ModelKind::kCoupledPlayPi}) {
-    const double other = heldout_rms_of_fit(hs::SimulatedActuatorConfig{}, kind);
-    RecordProperty(std::string(hc::to_string(kind)) + "_heldout_um", std::to_string(other));
-    EXPECT_GT(other, 0.03) << hc::to_string(kind);
-    EXPECT_GT(other, 5.0 * own) << hc::to_string(kind);
-  }
-}
-
-// The Preisach family (a density on a 24 x 24 grid, no parametric form) on the same record:
-// the default truth's loop, which every PI family misses by 0.08-1.1 um, is held to a few
-// hundredths of a um on the record's held-out quarter.
-TEST(SimulatedActuatorDefault, ThePreisachFamilyHoldsItsLoop) {
-  namespace hc = hystbench::compensation;
-  hs::SimulatedActuatorConfig c = bare();
-  c.hysteresis = hs::SimulatedActuatorConfig{}.hysteresis;
-  const double dt = 1e-3;
-  hs::SimulatedActuator a(c, dt);
-  const auto x = hs::identification_excitation(0.0, 150.0, dt, {});
-  a.reset(x.samples.front());
-  std::vector<double> y;
-  for (const double u : x.samples) y.push_back(a.step(u));
-  const hc::PreisachFit fit = hc::fit_preisach(x.samples, y);
-  RecordProperty("preisach_heldout_um", std::to_string(fit.heldout_rms));
-  RecordProperty("preisach_smoothness", std::to_string(fit.smoothness));
-  std::cout << "preisach 24 x 24: held-out " << fit.heldout_rms << " um, smoothness "
-            << fit.smoothness << "\n";
-  const double cpi =
-      heldout_rms_of_fit(hs::SimulatedActuatorConfig{}, hc::ModelKind::kCoupledPlayPi);
-  EXPECT_LT(fit.heldout_rms, 0.5 * cpi);
-  // Through fit_model (`fit --model preisach`): the same plane, its held-out error alike.
-  const double by_name =
-      heldout_rms_of_fit(hs::SimulatedActuatorConfig{}, hc::ModelKind::kPreisach);
-  RecordProperty("fit_model_preisach_heldout_um", std::to_string(by_name));
-  EXPECT_LT(by_name, 0.5 * cpi);
-  // On the modified-PI truth (plays, then dead zones on the output: not a Preisach model).
-  c.hysteresis = hs::SimulatedActuatorConfig::modified_pi_truth().hysteresis;
-  hs::SimulatedActuator b(c, dt);
-  b.reset(x.samples.front());
-  y.clear();
-  for (const double u : x.samples) y.push_back(b.step(u));
-  const hc::PreisachFit other = hc::fit_preisach(x.samples, y);
-  std::cout << "preisach 24 x 24 on the modified-PI truth: held-out " << other.heldout_rms
-            << " um\n";
-  RecordProperty("preisach_on_mpi_truth_heldout_um", std::to_string(other.heldout_rms));
-}
-
-/// A noise-free record of the static hysteresis of `c` (every other effect off) at 1 kHz.
-struct HysteresisRecord {
-  std::vector<double> t, u, y;
-};
-HysteresisRecord hysteresis_record(const hs::SimulatedActuatorConfig::Hysteresis& h) {
-  hs::SimulatedActuatorConfig c = bare();
-  c.hysteresis = h;
-  const double dt = 1e-3;
-  hs::SimulatedActuator a(c, dt);
-  HysteresisRecord r;
-  r.u = hs::identification_excitation(0.0, 150.0, dt, {}).samples;
-  a.reset(r.u.front());
-  for (std::size_t k = 0; k < r.u.size(); ++k) {
-    r.t.push_back(static_cast<double>(k) * dt);
-    r.y.push_back(a.step(r.u[k]));
-  }
-  return r;
-}
-
-/// `diagnose --model` of a modified PI fitted to the record (as `fit --model mpi` writes it).
-hystbench::compensation::Diagnosis diagnose_an_mpi_of(const HysteresisRecord& r) {
-  namespace hc = hystbench::compensation;
-  hc::FitOptions fit;
-  fit.kind = hc::ModelKind::kModifiedPi;
-  fit.delay_samples = 0;
-  hc::DiagnosisOptions o;
-  o.baseline = hc::fit_model(r.t, r.u, r.y, fit).model;
-  return hc::diagnose(r.t, r.u, r.y, o);
-}
-
-// The diagnosis names the loop's shape where the plays miss it, and swaps the operator: on the
-// default truth a modified PI leaves the shape, which a Preisach plane holds; on the modified-PI
-// truth the same model is the truth, and the plane is not named.
-TEST(SimulatedActuatorDefault, TheDiagnosisNamesTheLoopShapeTheModifiedPiMisses) {
-  namespace hc = hystbench::compensation;
-  const hc::Diagnosis d =
-      diagnose_an_mpi_of(hysteresis_record(hs::SimulatedActuatorConfig{}.hysteresis));
-  std::cout << "default truth: " << d.verdict << "\n";
-  ASSERT_EQ(d.cause, hc::Cause::kLoopShape) << d.verdict;
-  EXPECT_EQ(d.extended.hysteresis().kind(), hc::ModelKind::kPreisach);
-  const double gain = d.baseline_heldout.rmse / d.extended_heldout.rmse;
-  RecordProperty("default_truth_loop_shape_gain", std::to_string(gain));
-  EXPECT_GT(gain, 2.0);
-
-  const hc::Diagnosis m = diagnose_an_mpi_of(
-      hysteresis_record(hs::SimulatedActuatorConfig::modified_pi_truth().hysteresis));
-  std::cout << "modified-PI truth: " << m.verdict << "\n";
-  for (const hc::NamedCause& n : m.causes) EXPECT_NE(n.cause, hc::Cause::kLoopShape) << m.verdict;
-  EXPECT_EQ(m.extended.hysteresis().kind(), hc::ModelKind::kModifiedPi);
-}
 
 TEST(SimulatedActuator, TheModifiedPiTruthIsItsModel) {
   auto c = hs::SimulatedActuatorConfig::modified_pi_truth();
@@ -323,10 +73,10 @@ TEST(SimulatedActuator, TheModifiedPiTruthIsItsModel) {
 }
 
 TEST(SimulatedActuator, HysteresisDisabledIsTheLinearMapThroughTheSameLoopEnds) {
-  auto with = bare();
+  auto with = every_effect_off();
   with.hysteresis.enabled = true;
   const auto h = hs::measure_major_loop(with, 1e-3);
-  const auto l = hs::measure_major_loop(bare(), 1e-3);
+  const auto l = hs::measure_major_loop(every_effect_off(), 1e-3);
   EXPECT_GT(h.hysteresis_percent, 10.0);
   EXPECT_NEAR(l.width_at_mid_um, 0.0, 1e-9);
   EXPECT_NEAR(l.range_um, h.range_um, 1e-3 * h.range_um);
@@ -335,10 +85,10 @@ TEST(SimulatedActuator, HysteresisDisabledIsTheLinearMapThroughTheSameLoopEnds) 
 
 TEST(SimulatedActuator, CreepIsLogarithmicInTimeAfterAStep) {
   const double dt = 1e-3;
-  auto c = bare();
+  auto c = every_effect_off();
   c.creep.enabled = true;
   hs::SimulatedActuator creeping(c, dt);
-  hs::SimulatedActuator plain(bare(), dt);
+  hs::SimulatedActuator plain(every_effect_off(), dt);
   creeping.reset(0.0);
   plain.reset(0.0);
   const double y_rest = creeping.true_position();
@@ -361,7 +111,7 @@ TEST(SimulatedActuator, CreepIsLogarithmicInTimeAfterAStep) {
 
 TEST(SimulatedActuator, TheModifiedPiTruthsCreepIsLagsOfTheInput) {
   const double dt = 1e-3;
-  auto c = bare();
+  auto c = every_effect_off();
   c.hysteresis = hs::SimulatedActuatorConfig::modified_pi_truth().hysteresis;
   c.hysteresis.enabled = false;
   c.creep = hs::SimulatedActuatorConfig::modified_pi_truth().creep;
@@ -375,14 +125,14 @@ TEST(SimulatedActuator, TheModifiedPiTruthsCreepIsLagsOfTheInput) {
 
 TEST(SimulatedActuator, DelayShiftsTheCrossCorrelationPeak) {
   const double dt = 1e-4;
-  auto c = bare();
+  auto c = every_effect_off();
   c.delay.enabled = true;
   c.delay.delay_s = 2e-3;
   hs::SimulatedActuator delayed(c, dt);
   const auto u = random_input(4000, 0.0, 150.0);
   EXPECT_EQ(best_lag(u, run(delayed, u).measured, 60), 20);
 
-  hs::SimulatedActuator plain(bare(), dt);
+  hs::SimulatedActuator plain(every_effect_off(), dt);
   EXPECT_EQ(best_lag(u, run(plain, u).measured, 60), 0);
 }
 
@@ -416,7 +166,7 @@ FrequencyResponse respond(const hs::SimulatedActuatorConfig& c, double f, double
 
 TEST(SimulatedActuator, TwoModesShapeTheFrequencyResponse) {
   const double dt = 1e-5;  // 100 kHz: both modes below the Nyquist frequency
-  auto c = bare();
+  auto c = every_effect_off();
   c.dynamics.enabled = true;
   const double static_gain = respond(c, 100.0, dt).truth.first;
   std::vector<double> gain;
@@ -435,7 +185,7 @@ TEST(SimulatedActuator, TwoModesShapeTheFrequencyResponse) {
                   0.12 / (1.0 - std::pow(1000.0 / 8000.0, 2)),
               0.02);
 
-  hs::SimulatedActuator rigid(bare(), dt);
+  hs::SimulatedActuator rigid(every_effect_off(), dt);
   rigid.reset(0.0);
   const auto z = run_held(rigid, 75.0, 2000).truth;
   EXPECT_EQ(*std::max_element(z.begin(), z.end()), z.front());
@@ -444,7 +194,7 @@ TEST(SimulatedActuator, TwoModesShapeTheFrequencyResponse) {
 
 TEST(SimulatedActuator, TheSensorSeesThePositionThroughItsLowPass) {
   const double dt = 1e-5;
-  auto c = bare();
+  auto c = every_effect_off();
   c.sensor_filter.enabled = true;
   const double fc = c.sensor_filter.cutoff_hz, zeta = c.sensor_filter.damping_ratio;
   for (const double f : {500.0, 2000.0, 5000.0}) {
@@ -460,7 +210,7 @@ TEST(SimulatedActuator, TheSensorSeesThePositionThroughItsLowPass) {
 }
 
 TEST(SimulatedActuator, SensorNoiseHasTheConfiguredRmsAndIsSeeded) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.sensor_noise.enabled = true;
   c.sensor_noise.rms_um = 0.02;
   hs::SimulatedActuator noisy(c, 1e-4);
@@ -477,13 +227,13 @@ TEST(SimulatedActuator, SensorNoiseHasTheConfiguredRmsAndIsSeeded) {
   hs::SimulatedActuator other_seed(c, 1e-4);
   EXPECT_NE(run_held(other_seed, 75.0, 40000).measured, r.measured);
 
-  hs::SimulatedActuator quiet(bare(), 1e-4);
+  hs::SimulatedActuator quiet(every_effect_off(), 1e-4);
   const auto q = run_held(quiet, 75.0, 1000);
   EXPECT_EQ(q.measured, q.truth);
 }
 
 TEST(SimulatedActuator, AdcPutsTheMeasurementOnItsGrid) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.adc = {true, 10, -10.0, 60.0};
   const double lsb = 70.0 / 1023.0;
   hs::SimulatedActuator a(c, 1e-3);
@@ -496,13 +246,13 @@ TEST(SimulatedActuator, AdcPutsTheMeasurementOnItsGrid) {
   const std::set<double> levels(r.measured.begin(), r.measured.end());
   EXPECT_LT(levels.size(), 1024u);
 
-  hs::SimulatedActuator fine(bare(), 1e-3);
+  hs::SimulatedActuator fine(every_effect_off(), 1e-3);
   const auto f = run(fine, ramp(0.0, 150.0, 5000)).measured;
   EXPECT_EQ(std::set<double>(f.begin(), f.end()).size(), f.size());
 }
 
 TEST(SimulatedActuator, DacPutsTheAppliedVoltageOnItsGrid) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.dac = {true, 8, 0.0, 150.0};
   const double lsb = 150.0 / 255.0;
   hs::SimulatedActuator a(c, 1e-3);
@@ -516,13 +266,13 @@ TEST(SimulatedActuator, DacPutsTheAppliedVoltageOnItsGrid) {
   }
   EXPECT_LE(positions.size(), 256u);
 
-  hs::SimulatedActuator fine(bare(), 1e-3);
+  hs::SimulatedActuator fine(every_effect_off(), 1e-3);
   fine.step(1.234567);
   EXPECT_EQ(fine.applied_input(), 1.234567);
 }
 
 TEST(SimulatedActuator, InputSaturationClampsToTheAmplifierRange) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.input_saturation.enabled = true;
   hs::SimulatedActuator clamped(c, 1e-3);
   hs::SimulatedActuator reference(c, 1e-3);
@@ -533,14 +283,14 @@ TEST(SimulatedActuator, InputSaturationClampsToTheAmplifierRange) {
   clamped.step(-30.0);
   EXPECT_EQ(clamped.applied_input(), 0.0);
 
-  hs::SimulatedActuator open(bare(), 1e-3);
+  hs::SimulatedActuator open(every_effect_off(), 1e-3);
   open.step(200.0);
   EXPECT_EQ(open.applied_input(), 200.0);
   EXPECT_GT(open.true_position(), reference.true_position());
 }
 
 TEST(SimulatedActuator, DisplacementSaturationClampsTheTruePosition) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.displacement_saturation = {true, 5.0, 30.0};
   hs::SimulatedActuator stopped(c, 1e-3);
   const auto r = run(stopped, ramp(0.0, 150.0, 1000));
@@ -548,14 +298,14 @@ TEST(SimulatedActuator, DisplacementSaturationClampsTheTruePosition) {
   EXPECT_EQ(*std::min_element(r.truth.begin(), r.truth.end()), 5.0);
   EXPECT_EQ(r.measured, r.truth);
 
-  hs::SimulatedActuator free(bare(), 1e-3);
+  hs::SimulatedActuator free(every_effect_off(), 1e-3);
   const auto f = run(free, ramp(0.0, 150.0, 1000)).truth;
   EXPECT_GT(*std::max_element(f.begin(), f.end()), 40.0);
 }
 
 TEST(SimulatedActuator, SinusoidalDriftMovesTheHeldOutputSlowly) {
   const double dt = 1e-2;
-  auto c = bare();
+  auto c = every_effect_off();
   c.thermal_drift.enabled = true;
   c.thermal_drift.shape = hs::DriftShape::kSinusoid;
   c.thermal_drift.amplitude_um = 0.5;
@@ -567,20 +317,20 @@ TEST(SimulatedActuator, SinusoidalDriftMovesTheHeldOutputSlowly) {
   for (std::size_t k = 1; k < y.size(); ++k) largest_step = std::max(largest_step, y[k] - y[k - 1]);
   EXPECT_LE(largest_step, 2.0 * M_PI * 0.5 / 40.0 * dt * 1.001);
 
-  hs::SimulatedActuator steady(bare(), dt);
+  hs::SimulatedActuator steady(every_effect_off(), dt);
   const auto z = run_held(steady, 75.0, 1000).truth;
   EXPECT_EQ(z.front(), z.back());
 }
 
 TEST(SimulatedActuator, RandomWalkDriftWandersWithinItsLimit) {
   const double dt = 1e-2;
-  auto c = bare();
+  auto c = every_effect_off();
   c.thermal_drift.enabled = true;
   c.thermal_drift.shape = hs::DriftShape::kRandomWalk;
   c.thermal_drift.random_walk_um_per_sqrt_s = 0.05;
   c.thermal_drift.random_walk_limit_um = 0.3;
   hs::SimulatedActuator drifting(c, dt);
-  hs::SimulatedActuator steady(bare(), dt);
+  hs::SimulatedActuator steady(every_effect_off(), dt);
   const auto y = run_held(drifting, 75.0, 60000).truth;  // 10 min
   const double base = run_held(steady, 75.0, 1).truth.front();
   std::vector<double> increments;
@@ -597,7 +347,7 @@ TEST(SimulatedActuator, RandomWalkDriftWandersWithinItsLimit) {
 }
 
 TEST(SimulatedActuator, RateDependenceWidensTheLoopWithTheSquareRootOfTheRate) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.hysteresis.enabled = true;
   c.rate_dependence.enabled = true;
   const auto quasi_static = hs::measure_major_loop(c, 1e-4, 0.01).width_at_mid_um;
@@ -626,7 +376,7 @@ TEST(SimulatedActuator, RateDependenceWidensTheLoopWithTheSquareRootOfTheRate) {
 // Thresholds that widen with |du/dt|: the loop widens in proportion to the rate (sixteen times
 // the rate, about sixteen times the widening), and its tips stay where the input reverses.
 TEST(SimulatedActuator, WideningThresholdsWidenTheLoopInProportionToTheRate) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.hysteresis.enabled = true;
   c.rate_dependence.enabled = true;
   c.rate_dependence.mechanism = hs::RateMechanism::kSwitchingThresholds;
@@ -673,7 +423,7 @@ TEST(SimulatedActuator, ResetRepeatsARunExactly) {
 }
 
 TEST(SimulatedActuator, ResetSettlesAtTheInput) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.hysteresis.enabled = true;
   c.creep.enabled = true;
   c.dynamics.enabled = true;
@@ -686,7 +436,7 @@ TEST(SimulatedActuator, ResetSettlesAtTheInput) {
 }
 
 TEST(SimulatedActuator, NonFiniteInputHoldsThePreviousInput) {
-  hs::SimulatedActuator a(bare(), 1e-3);
+  hs::SimulatedActuator a(every_effect_off(), 1e-3);
   a.step(42.0);
   const double before = a.true_position();
   a.step(std::nan(""));
@@ -697,7 +447,7 @@ TEST(SimulatedActuator, NonFiniteInputHoldsThePreviousInput) {
 }
 
 TEST(SimulatedActuator, ReportsItsInputRangeAndConfig) {
-  auto c = bare();
+  auto c = every_effect_off();
   c.input = {-20.0, 120.0};
   hs::SimulatedActuator a(c, 1e-3);
   EXPECT_EQ(a.input_min(), -20.0);
