@@ -38,10 +38,10 @@ json identify_history_json(const json& fit_request) {
 }
 
 // The settle hold and the precondition sweep leave creep moving. The Preisach plane chooses its
-// output map with creep lags beside its cells, and they take its held-out error on the loopback's
-// identify record from 0.23 to 0.06 um; the modified PI alternates four fits of the record for
-// them and gained nothing there (the triangle 0.78 % either way, at 3.5x the time). Kept only
-// where they lower the held-out error.
+// output map with creep lags beside its cells, which lower its held-out error on the loopback's
+// identify record; the modified PI alternates several fits of the record for them and gains
+// nothing on the triangle there, at several times the cost (docs/measurements.md, "The Preisach
+// family through identify"). Kept only where they lower the held-out error.
 bool tries_creep(std::optional<hc::ModelKind> kind) { return kind == hc::ModelKind::kPreisach; }
 
 // The fit's options for identify's request (details::BuiltRun::fit), at the fit rate: records
