@@ -150,12 +150,13 @@ void Bench::continue_identify() {
   queue_parts_alone();
   if (verify_next_candidate()) return;
   IdentifySession& s = *session_;
-  if (s.extend && !s.extension_tried && !s.interrupted && !quit_.load()) {
+  const bool go_on = !s.interrupted && !quit_.load();
+  if (go_on && s.extend && s.step == IdentifyStep::kVerifyingCandidates) {
     if (play_while_diagnosing() && verify_next_candidate()) return;
     if (extend_identified_model() && verify_next_candidate()) return;
   }
-  if (!s.responses_tried && !s.interrupted && !quit_.load()) {
-    s.responses_tried = true;
+  if (go_on && s.step != IdentifyStep::kMeasuringResponses) {
+    s.step = IdentifyStep::kMeasuringResponses;
     if (measure_stage_responses()) return;
   }
   finish_identify();

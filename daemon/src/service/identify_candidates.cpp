@@ -217,7 +217,9 @@ void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
     continue_identify();
     // The rest start once the first segment is on the loop (building its drive does not share
     // the second core with them).
-    if (session_ && !session_->extension_tried) diagnose_candidates_ahead(*session_);
+    if (session_ && session_->step == IdentifyStep::kVerifyingCandidates) {
+      diagnose_candidates_ahead(*session_);
+    }
     return;
   } catch (const std::exception& e) {
     result.report["fit_error"] = e.what();

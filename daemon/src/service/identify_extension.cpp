@@ -235,7 +235,7 @@ bool Bench::play_while_diagnosing() {
 
 bool Bench::extend_identified_model() {
   IdentifySession& s = *session_;
-  s.extension_tried = true;
+  s.step = IdentifyStep::kExtending;
   s.base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
   const IdentifyCandidate& base = s.candidates[s.base];
   {

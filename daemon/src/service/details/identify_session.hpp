@@ -146,7 +146,18 @@ struct VerificationJob {
   bool short_precondition = false;
 };
 
+/// Where identify is after its excitation. The steps come in this order, each entered once:
+/// continue_identify() moves on when the step's runs are played (or none is left to play). An
+/// interrupted session (stop, abort, fault, shutdown) skips to its end from any step.
+enum class IdentifyStep {
+  kVerifyingCandidates,  ///< the fitted candidates' triangle and sines on the loop
+  kExtending,  ///< the diagnosis of the record ran (or failed); its extension, delay trim and
+               ///< parts alone verified on the loop
+  kMeasuringResponses,  ///< frf's run for the chosen model (last; nothing left after it)
+};
+
 struct Bench::IdentifySession {
+  IdentifyStep step = IdentifyStep::kVerifyingCandidates;
   nlohmann::json result;  ///< the identify run's result so far (run.finished adds the model)
   std::string log_path;
   std::size_t samples = 0;
@@ -161,7 +172,6 @@ struct Bench::IdentifySession {
   std::size_t unscored = 0;
   bool extend = true;                   ///< diagnose and extend the chosen model
   bool swap_operator = true;            ///< the extension may swap the operator (loop_shape)
-  bool extension_tried = false;         ///< the diagnosis ran (or failed): no second one
   std::size_t base = 0;                 ///< the candidate the extension extends
   std::optional<std::size_t> extended;  ///< the extended candidate, when there is one
   double fast_hz = 0.0;                 ///< the fast sine's frequency [Hz]; 0 = none
@@ -192,7 +202,6 @@ struct Bench::IdentifySession {
   bool interrupted = false;   ///< stop, abort or fault during a verification
   /// The stage's frequency responses, measured once the model is chosen (frf's run, last):
   /// the options of the run while it plays, what it measured, and what the result says of it.
-  bool responses_tried = false;
   std::optional<sim::FrequencyResponseExcitationOptions> response_options;
   std::optional<compensation::StageResponses> responses;
   nlohmann::json responses_result;
