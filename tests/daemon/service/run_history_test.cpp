@@ -112,15 +112,22 @@ TEST_F(RunHistoryFolder, TheListOutlivesARestartAndSkipsWhatIsNotAResult) {
   EXPECT_EQ(runs[1]["finished"].get<std::string>().size(), 20u);
 }
 
-TEST(RunHistory, IdentifysOwnModelErrorIsNotItsFigureButAnExcitesIs) {
+TEST(RunHistory, IdentifysOwnModelErrorIsNotItsFigureButAnExcitesIsWhereAModelPredicted) {
   hdd::RunHistory h;
   h.add(
       {{"run_id", "i"}, {"kind", "identify"}, {"end", "fault"}, {"model_rms_error_percent", 5.0}});
+  h.add({{"run_id", "line"},
+         {"kind", "excite"},
+         {"end", "completed"},
+         {"y_model", "linear map of limits.y_min..y_max, stepped with u"},
+         {"model_rms_error_percent", 4.2}});
   h.add({{"run_id", "e"},
          {"kind", "excite"},
          {"end", "completed"},
+         {"y_model", "the active model, stepped with u"},
          {"model_rms_error_percent", 0.7}});
   const json runs = h.runs()["runs"];
   EXPECT_EQ(runs[0]["rms_error_percent"], 0.7);         // the model's error on the excitation
-  EXPECT_TRUE(runs[1]["rms_error_percent"].is_null());  // a model before it, or none: not its own
+  EXPECT_TRUE(runs[1]["rms_error_percent"].is_null());  // the straight line's: measures nothing
+  EXPECT_TRUE(runs[2]["rms_error_percent"].is_null());  // a model before it, or none: not its own
 }

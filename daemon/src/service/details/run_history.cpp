@@ -42,8 +42,9 @@ json worst_axis(const json& holder, const char* key) {
 
 // The figure a list shows for a run, the first there is of: its tracking error (a stage's worst
 // axis's); identify's verification through its model (a stage identify's worst held-out fit);
-// the model's error on the run (excite). Identify's own model error is not one: it is the
-// previous model's, or the straight line's before any.
+// the model's error on the run (excite), where a model predicted it (its y_model says so).
+// Identify's own model error is not one: it is the previous model's, or the straight line's
+// before any; nor is an excite's before any model (the straight line of the limits).
 json headline_error(const json& result) {
   if (json e = finite_number(result, "rms_error_percent"); !e.is_null()) return e;
   if (json e = worst_axis(result, "rms_error_percent"); !e.is_null()) return e;
@@ -54,7 +55,10 @@ json headline_error(const json& result) {
     if (json e = worst_axis(*stage_model, "heldout_rms_error_percent"); !e.is_null()) return e;
   }
   if (result.value("kind", "") == "identify") return nullptr;
-  return finite_number(result, "model_rms_error_percent");
+  const auto y_model = result.find("y_model");
+  const bool model_predicted = y_model != result.end() && y_model->is_string() &&
+                               y_model->get<std::string>().rfind("the active model", 0) == 0;
+  return model_predicted ? finite_number(result, "model_rms_error_percent") : json(nullptr);
 }
 
 json string_or_null(const json& result, const char* key) {
