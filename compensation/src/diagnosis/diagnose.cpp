@@ -1,5 +1,3 @@
-#include "hystbench/compensation/diagnosis.hpp"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -7,14 +5,15 @@
 #include <stdexcept>
 #include <string>
 
-#include "details/after_reversals.hpp"
-#include "details/diagnosis_baseline.hpp"
-#include "details/diagnosis_candidates.hpp"
-#include "details/diagnosis_extension_fit.hpp"
-#include "details/diagnosis_left_out.hpp"
-#include "details/diagnosis_record.hpp"
 #include "details/diagnosis_signals.hpp"
 #include "details/record_startup.hpp"
+#include "diagnosis/details/after_reversals.hpp"
+#include "diagnosis/details/baseline.hpp"
+#include "diagnosis/details/candidates.hpp"
+#include "diagnosis/details/extension_fit.hpp"
+#include "diagnosis/details/left_out.hpp"
+#include "diagnosis/details/record.hpp"
+#include "hystbench/compensation/diagnosis.hpp"
 
 namespace hystbench::compensation {
 

@@ -1,4 +1,4 @@
-#include "details/diagnosis_record.hpp"
+#include "diagnosis/details/record.hpp"
 
 #include <algorithm>
 #include <cmath>

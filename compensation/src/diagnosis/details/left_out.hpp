@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "details/diagnosis_extension_fit.hpp"
-#include "details/diagnosis_record.hpp"
+#include "diagnosis/details/extension_fit.hpp"
+#include "diagnosis/details/record.hpp"
 
 namespace hystbench::compensation::details {
 

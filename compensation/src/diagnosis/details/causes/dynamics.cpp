@@ -16,7 +16,7 @@
 #include <optional>
 #include <utility>
 
-#include "details/diagnosis_candidates.hpp"
+#include "diagnosis/details/candidates.hpp"
 
 namespace hystbench::compensation::details {
 

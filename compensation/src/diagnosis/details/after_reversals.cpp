@@ -1,4 +1,4 @@
-#include "details/after_reversals.hpp"
+#include "diagnosis/details/after_reversals.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "details/diagnosis_candidates.hpp"
+#include "diagnosis/details/candidates.hpp"
 
 #include <algorithm>
 #include <cstdio>

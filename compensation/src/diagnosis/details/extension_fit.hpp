@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "details/designs.hpp"
-#include "details/diagnosis_record.hpp"
+#include "diagnosis/details/record.hpp"
 #include "hystbench/compensation/second_order_dynamics.hpp"
 
 namespace hystbench::compensation::details {

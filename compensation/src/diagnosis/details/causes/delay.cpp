@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "details/diagnosis_candidates.hpp"
+#include "diagnosis/details/candidates.hpp"
 
 namespace hystbench::compensation::details {
 

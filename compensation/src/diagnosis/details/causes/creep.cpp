@@ -11,7 +11,7 @@
 #include <optional>
 #include <vector>
 
-#include "details/diagnosis_candidates.hpp"
+#include "diagnosis/details/candidates.hpp"
 
 namespace hystbench::compensation::details {
 

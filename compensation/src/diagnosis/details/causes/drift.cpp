@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "details/diagnosis_candidates.hpp"
+#include "diagnosis/details/candidates.hpp"
 
 namespace hystbench::compensation::details {
 

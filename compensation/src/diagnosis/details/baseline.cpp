@@ -1,9 +1,9 @@
-#include "details/diagnosis_baseline.hpp"
+#include "diagnosis/details/baseline.hpp"
 
 #include <cmath>
 #include <limits>
 
-#include "details/diagnosis_candidates.hpp"
+#include "diagnosis/details/candidates.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"

@@ -1,4 +1,4 @@
-#include "details/diagnosis_extension_fit.hpp"
+#include "diagnosis/details/extension_fit.hpp"
 
 #include <algorithm>
 #include <array>

@@ -6,8 +6,8 @@
 #include <cstddef>
 #include <span>
 
-#include "details/diagnosis_record.hpp"
 #include "details/diagnosis_signals.hpp"
+#include "diagnosis/details/record.hpp"
 
 namespace hystbench::compensation::details {
 

@@ -1,4 +1,4 @@
-#include "details/diagnosis_left_out.hpp"
+#include "diagnosis/details/left_out.hpp"
 
 #include <exception>
 #include <utility>

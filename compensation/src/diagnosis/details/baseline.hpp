@@ -3,7 +3,7 @@
 // structure of a given model to refit the extensions from.
 #include <string>
 
-#include "details/diagnosis_extension_fit.hpp"
+#include "diagnosis/details/extension_fit.hpp"
 
 namespace hystbench::compensation::details {
 

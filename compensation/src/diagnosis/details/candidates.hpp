@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "details/diagnosis_extension_fit.hpp"
-#include "details/diagnosis_record.hpp"
 #include "details/diagnosis_signals.hpp"
+#include "diagnosis/details/extension_fit.hpp"
+#include "diagnosis/details/record.hpp"
 
 namespace hystbench::compensation::details {
 

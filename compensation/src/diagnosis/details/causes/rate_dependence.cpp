@@ -13,8 +13,8 @@
 #include <limits>
 #include <optional>
 
-#include "details/diagnosis_candidates.hpp"
 #include "details/rate_groups.hpp"
+#include "diagnosis/details/candidates.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 
 namespace hystbench::compensation::details {

@@ -12,8 +12,8 @@
 #include <string>
 
 #include "details/constrained_lsq.hpp"
-#include "details/diagnosis_baseline.hpp"
-#include "details/diagnosis_candidates.hpp"
+#include "diagnosis/details/baseline.hpp"
+#include "diagnosis/details/candidates.hpp"
 #include "hystbench/compensation/preisach_identification.hpp"
 
 namespace hystbench::compensation::details {
