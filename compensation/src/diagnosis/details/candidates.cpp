@@ -1,7 +1,6 @@
 #include "diagnosis/details/candidates.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -20,18 +19,6 @@ std::size_t simplest_within(const std::vector<ExtensionFit>& fits, double parsim
   std::size_t i = 0;
   while (i + 1 < fits.size() && !(fits[i].fit.rmse <= best * (1.0 + parsimony))) ++i;
   return i;
-}
-
-std::string num(double v, int digits) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
-
-std::string percent(double fraction) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.0f %%", 100.0 * fraction);
-  return buf;
 }
 
 }  // namespace hystbench::compensation::details

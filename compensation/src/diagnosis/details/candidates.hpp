@@ -9,6 +9,7 @@
 
 #include "details/diagnosis_signals.hpp"
 #include "diagnosis/details/extension_fit.hpp"
+#include "diagnosis/details/number_text.hpp"
 #include "diagnosis/details/record.hpp"
 
 namespace hystbench::compensation::details {
@@ -84,9 +85,5 @@ std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
 /// Index of the first of `fits` (simplest first) whose fit-part rms is within `parsimony` (a
 /// fraction) of the lowest: the simplest that fits about as well. fits not empty.
 std::size_t simplest_within(const std::vector<ExtensionFit>& fits, double parsimony);
-
-/// printf-style %.3g / %.4g helpers for evidence lines.
-std::string num(double v, int digits = 3);
-std::string percent(double fraction);
 
 }  // namespace hystbench::compensation::details

@@ -12,14 +12,9 @@
 
 #include "diagnosis/details/extension_fit.hpp"
 #include "diagnosis/details/record.hpp"
+#include "diagnosis/details/record_set.hpp"
 
 namespace hystbench::compensation::details {
-
-/// One record's samples [begin, end) in the concatenation.
-struct RecordPart {
-  std::string name;
-  std::size_t begin = 0, end = 0;
-};
 
 class LeftOutScorer {
  public:
@@ -42,5 +37,14 @@ class LeftOutScorer {
   std::vector<RecordPart> parts_;
   std::vector<std::unique_ptr<Others>> others_;  // stable: each record spans its own vectors
 };
+
+/// Leave-one-record-out scores of every candidate's structure (fits, in d.candidates' order)
+/// against the baseline's (base), for a set of records (parts, at least two): sets each
+/// candidate's left_out, left_out_gain and carries_over, and notes in d what the set shows (a
+/// baseline that cannot be fitted with a record left out, or that predicts some record left out
+/// far worse than its own held-out blocks).
+void score_left_out(Diagnosis& d, const DiagnosisRecord& r, const std::vector<RecordPart>& parts,
+                    const ExtensionSpec& base, const std::vector<ExtensionFit>& fits,
+                    const DiagnosisOptions& options);
 
 }  // namespace hystbench::compensation::details

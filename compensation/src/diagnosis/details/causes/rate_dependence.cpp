@@ -122,10 +122,9 @@ std::string describe_rate_law(const ModelStructure& chosen, const ModelStructure
          " up to " + num(s.max_rate) + " " + unit + "/s";
 }
 
-}  // namespace
-
-CandidateOutcome test_rate_dependence(const CandidateContext& c) {
-  CandidateOutcome out;
+// The statistic (0 where the half-cycle rates spread too little), its threshold and the
+// evidence line, into out.
+void read_rate_statistic(const CandidateContext& c, CandidateOutcome& out) {
   const DiagnosisRecord& r = c.record;
   const ResidualProfile& rate = c.profile("rate");
   const double spread = half_cycle_rate_spread(r.u, r.dt, 0, r.n);
@@ -142,6 +141,14 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
       out.evidence += " - too little to tell rate dependence from the loop shape";
     }
   }
+}
+
+}  // namespace
+
+CandidateOutcome test_rate_dependence(const CandidateContext& c) {
+  CandidateOutcome out;
+  const DiagnosisRecord& r = c.record;
+  read_rate_statistic(c, out);
 
   ExtensionSpec spec = c.base;
   ModelStructure& s = spec.structure;
