@@ -11,7 +11,7 @@
 #include "diagnosis/details/naming/rules.hpp"
 #include "diagnosis/details/progress.hpp"
 #include "diagnosis/details/report/notes.hpp"
-#include "diagnosis/details/report/reasons.hpp"
+#include "diagnosis/details/report/verdict.hpp"
 
 namespace hystbench::compensation::details::diagnosis {
 
@@ -33,53 +33,11 @@ void weigh_candidates(Diagnosis& d, Decision& decision, const DecisionInputs& in
   d.noise_allowance_rms =
       std::sqrt(options.noise_floor_factor * options.noise_floor_factor - 1.0) * d.noise_rms;
   decision.eligible = eligible_candidates(d, decision, options);
-  prefer_the_plays_shape(d, decision);
-  order_rate_and_delay(d, decision, in.r, in.ev);
+  apply_eligible_order_rules(d, decision, {in.r, in.ev});
   test_on_shape(d, in.r, in.fits, in.ev, options, decision);
   decision.best_any = &*std::max_element(
       d.candidates.begin(), d.candidates.end(),
       [](const CandidateReport& a, const CandidateReport& b) { return a.gain < b.gain; });
-}
-
-// d.cause and the verdict: none at the noise floor or without an eligible candidate, else the
-// cause named beyond the shape, else the eligible one of the largest gain.
-void decide_cause(Diagnosis& d, const Decision& decision, const DiagnosisOptions& options,
-                  const std::string& unit) {
-  const CandidateReport* best_any = decision.best_any;
-  if (decision.at_floor) {
-    d.cause = Cause::kNone;
-    d.verdict = "none: the baseline's held-out rms error " + num(d.baseline_heldout.rmse) + " " +
-                unit + " is at the noise floor (noise rms " + num(d.noise_rms) + " " + unit +
-                "); there is nothing left to explain";
-  } else if (decision.eligible.empty()) {
-    d.cause = Cause::kNone;
-    d.verdict = "none: no candidate lowers the held-out error by " + num(options.min_gain) +
-                "x with a significant statistic (best: " + std::string(to_string(best_any->cause)) +
-                ", gain " + num(best_any->gain) +
-                (best_any->significant ? "" : ", not significant") +
-                "); the baseline explains the data as far as these effects go";
-  } else if (decision.beyond) {
-    const OnTopOfShape* beyond = decision.beyond;
-    const CandidateReport& shape_report = *d.candidate(decision.shape);
-    d.cause = beyond->cause;
-    d.verdict = std::string(to_string(beyond->cause)) + ": " + beyond->outcome.evidence + ". " +
-                beyond->outcome.extension + ", on top of " + shape_name(decision.shape) + " (" +
-                shape_report.extension + ", gain " + num(shape_report.gain) +
-                "), lowers the held-out rms error from " + num(shape_report.heldout.rmse) + " to " +
-                num(beyond->outcome.fit.heldout.rmse) + " " + unit + " (gain " + num(beyond->gain) +
-                "; " + num(d.baseline_heldout.rmse / beyond->outcome.fit.heldout.rmse) +
-                " over the baseline)";
-  } else {
-    const CandidateReport& w = *decision.eligible.front();
-    d.cause = w.cause;
-    d.verdict = std::string(to_string(w.cause)) + ": " + w.evidence + ". " + w.extension +
-                " lowers the held-out rms error from " + num(d.baseline_heldout.rmse) + " to " +
-                num(w.heldout.rmse) + " " + unit + " (gain " + num(w.gain) + ")";
-    if (!w.left_out.empty()) {
-      d.verdict +=
-          ", and carries over to every record left out whole (gain " + left_out_summary(w) + ")";
-    }
-  }
 }
 
 }  // namespace
@@ -89,7 +47,8 @@ void decide(Diagnosis& d, const DecisionInputs& in, const DiagnosisOptions& opti
   Decision decision;
   weigh_candidates(d, decision, in, options);
   const std::string unit = in.r.units.output;
-  decide_cause(d, decision, options, unit);
+  d.cause = decision.named_cause();
+  d.verdict = verdict_text(d, decision, options, unit);
   note_unclean_verdict(d, decision, options);
   if (!decision.at_floor && d.coherent_share < kMinCoherentShare) {
     note_incoherent_output(d, in.r, unit);
@@ -106,6 +65,7 @@ void decide(Diagnosis& d, const DecisionInputs& in, const DiagnosisOptions& opti
   name_causes_and_extend(d, {in.r, in.fits, in.ev, in.ref.profiles, in.ref.response, options,
                              decision.reference, reference_name, decision.on_shape, decision.beyond,
                              in.reference_delay_samples, decision.shape});
+  if (d.causes.size() > 1) d.verdict += also_named_text(d, decision.shape, unit);
   note_ambiguity(d, decision);
 }
 

@@ -12,6 +12,25 @@ double quadrature_difference(double before, double after) {
   return std::sqrt(std::max(0.0, before * before - after * after));
 }
 
+VerdictCase Decision::verdict_case() const noexcept {
+  if (at_floor) return VerdictCase::kAtNoiseFloor;
+  if (eligible.empty()) return VerdictCase::kNothingEligible;
+  return beyond ? VerdictCase::kBeyondTheShape : VerdictCase::kLargestGain;
+}
+
+Cause Decision::named_cause() const noexcept {
+  switch (verdict_case()) {
+    case VerdictCase::kAtNoiseFloor:
+    case VerdictCase::kNothingEligible:
+      return Cause::kNone;
+    case VerdictCase::kBeyondTheShape:
+      return beyond->cause;
+    case VerdictCase::kLargestGain:
+      break;
+  }
+  return eligible.front()->cause;
+}
+
 bool plane_outdone(const Diagnosis& d) {
   const CandidateReport* plane = d.candidate(Cause::kLoopShape);
   const CandidateReport* plays = d.candidate(Cause::kAsymmetry);

@@ -54,6 +54,14 @@ struct OnTopOfShape {
   }
 };
 
+/// Which case of the verdict a decision is, in the order they are checked.
+enum class VerdictCase {
+  kAtNoiseFloor,     ///< the baseline's held-out error is at the noise floor: none
+  kNothingEligible,  ///< no candidate may be named: none
+  kBeyondTheShape,   ///< the first cause is named on top of the loop's shape (Decision::beyond)
+  kLargestGain,      ///< the eligible candidate of the largest gain is named
+};
+
 /// What the verdict and the notes are decided on.
 struct Decision {
   double reference = 0.0;  ///< held-out rms the gains are judged against: baseline or refit
@@ -63,6 +71,11 @@ struct Decision {
   const OnTopOfShape* beyond = nullptr;          ///< the strongest of those that counts
   Cause shape = Cause::kAsymmetry;               ///< the eligible shape cause on_shape holds
   const CandidateReport* best_any = nullptr;     ///< the largest gain of all
+
+  VerdictCase verdict_case() const noexcept;
+  /// The cause the verdict names: none at the noise floor or without an eligible candidate, else
+  /// the cause named beyond the shape, else the eligible one of the largest gain.
+  Cause named_cause() const noexcept;
 };
 
 /// What naming the causes beyond the first and joining their extensions need.

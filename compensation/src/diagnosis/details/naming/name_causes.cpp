@@ -11,7 +11,6 @@
 #include "diagnosis/details/naming/rules.hpp"
 #include "diagnosis/details/progress.hpp"
 #include "diagnosis/details/report/reasons.hpp"
-#include "diagnosis/details/report/verdict.hpp"
 #include "diagnosis/details/residual_profiles.hpp"
 
 namespace hystbench::compensation::details::diagnosis {
@@ -52,10 +51,11 @@ Joint name_first_cause(Diagnosis& d, const Naming& x) {
   return joint;
 }
 
-// The others, the shape first, then strongest first. A contender may be named: significant and
-// carrying over (when the first is named beyond the shape, significant on top of the shape). Every
-// significant extension that carries over (drift aside: never extrapolated) may join the extended
-// model. Says why a candidate that carries over is no contender beyond the shape.
+// The others, in the order of the try-first rules (naming/rules.cpp). A contender may be named:
+// significant and carrying over (when the first is named beyond the shape, significant on top of
+// the shape). Every significant extension that carries over (drift aside: never extrapolated) may
+// join the extended model. Says why a candidate that carries over is no contender beyond the
+// shape.
 std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
   std::vector<Next> order;
   const auto in_parts = [&d](Cause c) {
@@ -77,8 +77,8 @@ std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
       }
       continue;
     }
-    // The plane the plays' own shape holds as well is not tried later either
-    // (prefer_the_plays_shape).
+    // The plane the plays' own shape holds as well is not tried later either (the eligible-order
+    // rules, naming/rules.cpp).
     if (c.cause == Cause::kLoopShape && plane_outdone(d)) continue;
     const OnTopOfShape* s = x.beyond ? on_shape_of(x, c.cause) : nullptr;
     const bool contender = c.carries_over && (x.beyond ? s && s->significant : c.significant);
@@ -88,29 +88,16 @@ std::vector<Next> next_causes(Diagnosis& d, const Naming& x) {
                              " its statistic is not significant (gain " + num(s->gain) + ")";
     }
     const bool joins = c.significant && c.carries_over && c.cause != Cause::kDrift;
-    // A drift's and a creep's statistics (the residual's time and hold profiles) are swamped by a
-    // stronger cause the reference (or the shape) misses, a delay or a resonance erring on every
-    // move: read again on what the causes before them leave. So is the shape's (the level
-    // profile) behind a delay or a resonance named first. Behind a rate law it is not read again:
-    // on top of both, a creep or a drift took the law's misfit (1.12-1.19x added, none hidden).
-    const bool lag_first = d.cause == Cause::kDelay || d.cause == Cause::kDynamics;
-    const bool swamped = c.cause == Cause::kDrift || c.cause == Cause::kCreep ||
-                         (c.cause == Cause::kAsymmetry && lag_first);
+    // A statistic a stronger cause swamps is read again on what the causes before it leave
+    // (the read-again rules, naming/rules.cpp).
+    const bool swamped = read_again_rule(c.cause, d.cause) != nullptr;
     const bool retest = swamped && c.carries_over && !contender && (!x.beyond || s != nullptr);
     const double gain = s ? s->gain : c.heldout.rmse > 0.0 ? x.reference / c.heldout.rmse : 0.0;
     if (contender || joins || retest) order.push_back({i, gain, contender, retest});
   }
-  // The shape first: it is the base's own, and what a later cause adds is judged on top of it
-  // (beside a delay, the shape's error left in both dilutes a rate law's gain to 1.07x). Then the
-  // causes significant on the reference's residual, and those read again last: a creep read again
-  // before a rate law takes the law's filtered tail.
-  std::sort(order.begin(), order.end(), [&d](const Next& a, const Next& b) {
-    const bool shape_a = is_shape(d.candidates[a.index].cause);
-    const bool shape_b = is_shape(d.candidates[b.index].cause);
-    if (shape_a != shape_b) return shape_a;
-    if (a.retest != b.retest) return b.retest;
-    return ranks_before(d.candidates[a.index].cause, a.gain, d.candidates[b.index].cause, b.gain);
-  });
+  // The shape first, those read again last, else by rank (the try-first rules).
+  std::sort(order.begin(), order.end(),
+            [&d](const Next& a, const Next& b) { return tried_before(d, a, b); });
   return order;
 }
 
@@ -121,34 +108,35 @@ void judge_contender(Diagnosis& d, const Naming& x, const Next& next,
                      const details::CandidateOutcome& o, double joint_rms,
                      const std::string& before) {
   CandidateReport& c = d.candidates[next.index];
-  const DiagnosisOptions& options = x.options;
-  const std::string unit = x.r.units.output;
   const double rms = o.fit.heldout.rmse;
-  const double added_rms = quadrature_difference(joint_rms, rms);
-  const double added_gain = rms > 0.0 ? joint_rms / rms : 0.0;
-  const double needed = added_gain_needed(options);
   const OnTopOfShape* s = x.beyond ? on_shape_of(x, c.cause) : nullptr;
-  if (added_rms < d.noise_allowance_rms) {
-    c.not_named = within_noise(before, added_rms, d.noise_allowance_rms, unit);
-  } else if (next.gain < options.min_gain && added_gain < needed) {
-    c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
-                  " is below " + num(options.min_gain) + ", and added to the model holding " +
-                  before + " it gains " + num(added_gain) + ", below " + num(needed);
-  } else if (added_gain < needed) {
-    // Its own gain was mostly the stronger causes' (a rate law widening the loop as a delay
-    // does): added to them it explains little.
-    c.not_named = "its held-out gain " + num(next.gain) + (s ? " over the shape" : "") +
-                  " is mostly that of " + before + ": added to the model holding it, " +
-                  num(added_gain) + ", below " + num(needed);
-  } else {
-    d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
-                        s ? shape_name(x.shape) : x.reference_name, added_gain, added_rms,
-                        // A retested cause's evidence is read on the joint model's residual.
-                        s && !next.retest ? s->outcome.evidence : c.evidence,
-                        s ? s->outcome.extension : c.extension});
-    c.named = true;
-    c.not_named.clear();
+  using Verdict = AddedJudgement::Verdict;
+  AddedJudgement j;
+  j.gain = next.gain;
+  j.over_shape = s != nullptr;
+  j.added_gain = rms > 0.0 ? joint_rms / rms : 0.0;
+  j.added_rms = quadrature_difference(joint_rms, rms);
+  j.needed = added_gain_needed(x.options);
+  j.allowance = d.noise_allowance_rms;
+  j.min_gain = x.options.min_gain;
+  if (j.added_rms < j.allowance) {
+    j.verdict = Verdict::kWithinNoise;
+  } else if (j.gain < j.min_gain && j.added_gain < j.needed) {
+    j.verdict = Verdict::kBelowMinGain;
+  } else if (j.added_gain < j.needed) {
+    j.verdict = Verdict::kMostlyTheirs;
   }
+  if (j.verdict != Verdict::kNamed) {
+    c.not_named = not_named_reason(j, before, x.r.units.output);
+    return;
+  }
+  d.causes.push_back({c.cause, next.gain, s ? s->outcome.fit.heldout.rmse : c.heldout.rmse,
+                      s ? shape_name(x.shape) : x.reference_name, j.added_gain, j.added_rms,
+                      // A retested cause's evidence is read on the joint model's residual.
+                      s && !next.retest ? s->outcome.evidence : c.evidence,
+                      s ? s->outcome.extension : c.extension});
+  c.named = true;
+  c.not_named.clear();
 }
 
 // The next cause's test again, its baseline the joint model so far (its parameters, a
@@ -163,19 +151,19 @@ bool try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& join
       next.retest ? residual_profiles(x.r, joint_residual, x.ev) : std::vector<ResidualProfile>{};
   const details::CandidateContext jc =
       on_joint(d, x, joint, joint_residual, next.retest ? joint_profiles : x.profiles);
-  // A retested statistic, read before the fit: not significant there either, it is not tried.
-  if (next.retest && retest_statistic(c.cause, jc) < c.threshold) return false;
+  // A statistic read again (its read-again rule's), read before the fit: not significant there
+  // either, it is not tried.
+  const ReadAgainRule* again = next.retest ? read_again_rule(c.cause, d.cause) : nullptr;
+  if (next.retest && again->statistic(jc) < c.threshold) return false;
   try {
     details::CandidateOutcome o = test_of(c.cause)(jc);
     if (next.retest) {
       if (o.statistic < o.threshold) return false;
-      // The shape read again changes the family every later cause is judged in: it must gain
-      // min_gain on what the first leaves, as the first must over the reference (beside a creep
-      // and a delay on a symmetric PI, a level profile of 0.17 gained 1.12x, and a rate law then
-      // added 1.26x on top of it).
+      // A statistic whose rule says so (the shape's) must also gain min_gain on what the first
+      // leaves, as the first must over the reference.
       const double added =
           o.fit.heldout.rmse > 0.0 ? joint.fit.heldout.rmse / o.fit.heldout.rmse : 0.0;
-      if (c.cause == Cause::kAsymmetry && added < x.options.min_gain) {
+      if (again->must_gain_min_gain && added < x.options.min_gain) {
         c.not_named = "read again on what the model holding " + before + " leaves, its statistic " +
                       num(o.statistic) + " is significant, but it gains " + num(added) +
                       " added to it, below " + num(x.options.min_gain);
@@ -228,9 +216,8 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x) {
   const std::vector<Next> order = next_causes(d, x);
   report(x.options, 0.97, "naming the other causes and joining the significant extensions");
   for (const Next& next : order) {
-    const bool part_joined = try_next_cause(d, x, next, joint);
-    if (part_joined && is_shape(d.candidates[next.index].cause) && d.cause == Cause::kDelay) {
-      find_delay_again(d, x, joint);
+    if (try_next_cause(d, x, next, joint)) {
+      apply_after_join_rules(d, x, d.candidates[next.index].cause, joint);
     }
   }
   // The shape read again joined first, on top of the first cause alone; it is listed last, as
@@ -259,7 +246,6 @@ void name_causes_and_extend(Diagnosis& d, const Naming& x) {
     }
   }
   if (x.beyond) judge_shape(d, x);
-  if (d.causes.size() > 1) append_also_named(d, x.shape, x.r.units.output);
 }
 
 void extend_by_nothing(Diagnosis& d) {

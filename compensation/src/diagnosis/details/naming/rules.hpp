@@ -1,7 +1,9 @@
 #pragma once
-// The naming procedure's special-case rules (diagnosis internals): the order causes are ranked
-// in, the statistics read again on a joint model's residual, the plays' shape before the plane,
-// a delay before a rate law it ties with, and the delay found again on top of the shape.
+// The naming procedure's special-case rules (diagnosis internals). Each kind of rule is an
+// ordered table in rules.cpp, one row a rule (its name, when it applies, what it does, why),
+// evaluated row by row in the table's order; the comment above each row names the test that
+// holds it. The general rules (significance, min_gain, carrying over, the noise allowance, the
+// added gain) are the procedure's own (eligible_candidates, name_causes_and_extend).
 #include "details/diagnosis_signals.hpp"
 #include "diagnosis/details/candidates.hpp"
 #include "diagnosis/details/naming/decision.hpp"
@@ -10,36 +12,45 @@
 
 namespace hystbench::compensation::details::diagnosis {
 
-/// The order causes are named in: by gain, but creep before drift and before rate dependence.
-/// Creep and drift both explain a slow change of the output; creep is the part the input
-/// explains, the drift what is left, and a drift's pieces, fitted across the held-out blocks
-/// between them, follow a slow creep at least as well as the creep lags that predict it. A rate
-/// law's widening, where the filtered rate decays after a change, trails it as creep does; its
-/// own gain beside a stronger cause (a delay) is mostly that cause's, so it would be tried
-/// first and take the creep's share.
+/// The record the eligible-order rules read (the error after the input's reversals).
+struct RecordEvents {
+  const details::DiagnosisRecord& r;
+  const details::InputEvents& ev;
+};
+
+/// Applies the eligible-order rules, in order, to Decision::eligible as eligible_candidates left
+/// it (largest gain first): a rule that applies moves or removes a candidate, and says why in d
+/// (a note, or the candidate's not_named).
+void apply_eligible_order_rules(Diagnosis& d, Decision& decision, const RecordEvents& record);
+
+/// Whether cause a (held-out gain gain_a) goes before cause b (gain_b) where causes are ranked:
+/// the first precedence rule that pairs them decides, else the larger gain.
 bool ranks_before(Cause a, double gain_a, Cause b, double gain_b);
 
-/// The statistic of a cause that is read again on a joint model's residual (drift: the time
-/// profile; creep: the hold profile; the shape: the level profile), without its fit.
-double retest_statistic(Cause cause, const details::CandidateContext& c);
+/// Whether the cause after the first `a` is tried before `b` (both in d.candidates): the first
+/// try-first rule that tells them apart decides, else ranks_before.
+bool tried_before(const Diagnosis& d, const Next& a, const Next& b);
 
-/// The plane, eligible beside the play family's own shape extension (asymmetry), is left out
-/// unless it predicts the held-out blocks kPlaneOverPlays better; it is not tried later either.
-void prefer_the_plays_shape(Diagnosis& d, Decision& decision);
+/// A cause whose statistic a stronger cause's error swamps on the reference's residual: not
+/// significant there, it is read again on what the causes before it leave (Next::retest).
+struct ReadAgainRule {
+  const char* name;
+  Cause cause;
+  /// Whether it is read again behind `first`, the cause named first.
+  bool (*behind)(Cause first);
+  /// Its statistic on a joint model's residual, read before its fit.
+  double (*statistic)(const details::CandidateContext& c);
+  /// Read again and significant, it must also gain min_gain on what the first leaves: it
+  /// changes the family every later cause is judged in.
+  bool must_gain_min_gain;
+  const char* reason;
+};
 
-/// A delay and a rate law both lag a ramp, and on a coarse record gain about as much (a 1-sample
-/// delay at 100 Hz: the delay 1.79x, a thresholds law 1.80x). Right after a reversal they differ:
-/// for its length a delay carries the output on in the old direction, a rate law's widened
-/// thresholds hold it. When a rate law is eligible first and a delay within kAmbiguity of it
-/// predicts the held-out samples there better (by more than the noise allows), the delay is named
-/// first. Only that way: a law named first takes a delay's lag into its widening, and the delay
-/// then adds nothing, while on top of a delay the rate candidate tries the delay a sample less.
-void order_rate_and_delay(Diagnosis& d, Decision& decision, const details::DiagnosisRecord& r,
-                          const details::InputEvents& ev);
+/// The read-again rule of `cause` behind `first`, or nullptr when it is not read again.
+const ReadAgainRule* read_again_rule(Cause cause, Cause first);
 
-/// A delay named first was found on the baseline, which misses the loop's shape: off by a
-/// sample at 20 kHz, the lag left is what a rate law then takes (1.46x added, none hidden). With
-/// the shape joined, the delay is found again on top of both and kept where it predicts better.
-void find_delay_again(const Diagnosis& d, const Naming& x, Joint& joint);
+/// Applies the after-join rules, in order, once the part of `joined` has joined the joint model
+/// (try_next_cause returned true): a rule that applies refits a part the join changed.
+void apply_after_join_rules(const Diagnosis& d, const Naming& x, Cause joined, Joint& joint);
 
 }  // namespace hystbench::compensation::details::diagnosis
