@@ -75,9 +75,10 @@ std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
 /// other part's weights free: a part added on top of a mode fitted without it (a rate law, whose
 /// widening the mode's phase stood in for) is judged with the mode as fitted for it. Only for a
 /// mode on the measured `response`'s peak (as refit_resonance): one pulled off it stood in for a
-/// lag, which a delay, not the part added, takes. Only where DesignRows serve the trials (each
-/// would step the record again: 3x the diagnosis of a 10 kHz record with creep beside dead zones).
+/// lag, which a delay, not the part added, takes. Only where DesignRows serve the trials: each
+/// would otherwise step the record again (docs/measurements.md, Diagnosis, holds the cost).
 /// std::nullopt off the peak, without one, or where the rows do not serve.
+/// DiagnosisSeveralCauses.NamesAWideningLawBesideALightlyDampedMode holds the projection.
 std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
                                                     const ExtensionSpec& spec,
                                                     const FrequencyResponse& response);

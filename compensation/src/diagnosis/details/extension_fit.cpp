@@ -187,7 +187,7 @@ class FilteredColumns {
 
 // A free Preisach plane's fit takes every stride-th fit row where the record holds more than this
 // many per unknown: its hundreds of cells make each row's update costly, and neighbouring rows of
-// a fast record add little (a 10 kHz identify record: 285 000 fit rows for 220 unknowns).
+// a fast record (identify's at 10 kHz) add little.
 constexpr std::size_t kPlaneRowsPerUnknown = 200;
 
 std::size_t row_stride(const DiagnosisRecord& r, const ExtensionSpec& spec, Eigen::Index unknowns,

@@ -45,6 +45,4 @@ std::vector<double> align_offsets(std::span<const double> t, std::span<const dou
   return total;
 }
 
-/// The order causes are named in: by gain, but creep before drift and before rate dependence.
-
 }  // namespace hystbench::compensation::details

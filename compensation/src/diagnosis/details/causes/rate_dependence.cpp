@@ -21,10 +21,11 @@ namespace hystbench::compensation::details {
 
 namespace {
 
-// The statistic is a weak witness: behind a loop shape the baseline misses, a rate effect explains
-// 12-15 % of the residual in some records (a switching front at 100 Hz), and records without one
-// reach 9-35 % (a delay far more). It only keeps a record whose residual the rate does not order
-// at all from the contest; the held-out gain and the carry-over decide.
+// The statistic is a weak witness: behind a loop shape the baseline misses, records with a rate
+// effect and records without one (a delay above all) overlap in how much of the residual the rate
+// explains (docs/measurements.md, Diagnosis). It only keeps a record whose residual the rate does
+// not order at all from the contest; the held-out gain and the carry-over decide
+// (DiagnosisHiddenEffect.NamesRateDependenceBehindASwitchingFront names the weak cases).
 constexpr double kThreshold = 0.1;
 constexpr double kMinRateSpread = 1.25;  // as the identification's automatic family choice
 constexpr double kRateQuantile = 0.999;
@@ -183,10 +184,11 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     ExtensionFit f = fit_extension(r, spec);
     if (law == RateLaw::kSigned || f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
   }
-  // A delay named before was found without the law, and took some of the widening's lag (at 500
-  // Hz a 1-sample delay was found as 2): the thresholds law is tried on a sample less too. Not
-  // below the reference's own delay (an identified model's): a law on less than the record's
-  // delay stood in for it (0.2 ms at 10 kHz was named rate dependence).
+  // A delay named before was found without the law, and may have taken some of the widening's
+  // lag: the thresholds law is tried on a sample less too
+  // (DiagnosisSeveralCauses.NamesAWideningLawWhoseLagTheDelayTook). Not below the reference's own
+  // delay (an identified model's): a law on less than the record's delay stands in for it
+  // (BenchFeedforwardTest.IdentifyAddsTheDelayAndResonanceAndTracksFiveHundredHertz).
   std::vector<ExtensionSpec> delays{spec};
   if (c.reference_delay_samples >= 0.0 && spec.delay_samples >= c.reference_delay_samples + 1.0) {
     delays.push_back(spec);
@@ -197,8 +199,8 @@ CandidateOutcome test_rate_dependence(const CandidateContext& c) {
     if (f.fit.rmse < out.fit.fit.rmse) out.fit = std::move(f);
   }
   // On top of a mode on its peak, the law just short of being named: the mode was fitted without
-  // it, and its phase stood in for some of the widening (a law beside a lightly damped mode at 2
-  // kHz added 1.05-1.09x); projected again beside the law.
+  // it, and its phase may stand in for some of the widening; projected again beside the law
+  // (DiagnosisSeveralCauses.NamesAWideningLawBesideALightlyDampedMode).
   const double added = c.base_fit.heldout.rmse / out.fit.heldout.rmse;
   if (out.fit.spec.dynamics && added >= kMinGainToProject && added < c.added_gain_needed) {
     ExtensionSpec moded = out.fit.spec;
