@@ -17,20 +17,7 @@
 #include "compensation/diagnosis/diagnosis_test_support.hpp"
 #include "hystbench/compensation/diagnosis.hpp"
 
-namespace hc = hystbench::compensation;
-
-using hystbench::test::diagnosis::diagnose_case;
-using hystbench::test::diagnosis::HiddenCase;
-using hystbench::test::diagnosis::HiddenData;
-using hystbench::test::diagnosis::long_tests;
-using hystbench::test::diagnosis::make_hidden;
-using hystbench::test::diagnosis::max_ratio;
-using hystbench::test::diagnosis::name_of;
-using hystbench::test::diagnosis::named_causes;
-using hystbench::test::diagnosis::names;
-using hystbench::test::diagnosis::Outcome;
-using hystbench::test::diagnosis::Record;
-using hystbench::test::diagnosis::summary;
+namespace hystbench::test::diagnosis {
 
 namespace {
 
@@ -310,3 +297,5 @@ TEST(DiagnosisHiddenEffect, RateOrDelayDraws) {
   EXPECT_EQ(rate_called_delay, 0);
   EXPECT_GE(delays_named, 0.95 * delay_cases);
 }
+
+}  // namespace hystbench::test::diagnosis

@@ -11,18 +11,7 @@
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/model_file.hpp"
 
-namespace hc = hystbench::compensation;
-
-using hystbench::test::diagnosis::diagnose_case;
-using hystbench::test::diagnosis::expect_named;
-using hystbench::test::diagnosis::HiddenCase;
-using hystbench::test::diagnosis::HiddenData;
-using hystbench::test::diagnosis::make_hidden;
-using hystbench::test::diagnosis::name_of;
-using hystbench::test::diagnosis::Outcome;
-using hystbench::test::diagnosis::Record;
-using hystbench::test::diagnosis::rms_error;
-using hystbench::test::diagnosis::summary;
+namespace hystbench::test::diagnosis {
 
 TEST(DiagnosisHiddenEffect, NamesNothingBeyondTheShapeOfAPreisachWithNoise) {
   expect_named({hc::Cause::kNone, 200.0, 101});
@@ -82,8 +71,9 @@ TEST(DiagnosisHiddenEffect, NamesTheEffectBesideAPreisachBaseline) {
 
 // The resonance is fitted jointly with the weights (variable projection), not only named: its
 // natural frequency within 2 % and its damping within 20 %, across the range the bench meets
-// (50 Hz to a fifth of the sample rate, damping 0.02 to 0.2). The first case is the one a user
-// met: 107 Hz, damping 0.078 at 1 kHz, read as 99.7 Hz and 0.131 by a fit of the baseline alone.
+// (50 Hz to a fifth of the sample rate, damping 0.02 to 0.2). The first case is one a user met
+// (107 Hz, damping 0.078 at 1 kHz), whose resonance a fit of the baseline alone reads off the
+// truth.
 TEST(DiagnosisHiddenEffect, FitsTheResonanceItNames) {
   const HiddenCase cases[] = {{hc::Cause::kDynamics, 1000.0, 211, false, 107.0, 0.078},
                               {hc::Cause::kDynamics, 1000.0, 212, false, 55.0, 0.2},
@@ -118,4 +108,4 @@ TEST(DiagnosisHiddenEffect, ExtendedModelRoundTripsThroughAModelFile) {
   EXPECT_NEAR(rms_error(back.model, d.second), rms_error(dg.extended, d.second), 1e-9);
 }
 
-// ------------------------------------------------------------------------ several causes
+}  // namespace hystbench::test::diagnosis

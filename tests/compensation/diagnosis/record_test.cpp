@@ -14,15 +14,10 @@
 #include "hystbench/compensation/diagnosis.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 
-namespace hc = hystbench::compensation;
-namespace hs = hystbench::sim;
+namespace hystbench::test::diagnosis {
 
-using hystbench::test::diagnosis::HiddenData;
-using hystbench::test::diagnosis::make_hidden;
-using hystbench::test::diagnosis::Record;
-using hystbench::test::diagnosis::run;
-using hystbench::test::diagnosis::uniform;
-
+// A repeated random-phase multisine (the excitation of system-identification benches) through a
+// PI with a lightly damped resonance: the baseline's residual has content up to the Nyquist
 // frequency, so its second differences are no noise estimate; the output's period-to-period
 // difference is.
 TEST(Diagnosis, EstimatesTheNoiseFromTheOutputWhenTheInputRepeats) {
@@ -140,3 +135,5 @@ TEST(Diagnosis, SaysWhenAnInputNotInTheRecordDrivesTheOutput) {
   EXPECT_GT(alone.coherent_share, 0.9);
   EXPECT_FALSE(unexplained_note(alone));
 }
+
+}  // namespace hystbench::test::diagnosis

@@ -17,19 +17,7 @@
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 
-namespace hc = hystbench::compensation;
-namespace hs = hystbench::sim;
-
-using hystbench::test::diagnosis::HiddenCase;
-using hystbench::test::diagnosis::HiddenData;
-using hystbench::test::diagnosis::long_tests;
-using hystbench::test::diagnosis::make_hidden;
-using hystbench::test::diagnosis::name_of;
-using hystbench::test::diagnosis::Outcome;
-using hystbench::test::diagnosis::Record;
-using hystbench::test::diagnosis::run;
-using hystbench::test::diagnosis::summary;
-using hystbench::test::diagnosis::uniform;
+namespace hystbench::test::diagnosis {
 
 namespace {
 
@@ -180,4 +168,4 @@ TEST(DiagnosisSeveralRecords, RefusesABadSetNamingTheRecord) {
   }
 }
 
-// ------------------------------------------------------------------------ the randomised sweep
+}  // namespace hystbench::test::diagnosis
