@@ -18,6 +18,7 @@
 #include "hystbench/common/step_timed_model.hpp"
 #include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/model_file.hpp"
+#include "hystbench/compensation/number_text.hpp"
 #include "offline/details/mimo_commands.hpp"
 #include "report/details/gnuplot.hpp"
 
@@ -30,17 +31,9 @@ namespace {
 
 constexpr std::size_t kMaxPlotPoints = 20000;
 
-std::string fmt(double v, int digits = 4) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
+std::string fmt(double v, int digits = 4) { return hc::significant(v, digits); }
 
-std::string pct(double fraction) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "%.0f %%", 100.0 * fraction);
-  return buf;
-}
+std::string pct(double fraction) { return hc::fixed(100.0 * fraction, 0) + " %"; }
 
 // A column must hold finite numbers only: name the file, column and data row.
 // The variable that explains the named cause, for its residual plot.

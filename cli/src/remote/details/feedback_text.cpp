@@ -6,17 +6,13 @@
 #include <string>
 
 #include "hystbench/compensation/number_text.hpp"
+#include "remote/details/fixed_text.hpp"
 
 namespace hystbench::cli::details {
 
 using nlohmann::json;
 
 namespace {
-
-// A figure with `digits` decimals, "-" where the reply holds none.
-std::string fixed_or_dash(const json& v, int digits) {
-  return v.is_number() ? compensation::fixed(v.get<double>(), digits) : "-";
-}
 
 // The least (or most) of `key` over the margins, "-" where none is finite.
 std::string extreme(const json& margins, const char* key, bool least, int digits) {

@@ -1,19 +1,15 @@
 #pragma once
-// Numbers in the bench commands' reports: a fixed count of decimals, "-" where the daemon's
-// result holds none. Not real-time.
-#include <iomanip>
+// Numbers in the bench commands' reports: a fixed count of decimals (the library's one rule,
+// hystbench/compensation/number_text.hpp), "-" where the daemon's result holds none. Not
+// real-time.
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
+
+#include "hystbench/compensation/number_text.hpp"
 
 namespace hystbench::cli::details {
 
-/// `v` with `digits` decimals.
-inline std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
+using compensation::fixed;
 
 /// A number with `digits` decimals, "-" for null.
 inline std::string fixed_or_dash(const nlohmann::json& v, int digits) {
