@@ -13,7 +13,8 @@ BUILD_PKGS=(
 )
 # Peers and tools used only by the test suite (independent implementations to test against).
 # chromium and python3-websocket: the live view's test in a real browser (headless).
-TEST_PKGS=(python3 python3-pip python3-setuptools python3-wheel socat python3-pymodbus python3-serial python3-serial-asyncio mbpoll can-utils chromium python3-websocket)
+# clang-format: tests/source_limits.sh checks the C++ is formatted as .clang-format says.
+TEST_PKGS=(python3 python3-pip python3-setuptools python3-wheel socat python3-pymodbus python3-serial python3-serial-asyncio mbpoll can-utils chromium python3-websocket clang-format)
 # clang with the libFuzzer and sanitizer runtimes, for scripts/fuzz.sh only.
 FUZZ_PKGS=(clang libclang-rt-14-dev)
 # JSON and arithmetic on the command line, for the measurement scripts only.
