@@ -25,9 +25,19 @@ hc::ModelFile pi_model(double slope) {
   return hc::ModelFile{std::move(m), json::object()};
 }
 
+// One flat response of gain 0.3 over three lines, as measured by run `run_id`.
 hc::StageResponses responses(const std::string& run_id) {
+  hc::MeasuredResponse m;
+  m.frequency_hz = {10.0, 100.0, 1000.0};
+  m.response.assign(3, {0.3, 0.0});
+  m.noise.assign(3, 1e-4);
+  m.coherence.assign(3, 1.0);
+  m.operating_point = 75.0;
+  m.amplitude = 1.5;
+  m.label = "u 75 V";
   hc::StageResponses r;
   r.rate_hz = 10000.0;
+  r.responses = {m};
   r.run_id = run_id;
   return r;
 }

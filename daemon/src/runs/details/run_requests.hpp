@@ -20,7 +20,7 @@ using T = ParamType;
 
 inline constexpr double kWeekS = 7.0 * 24 * 3600;
 
-/// The tables of a and b, one after the other.
+/// The tables given, one after the other.
 template <std::size_t N, std::size_t M>
 constexpr std::array<ParamSpec, N + M> join(const std::array<ParamSpec, N>& a,
                                             const std::array<ParamSpec, M>& b) {
@@ -30,12 +30,17 @@ constexpr std::array<ParamSpec, N + M> join(const std::array<ParamSpec, N>& a,
   }
   (std::make_index_sequence<N>{}, std::make_index_sequence<M>{});
 }
+template <std::size_t N, std::size_t M, typename... More>
+constexpr auto join(const std::array<ParamSpec, N>& a, const std::array<ParamSpec, M>& b,
+                    const More&... more) {
+  return join(join(a, b), more...);
+}
 
-/// The feedback's gains a request may give (track, tune); none = designed per run.
-inline constexpr std::array<ParamSpec, 4> kCompensatorAndGains{{{"compensator", T::kString},
-                                                                {"kp", T::kNumber, 0.0, 1e6},
-                                                                {"ki", T::kNumber, 0.0, 1e9},
-                                                                {"kd", T::kNumber, 0.0, 1e3}}};
+/// The compensator a request names, and the feedback's gains it may give (track, tune); no
+/// gains = designed per run.
+inline constexpr std::array<ParamSpec, 1> kCompensator{{{"compensator", T::kString}}};
+inline constexpr std::array<ParamSpec, 3> kGains{
+    {{"kp", T::kNumber, 0.0, 1e6}, {"ki", T::kNumber, 0.0, 1e9}, {"kd", T::kNumber, 0.0, 1e3}}};
 /// What every single-axis track takes beside its reference: preconditioning and learning.
 inline constexpr std::array<ParamSpec, 7> kTrackRun{{{"force_gains", T::kBoolean},
                                                      {"precondition_s", T::kNumber, 0.0, 60.0},
@@ -60,37 +65,33 @@ inline constexpr std::array<ParamSpec, 6> kIdentifyParams{
 
 /// track with an uploaded reference (one axis).
 inline constexpr auto kTrackUploadedParams = request_fields::join(
-    request_fields::join(
-        std::array<ParamSpec, 2>{{{"reference_upload", request_fields::T::kString},
-                                  {"approach_s", request_fields::T::kNumber, 0.0, 60.0}}},
-        request_fields::kCompensatorAndGains),
-    request_fields::kTrackRun);
+    std::array<ParamSpec, 2>{{{"reference_upload", request_fields::T::kString},
+                              {"approach_s", request_fields::T::kNumber, 0.0, 60.0}}},
+    request_fields::kCompensator, request_fields::kGains, request_fields::kTrackRun);
 
 /// track on a stage with an uploaded reference per axis, {axis: upload name}.
 inline constexpr auto kTrackStageUploadedParams = request_fields::join(
-    std::array<ParamSpec, 4>{{{"reference_uploads", request_fields::T::kObject},
-                              {"approach_s", request_fields::T::kNumber, 0.0, 60.0},
-                              {"compensator", request_fields::T::kString},
-                              {"precondition_s", request_fields::T::kNumber, 0.0, 60.0}}},
+    std::array<ParamSpec, 2>{{{"reference_uploads", request_fields::T::kObject},
+                              {"approach_s", request_fields::T::kNumber, 0.0, 60.0}}},
+    request_fields::kCompensator,
+    std::array<ParamSpec, 1>{{{"precondition_s", request_fields::T::kNumber, 0.0, 60.0}}},
     request_fields::kDecoupling);
 
 /// track with a built-in reference (one axis, or a stage's with frequencies_hz and decoupling):
 /// a stage's track reads the keys it shares with one axis's through this table.
 inline constexpr auto kTrackBuiltinParams = request_fields::join(
-    request_fields::join(
-        request_fields::join(
-            std::array<ParamSpec, 7>{
-                {{"reference", request_fields::T::kString},
-                 {"frequency_hz", request_fields::T::kNumber, 1e-3},
-                 {"periods", request_fields::T::kNumber, 0.0, 1e7},
-                 {"duration_s", request_fields::T::kNumber, 0.0, request_fields::kWeekS},
-                 {"range_fraction", request_fields::T::kNumber, 0.01, 1.0},
-                 {"min_um", request_fields::T::kNumber, -1e9, 1e9},
-                 {"max_um", request_fields::T::kNumber, -1e9, 1e9}}},
-            request_fields::kCompensatorAndGains),
-        request_fields::kTrackRun),
-    request_fields::join(std::array<ParamSpec, 1>{{{"frequencies_hz", request_fields::T::kArray}}},
-                         request_fields::kDecoupling));
+    std::array<ParamSpec, 4>{
+        {{"reference", request_fields::T::kString},
+         {"frequency_hz", request_fields::T::kNumber, 1e-3},
+         {"periods", request_fields::T::kNumber, 0.0, 1e7},
+         {"duration_s", request_fields::T::kNumber, 0.0, request_fields::kWeekS}}},
+    request_fields::kCompensator,
+    std::array<ParamSpec, 3>{{{"range_fraction", request_fields::T::kNumber, 0.01, 1.0},
+                              {"min_um", request_fields::T::kNumber, -1e9, 1e9},
+                              {"max_um", request_fields::T::kNumber, -1e9, 1e9}}},
+    request_fields::kGains, request_fields::kTrackRun,
+    std::array<ParamSpec, 1>{{{"frequencies_hz", request_fields::T::kArray}}},
+    request_fields::kDecoupling);
 
 inline constexpr std::array<ParamSpec, 1> kExciteParams{
     {{"drive_upload", request_fields::T::kString}}};
@@ -100,7 +101,8 @@ inline constexpr std::array<ParamSpec, 1> kExciteStageParams{
 inline constexpr std::array<ParamSpec, 2> kFrfParams{
     {{"amplitude", request_fields::T::kNumber, 1e-3, 0.1},
      {"periods", request_fields::T::kInteger, 2, 64}}};
-inline constexpr auto kTuneParams = request_fields::kCompensatorAndGains;
+inline constexpr auto kTuneParams =
+    request_fields::join(request_fields::kCompensator, request_fields::kGains);
 
 /// The parameters of track with a built-in reference (kTrackBuiltinParams).
 inline std::span<const ParamSpec> track_builtin_params() { return kTrackBuiltinParams; }
