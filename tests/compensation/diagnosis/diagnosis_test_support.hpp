@@ -10,8 +10,8 @@
 // for a drift: see max_ratio). A classical PI baseline misses the Preisach base's bent loop: with
 // nothing hidden the diagnosis names that shape (asymmetry, "bent or asymmetric") or nothing; a
 // hidden effect is named on top of the shape. The shape's error stays in part in both models on the
-// second record, which bounds the ratio. The sweep (hidden_effect_sweep_test.cpp: 64 cases, 8 per
-// cause and none at 100 Hz .. 20 kHz, all asserted; plus 8 random-walk drifts, reported in their
+// second record, which bounds the ratio. The sweep (hidden_effect_sweep_test.cpp: 72 cases: 8 per
+// cause and none at 100 Hz .. 20 kHz, all asserted, and 8 random-walk drifts, reported in their
 // own row; confusion table and per-cause ratios printed) runs with HYSTBENCH_LONG_TESTS=1
 // (HYSTBENCH_SWEEP_SEED draws other cases, HYSTBENCH_SWEEP_CAUSE=<cause> runs the cases that hide
 // it, HYSTBENCH_SWEEP_VERBOSE=1 prints every case's report, not only a wrong one's); by default one

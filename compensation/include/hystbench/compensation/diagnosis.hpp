@@ -1,6 +1,7 @@
 #pragma once
 // Diagnosis of what a hysteresis model misses on a measured record (t, u, y).
-// Not real-time: allocates freely; about 1-3 s for 300 000 samples on one core.
+// Not real-time: allocates freely; seconds for a record of a few hundred thousand samples
+// (hystbench-bench --benchmark_filter=BM_DiagnoseModeAndDelay measures it).
 //
 // The record is cut into `blocks` equal blocks; every `heldout_every`-th block (from block
 // `heldout_every / 2`) is held out, the others are the fit part. Every model is simulated
