@@ -190,11 +190,11 @@ class NumericInverse final : public InverseModel {
 ///   u(k) = u(k-1) + (y_ref(k) - y_model(k-1)) / g,   y_model(k-1) = H[u](k-1),
 /// then, for a rate-independent model, u <- u + (y_ref(k) - H[u]) / g repeated within the tick
 /// (at most kMaxIterations passes, each one model step; hystbench-bench times them) until it
-/// settles: the implicit equation solved, not its one-tick-delayed form. A thresholds rate law is iterated the same
-/// way, at the drive's own rate where the output still grows with it, else at the rate its
-/// rate-free self's drive (the same structure on the law's modified PI) predicts: one pass a
-/// tick through widening thresholds chatters. Needs no inverse parameters:
-/// it runs the model itself in feedback. step() is real-time safe.
+/// settles: the implicit equation solved, not its one-tick-delayed form. A thresholds rate law is
+/// iterated the same way, at the drive's own rate where the output still grows with it, else at the
+/// rate its rate-free self's drive (the same structure on the law's modified PI) predicts: one pass
+/// a tick through widening thresholds chatters. Needs no inverse parameters: it runs the model
+/// itself in feedback. step() is real-time safe.
 class InverseMultiplicativeCompensator final : public InverseModel {
  public:
   /// gain <= 0 selects the steepest local slope of the model's major loop over its
