@@ -308,8 +308,8 @@ nlohmann::json Bench::load_model(const details::RequestParams& request) {
     throw common::CommandError("busy", "a run is active; load the model after it");
   }
   if (is_stage()) return load_stage_model(request);
-  if (stored) return models_->load(request.string("stored", ""), "", nullptr);
-  return models_->load(std::nullopt, request.string("name", "uploaded"), request.params()["model"]);
+  if (stored) return models_->load_stored(request.string("stored", ""));
+  return models_->load_document(request.string("name", "uploaded"), request.params()["model"]);
 }
 
 nlohmann::json Bench::list_models() const {

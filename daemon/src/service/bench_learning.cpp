@@ -76,14 +76,7 @@ void Bench::finish_learning(const RunProgram& run, json& report) {
   }
   announce_trials(*learning, run.run_id);  // the last trial, closed as the run ended
   json l = learning->result();
-  if (const auto last = learning->last_trial()) {
-    // The run's figures are its last trial's (the log keeps every period).
-    report["rms_error_um"] = last->rms_um;
-    report["max_error_um"] = last->max_um;
-    report["rms_error_percent"] = last->rms_percent;
-    report["max_error_percent"] = last->max_percent;
-    report["max_error_index"] = last->max_tick;
-  }
+  learning->put_last_trial_figures(report);
   keep_learned_drive(
       *learning, run.run_id,
       model_path.empty() ? std::string() : std::filesystem::path(model_path).filename().string(),

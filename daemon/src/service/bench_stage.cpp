@@ -245,14 +245,7 @@ void Bench::finish_axes_learning(const RunProgram& run, json& report) {
     const std::string& name = settings_.axes[a];
     json& axis = report["axes"][name];
     json learned = l.result();
-    if (const auto last = l.last_trial()) {
-      // The axis's figures are its last trial's (the log keeps every period).
-      axis["rms_error_um"] = last->rms_um;
-      axis["max_error_um"] = last->max_um;
-      axis["rms_error_percent"] = last->rms_percent;
-      axis["max_error_percent"] = last->max_percent;
-      axis["max_error_index"] = last->max_tick;
-    }
+    l.put_last_trial_figures(axis);
     // Each axis's drive as RUN-AXIS-learned: `track --learned RUN` replays them together.
     keep_learned_drive(
         l, run.run_id + "-" + name,

@@ -82,12 +82,12 @@ TEST_F(ModelStoreTest, EveryChangeRunsSeeIsANewGeneration) {
 
 TEST_F(ModelStoreTest, ADocumentIsKeptUnderItsNameAndLoadsAgainByThatName) {
   hd::ModelStore store(dir_.string());
-  const json loaded = store.load(std::nullopt, "mine", hc::to_json(pi_model(0.4)));
+  const json loaded = store.load_document("mine", hc::to_json(pi_model(0.4)));
   EXPECT_EQ(loaded["name"], "mine.json");
   EXPECT_TRUE(fs::exists(dir_ / "mine.json"));
   const auto g = store.generation();
   hd::ModelStore again(dir_.string());
-  const json stored = again.load(std::string("mine"), "", nullptr);
+  const json stored = again.load_stored("mine");
   EXPECT_EQ(stored["path"], (dir_ / "mine.json").string());
   EXPECT_EQ(again.get()["model"], store.get()["model"]);
   EXPECT_EQ(store.generation(), g);  // loading into another store changes nothing here
@@ -97,10 +97,8 @@ TEST_F(ModelStoreTest, ARefusedLoadChangesNothing) {
   hd::ModelStore store(dir_.string());
   store.adopt(pi_model(0.3), (dir_ / "a.json").string());
   const auto g = store.generation();
-  EXPECT_THROW((void)store.load(std::string("../etc/passwd"), "", nullptr),
-               hystbench::common::CommandError);
-  EXPECT_THROW((void)store.load(std::string("absent"), "", nullptr),
-               hystbench::common::CommandError);
+  EXPECT_THROW((void)store.load_stored("../etc/passwd"), hystbench::common::CommandError);
+  EXPECT_THROW((void)store.load_stored("absent"), hystbench::common::CommandError);
   EXPECT_EQ(store.generation(), g);
   EXPECT_EQ(store.active_path(), (dir_ / "a.json").string());
 }

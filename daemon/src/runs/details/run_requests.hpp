@@ -7,7 +7,6 @@
 // within the output limits) are checked by the run builders on top of these.
 #include <array>
 #include <cstddef>
-#include <span>
 #include <utility>
 
 #include "runs/details/request_params.hpp"
@@ -103,8 +102,5 @@ inline constexpr std::array<ParamSpec, 2> kFrfParams{
      {"periods", request_fields::T::kInteger, 2, 64}}};
 inline constexpr auto kTuneParams =
     request_fields::join(request_fields::kCompensator, request_fields::kGains);
-
-/// The parameters of track with a built-in reference (kTrackBuiltinParams).
-inline std::span<const ParamSpec> track_builtin_params() { return kTrackBuiltinParams; }
 
 }  // namespace hystbench::daemon::details

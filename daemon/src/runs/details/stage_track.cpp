@@ -461,7 +461,7 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
                           "decoupling", "reference_uploads", "approach_s"}) {
     rest.erase(key);
   }
-  r.common = parse_track_request(RequestParams(rest, track_builtin_params()), ctx);
+  r.common = parse_track_request(RequestParams(rest, kTrackBuiltinParams), ctx);
   if (request.has("approach_s")) r.common.approach_s = request.number("approach_s", 0.0);
   if (r.common.learning.learned) {
     const std::string run = stage_learning_run(*r.common.learning.learned, axes);

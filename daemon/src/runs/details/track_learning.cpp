@@ -246,6 +246,16 @@ std::optional<TrackLearning::Trial> TrackLearning::last_trial() const {
   return trials_.back();
 }
 
+void TrackLearning::put_last_trial_figures(json& figures) const {
+  const std::optional<Trial> last = last_trial();
+  if (!last) return;
+  figures["rms_error_um"] = last->rms_um;
+  figures["max_error_um"] = last->max_um;
+  figures["rms_error_percent"] = last->rms_percent;
+  figures["max_error_percent"] = last->max_percent;
+  figures["max_error_index"] = last->max_tick;
+}
+
 json TrackLearning::above_cutoff() const {
   if (!learner_.fast_trial()) {
     return {{"updates", 0}, {"why", "none: Q reaches the trial's fifth harmonic and more"}};

@@ -78,7 +78,9 @@ class TrackLearning {
 
   /// The run's `learning` object; the last trial's rms and max [µm] when any was scored.
   nlohmann::json result() const;
-  std::optional<Trial> last_trial() const;
+  /// A run's (or a stage axis's) figures are its last trial's, the log keeping every period:
+  /// writes rms/max [µm and % of range] and the max's tick into `figures`; nothing before any.
+  void put_last_trial_figures(nlohmann::json& figures) const;
   /// The drive the run ends with: the best trial's when the guard stopped, else the last one
   /// offered (the drive started from before any); empty before any.
   const std::vector<double>& kept_drive() const noexcept { return kept_; }
@@ -91,6 +93,7 @@ class TrackLearning {
   const LearningRequest& request() const noexcept { return request_; }
 
  private:
+  std::optional<Trial> last_trial() const;
   LearningExchange& exchange_;
   LearningRequest request_;
   // The `above_cutoff` object: how a fast trial learned its harmonics above Q, or why not.

@@ -16,10 +16,15 @@ void ModelStore::adopt(hc::ModelFile file, std::string path) {
   ++generation_;
 }
 
-json ModelStore::load(const std::optional<std::string>& stored, const std::string& name,
-                      const json& document) {
-  FolderModel m =
-      stored ? load_stored_model(folder_, *stored) : keep_model_document(folder_, name, document);
+json ModelStore::load_stored(const std::string& name) {
+  return adopt_loaded(load_stored_model(folder_, name));
+}
+
+json ModelStore::load_document(const std::string& name, const json& document) {
+  return adopt_loaded(keep_model_document(folder_, name, document));
+}
+
+json ModelStore::adopt_loaded(FolderModel m) {
   const auto inv = m.file.model.hysteresis().invertibility();
   const std::string file_name = std::filesystem::path(m.path).filename().string();
   adopt(std::move(m.file), m.path);

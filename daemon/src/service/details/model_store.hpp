@@ -34,11 +34,11 @@ class ModelStore {
 
   /// Makes `file`, kept at `path`, the active model.
   void adopt(compensation::ModelFile file, std::string path);
-  /// model.load on one axis: the stored model `stored` (a name in the folder), else `document`
-  /// kept under `name`; {path, name, type, invertible, reason}. Throws CommandError
-  /// (bad_params, bad_model, io_error); nothing changes then.
-  nlohmann::json load(const std::optional<std::string>& stored, const std::string& name,
-                      const nlohmann::json& document);
+  /// model.load on one axis, of the stored model `name` (a name in the folder), or of
+  /// `document` kept in the folder under `name`: {path, name, type, invertible, reason}. Throws
+  /// CommandError (bad_params, bad_model, io_error); nothing changes then.
+  nlohmann::json load_stored(const std::string& name);
+  nlohmann::json load_document(const std::string& name, const nlohmann::json& document);
   /// model.get: {path, model}. Throws CommandError no_model without one.
   nlohmann::json get() const;
   /// status' "model": {type, path, operators}, or null.
@@ -60,6 +60,9 @@ class ModelStore {
   void keep_frf_responses(compensation::StageResponses r, nlohmann::json& report);
 
  private:
+  /// Adopts a model the folder gave; load's reply.
+  nlohmann::json adopt_loaded(FolderModel m);
+
   std::string folder_;
   std::optional<compensation::ModelFile> model_;
   std::string path_;
