@@ -163,16 +163,11 @@ void print_planned_feedforward(std::ostream& out, const json& p) {
   }
 }
 
-// Whether a model predicted y_model over the run, from the result's `y_model` (the daemon's
-// predictor_name()): not where no model was active and the daemon stepped the straight line of
-// limits.y_min..y_max ("linear map of limits...") or nothing ("none..."): y - y_model then
-// measures the line, not a model. A result without the key counts as a model's.
-bool model_predicted(const json& r) {
-  const auto by = r.find("y_model");
-  if (by == r.end() || !by->is_string()) return true;
-  const std::string& name = by->get_ref<const std::string&>();
-  return name.rfind("linear map of limits", 0) != 0 && name.rfind("none", 0) != 0;
-}
+// Whether a model predicted y_model over the run, from the result's `y_model_from`: not where
+// no model was active and the daemon stepped the straight line of limits.y_min..y_max
+// ("limits") or nothing ("none"): y - y_model then measures the line, not a model. A result
+// without the key (kept before the daemon wrote it) counts as a model's.
+bool model_predicted(const json& r) { return r.value("y_model_from", "model") == "model"; }
 
 // The bench's output against the model's prediction over the run.
 void print_model_error(std::ostream& out, const json& r) {
@@ -207,7 +202,7 @@ void print_stage(std::ostream& out, const json& r) {
   for (const auto& [name, a] : axes.items()) {
     // An axis's own y_model where the result gives one, else the run's (the first axis's).
     const bool model_error =
-        a.contains("model_rms_error_um") && model_predicted(a.contains("y_model") ? a : r);
+        a.contains("model_rms_error_um") && model_predicted(a.contains("y_model_from") ? a : r);
     if (!a.contains("rms_error_um") && !model_error) continue;
     out << "  axis " << name;
     for (std::size_t pad = name.size(); pad < 11; ++pad) out << ' ';

@@ -94,11 +94,13 @@ TEST(PrintRunResult, GivesTheModelErrorOnlyWhereAModelPredicted) {
                       {"model_rms_error_percent", 4.2},
                       {"model_max_error_um", 16.3},
                       {"model_max_error_percent", 26.861},
-                      {"y_model", "linear map of limits.y_min..y_max, stepped with u"}};
+                      {"y_model", "linear map of limits.y_min..y_max, stepped with u"},
+                      {"y_model_from", "limits"}};
   std::ostringstream line;
   cli::print_run_result(r, line);
   EXPECT_EQ(line.str().find("model vs bench"), std::string::npos) << line.str();
   r["y_model"] = "the model active before this identification";
+  r["y_model_from"] = "model";
   std::ostringstream model;
   cli::print_run_result(r, model);
   EXPECT_NE(model.str().find("model vs bench  rms 2.5500 um (4.200 %)"), std::string::npos)
@@ -106,7 +108,8 @@ TEST(PrintRunResult, GivesTheModelErrorOnlyWhereAModelPredicted) {
   const nlohmann::json stage = {{"run_id", "r4"},
                                 {"end", "completed"},
                                 {"axes", {{"x", {{"model_rms_error_um", 2.55}}}}},
-                                {"y_model", "linear map of limits.y_min..y_max, stepped with u"}};
+                                {"y_model", "linear map of limits.y_min..y_max, stepped with u"},
+                                {"y_model_from", "limits"}};
   std::ostringstream axes;
   cli::print_run_result(stage, axes);
   EXPECT_EQ(axes.str().find("model vs bench"), std::string::npos) << axes.str();

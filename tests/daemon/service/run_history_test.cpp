@@ -119,12 +119,12 @@ TEST(RunHistory, IdentifysOwnModelErrorIsNotItsFigureButAnExcitesIsWhereAModelPr
   h.add({{"run_id", "line"},
          {"kind", "excite"},
          {"end", "completed"},
-         {"y_model", "linear map of limits.y_min..y_max, stepped with u"},
+         {"y_model_from", "limits"},
          {"model_rms_error_percent", 4.2}});
   h.add({{"run_id", "e"},
          {"kind", "excite"},
          {"end", "completed"},
-         {"y_model", "the active model, stepped with u"},
+         {"y_model_from", "model"},
          {"model_rms_error_percent", 0.7}});
   const json runs = h.runs()["runs"];
   EXPECT_EQ(runs[0]["rms_error_percent"], 0.7);         // the model's error on the excitation

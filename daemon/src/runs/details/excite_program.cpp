@@ -27,6 +27,7 @@ BuiltRun make_excite_program(const Upload& upload, const RunContext& ctx) {
   p->excitation.insert(p->excitation.end(), drive.begin(), drive.end());
   p->model = predictor(ctx, ctx.u_now);
   p->summary["y_model"] = predictor_name(ctx);
+  p->summary["y_model_from"] = predictor_source(ctx);
   p->total_samples = p->excitation.size();
   p->metrics_from = offset;
   allocate_records(*p);

@@ -83,6 +83,7 @@ BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext&
   // The result's model_rms_error is this predictor's: not the model identified from the run.
   p->summary["y_model"] =
       ctx.model != nullptr ? "the model active before this identification" : predictor_name(ctx);
+  p->summary["y_model_from"] = predictor_source(ctx);
   const std::size_t offset = p->excitation.size();
   p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
   p->total_samples = p->excitation.size();

@@ -119,6 +119,7 @@ BuiltRun make_response_program(const sim::FrequencyResponseExcitationOptions& o,
   p->excitation = std::move(x.u);
   p->model = predictor(ctx, ctx.u_now);
   p->summary["y_model"] = predictor_name(ctx);
+  p->summary["y_model_from"] = predictor_source(ctx);
   p->total_samples = p->excitation.size();
   p->metrics_from = 0;
   allocate_records(*p);

@@ -55,6 +55,11 @@ const char* predictor_name(const RunContext& ctx) {
   return "none (NaN): no model and no limits.y_min/y_max";
 }
 
+const char* predictor_source(const RunContext& ctx) {
+  if (ctx.model != nullptr) return "model";
+  return ctx.settings.y_max > ctx.settings.y_min ? "limits" : "none";
+}
+
 std::uint64_t model_exchange_ticks(const RunContext& ctx) {
   if (ctx.model == nullptr || !ctx.model->identification.is_object()) return 0;
   return static_cast<std::uint64_t>(

@@ -105,6 +105,10 @@ std::optional<ActuatorRange> actuator_range(const RunContext& ctx);
 std::optional<compensation::ActuatorModel> predictor(const RunContext& ctx, double u0);
 /// What predictor() gives, in words, for the log header.
 const char* predictor_name(const RunContext& ctx);
+/// Whose prediction predictor() gives, for a result's y_model_from: "model" (the active model),
+/// "limits" (the straight line of limits.y_min/y_max, which measures nothing of the actuator) or
+/// "none". Clients read it, not y_model's wording.
+const char* predictor_source(const RunContext& ctx);
 /// The active model as a run log's header keeps it (its file without the stage's frequency
 /// responses, which the model file keeps); null without one.
 nlohmann::json model_header(const RunContext& ctx);

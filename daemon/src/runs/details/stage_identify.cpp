@@ -194,6 +194,7 @@ BuiltRun make_stage_identify_program(const IdentifyRequest& request, const RunCo
     p->metrics_from = 0;
     p->model = predictor(axis_ctx, u_now[a]);
     p->summary["y_model"] = predictor_name(axis_ctx);
+    p->summary["y_model_from"] = predictor_source(axis_ctx);
     // Scored from the axis's own major loop: before it, its model has not met its state.
     const sim::ExcitationSegment* major = exc.find("major_loop");
     p->model_metrics_from = turn * a + ramp + (major != nullptr ? major->begin : 0);

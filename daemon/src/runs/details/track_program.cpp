@@ -481,7 +481,9 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
     throw common::CommandError("bad_params", e.what());
   }
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
-  p->summary = {{"compensator", comp_name}, {"y_model", predictor_name(ctx)}};
+  p->summary = {{"compensator", comp_name},
+                {"y_model", predictor_name(ctx)},
+                {"y_model_from", predictor_source(ctx)}};
   if (!feedforward.is_null()) p->summary["feedforward"] = feedforward;
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
 

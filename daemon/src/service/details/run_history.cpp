@@ -42,7 +42,7 @@ json worst_axis(const json& holder, const char* key) {
 
 // The figure a list shows for a run, the first there is of: its tracking error (a stage's worst
 // axis's); identify's verification through its model (a stage identify's worst held-out fit);
-// the model's error on the run (excite), where a model predicted it (its y_model says so).
+// the model's error on the run (excite), where a model predicted it (y_model_from).
 // Identify's own model error is not one: it is the previous model's, or the straight line's
 // before any; nor is an excite's before any model (the straight line of the limits).
 json headline_error(const json& result) {
@@ -55,9 +55,7 @@ json headline_error(const json& result) {
     if (json e = worst_axis(*stage_model, "heldout_rms_error_percent"); !e.is_null()) return e;
   }
   if (result.value("kind", "") == "identify") return nullptr;
-  const auto y_model = result.find("y_model");
-  const bool model_predicted = y_model != result.end() && y_model->is_string() &&
-                               y_model->get<std::string>().rfind("the active model", 0) == 0;
+  const bool model_predicted = result.value("y_model_from", "") == "model";
   return model_predicted ? finite_number(result, "model_rms_error_percent") : json(nullptr);
 }
 
