@@ -309,7 +309,7 @@ nlohmann::json Bench::load_model(const details::RequestParams& request) {
   }
   if (is_stage()) return load_stage_model(request);
   if (stored) return models_->load_stored(request.string("stored", ""));
-  return models_->load_document(request.string("name", "uploaded"), request.params()["model"]);
+  return models_->load_document(request.string("name"), request.params()["model"]);
 }
 
 nlohmann::json Bench::list_models() const {

@@ -5,6 +5,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
@@ -122,4 +124,70 @@ TEST(CommandTable, OnlyTheCommandsThatReadAreMarkedSo) {
     EXPECT_FALSE(hdd::command_reads_only(changes)) << changes;
   }
   EXPECT_FALSE(hdd::command_reads_only("fly"));
+}
+
+TEST(CommandTable, EveryKeyHasAMeaningAndEveryConstantDefaultIsAValueItAccepts) {
+  for (const hdd::Command& c : hdd::bench_commands()) {
+    for (const hdd::ParamSpec& p : c.params) {
+      const std::string where = std::string(c.name) + "." + p.key;
+      EXPECT_STRNE(p.doc, "") << where << ": no meaning for the protocol page";
+      if (p.fallback == nullptr) continue;
+      switch (p.type) {
+        case hdd::ParamType::kNumber:
+        case hdd::ParamType::kInteger: {
+          const double v = hdd::default_number(p);
+          EXPECT_GE(v, p.lo) << where;
+          EXPECT_LE(v, p.hi) << where;
+          if (p.type == hdd::ParamType::kInteger) {
+            EXPECT_EQ(v, std::floor(v)) << where;
+          }
+          break;
+        }
+        case hdd::ParamType::kBoolean:
+          EXPECT_TRUE(std::string(p.fallback) == "true" || std::string(p.fallback) == "false")
+              << where;
+          break;
+        case hdd::ParamType::kString:
+          EXPECT_STRNE(p.fallback, "") << where;
+          break;
+        default:
+          ADD_FAILURE() << where << ": an object or array has no constant default";
+      }
+    }
+  }
+}
+
+TEST(CommandTable, AKeyInTwoRowsOfACommandIsDefinedOnce) {
+  const auto same = [](const hdd::ParamSpec& a, const hdd::ParamSpec& b) {
+    const auto text = [](const char* s) { return std::string(s == nullptr ? "" : s); };
+    return a.type == b.type && a.lo == b.lo && a.hi == b.hi && text(a.doc) == text(b.doc) &&
+           text(a.fallback) == text(b.fallback) && text(a.fallback_doc) == text(b.fallback_doc);
+  };
+  const auto commands = hdd::bench_commands();
+  for (std::size_t i = 0; i < commands.size(); ++i) {
+    for (std::size_t j = i + 1; j < commands.size(); ++j) {
+      if (std::string(commands[i].name) != commands[j].name) continue;
+      for (const hdd::ParamSpec& a : commands[i].params) {
+        for (const hdd::ParamSpec& b : commands[j].params) {
+          if (std::string(a.key) == b.key) {
+            EXPECT_TRUE(same(a, b)) << commands[i].name << "." << a.key << " differs by row";
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(CommandTable, AGetterWithoutAFallbackGivesTheTablesDefault) {
+  const hdd::Command& track = hdd::find_command("track", json::object());
+  const json empty = json::object();
+  const hdd::RequestParams none(empty, track.params);
+  EXPECT_EQ(none.string("reference"), "triangle");
+  EXPECT_DOUBLE_EQ(none.number("range_fraction"), 0.8);
+  EXPECT_EQ(none.integer("learn_trials"), 0);
+  EXPECT_TRUE(none.boolean("decouple"));
+  // A key whose default depends on the bench has no constant: the builder must give it.
+  EXPECT_THROW((void)none.number("kp"), std::logic_error);
+  const json given = {{"range_fraction", 0.3}};
+  EXPECT_DOUBLE_EQ(hdd::RequestParams(given, track.params).number("range_fraction"), 0.3);
 }

@@ -1,6 +1,7 @@
 #include "runs/details/request_params.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <stdexcept>
 #include <string_view>
@@ -98,6 +99,55 @@ const ParamSpec& RequestParams::spec(const char* key) const {
     if (std::string_view(s.key) == key) return s;
   }
   throw std::logic_error(std::string("request parameter '") + key + "' is not in its command");
+}
+
+namespace {
+
+// The key's constant default (ParamSpec::fallback), which a getter without a fallback needs.
+std::string_view constant_fallback(const ParamSpec& s) {
+  if (s.fallback == nullptr) {
+    throw std::logic_error(std::string("request parameter '") + s.key +
+                           "' has no constant default: give the fallback");
+  }
+  return s.fallback;
+}
+
+}  // namespace
+
+double default_number(const ParamSpec& s) {
+  const std::string_view text = constant_fallback(s);
+  double v = 0.0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (error != std::errc() || end != text.data() + text.size()) {
+    throw std::logic_error(std::string("request parameter '") + s.key + "': default '" +
+                           std::string(text) + "' is not a number");
+  }
+  return v;
+}
+
+double RequestParams::number(const char* key) const {
+  return number(key, default_number(spec(key)));
+}
+
+int RequestParams::integer(const char* key) const {
+  return integer(key, static_cast<int>(default_number(spec(key))));
+}
+
+std::string RequestParams::string(const char* key) const {
+  return string(key, std::string(constant_fallback(spec(key))));
+}
+
+bool RequestParams::boolean(const char* key) const {
+  const std::string_view text = constant_fallback(spec(key));
+  if (text != "true" && text != "false") {
+    throw std::logic_error(std::string("request parameter '") + key + "': default '" +
+                           std::string(text) + "' is not true or false");
+  }
+  return boolean(key, text == "true");
+}
+
+double RequestParams::number_within(const char* key, double lo, double hi) const {
+  return number(key, default_number(spec(key)), lo, hi);
 }
 
 double RequestParams::number(const char* key, double fallback) const {

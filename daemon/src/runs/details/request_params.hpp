@@ -7,24 +7,41 @@
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace hystbench::daemon::details {
 
 /// What a parameter's value must be (request_params.cpp words them in this order).
 enum class ParamType { kNumber, kInteger, kString, kObject, kArray, kBoolean };
 
-/// One parameter of a command: key, type and the range a number or integer must lie in (a
-/// range known only at run time, such as the loop rate's, is checked by RequestParams::number's
-/// overload). `what` names the expected value in errors ("a number" and so on by default);
-/// `refusal` refuses the key with that reason (a key a client might expect, never accepted).
+/// One parameter of a command, the one place it is defined: key, type, the range a number or
+/// integer must lie in (a range known only at run time, such as the loop rate's, is checked by
+/// RequestParams::number's overloads), what it means and its default. The command table's rows
+/// point at these, RequestParams reads requests through them, and docs/reference/protocol.md's
+/// parameter tables are made from them (service/details/protocol_tables.hpp).
 struct ParamSpec {
   const char* key;
   ParamType type;
   double lo = -std::numeric_limits<double>::infinity();
   double hi = std::numeric_limits<double>::infinity();
+  /// What the key means, as the protocol page's table says it.
+  const char* doc = "";
+  /// The value an absent key takes when it is one constant: a number or integer as written,
+  /// "true" or "false", a string as it is. The getters without a fallback return it.
+  const char* fallback = nullptr;
+  /// The default in words where it depends on the bench, the config or other keys (after
+  /// `fallback` where both are given): the run builder passes that fallback itself.
+  const char* fallback_doc = nullptr;
+  /// Names the expected value in errors ("a number" and so on by default).
   const char* what = nullptr;
+  /// Refuses the key with this reason (a key a client might expect, never accepted).
   const char* refusal = nullptr;
+  /// The values a string takes, where the program lists them (the page adds them to `doc`).
+  std::vector<std::string> (*values)() = nullptr;
 };
+
+/// A number's, integer's constant default (ParamSpec::fallback; std::logic_error without one).
+double default_number(const ParamSpec& spec);
 
 /// `params` is null or an object holding only listed keys, each of its type and in its range.
 void check_params(const nlohmann::json& params, std::span<const ParamSpec> specs);
@@ -35,9 +52,18 @@ class RequestParams {
  public:
   RequestParams(const nlohmann::json& params, std::span<const ParamSpec> specs);
   bool has(const char* key) const { return params_.is_object() && params_.contains(key); }
+  /// The value, or the key's constant default (ParamSpec::fallback; a key without one is a
+  /// programming error: std::logic_error).
+  double number(const char* key) const;
+  int integer(const char* key) const;
+  std::string string(const char* key) const;
+  bool boolean(const char* key) const;
+  /// The value, or `fallback` (a default that depends on the bench: ParamSpec::fallback_doc).
   double number(const char* key, double fallback) const;
   /// Also within [lo, hi], a range that depends on the bench (limits, loop rate).
   double number(const char* key, double fallback, double lo, double hi) const;
+  /// The value or its constant default, also within [lo, hi] (a range that depends on the bench).
+  double number_within(const char* key, double lo, double hi) const;
   int integer(const char* key, int fallback) const;
   std::string string(const char* key, const std::string& fallback) const;
   bool boolean(const char* key, bool fallback) const;

@@ -30,7 +30,7 @@ sim::FrequencyResponseExcitationOptions response_options(const RequestParams& re
                                                          const RunContext& ctx) {
   sim::FrequencyResponseExcitationOptions o = response_options(ctx);
   if (request.has("amplitude")) {
-    const double a = request.number("amplitude", 0.02);
+    const double a = request.number("amplitude");
     // The small multisines at `a`, the last (the larger one) at four times it.
     for (std::size_t i = 0; i < o.conditions.size(); ++i) {
       o.conditions[i].amplitude_fraction =

@@ -462,7 +462,7 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
     rest.erase(key);
   }
   r.common = parse_track_request(RequestParams(rest, kTrackBuiltinParams), ctx);
-  if (request.has("approach_s")) r.common.approach_s = request.number("approach_s", 0.0);
+  if (request.has("approach_s")) r.common.approach_s = request.number("approach_s");
   if (r.common.learning.learned) {
     const std::string run = stage_learning_run(*r.common.learning.learned, axes);
     for (const std::string& axis : axes)
@@ -472,8 +472,8 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
   if (r.common.learning.trials > 0 || r.common.learning.learned) {
     r.common.gains.through_linear_map = true;
   }
-  r.decouple = request.boolean("decouple", true);
-  const std::string decoupling = request.string("decoupling", "static");
+  r.decouple = request.boolean("decouple");
+  const std::string decoupling = request.string("decoupling");
   if (decoupling != "dynamic" && decoupling != "static") {
     throw CommandError("bad_params",
                        "decoupling: 'static' (the default: the coupling's gains) or 'dynamic' "

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
+#include "runs/details/run_requests.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -30,7 +31,7 @@ void parse_compensator(const RequestParams& request, const RunContext& ctx, Trac
 // the run's length is theirs and a built-in reference must repeat.
 void parse_learning(const RequestParams& request, const RunContext& ctx, TrackRequest& r) {
   LearningKeys& l = r.learning;
-  l.trials = static_cast<std::size_t>(request.integer("learn_trials", 0));
+  l.trials = static_cast<std::size_t>(request.integer("learn_trials"));
   if (l.trials == 0) {
     for (const char* key : {"learn_gain", "learn_cutoff_hz"}) {
       if (request.has(key)) {
@@ -38,13 +39,13 @@ void parse_learning(const RequestParams& request, const RunContext& ctx, TrackRe
       }
     }
   }
-  l.gain = request.number("learn_gain", l.gain);
+  l.gain = request.number("learn_gain");
   l.cutoff_hz = request.number("learn_cutoff_hz", 0.0, 1e-3, 0.45 * ctx.settings.loop.rate_hz);
   if (request.has("learned")) l.learned = request.string("learned", "");
   if (request.has("lead_in_max_s") && !l.learned) {
     throw CommandError("bad_params", "lead_in_max_s: only with learned");
   }
-  l.lead_in_max_s = request.number("lead_in_max_s", l.lead_in_max_s, 0.0, 600.0);
+  l.lead_in_max_s = request.number("lead_in_max_s");
   if (!l.any() || !r.reference_upload.empty()) return;
   const std::string key = l.trials > 0 ? "learn_trials" : "learned";
   const std::string& name = r.reference.name;
@@ -87,12 +88,12 @@ void parse_builtin_reference(const RequestParams& request, const RunContext& ctx
                                          "a trajectory (reference_upload)");
   }
   const double rate = ctx.settings.loop.rate_hz;
-  ref.frequency_hz = request.number("frequency_hz", ref.frequency_hz, 1e-3, rate / 20.0);
-  ref.periods = request.number("periods", ref.periods);
-  ref.duration_s = request.number("duration_s", ref.duration_s);
+  ref.frequency_hz = request.number_within("frequency_hz", 1e-3, rate / 20.0);
+  ref.periods = request.number("periods");
+  ref.duration_s = request.number("duration_s", 0.0);
   // A step is a setpoint move: a fifth of the range by default (a triangle or sine spans 0.8).
-  ref.range_fraction = request.number(
-      "range_fraction", ref.kind == sim::SignalKind::kStep ? 0.2 : ref.range_fraction);
+  ref.range_fraction = ref.kind == sim::SignalKind::kStep ? request.number("range_fraction", 0.2)
+                                                          : request.number("range_fraction");
   if (request.has("min_um")) ref.min_um = request.number("min_um", 0.0);
   if (request.has("max_um")) ref.max_um = request.number("max_um", 0.0);
   if (ref.kind == sim::SignalKind::kStep) ref.rise_s = step_rise_s(ctx);
@@ -102,6 +103,8 @@ void parse_builtin_reference(const RequestParams& request, const RunContext& ctx
 
 TrackRequest parse_track_request(const RequestParams& request, const RunContext& ctx) {
   TrackRequest r;
+  // A stage's built-in reference plays as uploads: their approach is the default's.
+  r.approach_s = default_number(request_fields::kApproach);
   parse_compensator(request, ctx, r);
   // track's two parameter rows: a built-in reference's keys, or an upload's (with approach_s).
   if (request.has("reference_upload")) {
@@ -109,9 +112,9 @@ TrackRequest parse_track_request(const RequestParams& request, const RunContext&
     if (r.reference_upload.empty()) {
       throw CommandError("bad_params", "reference_upload: the name of a complete upload, not ''");
     }
-    r.approach_s = request.number("approach_s", r.approach_s);
+    r.approach_s = request.number("approach_s");
   } else {
-    r.reference.name = request.string("reference", r.reference.name);
+    r.reference.name = request.string("reference");
   }
   parse_learning(request, ctx, r);
   if (r.reference_upload.empty()) parse_builtin_reference(request, ctx, r.reference);

@@ -14,25 +14,62 @@ using T = ParamType;
 namespace {
 
 // The upload store checks the ranges (and what is missing) itself, with the same validator.
-constexpr ParamSpec kUploadBegin[] = {{"kind", T::kString},
-                                      {"samples", T::kInteger},
-                                      {"rate_hz", T::kNumber},
-                                      {"upload", T::kString},
-                                      {"source", T::kString}};
+constexpr ParamSpec kUploadBegin[] = {
+    {.key = "kind", .type = T::kString, .doc = "`reference` or `drive`"},
+    {.key = "samples", .type = T::kInteger, .doc = "the samples to come, at most 10 M"},
+    {.key = "rate_hz",
+     .type = T::kNumber,
+     .doc = "their sample rate [Hz]; without it each chunk carries `t`"},
+    {.key = "upload", .type = T::kString, .doc = "a name for it", .fallback_doc = "one is given"},
+    {.key = "source",
+     .type = T::kString,
+     .doc = "the file it came from, kept in the run log's header"}};
 constexpr ParamSpec kUploadChunk[] = {
-    {"upload", T::kString}, {"offset", T::kInteger}, {"values", T::kArray}, {"t", T::kArray}};
-constexpr ParamSpec kUploadCancel[] = {{"upload", T::kString}};
-constexpr ParamSpec kModelDelete[] = {{"name", T::kString}};
-constexpr ParamSpec kRunGet[] = {{"run_id", T::kString}};
+    {.key = "upload", .type = T::kString, .doc = "the upload's name"},
+    {.key = "offset", .type = T::kInteger, .doc = "the samples received so far"},
+    {.key = "values", .type = T::kArray, .doc = "at most 1000 finite values"},
+    {.key = "t",
+     .type = T::kArray,
+     .doc = "their times [s], strictly increasing (only without `rate_hz`)"}};
+constexpr ParamSpec kUploadCancel[] = {
+    {.key = "upload", .type = T::kString, .doc = "the upload to discard"}};
+constexpr ParamSpec kModelDelete[] = {
+    {.key = "name",
+     .type = T::kString,
+     .doc = "a model or a learned drive in the folder (never the active model)"}};
+constexpr ParamSpec kRunGet[] = {
+    {.key = "run_id",
+     .type = T::kString,
+     .doc = "one of `runs`' ids: that run's result, as `run.finished` gave it (`unknown_run` "
+            "otherwise)"}};
 constexpr ParamSpec kModelLoad[] = {
-    {"model", T::kObject, 0, 0, "the model file's JSON object"},
-    {"models", T::kObject, 0, 0, "a stage's model files' JSON objects by axis"},
-    {"name", T::kString},
-    {"stored", T::kString},
-    {"path", T::kString, 0, 0, nullptr,
-     "model.load takes the model document ('model', which `hystbench model load FILE` reads and "
-     "sends) or the name of a model in the daemon's model folder ('stored'); the daemon never "
-     "opens a path a client names"}};
+    {.key = "model",
+     .type = T::kObject,
+     .doc = "the model file's JSON object (`hystbench model load FILE` reads the file and sends "
+            "it)",
+     .what = "the model file's JSON object"},
+    {.key = "models",
+     .type = T::kObject,
+     .doc = "on a stage: `{axis: document}`, every axis's file of one stage identify (`hystbench "
+            "model load RUN-x.json RUN-y.json`); checked together, then kept as that identify's "
+            "`RUN-AXIS.json` and loaded as `stored` would (one request carries at most 1 MiB)",
+     .what = "a stage's model files' JSON objects by axis"},
+    {.key = "name",
+     .type = T::kString,
+     .doc = "the name it is kept under in the model folder (with `model`)",
+     .fallback = "uploaded"},
+    {.key = "stored",
+     .type = T::kString,
+     .doc = "the name of a model in the daemon's model folder; on a stage, the stage identify's "
+            "run id: every axis's `RUN-AXIS.json` loads, with the coupling and the responses "
+            "they carry (the reply gives `stage_run_id`, `axes` {`name`, `type`, `responses`} "
+            "and `coupling`)"},
+    {.key = "path",
+     .type = T::kString,
+     .doc = "refused: the daemon never opens a path a client names",
+     .refusal = "model.load takes the model document ('model', which `hystbench model load "
+                "FILE` reads and sends) or the name of a model in the daemon's model folder "
+                "('stored'); the daemon never opens a path a client names"}};
 
 // run.get: the kept result of run_id, which the request must name.
 json run_get(const RunHistory& history, const RequestParams& request) {
