@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Writes docs/reference/protocol.md's parameter tables from the daemon's command table (the one
-# place each request key is defined: daemon/src/runs/details/run_requests.hpp and
+# place each request key is defined: common/include/hystbench/common/run_requests.hpp and
 # daemon/src/service/details/command_table.cpp). Run after changing a key; the test
 # ProtocolReference.EveryParameterTableIsTheOneTheCommandTableMakes fails until the page agrees.
 # Needs a build (cmake --preset default && make -C build daemon_tests).

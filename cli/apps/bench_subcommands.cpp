@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "hystbench/common/fit_families.hpp"
 #include "hystbench/common/model_file_io.hpp"
 #include "hystbench/common/request_limits.hpp"
+#include "hystbench/common/run_requests.hpp"
 #include "subcommands.hpp"
 
 namespace cli = hystbench::cli;
@@ -26,6 +28,23 @@ void add_output_flags(CLI::App* c, cli::RemoteCommand& remote, bool waits) {
                 "Show progress until the run ends, then print its result (exit 1 unless it "
                 "completed)");
   }
+}
+
+CLI::Validator at_least(double lo) {
+  std::ostringstream name;
+  name << "FLOAT >= " << lo;
+  return CLI::Validator(
+      [lo](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(text, v)) return "not a number: " + text;
+        if (!(v >= lo)) {
+          std::ostringstream why;
+          why << "value " << text << " is below " << lo;
+          return why.str();
+        }
+        return std::string();
+      },
+      name.str());
 }
 
 // Sends the daemon `cmd` with `params`; returns the exit code of run_remote.
@@ -64,16 +83,17 @@ CliCommand add_identify(CLI::App& app, cli::RemoteCommand& remote) {
       "operator swapped for a Preisach plane unless --model names the family) is added where it "
       "lowers the held-out error, and the extended model is kept when it tracks better on the "
       "bench (the result lists the parts and their gains)");
-  cmd->add_option("--model", id->model,
-                  "pi, mpi, cpi, rpi, preisach (relays on a grid of the Preisach plane, with "
-                  "creep lags; holds a loop no play family does) or auto (every family, the "
-                  "best verified tracking kept); named, the extension keeps the family (default: "
-                  "the config's, whose operator the extension may swap)")
+  add_request_option(cmd, "--model", id->model, common::kIdentifyParams, "model",
+                     "pi, mpi, cpi, rpi, preisach (relays on a grid of the Preisach plane, with "
+                     "creep lags; holds a loop no play family does) or auto (every family, the "
+                     "best verified tracking kept); named, the extension keeps the family, left "
+                     "out it may swap the operator")
       ->check(CLI::IsMember(common::fit_family_name_list()));
-  cmd->add_option("--operators", id->operators,
-                  "Number of plays, or the Preisach plane's cells per side (0 = by held-out "
-                  "error; the plane: 24)");
-  cmd->add_option("--deadzones", id->dead_zones, "Dead zones per side (-1 = by held-out error)");
+  add_request_option(cmd, "--operators", id->operators, common::kIdentifyParams, "operators",
+                     "Number of plays, or the Preisach plane's cells per side (0 = by held-out "
+                     "error; the plane: 24)");
+  add_request_option(cmd, "--deadzones", id->dead_zones, common::kIdentifyParams, "dead_zones",
+                     "Dead zones per side (-1 = by held-out error)");
   cmd->add_flag("--no-extend", id->no_extend,
                 "Keep the fitted model as it is: no diagnosis of the record, no "
                 "extension (default: the config's [identify] extend, true)");
@@ -111,15 +131,14 @@ struct TrackOptions {
 
 // track's hand gains for inverse+pid and pid.
 void add_track_gain_options(CLI::App* cmd, TrackOptions& tr) {
-  cmd->add_option("--kp", tr.kp,
-                  "inverse+pid, pid: proportional gain [V/um] instead of the designed loop "
-                  "(checked against the loop's targets on the measured responses; `hystbench "
-                  "tune --kp ...` prints its margins)")
-      ->check(CLI::Range(0.0, 1e6));
-  cmd->add_option("--ki", tr.ki, "inverse+pid, pid: integral gain [V/(um s)], as --kp")
-      ->check(CLI::Range(0.0, 1e9));
-  cmd->add_option("--kd", tr.kd, "inverse+pid, pid: derivative gain [V s/um], as --kp")
-      ->check(CLI::Range(0.0, 1e3));
+  add_request_option(cmd, "--kp", tr.kp, common::kTrackBuiltinParams, "kp",
+                     "inverse+pid, pid: proportional gain [V/um] instead of the designed loop "
+                     "(checked against the loop's targets on the measured responses; `hystbench "
+                     "tune --kp ...` prints its margins)");
+  add_request_option(cmd, "--ki", tr.ki, common::kTrackBuiltinParams, "ki",
+                     "inverse+pid, pid: integral gain [V/(um s)], as --kp");
+  add_request_option(cmd, "--kd", tr.kd, common::kTrackBuiltinParams, "kd",
+                     "inverse+pid, pid: derivative gain [V s/um], as --kp");
   cmd->add_flag("--force-gains", tr.force_gains,
                 "Run gains that break the loop's targets (refused otherwise, naming their "
                 "margins)");
@@ -135,41 +154,42 @@ void add_gains(const TrackOptions& tr, nlohmann::json& p) {
 
 // track's built-in reference: its shape, frequency, length and range.
 void add_track_reference_options(CLI::App* cmd, TrackOptions& tr) {
-  cmd->add_option("--reference", tr.reference,
-                  "sine, triangle, sawtooth, step (a square wave: a step up and one down each "
-                  "period; the result gives their settling time to 1 % and overshoot), "
-                  "decaying_sine, multi_frequency, chirp. On a stage of several axes: raster "
-                  "(the first axis's lines at 10 Hz over a 0.1 Hz frame of the second, "
-                  "the default there), lissajous (10, 11, ... Hz), spiral (10 turns/s "
-                  "closing in over --duration); each axis over --range-fraction of its range "
-                  "(default: triangle; raster on a stage)");
-  cmd->add_option("--frequencies", tr.frequencies,
-                  "On a stage: the reference's frequencies [Hz]: raster FAST,SLOW; lissajous "
-                  "one per axis; spiral TURNS_PER_S")
+  add_request_option(cmd, "--reference", tr.reference, common::kTrackBuiltinParams, "reference",
+                     "sine, triangle, sawtooth, step (a square wave: a step up and one down each "
+                     "period; the result gives their settling time to 1 % and overshoot), "
+                     "decaying_sine, multi_frequency, chirp. On a stage of several axes: raster "
+                     "(the first axis's lines at 10 Hz over a 0.1 Hz frame of the second), "
+                     "lissajous (10, 11, ... Hz), spiral (10 turns/s closing in over --duration); "
+                     "each axis over --range-fraction of its range");
+  add_request_option(cmd, "--frequencies", tr.frequencies, common::kTrackBuiltinParams,
+                     "frequencies_hz",
+                     "On a stage: the reference's frequencies [Hz]: raster FAST,SLOW; lissajous "
+                     "one per axis; spiral TURNS_PER_S")
       ->delimiter(',');
   cmd->add_flag("--no-decouple", tr.no_decouple,
                 "On a stage: leave the coupling in the feedforward's targets (by default each "
                 "axis's target has the other axes' share taken out, from identify's estimate)");
-  cmd->add_option("--decoupling", tr.decoupling,
-                  "On a stage: static (the default: the coupling's gains, from identify's "
-                  "estimate) or dynamic (each coupling path's modes and lag too, fitted to the "
-                  "responses identify measured; the result's decoupling.dynamic names them)")
+  add_request_option(cmd, "--decoupling", tr.decoupling, common::kTrackBuiltinParams, "decoupling",
+                     "On a stage: static (the coupling's gains, from identify's estimate) or "
+                     "dynamic (each coupling path's modes and lag too, fitted to the responses "
+                     "identify measured; the result's decoupling.dynamic names them)")
       ->check(CLI::IsMember({"static", "dynamic"}))
       ->excludes("--no-decouple");
-  cmd->add_option("--frequency", tr.frequency, "Reference frequency [Hz] (default 1)");
-  cmd->add_option("--periods", tr.periods, "Number of periods (default 5)");
-  cmd->add_option("--duration", tr.duration, "Duration [s] (instead of --periods)");
-  cmd->add_option("--compensator", tr.compensator,
-                  "none, inverse, inverse_multiplicative, inverse+pid, pid (default: inverse "
-                  "with a model, none without)");
-  cmd->add_option("--range-fraction", tr.fraction,
-                  "Part of the actuator range the reference spans, centred (default 0.8; 0.2 "
-                  "for step)");
-  cmd->add_option("--min", tr.min, "Reference minimum [um] (instead of --range-fraction)");
-  cmd->add_option("--max", tr.max, "Reference maximum [um]");
-  cmd->add_option("--precondition", tr.precondition,
-                  "Open-loop sweep u_max -> u_min before the reference [s] (default: the "
-                  "daemon's, 1 s; 0 = none)");
+  const auto& t = common::kTrackBuiltinParams;
+  add_request_option(cmd, "--frequency", tr.frequency, t, "frequency_hz",
+                     "Reference frequency [Hz], at most a twentieth of the loop rate");
+  add_request_option(cmd, "--periods", tr.periods, t, "periods", "Number of periods");
+  add_request_option(cmd, "--duration", tr.duration, t, "duration_s",
+                     "Duration [s] (instead of --periods)");
+  add_request_option(cmd, "--compensator", tr.compensator, t, "compensator",
+                     "none, inverse, inverse_multiplicative, inverse+pid, pid");
+  add_request_option(cmd, "--range-fraction", tr.fraction, t, "range_fraction",
+                     "Part of the actuator range the reference spans, centred");
+  add_request_option(cmd, "--min", tr.min, t, "min_um",
+                     "Reference minimum [um] (instead of --range-fraction)");
+  add_request_option(cmd, "--max", tr.max, t, "max_um", "Reference maximum [um]");
+  add_request_option(cmd, "--precondition", tr.precondition, t, "precondition_s",
+                     "Open-loop sweep u_max -> u_min before the reference [s] (0 = none)");
 }
 
 // track --learn and its settings, and --learned.
@@ -186,17 +206,16 @@ void add_track_learning_options(CLI::App* cmd, TrackOptions& tr) {
                       "number of ticks. The result lists every trial; the run's errors are "
                       "the last trial's; the learned drive is saved in the model folder (t,u)")
           ->check(CLI::Range(1, 1000));
-  cmd->add_option("--learn-gain", tr.learn_gain,
-                  "--learn: share of the error corrected per trial at the start (default 0.5); "
-                  "a trial 20 % above the best halves it, two in a row stop the learning on "
-                  "the best trial's drive")
-      ->check(CLI::Range(1e-3, 20.0))
+  const auto& t = common::kTrackBuiltinParams;
+  add_request_option(cmd, "--learn-gain", tr.learn_gain, t, "learn_gain",
+                     "--learn: share of the error corrected per trial at the start; a trial 20 % "
+                     "above the best halves it, two in a row stop the learning on the best "
+                     "trial's drive")
       ->needs(learn_opt);
-  cmd->add_option("--learn-cutoff", tr.learn_cutoff,
-                  "--learn: the learning's low-pass cut-off [Hz] (default: the lowest of a fifth "
-                  "of the loop rate, 300 x the frequency and half a modelled mode); above it "
-                  "nothing is learned")
-      ->check(CLI::PositiveNumber)
+  add_request_option(cmd, "--learn-cutoff", tr.learn_cutoff, t, "learn_cutoff_hz",
+                     "--learn: the learning's low-pass cut-off [Hz], at most 0.45 of the loop "
+                     "rate (by default the lowest of a fifth of the loop rate, 300 x the "
+                     "frequency and half a modelled mode); above it nothing is learned")
       ->needs(learn_opt);
   auto* learned_opt = cmd->add_option(
       "--learned", tr.learned,
@@ -207,14 +226,13 @@ void add_track_learning_options(CLI::App* cmd, TrackOptions& tr) {
       "reference, range and loop rate it was "
       "learned for: give the same --reference, --frequency and range (or the same "
       "--reference-file), with the model it was learned with loaded");
-  cmd->add_option("--lead-in-max", tr.lead_in_max,
-                  "--learned: where the actuator's offset is not "
-                  "the one the drive was learned at (its creep after a rest, or after a long "
-                  "run), the lead-in goes on while the offset moves toward it, following it, "
-                  "until it is within 5x the last trial's rms or stops moving; at most this "
-                  "long [s] (default 60; 0: the shortest lead-in). The result says how long "
-                  "(learning.lead_in_periods) and why it ended (learning.lead_in_end)")
-      ->check(CLI::Range(0.0, 600.0))
+  add_request_option(cmd, "--lead-in-max", tr.lead_in_max, t, "lead_in_max_s",
+                     "--learned: where the actuator's offset is not the one the drive was "
+                     "learned at (its creep after a rest, or after a long run), the lead-in goes "
+                     "on while the offset moves toward it, following it, until it is within 5x "
+                     "the last trial's rms or stops moving; at most this long [s] (0: the "
+                     "shortest lead-in). The result says how long (learning.lead_in_periods) and "
+                     "why it ended (learning.lead_in_end)")
       ->needs(learned_opt);
   for (const char* other : {"--periods", "--duration"}) {
     learn_opt->excludes(cmd->get_option(other));
@@ -239,9 +257,9 @@ void add_track_file_options(CLI::App* cmd, TrackOptions& tr) {
                      {"--reference-file: time column [s]", "--reference-file: reference column",
                       "--reference-file: multiply the reference by this (m -> um: 1e6)",
                       "--reference-file: sample rate [Hz] of a file without a time column"});
-  cmd->add_option("--approach", tr.approach,
-                  "--reference-file: unscored move from the precondition's end to the "
-                  "first value [s] (default 0.2, longer when the slew limit needs it)");
+  add_request_option(cmd, "--approach", tr.approach, common::kTrackUploadedParams, "approach_s",
+                     "--reference-file: unscored move from the precondition's end to the first "
+                     "value [s], longer when the slew limit needs it");
 }
 
 // --learn and --learned into the request; false when neither is given.

@@ -6,9 +6,11 @@
 #include <memory>
 #include <string>
 
+#include "hystbench/common/run_requests.hpp"
 #include "subcommands.hpp"
 
 namespace cli = hystbench::cli;
+namespace common = hystbench::common;
 
 namespace {
 
@@ -40,12 +42,11 @@ CliCommand add_frf(CLI::App& app, cli::RemoteCommand& remote) {
       "first mode moved since the last measurement, and the loop designed now. identify "
       "measures it too.\n"
       "Example: hystbench frf --wait --plot frf/");
-  cmd->add_option("--amplitude", o->amplitude,
-                  "Peak of the small multisines, a fraction of the drive span (the larger one is "
-                  "4x; default 0.02)")
-      ->check(CLI::Range(0.001, 0.1));
-  cmd->add_option("--periods", o->periods, "Periods averaged per condition (default 4)")
-      ->check(CLI::Range(2, 64));
+  add_request_option(cmd, "--amplitude", o->amplitude, common::kFrfParams, "amplitude",
+                     "Peak of the small multisines, a fraction of the drive span (the larger one "
+                     "is 4x)");
+  add_request_option(cmd, "--periods", o->periods, common::kFrfParams, "periods",
+                     "Periods averaged per condition");
   add_output_flags(cmd, remote, true);
   cmd->add_option("--plot", remote.plot_dir,
                   "With --wait: write response.png (magnitude, phase and coherence of each "
@@ -76,12 +77,15 @@ CliCommand add_tune(CLI::App& app, cli::RemoteCommand& remote) {
       "where they would not hold), as a track runs them; --plot writes each axis's pictures "
       "in DIR/AXIS.\n"
       "Example: hystbench tune --plot tune/");
-  cmd->add_option("--compensator", o->compensator,
-                  "inverse+pid or pid (default: inverse+pid with a model, pid without)")
+  add_request_option(cmd, "--compensator", o->compensator, common::kTuneParams, "compensator",
+                     "inverse+pid or pid")
       ->check(CLI::IsMember({"inverse+pid", "pid"}));
-  cmd->add_option("--kp", o->kp, "Proportional gain to check [V/um]")->check(CLI::Range(0.0, 1e6));
-  cmd->add_option("--ki", o->ki, "Integral gain to check [V/(um s)]")->check(CLI::Range(0.0, 1e9));
-  cmd->add_option("--kd", o->kd, "Derivative gain to check [V s/um]")->check(CLI::Range(0.0, 1e3));
+  add_request_option(cmd, "--kp", o->kp, common::kTuneParams, "kp",
+                     "Proportional gain to check [V/um]");
+  add_request_option(cmd, "--ki", o->ki, common::kTuneParams, "ki",
+                     "Integral gain to check [V/(um s)]");
+  add_request_option(cmd, "--kd", o->kd, common::kTuneParams, "kd",
+                     "Derivative gain to check [V s/um]");
   add_output_flags(cmd, remote, false);
   cmd->add_option("--plot", remote.plot_dir,
                   "Write loop-bode.png (|L| and arg L with the crossover and the phase-margin "

@@ -2,10 +2,14 @@
 // The subcommands of the `hystbench` CLI: each add_ function registers one command's options on
 // `app` and returns the command with what it does once parsed.
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <functional>
+#include <span>
 #include <string>
+#include <string_view>
 
 #include "hystbench/cli/remote/remote_commands.hpp"
+#include "hystbench/common/request_schema.hpp"
 
 // A subcommand and what it does once parsed: returns the process's exit code.
 struct CliCommand {
@@ -26,6 +30,33 @@ struct RecordColumnsHelp {
 void add_record_columns(CLI::App* cmd, const std::string& signal, std::string& t_column,
                         std::string& column, double& scale, double& rate_hz,
                         const RecordColumnsHelp& help);
+
+// A number at least `lo` ("FLOAT >= lo" in --help).
+CLI::Validator at_least(double lo);
+
+// An option that sets request key `key` of `table` (hystbench/common/run_requests.hpp, the table
+// the daemon checks the request with): its help ends with the key's default, and a number's or
+// integer's value is checked against the key's range, so that the CLI refuses what the daemon
+// would before anything is sent.
+template <typename T>
+CLI::Option* add_request_option(CLI::App* cmd, const std::string& flag, T& value,
+                                std::span<const hystbench::common::ParamSpec> table,
+                                std::string_view key, std::string help) {
+  namespace common = hystbench::common;
+  const common::ParamSpec& spec = common::find_param(table, key);
+  const std::string default_words = common::default_text(spec, false);
+  if (!default_words.empty()) help += " (default: " + default_words + ")";
+  CLI::Option* option = cmd->add_option(flag, value, std::move(help));
+  const bool lo = std::isfinite(spec.lo), hi = std::isfinite(spec.hi);
+  if (spec.type == common::ParamType::kInteger && lo && hi) {
+    option->check(CLI::Range(static_cast<long long>(spec.lo), static_cast<long long>(spec.hi)));
+  } else if (spec.type == common::ParamType::kNumber && lo && hi) {
+    option->check(CLI::Range(spec.lo, spec.hi));
+  } else if (spec.type == common::ParamType::kNumber && lo) {
+    option->check(at_least(spec.lo));
+  }
+  return option;
+}
 
 // Offline commands, no daemon needed (offline_subcommands.cpp).
 CliCommand add_fit(CLI::App& app);

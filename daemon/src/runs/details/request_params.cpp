@@ -1,7 +1,6 @@
 #include "runs/details/request_params.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <stdexcept>
 #include <string_view>
@@ -101,30 +100,6 @@ const ParamSpec& RequestParams::spec(const char* key) const {
   throw std::logic_error(std::string("request parameter '") + key + "' is not in its command");
 }
 
-namespace {
-
-// The key's constant default (ParamSpec::fallback), which a getter without a fallback needs.
-std::string_view constant_fallback(const ParamSpec& s) {
-  if (s.fallback == nullptr) {
-    throw std::logic_error(std::string("request parameter '") + s.key +
-                           "' has no constant default: give the fallback");
-  }
-  return s.fallback;
-}
-
-}  // namespace
-
-double default_number(const ParamSpec& s) {
-  const std::string_view text = constant_fallback(s);
-  double v = 0.0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (error != std::errc() || end != text.data() + text.size()) {
-    throw std::logic_error(std::string("request parameter '") + s.key + "': default '" +
-                           std::string(text) + "' is not a number");
-  }
-  return v;
-}
-
 double RequestParams::number(const char* key) const {
   return number(key, default_number(spec(key)));
 }
@@ -134,11 +109,11 @@ int RequestParams::integer(const char* key) const {
 }
 
 std::string RequestParams::string(const char* key) const {
-  return string(key, std::string(constant_fallback(spec(key))));
+  return string(key, std::string(common::default_constant(spec(key))));
 }
 
 bool RequestParams::boolean(const char* key) const {
-  const std::string_view text = constant_fallback(spec(key));
+  const std::string_view text = common::default_constant(spec(key));
   if (text != "true" && text != "false") {
     throw std::logic_error(std::string("request parameter '") + key + "': default '" +
                            std::string(text) + "' is not true or false");

@@ -7,41 +7,15 @@
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
-#include <vector>
+
+#include "hystbench/common/request_schema.hpp"
 
 namespace hystbench::daemon::details {
 
-/// What a parameter's value must be (request_params.cpp words them in this order).
-enum class ParamType { kNumber, kInteger, kString, kObject, kArray, kBoolean };
-
-/// One parameter of a command, the one place it is defined: key, type, the range a number or
-/// integer must lie in (a range known only at run time, such as the loop rate's, is checked by
-/// RequestParams::number's overloads), what it means and its default. The command table's rows
-/// point at these, RequestParams reads requests through them, and docs/reference/protocol.md's
-/// parameter tables are made from them (service/details/protocol_tables.hpp).
-struct ParamSpec {
-  const char* key;
-  ParamType type;
-  double lo = -std::numeric_limits<double>::infinity();
-  double hi = std::numeric_limits<double>::infinity();
-  /// What the key means, as the protocol page's table says it.
-  const char* doc = "";
-  /// The value an absent key takes when it is one constant: a number or integer as written,
-  /// "true" or "false", a string as it is. The getters without a fallback return it.
-  const char* fallback = nullptr;
-  /// The default in words where it depends on the bench, the config or other keys (after
-  /// `fallback` where both are given): the run builder passes that fallback itself.
-  const char* fallback_doc = nullptr;
-  /// Names the expected value in errors ("a number" and so on by default).
-  const char* what = nullptr;
-  /// Refuses the key with this reason (a key a client might expect, never accepted).
-  const char* refusal = nullptr;
-  /// The values a string takes, where the program lists them (the page adds them to `doc`).
-  std::vector<std::string> (*values)() = nullptr;
-};
-
-/// A number's, integer's constant default (ParamSpec::fallback; std::logic_error without one).
-double default_number(const ParamSpec& spec);
+// The schema of every request (hystbench/common/request_schema.hpp), shared with the CLI.
+using common::default_number;
+using common::ParamSpec;
+using common::ParamType;
 
 /// `params` is null or an object holding only listed keys, each of its type and in its range.
 void check_params(const nlohmann::json& params, std::span<const ParamSpec> specs);

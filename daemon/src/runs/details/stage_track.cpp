@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "hystbench/common/command_error.hpp"
+#include "hystbench/common/run_requests.hpp"
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/loop_analysis.hpp"
 #include "hystbench/compensation/number_text.hpp"
@@ -18,7 +19,6 @@
 #include "hystbench/compensation/stage_interaction.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "runs/details/feedback_design.hpp"
-#include "runs/details/run_requests.hpp"
 #include "runs/details/stage_loops_together.hpp"
 #include "runs/details/stage_runs.hpp"
 #include "runs/details/track_program.hpp"
@@ -461,7 +461,7 @@ StageTrackRequest parse_stage_track_request(const RequestParams& request, const 
                           "decoupling", "reference_uploads", "approach_s"}) {
     rest.erase(key);
   }
-  r.common = parse_track_request(RequestParams(rest, kTrackBuiltinParams), ctx);
+  r.common = parse_track_request(RequestParams(rest, common::kTrackBuiltinParams), ctx);
   if (request.has("approach_s")) r.common.approach_s = request.number("approach_s");
   if (r.common.learning.learned) {
     const std::string run = stage_learning_run(*r.common.learning.learned, axes);

@@ -3,7 +3,7 @@
 #include <string>
 
 #include "hystbench/common/command_error.hpp"
-#include "runs/details/run_requests.hpp"
+#include "hystbench/common/run_requests.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -104,7 +104,7 @@ void parse_builtin_reference(const RequestParams& request, const RunContext& ctx
 TrackRequest parse_track_request(const RequestParams& request, const RunContext& ctx) {
   TrackRequest r;
   // A stage's built-in reference plays as uploads: their approach is the default's.
-  r.approach_s = default_number(request_fields::kApproach);
+  r.approach_s = default_number(common::request_fields::kApproach);
   parse_compensator(request, ctx, r);
   // track's two parameter rows: a built-in reference's keys, or an upload's (with approach_s).
   if (request.has("reference_upload")) {

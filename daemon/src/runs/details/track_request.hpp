@@ -16,7 +16,8 @@
 namespace hystbench::daemon::details {
 
 /// A built-in periodic reference's keys (a track without reference_upload). Every value, and its
-/// default, comes from the request's table (run_requests.hpp: kTrackBuiltinParams).
+/// default, comes from the request's table (hystbench/common/run_requests.hpp:
+/// kTrackBuiltinParams).
 struct BuiltinReferenceRequest {
   std::string name;  ///< reference: sine, triangle, sawtooth, chirp, ...
   sim::SignalKind kind = sim::SignalKind::kTriangle;

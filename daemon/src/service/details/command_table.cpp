@@ -3,7 +3,7 @@
 #include <string_view>
 
 #include "hystbench/common/command_error.hpp"
-#include "runs/details/run_requests.hpp"
+#include "hystbench/common/run_requests.hpp"
 #include "service/details/run_history.hpp"
 
 namespace hystbench::daemon::details {
@@ -89,21 +89,21 @@ std::span<const Command> bench_commands() {
        {},
        [](Bench& b, const RequestParams&, std::uint64_t) { return b.status(); },
        true},
-      {"identify", nullptr, kIdentifyParams,
+      {"identify", nullptr, common::kIdentifyParams,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.start_identify(r); }},
-      {"track", "reference_upload", kTrackUploadedParams,
+      {"track", "reference_upload", common::kTrackUploadedParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
-      {"track", "reference_uploads", kTrackStageUploadedParams,
+      {"track", "reference_uploads", common::kTrackStageUploadedParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
-      {"track", nullptr, kTrackBuiltinParams,
+      {"track", nullptr, common::kTrackBuiltinParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_track(r, c); }},
-      {"excite", "drive_uploads", kExciteStageParams,
+      {"excite", "drive_uploads", common::kExciteStageParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_excite(r, c); }},
-      {"excite", nullptr, kExciteParams,
+      {"excite", nullptr, common::kExciteParams,
        [](Bench& b, const RequestParams& r, std::uint64_t c) { return b.start_excite(r, c); }},
-      {"frf", nullptr, kFrfParams,
+      {"frf", nullptr, common::kFrfParams,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.start_frf(r); }},
-      {"tune", nullptr, kTuneParams,
+      {"tune", nullptr, common::kTuneParams,
        [](Bench& b, const RequestParams& r, std::uint64_t) { return b.tune(r); }},
       {"upload.begin", nullptr, kUploadBegin,
        [](Bench& b, const RequestParams& r, std::uint64_t c) {

@@ -23,13 +23,6 @@ std::string range_text(const ParamSpec& p) {
   return "";
 }
 
-std::string default_text(const ParamSpec& p) {
-  std::string out;
-  if (p.fallback != nullptr) out = fmt::format("`{}`", p.fallback);
-  if (p.fallback_doc != nullptr) out += (out.empty() ? "" : "; ") + std::string(p.fallback_doc);
-  return out;
-}
-
 std::string meaning_text(const ParamSpec& p) {
   std::string out = p.doc;
   if (p.values == nullptr) return out;
@@ -65,7 +58,7 @@ std::string parameter_table(std::string_view name) {
       listed.emplace_back(p.key);
       out +=
           fmt::format("| `{}` | {} | {} | {} | {} |\n", p.key, kTypeNames[static_cast<int>(p.type)],
-                      range_text(p), default_text(p), meaning_text(p));
+                      range_text(p), common::default_text(p, true), meaning_text(p));
     }
   }
   if (out.empty()) return out;

@@ -1,6 +1,6 @@
 #pragma once
 // The protocol page's parameter tables, made from the command table (command_table.hpp) and the
-// requests' parameter tables (runs/details/run_requests.hpp): docs/reference/protocol.md holds
+// requests' parameter tables (hystbench/common/run_requests.hpp): docs/reference/protocol.md holds
 // each between markers, scripts/protocol-reference.sh writes them there and
 // protocol_reference_test holds the page to them. Not real-time safe.
 #include <string>

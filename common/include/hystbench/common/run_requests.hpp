@@ -1,41 +1,23 @@
 #pragma once
 // The parameters of each run command's request, one table each (key, type, range, meaning,
-// default): the command table's rows point at them (service/details/command_table.cpp), the run
-// builders read the keys and their defaults through them, and docs/reference/protocol.md's tables
-// are made from them (scripts/protocol-reference.sh; protocol_reference_test holds the page to
-// them). A key two requests share is defined once here. Ranges that
-// depend on the bench (frequency_hz up to a twentieth of the loop rate, identify's u_min/u_max
-// within the output limits) are checked by the run builders on top of these.
+// default), shared by the two programs: the daemon's command table points at them, its run
+// builders read the keys and their defaults through them, and docs/reference/protocol.md's
+// tables are made from them (scripts/protocol-reference.sh); the CLI's options that set a key
+// take its range and default from them. A key two requests share is defined once here. Ranges
+// that depend on the bench (frequency_hz up to a twentieth of the loop rate, identify's
+// u_min/u_max within the output limits) are checked by the run builders on top of these.
 #include <array>
-#include <cstddef>
-#include <utility>
 
 #include "hystbench/common/fit_families.hpp"
-#include "runs/details/request_params.hpp"
+#include "hystbench/common/request_schema.hpp"
 
-namespace hystbench::daemon::details {
+namespace hystbench::common {
 
 namespace request_fields {
 
 using T = ParamType;
 
 inline constexpr double kWeekS = 7.0 * 24 * 3600;
-
-/// The tables given, one after the other.
-template <std::size_t N, std::size_t M>
-constexpr std::array<ParamSpec, N + M> join(const std::array<ParamSpec, N>& a,
-                                            const std::array<ParamSpec, M>& b) {
-  return [&]<std::size_t... I, std::size_t... J>(std::index_sequence<I...>,
-                                                 std::index_sequence<J...>) {
-    return std::array<ParamSpec, N + M>{a[I]..., b[J]...};
-  }
-  (std::make_index_sequence<N>{}, std::make_index_sequence<M>{});
-}
-template <std::size_t N, std::size_t M, typename... More>
-constexpr auto join(const std::array<ParamSpec, N>& a, const std::array<ParamSpec, M>& b,
-                    const More&... more) {
-  return join(join(a, b), more...);
-}
 
 /// The compensator a track names, and the feedback's gains it may give (track, tune); no
 /// gains = designed per run.
@@ -135,7 +117,7 @@ inline constexpr std::array<ParamSpec, 6> kIdentifyParams{
       .type = request_fields::T::kString,
       .doc = "the model family (`auto`: chosen by held-out error)",
       .fallback_doc = "`[identify] model`",
-      .values = common::fit_family_name_list},
+      .values = fit_family_name_list},
      {.key = "operators",
       .type = request_fields::T::kInteger,
       .lo = 0,
@@ -267,4 +249,4 @@ inline constexpr auto kTuneParams = request_fields::join(
                                .fallback_doc = "`inverse+pid` with a model, else `pid`"}}},
     request_fields::kGains);
 
-}  // namespace hystbench::daemon::details
+}  // namespace hystbench::common
