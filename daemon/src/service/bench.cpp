@@ -21,6 +21,7 @@
 #include "service/details/model_folder.hpp"
 #include "service/details/model_store.hpp"
 #include "service/details/run_history.hpp"
+#include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
 
@@ -78,6 +79,7 @@ Bench::Bench(BenchSettings settings)
   BenchLoopOptions loop = settings_.loop;
   loop.axis_names = settings_.axes;
   loop_ = std::make_unique<BenchLoop>(*driver_, loop);
+  runs_ = std::make_unique<details::RunSupervisor>(*loop_, mutex_);
 }
 
 Bench::~Bench() {
@@ -91,12 +93,16 @@ Bench::~Bench() {
 
 RealtimeReport Bench::start() {
   realtime_ = loop_->start();
-  supervisor_ = std::thread([this] { supervise(); });
+  runs_->start({[this](std::unique_ptr<RunProgram> run) { finalize(std::move(run)); },
+                [this] { learn(); },
+                [this](std::unique_ptr<RunProgram> run, RunEnd end, const std::string& why) {
+                  end_unplayed(std::move(run), end, why);
+                }});
   return realtime_;
 }
 
 void Bench::shutdown() {
-  if (quit_.exchange(true)) return;
+  if (!runs_ || !runs_->quit()) return;
   if (loop_) {
     loop_->request_abort();
     // Give the loop a few ticks (at most 0.2 s) to end the run cleanly, then stop it.
@@ -104,16 +110,7 @@ void Bench::shutdown() {
                     std::chrono::milliseconds(200));
     loop_->shutdown();
   }
-  if (supervisor_.joinable()) supervisor_.join();
-  if (preparation_queued()) {  // queued as the bench shut down: never prepared
-    std::unique_ptr<RunProgram> run;
-    {
-      std::lock_guard lock(mutex_);
-      run = std::move(preparing_);
-      preparation_.reset();
-    }
-    end_unplayed(std::move(run), RunEnd::kAborted, "the daemon shut down before the run started");
-  }
+  runs_->join();
   if (loop_) {
     if (auto finished = loop_->take_finished()) finalize(std::move(finished));
   }
@@ -123,24 +120,16 @@ void Bench::shutdown() {
   }
 }
 
-void Bench::set_event_sink(EventSink sink) {
-  std::lock_guard lock(mutex_);
-  sink_ = std::move(sink);
-}
+void Bench::set_event_sink(EventSink sink) { runs_->set_sink(std::move(sink)); }
 
 void Bench::set_web_view_status(nlohmann::json view) {
   std::lock_guard lock(mutex_);
   web_view_ = std::move(view);
 }
 
-void Bench::emit(const json& event) {
-  EventSink sink;
-  {
-    std::lock_guard lock(mutex_);
-    sink = sink_;
-  }
-  if (sink) sink(event);
-}
+void Bench::emit(const json& event) { runs_->emit(event); }
+
+bool Bench::quitting() const noexcept { return runs_->quitting(); }
 
 bool Bench::loop_advanced() {
   const std::uint64_t t = loop_->ticks();
@@ -149,17 +138,7 @@ bool Bench::loop_advanced() {
   return advanced;
 }
 
-bool Bench::wait_idle(std::chrono::milliseconds timeout) {
-  // The loop runs only what the bench submits: with no run in any phase it is not running.
-  std::unique_lock lock(mutex_);
-  return idle_cv_.wait_for(lock, timeout,
-                           [this] { return phase_ == RunPhase::kIdle && !delivering_result_; });
-}
-
-void Bench::set_phase(RunPhase phase) {
-  std::lock_guard lock(mutex_);
-  phase_ = phase;
-}
+bool Bench::wait_idle(std::chrono::milliseconds timeout) { return runs_->wait_idle(timeout); }
 
 std::string Bench::new_run_id(const char* kind) {
   const std::time_t now = std::time(nullptr);
@@ -202,29 +181,11 @@ json Bench::handle(const std::string& cmd, const json& params, std::uint64_t cli
   return command.handle(*this, request, client);
 }
 
-json Bench::stop_run() {
-  {
-    std::lock_guard lock(mutex_);
-    if (phase_ == RunPhase::kPreparing) {  // ends unplayed once the preparation stops
-      if (cancel_preparation_ == RunEnd::kCompleted) cancel_preparation_ = RunEnd::kStopped;
-      return {{"stopping", true}};
-    }
-    // A run submitted but not yet picked up by the loop counts as active.
-    if (phase_ != RunPhase::kRunning) throw common::CommandError("no_run", "no run is active");
-  }
-  loop_->request_stop();
-  return {{"stopping", true}};
-}
+json Bench::stop_run() { return runs_->stop(); }
 
 json Bench::abort_run() {
-  bool running = false;
-  {
-    std::lock_guard lock(mutex_);
-    running = phase_ == RunPhase::kRunning || phase_ == RunPhase::kPreparing;
-    if (phase_ == RunPhase::kPreparing) cancel_preparation_ = RunEnd::kAborted;
-  }
-  loop_->request_abort();
-  return {{"aborted", running}, {"output_v", driver_->safe_output_v()}};
+  const bool active = runs_->abort();
+  return {{"aborted", active}, {"output_v", driver_->safe_output_v()}};
 }
 
 json Bench::reset() {
@@ -251,8 +212,10 @@ json Bench::status() const {
   json s;
   const auto state = loop_->state();
   std::lock_guard lock(mutex_);
-  const bool finalizing = phase_ == RunPhase::kFinalizing && state == BenchLoop::State::kIdle;
-  const bool preparing = phase_ == RunPhase::kPreparing && state == BenchLoop::State::kIdle;
+  const details::RunPhase phase = runs_->phase();
+  const bool finalizing =
+      phase == details::RunPhase::kFinalizing && state == BenchLoop::State::kIdle;
+  const bool preparing = phase == details::RunPhase::kPreparing && state == BenchLoop::State::kIdle;
   s["state"] = finalizing ? "finalizing" : preparing ? "preparing" : state_name(state);
   if (state == BenchLoop::State::kFault) s["fault_reason"] = loop_->fault_reason();
   s["output_v"] = loop_->last_output();
@@ -266,11 +229,7 @@ json Bench::status() const {
     s["axes"] = axes;
     s["stage_model"] = stage_ ? stage_status() : json(nullptr);
   }
-  if (!active_run_.is_null()) {
-    s["run"] = active_run_;
-  } else {
-    s["run"] = nullptr;
-  }
+  s["run"] = runs_->active();
   s["model"] = models_->summary();
   s["loop"] = {{"rate_hz", settings_.loop.rate_hz},
                {"clock", to_string(settings_.loop.clock)},
@@ -304,7 +263,7 @@ nlohmann::json Bench::load_model(const details::RequestParams& request) {
   }
   // Checked first: a refused request changes nothing (an upload is not kept either).
   std::lock_guard lock(mutex_);
-  if (phase_ != RunPhase::kIdle) {
+  if (runs_->phase() != details::RunPhase::kIdle) {
     throw common::CommandError("busy", "a run is active; load the model after it");
   }
   if (is_stage()) return load_stage_model(request);
@@ -327,7 +286,7 @@ void Bench::require_idle() const {
     throw common::CommandError("fault", std::string("the bench is in FAULT (") +
                                             loop_->fault_reason() + "); send reset first");
   }
-  if (phase_ != RunPhase::kIdle) throw common::CommandError("busy", "a run is active");
+  runs_->require_idle();
 }
 
 Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json& header) {
@@ -362,31 +321,26 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
       if (!launched) loop.hold_time_between_runs(false);
     }
   } hold{*loop_};
-  std::string run_id, log_path;
-  std::uint64_t total = 0;
-  if (run.preparation.work) {
+  const bool prepared = static_cast<bool>(run.preparation.work);
+  SubmittedRun r;
+  if (prepared) {
     // Prepared on the supervisor thread, then submitted: the reply does not wait for it.
-    RunProgram& p = *run.program;
-    open_log(p, run.header);
-    run_id = p.run_id;
-    log_path = p.log->path().string();
-    total = p.total_samples;
-    preparing_ = std::move(run.program);
-    preparation_ = std::make_unique<details::RunPreparation>(std::move(run.preparation));
-    cancel_preparation_ = RunEnd::kCompleted;
-    phase_ = RunPhase::kPreparing;
-    loop_->wake_control();
+    open_log(*run.program, run.header);
+    r = {run.program->run_id, run.program->log->path().string(), run.program->total_samples};
   } else {
-    SubmittedRun r = submit_run(std::move(run.program), run.header);
-    run_id = std::move(r.run_id);
-    log_path = std::move(r.log_path);
-    total = r.total;
-    phase_ = RunPhase::kRunning;
-    loop_->wake_control();  // the supervisor announces the run
+    r = submit_run(std::move(run.program), run.header);
   }
-  active_run_ = {{"run_id", run_id}, {"kind", kind}, {"total", total}, {"log", log_path}};
-  active_run_.update(run.status);
-  if (phase_ == RunPhase::kPreparing) active_run_["stage"] = preparation_->stage;
+  const std::string run_id = r.run_id, log_path = r.log_path;
+  const std::uint64_t total = r.total;
+  json active = {{"run_id", run_id}, {"kind", kind}, {"total", total}, {"log", log_path}};
+  active.update(run.status);
+  if (prepared) {
+    runs_->queue(std::move(run.program),
+                 std::make_unique<details::RunPreparation>(std::move(run.preparation)),
+                 std::move(active));
+  } else {
+    runs_->running(std::move(active));
+  }
   json reply = {{"run_id", run_id},
                 {"samples", total},
                 {"duration_s", static_cast<double>(total) * dt_},
@@ -462,126 +416,11 @@ json Bench::start_track(const details::RequestParams& request, std::uint64_t cli
   return reply;
 }
 
-void Bench::supervise() {
-  constexpr auto kProgressPeriod = std::chrono::milliseconds(500);
-  auto next_progress = std::chrono::steady_clock::now() + kProgressPeriod;
-  while (!quit_.load()) {
-    // Read before looking, so a run that ends in between wakes the wait at once.
-    const std::uint32_t seen = loop_->events();
-    if (preparation_queued()) {
-      prepare();
-      continue;
-    }
-    // Before a finished run is taken: on the simulated clock a run can end before the first
-    // periodic event, and a client still sees it (and each verification stage) start.
-    announce_run();
-    learn();
-    if (auto finished = loop_->take_finished()) {
-      finalize(std::move(finished));
-      continue;
-    }
-    const auto now = std::chrono::steady_clock::now();
-    if (now >= next_progress) {
-      next_progress = now + kProgressPeriod;
-      emit_progress();
-    }
-    loop_->wait_event(seen, next_progress - now);
-  }
-}
-
-void Bench::announce_run() {
-  std::string key;
-  {
-    std::lock_guard lock(mutex_);
-    if (active_run_.is_null() || phase_ != RunPhase::kRunning) return;
-    key = active_run_["run_id"].get<std::string>() + "/" + active_run_.value("stage", "");
-  }
-  if (key == announced_run_) return;
-  announced_run_ = key;
-  emit_progress(true);
-}
-
-void Bench::emit_progress(bool started) {
-  json run;
-  {
-    std::lock_guard lock(mutex_);
-    run = active_run_;
-  }
-  const RunProgram* p = loop_->active();
-  if (run.is_null() || (p == nullptr && !started)) return;
-  // A run that already ended (or is not picked up yet) is announced at its start.
-  const std::uint64_t done = p != nullptr ? p->done.load(std::memory_order_acquire) : 0;
-  const auto total = run["total"].get<std::uint64_t>();
-  json event = {
-      {"event", "run.progress"}, {"run_id", run["run_id"]},
-      {"kind", run["kind"]},     {"done", done},
-      {"total", total},          {"fraction", total ? static_cast<double>(done) / total : 0.0}};
-  if (run.contains("stage")) event["stage"] = run["stage"];  // identify's verification
-  emit(event);
-}
-
-bool Bench::preparation_queued() const {
-  std::lock_guard lock(mutex_);
-  return preparing_ != nullptr;
-}
-
-void Bench::prepare() {
-  std::unique_ptr<RunProgram> run;
-  std::unique_ptr<details::RunPreparation> preparation;
-  {
-    std::lock_guard lock(mutex_);
-    run = std::move(preparing_);
-    preparation = std::move(preparation_);
-  }
-  const json progress = {{"event", "run.progress"},      {"run_id", run->run_id},
-                         {"kind", to_string(run->kind)}, {"done", 0},
-                         {"total", run->total_samples},  {"stage", preparation->stage}};
-  bool cancelled = false;
-  try {
-    preparation->work(*run, [&](double fraction) {
-      {
-        std::lock_guard lock(mutex_);
-        if (cancel_preparation_ != RunEnd::kCompleted || quit_.load()) {
-          throw details::PreparationCancelled{};
-        }
-      }
-      json event = progress;
-      event["fraction"] = fraction;
-      emit(event);
-    });
-  } catch (const details::PreparationCancelled&) {
-    cancelled = true;
-  }
-  RunEnd cancel = RunEnd::kCompleted;
-  {
-    std::lock_guard lock(mutex_);
-    cancel = cancel_preparation_;
-    if (quit_.load()) cancel = RunEnd::kAborted;
-    if (!cancelled && cancel == RunEnd::kCompleted) {
-      active_run_.erase("stage");
-      if (auto refused = loop_->submit(std::move(run))) {
-        run = std::move(refused);
-      } else {
-        phase_ = RunPhase::kRunning;
-        return;
-      }
-    }
-  }
-  if (cancel == RunEnd::kCompleted) {
-    end_unplayed(std::move(run), RunEnd::kAborted,
-                 loop_->state() == BenchLoop::State::kFault
-                     ? std::string("the loop went into FAULT (") + loop_->fault_reason() +
-                           ") while the run was prepared: nothing was played"
-                     : "the loop did not accept the run: nothing was played");
-    return;
-  }
-  end_unplayed(std::move(run), cancel,
-               std::string(cancel == RunEnd::kStopped ? "stopped" : "aborted") + " while " +
-                   preparation->stage + ": nothing was played");
-}
-
 void Bench::end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason) {
-  set_phase(RunPhase::kFinalizing);
+  {
+    std::lock_guard lock(mutex_);
+    runs_->finalizing();
+  }
   run->end = end;
   json report = details::collect_result(*run, loop_->last_output()).report;
   // Its learners go with the program that holds their exchanges.
@@ -600,7 +439,10 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
     verification_finished(std::move(run));
     return;
   }
-  set_phase(RunPhase::kFinalizing);
+  {
+    std::lock_guard lock(mutex_);
+    runs_->finalizing();
+  }
   details::RunResult result = details::collect_result(*run, loop_->last_output());
   if (run->axes() > 1) {
     details::replace_with_stage_result(result.report, *run, settings_.axes);
@@ -629,23 +471,10 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
 }
 
 void Bench::deliver_result(json result) {
-  {
-    std::lock_guard lock(mutex_);
-    last_result_ = result;
-    history_->add(result);
-    active_run_ = nullptr;
-    phase_ = RunPhase::kIdle;
-    delivering_result_ = true;
-  }
-  loop_->hold_time_between_runs(false);
-  // Clients may start the next run as soon as they see this event, so the bench is idle before
-  // it goes out; wait_idle() still waits for it, or a caller could read the previous result.
-  emit({{"event", "run.finished"}, {"result", result}});
-  {
-    std::lock_guard lock(mutex_);
-    delivering_result_ = false;
-  }
-  idle_cv_.notify_all();
+  runs_->deliver(std::move(result), [this](const json& r) {
+    last_result_ = r;
+    history_->add(r);
+  });
 }
 
 }  // namespace hystbench::daemon

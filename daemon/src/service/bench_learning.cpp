@@ -10,6 +10,7 @@
 #include "runs/details/learned_drive.hpp"
 #include "runs/details/track_learning.hpp"
 #include "service/details/model_store.hpp"
+#include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
 
@@ -20,7 +21,7 @@ void Bench::learn() {
   std::string run_id;
   {
     std::lock_guard lock(mutex_);
-    if (!learning_ || phase_ != RunPhase::kRunning) return;
+    if (!learning_ || runs_->phase() != details::RunPhase::kRunning) return;
     learning = learning_.get();
     run_id = learning_run_id_;
   }
@@ -48,7 +49,7 @@ void Bench::announce_trials(details::TrackLearning& learning, const std::string&
                               compensation::fixed(t.rms_percent, 3) + " %";
     {
       std::lock_guard lock(mutex_);
-      if (!active_run_.is_null()) active_run_["stage"] = stage;
+      runs_->set_stage(stage);
     }
     emit({{"event", "run.progress"},
           {"run_id", run_id},

@@ -14,6 +14,7 @@
 #include "runs/details/stage_runs.hpp"
 #include "service/details/identify_session.hpp"
 #include "service/details/model_store.hpp"
+#include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
 
@@ -132,25 +133,15 @@ bool Bench::measure_stage_responses() {
     }
   }
   const std::string program_id = p->run_id;
-  const std::string log = p->log->path().string();
-  const std::uint64_t total = p->total_samples;
+  std::string why;
   std::lock_guard lock(mutex_);
-  if (quit_.load()) {
-    p->log->close();
-    s.responses_result = {{"error", "daemon shutting down"}};
-    return false;
-  }
-  if (auto refused = loop_->submit(std::move(p))) {
-    refused->log->close();
-    s.responses_result = {{"error", "the loop did not accept the run"}};
+  if (!runs_->submit_segment(std::move(p), "measuring the frequency response", "verification_log",
+                             why)) {
+    s.responses_result = {{"error", why}};
     return false;
   }
   s.program_id = program_id;
   s.response_options = o;
-  active_run_["stage"] = "measuring the frequency response";
-  active_run_["total"] = total;
-  active_run_["verification_log"] = log;
-  phase_ = RunPhase::kRunning;
   return true;
 }
 
@@ -158,8 +149,7 @@ void Bench::stage_responses_measured(std::unique_ptr<RunProgram> run) {
   IdentifySession& s = *session_;
   {
     std::lock_guard lock(mutex_);
-    phase_ = RunPhase::kFinalizing;
-    active_run_["stage"] = "designing the feedback";
+    runs_->finalizing("designing the feedback");
   }
   const sim::FrequencyResponseExcitationOptions o = *s.response_options;
   s.response_options.reset();

@@ -13,6 +13,7 @@
 #include "runs/details/stage_runs.hpp"
 #include "service/details/model_folder.hpp"
 #include "service/details/model_store.hpp"
+#include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
 
@@ -282,24 +283,12 @@ bool Bench::measure_axes_responses(const std::string& identify_run_id, std::stri
     why = e.what();
     return false;
   }
-  if (quit_.load()) {
-    p->log->close();
-    why = "daemon shutting down";
-    return false;
-  }
-  const std::uint64_t total = p->total_samples;
-  const std::string log = p->log->path().string();
-  if (auto refused = loop_->submit(std::move(p))) {
-    refused->log->close();
-    why = "the loop did not accept the run";
+  if (!runs_->submit_segment(std::move(p), "measuring each axis's frequency responses",
+                             "responses_log", why)) {
     return false;
   }
   stage_frf_options_ = std::move(options);
   stage_frf_turn_ = turn;
-  active_run_["stage"] = "measuring each axis's frequency responses";
-  active_run_["total"] = total;
-  active_run_["responses_log"] = log;
-  phase_ = RunPhase::kRunning;
   return true;
 }
 

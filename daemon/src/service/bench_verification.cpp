@@ -13,6 +13,7 @@
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "service/details/identify_session.hpp"
+#include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
 
@@ -78,27 +79,17 @@ bool Bench::verify_next_candidate() {
       s.interrupted = true;
       return false;
     }
-    const std::string log = p->log->path().string();
     const std::string program_id = p->run_id;
-    const std::uint64_t total = p->total_samples;
+    std::string why;
     std::lock_guard lock(mutex_);
-    if (quit_.load()) {
-      p->log->close();
-      slot = {{"end", "not_run"}, {"reason", "daemon shutting down"}};
-      s.interrupted = true;
-      return false;
-    }
-    if (auto refused = loop_->submit(std::move(p))) {
-      refused->log->close();
-      slot = {{"end", "not_run"}, {"reason", "the loop did not accept the segment"}};
+    if (!runs_->submit_segment(std::move(p),
+                               "verify " + c.label + (sine ? " (" + hz + " Hz sine)" : ""),
+                               "verification_log", why)) {
+      slot = {{"end", "not_run"}, {"reason", why}};
       s.interrupted = true;
       return false;
     }
     s.program_id = program_id;
-    active_run_["stage"] = "verify " + c.label + (sine ? " (" + hz + " Hz sine)" : "");
-    active_run_["total"] = total;
-    active_run_["verification_log"] = log;
-    phase_ = RunPhase::kRunning;  // stop and abort now act on the verification
     return true;
   }
   return false;
@@ -112,8 +103,7 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   }
   {
     std::lock_guard lock(mutex_);
-    phase_ = RunPhase::kFinalizing;
-    active_run_["stage"] = "choosing the model";
+    runs_->finalizing("choosing the model");
   }
   const VerificationJob job = s.jobs[s.next];
   IdentifyCandidate& c = s.candidates[job.candidate];
@@ -137,7 +127,7 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   }
   ++s.next;
   s.interrupted = s.interrupted || run->end != RunEnd::kCompleted;
-  if (s.interrupted || quit_.load()) {
+  if (s.interrupted || quitting()) {
     finish_identify();
   } else {
     continue_identify();
@@ -150,7 +140,7 @@ void Bench::continue_identify() {
   queue_parts_alone();
   if (verify_next_candidate()) return;
   IdentifySession& s = *session_;
-  const bool go_on = !s.interrupted && !quit_.load();
+  const bool go_on = !s.interrupted && !quitting();
   if (go_on && s.extend && s.step == IdentifyStep::kVerifyingCandidates) {
     if (play_while_diagnosing() && verify_next_candidate()) return;
     if (extend_identified_model() && verify_next_candidate()) return;

@@ -14,6 +14,7 @@
 #include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/preisach_model.hpp"
 #include "service/details/identify_session.hpp"
+#include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
 
@@ -240,7 +241,7 @@ bool Bench::extend_identified_model() {
   const IdentifyCandidate& base = s.candidates[s.base];
   {
     std::lock_guard lock(mutex_);
-    active_run_["stage"] = "diagnosing the record with " + base.label;
+    runs_->set_stage("diagnosing the record with " + base.label);
   }
   const auto seconds = [started = std::chrono::steady_clock::now()] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

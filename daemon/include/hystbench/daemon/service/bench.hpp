@@ -46,6 +46,7 @@ struct IdentifyRequest;
 class TrackLearning;
 class RunHistory;
 class ModelStore;
+class RunSupervisor;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -179,18 +180,6 @@ class Bench {
   /// Opens the run's log with `header` and hands the run to the loop; throws busy when the loop
   /// does not take it (the log is closed). Caller holds mutex_.
   SubmittedRun submit_run(std::unique_ptr<RunProgram> p, const nlohmann::json& header);
-  /// Where the bench is with its run. kPreparing: started, its preparation (track's planned
-  /// feedforward) queued or under way on the supervisor thread, not yet on the loop (stop and
-  /// abort cancel it); kRunning: submitted to the loop (stop and abort act on it); kFinalizing:
-  /// ended, its result or identify's fit being made. Guarded by mutex_.
-  enum class RunPhase { kIdle, kPreparing, kRunning, kFinalizing };
-  void set_phase(RunPhase phase);
-  /// The supervisor thread: finalises each run the loop hands back (woken by the loop's
-  /// events), and emits run.progress when a run (or a verification stage) starts and every
-  /// 0.5 s while one runs.
-  void supervise();
-  /// Emits run.progress once for a run or stage not announced yet (supervisor thread).
-  void announce_run();
   /// A learning run: scores the trials the loop closed, offers the next drives, and emits
   /// run.progress for each trial (supervisor thread).
   void learn();
@@ -205,18 +194,13 @@ class Bench {
   void keep_learned_drive(const details::TrackLearning& learning, const std::string& name,
                           const std::string& model_file, double tare_um, const nlohmann::json& more,
                           nlohmann::json& l) const;
-  /// run.progress of the active run; `started`: also when the loop no longer (or not yet)
-  /// plays it, with done = 0.
-  void emit_progress(bool started = false);
-  bool preparation_queued() const;
-  /// Runs the queued preparation (supervisor thread), then hands the run to the loop; a
-  /// cancelled one ends unplayed.
-  void prepare();
   /// The result of a run that ends before the loop played it (stopped or aborted while it was
   /// prepared, refused by the loop): delivered with 0 samples and `reason`.
   void end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason);
+  /// A run the loop played and handed back: its result (supervisor thread).
   void finalize(std::unique_ptr<RunProgram> run);
-  /// Sets the last result, leaves the bench idle and emits run.finished.
+  /// Keeps the result as the last one and in the history; the supervisor leaves the bench idle
+  /// and emits run.finished.
   void deliver_result(nlohmann::json result);
   // identify after its excitation (identify_session.hpp: runs/identify_candidates.cpp,
   // bench_verification.cpp, identify_extension.cpp, identify_choice.cpp).
@@ -268,6 +252,7 @@ class Bench {
   void open_log(RunProgram& p, nlohmann::json header);
   std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
+  bool quitting() const noexcept;
 
   BenchSettings settings_;
   std::unique_ptr<drivers::Driver> driver_;
@@ -278,24 +263,18 @@ class Bench {
   std::mutex commands_mutex_;  // one command at a time, whichever thread sends it
   std::unique_ptr<details::RunHistory> history_;  // the runs, kept in log_dir (its own lock)
   mutable std::mutex mutex_;                      // guards everything below
-  nlohmann::json web_view_;                       // status "http"
-  std::unique_ptr<details::ModelStore> models_;   // the active model and responses, the folder
-  std::shared_ptr<details::PlanCache> plans_;     // track's last plan (its own lock)
+  // The run's phase, its preparation, the active run, events and the supervisor thread
+  // (details/run_supervisor.hpp; under mutex_ too).
+  std::unique_ptr<details::RunSupervisor> runs_;
+  nlohmann::json web_view_;                      // status "http"
+  std::unique_ptr<details::ModelStore> models_;  // the active model and responses, the folder
+  std::shared_ptr<details::PlanCache> plans_;    // track's last plan (its own lock)
   // The options of the frf run under way; the feedback's last design.
   std::optional<sim::FrequencyResponseExcitationOptions> frf_options_;
   std::shared_ptr<details::FeedbackPlanCache> feedback_plans_;
   nlohmann::json last_feedback_;  // the feedback of the last track, tune or frf (status)
   nlohmann::json last_result_;
-  nlohmann::json active_run_;  // id, kind, total, log (while running or finalising)
-  RunPhase phase_ = RunPhase::kIdle;
-  bool delivering_result_ = false;   // run.finished is on its way to the sink (wait_idle waits)
-  std::condition_variable idle_cv_;  // phase_ back to kIdle and run.finished delivered
-  nlohmann::json pending_fit_;       // identify's fit request (details::BuiltRun::fit)
-  // The run being prepared (phase_ kPreparing): its program and preparation until the
-  // supervisor takes them; what stop or abort asked for meanwhile (kCompleted = nothing).
-  std::unique_ptr<RunProgram> preparing_;
-  std::unique_ptr<details::RunPreparation> preparation_;
-  RunEnd cancel_preparation_ = RunEnd::kCompleted;
+  nlohmann::json pending_fit_;                  // identify's fit request (details::BuiltRun::fit)
   std::unique_ptr<IdentifySession> session_;    // supervisor thread only
   std::unique_ptr<details::StageModel> stage_;  // a stage's model (identify on a stage)
   // A stage's frf under way: each axis's excitation options and the ticks of each turn.
@@ -307,13 +286,8 @@ class Bench {
   std::unique_ptr<details::TrackLearning> learning_;
   std::vector<std::unique_ptr<details::TrackLearning>> axis_learning_;
   std::string learning_run_id_;
-  std::string announced_run_;  // run_id/stage last announced; supervisor only
-  EventSink sink_;
   std::uint64_t run_counter_ = 0;
   UploadStore uploads_;  // its own lock
-
-  std::thread supervisor_;
-  std::atomic<bool> quit_{false};
   std::uint64_t watchdog_ticks_ = 0;
 };
 
