@@ -49,7 +49,8 @@ const char* state_name(BenchLoop::State s) {
 Bench::Bench(BenchSettings settings)
     : settings_(std::move(settings)),
       history_(std::make_unique<details::RunHistory>(settings_.log_dir)),
-      models_(std::make_unique<details::ModelStore>(settings_.model_dir)),
+      models_(std::make_unique<details::ModelStore>(
+          settings_.model_dir, settings_.loop.limits.u_min, settings_.loop.limits.u_max)),
       plans_(std::make_shared<details::PlanCache>()),
       feedback_plans_(std::make_shared<details::FeedbackPlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;

@@ -93,6 +93,26 @@ TEST_F(ModelStoreTest, ADocumentIsKeptUnderItsNameAndLoadsAgainByThatName) {
   EXPECT_EQ(store.generation(), g);  // loading into another store changes nothing here
 }
 
+TEST_F(ModelStoreTest, AModelOfDrivesBeyondTheBenchsLimitsLoadsWithAWarningNamingBoth) {
+  // pi_model was identified on [0, 150] V: a bench whose driver puts out 0-10 V (a DAQ into an
+  // amplifier) would clamp nearly every drive its inverse asks for.
+  hd::ModelStore daq(dir_.string(), 0.0, 10.0);
+  const json loaded = daq.load_document("amplifier", hc::to_json(pi_model(0.4)));
+  EXPECT_EQ(loaded["input_range"]["model"], json::array({0.0, 150.0}));
+  EXPECT_EQ(loaded["input_range"]["limits"], json::array({0.0, 10.0}));
+  ASSERT_TRUE(loaded.contains("warning")) << loaded.dump();
+  EXPECT_NE(loaded["warning"].get<std::string>().find("[0, 150] V"), std::string::npos);
+  EXPECT_NE(loaded["warning"].get<std::string>().find("[0, 10] V"), std::string::npos);
+  ASSERT_NE(daq.active(), nullptr);  // loaded all the same: the user may know better
+  // On the bench it was identified on, or one a little narrower (within 1 % of the span): no
+  // warning.
+  for (const double u_max : {150.0, 149.0}) {
+    hd::ModelStore same(dir_.string(), 0.0, u_max);
+    const json again = same.load_stored("amplifier");
+    EXPECT_FALSE(again.contains("warning")) << u_max << ": " << again.dump();
+  }
+}
+
 TEST_F(ModelStoreTest, ARefusedLoadChangesNothing) {
   hd::ModelStore store(dir_.string());
   store.adopt(pi_model(0.3), (dir_ / "a.json").string());

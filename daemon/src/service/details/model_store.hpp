@@ -5,6 +5,7 @@
 // component's (bench_stage.cpp); it bumps the generation here. Not thread-safe: the Bench holds
 // its mutex around every call. File I/O: never on the loop thread.
 #include <cstdint>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -18,8 +19,11 @@ namespace hystbench::daemon::details {
 
 class ModelStore {
  public:
-  /// `folder`: BenchSettings::model_dir, where models are kept and read by name.
-  explicit ModelStore(std::string folder) : folder_(std::move(folder)) {}
+  /// `folder`: BenchSettings::model_dir, where models are kept and read by name; [u_min, u_max]:
+  /// the bench's output limits [V], which a loaded model's input range is checked against.
+  explicit ModelStore(std::string folder, double u_min = -std::numeric_limits<double>::infinity(),
+                      double u_max = std::numeric_limits<double>::infinity())
+      : folder_(std::move(folder)), u_min_(u_min), u_max_(u_max) {}
 
   const std::string& folder() const noexcept { return folder_; }
   /// The active model, or null (none yet, or a stage bench).
@@ -35,8 +39,11 @@ class ModelStore {
   /// Makes `file`, kept at `path`, the active model.
   void adopt(compensation::ModelFile file, std::string path);
   /// model.load on one axis, of the stored model `name` (a name in the folder), or of
-  /// `document` kept in the folder under `name`: {path, name, type, invertible, reason}. Throws
-  /// CommandError (bad_params, bad_model, io_error); nothing changes then.
+  /// `document` kept in the folder under `name`: {path, name, type, invertible, reason,
+  /// input_range}, and `warning` where the model was identified on drives beyond the bench's
+  /// output limits by more than 1 % of their span (its inverse would ask for drives the limits
+  /// clamp: a model of another amplifier's volts). Throws CommandError (bad_params, bad_model,
+  /// io_error); nothing changes then.
   nlohmann::json load_stored(const std::string& name);
   nlohmann::json load_document(const std::string& name, const nlohmann::json& document);
   /// model.get: {path, model}. Throws CommandError no_model without one.
@@ -64,6 +71,7 @@ class ModelStore {
   nlohmann::json adopt_loaded(FolderModel m);
 
   std::string folder_;
+  double u_min_, u_max_;
   std::optional<compensation::ModelFile> model_;
   std::string path_;
   std::uint64_t generation_ = 0;
