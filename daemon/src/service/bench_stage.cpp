@@ -120,10 +120,12 @@ json Bench::load_stage_model(const details::RequestParams& request) {
   json axes = json::object();
   for (std::size_t a = 0; a < stage_->axes.size(); ++a) {
     const compensation::ModelFile& f = stage_->models[a];
-    axes[stage_->axes[a]] = {
+    json& axis = axes[stage_->axes[a]] = {
         {"name", names[a]},
         {"type", std::string(compensation::to_string(f.model.hysteresis().kind()))},
         {"responses", f.responses.has_value()}};
+    const OutputLimits& lim = settings_.loop.limits;
+    details::check_input_range(f.model, lim.u_min, lim.u_max, axis);
   }
   return {
       {"stage_run_id", stage_->run_id}, {"axes", axes}, {"coupling", stage_->report["coupling"]}};

@@ -297,7 +297,12 @@ TEST_F(BenchStage, IdentifiesEachAxisAndTheCouplingThenARasterDecoupledLeavesTen
   EXPECT_TRUE(status()["stage_model"].is_null());
   const json loaded = bench_->handle("model.load", {{"stored", id["run_id"]}});
   EXPECT_EQ(loaded["stage_run_id"], id["run_id"]);
-  for (const char* axis : {"x", "y"}) EXPECT_EQ(loaded["axes"][axis]["responses"], true) << axis;
+  for (const char* axis : {"x", "y"}) {
+    EXPECT_EQ(loaded["axes"][axis]["responses"], true) << axis;
+    // Identified on this bench: its drives within the limits, no warning.
+    EXPECT_TRUE(loaded["axes"][axis]["input_range"]["model"].is_array()) << axis;
+    EXPECT_FALSE(loaded["axes"][axis].contains("warning")) << loaded["axes"][axis].dump();
+  }
   EXPECT_NEAR(loaded["coupling"]["gains"]["y<-x"]["gain"].get<double>(),
               gains["y<-x"]["gain"].get<double>(), 1e-12);
   // Both axes' files are the active models: listed so, and not deleted under the stage.

@@ -113,6 +113,15 @@ TEST_F(ModelStoreTest, AModelOfDrivesBeyondTheBenchsLimitsLoadsWithAWarningNamin
   }
 }
 
+TEST_F(ModelStoreTest, AModelOfAnotherInputUnitLoadsWithAWarningNamingIt) {
+  hc::ModelFile force = pi_model(0.4);
+  force.model.units.input = "N";  // a shaker's force record, fitted offline
+  hd::ModelStore bench(dir_.string(), 0.0, 150.0);
+  const json loaded = bench.load_document("shaker", hc::to_json(force));
+  ASSERT_TRUE(loaded.contains("warning")) << loaded.dump();
+  EXPECT_NE(loaded["warning"].get<std::string>().find("input is in N"), std::string::npos);
+}
+
 TEST_F(ModelStoreTest, ARefusedLoadChangesNothing) {
   hd::ModelStore store(dir_.string());
   store.adopt(pi_model(0.3), (dir_ / "a.json").string());

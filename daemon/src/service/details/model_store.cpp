@@ -26,29 +26,29 @@ json ModelStore::load_document(const std::string& name, const json& document) {
   return adopt_loaded(keep_model_document(folder_, name, document));
 }
 
-namespace {
-
-// The model's input range against the bench's output limits: {model, limits}, and a warning
-// where the model reaches beyond the limits by more than 1 % of their span.
 void check_input_range(const hc::ActuatorModel& model, double u_min, double u_max, json& reply) {
   const bool known = model.input_max > model.input_min;
   const bool limited = std::isfinite(u_min) && std::isfinite(u_max) && u_max > u_min;
   reply["input_range"] = {
       {"model", known ? json::array({model.input_min, model.input_max}) : json(nullptr)},
       {"limits", limited ? json::array({u_min, u_max}) : json(nullptr)}};
-  if (!known || !limited) return;
-  const double tolerance = 0.01 * (u_max - u_min);
-  if (model.input_min >= u_min - tolerance && model.input_max <= u_max + tolerance) return;
-  reply["warning"] = "the model was identified on drives of [" +
-                     hc::significant(model.input_min, 4) + ", " +
-                     hc::significant(model.input_max, 4) + "] " + model.units.input +
-                     ", beyond this bench's output limits [" + hc::significant(u_min, 4) + ", " +
-                     hc::significant(u_max, 4) +
-                     "] V: its inverse asks for drives the limits clamp (a model of another "
-                     "amplifier's range?)";
+  std::string warning;
+  const double tolerance = limited ? 0.01 * (u_max - u_min) : 0.0;
+  if (known && limited &&
+      (model.input_min < u_min - tolerance || model.input_max > u_max + tolerance)) {
+    warning = "the model was identified on drives of [" + hc::significant(model.input_min, 4) +
+              ", " + hc::significant(model.input_max, 4) + "] " + model.units.input +
+              ", beyond this bench's output limits [" + hc::significant(u_min, 4) + ", " +
+              hc::significant(u_max, 4) +
+              "] V: its inverse asks for drives the limits clamp (a model of another "
+              "amplifier's range?)";
+  }
+  if (model.units.input != "V") {
+    warning += (warning.empty() ? "the model's" : "; its") + std::string(" input is in ") +
+               model.units.input + ", the bench drives volts";
+  }
+  if (!warning.empty()) reply["warning"] = warning;
 }
-
-}  // namespace
 
 json ModelStore::adopt_loaded(FolderModel m) {
   const auto inv = m.file.model.hysteresis().invertibility();

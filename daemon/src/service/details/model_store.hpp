@@ -17,6 +17,13 @@
 
 namespace hystbench::daemon::details {
 
+/// A loaded model's input range against the bench's output limits [u_min, u_max] (V; infinite:
+/// not known): reply["input_range"] = {model, limits}, and reply["warning"] where the model was
+/// identified on drives beyond the limits by more than 1 % of their span, or on another input
+/// unit than the bench's volts.
+void check_input_range(const compensation::ActuatorModel& model, double u_min, double u_max,
+                       nlohmann::json& reply);
+
 class ModelStore {
  public:
   /// `folder`: BenchSettings::model_dir, where models are kept and read by name; [u_min, u_max]:
