@@ -103,7 +103,7 @@ RealtimeReport Bench::start() {
 }
 
 void Bench::shutdown() {
-  if (!runs_ || !runs_->quit()) return;
+  if (!runs_->quit()) return;  // shut down already
   if (loop_) {
     loop_->request_abort();
     // Give the loop a few ticks (at most 0.2 s) to end the run cleanly, then stop it.
