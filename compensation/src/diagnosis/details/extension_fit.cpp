@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "details/diagnosis_signals.hpp"
+#include "details/scoped_no_denormals.hpp"
 #include "details/second_order_bank.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/delay_line.hpp"
@@ -401,6 +402,9 @@ bool DesignRows::serves(const DiagnosisRecord& r, const ExtensionSpec& spec) con
 
 ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows,
                            bool predict, const DesignRows* cached) {
+  // The dynamics filter regressor columns that go quiet; their states decay through the
+  // subnormal range for thousands of samples, where arithmetic is slow (ScopedNoDenormals).
+  const ScopedNoDenormals flushed;
   if (cached != nullptr && !cached->serves(r, spec)) cached = nullptr;
   Joint j =
       alternates(spec) ? fit_alternating(r, spec, rows) : fit_joint(r, r.y, spec, rows, cached);
