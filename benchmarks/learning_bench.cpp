@@ -12,7 +12,7 @@
 
 #include "hystbench/compensation/iterative_learning.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
-#include "hystbench/daemon/loop/learning_exchange.hpp"
+#include "hystbench/daemon/runs/learning_exchange.hpp"
 #include "support/random_models.hpp"
 
 namespace hc = hystbench::compensation;

@@ -123,18 +123,12 @@ std::unique_ptr<RunProgram> BenchLoop::submit(std::unique_ptr<RunProgram> progra
   }
   for (std::size_t a = 0; a < program->axes(); ++a) {
     RunProgram& p = program->axis(a);
-    // The targets ahead, for an inverse that uses them. Not yet with a dynamics preview, whose
-    // target is already computed from the reference ahead: fed both, the rate inverse tracked
-    // worse.
-    if (p.compensator && !p.preview) p.targets.allocate(p.compensator->preview_samples());
-    if (p.learned_twin && !p.preview) {
-      p.twin_targets.allocate(p.learned_twin->preview_samples());
-    }
+    // Beyond its excitation a run needs a drive (RunDrive).
+    if (!p.drive && p.total_samples > p.excitation.size()) return program;
     p.dt_s = dt_;
-    // The feedback's integral holds while the drive sits at a bound of the output range.
-    if (p.compensator) p.compensator->set_drive_range(options_.limits.u_min, options_.limits.u_max);
-    if (p.learned_twin) {
-      p.learned_twin->set_drive_range(options_.limits.u_min, options_.limits.u_max);
+    if (p.drive) {
+      p.drive->configure(DriveSetup{dt_, options_.limits.u_min, options_.limits.u_max,
+                                    static_cast<std::uint64_t>(p.excitation.size())});
     }
   }
   RunProgram* expected = nullptr;
@@ -353,10 +347,7 @@ void BenchLoop::idle_tick() noexcept {
 struct BenchLoop::TickDrive {
   double y_ref = std::numeric_limits<double>::quiet_NaN();  ///< NaN: no reference at this tick
   double u_request = 0.0;                                   ///< the output asked for, unlimited
-  double u_compensator = 0.0;  ///< the compensator's feedforward, for a learning run
-  std::size_t phase = 0;       ///< the learning trial's phase
-  bool learning = false;       ///< the tick belongs to a learning run's trials, at this phase
-  bool lead_in = false;        ///< a drive learned before plays the period before trial 0
+  bool trial_ends = false;  ///< the tick ends a trial the control thread waits for
 };
 
 /// What the exchange with the driver leaves for the stages after it.
@@ -366,22 +357,6 @@ struct BenchLoop::TickExchange {
   std::array<std::uint32_t, drivers::kMaxAxes> response{};
   TickExchange() { response.fill(RunRecords::kNoFreshReading); }
 };
-
-namespace {
-/// Adds the tare's sample: a fresh reading on the open-loop prefix less the model's prediction
-/// for the output it answers (the reading answers the output of response_ticks ago, less the
-/// exchange latency the model's delay holds).
-void add_tare_sample(RunProgram& p, std::uint64_t k, const drivers::Measurement& m) noexcept {
-  const std::uint64_t lag = m.response_ticks > p.tare.model_exchange_ticks
-                                ? m.response_ticks - p.tare.model_exchange_ticks
-                                : 0;
-  if (p.model && k >= p.tare.from && k < p.excitation.size() && lag < TareWindow::kHistory &&
-      lag <= k) {
-    p.tare.sum += m.position_um - p.tare.y_model_history[(k - lag) % TareWindow::kHistory];
-    ++p.tare.samples;
-  }
-}
-}  // namespace
 
 void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   const std::uint64_t k = p.done.load(std::memory_order_relaxed);
@@ -443,79 +418,29 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
 BenchLoop::TickDrive BenchLoop::drive(std::size_t a, RunProgram& p, std::uint64_t k,
                                       SampleRecord& rec) noexcept {
   TickDrive d;
-  if (p.kind != RunKind::kTrack || k < p.excitation.size()) {
-    // An open-loop drive (identify, excite), or the pre-conditioning prefix of a tracking run.
+  if (k < p.excitation.size()) {
+    // The open-loop drive: identify's, excite's and frf's whole run, track's sweep.
     d.u_request = p.excitation[k];
     rec.u_ff = d.u_request;
   } else {
-    track_drive(a, p, k, d, rec);
+    if (simulated_) await_drive(*p.drive, k);
+    const DriveCommand c = p.drive->update(DriveInput{k, y_prev_[a], k >= p.feedback_from});
+    d.y_ref = c.y_ref;
+    d.u_request = c.u;
+    d.trial_ends = c.trial_ends;
+    rec.u_ff = c.u_ff;
+    rec.u_fb = c.u_fb;
+    rec.flags |= c.flags;
+    if ((c.flags & kSampleReferenceLimited) != 0U) ++p.counters.reference_clips;
   }
   rec.reference = d.y_ref;
   return d;
 }
 
-double BenchLoop::twin_feedforward(RunProgram& p, double t) const noexcept {
-  const double none = std::numeric_limits<double>::quiet_NaN();  // its feedback holds
-  auto target_at = [&p](double tt) noexcept {
-    return p.feedforward_target(tt, p.learned_twin_offset_um);
-  };
-  if (p.twin_targets.capacity() > 1) {
-    return p.learned_twin->step(none, none, p.twin_targets.advance(t, dt_, target_at)).u_ff;
-  }
-  return p.learned_twin->step(none, none, target_at(t)).u_ff;
-}
-
-void BenchLoop::track_drive(std::size_t a, RunProgram& p, std::uint64_t k, TickDrive& d,
-                            SampleRecord& rec) noexcept {
-  const double t = static_cast<double>(k - p.excitation.size()) * dt_;
-  d.y_ref = p.reference->value(t);
-  if (d.y_ref < p.y_ref_min || d.y_ref > p.y_ref_max) {
-    d.y_ref = std::min(std::max(d.y_ref, p.y_ref_min), p.y_ref_max);
-    rec.flags |= kSampleReferenceLimited;
-    ++p.counters.reference_clips;
-  }
-  // The feedforward's target at run time tt: the reference, or with a preview the static
-  // target that inverts the model's delay and dynamics (the reference ahead by the delay).
-  // Less the tare: the output offset the model did not predict on the open-loop prefix, and
-  // from the first scored tick of a periodic reference the mean error of its start-up period.
-  // A drive learned before: the offset taken off when it was learned, and from trial 0 on
-  // also the offset its lead-in measured.
-  const double tare = p.learning ? p.learning->target_offset(k, p.tare.um()) : p.tare.um_at(k);
-  auto target_at = [&p, tare](double tt) noexcept { return p.feedforward_target(tt, tare); };
-  // The feedback's reference; before feedback_from NaN: the PID holds (RunProgram).
-  const double fb_ref = k < p.feedback_from ? std::numeric_limits<double>::quiet_NaN() : d.y_ref;
-  compensation::CompensatorOutput out;
-  if (p.targets.capacity() > 1) {
-    out = p.compensator->step(fb_ref, y_prev_[a], p.targets.advance(t, dt_, target_at));
-  } else {
-    out = p.compensator->step(fb_ref, y_prev_[a], target_at(t));
-  }
-  const double twin = p.learned_twin ? twin_feedforward(p, t) : kNoTwin;
-  rec.u_ff = out.u_ff;
-  rec.u_fb = out.u_fb;
-  d.u_compensator = out.u_ff;
-  if (out.feedback_saturated) rec.flags |= kSampleFeedbackSaturated;
-  d.u_request = out.u;
-  if (p.learning && k >= p.learning->first_scored_tick()) {
-    // A learning run: from trial 1 on the learned feedforward, with the feedback on it.
-    if (simulated_) await_learned_drive(*p.learning, k);
-    d.phase = p.learning->begin_tick(k);
-    d.learning = true;
-    if (double u_ff = out.u_ff; p.learning->learned(d.phase, u_ff, twin)) {
-      rec.u_ff = u_ff;
-      d.u_request = u_ff + out.u_fb;
-    }
-  } else if (double u_ff = out.u_ff; p.learning && p.learning->lead_in(k, u_ff, twin)) {
-    rec.u_ff = u_ff;  // a drive learned before plays the start-up period too
-    d.u_request = u_ff + out.u_fb;
-    d.lead_in = true;
-  }
-}
-
 OutputLimiter::Applied BenchLoop::limit(std::size_t a, RunProgram& p, std::uint64_t k,
                                         double u_request, SampleRecord& rec) noexcept {
   const OutputLimiter::Applied lim = limiters_[a].apply(u_request);
-  if (p.compensator) p.compensator->notify_saturation(lim.direction);
+  if (p.drive) p.drive->limited(lim.direction);
   if (lim.clamped) {
     rec.flags |= kSampleOutputClamped;
     ++p.counters.clamps;
@@ -527,7 +452,7 @@ OutputLimiter::Applied BenchLoop::limit(std::size_t a, RunProgram& p, std::uint6
   rec.u_out = lim.u;
   if (p.model) {
     rec.y_model = p.model->step(lim.u);
-    p.tare.y_model_history[k % TareWindow::kHistory] = rec.y_model;
+    if (p.drive) p.drive->predicted(k, rec.y_model);
   }
   return lim;
 }
@@ -542,7 +467,7 @@ void BenchLoop::couple_predictions(RunProgram& p, std::uint64_t k, AxisRecords& 
   p.coupling->couple(std::span(own).first(n), std::span(stage).first(n));
   for (std::size_t a = 0; a < n; ++a) {
     rec[a].y_model = stage[a];
-    p.axis(a).tare.y_model_history[k % TareWindow::kHistory] = stage[a];
+    if (p.axis(a).drive) p.axis(a).drive->predicted(k, stage[a]);
   }
 }
 
@@ -588,7 +513,9 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
         y_prev_[a] = st == drivers::DriverStatus::kOk ? m[a].position_um
                                                       : std::numeric_limits<double>::quiet_NaN();
         last_y_[a].store(m[a].position_um, std::memory_order_relaxed);
-        if (a < n && st == drivers::DriverStatus::kOk) add_tare_sample(p.axis(a), k, m[a]);
+        if (a < n && st == drivers::DriverStatus::kOk && p.axis(a).drive) {
+          p.axis(a).drive->measured(k, m[a]);
+        }
       }
     }
   }
@@ -609,21 +536,15 @@ bool BenchLoop::score(RunProgram& p, std::uint64_t k, const TickDrive& d,
   if (k >= p.metrics_from && k >= p.model_metrics_from && p.model) {
     p.model_error.add(rec.y_measured - rec.y_model, k);
   }
-  if (k >= p.tare.startup_from && k < p.tare.startup_to && std::isfinite(d.y_ref) &&
-      std::isfinite(rec.y_measured)) {
-    p.tare.startup_sum += rec.y_measured - d.y_ref;
-    ++p.tare.startup_samples;
+  if (!p.drive) return false;
+  const DriveScore s = p.drive->scored(k, d.y_ref, rec.y_measured, rec.u_ff);
+  if (s.scored_from < p.metrics_from) {
+    // A learned drive's lead-in that ended early moves the scored part (and the feedback's
+    // start, where it began with it) up.
+    if (p.feedback_from == p.metrics_from) p.feedback_from = s.scored_from;
+    p.metrics_from = s.scored_from;
   }
-  if (d.lead_in) {
-    p.learning->lead_in_error(k, d.y_ref - rec.y_measured, p.tare.um());
-    // A lead-in that ends early moves the scored part (and the feedback's start) up with it.
-    if (const std::uint64_t first = p.learning->first_scored_tick(); first < p.metrics_from) {
-      if (p.feedback_from == p.metrics_from) p.feedback_from = first;
-      p.metrics_from = first;
-    }
-  }
-  if (!d.learning) return false;
-  return p.learning->end_tick(d.phase, rec.u_ff, d.u_compensator, d.y_ref - rec.y_measured);
+  return s.last_trial;
 }
 
 void BenchLoop::record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::uint32_t response,
@@ -637,13 +558,13 @@ void BenchLoop::record(RunProgram& p, std::uint64_t k, const TickDrive& d, std::
   }
   p.stats.record(wake_latency_ns, rec.exec_ns, overran_);
   p.done.store(k + 1, std::memory_order_release);
-  if (d.learning && d.phase + 1 == p.learning->period) signal_event();  // a trial for the learner
+  if (d.trial_ends) signal_event();  // a trial for the control thread
 }
 
-void BenchLoop::await_learned_drive(const LearningExchange& learning, std::uint64_t k) noexcept {
-  // Virtual time waits for the learner, as for the log writer: each period after a trial plays
-  // the drive learned from it. A stop, an abort or a shutdown ends the wait.
-  while (learning.owed(k) && !quit_.load(std::memory_order_acquire) &&
+void BenchLoop::await_drive(const RunDrive& drive, std::uint64_t k) noexcept {
+  // Virtual time waits for the control thread, as for the log writer (a learner: each period
+  // after a trial plays the drive learned from it). A stop, an abort or a shutdown ends the wait.
+  while (drive.awaits(k) && !quit_.load(std::memory_order_acquire) &&
          !stop_requested_.load(std::memory_order_acquire) &&
          !abort_requested_.load(std::memory_order_acquire)) {
     std::this_thread::sleep_for(std::chrono::microseconds(50));

@@ -8,6 +8,7 @@
 
 #include "drivers/example_driver.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "hystbench/daemon/runs/track_drive.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 
 namespace hd = hystbench::daemon;
@@ -114,9 +115,10 @@ TEST(BenchLoop, TheFeedbackHoldsOnAStaleReading) {
   auto program = std::make_unique<hd::RunProgram>();
   program->kind = hd::RunKind::kTrack;
   program->total_samples = 400;
-  program->reference = hystbench::sim::make_uniform_signal({10.0, 10.0}, 1.0);
-  program->compensator.emplace(hc::CompensatorKind::kPid, nullptr, hc::FeedbackController(law, kDt),
-                               linear);
+  hd::TrackDrive& track = hd::make_track_drive(*program);
+  track.reference = hystbench::sim::make_uniform_signal({10.0, 10.0}, 1.0);
+  track.compensator.emplace(hc::CompensatorKind::kPid, nullptr, hc::FeedbackController(law, kDt),
+                            linear);
   program->records.capacity = program->total_samples;
   program->records.u.resize(program->total_samples);
   program->records.y.resize(program->total_samples);

@@ -12,6 +12,7 @@
 #include "hystbench/daemon/loop/bench_loop.hpp"
 #include "hystbench/daemon/loop/sample_log_writer.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "hystbench/daemon/runs/track_drive.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 #include "support/allocation_counter.hpp"
 
@@ -67,8 +68,9 @@ long run_allocations(const Case& c, const std::filesystem::path& dir) {
     auto truth = hs::make_truth_model(truth_config, 1.0 / kRate);
     const hc::ActuatorModel m = hd::model_after(truth, program->excitation, loop.last_output(),
                                                 o.limits.u_min, o.limits.u_max, 1.0 / kRate);
-    program->compensator.emplace(hc::CompensatorKind::kInversePid, hc::make_inverse(m),
-                                 hc::FeedbackController(law, 1.0 / kRate), hc::LinearMap{});
+    hd::track_drive(*program)->compensator.emplace(
+        hc::CompensatorKind::kInversePid, hc::make_inverse(m),
+        hc::FeedbackController(law, 1.0 / kRate), hc::LinearMap{});
   }
   hd::SampleLogOptions log;
   log.log_dir = dir;

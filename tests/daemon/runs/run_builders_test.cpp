@@ -14,6 +14,7 @@
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/compensation/second_order_dynamics.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "hystbench/daemon/runs/track_drive.hpp"
 #include "hystbench/sim/frequency_response_excitation.hpp"
 #include "runs/details/excite_program.hpp"
 #include "runs/details/identify_program.hpp"
@@ -121,6 +122,8 @@ TEST(TrackProgram, ABuiltInTriangleWithoutAModelFollowsTheConfiguredRange) {
   const hdd::BuiltRun run =
       track({{"compensator", "none"}, {"frequency_hz", 2.0}, {"periods", 3}}, ctx);
   const hd::RunProgram& p = *run.program;
+  ASSERT_NE(hd::track_drive(p), nullptr);
+  const hd::TrackDrive& t = *hd::track_drive(p);
   EXPECT_EQ(p.kind, hd::RunKind::kTrack);
   EXPECT_TRUE(p.run_id.empty());  // the bench names it
   // The prefix is the precondition sweep from the present output: 0.4 s at 1 kHz.
@@ -134,16 +137,16 @@ TEST(TrackProgram, ABuiltInTriangleWithoutAModelFollowsTheConfiguredRange) {
   EXPECT_EQ(p.records.u.size(), 1000u);
   EXPECT_TRUE(p.records.response.empty());
   // 80 % of 0..45 um, starting at the bottom and rising.
-  ASSERT_TRUE(p.reference);
-  EXPECT_NEAR(p.reference->value(0.0), 4.5, 1e-9);
-  EXPECT_NEAR(p.reference->value(0.25), 40.5, 1e-9);
-  EXPECT_DOUBLE_EQ(p.y_ref_min, 0.0);
-  EXPECT_DOUBLE_EQ(p.y_ref_max, 45.0);
+  ASSERT_TRUE(t.reference);
+  EXPECT_NEAR(t.reference->value(0.0), 4.5, 1e-9);
+  EXPECT_NEAR(t.reference->value(0.25), 40.5, 1e-9);
+  EXPECT_DOUBLE_EQ(t.y_ref_min, 0.0);
+  EXPECT_DOUBLE_EQ(t.y_ref_max, 45.0);
   // No model: nothing to preview or tare; y_model is the range's straight line.
-  EXPECT_FALSE(p.preview);
-  EXPECT_GE(p.tare.from, p.excitation.size());
+  EXPECT_FALSE(t.preview);
+  EXPECT_GE(t.tare.from, p.excitation.size());
   ASSERT_TRUE(p.model);
-  ASSERT_TRUE(p.compensator);
+  ASSERT_TRUE(t.compensator);
   EXPECT_DOUBLE_EQ(run.reply["reference"]["min_um"].get<double>(), 4.5);
   EXPECT_DOUBLE_EQ(run.reply["reference"]["max_um"].get<double>(), 40.5);
   EXPECT_TRUE(run.reply["feedforward"].is_null());
@@ -159,16 +162,18 @@ TEST(TrackProgram, AModelsInverseIsPreviewedAndTaredOverTheModelsRange) {
   const hdd::RunContext ctx{s, &model, 0.0};
   const hdd::BuiltRun run = track({{"periods", 2}}, ctx);  // "inverse" is the default with a model
   const hd::RunProgram& p = *run.program;
+  ASSERT_NE(hd::track_drive(p), nullptr);
+  const hd::TrackDrive& t = *hd::track_drive(p);
   const hd::ModelOutputRange range = hd::major_loop_range(model.model, 0.0, 150.0, 1e-3);
-  EXPECT_DOUBLE_EQ(p.y_ref_min, range.y_bottom);
-  EXPECT_DOUBLE_EQ(p.y_ref_max, range.y_top);
+  EXPECT_DOUBLE_EQ(t.y_ref_min, range.y_bottom);
+  EXPECT_DOUBLE_EQ(t.y_ref_max, range.y_top);
   EXPECT_EQ(run.reply["compensator"], "inverse");
   EXPECT_EQ(p.summary["feedforward"]["inverted"], json::array({"hysteresis"}));
   EXPECT_FALSE(p.summary["feedforward"].contains("planned"));  // nothing to plan for a PI
   EXPECT_EQ(run.reply["feedforward"], p.summary["feedforward"]);
   // A static model has no delay or dynamics to preview, but the offset is tared on the sweep.
-  EXPECT_FALSE(p.preview);
-  EXPECT_LT(p.tare.from, p.excitation.size());
+  EXPECT_FALSE(t.preview);
+  EXPECT_LT(t.tare.from, p.excitation.size());
   EXPECT_EQ(run.header["model"], hc::to_json(model));
 }
 
@@ -203,6 +208,8 @@ TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
   const hdd::BuiltRun run =
       track({{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 3}}, ctx);
   hd::RunProgram& p = *run.program;
+  ASSERT_NE(hd::track_drive(p), nullptr);
+  hd::TrackDrive& t = *hd::track_drive(p);
   const std::uint64_t prefix = p.excitation.size(), samples = p.total_samples - prefix;
   EXPECT_EQ(run.reply["feedforward"]["planned"], json({{"samples", samples}, {"planning", true}}));
   ASSERT_TRUE(run.preparation.work);
@@ -223,8 +230,8 @@ TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
   for (const double u : p.excitation) m.step(u);
   double sum2 = 0.0;
   for (std::uint64_t k = 0; k < samples; ++k) {
-    const double target = p.feedforward_target(static_cast<double>(k) * 1e-4, 0.0);
-    const double e = m.step(p.compensator->step(target, std::nan(""), target).u) - target;
+    const double target = t.feedforward_target(static_cast<double>(k) * 1e-4, 0.0);
+    const double e = m.step(t.compensator->step(target, std::nan(""), target).u) - target;
     sum2 += e * e;
   }
   EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(samples)), planned["model_rms_um"], 1e-9);
@@ -360,7 +367,9 @@ TEST(TrackProgram, AnUploadedReferenceIsApproachedFromTheBottomOfTheRange) {
   up.samples = up.values.size();
   const hdd::BuiltRun run = track({{"reference_upload", "r"}, {"approach_s", 0.5}}, ctx, &up);
   const hd::RunProgram& p = *run.program;
-  EXPECT_NEAR(p.reference->value(0.0), 0.0, 1e-9);  // where the sweep leaves the output
+  ASSERT_NE(hd::track_drive(p), nullptr);
+  const hd::TrackDrive& t = *hd::track_drive(p);
+  EXPECT_NEAR(t.reference->value(0.0), 0.0, 1e-9);  // where the sweep leaves the output
   EXPECT_EQ(run.reply["reference"]["kind"], "upload");
   EXPECT_EQ(p.metrics_from, p.excitation.size() + 500);  // the approach is not scored
   up.values[3] = 50.0;                                   // beyond the 0..45 um range

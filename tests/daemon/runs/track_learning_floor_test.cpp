@@ -11,7 +11,7 @@
 #include <random>
 #include <vector>
 
-#include "hystbench/daemon/loop/learning_exchange.hpp"
+#include "hystbench/daemon/runs/learning_exchange.hpp"
 #include "runs/details/track_learning.hpp"
 #include "support/random_models.hpp"
 

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "hystbench/daemon/runs/track_drive.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -30,11 +31,13 @@ void add_model_error(const RunProgram& run, json& report) {
 // A drive learned before whose lead-in ended before its longest: the header's metrics_from is
 // the latest the scored part could begin; a last comment line gives where it began.
 void append_lead_in_end(const RunProgram& run, const std::string& path) {
-  if (!run.learning || run.learning->first_scored_tick() >= run.learning->first_tick) return;
+  const TrackDrive* track = track_drive(run);
+  const LearningExchange* learning = track != nullptr ? track->learning.get() : nullptr;
+  if (learning == nullptr || learning->first_scored_tick() >= learning->first_tick) return;
   std::ofstream out(path, std::ios::app);
   out << "# "
-      << nlohmann::json{{"scored_from", run.learning->first_scored_tick()},
-                        {"lead_in_periods", run.learning->lead_in_played()}}
+      << nlohmann::json{{"scored_from", learning->first_scored_tick()},
+                        {"lead_in_periods", learning->lead_in_played()}}
              .dump()
       << "\n";
 }

@@ -18,6 +18,7 @@
 #include "hystbench/compensation/stage_dynamic_decoupling.hpp"
 #include "hystbench/compensation/stage_interaction.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "hystbench/daemon/runs/track_drive.hpp"
 #include "runs/details/feedback_design.hpp"
 #include "runs/details/stage_loops_together.hpp"
 #include "runs/details/stage_runs.hpp"
@@ -370,10 +371,13 @@ BuiltRun axis_track_program(const StageTrackRequest& stage, const TrackRequest& 
 
 // A stage's replay: every axis's lead-in ends at one period, trial 0 beginning together.
 void decide_lead_ins_together(RunProgram& program) {
-  program.lead_in_together = std::make_unique<LearningExchange::LeadInTogether>();
-  program.lead_in_together->axes = program.axes();
+  TrackDrive& first = *track_drive(program);
+  first.lead_in_together = std::make_unique<LearningExchange::LeadInTogether>();
+  first.lead_in_together->axes = program.axes();
   for (std::size_t a = 0; a < program.axes(); ++a) {
-    if (auto& l = program.axis(a).learning) l->decide_together(program.lead_in_together.get());
+    if (auto& l = track_drive(program.axis(a))->learning) {
+      l->decide_together(first.lead_in_together.get());
+    }
   }
 }
 

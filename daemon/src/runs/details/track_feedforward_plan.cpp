@@ -13,6 +13,7 @@
 #include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/planned_inverse.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "hystbench/daemon/runs/track_drive.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -139,7 +140,7 @@ struct FeedforwardPlanning {
     // at it plans on the continued law: where that leaves it worse on the model as it
     // is, the previewed inverse plays.
     if (plan.rms <= plan.start_rms) {
-      program.compensator.emplace(
+      track_drive(program)->compensator.emplace(
           kind, std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(plan)), pid,
           linear, path);
     } else {
@@ -192,7 +193,7 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
   }
   std::vector<double> targets(samples);
   for (std::uint64_t k = 0; k < samples; ++k) {
-    targets[k] = p.feedforward_target(static_cast<double>(k) * dt, 0.0);
+    targets[k] = track_drive(p)->feedforward_target(static_cast<double>(k) * dt, 0.0);
   }
   feedforward["planned"] = {{"samples", samples}, {"planning", true}};
   return {

@@ -22,7 +22,7 @@ namespace hystbench::daemon::details {
 /// inverse stays: another model kind, a reference too long to plan in
 /// kMaxPlanWork (a periodic one: its first four periods are planned and the third repeats); a plan
 /// that is not better on the model, or that fails, also leaves it and says why in the run's result.
-/// The targets are the loop's (RunProgram::feedforward_target) without the tare, which the planned
+/// The targets are the loop's (TrackDrive::feedforward_target) without the tare, which the planned
 /// inverse meets through the plan's gain once the prefix measured it.
 RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
                                 compensation::CompensatorKind kind, std::uint64_t samples,

@@ -16,7 +16,7 @@
 
 #include "hystbench/compensation/iterative_learning.hpp"
 #include "hystbench/compensation/learning_guard.hpp"
-#include "hystbench/daemon/loop/learning_exchange.hpp"
+#include "hystbench/daemon/runs/learning_exchange.hpp"
 #include "runs/details/learned_drive.hpp"
 
 namespace hystbench::daemon::details {

@@ -21,6 +21,7 @@
 #include "hystbench/compensation/planned_inverse.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "hystbench/daemon/runs/track_drive.hpp"
 #include "runs/details/learned_drive.hpp"
 #include "runs/details/track_feedforward_plan.hpp"
 #include "runs/details/track_reference.hpp"
@@ -171,7 +172,7 @@ std::optional<hc::FeedbackController> feedback_controller(const FeedbackGainsReq
 // The feedforward inverts the whole model: hysteresis, creep and rate in the static inverse,
 // the delay and dynamics from the previewed reference. Sets the preview and the tare; returns
 // the summary.
-json arm_feedforward(RunProgram& p, const RunContext& ctx) {
+json arm_feedforward(RunProgram& p, TrackDrive& track, const RunContext& ctx) {
   const hc::ActuatorModel& model = ctx.model->model;
   const hc::DynamicsInversion inversion(model, ctx.dt(), ctx.settings.feedforward_bandwidth_hz);
   json inverted = json::array({"hysteresis"});
@@ -182,8 +183,8 @@ json arm_feedforward(RunProgram& p, const RunContext& ctx) {
   }
   if (model.delay_samples() > 0 || model.delay_s() > 0.0) inverted.push_back("delay");
   if (model.dynamics()) inverted.push_back("dynamics");
-  if (inversion.active()) p.preview = inversion;
-  arm_tare(p, model_exchange_ticks(ctx));
+  if (inversion.active()) track.preview = inversion;
+  arm_tare(track, p.excitation.size(), model_exchange_ticks(ctx));
   json out = {{"inverted", inverted},
               {"preview_samples", inversion.preview_samples()},
               {"bandwidth_hz", inversion.bandwidth_hz()},
@@ -222,15 +223,16 @@ std::optional<hc::DynamicsParameters> timed_mode(const RunContext& ctx) {
 
 // The learner of a learning run: the trials' exchange from the first scored period on, the
 // active model (else the linear map of the limits) as its L, the drive limits of the loop.
-std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
+std::unique_ptr<TrackLearning> learning(RunProgram& p, TrackDrive& track, const LearningPlan& plan,
                                         const RunContext& ctx, const TrackReference& ref,
                                         const FeedbackPlan* feedback) {
   const auto& lim = ctx.settings.loop.limits;
   const std::optional<hc::ActuatorModel> model = predictor(ctx, ctx.u_now);
   if (!model)
     throw common::CommandError("no_range", "learning needs a model or limits.y_min/y_max");
-  p.learning = std::make_unique<LearningExchange>(plan.period, p.metrics_from, plan.lead_in_max);
-  p.learning->follow_offset(plan.lead_in, {});
+  track.learning =
+      std::make_unique<LearningExchange>(plan.period, p.metrics_from, plan.lead_in_max);
+  track.learning->follow_offset(plan.lead_in, {});
   hc::LearningOptions o;
   o.dt = ctx.dt();
   o.u_min = lim.u_min;
@@ -258,7 +260,7 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
     r.start_name = plan.start->name;
   }
   try {
-    return std::make_unique<TrackLearning>(*model, *p.learning, r, o);
+    return std::make_unique<TrackLearning>(*model, *track.learning, r, o);
   } catch (const std::invalid_argument& e) {
     throw common::CommandError("bad_params", std::string("learning: ") + e.what());
   }
@@ -269,15 +271,16 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, const LearningPlan& plan,
 std::optional<double> tare_window_prediction(hc::ActuatorModel model, const RunProgram& p,
                                              double dt) {
   const std::vector<double>& sweep = p.excitation;
-  if (sweep.empty() || p.tare.from >= sweep.size()) return std::nullopt;
+  const TareWindow& tare = track_drive(p)->tare;
+  if (sweep.empty() || tare.from >= sweep.size()) return std::nullopt;
   model.configure(dt);
   model.reset(sweep.front());
   double sum = 0.0;
   for (std::size_t k = 0; k < sweep.size(); ++k) {
     const double y = model.step(sweep[k]);
-    if (k >= p.tare.from) sum += y;
+    if (k >= tare.from) sum += y;
   }
-  return sum / static_cast<double>(sweep.size() - p.tare.from);
+  return sum / static_cast<double>(sweep.size() - tare.from);
 }
 
 // The target offset a drive learned before is moved from, in the active model's terms. The
@@ -292,7 +295,9 @@ std::optional<double> tare_window_prediction(hc::ActuatorModel model, const RunP
 std::optional<double> learned_start_offset(const LearnedDrive& start, const RunProgram& p,
                                            const RunContext& ctx) {
   const double offset = start.meta.value("compensator_offset_um", std::nan(""));
-  if (start.compensator.empty() || !std::isfinite(offset) || !p.compensator) return std::nullopt;
+  if (start.compensator.empty() || !std::isfinite(offset) || !track_drive(p)->compensator) {
+    return std::nullopt;
+  }
   const json then_model = start.meta.value("model", json());
   if (ctx.model == nullptr || !then_model.is_string()) return offset;
   const std::string name = then_model.get<std::string>();
@@ -311,15 +316,16 @@ std::optional<double> learned_start_offset(const LearnedDrive& start, const RunP
 
 // After the feedforward's own preparation: the compensator's twin, which plays the reference at
 // the learned drive's offset (learned_start_offset) beside it, tick by tick
-// (RunProgram::learned_twin): the drive moves from it.
+// (TrackDrive::learned_twin): the drive moves from it.
 RunPreparation with_learned_start(RunPreparation preparation, double offset) {
   if (preparation.stage.empty()) preparation.stage = "copying the compensator";
   preparation.work = [before = std::move(preparation.work), offset](
                          RunProgram& p, const std::function<void(double)>& progress) {
     if (before) before(p, progress);
-    if (p.compensator && p.learning) {
-      p.learned_twin = *p.compensator;  // its state the compensator's at the run's start
-      p.learned_twin_offset_um = offset;
+    TrackDrive& track = *track_drive(p);
+    if (track.compensator && track.learning) {
+      track.learned_twin = *track.compensator;  // its state the compensator's at the run's start
+      track.learned_twin_offset_um = offset;
     }
   };
   return preparation;
@@ -344,15 +350,15 @@ LearningLeadIn lead_in_following(const LearnedDrive& start, const LearningPlan& 
 
 // A learning run's learner; a drive learned before moves from the active compensator's
 // feedforward at its offset, played ahead after the run's `preparation`.
-std::unique_ptr<TrackLearning> arm_learning(RunProgram& p, const LearningPlan& plan,
-                                            const RunContext& ctx, const TrackReference& ref,
-                                            RunPreparation& preparation,
+std::unique_ptr<TrackLearning> arm_learning(RunProgram& p, TrackDrive& track,
+                                            const LearningPlan& plan, const RunContext& ctx,
+                                            const TrackReference& ref, RunPreparation& preparation,
                                             const FeedbackPlan* feedback) {
-  std::unique_ptr<TrackLearning> learner = learning(p, plan, ctx, ref, feedback);
+  std::unique_ptr<TrackLearning> learner = learning(p, track, plan, ctx, ref, feedback);
   if (plan.start) {
     if (const auto offset = learned_start_offset(*plan.start, p, ctx)) {
       preparation = with_learned_start(std::move(preparation), *offset);
-      p.learning->follow_offset(
+      track.learning->follow_offset(
           plan.lead_in, lead_in_following(*plan.start, plan, *offset, ctx.settings.loop.rate_hz));
     }
   }
@@ -382,16 +388,17 @@ json learning_summary(const LearningPlan& learn) {
 // (its approach is not the trajectory) or a run with feedback (the loop holds the mean from the
 // reference's start, and the target's step would only kick the stage). Call with total_samples
 // and metrics_from set.
-void arm_periodic_startup(RunProgram& p, const TrackReference& ref, bool learning, bool feedback) {
+void arm_periodic_startup(RunProgram& p, TareWindow& tare, const TrackReference& ref, bool learning,
+                          bool feedback) {
   const std::uint64_t prefix = p.excitation.size(), period = ref.unscored;
   if (ref.frequency_hz <= 0.0 || learning || feedback || ref.pass_samples != 0 || period < 4 ||
-      p.tare.from >= prefix || p.metrics_from != prefix + period ||
+      tare.from >= prefix || p.metrics_from != prefix + period ||
       p.total_samples < p.metrics_from + 3 * period) {
     return;
   }
-  p.tare.startup_from = p.metrics_from;
+  tare.startup_from = p.metrics_from;
   p.metrics_from += period;
-  p.tare.startup_to = p.metrics_from;
+  tare.startup_to = p.metrics_from;
 }
 
 // The run log's header and the start reply of a track run built as `p`.
@@ -452,17 +459,18 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kTrack;
   p->response_delay_ticks = model_delay_ticks(ctx);
-  p->reference = std::move(ref.signal);
-  p->feedforward_reference = std::move(feedforward_reference);
-  p->y_ref_min = range.y_bottom;
-  p->y_ref_max = range.y_top;
+  TrackDrive& track = make_track_drive(*p);
+  track.reference = std::move(ref.signal);
+  track.feedforward_reference = std::move(feedforward_reference);
+  track.y_ref_min = range.y_bottom;
+  track.y_ref_max = range.y_top;
   // Pre-conditioning: current output -> u_max -> u_min, open loop.
   p->excitation =
       precondition_sweep(ctx.u_now, lim.u_min, lim.u_max, request.precondition_s, ctx.dt());
   const double gain = (range.y_top - range.y_bottom) / (lim.u_max - lim.u_min);
   const hc::LinearMap linear{gain, range.y_bottom - gain * lim.u_min};
   json feedforward = nullptr;
-  if (ctx.model != nullptr && hc::needs_model(kind)) feedforward = arm_feedforward(*p, ctx);
+  if (ctx.model != nullptr && hc::needs_model(kind)) feedforward = arm_feedforward(*p, track, ctx);
   std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
   json feedback = nullptr;
   std::optional<FeedbackPlan> plan;
@@ -476,7 +484,7 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
                                    linear, path);
   }
   try {
-    p->compensator.emplace(kind, std::move(inverse), pid, linear, path);
+    track.compensator.emplace(kind, std::move(inverse), pid, linear, path);
   } catch (const std::exception& e) {
     throw common::CommandError("bad_params", e.what());
   }
@@ -490,7 +498,7 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
   const std::uint64_t prefix = p->excitation.size();
   p->total_samples = prefix + ref.samples;
   p->metrics_from = prefix + ref.unscored;
-  arm_periodic_startup(*p, ref, learn.has_value(), pid.has_value());
+  arm_periodic_startup(*p, track.tare, ref, learn.has_value(), pid.has_value());
   // The feedback holds the reading to the reference from the reference's first tick on, so that
   // it has taken out the start from rest before the scored part begins (held until then, the
   // scored part began with the feedforward's error there).
@@ -506,7 +514,7 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
 
   BuiltRun run;
   if (learn) {
-    run.learning = arm_learning(*p, *learn, ctx, ref, preparation, plan ? &*plan : nullptr);
+    run.learning = arm_learning(*p, track, *learn, ctx, ref, preparation, plan ? &*plan : nullptr);
   }
   describe_track_run(run, *p, ref, ctx, comp_name, feedback, learn);
   if (plan) run.feedback_plan = std::make_shared<const FeedbackPlan>(std::move(*plan));

@@ -1,8 +1,9 @@
 #pragma once
 // The fixed-rate loop thread: absolute deadlines (clock_nanosleep, CLOCK_MONOTONIC), optional
-// SCHED_FIFO / mlockall / CPU affinity. Per tick: reference -> compensator -> limits ->
-// driver write -> driver read -> record and log. Idle ticks ramp the output to the driver's safe
-// value through the slew limit and keep reading, so timing statistics are kept all the time.
+// SCHED_FIFO / mlockall / CPU affinity. Per tick: the run's drive (its excitation, then its
+// RunDrive) -> limits -> driver write -> driver read -> score -> record and log. Idle ticks ramp
+// the output to the driver's safe value through the slew limit and keep reading, so timing
+// statistics are kept all the time.
 //
 // Threads: the loop thread runs tick(); every public method except the constructor, start(),
 // step() and shutdown() is for the control thread and is lock-free. step() runs one tick on the
@@ -193,16 +194,8 @@ class BenchLoop {
   /// Per driver axis: what the run's axes asked and got, and the measurements.
   using AxisRecords = std::array<SampleRecord, drivers::kMaxAxes>;
   using AxisValues = std::array<double, drivers::kMaxAxes>;
-  /// The output axis a of the run asks for at tick k: its open-loop drive, or the compensator's.
+  /// The output axis a of the run asks for at tick k: its excitation, then its drive's.
   inline TickDrive drive(std::size_t a, RunProgram& p, std::uint64_t k, SampleRecord& rec) noexcept;
-  /// A tracking tick: the reference, limited to the range, and the compensator's output for it
-  /// (or a learned drive's).
-  inline void track_drive(std::size_t a, RunProgram& p, std::uint64_t k, TickDrive& d,
-                          SampleRecord& rec) noexcept;
-  /// track --learned: the compensator's twin stepped at run time t [s] on the targets at the
-  /// offset the drive was learned at (RunProgram::learned_twin); its feedforward [V].
-  inline double twin_feedforward(RunProgram& p, double t) const noexcept;
-  static constexpr double kNoTwin = std::numeric_limits<double>::quiet_NaN();
   /// Axis a's requested output through its limits, counted, and the model's prediction for it.
   inline OutputLimiter::Applied limit(std::size_t a, RunProgram& p, std::uint64_t k,
                                       double u_request, SampleRecord& rec) noexcept;
@@ -211,7 +204,7 @@ class BenchLoop {
   inline TickExchange exchange(RunProgram& p, std::size_t n, std::uint64_t k, const AxisValues& u,
                                bool limited, AxisRecords& rec) noexcept;
   /// A stage's axes' predictions (their own displacements) coupled into the stage's
-  /// (RunProgram::coupling), in the records and each axis's tare history. Real-time safe.
+  /// (RunProgram::coupling), in the records and for each axis's drive. Real-time safe.
   void couple_predictions(RunProgram& p, std::uint64_t k, AxisRecords& rec) noexcept;
   /// Writes u to every axis (write() for one). Real-time safe.
   drivers::DriverStatus write_all(const AxisValues& u) noexcept;
@@ -219,8 +212,8 @@ class BenchLoop {
   drivers::DriverStatus read_all(std::array<drivers::Measurement, drivers::kMaxAxes>& m) noexcept;
   /// Every axis's limiter and last output back at the safe output.
   void reset_outputs() noexcept;
-  /// Adds a sample that did not fault to the run's errors and to its learning trial; true when
-  /// the last trial has played.
+  /// Adds a sample that did not fault to the run's errors and hands it to the run's drive; true
+  /// when the drive's last trial has played.
   static inline bool score(RunProgram& p, std::uint64_t k, const TickDrive& d,
                            const SampleRecord& rec) noexcept;
   /// Keeps axis p's sample in its record and timing, and publishes it as done.
@@ -236,8 +229,8 @@ class BenchLoop {
   void fault(const char* reason) noexcept;
   /// Bumps events() and wakes wait_event(): one non-blocking system call.
   void signal_event() noexcept;
-  // Simulated clock: waits until the learner made the drive for the period at tick k ready.
-  void await_learned_drive(const LearningExchange& learning, std::uint64_t k) noexcept;
+  // Simulated clock: waits while the drive awaits its control thread at tick k (RunDrive::awaits).
+  void await_drive(const RunDrive& drive, std::uint64_t k) noexcept;
 
   drivers::Driver& driver_;
   BenchLoopOptions options_;

@@ -14,15 +14,11 @@
 #include <vector>
 
 #include "hystbench/compensation/actuator_model.hpp"
-#include "hystbench/compensation/compensator.hpp"
-#include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/stage_decoupling.hpp"
-#include "hystbench/daemon/loop/learning_exchange.hpp"
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/loop/oscillation_detector.hpp"
+#include "hystbench/daemon/loop/run_drive.hpp"
 #include "hystbench/daemon/loop/sample_log_writer.hpp"
-#include "hystbench/daemon/loop/target_window.hpp"
-#include "hystbench/sim/signal_generator.hpp"
 
 namespace hystbench::daemon {
 
@@ -66,73 +62,27 @@ struct ErrorFigures {
   }
 };
 
-/// track: the output offset the model does not predict (slow creep, a sensor offset): the mean
-/// of y - y_model over the open-loop prefix samples [from, excitation.size()) is subtracted from
-/// the feedforward's target (not from the reference the error and the PID see).
-struct TareWindow {
-  /// The window's first tick; >= excitation.size() = no tare.
-  std::uint64_t from = std::numeric_limits<std::uint64_t>::max();
-  /// The driver exchange latency that the model's delay already holds [ticks]: an identified
-  /// model's exchange_ticks, 0 for a model made elsewhere. A reading that answers the output of
-  /// response_ticks ago is compared with y_model of (response_ticks - this) ago.
-  std::uint64_t model_exchange_ticks = 0;
-  // ---- written by the loop ----
-  static constexpr std::size_t kHistory = 64;      ///< y_model ticks kept
-  std::array<double, kHistory> y_model_history{};  ///< y_model of tick k at k % kHistory
-  double sum = 0.0;                                ///< of y - y_model over the window [µm]
-  std::uint64_t samples = 0;
-  /// The tare the feedforward applies [µm] (0 until the window has a sample).
-  double um() const noexcept { return samples > 0 ? sum / static_cast<double>(samples) : 0.0; }
-
-  /// A periodic reference: the mean of y - y_ref over its second unscored period,
-  /// [startup_from, startup_to), is added to the tare from startup_to on: the offset of the
-  /// periodic motion that the prefix's slow sweep does not show (a fast drive moves a loop's
-  /// mean differently from the model's). startup_from >= startup_to: none.
-  std::uint64_t startup_from = std::numeric_limits<std::uint64_t>::max();
-  std::uint64_t startup_to = 0;
-  // ---- written by the loop ----
-  double startup_sum = 0.0;  ///< of y - y_ref over the start-up window [µm]
-  std::uint64_t startup_samples = 0;
-  /// The start-up's offset [µm] (0 without a sample).
-  double startup_um() const noexcept {
-    return startup_samples > 0 ? startup_sum / static_cast<double>(startup_samples) : 0.0;
-  }
-  /// The tare the feedforward applies at tick k [µm]. Real-time safe.
-  double um_at(std::uint64_t k) const noexcept {
-    return um() + (k >= startup_to ? startup_um() : 0.0);
-  }
-};
-
 struct RunProgram {
   // ---- set by the control thread before submit() ----
   std::string run_id;
   RunKind kind = RunKind::kTrack;
   double dt_s = 0.0;  ///< the loop's period [s] (BenchLoop::submit() sets it)
   std::uint64_t total_samples = 0;
-  /// identify, excite: the open-loop drive, one value per sample [V]; track: its open-loop
-  /// prefix (the precondition sweep).
+  /// The open-loop drive played from the run's first tick, one value per sample [V]: the whole
+  /// run for identify, excite and frf, track's prefix (the precondition sweep).
   std::vector<double> excitation;
-  /// track: the reference [µm] as a function of run time, and the compensator.
-  std::unique_ptr<sim::SignalGenerator> reference;
-  std::optional<compensation::Compensator> compensator;
-  /// track: the model's delay and dynamics inverted from the previewed reference (the
-  /// feedforward then inverts its target, not y_ref); absent for a static model or `none`/`pid`.
-  std::optional<compensation::DynamicsInversion> preview;
-  /// track: the feedforward targets ahead for an inverse that uses them (BenchLoop::submit()
-  /// sizes it from the compensator; capacity 0 = this tick's target only).
-  TargetWindow targets;
+  /// The kind's drive from the tick after the excitation on (RunDrive; track's is TrackDrive);
+  /// null for a run that is its excitation alone (total_samples == excitation.size()).
+  std::unique_ptr<RunDrive> drive;
   /// The active model, configured at the loop's period and relaxed at the run's first output:
   /// stepped every tick with the drive actually applied, its output is y_model (absent = NaN).
   std::optional<compensation::ActuatorModel> model;
-  /// The feedback sees no error before this tick (its loop holds at 0): track's is its
-  /// reference's first tick, after the open-loop prefix.
+  /// The drive's feedback sees no error before this tick (its loop holds at 0), and the
+  /// oscillation watch starts here: track's is its reference's first tick, after the sweep.
   std::uint64_t feedback_from = 0;
   /// A run with feedback: watches the error from feedback_from on, and faults the run to the
   /// safe output when the loop oscillates (the loop writes its trip).
   std::optional<OscillationDetector> oscillation;
-  /// track: references outside [y_ref_min, y_ref_max] are clipped and flagged [µm].
-  double y_ref_min = -std::numeric_limits<double>::infinity();
-  double y_ref_max = std::numeric_limits<double>::infinity();
   /// Samples before this index are left out of the error figures (start-up transient).
   std::uint64_t metrics_from = 0;
   /// y - y_model is scored from max(metrics_from, this): where the drive has swept the range
@@ -146,21 +96,6 @@ struct RunProgram {
   /// The active model's identified input delay [ticks]: the stuck-sensor detector waits this
   /// much longer for the reading to answer the output.
   std::uint64_t response_delay_ticks = 0;
-  TareWindow tare;
-  /// track --learn: the trials' hand-over with the learner (null for a run that does not learn).
-  /// From its first_tick on, a period that plays a learned drive plays it in place of the
-  /// compensator's feedforward (its feedback stays on).
-  std::unique_ptr<LearningExchange> learning;
-  /// A stage's replay (axis 0's program holds it): its axes' lead-ins end together.
-  std::unique_ptr<LearningExchange::LeadInTogether> lead_in_together;
-  /// track --learned: the compensator again, fed the targets at the offset the drive was learned
-  /// at (learned_twin_offset_um) with its feedback held; the drive moves by how far the
-  /// compensator's feedforward is from its twin's at the same tick: the target offset's effect
-  /// alone, where the compensator's slow states (a model's creep, relaxed at the run's start)
-  /// move both alike (LearningExchange::learned()). Absent otherwise.
-  std::optional<compensation::Compensator> learned_twin;
-  double learned_twin_offset_um = 0.0;
-  TargetWindow twin_targets;  ///< the twin's targets ahead, sized as `targets`
   /// The per-run log (may be null in unit tests). On a stage, axis 0's holds every axis's
   /// columns (its row_records() = axes()); the other axes' stay null.
   std::unique_ptr<SampleLogWriter> log;
@@ -169,13 +104,9 @@ struct RunProgram {
   /// it (one write and one read of every axis). Empty: one axis. A driver's axes beyond the
   /// run's hold their safe output.
   std::vector<std::unique_ptr<RunProgram>> stage_axes;
-  /// track on a stage: the feedforward's reference in place of `reference`, the target with the
-  /// coupling taken out (static decoupling); the error and the feedback keep `reference`.
-  /// Null: `reference`.
-  std::unique_ptr<sim::SignalGenerator> feedforward_reference;
   /// A stage's coupling (axis 0's program): each tick the axes' y_model, their own displacements,
   /// become the stage's prediction (I + K) y_model, which the log, the model error and each
-  /// axis's tare see. Absent: each axis's y_model is its own.
+  /// axis's drive see. Absent: each axis's y_model is its own.
   std::optional<compensation::StageDecoupler> coupling;
   /// The run's axes (1 + stage_axes) and axis a's program (0 = this one). Real-time safe.
   std::size_t axes() const noexcept { return stage_axes.size() + 1; }
@@ -194,11 +125,6 @@ struct RunProgram {
   ErrorFigures error;        ///< tracking error, from metrics_from on
   ErrorFigures model_error;  ///< y - y_model, from model_metrics_from on (see there)
   LoopStatistics stats;      ///< this run's loop timing
-
-  /// track: the feedforward's target at run time t_s [s] (0 = the reference's first sample): the
-  /// reference clipped to [y_ref_min, y_ref_max], or with a preview the static target that
-  /// inverts the model's delay and dynamics (the reference ahead); less `tare_um`. Real-time safe.
-  double feedforward_target(double t_s, double tare_um) const noexcept;
 };
 
 }  // namespace hystbench::daemon

@@ -13,6 +13,7 @@
 #include "hystbench/compensation/actuator_model.hpp"
 #include "hystbench/daemon/loop/output_limiter.hpp"
 #include "hystbench/daemon/loop/run_program.hpp"
+#include "hystbench/daemon/runs/track_drive.hpp"
 
 namespace hystbench::daemon {
 
@@ -31,11 +32,11 @@ ModelOutputRange major_loop_range(const compensation::ActuatorModel& model, doub
 std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
                                        double precondition_s, double dt_s);
 
-/// Arms the tare of a program whose excitation is a precondition sweep: the output's
-/// unpredicted offset is measured on the falling ramp (RunProgram::tare_from), once the turn at
-/// u_max has wiped both the actuator's and the model's memory (no tare without a sweep), with
-/// readings matched to the outputs they answer less `model_exchange_ticks`.
-void arm_tare(RunProgram& program, std::uint64_t model_exchange_ticks);
+/// Arms the tare of a track drive after a precondition sweep of `sweep_samples`: the output's
+/// unpredicted offset is measured on the falling ramp (TareWindow::from), once the turn at u_max
+/// has wiped both the actuator's and the model's memory (no tare without a sweep), with readings
+/// matched to the outputs they answer less `model_exchange_ticks`.
+void arm_tare(TrackDrive& track, std::size_t sweep_samples, std::uint64_t model_exchange_ticks);
 
 /// A copy of `model` configured for dt_s, relaxed at u_start, simulated through `prefix`, its
 /// input range narrowed to [u_min, u_max] (or set to it when the model has none): the model an

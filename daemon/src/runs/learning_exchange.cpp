@@ -1,4 +1,4 @@
-#include "hystbench/daemon/loop/learning_exchange.hpp"
+#include "hystbench/daemon/runs/learning_exchange.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 // compensator's drive; a drive offered before a period begins is that period's trial; a period
 // with none replays the last drive and is not a trial; the drive offered as the last ends the
 // run after its period; the loop owes a wait only for a drive the learner owes.
-#include "hystbench/daemon/loop/learning_exchange.hpp"
+#include "hystbench/daemon/runs/learning_exchange.hpp"
 
 #include <gtest/gtest.h>
 

@@ -85,7 +85,7 @@ struct LearningExchange {
   /// (start_from) moves by how far the compensator's moved from its own in the run that learned
   /// it (the output offset the run measured, through the model's inverse): from `twin` when it
   /// is finite (the compensator's twin at this tick, fed the targets at the offset the drive was
-  /// learned at: RunProgram::learned_twin), else from the feedforward start_from was given.
+  /// learned at: TrackDrive::learned_twin), else from the feedforward start_from was given.
   bool learned(std::size_t j, double& u_ff,
                double twin = std::numeric_limits<double>::quiet_NaN()) const noexcept;
   /// Before first_tick: as learned() for tick k, true when a drive learned before plays the

@@ -1,0 +1,150 @@
+#include "hystbench/daemon/runs/track_drive.hpp"
+
+#include <algorithm>
+
+#include "hystbench/daemon/loop/sample_record.hpp"
+
+namespace hystbench::daemon {
+
+namespace {
+constexpr double kNoTwin = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
+
+double TrackDrive::feedforward_target(double t_s, double tare_um) const noexcept {
+  const sim::SignalGenerator& r = feedforward_reference ? *feedforward_reference : *reference;
+  if (!preview) return std::clamp(r.value(t_s), y_ref_min, y_ref_max) - tare_um;
+  const double tl = t_s + preview->lead_s(), h = preview->step_s();
+  return preview->target(r.value(tl - h), r.value(tl), r.value(tl + h)) - tare_um;
+}
+
+void TrackDrive::configure(const DriveSetup& setup) {
+  dt_ = setup.dt_s;
+  first_tick_ = setup.first_tick;
+  // The targets ahead, for an inverse that uses them. Not yet with a dynamics preview, whose
+  // target is already computed from the reference ahead: fed both, the rate inverse tracked
+  // worse.
+  targets_.allocate(compensator && !preview ? compensator->preview_samples() : 0);
+  twin_targets_.allocate(learned_twin && !preview ? learned_twin->preview_samples() : 0);
+  // The feedback's integral holds while the drive sits at a bound of the output range.
+  if (compensator) compensator->set_drive_range(setup.u_min, setup.u_max);
+  if (learned_twin) learned_twin->set_drive_range(setup.u_min, setup.u_max);
+}
+
+bool TrackDrive::awaits(std::uint64_t k) const noexcept {
+  return learning && k >= learning->first_scored_tick() && learning->owed(k);
+}
+
+double TrackDrive::twin_feedforward(double t) noexcept {
+  const double none = std::numeric_limits<double>::quiet_NaN();  // its feedback holds
+  auto target_at = [this](double tt) noexcept {
+    return feedforward_target(tt, learned_twin_offset_um);
+  };
+  if (twin_targets_.capacity() > 1) {
+    return learned_twin->step(none, none, twin_targets_.advance(t, dt_, target_at)).u_ff;
+  }
+  return learned_twin->step(none, none, target_at(t)).u_ff;
+}
+
+DriveCommand TrackDrive::update(const DriveInput& in) noexcept {
+  const std::uint64_t k = in.k;
+  DriveCommand d;
+  trial_tick_ = lead_in_ = false;
+  const double t = static_cast<double>(k - first_tick_) * dt_;
+  d.y_ref = reference->value(t);
+  if (d.y_ref < y_ref_min || d.y_ref > y_ref_max) {
+    d.y_ref = std::min(std::max(d.y_ref, y_ref_min), y_ref_max);
+    d.flags |= kSampleReferenceLimited;
+  }
+  // The feedforward's target at time tt: the reference, or with a preview the static target
+  // that inverts the model's delay and dynamics (the reference ahead by the delay). Less the
+  // tare: the output offset the model did not predict on the sweep, and from the first scored
+  // tick of a periodic reference the mean error of its start-up period. A drive learned before:
+  // the offset taken off when it was learned, and from trial 0 on also the offset its lead-in
+  // measured.
+  const double tare_um = learning ? learning->target_offset(k, tare.um()) : tare.um_at(k);
+  auto target_at = [this, tare_um](double tt) noexcept { return feedforward_target(tt, tare_um); };
+  // The feedback's reference; NaN before the feedback may act: the PID holds.
+  const double fb_ref = in.feedback_on ? d.y_ref : std::numeric_limits<double>::quiet_NaN();
+  compensation::CompensatorOutput out;
+  if (targets_.capacity() > 1) {
+    out = compensator->step(fb_ref, in.y, targets_.advance(t, dt_, target_at));
+  } else {
+    out = compensator->step(fb_ref, in.y, target_at(t));
+  }
+  const double twin = learned_twin ? twin_feedforward(t) : kNoTwin;
+  d.u_ff = out.u_ff;
+  d.u_fb = out.u_fb;
+  u_compensator_ = out.u_ff;
+  if (out.feedback_saturated) d.flags |= kSampleFeedbackSaturated;
+  d.u = out.u;
+  if (learning && k >= learning->first_scored_tick()) {
+    // A learning run: from trial 1 on the learned feedforward, with the feedback on it.
+    phase_ = learning->begin_tick(k);
+    trial_tick_ = true;
+    d.trial_ends = phase_ + 1 == learning->period;
+    if (double u_ff = out.u_ff; learning->learned(phase_, u_ff, twin)) {
+      d.u_ff = u_ff;
+      d.u = u_ff + out.u_fb;
+    }
+  } else if (double u_ff = out.u_ff; learning && learning->lead_in(k, u_ff, twin)) {
+    d.u_ff = u_ff;  // a drive learned before plays the start-up period too
+    d.u = u_ff + out.u_fb;
+    lead_in_ = true;
+  }
+  return d;
+}
+
+void TrackDrive::limited(int direction) noexcept {
+  if (compensator) compensator->notify_saturation(direction);
+}
+
+void TrackDrive::predicted(std::uint64_t k, double y_model) noexcept {
+  tare.y_model_history[k % TareWindow::kHistory] = y_model;
+  tare.predicted = true;
+}
+
+void TrackDrive::measured(std::uint64_t k, const drivers::Measurement& m) noexcept {
+  // A fresh reading on the sweep less the model's prediction for the output it answers (the
+  // reading answers the output of response_ticks ago, less the exchange latency the model's
+  // delay holds).
+  const std::uint64_t lag = m.response_ticks > tare.model_exchange_ticks
+                                ? m.response_ticks - tare.model_exchange_ticks
+                                : 0;
+  if (tare.predicted && k >= tare.from && k < first_tick_ && lag < TareWindow::kHistory &&
+      lag <= k) {
+    tare.sum += m.position_um - tare.y_model_history[(k - lag) % TareWindow::kHistory];
+    ++tare.samples;
+  }
+}
+
+DriveScore TrackDrive::scored(std::uint64_t k, double y_ref, double y_measured,
+                              double u_ff) noexcept {
+  DriveScore s;
+  if (k >= tare.startup_from && k < tare.startup_to && std::isfinite(y_ref) &&
+      std::isfinite(y_measured)) {
+    tare.startup_sum += y_measured - y_ref;
+    ++tare.startup_samples;
+  }
+  if (lead_in_) {
+    learning->lead_in_error(k, y_ref - y_measured, tare.um());
+    s.scored_from = learning->first_scored_tick();  // a lead-in that ends early moves it up
+  }
+  if (trial_tick_)
+    s.last_trial = learning->end_tick(phase_, u_ff, u_compensator_, y_ref - y_measured);
+  return s;
+}
+
+TrackDrive* track_drive(RunProgram& p) noexcept { return dynamic_cast<TrackDrive*>(p.drive.get()); }
+
+const TrackDrive* track_drive(const RunProgram& p) noexcept {
+  return dynamic_cast<const TrackDrive*>(p.drive.get());
+}
+
+TrackDrive& make_track_drive(RunProgram& p) {
+  auto drive = std::make_unique<TrackDrive>();
+  TrackDrive& out = *drive;
+  p.drive = std::move(drive);
+  return out;
+}
+
+}  // namespace hystbench::daemon
