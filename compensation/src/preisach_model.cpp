@@ -230,12 +230,16 @@ void PreisachModel::cell_areas(double u, std::span<double> out) const noexcept {
 
 void PreisachModel::step_cell_areas(double u, std::span<double> out) noexcept {
   if (out.size() != p_.densities.size()) return;
+  step_relays(u);
+  write_cell_areas(memory_, u_, out);
+}
+
+void PreisachModel::step_relays(double u) noexcept {
   // As step(u), without the output's Everett value.
   if (p_.rate_law.active() && std::isfinite(u)) front_ = front(u, rate_.step(u));
   const double x = clamp(p_.rate_law.active() ? front_ : u);
   apply(x, memory_);
   u_ = x;
-  write_cell_areas(memory_, x, out);
 }
 
 void PreisachModel::write_cell_areas(const Memory& m, double x,

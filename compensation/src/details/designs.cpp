@@ -120,7 +120,7 @@ void Design::step_operators(double u, double widen) noexcept {
   }
 }
 
-double Design::row(double u, double y, double* a) noexcept {
+double Design::step(double u, double y, double* a) noexcept {
   // The model's rate: filtered, capped at max_rate (rho in [0, 1], signed: [-1, 1]).
   const double rho = s_.kind == ModelKind::kRateDependentPi
                          ? std::clamp(rate_.step(u) * inv_max_rate_, -1.0, 1.0)
@@ -130,6 +130,21 @@ double Design::row(double u, double y, double* a) noexcept {
                           ? threshold_widening(s_.threshold_rate_s, s_.threshold_rate_exponent,
                                                s_.max_rate, std::abs(rho) * s_.max_rate)
                           : 0.0);
+  }
+  if (a == nullptr) {  // skip(): the state alone
+    if (plane_) {
+      if (s_.preisach_shape.empty()) {
+        plane_->step_relays(u);
+      } else {
+        (void)plane_->step(u);
+      }
+    }
+    for (std::size_t k = 0; k < creep_x_.size(); ++k) {
+      creep_x_[k] = creep_a_[k] * creep_x_[k] + (1.0 - creep_a_[k]) * u;
+    }
+    ++sample_;
+    u_prev_ = u;
+    return 0.0;
   }
   // Cumulative-weight regressors: sum_i w_i (p_i - u_ref) = sum_i W_i (p_i - p_{i+1}).
   const double* z = z_.data();
@@ -329,9 +344,8 @@ ActuatorModel Design::build(const Eigen::VectorXd& x) const {
 BoundedLsqResult fit_design(Design& design, std::span<const double> u, std::span<const double> y,
                             std::size_t begin, std::size_t end, std::size_t stride) {
   NormalEquations ne(design.unknowns());
-  std::vector<double> scratch(static_cast<std::size_t>(design.unknowns()));
   design.reset(u[0]);
-  for (std::size_t k = 0; k < begin; ++k) design.row(u[k], y[k], scratch.data());
+  for (std::size_t k = 0; k < begin; ++k) design.skip(u[k]);
   if (stride <= 1) {
     for (std::size_t k = begin; k < end; ++k) ne.push(design.row(u[k], y[k], ne.row()));
   } else {
@@ -339,7 +353,7 @@ BoundedLsqResult fit_design(Design& design, std::span<const double> u, std::span
       if ((k - begin) % stride == 0) {
         ne.push(design.row(u[k], y[k], ne.row()));
       } else {
-        design.row(u[k], y[k], scratch.data());
+        design.skip(u[k]);
       }
     }
   }

@@ -133,7 +133,10 @@ class Design {
   void reset(double u0) noexcept;
   /// Steps the operators with input u (measured output y) and writes the regressors of this
   /// sample to a[0 .. unknowns()); returns the regression target.
-  double row(double u, double y, double* a) noexcept;
+  double row(double u, double y, double* a) noexcept { return step(u, y, a); }
+  /// Steps the operators with input u as row() does, without the regressors: a sample the fit
+  /// leaves out (the rows after it are the same as when row() stepped it).
+  void skip(double u) noexcept { (void)step(u, 0.0, nullptr); }
 
   Eigen::VectorXd lower_bounds() const;
   Eigen::VectorXd upper_bounds() const;
@@ -150,6 +153,8 @@ class Design {
   std::unique_ptr<HysteresisModel> build_plane(const Eigen::VectorXd& x) const;
   /// Steps the plays with input u; `widen` is added to every threshold [input unit].
   void step_operators(double u, double widen) noexcept;
+  /// row(), or skip() for a null `a`.
+  double step(double u, double y, double* a) noexcept;
   bool thresholds_law() const noexcept {
     return s_.kind == ModelKind::kRateDependentPi && s_.rate_law == RateLaw::kThresholds;
   }

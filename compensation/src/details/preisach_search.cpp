@@ -43,11 +43,10 @@ PreisachSearch search_one_map(const ModelStructure& s, std::span<const double> u
   Design design(s);
   // One pass: the first part's equations and the rest's.
   NormalEquations first(design.unknowns()), rest(design.unknowns());
-  std::vector<double> scratch(static_cast<std::size_t>(design.unknowns()));
   design.reset(u[0]);
   for (std::size_t k = 0; k < end; ++k) {
     if (k < begin) {
-      design.row(u[k], y[k], scratch.data());
+      design.skip(u[k]);
       continue;
     }
     NormalEquations& ne = k < split ? first : rest;

@@ -88,6 +88,9 @@ class PreisachModel final : public HysteresisModel {
   /// cell_areas(u) then step(u) give, at about half the work): the identification's rows.
   /// Real-time safe.
   void step_cell_areas(double u, std::span<double> out) noexcept;
+  /// step_cell_areas(u) without the areas: the relays' state stepped alone (a row the fit skips).
+  /// Real-time safe.
+  void step_relays(double u) noexcept;
   /// The input the relays see for input u at rate [input unit / s]: u without a rate law.
   double front(double u, double rate) const noexcept;
   /// Cells in the triangle of N cells per side.

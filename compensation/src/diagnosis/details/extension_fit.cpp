@@ -226,13 +226,18 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
     bool use = r.fit_row(k);
     if (use) use = fit_index++ % stride == 0;
     if (use && rate_cap && k > 0 && std::abs(ud[k] - ud[k - 1]) > max_step) use = false;
+    if (!use && !filters.active()) {
+      // Nothing reads the row: the operators step alone (a cached row is not needed at all).
+      if (cached == nullptr) design.skip(ud[k]);
+      continue;
+    }
     double* a = use ? ne.row() : scratch.data();
     // The row: cached (copied only where it is used; the filters read it in place) or stepped.
     const double* row = a;
     double target = 0.0;
     if (cached != nullptr) {
       row = cached->row(k);
-      if (use || !filters.active()) std::copy_n(row, nd, a);
+      if (use) std::copy_n(row, nd, a);
       target = cached->target(k);
     } else {
       target = design.row(ud[k], y[k], a);

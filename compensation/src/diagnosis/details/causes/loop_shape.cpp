@@ -60,13 +60,15 @@ double explained_by_probe(const CandidateContext& c) {
   Design probe(plane_of(c.base.structure, r, kProbeCells, 0));
   const std::vector<double> ud = delayed(r.u, c.base.delay_samples);
   NormalEquations ne(probe.unknowns());
-  std::vector<double> scratch(static_cast<std::size_t>(probe.unknowns()));
   double sum = 0.0;
   probe.reset(ud[0]);
   for (std::size_t k = 0; k < r.n; ++k) {
     const bool use = r.fit_row(k) && k % r.search_stride == 0;
-    probe.row(ud[k], 0.0, use ? ne.row() : scratch.data());
-    if (!use) continue;
+    if (!use) {
+      probe.skip(ud[k]);
+      continue;
+    }
+    probe.row(ud[k], 0.0, ne.row());
     ne.push(c.residual[k]);
     sum += c.residual[k];
   }
