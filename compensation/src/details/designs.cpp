@@ -120,6 +120,21 @@ void Design::step_operators(double u, double widen) noexcept {
   }
 }
 
+void Design::step_relays_and_lags(double u) noexcept {
+  if (plane_) {
+    if (s_.preisach_shape.empty()) {
+      plane_->step_relays(u);
+    } else {
+      (void)plane_->step(u);
+    }
+  }
+  for (std::size_t k = 0; k < creep_x_.size(); ++k) {
+    creep_x_[k] = creep_a_[k] * creep_x_[k] + (1.0 - creep_a_[k]) * u;
+  }
+  ++sample_;
+  u_prev_ = u;
+}
+
 double Design::step(double u, double y, double* a) noexcept {
   // The model's rate: filtered, capped at max_rate (rho in [0, 1], signed: [-1, 1]).
   const double rho = s_.kind == ModelKind::kRateDependentPi
@@ -131,19 +146,8 @@ double Design::step(double u, double y, double* a) noexcept {
                                                s_.max_rate, std::abs(rho) * s_.max_rate)
                           : 0.0);
   }
-  if (a == nullptr) {  // skip(): the state alone
-    if (plane_) {
-      if (s_.preisach_shape.empty()) {
-        plane_->step_relays(u);
-      } else {
-        (void)plane_->step(u);
-      }
-    }
-    for (std::size_t k = 0; k < creep_x_.size(); ++k) {
-      creep_x_[k] = creep_a_[k] * creep_x_[k] + (1.0 - creep_a_[k]) * u;
-    }
-    ++sample_;
-    u_prev_ = u;
+  if (a == nullptr) {  // skip()
+    step_relays_and_lags(u);
     return 0.0;
   }
   // Cumulative-weight regressors: sum_i w_i (p_i - u_ref) = sum_i W_i (p_i - p_{i+1}).

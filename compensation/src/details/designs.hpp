@@ -153,6 +153,8 @@ class Design {
   std::unique_ptr<HysteresisModel> build_plane(const Eigen::VectorXd& x) const;
   /// Steps the plays with input u; `widen` is added to every threshold [input unit].
   void step_operators(double u, double widen) noexcept;
+  /// skip()'s part after the plays: the plane's relays, the creep lags, the sample count.
+  void step_relays_and_lags(double u) noexcept;
   /// row(), or skip() for a null `a`.
   double step(double u, double y, double* a) noexcept;
   bool thresholds_law() const noexcept {
