@@ -464,8 +464,11 @@ SavedModels save_models(const DiagnoseCommand& cmd, const hc::Diagnosis& d,
 
 // The models written, each with its check (or why it was not written: the error says so too).
 void print_saved(std::ostream& out, const DiagnoseCommand& cmd, const SavedModels& saved) {
-  for (const auto& [which, path] :
+  for (const auto& entry :
        {std::pair{"baseline", &cmd.save_baseline}, std::pair{"extended", &cmd.save_extended}}) {
+    // Named, not a structured binding: clang (clang-tidy) refuses a lambda capturing one.
+    const char* const which = entry.first;
+    const std::string* const path = entry.second;
     const auto check = std::find_if(saved.checks.begin(), saved.checks.end(),
                                     [&which](const auto& c) { return c.first == which; });
     if (path->empty() || check == saved.checks.end()) continue;

@@ -410,7 +410,10 @@ json request_command(BenchClient& client, const RemoteCommand& cmd, bool tty, st
   std::vector<std::pair<std::string, RemoteUpload>> uploads;
   if (cmd.upload) uploads.emplace_back("", *cmd.upload);
   if (cmd.reference_file) uploads = reference_file_uploads(client, *cmd.reference_file);
-  for (const auto& [axis, upload] : uploads) {
+  for (const auto& entry : uploads) {
+    // Named, not a structured binding: clang (clang-tidy) refuses a lambda capturing one.
+    const std::string& axis = entry.first;
+    const RemoteUpload& upload = entry.second;
     std::function<void(double)> shown;
     if (tty && !cmd.json_output && upload.values.size() > 100'000) {
       shown = [&](double f) { progress_bar(err, f, "uploading " + upload.source); };
