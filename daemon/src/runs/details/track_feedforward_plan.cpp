@@ -192,8 +192,9 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
     return {};
   }
   std::vector<double> targets(samples);
+  const TrackDrive& track = *track_drive(p);
   for (std::uint64_t k = 0; k < samples; ++k) {
-    targets[k] = track_drive(p)->feedforward_target(static_cast<double>(k) * dt, 0.0);
+    targets[k] = track.feedforward_target(static_cast<double>(k) * dt, 0.0);
   }
   feedforward["planned"] = {{"samples", samples}, {"planning", true}};
   return {
