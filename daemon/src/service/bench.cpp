@@ -17,10 +17,11 @@
 #include "runs/details/stage_runs.hpp"
 #include "runs/details/track_program.hpp"
 #include "service/details/command_table.hpp"
-#include "service/details/identify_session.hpp"
+#include "service/details/identify_coordinator.hpp"
 #include "service/details/model_folder.hpp"
 #include "service/details/model_store.hpp"
 #include "service/details/run_history.hpp"
+#include "service/details/run_log.hpp"
 #include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
@@ -81,6 +82,17 @@ Bench::Bench(BenchSettings settings)
   loop.axis_names = settings_.axes;
   loop_ = std::make_unique<BenchLoop>(*driver_, loop);
   runs_ = std::make_unique<details::RunSupervisor>(*loop_, mutex_);
+  details::IdentifyCoordinator::Hooks identify;
+  identify.run_context = [this] { return run_context(); };
+  identify.adopt = [this](hc::ModelFile file, const std::string& path,
+                          const std::optional<hc::StageResponses>& responses, json* why) {
+    if (responses) models_->set_measured_responses(*responses);
+    models_->adopt(std::move(file), path);
+    return feedback_now(hc::CompensatorKind::kInversePid, why);
+  };
+  identify.deliver = [this](json result) { deliver_result(std::move(result)); };
+  identify_ = std::make_unique<details::IdentifyCoordinator>(settings_, *loop_, *runs_, mutex_,
+                                                             std::move(identify));
 }
 
 Bench::~Bench() {
@@ -155,24 +167,6 @@ std::string Bench::new_run_id(const char* kind) {
     id = std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
   } while (std::filesystem::exists(std::filesystem::path(settings_.log_dir) / (id + ".csv"), ec));
   return id;
-}
-
-void Bench::open_log(RunProgram& p, json header) {
-  // The clock the samples are timed by, in the log's header and the run's result.
-  const char* clock = to_string(settings_.loop.clock);
-  if (header.contains("run") && header["run"].is_object()) header["run"]["clock"] = clock;
-  p.summary["clock"] = clock;
-  SampleLogOptions opt;
-  opt.log_dir = settings_.log_dir;
-  opt.run_id = p.run_id;
-  opt.header = std::move(header);
-  opt.ring_capacity = settings_.log_ring_capacity;
-  if (p.axes() > 1) opt.axes.assign(settings_.axes.begin(), settings_.axes.begin() + p.axes());
-  try {
-    p.log = std::make_unique<SampleLogWriter>(std::move(opt));
-  } catch (const std::exception& e) {
-    throw common::CommandError("log_error", std::string("cannot open the run log: ") + e.what());
-  }
 }
 
 json Bench::handle(const std::string& cmd, const json& params, std::uint64_t client) {
@@ -291,7 +285,7 @@ void Bench::require_idle() const {
 }
 
 Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json& header) {
-  open_log(*p, header);
+  details::open_run_log(*p, header, settings_);
   SubmittedRun s{p->run_id, p->log->path().string(), p->total_samples};
   if (auto refused = loop_->submit(std::move(p))) {
     refused->log->close();
@@ -326,7 +320,7 @@ json Bench::launch(const char* kind, details::BuiltRun run) {
   SubmittedRun r;
   if (prepared) {
     // Prepared on the supervisor thread, then submitted: the reply does not wait for it.
-    open_log(*run.program, run.header);
+    details::open_run_log(*run.program, run.header, settings_);
     r = {run.program->run_id, run.program->log->path().string(), run.program->total_samples};
   } else {
     r = submit_run(std::move(run.program), run.header);
@@ -436,8 +430,8 @@ void Bench::end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std:
 }
 
 void Bench::finalize(std::unique_ptr<RunProgram> run) {
-  if (session_ && run->run_id == session_->program_id) {
-    verification_finished(std::move(run));
+  if (identify_->owns(*run)) {
+    identify_->segment_played(std::move(run));
     return;
   }
   {
@@ -465,7 +459,13 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
       return;
     }
   } else if (result.wants_fit()) {
-    fit_identify(*run, std::move(result));  // delivers when the candidates are verified
+    json fit_request;
+    {
+      std::lock_guard lock(mutex_);
+      fit_request = pending_fit_;
+    }
+    // Delivers when the candidates are verified.
+    identify_->excitation_played(*run, std::move(result), fit_request);
     return;
   }
   deliver_result(std::move(result.report));

@@ -1,18 +1,19 @@
 // The stage's frequency responses and the feedback designed on them: frf's run and result,
-// identify's measurement once its model is chosen, tune, and the feedback status states
-// (Bench members; the supervisor thread finalises the runs).
+// tune, and the feedback status states (Bench members; the supervisor thread finalises the
+// runs). identify's own measurement is the identify coordinator's (identify_verification.cpp).
 #include <spdlog/spdlog.h>
 
 #include <mutex>
 
+#include "hystbench/common/command_error.hpp"
 #include "hystbench/common/model_file_io.hpp"
+#include "hystbench/daemon/service/bench.hpp"
 #include "runs/details/feedback_design.hpp"
 #include "runs/details/request_params.hpp"
 #include "runs/details/response_program.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/run_result.hpp"
 #include "runs/details/stage_runs.hpp"
-#include "service/details/identify_session.hpp"
 #include "service/details/model_store.hpp"
 #include "service/details/run_supervisor.hpp"
 
@@ -112,63 +113,6 @@ json Bench::tune(const details::RequestParams& request) {
   last_feedback_ = plan.summary;
   last_feedback_["compensator"] = name;
   return out;
-}
-
-bool Bench::measure_stage_responses() {
-  IdentifySession& s = *session_;
-  std::unique_ptr<RunProgram> p;
-  sim::FrequencyResponseExcitationOptions o;
-  {
-    std::lock_guard lock(mutex_);
-    const details::RunContext ctx = run_context();
-    o = details::response_options(ctx);
-    try {
-      details::BuiltRun run = details::make_response_program(o, ctx);
-      p = std::move(run.program);
-      p->run_id = s.result["run_id"].get<std::string>() + "-frf";
-      open_log(*p, run.header);
-    } catch (const std::exception& e) {
-      s.responses_result = {{"error", e.what()}};
-      return false;
-    }
-  }
-  const std::string program_id = p->run_id;
-  std::string why;
-  std::lock_guard lock(mutex_);
-  if (!runs_->submit_segment(std::move(p), "measuring the frequency response", "verification_log",
-                             why)) {
-    s.responses_result = {{"error", why}};
-    return false;
-  }
-  s.program_id = program_id;
-  s.response_options = o;
-  return true;
-}
-
-void Bench::stage_responses_measured(std::unique_ptr<RunProgram> run) {
-  IdentifySession& s = *session_;
-  {
-    std::lock_guard lock(mutex_);
-    runs_->finalizing("designing the feedback");
-  }
-  const sim::FrequencyResponseExcitationOptions o = *s.response_options;
-  s.response_options.reset();
-  const std::string log = run->log ? run->log->path().string() : "";
-  if (run->log) run->log->close();
-  if (run->end == RunEnd::kCompleted) {
-    try {
-      s.responses = details::measure_responses(*run, o);
-      s.responses_result = details::responses_summary(*s.responses, nullptr);
-      s.responses_result["log"] = log;
-    } catch (const std::exception& e) {
-      s.responses_result = {{"error", e.what()}, {"log", log}};
-    }
-  } else {
-    s.interrupted = true;
-    s.responses_result = {{"error", std::string("the run did not complete: ") + run->end_reason},
-                          {"log", log}};
-  }
-  finish_identify();
 }
 
 }  // namespace hystbench::daemon

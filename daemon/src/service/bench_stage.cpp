@@ -13,6 +13,7 @@
 #include "runs/details/stage_runs.hpp"
 #include "service/details/model_folder.hpp"
 #include "service/details/model_store.hpp"
+#include "service/details/run_log.hpp"
 #include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
@@ -280,7 +281,7 @@ bool Bench::measure_axes_responses(const std::string& identify_run_id, std::stri
     turn = run.fit.value("turn_samples", std::size_t{0});
     p = std::move(run.program);
     p->run_id = identify_run_id + "-frf";
-    open_log(*p, run.header);
+    details::open_run_log(*p, run.header, settings_);
   } catch (const std::exception& e) {
     why = e.what();
     return false;

@@ -1,7 +1,7 @@
 // identify's candidates: the identify record brought to the fit rate with the measurement delay
 // chosen in ticks, one fit per family (every family for auto), the neighbours the verification
 // judges (one dead zone fewer, a rate law without its law), and the jobs that verify them
-// (Bench members on the supervisor thread; identify_session.hpp).
+// (the identify coordinator on the supervisor thread; identify_coordinator.hpp).
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -14,6 +14,7 @@
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/runs/identification_fit.hpp"
 #include "runs/details/run_result.hpp"
+#include "service/details/identify_coordinator.hpp"
 #include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
@@ -206,28 +207,7 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
   }
 }
 
-void Bench::fit_identify(const RunProgram& run, details::RunResult result) {
-  json fit_request;
-  {
-    std::lock_guard lock(mutex_);
-    fit_request = pending_fit_;
-  }
-  try {
-    session_ = fit_candidates(run, result, fit_request);
-    continue_identify();
-    // The rest start once the first segment is on the loop (building its drive does not share
-    // the second core with them).
-    if (session_ && session_->step == IdentifyStep::kVerifyingCandidates) {
-      diagnose_candidates_ahead(*session_);
-    }
-    return;
-  } catch (const std::exception& e) {
-    result.report["fit_error"] = e.what();
-  }
-  deliver_result(std::move(result.report));
-}
-
-void Bench::diagnose_candidates_ahead(IdentifySession& s) const {
+void details::IdentifyCoordinator::diagnose_candidates_ahead(IdentifySession& s) const {
   if (!s.extend) return;
   // Every candidate may become the base: diagnosed in the order the choice prefers them until
   // the verification has chosen.
@@ -242,9 +222,8 @@ void Bench::diagnose_candidates_ahead(IdentifySession& s) const {
   }
 }
 
-std::unique_ptr<Bench::IdentifySession> Bench::fit_candidates(const RunProgram& run,
-                                                              const details::RunResult& result,
-                                                              const json& fit_request) {
+std::unique_ptr<IdentifySession> details::IdentifyCoordinator::fit_candidates(
+    const RunProgram& run, const details::RunResult& result, const json& fit_request) {
   // Block-average down to the fit rate: the hysteresis is rate independent and the fit's
   // cost grows with the sample count. The input delay is chosen in ticks before averaging.
   const std::size_t block = std::max<std::size_t>(

@@ -1,7 +1,7 @@
 // identify's choice and report: the verified candidate that tracks best, a rate law against its
 // rate-free self, the extension against the model it extends; then the chosen model saved and
-// adopted, and identify's result with every candidate's figures (Bench members on the
-// supervisor thread; identify_session.hpp).
+// adopted, and identify's result with every candidate's figures (the identify coordinator
+// on the supervisor thread; identify_coordinator.hpp).
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +13,7 @@
 #include "hystbench/common/model_file_io.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
+#include "service/details/identify_coordinator.hpp"
 #include "service/details/identify_session.hpp"
 #include "service/details/model_store.hpp"
 
@@ -247,7 +248,7 @@ std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
   return first.value_or(0);
 }
 
-void Bench::finish_identify() {
+void details::IdentifyCoordinator::finish() {
   settle_delay_trim();  // a trial cut short is no candidate
   std::unique_ptr<IdentifySession> session = std::move(session_);
   IdentifySession& s = *session;
@@ -307,16 +308,14 @@ void Bench::finish_identify() {
     if (s.candidates.size() > 1) result["candidates"] = candidates;
     if (!s.responses_result.is_null()) result["frequency_response"] = s.responses_result;
     std::lock_guard lock(mutex_);
-    if (s.responses) models_->set_measured_responses(*s.responses);
-    models_->adopt(std::move(file), path);
     // The loop a track through the new model's inverse gets, designed now (a track reuses it).
     json why;
-    result["feedback"] = feedback_now(hc::CompensatorKind::kInversePid, &why);
+    result["feedback"] = hooks_.adopt(std::move(file), path, s.responses, &why);
     if (result["feedback"].is_null()) result["feedback_error"] = why;
   } catch (const std::exception& e) {
     result["fit_error"] = e.what();
   }
-  deliver_result(std::move(result));
+  hooks_.deliver(std::move(result));
 }
 
 }  // namespace hystbench::daemon

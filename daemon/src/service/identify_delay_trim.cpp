@@ -4,12 +4,13 @@
 // fast sine measures its output's lag behind the reference (its fundamental's phase error, to a
 // fraction of a sample); the model with that lag added to its delay and the model as timed play
 // the same sine, and the extension takes the trimmed delay when it tracks the sine better. The
-// middle sine then plays the model kept (Bench members on the supervisor thread;
-// identify_session.hpp).
+// middle sine then plays the model kept (the identify coordinator on the supervisor thread;
+// identify_coordinator.hpp).
 #include <cmath>
 #include <string>
 
 #include "hystbench/compensation/number_text.hpp"
+#include "service/details/identify_coordinator.hpp"
 #include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
@@ -29,7 +30,7 @@ constexpr double kTrimGain = 0.97;
 
 }  // namespace
 
-void Bench::queue_delay_trim() {
+void details::IdentifyCoordinator::queue_delay_trim() {
   IdentifySession& s = *session_;
   if (!s.extended || !s.trim_delay || s.trim_tried || s.interrupted) return;
   const IdentifyCandidate& ext = s.candidates[*s.extended];
@@ -65,7 +66,7 @@ void Bench::queue_delay_trim() {
   s.extension["delay_trim"] = std::move(trim);
 }
 
-void Bench::settle_delay_trim() {
+void details::IdentifyCoordinator::settle_delay_trim() {
   if (!session_ || !session_->trim) return;
   IdentifySession& s = *session_;
   IdentifyCandidate& trimmed = s.candidates[*s.trim];

@@ -1,6 +1,6 @@
 // identify's extension: the record diagnosed with the best verified candidate, and what the
 // diagnosis finds it misses added to that model as one more candidate, with the sines that judge
-// it (Bench members on the supervisor thread; identify_session.hpp).
+// it (the identify coordinator on the supervisor thread; identify_coordinator.hpp).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,6 +13,7 @@
 #include "hystbench/compensation/diagnosis.hpp"
 #include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/preisach_model.hpp"
+#include "service/details/identify_coordinator.hpp"
 #include "service/details/identify_session.hpp"
 #include "service/details/run_supervisor.hpp"
 
@@ -215,7 +216,7 @@ details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandi
   };
 }
 
-bool Bench::play_while_diagnosing() {
+bool details::IdentifyCoordinator::play_while_diagnosing() {
   IdentifySession& s = *session_;
   if (!s.ahead) return false;
   const std::size_t base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
@@ -234,14 +235,14 @@ bool Bench::play_while_diagnosing() {
   return false;
 }
 
-bool Bench::extend_identified_model() {
+bool details::IdentifyCoordinator::extend_identified_model() {
   IdentifySession& s = *session_;
   s.step = IdentifyStep::kExtending;
   s.base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
   const IdentifyCandidate& base = s.candidates[s.base];
   {
     std::lock_guard lock(mutex_);
-    runs_->set_stage("diagnosing the record with " + base.label);
+    runs_.set_stage("diagnosing the record with " + base.label);
   }
   const auto seconds = [started = std::chrono::steady_clock::now()] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();

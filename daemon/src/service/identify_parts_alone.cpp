@@ -7,11 +7,12 @@
 // mode fitted off the stage's that loses on the fast one. So the base with only the fast parts
 // (the extension's mode and delay, timed on the steps, trimmed on the sine), or the extension
 // without them (the base's mode and delay), plays the same three references, and is adopted
-// where the whole extension is not and it tracks better in its band (finish_identify). Bench
-// members on the supervisor thread (identify_session.hpp).
+// where the whole extension is not and it tracks better in its band (finish()). The identify
+// coordinator on the supervisor thread (identify_coordinator.hpp).
 #include <algorithm>
 #include <string>
 
+#include "service/details/identify_coordinator.hpp"
 #include "service/details/identify_session.hpp"
 
 namespace hystbench::daemon {
@@ -118,7 +119,8 @@ std::optional<IdentifyCandidate> fast_parts_instead(const IdentifyCandidate& bas
   return fast;
 }
 
-void Bench::settle_parts_alone(IdentifySession& s, std::size_t& chosen, bool& extended) {
+void details::IdentifyCoordinator::settle_parts_alone(IdentifySession& s, std::size_t& chosen,
+                                                      bool& extended) {
   std::optional<PartsBand> alone = s.extension_band;
   if (alone) {
     // The extension held one band alone (the whole failed its check): that band was judged.
@@ -142,7 +144,7 @@ void Bench::settle_parts_alone(IdentifySession& s, std::size_t& chosen, bool& ex
   mark_adopted_parts(s.extension, extended, alone);
 }
 
-void Bench::queue_parts_alone() {
+void details::IdentifyCoordinator::queue_parts_alone() {
   if (!session_) return;
   IdentifySession& s = *session_;
   if (!s.extended || s.extension_band || s.parts_alone_tried || s.trim || s.interrupted ||

@@ -2,11 +2,13 @@
 // identify after its excitation: the fitted candidates (one per family; several with
 // `--model auto`), each verified on the loop by a short tracking segment through its inverse;
 // then the record diagnosed with the best one (the candidates' diagnoses run on a worker while
-// the loop verifies them) and its extension verified against it, before the bench adopts one
-// and reports run.finished. Supervisor thread only. In runs/:
-// identify_candidates.cpp (the fits), bench_verification.cpp (the segments on the loop),
-// identify_extension.cpp (the diagnosis and the extended candidate), identify_choice.cpp (the
-// choice, the model file and the result).
+// the loop verifies them) and its extension verified against it, before the coordinator adopts
+// one and reports run.finished. Supervisor thread only. The coordinator
+// (identify_coordinator.hpp) walks the session through its steps, in service/:
+// identify_candidates.cpp (the fits), identify_verification.cpp (the segments on the loop),
+// identify_extension.cpp (the diagnosis and the extended candidate), identify_delay_trim.cpp and
+// identify_parts_alone.cpp (the extension's trials), identify_choice.cpp (the choice, the model
+// file and the result).
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -18,7 +20,7 @@
 
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/stage_responses.hpp"
-#include "hystbench/daemon/service/bench.hpp"
+#include "hystbench/daemon/loop/run_program.hpp"
 #include "hystbench/sim/frequency_response_excitation.hpp"
 #include "runs/details/diagnosis_ahead.hpp"
 
@@ -81,7 +83,7 @@ PartsByBand split_parts(const nlohmann::json& parts);
 enum class PartsBand { kFast, kSlow };
 const char* parts_key(PartsBand band);
 
-/// Whether identify tries one band of the extension's parts alone (Bench::queue_parts_alone()):
+/// Whether identify tries one band of the extension's parts alone (queue_parts_alone()):
 /// the extension holds parts of both bands and does not track better on the bench as a whole;
 /// the fast band where it gained on the fast sine, the slow band where it gained on the middle
 /// sine and lost on the fast one.
@@ -156,7 +158,7 @@ enum class IdentifyStep {
   kMeasuringResponses,  ///< frf's run for the chosen model (last; nothing left after it)
 };
 
-struct Bench::IdentifySession {
+struct IdentifySession {
   IdentifyStep step = IdentifyStep::kVerifyingCandidates;
   nlohmann::json result;  ///< the identify run's result so far (run.finished adds the model)
   std::string log_path;

@@ -47,6 +47,7 @@ class TrackLearning;
 class RunHistory;
 class ModelStore;
 class RunSupervisor;
+class IdentifyCoordinator;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -147,10 +148,6 @@ class Bench {
   nlohmann::json save_stage_models();
   /// A finished frf run: the responses estimated, kept, and its result (supervisor thread).
   void responses_finished(std::unique_ptr<RunProgram> run, details::RunResult result);
-  /// identify's last segment: frf's run, once the model is chosen; false when it did not start.
-  bool measure_stage_responses();
-  /// identify's frf run played: its responses go with the chosen model (supervisor thread).
-  void stage_responses_measured(std::unique_ptr<RunProgram> run);
   /// The feedback a track run with `kind` would get now, for a result or status (null when the
   /// bench cannot design one: `why` says so). Caller holds mutex_.
   nlohmann::json feedback_now(compensation::CompensatorKind kind, nlohmann::json* why);
@@ -202,54 +199,6 @@ class Bench {
   /// Keeps the result as the last one and in the history; the supervisor leaves the bench idle
   /// and emits run.finished.
   void deliver_result(nlohmann::json result);
-  // identify after its excitation (identify_session.hpp: runs/identify_candidates.cpp,
-  // bench_verification.cpp, identify_extension.cpp, identify_choice.cpp).
-  struct IdentifySession;
-  /// Submits the next verification segment; false when none is left or it failed.
-  bool verify_next_candidate();
-  void verification_finished(std::unique_ptr<RunProgram> run);
-  /// The next segment, else the extension (once), else finish_identify().
-  void continue_identify();
-  /// While the best verified candidate's diagnosis still runs (on its own from now on), queues
-  /// one of that candidate's sines an extension of delay or dynamics is judged against, not yet
-  /// played: the wait plays what the extension would play after it. False when it is ready or
-  /// both sines have played.
-  bool play_while_diagnosing();
-  /// Diagnoses the record with the best verified candidate and queues its extension's
-  /// verification; false when nothing is added (the reason in the session's extension).
-  bool extend_identified_model();
-  /// Once the extension's fast sine has played: its model with the delay the sine's output lag
-  /// measures, and the model as timed, queued on that sine ahead of the segments left (nothing
-  /// when the lag is outside the trim's bounds or the sine judges no delay or dynamics).
-  void queue_delay_trim();
-  /// Once both have played: the extension takes the trimmed delay when it tracks that sine
-  /// better; the two trial candidates are dropped either way.
-  void settle_delay_trim();
-  /// Once the extension is verified (its delay trim settled): where it holds slower parts beside
-  /// a mode or a delay and does not track better on the bench, the base with that mode and delay
-  /// alone (it gained on the fast sine), the extension without them (it gained on the middle
-  /// sine), each queued on the triangle and both sines.
-  void queue_parts_alone();
-  /// After the whole extension's verdict (`extended`, `chosen`): a band of its parts alone that
-  /// tracks better is taken (the band the extension held alone where the whole failed its
-  /// check; else the fast band, then the slow one), and every part says whether it was.
-  static void settle_parts_alone(IdentifySession& s, std::size_t& chosen, bool& extended);
-  /// Fits identify's record and verifies the candidates; delivers the result (with fit_error
-  /// when the fit fails).
-  void fit_identify(const RunProgram& run, details::RunResult result);
-  /// The fitted candidates of identify's record, not yet verified. Throws when none fits.
-  std::unique_ptr<IdentifySession> fit_candidates(const RunProgram& run,
-                                                  const details::RunResult& result,
-                                                  const nlohmann::json& fit_request);
-  /// Diagnoses s's candidates ahead on a worker (s.ahead), in the order the choice prefers them:
-  /// started with those there are, or those fitted since queued on it. Nothing where s does not
-  /// extend its model.
-  void diagnose_candidates_ahead(IdentifySession& s) const;
-  /// Adopts the chosen candidate and delivers the identify result.
-  void finish_identify();
-  /// Opens p's log (p.log) with `header`; the header's run and p's result name the loop's clock.
-  /// Throws CommandError log_error.
-  void open_log(RunProgram& p, nlohmann::json header);
   std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
   bool quitting() const noexcept;
@@ -266,6 +215,8 @@ class Bench {
   // The run's phase, its preparation, the active run, events and the supervisor thread
   // (details/run_supervisor.hpp; under mutex_ too).
   std::unique_ptr<details::RunSupervisor> runs_;
+  // identify after its excitation: the fit, the verification, the extension (supervisor thread).
+  std::unique_ptr<details::IdentifyCoordinator> identify_;
   nlohmann::json web_view_;                      // status "http"
   std::unique_ptr<details::ModelStore> models_;  // the active model and responses, the folder
   std::shared_ptr<details::PlanCache> plans_;    // track's last plan (its own lock)
@@ -275,7 +226,6 @@ class Bench {
   nlohmann::json last_feedback_;  // the feedback of the last track, tune or frf (status)
   nlohmann::json last_result_;
   nlohmann::json pending_fit_;                  // identify's fit request (details::BuiltRun::fit)
-  std::unique_ptr<IdentifySession> session_;    // supervisor thread only
   std::unique_ptr<details::StageModel> stage_;  // a stage's model (identify on a stage)
   // A stage's frf under way: each axis's excitation options and the ticks of each turn.
   std::vector<sim::FrequencyResponseExcitationOptions> stage_frf_options_;

@@ -1,7 +1,7 @@
 // identify's verification on the loop: each candidate (and the extension) plays one tracking
 // segment through its inverse, a standard triangle or a sine, one after the other; each
-// segment's errors go to its candidate (Bench members on the supervisor thread;
-// identify_session.hpp).
+// segment's errors go to its candidate (the identify coordinator on the supervisor thread;
+// identify_coordinator.hpp).
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -9,10 +9,14 @@
 #include <span>
 #include <string>
 
+#include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/number_text.hpp"
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "runs/details/response_program.hpp"
+#include "service/details/identify_coordinator.hpp"
 #include "service/details/identify_session.hpp"
+#include "service/details/run_log.hpp"
 #include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon {
@@ -28,7 +32,7 @@ constexpr double kShortPreconditionS = 0.1;
 
 }  // namespace
 
-bool Bench::verify_next_candidate() {
+bool details::IdentifyCoordinator::verify_next_candidate() {
   IdentifySession& s = *session_;
   const auto& lim = settings_.loop.limits;
   while (s.next < s.jobs.size()) {
@@ -50,7 +54,7 @@ bool Bench::verify_next_candidate() {
       spec.feedforward_bandwidth_hz = settings_.feedforward_bandwidth_hz;
       spec.model_exchange_ticks =
           static_cast<std::uint64_t>(std::max(0, s.history.value("exchange_ticks", 0)));
-      p = make_verification_program(c.fit.model, spec, loop_->last_output(), lim, dt_);
+      p = make_verification_program(c.fit.model, spec, loop_.last_output(), lim, dt_);
     } catch (const std::exception& e) {
       slot = {{"end", "not_run"}, {"reason", e.what()}};
       ++s.next;
@@ -73,7 +77,7 @@ bool Bench::verify_next_candidate() {
                    {"driver", settings_.driver_type},
                    {"model", hc::to_json(hc::ModelFile{c.fit.model, json::object()})}};
     try {
-      open_log(*p, header);
+      open_run_log(*p, header, settings_);
     } catch (const common::CommandError& e) {
       slot = {{"end", "not_run"}, {"reason", e.what()}};
       s.interrupted = true;
@@ -82,9 +86,9 @@ bool Bench::verify_next_candidate() {
     const std::string program_id = p->run_id;
     std::string why;
     std::lock_guard lock(mutex_);
-    if (!runs_->submit_segment(std::move(p),
-                               "verify " + c.label + (sine ? " (" + hz + " Hz sine)" : ""),
-                               "verification_log", why)) {
+    if (!runs_.submit_segment(std::move(p),
+                              "verify " + c.label + (sine ? " (" + hz + " Hz sine)" : ""),
+                              "verification_log", why)) {
       slot = {{"end", "not_run"}, {"reason", why}};
       s.interrupted = true;
       return false;
@@ -95,15 +99,11 @@ bool Bench::verify_next_candidate() {
   return false;
 }
 
-void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
+void details::IdentifyCoordinator::verification_finished(std::unique_ptr<RunProgram> run) {
   IdentifySession& s = *session_;
-  if (s.response_options) {
-    stage_responses_measured(std::move(run));
-    return;
-  }
   {
     std::lock_guard lock(mutex_);
-    runs_->finalizing("choosing the model");
+    runs_.finalizing("choosing the model");
   }
   const VerificationJob job = s.jobs[s.next];
   IdentifyCandidate& c = s.candidates[job.candidate];
@@ -128,13 +128,13 @@ void Bench::verification_finished(std::unique_ptr<RunProgram> run) {
   ++s.next;
   s.interrupted = s.interrupted || run->end != RunEnd::kCompleted;
   if (s.interrupted || quitting()) {
-    finish_identify();
+    finish();
   } else {
     continue_identify();
   }
 }
 
-void Bench::continue_identify() {
+void details::IdentifyCoordinator::continue_identify() {
   settle_delay_trim();
   queue_delay_trim();
   queue_parts_alone();
@@ -147,9 +147,66 @@ void Bench::continue_identify() {
   }
   if (go_on && s.step != IdentifyStep::kMeasuringResponses) {
     s.step = IdentifyStep::kMeasuringResponses;
-    if (measure_stage_responses()) return;
+    if (measure_responses()) return;
   }
-  finish_identify();
+  finish();
+}
+
+bool details::IdentifyCoordinator::measure_responses() {
+  IdentifySession& s = *session_;
+  std::unique_ptr<RunProgram> p;
+  sim::FrequencyResponseExcitationOptions o;
+  {
+    std::lock_guard lock(mutex_);
+    const details::RunContext ctx = hooks_.run_context();
+    o = details::response_options(ctx);
+    try {
+      details::BuiltRun run = details::make_response_program(o, ctx);
+      p = std::move(run.program);
+      p->run_id = s.result["run_id"].get<std::string>() + "-frf";
+      open_run_log(*p, run.header, settings_);
+    } catch (const std::exception& e) {
+      s.responses_result = {{"error", e.what()}};
+      return false;
+    }
+  }
+  const std::string program_id = p->run_id;
+  std::string why;
+  std::lock_guard lock(mutex_);
+  if (!runs_.submit_segment(std::move(p), "measuring the frequency response", "verification_log",
+                            why)) {
+    s.responses_result = {{"error", why}};
+    return false;
+  }
+  s.program_id = program_id;
+  s.response_options = o;
+  return true;
+}
+
+void details::IdentifyCoordinator::responses_measured(std::unique_ptr<RunProgram> run) {
+  IdentifySession& s = *session_;
+  {
+    std::lock_guard lock(mutex_);
+    runs_.finalizing("designing the feedback");
+  }
+  const sim::FrequencyResponseExcitationOptions o = *s.response_options;
+  s.response_options.reset();
+  const std::string log = run->log ? run->log->path().string() : "";
+  if (run->log) run->log->close();
+  if (run->end == RunEnd::kCompleted) {
+    try {
+      s.responses = details::measure_responses(*run, o);
+      s.responses_result = details::responses_summary(*s.responses, nullptr);
+      s.responses_result["log"] = log;
+    } catch (const std::exception& e) {
+      s.responses_result = {{"error", e.what()}, {"log", log}};
+    }
+  } else {
+    s.interrupted = true;
+    s.responses_result = {{"error", std::string("the run did not complete: ") + run->end_reason},
+                          {"log", log}};
+  }
+  finish();
 }
 
 }  // namespace hystbench::daemon
