@@ -7,8 +7,9 @@
 # permitted, otherwise the daemon says so and runs degraded).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# Only what the demo runs (the CLI and the daemon, optimised without debug info, in build-demo/):
-# the first output comes minutes sooner on a fresh machine. scripts/build.sh builds everything,
+# Only what the demo runs (the CLI and the daemon, optimised without debug info, nlohmann/json and
+# Eigen precompiled once for every library, in build-demo/): the first output comes minutes sooner
+# on a fresh machine. scripts/build.sh builds everything,
 # with debug info, in build/.
 bash scripts/deps.sh demo >&2
 cmake --preset demo >/dev/null
