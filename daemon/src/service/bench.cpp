@@ -18,6 +18,7 @@
 #include "runs/details/track_program.hpp"
 #include "service/details/command_table.hpp"
 #include "service/details/identify_coordinator.hpp"
+#include "service/details/learning_runs.hpp"
 #include "service/details/model_folder.hpp"
 #include "service/details/model_store.hpp"
 #include "service/details/run_history.hpp"
@@ -91,8 +92,14 @@ Bench::Bench(BenchSettings settings)
     return feedback_now(hc::CompensatorKind::kInversePid, why);
   };
   identify.deliver = [this](json result) { deliver_result(std::move(result)); };
-  identify_ = std::make_unique<details::IdentifyCoordinator>(settings_, *loop_, *runs_, mutex_,
-                                                             std::move(identify));
+  const details::BenchParts parts{settings_, *loop_, *runs_, mutex_};
+  identify_ = std::make_unique<details::IdentifyCoordinator>(parts, std::move(identify));
+  learning_ = std::make_unique<details::LearningRuns>(
+      parts, [this](const std::string& axis) -> std::string {
+        if (!axis.empty()) return stage_ ? details::stage_model_file(stage_->run_id, axis) : "";
+        const std::string path = models_->active_path();
+        return path.empty() ? path : std::filesystem::path(path).filename().string();
+      });
 }
 
 Bench::~Bench() {
@@ -107,7 +114,7 @@ Bench::~Bench() {
 RealtimeReport Bench::start() {
   realtime_ = loop_->start();
   runs_->start({[this](std::unique_ptr<RunProgram> run) { finalize(std::move(run)); },
-                [this] { learn(); },
+                [this] { learning_->poll(); },
                 [this](std::unique_ptr<RunProgram> run, RunEnd end, const std::string& why) {
                   end_unplayed(std::move(run), end, why);
                 }});
@@ -406,8 +413,7 @@ json Bench::start_track(const details::RequestParams& request, std::uint64_t cli
   }
   json reply = launch("track", std::move(run));
   if (upload) uploads_.erase(upload_name, client);  // the run has it now
-  learning_ = std::move(learning);                  // the supervisor takes the lock before it looks
-  learning_run_id_ = learning_ ? reply["run_id"].get<std::string>() : std::string();
+  learning_->started(reply["run_id"].get<std::string>(), std::move(learning));
   return reply;
 }
 
@@ -421,9 +427,9 @@ void Bench::end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std:
   // Its learners go with the program that holds their exchanges.
   if (run->axes() > 1) {
     details::replace_with_stage_result(report, *run, settings_.axes);
-    finish_axes_learning(*run, report);
+    learning_->axes_finished(*run, report);
   } else {
-    finish_learning(*run, report);
+    learning_->finished(*run, report);
   }
   report["reason"] = reason;
   deliver_result(std::move(report));
@@ -441,9 +447,9 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
   details::RunResult result = details::collect_result(*run, loop_->last_output());
   if (run->axes() > 1) {
     details::replace_with_stage_result(result.report, *run, settings_.axes);
-    finish_axes_learning(*run, result.report);
+    learning_->axes_finished(*run, result.report);
   } else {
-    finish_learning(*run, result.report);
+    learning_->finished(*run, result.report);
   }
   if (run->axes() > 1 && result.kind == RunKind::kFrequencyResponse) {
     axes_responses_measured(*run, std::move(result));

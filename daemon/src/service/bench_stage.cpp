@@ -11,6 +11,7 @@
 #include "runs/details/response_program.hpp"
 #include "runs/details/run_result.hpp"
 #include "runs/details/stage_runs.hpp"
+#include "service/details/learning_runs.hpp"
 #include "service/details/model_folder.hpp"
 #include "service/details/model_store.hpp"
 #include "service/details/run_log.hpp"
@@ -159,10 +160,7 @@ json Bench::start_stage_track(const details::RequestParams& request, std::uint64
   std::vector<std::unique_ptr<details::TrackLearning>> others = std::move(run.axis_learning);
   json reply = launch("track", std::move(run));
   for (const std::string& name : track.uploads) uploads_.erase(name, client);
-  // The supervisor takes the lock before it looks.
-  learning_run_id_ = learning ? reply["run_id"].get<std::string>() : std::string();
-  if (learning) axis_learning_ = std::move(others);
-  learning_ = std::move(learning);
+  learning_->started(reply["run_id"].get<std::string>(), std::move(learning), std::move(others));
   return reply;
 }
 
@@ -208,60 +206,6 @@ json Bench::start_stage_frf(const details::RequestParams& request) {
   stage_frf_options_ = std::move(options);
   stage_frf_turn_ = turn;
   return reply;
-}
-
-void Bench::learn_other_axes() {
-  std::vector<details::TrackLearning*> learners;
-  {
-    std::lock_guard lock(mutex_);
-    for (const auto& l : axis_learning_) learners.push_back(l.get());
-  }
-  // Their exchanges live in the program the loop plays, as axis 0's; only this thread polls.
-  for (details::TrackLearning* l : learners) {
-    try {
-      (void)l->poll();
-    } catch (const std::exception& e) {
-      l->fail(e.what());  // the loop must not wait for a drive that will not come
-      spdlog::error("an axis's learning failed: {}", e.what());
-    }
-  }
-}
-
-void Bench::finish_axes_learning(const RunProgram& run, json& report) {
-  std::vector<std::unique_ptr<details::TrackLearning>> learners;
-  std::string model_run;  // the stage identify whose models the run played with
-  {
-    std::lock_guard lock(mutex_);
-    if (!learning_ || run.run_id != learning_run_id_) return;
-    learners.push_back(std::move(learning_));
-    for (auto& l : axis_learning_) learners.push_back(std::move(l));
-    axis_learning_.clear();
-    learning_run_id_.clear();
-    if (stage_) model_run = stage_->run_id;
-  }
-  for (std::size_t a = 0; a < learners.size() && a < settings_.axes.size(); ++a) {
-    details::TrackLearning& l = *learners[a];
-    try {
-      (void)l.poll();  // the last trial, closed as the run ended
-    } catch (const std::exception& e) {
-      l.fail(e.what());
-    }
-    const std::string& name = settings_.axes[a];
-    json& axis = report["axes"][name];
-    json learned = l.result();
-    l.put_last_trial_figures(axis);
-    // Each axis's drive as RUN-AXIS-learned: `track --learned RUN` replays them together.
-    keep_learned_drive(
-        l, run.run_id + "-" + name,
-        model_run.empty() ? std::string() : details::stage_model_file(model_run, name),
-        axis.value("tare_um", 0.0),
-        {{"stage", {{"run_id", run.run_id}, {"axis", name}, {"axes", settings_.axes}}}}, learned);
-    axis["learning"] = std::move(learned);
-  }
-  if (report["axes"].contains(settings_.axes.front()) &&
-      report["axes"][settings_.axes.front()]["learning"].contains("drive")) {
-    report["learned_drive"] = run.run_id;  // the name `track --learned` takes on this stage
-  }
 }
 
 bool Bench::measure_axes_responses(const std::string& identify_run_id, std::string& why) {

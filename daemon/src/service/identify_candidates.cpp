@@ -228,8 +228,8 @@ std::unique_ptr<IdentifySession> details::IdentifyCoordinator::fit_candidates(
   // cost grows with the sample count. The input delay is chosen in ticks before averaging.
   const std::size_t block = std::max<std::size_t>(
       1, static_cast<std::size_t>(
-             std::floor(settings_.loop.rate_hz / settings_.identify.fit_rate_hz)));
-  hc::FitOptions opt = identify_fit_options(fit_request, settings_, block);
+             std::floor(bench_.settings.loop.rate_hz / bench_.settings.identify.fit_rate_hz)));
+  hc::FitOptions opt = identify_fit_options(fit_request, bench_.settings, block);
   opt.progress = [this, run_id = run.run_id](double f, const std::string& what) {
     emit({{"event", "fit.progress"}, {"run_id", run_id}, {"fraction", f}, {"stage", what}});
   };
@@ -290,7 +290,7 @@ std::unique_ptr<IdentifySession> details::IdentifyCoordinator::fit_candidates(
     session->jobs.push_back({i});
   }
   if (session->rate_free) {
-    session->rate_sine_hz = rate_sine_frequency(settings_.loop.rate_hz);
+    session->rate_sine_hz = rate_sine_frequency(bench_.settings.loop.rate_hz);
     session->jobs.push_back({0, session->rate_sine_hz});
     session->jobs.push_back({*session->rate_free, session->rate_sine_hz});
   }

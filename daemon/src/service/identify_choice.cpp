@@ -296,8 +296,8 @@ void details::IdentifyCoordinator::finish() {
     if (s.candidates.size() > 1) file.identification["candidates"] = candidates;
     if (s.rate_free) file.identification["rate_law"] = rate_law;
     file.responses = s.responses;
-    std::filesystem::create_directories(settings_.model_dir);
-    const std::string path = (std::filesystem::path(settings_.model_dir) /
+    std::filesystem::create_directories(bench_.settings.model_dir);
+    const std::string path = (std::filesystem::path(bench_.settings.model_dir) /
                               (result["run_id"].get<std::string>() + ".json"))
                                  .string();
     common::save_model_file(path, file);
@@ -307,7 +307,7 @@ void details::IdentifyCoordinator::finish() {
     result["verification"] = c.verification;
     if (s.candidates.size() > 1) result["candidates"] = candidates;
     if (!s.responses_result.is_null()) result["frequency_response"] = s.responses_result;
-    std::lock_guard lock(mutex_);
+    std::lock_guard lock(bench_.mutex);
     // The loop a track through the new model's inverse gets, designed now (a track reuses it).
     json why;
     result["feedback"] = hooks_.adopt(std::move(file), path, s.responses, &why);

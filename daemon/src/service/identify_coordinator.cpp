@@ -10,14 +10,8 @@
 
 namespace hystbench::daemon::details {
 
-IdentifyCoordinator::IdentifyCoordinator(const BenchSettings& settings, BenchLoop& loop,
-                                         RunSupervisor& runs, std::mutex& mutex, Hooks hooks)
-    : settings_(settings),
-      dt_(1.0 / settings.loop.rate_hz),
-      loop_(loop),
-      runs_(runs),
-      mutex_(mutex),
-      hooks_(std::move(hooks)) {}
+IdentifyCoordinator::IdentifyCoordinator(BenchParts bench, Hooks hooks)
+    : bench_(bench), dt_(bench.dt()), hooks_(std::move(hooks)) {}
 
 IdentifyCoordinator::~IdentifyCoordinator() = default;
 
@@ -50,8 +44,8 @@ void IdentifyCoordinator::segment_played(std::unique_ptr<RunProgram> run) {
   }
 }
 
-void IdentifyCoordinator::emit(const nlohmann::json& event) const { runs_.emit(event); }
+void IdentifyCoordinator::emit(const nlohmann::json& event) const { bench_.runs.emit(event); }
 
-bool IdentifyCoordinator::quitting() const noexcept { return runs_.quitting(); }
+bool IdentifyCoordinator::quitting() const noexcept { return bench_.runs.quitting(); }
 
 }  // namespace hystbench::daemon::details

@@ -225,7 +225,7 @@ bool details::IdentifyCoordinator::play_while_diagnosing() {
   // and playing them first in every run keeps the bench's history before the extension's own
   // segments the same however long the diagnosis takes (on the simulated clock, the outcome of a
   // run would otherwise depend on the machine's load).
-  const double fast = delay_sine_frequency(settings_.loop.rate_hz);
+  const double fast = delay_sine_frequency(bench_.settings.loop.rate_hz);
   for (const double hz : {fast, fast / kMidFraction}) {
     if (s.candidates[base].sines.contains(hz)) continue;
     s.jobs.push_back({base, hz});
@@ -241,8 +241,8 @@ bool details::IdentifyCoordinator::extend_identified_model() {
   s.base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
   const IdentifyCandidate& base = s.candidates[s.base];
   {
-    std::lock_guard lock(mutex_);
-    runs_.set_stage("diagnosing the record with " + base.label);
+    std::lock_guard lock(bench_.mutex);
+    bench_.runs.set_stage("diagnosing the record with " + base.label);
   }
   const auto seconds = [started = std::chrono::steady_clock::now()] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
@@ -280,7 +280,7 @@ bool details::IdentifyCoordinator::extend_identified_model() {
     s.extension["from"] = extension_origin(draft->named);
     const json timing = common::time_on_steps(draft->model, s.u, s.y, dt_, exchange_s);
     if (!timing.is_null()) s.extension["timing"] = timing;
-    const ScoredRecord record{t, s.u, s.y, settings_.identify.heldout_fraction, s.unscored};
+    const ScoredRecord record{t, s.u, s.y, bench_.settings.identify.heldout_fraction, s.unscored};
     IdentifyCandidate ext =
         extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
     if (!passes_check(ext.fit.model, dt_, s.extension)) {
@@ -302,7 +302,7 @@ bool details::IdentifyCoordinator::extend_identified_model() {
     s.candidates.push_back(std::move(ext));
     s.extended = s.candidates.size() - 1;
     s.fast_hz = fast_frequency(s.extension_band ? bands.fast : draft->parts,
-                               s.candidates.back().fit.model, settings_.loop.rate_hz);
+                               s.candidates.back().fit.model, bench_.settings.loop.rate_hz);
     s.trim_delay = s.fast_hz > 0.0 && !bands.fast.empty();
     if (s.fast_hz > 0.0) s.mid_hz = s.fast_hz / kMidFraction;
     queue_extension_verification(s.jobs, s.candidates, s.base, *s.extended, s.fast_hz, s.mid_hz);

@@ -34,7 +34,7 @@ constexpr double kShortPreconditionS = 0.1;
 
 bool details::IdentifyCoordinator::verify_next_candidate() {
   IdentifySession& s = *session_;
-  const auto& lim = settings_.loop.limits;
+  const auto& lim = bench_.settings.loop.limits;
   while (s.next < s.jobs.size()) {
     const VerificationJob job = s.jobs[s.next];
     IdentifyCandidate& c = s.candidates[job.candidate];
@@ -49,12 +49,12 @@ bool details::IdentifyCoordinator::verify_next_candidate() {
     }
     try {
       spec.precondition_s = job.short_precondition
-                                ? std::min(settings_.precondition_s, kShortPreconditionS)
-                                : settings_.precondition_s;
-      spec.feedforward_bandwidth_hz = settings_.feedforward_bandwidth_hz;
+                                ? std::min(bench_.settings.precondition_s, kShortPreconditionS)
+                                : bench_.settings.precondition_s;
+      spec.feedforward_bandwidth_hz = bench_.settings.feedforward_bandwidth_hz;
       spec.model_exchange_ticks =
           static_cast<std::uint64_t>(std::max(0, s.history.value("exchange_ticks", 0)));
-      p = make_verification_program(c.fit.model, spec, loop_.last_output(), lim, dt_);
+      p = make_verification_program(c.fit.model, spec, bench_.loop.last_output(), lim, dt_);
     } catch (const std::exception& e) {
       slot = {{"end", "not_run"}, {"reason", e.what()}};
       ++s.next;
@@ -73,11 +73,11 @@ bool details::IdentifyCoordinator::verify_next_candidate() {
                      {"compensator", "inverse"},
                      {"precondition_samples", p->excitation.size()},
                      {"metrics_from", p->metrics_from},
-                     {"rate_hz", settings_.loop.rate_hz}}},
-                   {"driver", settings_.driver_type},
+                     {"rate_hz", bench_.settings.loop.rate_hz}}},
+                   {"driver", bench_.settings.driver_type},
                    {"model", hc::to_json(hc::ModelFile{c.fit.model, json::object()})}};
     try {
-      open_run_log(*p, header, settings_);
+      open_run_log(*p, header, bench_.settings);
     } catch (const common::CommandError& e) {
       slot = {{"end", "not_run"}, {"reason", e.what()}};
       s.interrupted = true;
@@ -85,10 +85,10 @@ bool details::IdentifyCoordinator::verify_next_candidate() {
     }
     const std::string program_id = p->run_id;
     std::string why;
-    std::lock_guard lock(mutex_);
-    if (!runs_.submit_segment(std::move(p),
-                              "verify " + c.label + (sine ? " (" + hz + " Hz sine)" : ""),
-                              "verification_log", why)) {
+    std::lock_guard lock(bench_.mutex);
+    if (!bench_.runs.submit_segment(std::move(p),
+                                    "verify " + c.label + (sine ? " (" + hz + " Hz sine)" : ""),
+                                    "verification_log", why)) {
       slot = {{"end", "not_run"}, {"reason", why}};
       s.interrupted = true;
       return false;
@@ -102,8 +102,8 @@ bool details::IdentifyCoordinator::verify_next_candidate() {
 void details::IdentifyCoordinator::verification_finished(std::unique_ptr<RunProgram> run) {
   IdentifySession& s = *session_;
   {
-    std::lock_guard lock(mutex_);
-    runs_.finalizing("choosing the model");
+    std::lock_guard lock(bench_.mutex);
+    bench_.runs.finalizing("choosing the model");
   }
   const VerificationJob job = s.jobs[s.next];
   IdentifyCandidate& c = s.candidates[job.candidate];
@@ -157,14 +157,14 @@ bool details::IdentifyCoordinator::measure_responses() {
   std::unique_ptr<RunProgram> p;
   sim::FrequencyResponseExcitationOptions o;
   {
-    std::lock_guard lock(mutex_);
+    std::lock_guard lock(bench_.mutex);
     const details::RunContext ctx = hooks_.run_context();
     o = details::response_options(ctx);
     try {
       details::BuiltRun run = details::make_response_program(o, ctx);
       p = std::move(run.program);
       p->run_id = s.result["run_id"].get<std::string>() + "-frf";
-      open_run_log(*p, run.header, settings_);
+      open_run_log(*p, run.header, bench_.settings);
     } catch (const std::exception& e) {
       s.responses_result = {{"error", e.what()}};
       return false;
@@ -172,9 +172,9 @@ bool details::IdentifyCoordinator::measure_responses() {
   }
   const std::string program_id = p->run_id;
   std::string why;
-  std::lock_guard lock(mutex_);
-  if (!runs_.submit_segment(std::move(p), "measuring the frequency response", "verification_log",
-                            why)) {
+  std::lock_guard lock(bench_.mutex);
+  if (!bench_.runs.submit_segment(std::move(p), "measuring the frequency response",
+                                  "verification_log", why)) {
     s.responses_result = {{"error", why}};
     return false;
   }
@@ -186,8 +186,8 @@ bool details::IdentifyCoordinator::measure_responses() {
 void details::IdentifyCoordinator::responses_measured(std::unique_ptr<RunProgram> run) {
   IdentifySession& s = *session_;
   {
-    std::lock_guard lock(mutex_);
-    runs_.finalizing("designing the feedback");
+    std::lock_guard lock(bench_.mutex);
+    bench_.runs.finalizing("designing the feedback");
   }
   const sim::FrequencyResponseExcitationOptions o = *s.response_options;
   s.response_options.reset();

@@ -48,8 +48,8 @@ struct Harness {
       return json();
     };
     hooks.deliver = [this](json result) { delivered.push_back(std::move(result)); };
-    coordinator = std::make_unique<hd::details::IdentifyCoordinator>(settings, *loop, *runs, mutex,
-                                                                     std::move(hooks));
+    coordinator = std::make_unique<hd::details::IdentifyCoordinator>(
+        hd::details::BenchParts{settings, *loop, *runs, mutex}, std::move(hooks));
   }
 };
 

@@ -8,7 +8,6 @@
 // bench's own (bench_stage.cpp).
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -19,14 +18,13 @@
 #include "hystbench/daemon/loop/bench_loop.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/run_result.hpp"
+#include "service/details/bench_parts.hpp"
 
 namespace hystbench::daemon {
 
 struct IdentifySession;
 
 namespace details {
-
-class RunSupervisor;
 
 class IdentifyCoordinator {
  public:
@@ -46,9 +44,7 @@ class IdentifyCoordinator {
     std::function<void(nlohmann::json)> deliver;
   };
 
-  /// `settings` and the components outlive the coordinator.
-  IdentifyCoordinator(const BenchSettings& settings, BenchLoop& loop, RunSupervisor& runs,
-                      std::mutex& mutex, Hooks hooks);
+  IdentifyCoordinator(BenchParts bench, Hooks hooks);
   ~IdentifyCoordinator();
   IdentifyCoordinator(const IdentifyCoordinator&) = delete;
   IdentifyCoordinator& operator=(const IdentifyCoordinator&) = delete;
@@ -112,11 +108,8 @@ class IdentifyCoordinator {
   void emit(const nlohmann::json& event) const;
   bool quitting() const noexcept;
 
-  const BenchSettings& settings_;
+  BenchParts bench_;
   const double dt_;  // the loop's period [s]
-  BenchLoop& loop_;
-  RunSupervisor& runs_;
-  std::mutex& mutex_;
   Hooks hooks_;
   std::unique_ptr<IdentifySession> session_;  // from excitation_played() to finish()
 };

@@ -43,11 +43,11 @@ struct PlanCache;
 struct FeedbackPlanCache;
 struct StageModel;
 struct IdentifyRequest;
-class TrackLearning;
 class RunHistory;
 class ModelStore;
 class RunSupervisor;
 class IdentifyCoordinator;
+class LearningRuns;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -121,17 +121,10 @@ class Bench {
   /// A stage's identify run played: its fit, the stage model kept and saved, its result
   /// delivered (supervisor thread).
   void stage_identified(const RunProgram& run, details::RunResult result);
-  /// A stage's learning run: the other axes' learners polled (their trials closed, their next
-  /// drives offered), as learn() does axis 0's (supervisor thread).
-  void learn_other_axes();
   /// excite on a stage: drive_uploads names a complete drive upload per axis, each played open
   /// loop from its axis's present output, every axis's record as long as the longest (the
   /// others hold their last drive). Caller holds mutex_, the bench idle.
   nlohmann::json start_stage_excite(const details::RequestParams& request, std::uint64_t client);
-  /// A stage's run ended: for a learning run, each axis's learning and its last trial's
-  /// figures under `axes` (after replace_with_stage_result), and each axis's drive kept as
-  /// RUN-AXIS-learned (`track --learned RUN` replays them all; supervisor thread).
-  void finish_axes_learning(const RunProgram& run, nlohmann::json& report);
   /// Every axis's present output [V].
   std::vector<double> axis_outputs() const;
   /// status' and model.get's word on the stage. Caller holds mutex_.
@@ -177,20 +170,6 @@ class Bench {
   /// Opens the run's log with `header` and hands the run to the loop; throws busy when the loop
   /// does not take it (the log is closed). Caller holds mutex_.
   SubmittedRun submit_run(std::unique_ptr<RunProgram> p, const nlohmann::json& header);
-  /// A learning run: scores the trials the loop closed, offers the next drives, and emits
-  /// run.progress for each trial (supervisor thread).
-  void learn();
-  /// Takes the trials the loop closed, offers the next drive and emits run.progress for each.
-  void announce_trials(details::TrackLearning& learning, const std::string& run_id);
-  /// A learning run's result: `learning` (its trials), the last trial's errors as the run's,
-  /// and the kept drive saved in the model folder (supervisor thread).
-  void finish_learning(const RunProgram& run, nlohmann::json& report);
-  /// Saves `learning`'s kept drive as NAME-learned in the model folder (nothing for a replay),
-  /// `more` added to its metadata; `l` (the learning's result) gets drive and drive_file, or
-  /// drive_file_error (supervisor thread).
-  void keep_learned_drive(const details::TrackLearning& learning, const std::string& name,
-                          const std::string& model_file, double tare_um, const nlohmann::json& more,
-                          nlohmann::json& l) const;
   /// The result of a run that ends before the loop played it (stopped or aborted while it was
   /// prepared, refused by the loop): delivered with 0 samples and `reason`.
   void end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason);
@@ -231,11 +210,8 @@ class Bench {
   std::vector<sim::FrequencyResponseExcitationOptions> stage_frf_options_;
   std::size_t stage_frf_turn_ = 0;
   nlohmann::json stage_identify_report_;  // identify's result while its frf plays
-  // The learner of a learning run (set with it, taken by the supervisor when it ends); on a
-  // stage, axis 0's, and axis_learning_ the others'.
-  std::unique_ptr<details::TrackLearning> learning_;
-  std::vector<std::unique_ptr<details::TrackLearning>> axis_learning_;
-  std::string learning_run_id_;
+  // The learning runs' learners, their trials and kept drives (supervisor thread).
+  std::unique_ptr<details::LearningRuns> learning_;
   std::uint64_t run_counter_ = 0;
   UploadStore uploads_;  // its own lock
   std::uint64_t watchdog_ticks_ = 0;
