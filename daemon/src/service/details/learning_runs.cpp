@@ -13,6 +13,20 @@ namespace hystbench::daemon::details {
 
 using nlohmann::json;
 
+namespace {
+/// The learner's newly scored trials; a learner that throws is failed (the loop must not wait
+/// for a drive that will not come) and logged as `who`'s, and gives none.
+std::vector<TrackLearning::Trial> poll_or_fail(TrackLearning& learning, const std::string& who) {
+  try {
+    return learning.poll();
+  } catch (const std::exception& e) {
+    learning.fail(e.what());
+    spdlog::error("{}: the learning failed: {}", who, e.what());
+    return {};
+  }
+}
+}  // namespace
+
 LearningRuns::LearningRuns(BenchParts bench, ModelFile model_file)
     : bench_(bench), model_file_(std::move(model_file)) {}
 
@@ -39,27 +53,14 @@ void LearningRuns::poll() {
   const RunProgram* active = bench_.loop.active();
   if (active == nullptr || active->run_id != run_id) return;
   announce_trials(*learning, run_id);
-  for (TrackLearning* l : others) {
-    try {
-      (void)l->poll();
-    } catch (const std::exception& e) {
-      l->fail(e.what());  // the loop must not wait for a drive that will not come
-      spdlog::error("an axis's learning failed: {}", e.what());
-    }
-  }
+  for (TrackLearning* l : others) (void)poll_or_fail(*l, "run " + run_id + ", another axis");
 }
 
 void LearningRuns::announce_trials(TrackLearning& learning, const std::string& run_id) {
   // The last trial's number: trial 0, its repeat (trial 1), then the learned ones.
   const std::size_t learned = learning.request().trials;
   const std::size_t asked = learned > 0 ? learned + 1 : 0;
-  std::vector<TrackLearning::Trial> scored;
-  try {
-    scored = learning.poll();
-  } catch (const std::exception& e) {
-    learning.fail(e.what());  // the loop must not wait for a drive that will not come
-    spdlog::error("run {}: the learning failed: {}", run_id, e.what());
-  }
+  const std::vector<TrackLearning::Trial> scored = poll_or_fail(learning, "run " + run_id);
   for (const TrackLearning::Trial& t : scored) {
     const std::string stage = "learning: trial " + std::to_string(t.trial) + " of " +
                               std::to_string(asked) + ", rms " +
@@ -115,12 +116,8 @@ void LearningRuns::axes_finished(const RunProgram& run, json& report) {
   }
   for (std::size_t a = 0; a < learners.size() && a < bench_.settings.axes.size(); ++a) {
     TrackLearning& l = *learners[a];
-    try {
-      (void)l.poll();  // the last trial, closed as the run ended
-    } catch (const std::exception& e) {
-      l.fail(e.what());
-    }
     const std::string& name = bench_.settings.axes[a];
+    (void)poll_or_fail(l, "run " + run.run_id + ", axis " + name);  // the last trial, closed
     json& axis = report["axes"][name];
     json learned = l.result();
     l.put_last_trial_figures(axis);
