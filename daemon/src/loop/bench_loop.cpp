@@ -43,7 +43,9 @@ BenchLoop::BenchLoop(drivers::Driver& driver, const BenchLoopOptions& options)
       period_ns_(static_cast<std::int64_t>(std::llround(1e9 / options.rate_hz))),
       simulated_(options.clock == LoopClock::kSimulated),
       held_gap_ticks_(std::max<std::uint64_t>(
-          1, static_cast<std::uint64_t>(std::llround(options.held_gap_s * options.rate_hz)))) {
+          1, static_cast<std::uint64_t>(std::llround(options.held_gap_s * options.rate_hz)))),
+      idle_grace_ns_(
+          static_cast<std::int64_t>(std::llround(std::max(0.0, options.idle_grace_s) * 1e9))) {
   if (axes_ > 1) {
     axis_faults_.resize(axes_);
     for (std::size_t a = 0; a < axes_; ++a) {
@@ -229,13 +231,17 @@ BenchLoop::SimulatedStep BenchLoop::next_simulated_step() noexcept {
   defer_pending_ = false;
   if (state() == State::kFault) return SimulatedStep::kPaced;
   if (active_ != nullptr) return SimulatedStep::kFree;
-  const bool pending = pending_.load(std::memory_order_acquire) != nullptr;
-  if (!hold_gaps_.load(std::memory_order_acquire)) {
-    return pending ? SimulatedStep::kFree : SimulatedStep::kPaced;
-  }
   if (idle_ticks_ < held_gap_ticks_) {
     defer_pending_ = true;  // the gap first, however early the next run came
     return SimulatedStep::kFree;
+  }
+  const bool pending = pending_.load(std::memory_order_acquire) != nullptr;
+  // The grace: the next request of a script that sends it within this wall time after the gap
+  // meets the plant the gap left, whatever the machine's load.
+  const std::int64_t now = LoopTimer::now_ns();
+  if (grace_end_ns_ < 0) grace_end_ns_ = now + idle_grace_ns_;
+  if (!hold_gaps_.load(std::memory_order_acquire) && now >= grace_end_ns_) {
+    return pending ? SimulatedStep::kFree : SimulatedStep::kPaced;
   }
   if (pending || abort_requested_.load(std::memory_order_acquire) ||
       reset_requested_.load(std::memory_order_acquire)) {
@@ -283,6 +289,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
     if (p != nullptr) {
       active_ = p;
       idle_ticks_ = 0;
+      grace_end_ns_ = -1;
       for (std::size_t a = 0; a < axes_; ++a) {
         stuck_[a].reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
       }

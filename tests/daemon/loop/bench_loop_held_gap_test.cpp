@@ -1,6 +1,7 @@
-// BenchLoop on the simulated clock with its thread running: the gap between two runs of one
-// request is held to a fixed virtual time, so the second run meets the same plant however long
-// the control thread computed in between.
+// BenchLoop on the simulated clock with its thread running: two runs are never closer than the
+// gap, and time stands still after it for the grace, and between the runs of one request until
+// the next run comes: the second run meets the same plant however long the control thread
+// computed in between.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -24,7 +25,7 @@ std::unique_ptr<hystbench::drivers::Driver> loopback(const nlohmann::json& confi
   return driver;
 }
 
-/// The simulated clock at kRate, a gap of 0.2 s (1000 ticks) where held.
+/// The simulated clock at kRate, a gap of 0.2 s (1000 ticks), a grace of 0.25 s.
 hd::BenchLoopOptions simulated_options() {
   hd::BenchLoopOptions o;
   o.rate_hz = kRate;
@@ -32,6 +33,7 @@ hd::BenchLoopOptions simulated_options() {
   o.realtime.fifo = false;
   o.realtime.lock_memory = false;
   o.held_gap_s = 0.2;
+  o.idle_grace_s = 0.25;
   return o;
 }
 
@@ -81,10 +83,29 @@ TEST(BenchLoopHeldGap, TheSecondRunOfARequestMeetsThePlantTheFixedGapLeftWhateve
   const double slow = second_run_sum2(true, std::chrono::milliseconds(400));
   EXPECT_GT(quick, 0.0);
   EXPECT_EQ(quick, slow);
-  // Without the hold the idle is paced on the wall clock: 400 ms of it relaxes the creep by
-  // 2000 ticks more than 5 ms does, and the second run differs.
-  EXPECT_NE(second_run_sum2(false, std::chrono::milliseconds(5)),
-            second_run_sum2(false, std::chrono::milliseconds(400)));
+  // Without the hold, a run sent within the grace meets the same plant; 600 ms is past the
+  // grace, where the idle is paced on the wall clock: about 1700 ticks more relax the creep,
+  // and the second run differs.
+  EXPECT_EQ(second_run_sum2(false, std::chrono::milliseconds(5)), quick);
+  EXPECT_NE(second_run_sum2(false, std::chrono::milliseconds(600)), quick);
+}
+
+TEST(BenchLoopHeldGap, ARunSentAtOnceAfterAnotherWaitsForTheGapWithoutAHold) {
+  auto driver =
+      loopback({{"actuator", hs::to_json(hs::SimulatedActuatorConfig::modified_pi_truth())}});
+  hd::BenchLoop loop(*driver, simulated_options());
+  const std::uint64_t gap = 1000;  // 0.2 s at kRate
+  loop.start();
+  auto second = verification(loop);  // built before: sent as soon as the first is taken
+  const auto first = play(loop, verification(loop));
+  ASSERT_NE(first, nullptr);
+  const auto done = play(loop, std::move(second));
+  ASSERT_NE(done, nullptr);
+  EXPECT_EQ(done->end, hd::RunEnd::kCompleted);
+  // The gap after start, the first run, the gap after it, the second run: at least that many
+  // ticks, where a loop that started each run at once would have ticked a few paced ones.
+  EXPECT_GE(loop.ticks(), 2 * gap + first->done.load() + done->done.load());
+  loop.shutdown();
 }
 
 TEST(BenchLoopHeldGap, TimeStandsStillAfterTheGapAndTheWatchdogStillSeesTheLoopAlive) {
@@ -100,7 +121,7 @@ TEST(BenchLoopHeldGap, TimeStandsStillAfterTheGapAndTheWatchdogStillSeesTheLoopA
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   EXPECT_GT(loop.ticks(), alive);
   EXPECT_EQ(loop.statistics().ticks, ticked);
-  // Released, the idle is paced on the wall clock again.
+  // Released past the grace, the idle is paced on the wall clock again.
   loop.hold_time_between_runs(false);
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
   EXPECT_GT(loop.statistics().ticks, ticked);

@@ -1,7 +1,8 @@
 // The loop on the simulated clock ([loop] clock = "simulated"), in-process on the loopback: a run
 // ticks on virtual time (tick count x period) as fast as it computes, logs every sample on the
 // exact time grid with no drops even through the smallest log ring, says so in its result, log
-// header and status; stop and abort end it mid-run; idle ticks stay paced on the wall clock.
+// header and status; stop and abort end it mid-run; idle time stands still for a grace after
+// the gap, and then idle ticks are paced on the wall clock.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -101,12 +102,18 @@ TEST_F(BenchSimulatedClockTest, StopAndAbortEndARunMidway) {
 
 // Between runs the loop does not run free: the idle plant evolves at a real one's pace and an
 // idle daemon leaves the CPU alone. A loaded machine only lowers the count.
-TEST_F(BenchSimulatedClockTest, IdleTicksStayPacedOnTheWallClock) {
+TEST_F(BenchSimulatedClockTest, IdleTimeStandsStillForTheGraceThenTicksPacedOnTheWallClock) {
   start_simulated();
-  const std::uint64_t before = bench_->loop().ticks();
+  // The gap after start (1 s of virtual time, 10 000 ticks at 10 kHz) ticks at once; then the
+  // plant's time stands still for the grace (2 s of wall time by default).
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const std::uint64_t in_grace = bench_->loop().statistics().ticks;
+  EXPECT_EQ(in_grace, 10000u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(2000));  // past the grace
+  const std::uint64_t before = bench_->loop().statistics().ticks;
   const auto begin = std::chrono::steady_clock::now();
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  const std::uint64_t ticks = bench_->loop().ticks() - before;
+  const std::uint64_t ticks = bench_->loop().statistics().ticks - before;
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
   std::cout << "[ simulated ] idle: " << ticks << " ticks in " << wall_s << " s\n";

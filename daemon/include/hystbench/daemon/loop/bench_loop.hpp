@@ -25,12 +25,16 @@
 // plant that follows a virtual clock (the loopback's simulated actuator): time is the tick count
 // times the period, and a sample's scheduled and wake-up times are both that virtual time, so logs
 // have the same columns and time grid as on the wall clock. During a run the loop ticks without
-// sleeping, each tick as soon as the previous one is computed; while idle (no run, or in kFault)
-// ticks stay paced on the wall clock, so an idle daemon does not burn a core and the idle plant
-// evolves at a real one's pace while the bench fits or plans, except between the runs of one
-// request (hold_time_between_runs): there the idle lasts BenchLoopOptions::held_gap_s of virtual
-// time, ticked without sleeping, and then the plant's time stands still until the next run comes,
-// so a request's history does not follow the machine's load. Wake latency is 0 and there are no
+// sleeping, each tick as soon as the previous one is computed. After a run (and after start) the
+// idle first lasts BenchLoopOptions::held_gap_s of virtual time, ticked without sleeping, and a
+// run that comes sooner waits for the gap's end: two runs are never closer than the gap, however
+// fast the client that sent them. Then the plant's time stands still (no tick) for the grace
+// (BenchLoopOptions::idle_grace_s of wall time), and between the runs of one request
+// (hold_time_between_runs) until the next run comes: a request's later runs, and a script's next
+// request sent within the grace, meet the plant the gap left, whatever the machine's load and
+// however long the bench computes. After the grace the idle is paced on the wall clock (and in
+// kFault), so an idle daemon does not burn a core and the idle plant evolves at a real one's
+// pace. Wake latency is 0 and there are no
 // overruns and no overrun faults (lateness means nothing there); execution time per tick is still
 // measured on CLOCK_MONOTONIC. No SCHED_FIFO (a free-running FIFO thread would starve the rest of
 // the process on its CPU) and no memory lock. A full sample-log ring makes the loop wait for room
@@ -77,9 +81,13 @@ struct BenchLoopOptions {
   /// (LoopTimer::now_ns). Must be real-time safe. Used by step() only: the loop thread's
   /// deadlines and figures stay on CLOCK_MONOTONIC.
   std::int64_t (*clock_ns)() noexcept = nullptr;
-  /// Simulated clock, while hold_time_between_runs(true): the idle between two runs [s] of
-  /// virtual time, > 0 (about what a fit between two of identify's segments takes).
+  /// Simulated clock: the idle after a run [s] of virtual time before the next may start, > 0
+  /// (about what a fit between two of identify's segments takes).
   double held_gap_s = 1.0;
+  /// Simulated clock: after the gap, time stands still for this long [s] of wall time (a
+  /// script's next request comes within it and meets the plant the gap left), and then the
+  /// idle is paced on the wall clock; >= 0.
+  double idle_grace_s = 2.0;
   /// The axes' names, for the fault reasons of a driver of several ("sensor stuck on axis y:
   /// ..."); an axis without one is named by its index. Unused with one axis.
   std::vector<std::string> axis_names;
@@ -113,8 +121,8 @@ class BenchLoop {
   /// is pending, a finished one has not been taken yet, the loop is in kFault, or the run has
   /// more axes than the driver serves.
   std::unique_ptr<RunProgram> submit(std::unique_ptr<RunProgram> program);
-  /// Simulated clock only (ignored on the wall clock and by step()): while on, the idle between
-  /// two runs lasts exactly held_gap_s, and then time stands still (no tick) until a run is
+  /// Simulated clock only (ignored on the wall clock and by step()): while on, the idle after
+  /// the gap (held_gap_s) does not tick, past the grace too: time stands still until a run is
   /// submitted. The bench holds it from a request's start to its result, so the runs of one
   /// request (identify's segments) see the same plant however long it computes between them.
   void hold_time_between_runs(bool on) noexcept { hold_gaps_.store(on, std::memory_order_release); }
@@ -277,6 +285,10 @@ class BenchLoop {
   std::uint64_t idle_ticks_ = 0;
   std::uint64_t held_gap_ticks_ = 1;
   bool defer_pending_ = false;
+  // Simulated clock: the grace after the gap [ns of CLOCK_MONOTONIC], and when this idle's ends
+  // (-1 until its gap is full).
+  std::int64_t idle_grace_ns_ = 0;
+  std::int64_t grace_end_ns_ = -1;
   std::int64_t exec_start_ns_ = 0;  // CLOCK_MONOTONIC (or step()'s clock) when this tick began
 };
 
