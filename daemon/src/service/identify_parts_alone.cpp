@@ -111,11 +111,14 @@ std::optional<IdentifyCandidate> fast_parts_instead(const IdentifyCandidate& bas
   if (parts.fast.empty() || parts.slow.empty()) return std::nullopt;
   IdentifyCandidate fast = with_timing_of(base, ext, dt_s);
   json tried = {{"parts", parts.fast}, {"left_out", parts.slow}};
-  const bool checked = passes_check(fast.fit.model, dt_s, tried);
+  const bool checked = passes_check(fast.fit.model, base.fit.model, dt_s, tried);
   extension[parts_key(PartsBand::kFast)] = std::move(tried);
   if (!checked) return std::nullopt;
   extension["why_fast_parts"] =
-      "the whole extension failed its check; its fast parts alone passed it";
+      "the whole extension failed its check; its fast parts alone passed it" +
+      std::string(extension[parts_key(PartsBand::kFast)]["check"].contains("accepted")
+                      ? " (their inverse misses no more than the base's)"
+                      : "");
   return fast;
 }
 
@@ -167,7 +170,7 @@ void details::IdentifyCoordinator::queue_parts_alone() {
     const std::vector<std::string>& in = fast ? parts.fast : parts.slow;
     const std::vector<std::string>& out = fast ? parts.slow : parts.fast;
     json tried = {{"parts", in}, {"left_out", out}};
-    const bool checked = passes_check(m, dt_, tried);
+    const bool checked = passes_check(m, base.fit.model, dt_, tried);
     s.extension[parts_key(band)] = std::move(tried);
     if (!checked) continue;
     s.candidates.push_back(std::move(alone));

@@ -155,6 +155,40 @@ TEST(PrintRunResult, SaysWhichPartsOfTheExtensionWereAdopted) {
       << text;
 }
 
+// The whole extension failed its check; its mode alone failed it too, by no more than the model
+// it extends (their static part is the same), so it was played: both figures are printed.
+TEST(PrintRunResult, SaysWhenAModeWasPlayedThoughItsCheckFailedAsItsBasesDoes) {
+  const nlohmann::json accepted = {
+      {"passed", false},
+      {"inverse_rms_percent", 25.793},
+      {"base", {{"passed", false}, {"inverse_rms_percent", 25.793}}},
+      {"accepted", "its inverse misses no more than its base's, which identify keeps without it"}};
+  const nlohmann::json extension = {
+      {"parts", {{{"cause", "dynamics"}, {"heldout_gain", 1.39}, {"adopted", true}}}},
+      {"adopted", true},
+      {"why", "its fast parts alone track better on the bench; the whole extension does not"},
+      {"check", {{"passed", false}, {"inverse_rms_percent", 0.743}}},
+      {"fast_parts",
+       {{"parts", {"dynamics"}},
+        {"left_out", {"rate_dependence"}},
+        {"adopted", true},
+        {"why", "they track better on the bench"},
+        {"check", accepted}}}};
+  const nlohmann::json r = {{"run_id", "r3"},
+                            {"kind", "identify"},
+                            {"end", "completed"},
+                            {"model", {{"type", "mpi"}, {"extension", extension}}}};
+  std::ostringstream out;
+  cli::print_run_result(r, out);
+  const std::string text = out.str();
+  EXPECT_NE(text.find("extension fast checked: driven by its inverse it misses a triangle over 90 "
+                      "% of its range by 25.793 % rms, its base by 25.793 %: played, as its "
+                      "inverse misses no more than its base's"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("extension model checked"), std::string::npos) << text;
+}
+
 // tune on a stage: each axis's loop, then the loops together, with the factor they were lowered
 // by where the coupling asked for it.
 TEST(PrintTuneResult, OnAStageGivesEachAxisAndTheLoopsTogether) {

@@ -25,6 +25,16 @@ void print_delay_trim(std::ostream& out, const json& t) {
       << "\n";
 }
 
+// A check that failed and was passed all the same: `who`'s inverse misses no more than its base's.
+void print_accepted_check(std::ostream& out, const json& check, const std::string& who) {
+  if (!check.contains("accepted")) return;
+  out << "  " << who << " checked: driven by its inverse it misses a triangle over 90 % of its "
+      << "range by " << fixed_or_dash(check.value("inverse_rms_percent", json()), 3)
+      << " % rms, its base by "
+      << fixed_or_dash(check.value("base", json::object()).value("inverse_rms_percent", json()), 3)
+      << " %: played, as " << check["accepted"].get<std::string>() << "\n";
+}
+
 // One band of an extension's parts tried alone (model.extension.fast_parts / slow_parts).
 void print_parts_alone(std::ostream& out, const json& f, const std::string& band) {
   const auto names = [](const json& list) {
@@ -48,6 +58,7 @@ void print_parts_alone(std::ostream& out, const json& f, const std::string& band
   }
   out << ": " << (f.value("adopted", false) ? "adopted" : "not adopted") << ", "
       << f.value("why", std::string("not judged: the verification did not complete")) << "\n";
+  print_accepted_check(out, f.value("check", json::object()), "extension " + band);
 }
 
 // identify's extension: each part with its held-out gain, the verified figures, the decision.
@@ -66,6 +77,8 @@ void print_extension(std::ostream& out, const json& e) {
     out << "  extension model checked: driven by its inverse it tracks a triangle over 90 % of its "
            "range at "
         << fixed_or_dash(check.value("inverse_rms_percent", json()), 3) << " % rms\n";
+  } else {
+    print_accepted_check(out, check, "extension model");
   }
   if (e.contains("verified")) {
     const json& v = e["verified"];

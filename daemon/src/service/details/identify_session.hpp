@@ -91,10 +91,12 @@ bool parts_alone_worth_trying(const IdentifyCandidate& base, const IdentifyCandi
                               const PartsByBand& parts, PartsBand band, double fast_hz,
                               double mid_hz);
 
-/// Whether an extended model may be played and written: its check (model_check.hpp) passes.
-/// Writes the check to extension["check"] and, where it fails, extension["adopted"] = false and
-/// ["why"].
-bool passes_check(const compensation::ActuatorModel& model, double dt_s, nlohmann::json& extension);
+/// Whether an extended model may be played and written: its check (model_check.hpp) passes, or
+/// it fails on its inverse by no more (rms and max) than `base`, the model identify keeps without
+/// it, fails its own (check["base"], check["accepted"]). Writes the check to extension["check"]
+/// and, where it fails, extension["adopted"] = false and ["why"].
+bool passes_check(const compensation::ActuatorModel& model, const compensation::ActuatorModel& base,
+                  double dt_s, nlohmann::json& extension);
 
 /// "its dynamics alone, without rate_dependence": one band of an extension's parts.
 std::string parts_alone_text(const PartsByBand& parts, PartsBand band);
@@ -107,8 +109,8 @@ IdentifyCandidate with_timing_of(const IdentifyCandidate& from, const IdentifyCa
 
 /// Where the whole extension `ext` failed its check: `base` with the extension's fast parts
 /// alone, checked (extension["fast_parts"]: parts, left_out, check), with no note of them (the
-/// caller describes the extension); empty where the extension
-/// does not hold parts of both bands, or the fast parts fail the check too.
+/// caller describes the extension); empty where the extension does not hold parts of both bands,
+/// or the fast parts fail the check too (passes_check(): by more than the base fails its own).
 std::optional<IdentifyCandidate> fast_parts_instead(const IdentifyCandidate& base,
                                                     const IdentifyCandidate& ext, double dt_s,
                                                     nlohmann::json& extension);
