@@ -115,6 +115,19 @@ TEST(PrintRunResult, GivesTheModelErrorOnlyWhereAModelPredicted) {
   EXPECT_EQ(axes.str().find("model vs bench"), std::string::npos) << axes.str();
 }
 
+namespace {
+// What `hystbench identify` prints for a completed identify whose model carries `extension`.
+std::string identify_text(const nlohmann::json& extension) {
+  const nlohmann::json r = {{"run_id", "r2"},
+                            {"kind", "identify"},
+                            {"end", "completed"},
+                            {"model", {{"type", "mpi"}, {"extension", extension}}}};
+  std::ostringstream out;
+  cli::print_run_result(r, out);
+  return out.str();
+}
+}  // namespace
+
 // identify's extension adopted in part: its model's check, and its fast parts alone with their
 // verified figures and the decision, one line each.
 TEST(PrintRunResult, SaysWhichPartsOfTheExtensionWereAdopted) {
@@ -134,13 +147,7 @@ TEST(PrintRunResult, SaysWhichPartsOfTheExtensionWereAdopted) {
          {{"triangle_rms_percent", {{"model", 0.165}, {"extended", 0.107}}},
           {"fast_hz", 500.0},
           {"fast_rms_percent", {{"model", 15.78}, {"extended", 0.555}}}}}}}};
-  const nlohmann::json r = {{"run_id", "r2"},
-                            {"kind", "identify"},
-                            {"end", "completed"},
-                            {"model", {{"type", "mpi"}, {"extension", extension}}}};
-  std::ostringstream out;
-  cli::print_run_result(r, out);
-  const std::string text = out.str();
+  const std::string text = identify_text(extension);
   EXPECT_NE(text.find("delay (held-out gain 1.36x) + creep (held-out gain 1.01x): adopted, its "
                       "fast parts alone track better"),
             std::string::npos)
@@ -174,13 +181,7 @@ TEST(PrintRunResult, SaysWhenAModeWasPlayedThoughItsCheckFailedAsItsBasesDoes) {
         {"adopted", true},
         {"why", "they track better on the bench"},
         {"check", accepted}}}};
-  const nlohmann::json r = {{"run_id", "r3"},
-                            {"kind", "identify"},
-                            {"end", "completed"},
-                            {"model", {{"type", "mpi"}, {"extension", extension}}}};
-  std::ostringstream out;
-  cli::print_run_result(r, out);
-  const std::string text = out.str();
+  const std::string text = identify_text(extension);
   EXPECT_NE(text.find("extension fast checked: driven by its inverse it misses a triangle over 90 "
                       "% of its range by 25.793 % rms, its base by 25.793 %: played, as its "
                       "inverse misses no more than its base's"),
