@@ -253,7 +253,9 @@ StreamSeen parse_stream(const std::string& received) {
   for (std::size_t at = received.find("event: scope\ndata: "); at != std::string::npos;
        at = received.find("event: scope\ndata: ", at + 1)) {
     const std::size_t from = at + 19;
-    const json f = json::parse(received.substr(from, received.find('\n', from) - from));
+    const std::size_t end = received.find('\n', from);
+    if (end == std::string::npos) break;  // its data line has not arrived whole yet
+    const json f = json::parse(received.substr(from, end - from));
     seen.ordered = seen.ordered && f["seq"].get<long>() > last_seq;
     last_seq = f["seq"].get<long>() + static_cast<long>(f["y"][0].size()) - 1;
     seen.running = seen.running || f["running"].get<bool>();
@@ -276,12 +278,8 @@ StreamSeen stream_during_a_track(int port, const json& track) {
     c.Get("/api/stream", [&](const char* data, std::size_t n) {
       received.append(data, n);
       if (received.size() >= 400000) return false;
-      std::size_t complete = 0;  // frames whose data line has arrived whole
-      for (std::size_t at = received.find("event: scope\ndata: "); at != std::string::npos;
-           at = received.find("event: scope\ndata: ", at + 1)) {
-        if (received.find('\n', at + 19) != std::string::npos) ++complete;
-      }
-      return complete < 3 || received.find("\"event\":\"run.finished\"") == std::string::npos;
+      const StreamSeen seen = parse_stream(received);
+      return seen.frames < 3 || !seen.finished;
     });
   });
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
