@@ -4,12 +4,34 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "hystbench/compensation/pi_model.hpp"
 
 namespace hc = hystbench::compensation;
 namespace hd = hystbench::compensation::details;
+
+namespace {
+
+// A PI's record over `cycles` rises 0 -> 150 V (401 samples each), each followed by a fall back
+// to 0; the fall of cycle `short_cycle` steps down to `fraction` x 150 V first.
+std::pair<std::vector<double>, std::vector<double>> full_range_cycles(const hc::PiParameters& p,
+                                                                      int cycles, int short_cycle,
+                                                                      double fraction) {
+  std::vector<double> u, y;
+  for (int cycle = 0; cycle < cycles; ++cycle) {
+    for (int k = 0; k <= 400; ++k) u.push_back(150.0 * k / 400.0);
+    for (int k = 400; k >= 0; --k)
+      u.push_back(150.0 * k / 400.0 * (cycle == short_cycle ? fraction : 1.0));
+  }
+  hc::PiModel truth(p);
+  truth.reset(u.front());
+  for (const double v : u) y.push_back(truth.step(v));
+  return {u, y};
+}
+
+}  // namespace
 
 // The search packs thresholds as logarithms of their gaps. A gap it drives towards zero must
 // stay a gap: 26.84 + exp(-60) rounds to 26.84, and equal thresholds throw in PiModel (in a
@@ -32,14 +54,7 @@ TEST(ThresholdRefinement, AGapDrivenToZeroStaysAGap) {
 // against its neighbour (the truth has plays at 0 and 40 V only) comes back strictly ordered,
 // and no worse than it went in.
 TEST(ThresholdRefinement, ASqueezedPlayComesBackOrdered) {
-  hc::PiModel truth(hc::PiParameters{{0.0, 40.0}, {0.3, 0.2}, 1.0});
-  std::vector<double> u, y;
-  for (int cycle = 0; cycle < 3; ++cycle) {
-    for (int k = 0; k <= 400; ++k) u.push_back(150.0 * k / 400.0);
-    for (int k = 400; k >= 0; --k) u.push_back(150.0 * k / 400.0 * (cycle == 1 ? 0.5 : 1.0));
-  }
-  truth.reset(u.front());
-  for (const double v : u) y.push_back(truth.step(v));
+  const auto [u, y] = full_range_cycles(hc::PiParameters{{0.0, 40.0}, {0.3, 0.2}, 1.0}, 3, 1, 0.5);
   hd::ModelStructure s;
   s.kind = hc::ModelKind::kPi;
   s.play_thresholds = {0.0, 20.0, 20.0 + 2e-14, 40.0, 60.0};
@@ -49,4 +64,22 @@ TEST(ThresholdRefinement, ASqueezedPlayComesBackOrdered) {
   ASSERT_EQ(t.size(), s.play_thresholds.size());
   for (std::size_t i = 1; i < t.size(); ++i) EXPECT_GT(t[i], t[i - 1]) << "threshold " << i;
   EXPECT_LE(r.final_rmse, r.initial_rmse);
+}
+
+// A play whose threshold is half the fitted rows' input excursion or more never moves within
+// them: its column is a constant set by where the record began, and its weight, fitted to
+// nothing there, can flatten the model elsewhere. A starting grid that reaches beyond the
+// excursion (the top play at 90 V on a 0-150 V record) comes back with every play moving.
+TEST(ThresholdRefinement, EveryRefinedPlayMovesWithinTheFittedRows) {
+  const auto [u, y] = full_range_cycles(
+      hc::PiParameters{{0.0, 20.0, 40.0, 60.0}, {0.3, 0.1, 0.08, 0.05}, 1.0}, 4, 2, 0.4);
+  hd::ModelStructure s;
+  s.kind = hc::ModelKind::kPi;
+  s.play_thresholds = {0.0, 30.0, 60.0, 90.0};
+  const hd::RefinementRecord rec{u, y, 401, u.size(), 1};  // the first rise left out
+  const hd::RefinementResult r = hd::refine_structure(s, rec, hd::RefinementSettings{});
+  ASSERT_LT(r.final_rmse, r.initial_rmse);  // the search ran and kept its result
+  const std::vector<double>& t = r.structure.play_thresholds;
+  ASSERT_EQ(t.size(), s.play_thresholds.size());
+  EXPECT_LT(2.0 * t.back(), 150.0) << "the top play, at " << t.back() << " V";
 }

@@ -15,10 +15,21 @@ namespace {
 constexpr double kMinMeanGapFraction = 0.1;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// max - min of the fitted rows' input.
+double input_excursion(const RefinementRecord& record) {
+  if (record.end <= record.begin || record.end > record.u.size()) return 0.0;
+  const auto [lo, hi] =
+      std::minmax_element(record.u.begin() + static_cast<std::ptrdiff_t>(record.begin),
+                          record.u.begin() + static_cast<std::ptrdiff_t>(record.end));
+  return *hi - *lo;
+}
+
 // Thresholds <-> log-increments.
 class Packing {
  public:
-  Packing(const ModelStructure& s, const RefinementSettings& settings) : base_(s) {
+  Packing(const ModelStructure& s, const RefinementSettings& settings,
+          const RefinementRecord& record)
+      : base_(s) {
     plays_ = settings.plays && s.plays() >= 2 ? static_cast<Eigen::Index>(s.plays()) - 1 : 0;
     if (settings.dead_zones && s.has_dead_zones()) {
       zero_ = s.zero_index();
@@ -49,6 +60,13 @@ class Packing {
     const auto& r = s.play_thresholds;
     if (r.size() >= 2)
       play_top_ = r.back() + (r.back() - r.front()) / static_cast<double>(r.size() - 1);
+    // And a floor gap below half the fitted part's input excursion: a play moves there on every
+    // pass between the excursion's extremes, whatever its state when the fitted part began. At
+    // half the excursion it never moves within the fitted part, and its weight, fitted to
+    // nothing there, can flatten the model where the first sweep left it (a full-range play
+    // whose -0.36 cancelled the others' slope to 4e-4: the inverse missed its check by 26 %).
+    const double excursion = input_excursion(record);
+    if (excursion > 0.0) play_top_ = std::min(play_top_, 0.5 * excursion - play_gap_);
     const auto& d = s.dead_zone_thresholds;
     if (s.has_dead_zones() && d.size() >= 2) {
       const std::size_t z = s.zero_index(), above = d.size() - 1 - z;
@@ -171,7 +189,7 @@ RefinementResult refine_structure(const ModelStructure& s, const RefinementRecor
   RefinementResult out;
   out.structure = s;
   out.initial_rmse = out.final_rmse = structure_rmse(s, record);
-  const Packing packing(s, settings);
+  const Packing packing(s, settings, record);
   if (packing.size() == 0 || record.end <= record.begin) return out;
 
   Residuals functor(packing, record, &out.evaluations);
