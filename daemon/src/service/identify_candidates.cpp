@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "hystbench/common/fit_families.hpp"
+#include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/runs/identification_fit.hpp"
@@ -86,7 +87,11 @@ std::string model_type_name(const hc::FitResult& f) {
 
 IdentifyCandidate family_candidate(hc::FitResult fit) {
   std::string label = model_type_name(fit);
-  return {std::move(fit), json(), std::move(label), {}};
+  return {std::move(fit), json(), std::move(label), {}, std::nullopt};
+}
+
+hc::ModelCheck check_of(const IdentifyCandidate& c, double dt_s) {
+  return c.check ? *c.check : hc::check_model(c.fit.model, dt_s);
 }
 
 std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t,
@@ -145,7 +150,7 @@ void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     hc::FitResult fit = hc::fit_model(t, u, y, o);
     if (fit.dead_zones != o.dead_zones) return;  // e.g. a fall-back to the classical PI
     const std::string label = model_type_name(fit) + "-" + std::to_string(fit.dead_zones) + "dz";
-    candidates.push_back({std::move(fit), json(), label, {}});
+    candidates.push_back({std::move(fit), json(), label, {}, std::nullopt});
   } catch (const std::exception&) {
     // The chosen order stands alone; its own fit succeeded.
   }
@@ -168,7 +173,7 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
       hc::FitResult fit = hc::fit_model(t, u, y, o);
       if (fit.model.hysteresis().kind() != hc::ModelKind::kPreisach) return;
       fit.notes.push_back("the rate law left out: the plane refitted without it");
-      candidates.push_back({std::move(fit), json(), "preisach-rate-free", {}});
+      candidates.push_back({std::move(fit), json(), "preisach-rate-free", {}, std::nullopt});
     } catch (const std::exception&) {
       // The rate law stands alone; its own fit succeeded.
     }
@@ -201,7 +206,7 @@ void add_rate_free_neighbour(std::vector<IdentifyCandidate>& candidates, std::sp
     model.input_max = fit.model.input_max;
     fit.model = std::move(model);
     fit.notes.push_back("the rate law left out: the modified PI it contains, refitted");
-    candidates.push_back({std::move(fit), json(), "rpi-rate-free", {}});
+    candidates.push_back({std::move(fit), json(), "rpi-rate-free", {}, std::nullopt});
   } catch (const std::exception&) {
     // The rate law stands alone; its own fit succeeded.
   }
@@ -286,7 +291,9 @@ std::unique_ptr<IdentifySession> details::IdentifyCoordinator::fit_candidates(
     session->candidates = fit_identify_candidates(rec.t, rec.u, rec.y, opt);
   }
   for (std::size_t i = 0; i < session->candidates.size(); ++i) {
-    timed(session->candidates[i]);
+    IdentifyCandidate& c = session->candidates[i];
+    timed(c);
+    c.check = hc::check_model(c.fit.model, dt_);
     session->jobs.push_back({i});
   }
   if (session->rate_free) {

@@ -12,6 +12,7 @@
 
 #include "hystbench/common/model_file_io.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
+#include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "service/details/identify_coordinator.hpp"
 #include "service/details/identify_session.hpp"
@@ -46,6 +47,7 @@ json candidate_summary(const IdentifyCandidate& c) {
   json j = {{"type", model_type_name(c.fit)},    {"label", c.label},
             {"operators", c.fit.operators},      {"dead_zones", c.fit.dead_zones},
             {"heldout", to_json(c.fit.heldout)}, {"verification", c.verification}};
+  if (c.check) j["check"] = to_json(*c.check);
   if (!c.sines.empty()) {
     j["sine_verifications"] = json::array();
     for (const auto& [hz, v] : c.sines) j["sine_verifications"].push_back(v);
@@ -231,8 +233,17 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
 // A choice on the noise of one bench run would follow the bench's history, not the models.
 std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
                           const std::vector<std::size_t>& left_out) {
-  const auto skipped = [&left_out](std::size_t i) {
-    return std::find(left_out.begin(), left_out.end(), i) != left_out.end();
+  const auto failed = [&candidates](std::size_t i) {
+    return candidates[i].check && !candidates[i].check->passed;
+  };
+  bool any_passed = false;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const bool out = std::find(left_out.begin(), left_out.end(), i) != left_out.end();
+    any_passed = any_passed || (!out && !failed(i));
+  }
+  const auto skipped = [&left_out, &failed, any_passed](std::size_t i) {
+    return std::find(left_out.begin(), left_out.end(), i) != left_out.end() ||
+           (any_passed && failed(i));
   };
   double lowest = INFINITY;
   std::optional<std::size_t> first;

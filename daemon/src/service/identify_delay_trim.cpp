@@ -53,10 +53,10 @@ void details::IdentifyCoordinator::queue_delay_trim() {
     // The trimmed model, then the timed one again, each after the same short precondition
     // sweep (the daemon's would add a second to each 40 ms segment): the two are judged on the
     // same footing.
-    IdentifyCandidate trimmed{ext.fit, json(), ext.label + "-trimmed", {}};
+    IdentifyCandidate trimmed{ext.fit, json(), ext.label + "-trimmed", {}, ext.check};
     trimmed.fit.model.set_delay((delay + lag) * dt_);
     trimmed.fit.model.configure(dt_);
-    IdentifyCandidate again{ext.fit, json(), ext.label + "-again", {}};
+    IdentifyCandidate again{ext.fit, json(), ext.label + "-again", {}, ext.check};
     s.candidates.push_back(std::move(trimmed));
     s.candidates.push_back(std::move(again));
     s.trim = s.candidates.size() - 2;

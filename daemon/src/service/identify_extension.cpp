@@ -117,7 +117,7 @@ struct ScoredRecord {
 IdentifyCandidate extended_candidate(const IdentifyCandidate& base, hc::ActuatorModel model,
                                      double exchange_s, double dt, const ScoredRecord& record,
                                      json& extension) {
-  IdentifyCandidate ext{base.fit, json(), base.label, {}};
+  IdentifyCandidate ext{base.fit, json(), base.label, {}, std::nullopt};
   model.set_delay(model.delay_s() + exchange_s);
   model.units = base.fit.model.units;
   model.input_min = base.fit.model.input_min;
@@ -187,13 +187,12 @@ void queue_extension_verification(std::vector<VerificationJob>& jobs,
 // A model whose inverse does not exist over its input range is never played nor written, unless
 // it misses no more than its base, which identify keeps without it: refusing it would keep the
 // same fault and lose what it adds.
-bool passes_check(const hc::ActuatorModel& model, const hc::ActuatorModel& base, double dt_s,
+bool passes_check(const hc::ActuatorModel& model, const hc::ModelCheck& own, double dt_s,
                   json& extension) {
   const hc::ModelCheck check = hc::check_model(model, dt_s);
   extension["check"] = to_json(check);
   if (check.passed) return true;
   if (check.part == "inverse") {
-    const hc::ModelCheck own = hc::check_model(base, dt_s);
     if (!own.passed && own.part == "inverse" &&
         check.inverse_rms_percent <= own.inverse_rms_percent &&
         check.inverse_max_percent <= own.inverse_max_percent) {
@@ -297,7 +296,7 @@ bool details::IdentifyCoordinator::extend_identified_model() {
     const ScoredRecord record{t, s.u, s.y, bench_.settings.identify.heldout_fraction, s.unscored};
     IdentifyCandidate ext =
         extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
-    if (!passes_check(ext.fit.model, base.fit.model, dt_, s.extension)) {
+    if (!passes_check(ext.fit.model, check_of(base, dt_), dt_, s.extension)) {
       // A slow part that breaks the inverse (a rate law's weights) need not take a mode or a
       // delay that passes with it: the base with the fast parts alone is the extension then.
       std::optional<IdentifyCandidate> fast = fast_parts_instead(base, ext, dt_, s.extension);

@@ -95,7 +95,8 @@ std::string parts_alone_text(const PartsByBand& parts, PartsBand band) {
 
 IdentifyCandidate with_timing_of(const IdentifyCandidate& from, const IdentifyCandidate& timing,
                                  double dt_s) {
-  IdentifyCandidate alone{from.fit, json(), from.label, {}};
+  // The static part is from's: so is its check.
+  IdentifyCandidate alone{from.fit, json(), from.label, {}, from.check};
   hc::ActuatorModel& m = alone.fit.model;
   m.set_dynamics(timing.fit.model.dynamics());
   m.set_delay(timing.fit.model.delay_s());
@@ -111,7 +112,7 @@ std::optional<IdentifyCandidate> fast_parts_instead(const IdentifyCandidate& bas
   if (parts.fast.empty() || parts.slow.empty()) return std::nullopt;
   IdentifyCandidate fast = with_timing_of(base, ext, dt_s);
   json tried = {{"parts", parts.fast}, {"left_out", parts.slow}};
-  const bool checked = passes_check(fast.fit.model, base.fit.model, dt_s, tried);
+  const bool checked = passes_check(fast.fit.model, check_of(base, dt_s), dt_s, tried);
   extension[parts_key(PartsBand::kFast)] = std::move(tried);
   if (!checked) return std::nullopt;
   extension["why_fast_parts"] =
@@ -170,7 +171,7 @@ void details::IdentifyCoordinator::queue_parts_alone() {
     const std::vector<std::string>& in = fast ? parts.fast : parts.slow;
     const std::vector<std::string>& out = fast ? parts.slow : parts.fast;
     json tried = {{"parts", in}, {"left_out", out}};
-    const bool checked = passes_check(m, base.fit.model, dt_, tried);
+    const bool checked = passes_check(m, check_of(base, dt_), dt_, tried);
     s.extension[parts_key(band)] = std::move(tried);
     if (!checked) continue;
     s.candidates.push_back(std::move(alone));

@@ -1,10 +1,11 @@
-// identify's extension, its check before a model is played or written: a model whose inverse
-// does not reach its own output over its input range is refused, unless it misses by no more
-// than its base, which identify keeps without it (refusing it would keep the same fault and lose
-// what it adds).
+// identify's check before a model is played, kept or written: an extension whose inverse does
+// not reach its own output over its input range is refused, unless it misses by no more than its
+// base, which identify keeps without it (refusing it would keep the same fault and lose what it
+// adds); a candidate that fails it is not kept beside one that passes.
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/model_file.hpp"
@@ -70,7 +71,7 @@ TEST(ExtensionCheck, AModelThatMissesNoMoreThanItsFailingBaseIsPlayed) {
   EXPECT_GT(own.inverse_rms_percent, 5.0);  // far from a usable inverse
 
   json played;
-  EXPECT_TRUE(hd::passes_check(with_mode(base), base, kDt, played));
+  EXPECT_TRUE(hd::passes_check(with_mode(base), own, kDt, played));
   EXPECT_FALSE(played["check"]["passed"].get<bool>()) << played;
   EXPECT_TRUE(played["check"].contains("accepted")) << played;
   EXPECT_DOUBLE_EQ(played["check"]["base"]["inverse_rms_percent"].get<double>(),
@@ -79,9 +80,10 @@ TEST(ExtensionCheck, AModelThatMissesNoMoreThanItsFailingBaseIsPlayed) {
 
   // Beside a base whose inverse reaches its range, the same model is refused, and says why.
   const hc::ActuatorModel sound = fitted_mpi(-0.1);
-  ASSERT_TRUE(hc::check_model(sound, kDt).passed);
+  const hc::ModelCheck sound_check = hc::check_model(sound, kDt);
+  ASSERT_TRUE(sound_check.passed);
   json refused;
-  EXPECT_FALSE(hd::passes_check(with_mode(base), sound, kDt, refused));
+  EXPECT_FALSE(hd::passes_check(with_mode(base), sound_check, kDt, refused));
   EXPECT_FALSE(refused["adopted"].get<bool>());
   EXPECT_EQ(refused["why"].get<std::string>().rfind("its check failed: its inverse", 0), 0u)
       << refused;
@@ -103,4 +105,26 @@ TEST(FastParts, AModeIsNotRefusedForTheStaticInverseItsBaseHasToo) {
   EXPECT_NE(extension["why_fast_parts"].get<std::string>().find("no more than the base's"),
             std::string::npos)
       << extension;
+}
+
+// The base identify keeps is checked as its extensions are: the fitted model above, verified
+// with the lower max error on the bench's triangle (over 80 % of the range, short of its flat
+// top), is not kept beside a candidate whose inverse reaches its whole range; its check is what
+// the candidate's summary reports.
+TEST(CandidateCheck, AFittedModelWhoseInverseFailsItsCheckIsNotKeptBesideOneThatPasses) {
+  std::vector<hd::IdentifyCandidate> c = {candidate(fitted_mpi(-0.1), "mpi"),
+                                          candidate(fitted_mpi(), "mpi-2dz")};
+  c[0].verification = {{"end", "completed"}, {"max_error_percent", 1.78}};
+  c[1].verification = {{"end", "completed"}, {"max_error_percent", 1.72}};
+  EXPECT_EQ(hd::best_verified(c, {}), 1U);  // unchecked, the lower max wins
+  for (hd::IdentifyCandidate& x : c) x.check = hd::check_of(x, kDt);
+  ASSERT_TRUE(c[0].check->passed);
+  ASSERT_FALSE(c[1].check->passed);
+  EXPECT_EQ(hd::best_verified(c, {}), 0U);
+  // With no candidate that passes, the bench's figure decides as before.
+  c[0].check->passed = false;
+  EXPECT_EQ(hd::best_verified(c, {}), 1U);
+  // One that passes but is left out (an extension judged apart) does not count.
+  c[0].check->passed = true;
+  EXPECT_EQ(hd::best_verified(c, {0}), 1U);
 }

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "hystbench/compensation/identification.hpp"
+#include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/stage_responses.hpp"
 #include "hystbench/daemon/loop/run_program.hpp"
 #include "hystbench/sim/frequency_response_excitation.hpp"
@@ -36,7 +37,12 @@ struct IdentifyCandidate {
   /// The same on sines, by frequency [Hz] (none ran: empty): the extension and the model it
   /// extends on the fast sine, a rate law and its rate-free self on the rate sine.
   std::map<double, nlohmann::json> sines;
+  /// Its static part driven by its inverse (model_check.hpp); empty until checked.
+  std::optional<compensation::ModelCheck> check;
 };
+
+/// c.check, or where it is empty the check at the loop's period dt_s.
+compensation::ModelCheck check_of(const IdentifyCandidate& c, double dt_s);
 
 /// The family of a fit's hysteresis model, as model files name it ("mpi", "rpi", ...).
 std::string model_type_name(const compensation::FitResult& fit);
@@ -47,7 +53,9 @@ IdentifyCandidate family_candidate(compensation::FitResult fit);
 /// The candidate that tracks best: the lowest verified max error on the standard triangle,
 /// figures within 3 % of the lowest counting as equal (a margin above the spread of two triangles
 /// on one model, which the bench's history moves) and the first of them taken: candidates come
-/// by held-out error, best first. Candidates in `left_out` are skipped; none verified: the first.
+/// by held-out error, best first. Candidates in `left_out` are skipped, and so is a candidate
+/// whose check failed where another's passed (its inverse does not reach its own output: a model
+/// that fits the record may still be unusable on the bench); none verified: the first.
 std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
                           const std::vector<std::size_t>& left_out);
 
@@ -92,10 +100,10 @@ bool parts_alone_worth_trying(const IdentifyCandidate& base, const IdentifyCandi
                               double mid_hz);
 
 /// Whether an extended model may be played and written: its check (model_check.hpp) passes, or
-/// it fails on its inverse by no more (rms and max) than `base`, the model identify keeps without
-/// it, fails its own (check["base"], check["accepted"]). Writes the check to extension["check"]
-/// and, where it fails, extension["adopted"] = false and ["why"].
-bool passes_check(const compensation::ActuatorModel& model, const compensation::ActuatorModel& base,
+/// it fails on its inverse by no more (rms and max) than the model identify keeps without it
+/// fails its own (`base`: that check; check["base"], check["accepted"]). Writes the check to
+/// extension["check"] and, where it fails, extension["adopted"] = false and ["why"].
+bool passes_check(const compensation::ActuatorModel& model, const compensation::ModelCheck& base,
                   double dt_s, nlohmann::json& extension);
 
 /// "its dynamics alone, without rate_dependence": one band of an extension's parts.
