@@ -442,15 +442,19 @@ for section in "${sections[@]}"; do
     feedback-learning)
       slow=$(slow_bench)
       start_daemon feedback-learning "$slow" $'[actuator.rate_dependence]\nenabled = true'
-      echo "### 1 kHz loop, a 190 Hz mode, rate dependence and creep on: learning with inverse+pid"
+      echo "### 1 kHz loop, a 190 Hz mode, rate dependence and creep on: learning with the default compensator (inverse) and with inverse+pid"
       id=$(hb identify --wait --json || true)
       jq -r "$f3"'"\(.model.type) [\([.model.extension.parts[]?.cause] | join("+"))]: \(.feedback | '"$design"')"' <<<"$id" || true
       echo
-      echo "| f [Hz] | trials (rms %, the first the compensator's) | last rms % | last max % | floor % | why it ended |"
-      echo "| --- | --- | --- | --- | --- | --- |"
-      for f in 20 50; do
-        hb track --reference sine --frequency "$f" --compensator inverse+pid --learn 10 --wait --json |
-          jq -r --arg f "$f" "$f3"'"| \($f) | '"$trials_cells"' | \(.learning.floor.rms_error_percent | f) | \(.learning.why // "-") |"' || true
+      echo "| compensator | f [Hz] | trials (rms %, the first the compensator's) | last rms % | last max % | floor % | why it ended |"
+      echo "| --- | --- | --- | --- | --- | --- | --- |"
+      for c in inverse+pid default; do
+        for f in 20 50; do
+          compensator=()
+          [ "$c" = default ] || compensator=(--compensator "$c")
+          hb track --reference sine --frequency "$f" "${compensator[@]}" --learn 10 --wait --json |
+            jq -r --arg c "$c" --arg f "$f" "$f3"'"| \($c) | \($f) | '"$trials_cells"' | \(.learning.floor.rms_error_percent | f) | \(.learning.why // "-") |"' || true
+        done
       done
       echo
       stop_daemon
