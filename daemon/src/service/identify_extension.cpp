@@ -26,6 +26,10 @@ namespace {
 
 // The middle sine that guards an extension: the fast one's frequency over this.
 constexpr double kMidFraction = 2.5;
+// The steps timed the mode or the delay off what the diagnosis fitted when the delay moved by
+// this many samples or more, or the mode's frequency by this fraction.
+constexpr double kRetimedDelaySamples = 0.25;
+constexpr double kRetimedModeFraction = 0.02;
 
 // The fast sine a delay or dynamics show at [Hz]: a twentieth of the loop rate, the fastest
 // `track` plays.
@@ -102,6 +106,58 @@ json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& adde
                      {"extension", c != nullptr ? c->extension : std::string()}});
   }
   return {{"parts", parts}, {"verdict", d.verdict}};
+}
+
+// Whether the steps timed the mode or the delay off what the diagnosis fitted (timing: the
+// time_on_steps() result).
+bool timed_off(const json& timing) {
+  if (timing.is_null() || !timing.contains("from_record")) return false;
+  const json& fitted = timing["from_record"];
+  const double f = timing.value("natural_frequency_hz", 0.0);
+  const double f0 = fitted.value("natural_frequency_hz", 0.0);
+  return std::abs(timing.value("delay_samples", 0.0) - fitted.value("delay_samples", 0.0)) >=
+             kRetimedDelaySamples ||
+         (f0 > 0.0 && std::abs(f - f0) >= kRetimedModeFraction * f0);
+}
+
+// A mode or a delay fitted off the stage's leaves an error on every move that can hide what lies
+// beyond them (the loop's shape, creep: named on the same record once the mode and the delay are
+// the steps'). Where the steps timed them off and the draft does not swap the operator, the
+// record is diagnosed again with the timed draft as its baseline; the causes it names beyond
+// the draft's parts join them, the draft becomes its extended model, and the diagnosis is
+// returned (else empty). `extension` gets `after_timing` and the new parts.
+std::optional<hc::Diagnosis> diagnose_after_timing(
+    ExtensionDraft& draft, const json& timing, std::span<const double> t, std::span<const double> u,
+    std::span<const double> y, bool swap_operator,
+    const details::DiagnosisAhead::Progress& progress, json& extension) {
+  const auto has = [&draft](const std::string& part) {
+    return std::find(draft.parts.begin(), draft.parts.end(), part) != draft.parts.end();
+  };
+  if (!timed_off(timing)) return std::nullopt;
+  hc::DiagnosisOptions options;
+  options.baseline = draft.model;
+  options.units = {"V", "um"};
+  options.progress = progress;
+  options.swap_operator = swap_operator;
+  hc::Diagnosis d = hc::diagnose(t, u, y, options);
+  std::vector<std::string> added;
+  if (d.cause != hc::Cause::kNone) {
+    for (const std::string& part : d.extended_parts) {
+      if (!has(part)) added.push_back(part);
+    }
+  }
+  extension["after_timing"] = {{"named", added}, {"verdict", d.verdict}};
+  if (added.empty()) return std::nullopt;
+  const json named = extension_json(d, added);
+  for (const json& part : named["parts"]) extension["parts"].push_back(part);
+  // The mode and the delay stay the steps' (the diagnosis may fit its own again beside the rest).
+  hc::ActuatorModel extended = d.extended;
+  extended.set_dynamics(draft.model.dynamics());
+  extended.set_delay(draft.model.delay_s());
+  draft.model = std::move(extended);
+  draft.parts.insert(draft.parts.end(), added.begin(), added.end());
+  draft.named = true;
+  return d;
 }
 
 // identify's record at the loop rate, and how the candidates are scored on it.
@@ -293,6 +349,9 @@ bool details::IdentifyCoordinator::extend_identified_model() {
     s.extension["from"] = extension_origin(draft->named);
     const json timing = common::time_on_steps(draft->model, s.u, s.y, dt_, exchange_s);
     if (!timing.is_null()) s.extension["timing"] = timing;
+    const std::optional<hc::Diagnosis> after =
+        diagnose_after_timing(*draft, timing, t, s.u, s.y, s.swap_operator, progress, s.extension);
+    if (after) s.extension["from"] = extension_origin(true);
     const ScoredRecord record{t, s.u, s.y, bench_.settings.identify.heldout_fraction, s.unscored};
     IdentifyCandidate ext =
         extended_candidate(base, std::move(draft->model), exchange_s, dt_, record, s.extension);
@@ -305,9 +364,10 @@ bool details::IdentifyCoordinator::extend_identified_model() {
       s.extension_band = PartsBand::kFast;
     }
     const PartsByBand bands = split_parts(s.extension["parts"]);
-    std::string added = s.extension_band ? parts_alone_text(bands, PartsBand::kFast) +
-                                               " (the whole extension failed its check)"
-                                         : extension_added(d, draft->named, s.extension["parts"]);
+    std::string added =
+        s.extension_band
+            ? parts_alone_text(bands, PartsBand::kFast) + " (the whole extension failed its check)"
+            : extension_added(after ? *after : d, draft->named, s.extension["parts"]);
     if (!timing.is_null()) added += "; " + common::timing_text(timing);
     ext.fit.notes.push_back("extended by the diagnosis of its record: " + added);
     s.extension["description"] = added;

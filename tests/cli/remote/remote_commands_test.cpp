@@ -190,6 +190,27 @@ TEST(PrintRunResult, SaysWhenAModeWasPlayedThoughItsCheckFailedAsItsBasesDoes) {
   EXPECT_EQ(text.find("extension model checked"), std::string::npos) << text;
 }
 
+// The steps timed the mode and the delay off the diagnosis's: what the record named when diagnosed
+// again on them is said, and so is nothing.
+TEST(PrintRunResult, SaysWhatTheDiagnosisOnTheTimedModeNamed) {
+  nlohmann::json extension = {
+      {"parts",
+       {{{"cause", "dynamics"}, {"heldout_gain", 1.33}, {"adopted", true}},
+        {{"cause", "loop_shape"}, {"heldout_gain", 1.83}, {"adopted", true}}}},
+      {"adopted", true},
+      {"why", "it tracks better on the bench"},
+      {"after_timing", {{"named", {"loop_shape", "creep"}}, {"verdict", "loop_shape: ..."}}}};
+  EXPECT_NE(identify_text(extension).find(
+                "extension diagnosed again on the timed mode and delay: named loop_shape + "
+                "creep\n"),
+            std::string::npos)
+      << identify_text(extension);
+  extension["after_timing"]["named"] = nlohmann::json::array();
+  EXPECT_NE(identify_text(extension).find("on the timed mode and delay: nothing more named"),
+            std::string::npos)
+      << identify_text(extension);
+}
+
 // tune on a stage: each axis's loop, then the loops together, with the factor they were lowered
 // by where the coupling asked for it.
 TEST(PrintTuneResult, OnAStageGivesEachAxisAndTheLoopsTogether) {

@@ -103,6 +103,14 @@ void print_extension(std::ostream& out, const json& e) {
     }
     if (e.contains("delay_trim")) print_delay_trim(out, e["delay_trim"]);
   }
+  if (e.contains("after_timing")) {
+    std::string named;
+    for (const json& cause : e["after_timing"].value("named", json::array())) {
+      named += (named.empty() ? "" : " + ") + cause.get<std::string>();
+    }
+    out << "  extension diagnosed again on the timed mode and delay: "
+        << (named.empty() ? "nothing more named" : "named " + named) << "\n";
+  }
   if (e.contains("fast_parts")) print_parts_alone(out, e["fast_parts"], "fast");
   if (e.contains("slow_parts")) print_parts_alone(out, e["slow_parts"], "slow");
 }
