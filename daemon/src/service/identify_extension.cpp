@@ -122,12 +122,13 @@ bool timed_off(const json& timing) {
 
 // A mode or a delay fitted off the stage's leaves an error on every move that can hide what lies
 // beyond them (the loop's shape, creep: named on the same record once the mode and the delay are
-// the steps'). Where the steps timed them off and the draft does not swap the operator (where it
-// does, the shape was not hidden, and on a 10 kHz record a second diagnosis costs seconds and
-// named nothing more in the variants measured), the record is diagnosed again with the timed
-// draft as its baseline; the causes it names beyond
-// the draft's parts join them, the draft becomes its extended model, and the diagnosis is
-// returned (else empty). `extension` gets `after_timing` and the new parts.
+// the steps'; BenchFeedforwardTest.DiagnosedAgainOnTheTimedModeTheRecordNamesTheShapeAndCreep).
+// Where the steps timed them off and the draft does not swap the operator (where it does, the
+// shape was not hidden, and a second diagnosis of a 10 kHz record costs seconds: the timing
+// section of design/identify.md), the record is diagnosed again with the timed draft as its
+// baseline; the causes it names beyond the draft's parts join them, the draft becomes its
+// extended model, and the diagnosis is returned (else empty). `extension` gets `after_timing`
+// and the new parts.
 std::optional<hc::Diagnosis> diagnose_after_timing(
     ExtensionDraft& draft, const json& timing, std::span<const double> t, std::span<const double> u,
     std::span<const double> y, bool swap_operator,
