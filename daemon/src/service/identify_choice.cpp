@@ -233,18 +233,15 @@ std::vector<std::size_t> left_out_of_choice(const std::vector<IdentifyCandidate>
 // A choice on the noise of one bench run would follow the bench's history, not the models.
 std::size_t best_verified(const std::vector<IdentifyCandidate>& candidates,
                           const std::vector<std::size_t>& left_out) {
+  const auto out = [&left_out](std::size_t i) {
+    return std::find(left_out.begin(), left_out.end(), i) != left_out.end();
+  };
   const auto failed = [&candidates](std::size_t i) {
     return candidates[i].check && !candidates[i].check->passed;
   };
   bool any_passed = false;
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const bool out = std::find(left_out.begin(), left_out.end(), i) != left_out.end();
-    any_passed = any_passed || (!out && !failed(i));
-  }
-  const auto skipped = [&left_out, &failed, any_passed](std::size_t i) {
-    return std::find(left_out.begin(), left_out.end(), i) != left_out.end() ||
-           (any_passed && failed(i));
-  };
+  for (std::size_t i = 0; i < candidates.size(); ++i) any_passed |= !out(i) && !failed(i);
+  const auto skipped = [&](std::size_t i) { return out(i) || (any_passed && failed(i)); };
   double lowest = INFINITY;
   std::optional<std::size_t> first;
   for (std::size_t i = 0; i < candidates.size(); ++i) {

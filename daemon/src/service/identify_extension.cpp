@@ -7,6 +7,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hystbench/common/step_timed_model.hpp"
@@ -108,6 +109,17 @@ json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& adde
   return {{"parts", parts}, {"verdict", d.verdict}};
 }
 
+// How identify diagnoses its record with `baseline`.
+hc::DiagnosisOptions diagnosis_options(hc::ActuatorModel baseline, bool swap_operator,
+                                       const details::DiagnosisAhead::Progress& progress) {
+  hc::DiagnosisOptions options;
+  options.baseline = std::move(baseline);
+  options.units = {"V", "um"};
+  options.progress = progress;
+  options.swap_operator = swap_operator;
+  return options;
+}
+
 // Whether the steps timed the mode or the delay off what the diagnosis fitted (timing: the
 // time_on_steps() result).
 bool timed_off(const json& timing) {
@@ -137,12 +149,7 @@ std::optional<hc::Diagnosis> diagnose_after_timing(
     return std::find(draft.parts.begin(), draft.parts.end(), part) != draft.parts.end();
   };
   if (!timed_off(timing) || has("loop_shape")) return std::nullopt;
-  hc::DiagnosisOptions options;
-  options.baseline = draft.model;
-  options.units = {"V", "um"};
-  options.progress = progress;
-  options.swap_operator = swap_operator;
-  hc::Diagnosis d = hc::diagnose(t, u, y, options);
+  hc::Diagnosis d = hc::diagnose(t, u, y, diagnosis_options(draft.model, swap_operator, progress));
   std::vector<std::string> added;
   if (d.cause != hc::Cause::kNone) {
     for (const std::string& part : d.extended_parts) {
@@ -279,12 +286,8 @@ details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandi
   return [baselines = std::move(baselines), t = record_times(u.size(), dt),
           u = std::vector<double>(u.begin(), u.end()), y = std::vector<double>(y.begin(), y.end()),
           swap_operator](std::size_t candidate, const details::DiagnosisAhead::Progress& progress) {
-    hc::DiagnosisOptions options;
-    options.baseline = baselines.at(candidate);
-    options.units = {"V", "um"};
-    options.progress = progress;
-    options.swap_operator = swap_operator;
-    return hc::diagnose(t, u, y, options);
+    return hc::diagnose(t, u, y,
+                        diagnosis_options(baselines.at(candidate), swap_operator, progress));
   };
 }
 

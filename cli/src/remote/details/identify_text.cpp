@@ -35,13 +35,15 @@ void print_accepted_check(std::ostream& out, const json& check, const std::strin
       << " %: played, as " << check["accepted"].get<std::string>() << "\n";
 }
 
+// "delay + creep": the names of a list of parts.
+std::string names(const json& list) {
+  std::string s;
+  for (const json& n : list) s += (s.empty() ? "" : " + ") + n.get<std::string>();
+  return s;
+}
+
 // One band of an extension's parts tried alone (model.extension.fast_parts / slow_parts).
 void print_parts_alone(std::ostream& out, const json& f, const std::string& band) {
-  const auto names = [](const json& list) {
-    std::string s;
-    for (const json& n : list) s += (s.empty() ? "" : " + ") + n.get<std::string>();
-    return s;
-  };
   out << "  extension " << band << "  " << names(f.value("parts", json::array()))
       << " alone (without " << names(f.value("left_out", json::array())) << ")";
   if (f.contains("verified")) {
@@ -104,10 +106,7 @@ void print_extension(std::ostream& out, const json& e) {
     if (e.contains("delay_trim")) print_delay_trim(out, e["delay_trim"]);
   }
   if (e.contains("after_timing")) {
-    std::string named;
-    for (const json& cause : e["after_timing"].value("named", json::array())) {
-      named += (named.empty() ? "" : " + ") + cause.get<std::string>();
-    }
+    const std::string named = names(e["after_timing"].value("named", json::array()));
     out << "  extension diagnosed again on the timed mode and delay: "
         << (named.empty() ? "nothing more named" : "named " + named) << "\n";
   }
