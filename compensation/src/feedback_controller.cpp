@@ -43,9 +43,12 @@ void FeedbackController::reset() noexcept {
 }
 
 std::complex<double> FeedbackController::response(double f_hz) const noexcept {
-  const std::complex<double> zi = std::polar(1.0, -2.0 * std::numbers::pi * f_hz * dt_);
+  return response_at(std::polar(1.0, -2.0 * std::numbers::pi * f_hz * dt_));
+}
+
+std::complex<double> FeedbackController::response_at(std::complex<double> zi) const noexcept {
   const std::complex<double> boost = (b0_ + b1_ * zi) / (1.0 + a1_ * zi);
-  return boost * pid_.response(f_hz) * shaping_.response(f_hz);
+  return boost * pid_.response_at(zi) * shaping_.response_at(zi);
 }
 
 }  // namespace hystbench::compensation

@@ -11,8 +11,6 @@ namespace hystbench::compensation {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-// Each interval between two lines is cut into this many chords for the winding.
-constexpr int kChords = 8;
 
 double to_db(double x) { return 20.0 * std::log10(x); }
 
@@ -31,15 +29,20 @@ bool meets(const LoopMargins& m, const LoopTargets& t) noexcept {
          m.phase_margin_deg >= t.phase_margin_deg && m.peak_sensitivity_db <= t.peak_sensitivity_db;
 }
 
-std::vector<std::complex<double>> loop_response(const MeasuredResponse& plant,
-                                                const FeedbackController& c, double dt_s) {
+std::vector<std::complex<double>> loop_response(
+    const MeasuredResponse& plant, const FeedbackController& c, double dt_s,
+    std::vector<std::complex<double>>* controller_response) {
   std::vector<std::complex<double>> l(plant.size() + 1);
-  for (std::size_t i = 0; i < plant.size(); ++i) {
-    const double f = plant.frequency_hz[i];
-    l[i] = c.response(f) * std::polar(1.0, -2.0 * kPi * f * dt_s) * plant.response[i];
+  if (controller_response != nullptr) controller_response->resize(l.size());
+  for (std::size_t i = 0; i < l.size(); ++i) {
+    // The loop's one-sample delay is z^-1 itself; at the Nyquist frequency it is -1 exactly.
+    const bool nyquist = i == plant.size();
+    const std::complex<double> zi =
+        nyquist ? -1.0 : std::polar(1.0, -2.0 * kPi * plant.frequency_hz[i] * dt_s);
+    const std::complex<double> ci = c.response_at(zi);
+    if (controller_response != nullptr) (*controller_response)[i] = ci;
+    l[i] = ci * zi * (nyquist ? plant.response.back() : plant.response[i]);
   }
-  const double nyquist = 0.5 / dt_s;
-  l.back() = c.response(nyquist) * -1.0 * plant.response.back();
   return l;
 }
 
@@ -56,11 +59,12 @@ LoopMargins loop_margins(const MeasuredResponse& plant, std::span<const std::com
   LoopMargins m;
   const double half_power = 1.0 / std::sqrt(2.0);
   bool bandwidth_found = false, rejection_found = false, tenfold_found = false;
-  double peak_s = 0.0, t_prev = 0.0, s_prev = 0.0;
+  double peak_s = 0.0, t_prev = 0.0, s_prev = 0.0, m_prev = 0.0;
   for (std::size_t i = 0; i < l.size(); ++i) {
     const double s = 1.0 / std::abs(1.0 + l[i]);
     if (s > peak_s) peak_s = s, m.peak_sensitivity_hz = f[i];
-    const double t = std::abs(l[i]) * s;
+    const double magnitude = std::abs(l[i]);
+    const double t = magnitude * s;
     if (!bandwidth_found && t < half_power) {
       bandwidth_found = true;
       m.bandwidth_hz = i == 0 ? 0.0 : crossing_hz(f[i - 1], t_prev, f[i], t, half_power);
@@ -73,12 +77,13 @@ LoopMargins loop_margins(const MeasuredResponse& plant, std::span<const std::com
       rejection_found = true;
       m.rejection_bandwidth_hz = i == 0 ? 0.0 : crossing_hz(f[i - 1], s_prev, f[i], s, half_power);
     }
+    const double ma = m_prev, mb = std::log(magnitude);
     t_prev = t;
     s_prev = s;
+    m_prev = mb;
     if (i == 0) continue;
     const std::complex<double> a = l[i - 1], b = l[i];
     // |L| crossing 1, in log magnitude.
-    const double ma = std::log(std::abs(a)), mb = std::log(std::abs(b));
     if ((ma >= 0.0) != (mb >= 0.0)) {
       const double w = ma / (ma - mb);
       const double fc = crossing_hz(f[i - 1], ma, f[i], mb, 0.0);
@@ -105,19 +110,14 @@ LoopMargins loop_margins(const MeasuredResponse& plant, std::span<const std::com
   if (!bandwidth_found) m.bandwidth_hz = f.back();  // |T| above -3 dB up to the Nyquist frequency
   if (!rejection_found) m.rejection_bandwidth_hz = f.back();
   if (!tenfold_found) m.tenfold_rejection_hz = f.back();
-  // The winding of 1 + L from the lowest line to the Nyquist frequency, by short chords. An
-  // integral loop starts at -90 degrees (1 + L ~ L ~ ki / (j w) times a positive static gain),
-  // a loop without one at 0.
+  // The winding of 1 + L from the lowest line to the Nyquist frequency along the chords between
+  // lines. A chord not through the origin turns by less than half a turn, the angle from its
+  // start to its end. An integral loop starts at -90 degrees (1 + L ~ L ~ ki / (j w) times a
+  // positive static gain), a loop without one at 0.
   const double start = integrator ? -kPi / 2.0 : 0.0;
   double phase = start + wrap(std::arg(1.0 + l[0]) - start);
-  for (std::size_t i = 1; i < l.size(); ++i) {
-    std::complex<double> prev = 1.0 + l[i - 1];
-    for (int j = 1; j <= kChords; ++j) {
-      const std::complex<double> next = 1.0 + l[i - 1] + (l[i] - l[i - 1]) * (double(j) / kChords);
-      phase += wrap(std::arg(next) - std::arg(prev));
-      prev = next;
-    }
-  }
+  for (std::size_t i = 1; i < l.size(); ++i)
+    phase += std::arg((1.0 + l[i]) * std::conj(1.0 + l[i - 1]));
   // Stable: the phase rises by 90 degrees (integrator) or not at all; each pair of closed-loop
   // poles outside the unit circle takes 180 degrees off.
   const double expected = integrator ? kPi / 2.0 : 0.0;

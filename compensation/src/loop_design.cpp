@@ -95,12 +95,13 @@ std::vector<MeasuredResponse> robust_variants(std::span<const MeasuredResponse> 
 
 // The rms of v over that of white output noise through the loop: v = -C S n, so
 // (v / n)^2 = the mean of |C S|^2 over [0, Nyquist] (|C S| held below the lowest line).
-double drive_noise_gain(const FeedbackController& c, const MeasuredResponse& p,
+// c: C at the lines and the Nyquist frequency, as l.
+double drive_noise_gain(const std::vector<std::complex<double>>& c, const MeasuredResponse& p,
                         const std::vector<std::complex<double>>& l, double dt) {
   std::vector<double> f(p.frequency_hz.begin(), p.frequency_hz.end());
   f.push_back(0.5 / dt);
   std::vector<double> cs2(f.size());
-  for (std::size_t i = 0; i < f.size(); ++i) cs2[i] = std::norm(c.response(f[i]) / (1.0 + l[i]));
+  for (std::size_t i = 0; i < f.size(); ++i) cs2[i] = std::norm(c[i] / (1.0 + l[i]));
   double integral = cs2[0] * f[0];
   for (std::size_t i = 1; i < f.size(); ++i)
     integral += 0.5 * (cs2[i] + cs2[i - 1]) * (f[i] - f[i - 1]);
@@ -122,8 +123,9 @@ class Evaluator {
     e.meets_targets = true;
     e.crossover_hz = e.bandwidth_hz = e.rejection_bandwidth_hz = e.tenfold_rejection_hz =
         std::numeric_limits<double>::infinity();
+    std::vector<std::complex<double>> controller;
     for (const MeasuredResponse& r : responses_) {
-      const std::vector<std::complex<double>> l = loop_response(r, c, o_.dt_s);
+      const std::vector<std::complex<double>> l = loop_response(r, c, o_.dt_s, &controller);
       const LoopMargins m = loop_margins(r, l, integrator, o_.dt_s);
       e.margins.push_back(m);
       e.crossover_hz = std::min(e.crossover_hz, m.crossover_hz);
@@ -131,8 +133,8 @@ class Evaluator {
       e.rejection_bandwidth_hz = std::min(e.rejection_bandwidth_hz, m.rejection_bandwidth_hz);
       e.tenfold_rejection_hz = std::min(e.tenfold_rejection_hz, m.tenfold_rejection_hz);
       e.output_noise_rms = std::max(e.output_noise_rms, r.output_noise_rms);
-      e.drive_noise_rms =
-          std::max(e.drive_noise_rms, drive_noise_gain(c, r, l, o_.dt_s) * r.output_noise_rms);
+      e.drive_noise_rms = std::max(
+          e.drive_noise_rms, drive_noise_gain(controller, r, l, o_.dt_s) * r.output_noise_rms);
       if (!meets(m, o_.targets)) {
         if (e.meets_targets) describe_failure(m, r, e);
         e.meets_targets = false;

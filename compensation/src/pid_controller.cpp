@@ -62,7 +62,10 @@ void PidController::reset(double initial_output) noexcept {
 }
 
 std::complex<double> PidController::response(double f_hz) const noexcept {
-  const std::complex<double> zi = std::polar(1.0, -2.0 * std::numbers::pi * f_hz * dt_);  // 1 / z
+  return response_at(std::polar(1.0, -2.0 * std::numbers::pi * f_hz * dt_));
+}
+
+std::complex<double> PidController::response_at(std::complex<double> zi) const noexcept {
   const std::complex<double> diff = 1.0 - zi;
   // u = kp e + ki dt e / (1 - 1/z) + kd / dt (1 - 1/z) ef, ef = alpha e / (1 - (1 - alpha) / z),
   // then the output low-pass beta / (1 - (1 - beta) / z).

@@ -79,7 +79,10 @@ void ShapingFilter::reset(double x0) noexcept {
 }
 
 std::complex<double> ShapingFilter::response(double f_hz) const noexcept {
-  const std::complex<double> zi = std::polar(1.0, -kTwoPi * f_hz * dt_);  // 1 / z
+  return response_at(std::polar(1.0, -kTwoPi * f_hz * dt_));
+}
+
+std::complex<double> ShapingFilter::response_at(std::complex<double> zi) const noexcept {
   std::complex<double> h = 1.0;
   for (std::size_t i = 0; i < count_; ++i) {
     const Section& s = sections_[i];

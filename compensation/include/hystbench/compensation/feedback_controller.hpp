@@ -43,6 +43,8 @@ class FeedbackController {
   bool saturated() const noexcept { return pid_.saturated(); }
   /// v / e at f_hz, linear (no clamp): boost, PID and shaping, at z = exp(j 2 pi f dt).
   std::complex<double> response(double f_hz) const noexcept;
+  /// The same at z^-1 = z_inverse (|z_inverse| = 1 for a frequency).
+  std::complex<double> response_at(std::complex<double> z_inverse) const noexcept;
   const FeedbackLaw& law() const noexcept { return law_; }
 
  private:

@@ -48,9 +48,11 @@ struct LoopMargins {
 /// Whether m is stable and meets every target.
 bool meets(const LoopMargins& m, const LoopTargets& targets) noexcept;
 
-/// L at each of plant's lines, and at the Nyquist frequency last (the plant held there).
-std::vector<std::complex<double>> loop_response(const MeasuredResponse& plant,
-                                                const FeedbackController& controller, double dt_s);
+/// L at each of plant's lines, and at the Nyquist frequency last (the plant held there). With
+/// `controller_response`, C at the same frequencies goes there too.
+std::vector<std::complex<double>> loop_response(
+    const MeasuredResponse& plant, const FeedbackController& controller, double dt_s,
+    std::vector<std::complex<double>>* controller_response = nullptr);
 
 /// The margins of the loop whose response at plant's lines is loop_response(plant, c, dt);
 /// `integrator`: C has a pole at z = 1 (ki > 0).

@@ -42,6 +42,8 @@ class PidController {
   /// The linear response u_fb / e at f_hz (no clamp, no saturation): its discrete transfer
   /// function at z = exp(j 2 pi f dt).
   std::complex<double> response(double f_hz) const noexcept;
+  /// The same at z^-1 = z_inverse (|z_inverse| = 1 for a frequency).
+  std::complex<double> response_at(std::complex<double> z_inverse) const noexcept;
 
  private:
   PidParameters p_;

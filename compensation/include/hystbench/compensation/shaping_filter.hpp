@@ -46,6 +46,8 @@ class ShapingFilter {
   void reset(double x0 = 0.0) noexcept;
   /// The sections' response at f_hz, their discrete transfer function at z = exp(j 2 pi f dt).
   std::complex<double> response(double f_hz) const noexcept;
+  /// The same at z^-1 = z_inverse (|z_inverse| = 1 for a frequency).
+  std::complex<double> response_at(std::complex<double> z_inverse) const noexcept;
   std::size_t sections() const noexcept { return count_; }
 
  private:
