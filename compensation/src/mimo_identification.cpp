@@ -49,19 +49,32 @@ LagSums lag_sums(const PeriodicSpectra& s, const CrossSpectra& c, const std::vec
                  Eigen::Index n) {
   const auto m = static_cast<Eigen::Index>(s.inputs()), p = static_cast<Eigen::Index>(s.outputs());
   const Eigen::Index lags = 2 * n + 1;  // d = -n .. n at index d + n
-  LagSums t{std::vector<Eigen::MatrixXcd>(lags, Eigen::MatrixXcd::Zero(m, m)),
-            std::vector<Eigen::MatrixXcd>(lags, Eigen::MatrixXcd::Zero(p, m)),
-            std::vector<Eigen::VectorXd>(lags, Eigen::VectorXd::Zero(p)), n};
-  for (std::size_t q = 0; q < c.k.size(); ++q) {
-    const cd z = s.z(c.k[q]);
+  const auto bins = static_cast<Eigen::Index>(c.k.size());
+  // One product for every lag and entry: the weights (lag x bin) times the cross-spectra stacked
+  // one bin a row, uu's entries, then yu's, then yy's.
+  Eigen::MatrixXcd weights(lags, bins);
+  Eigen::MatrixXcd spectra(bins, m * m + p * m + p);
+  for (Eigen::Index q = 0; q < bins; ++q) {
+    const auto qi = static_cast<std::size_t>(q);
+    const cd z = s.z(c.k[qi]);
     cd zd = std::pow(z, -static_cast<double>(n));
     for (Eigen::Index d = 0; d < lags; ++d) {
-      const cd f = w[q] * zd;
-      t.uu[d] += f * c.uu[q];
-      t.yu[d] += f * c.yu[q];
-      t.yy[d] += w[q] * zd.real() * c.yy[q];
+      weights(d, q) = w[qi] * zd;
       zd *= z;
     }
+    spectra.row(q).head(m * m) = c.uu[qi].reshaped().transpose();
+    spectra.row(q).segment(m * m, p * m) = c.yu[qi].reshaped().transpose();
+    spectra.row(q).tail(p) = c.yy[qi].transpose().cast<cd>();
+  }
+  const Eigen::MatrixXcd sums = weights * spectra;
+  LagSums t{std::vector<Eigen::MatrixXcd>(lags), std::vector<Eigen::MatrixXcd>(lags),
+            std::vector<Eigen::VectorXd>(lags), n};
+  for (Eigen::Index d = 0; d < lags; ++d) {
+    const auto di = static_cast<std::size_t>(d);
+    t.uu[di] = sums.row(d).head(m * m).reshaped(m, m);
+    t.yu[di] = sums.row(d).segment(m * m, p * m).reshaped(p, m);
+    // w and yy are real: sum w Re(z^d) yy = Re(sum w z^d yy).
+    t.yy[di] = sums.row(d).tail(p).transpose().real();
   }
   return t;
 }
