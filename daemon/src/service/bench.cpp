@@ -24,6 +24,7 @@
 #include "service/details/run_history.hpp"
 #include "service/details/run_log.hpp"
 #include "service/details/run_supervisor.hpp"
+#include "service/details/stage_coordinator.hpp"
 
 namespace hystbench::daemon {
 
@@ -96,10 +97,20 @@ Bench::Bench(BenchSettings settings)
   identify_ = std::make_unique<details::IdentifyCoordinator>(parts, std::move(identify));
   learning_ = std::make_unique<details::LearningRuns>(
       parts, [this](const std::string& axis) -> std::string {
-        if (!axis.empty()) return stage_ ? details::stage_model_file(stage_->run_id, axis) : "";
+        if (!axis.empty()) return stage_ ? stage_->model_file(axis) : "";
         const std::string path = models_->active_path();
         return path.empty() ? path : std::filesystem::path(path).filename().string();
       });
+  if (is_stage()) {
+    details::StageCoordinator::Hooks stage;
+    stage.run_context = [this] { return run_context(); };
+    stage.launch = [this](const char* kind, details::BuiltRun run) {
+      return launch(kind, std::move(run));
+    };
+    stage.deliver = [this](json result) { deliver_result(std::move(result)); };
+    stage_ = std::make_unique<details::StageCoordinator>(parts, *models_, *learning_, uploads_,
+                                                         std::move(stage));
+  }
 }
 
 Bench::~Bench() {
@@ -201,9 +212,9 @@ json Bench::reset() {
 json Bench::model_get() const {
   std::lock_guard lock(mutex_);
   if (is_stage()) {
-    if (!stage_)
+    if (stage_->model() == nullptr)
       throw common::CommandError("no_model", "no stage model (identify the stage first)");
-    return stage_status();
+    return stage_->status();
   }
   return models_->get();
 }
@@ -229,7 +240,7 @@ json Bench::status() const {
                                  {"position_um", loop_->last_measurement(a)}};
     }
     s["axes"] = axes;
-    s["stage_model"] = stage_ ? stage_status() : json(nullptr);
+    s["stage_model"] = stage_->status();
   }
   s["run"] = runs_->active();
   s["model"] = models_->summary();
@@ -268,9 +279,13 @@ nlohmann::json Bench::load_model(const details::RequestParams& request) {
   if (runs_->phase() != details::RunPhase::kIdle) {
     throw common::CommandError("busy", "a run is active; load the model after it");
   }
-  if (is_stage()) return load_stage_model(request);
+  if (is_stage()) return stage_->load_model(request);
   if (stored) return models_->load_stored(request.string("stored", ""));
   return models_->load_document(request.string("name"), request.params()["model"]);
+}
+
+std::vector<std::string> Bench::active_model_paths() const {
+  return is_stage() ? stage_->model_paths() : std::vector<std::string>{models_->active_path()};
 }
 
 nlohmann::json Bench::list_models() const {
@@ -356,7 +371,7 @@ json Bench::start_identify(const details::RequestParams& request) {
   const details::IdentifyRequest identify = details::parse_identify_request(request, settings_);
   std::lock_guard lock(mutex_);
   require_idle();
-  if (is_stage()) return start_stage_identify(identify);
+  if (is_stage()) return stage_->start_identify(identify);
   details::BuiltRun run = details::make_identify_program(identify, run_context());
   json fit = std::move(run.fit);
   json reply = launch("identify", std::move(run));
@@ -368,7 +383,7 @@ json Bench::start_excite(const details::RequestParams& request, std::uint64_t cl
   std::lock_guard lock(mutex_);
   if (is_stage()) {
     require_idle();
-    return start_stage_excite(request, client);
+    return stage_->start_excite(request, client);
   }
   if (request.has("drive_uploads")) {
     throw common::CommandError("not_on_stage",
@@ -390,7 +405,7 @@ json Bench::start_excite(const details::RequestParams& request, std::uint64_t cl
 json Bench::start_track(const details::RequestParams& request, std::uint64_t client) {
   std::lock_guard lock(mutex_);
   require_idle();
-  if (is_stage()) return start_stage_track(request, client);
+  if (is_stage()) return stage_->start_track(request, client);
   for (const char* key : {"frequencies_hz", "decouple", "decoupling", "reference_uploads"}) {
     if (request.has(key)) {
       throw common::CommandError("not_on_stage", std::string(key) +
@@ -452,7 +467,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
     learning_->finished(*run, result.report);
   }
   if (run->axes() > 1 && result.kind == RunKind::kFrequencyResponse) {
-    axes_responses_measured(*run, std::move(result));
+    stage_->responses_measured(*run, std::move(result));
     return;
   }
   if (result.kind == RunKind::kFrequencyResponse) {
@@ -461,7 +476,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
   }
   if (run->axes() > 1) {
     if (result.wants_fit()) {
-      stage_identified(*run, std::move(result));
+      stage_->identified(*run, std::move(result));
       return;
     }
   } else if (result.wants_fit()) {

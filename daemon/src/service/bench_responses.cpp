@@ -16,6 +16,7 @@
 #include "runs/details/stage_runs.hpp"
 #include "service/details/model_store.hpp"
 #include "service/details/run_supervisor.hpp"
+#include "service/details/stage_coordinator.hpp"
 
 namespace hystbench::daemon {
 
@@ -47,7 +48,7 @@ json Bench::feedback_now(hc::CompensatorKind kind, json* why) {
 json Bench::start_frf(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
   require_idle();
-  if (is_stage()) return start_stage_frf(request);
+  if (is_stage()) return stage_->start_frf(request);
   const details::RunContext ctx = run_context();
   const sim::FrequencyResponseExcitationOptions o = details::response_options(request, ctx);
   json reply = launch("frf", details::make_response_program(o, ctx));
@@ -85,7 +86,7 @@ void Bench::responses_finished(std::unique_ptr<RunProgram> run, details::RunResu
 
 json Bench::tune(const details::RequestParams& request) {
   std::lock_guard lock(mutex_);
-  const bool has_model = is_stage() ? stage_ != nullptr : models_->active() != nullptr;
+  const bool has_model = is_stage() ? stage_->model() != nullptr : models_->active() != nullptr;
   const std::string name = request.string("compensator", has_model ? "inverse+pid" : "pid");
   const auto kind = hc::compensator_kind_from_string(name);
   if (!kind || !hc::uses_feedback(*kind)) {
@@ -102,7 +103,8 @@ json Bench::tune(const details::RequestParams& request) {
   gains.force = true;  // tune states a hand law's margins; it refuses nothing, as it runs nothing
   const details::RunContext ctx = run_context();
   if (is_stage()) {
-    json out = details::stage_tune(ctx, stage_.get(), axis_outputs(), settings_.axes, *kind, gains);
+    json out = details::stage_tune(ctx, stage_->model(), stage_->axis_outputs(), settings_.axes,
+                                   *kind, gains);
     out["compensator"] = name;
     return out;
   }

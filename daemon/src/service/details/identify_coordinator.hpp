@@ -5,7 +5,7 @@
 // adopts that model and delivers identify's result. Where it is: IdentifyStep
 // (identify_session.hpp). Supervisor thread only; it takes the bench's mutex where it touches the
 // run supervisor, and never runs on the loop thread. A stage's identify (several axes) is the
-// bench's own (bench_stage.cpp).
+// stage coordinator's (stage_coordinator.hpp).
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>

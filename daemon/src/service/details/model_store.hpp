@@ -2,8 +2,8 @@
 // The bench's model store: the active model of a single-axis bench (its file and where it is
 // kept), the stage's frequency responses measured last, the generation that counts the changes
 // runs see, and the model folder's commands (load, list, delete). A stage's model is the stage
-// component's (bench_stage.cpp); it bumps the generation here. Not thread-safe: the Bench holds
-// its mutex around every call. File I/O: never on the loop thread.
+// coordinator's (stage_coordinator.hpp); it bumps the generation here. Not thread-safe: the
+// Bench holds its mutex around every call. File I/O: never on the loop thread.
 #include <cstdint>
 #include <limits>
 #include <nlohmann/json.hpp>

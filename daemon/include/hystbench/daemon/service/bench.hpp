@@ -41,13 +41,13 @@ struct RunPreparation;
 struct RunResult;
 struct PlanCache;
 struct FeedbackPlanCache;
-struct StageModel;
 struct IdentifyRequest;
 class RunHistory;
 class ModelStore;
 class RunSupervisor;
 class IdentifyCoordinator;
 class LearningRuns;
+class StageCoordinator;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -103,42 +103,11 @@ class Bench {
   /// tune: the feedback a track run would get (designed, or given gains checked), with its
   /// loop's curves; runs nothing.
   nlohmann::json tune(const details::RequestParams& request);
-  // A stage of several axes (bench_stage.cpp): identify one axis at a time, track every axis.
-  /// settings_.axes is not empty.
+  /// A stage of several axes (details/stage_coordinator.hpp): settings_.axes is not empty.
   bool is_stage() const noexcept { return !settings_.axes.empty(); }
-  /// identify on the stage. Caller holds mutex_.
-  nlohmann::json start_stage_identify(const details::IdentifyRequest& request);
-  /// track on the stage. Caller holds mutex_.
-  nlohmann::json start_stage_track(const details::RequestParams& request, std::uint64_t client);
-  /// frf on the stage: each axis's responses, for its feedback. Caller holds mutex_.
-  nlohmann::json start_stage_frf(const details::RequestParams& request);
-  /// A stage's frf run played: each axis's responses kept with its model (supervisor thread);
-  /// after identify's, identify's result is delivered with them.
-  void axes_responses_measured(const RunProgram& run, details::RunResult result);
-  /// identify on a stage, once fitted: its frf run, each axis's responses for its feedback.
-  /// False when it did not start (`why` says so). Supervisor thread.
-  bool measure_axes_responses(const std::string& identify_run_id, std::string& why);
-  /// A stage's identify run played: its fit, the stage model kept and saved, its result
-  /// delivered (supervisor thread).
-  void stage_identified(const RunProgram& run, details::RunResult result);
-  /// excite on a stage: drive_uploads names a complete drive upload per axis, each played open
-  /// loop from its axis's present output, every axis's record as long as the longest (the
-  /// others hold their last drive). Caller holds mutex_, the bench idle.
-  nlohmann::json start_stage_excite(const details::RequestParams& request, std::uint64_t client);
-  /// Every axis's present output [V].
-  std::vector<double> axis_outputs() const;
-  /// status' and model.get's word on the stage. Caller holds mutex_.
-  nlohmann::json stage_status() const;
-  /// model.load on a stage: `stored` names the stage identify's run; each axis's model file
-  /// RUN-AXIS.json (with its responses and the coupling it carries) becomes the stage's model.
-  /// Caller holds mutex_.
-  nlohmann::json load_stage_model(const details::RequestParams& request);
   /// The active models' files: the one active model's, or on a stage each axis's RUN-AXIS.json.
   /// Caller holds mutex_.
   std::vector<std::string> active_model_paths() const;
-  /// Writes each axis's model file of stage_ (RUN-AXIS.json, its responses with it) to the model
-  /// folder; the file names. Throws CommandError io_error. Caller holds mutex_.
-  nlohmann::json save_stage_models();
   /// A finished frf run: the responses estimated, kept, and its result (supervisor thread).
   void responses_finished(std::unique_ptr<RunProgram> run, details::RunResult result);
   /// The feedback a track run with `kind` would get now, for a result or status (null when the
@@ -204,12 +173,9 @@ class Bench {
   std::shared_ptr<details::FeedbackPlanCache> feedback_plans_;
   nlohmann::json last_feedback_;  // the feedback of the last track, tune or frf (status)
   nlohmann::json last_result_;
-  nlohmann::json pending_fit_;                  // identify's fit request (details::BuiltRun::fit)
-  std::unique_ptr<details::StageModel> stage_;  // a stage's model (identify on a stage)
-  // A stage's frf under way: each axis's excitation options and the ticks of each turn.
-  std::vector<sim::FrequencyResponseExcitationOptions> stage_frf_options_;
-  std::size_t stage_frf_turn_ = 0;
-  nlohmann::json stage_identify_report_;  // identify's result while its frf plays
+  nlohmann::json pending_fit_;  // identify's fit request (details::BuiltRun::fit)
+  // A stage's model and its runs (a stage of several axes only).
+  std::unique_ptr<details::StageCoordinator> stage_;
   // The learning runs' learners, their trials and kept drives (supervisor thread).
   std::unique_ptr<details::LearningRuns> learning_;
   std::uint64_t run_counter_ = 0;
