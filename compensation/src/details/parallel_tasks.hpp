@@ -1,8 +1,9 @@
 #pragma once
-// Independent tasks run on the machine's cores: run_parallel(n, task) calls task(0..n-1), each
-// once, on up to hardware_concurrency threads (the calling thread one of them; all in it where
-// there is one core or one task), and returns when all have ended. The first exception a task
-// throws is rethrown then. Not for the real-time path (it starts threads).
+// Independent tasks run on the machine's cores: run_parallel(n, task, threads) calls
+// task(0..n-1), each once, on up to `threads` threads (0: hardware_concurrency; the calling thread
+// one of them; all in it where there is one thread or one task), and returns when all have ended.
+// Once a task has thrown, no further one starts; the first exception is rethrown then. Not for the
+// real-time path (it starts threads).
 #include <algorithm>
 #include <atomic>
 #include <cstddef>
@@ -15,9 +16,10 @@
 
 namespace hystbench::compensation::details {
 
-inline void run_parallel(std::size_t n, const std::function<void(std::size_t)>& task) {
+inline void run_parallel(std::size_t n, const std::function<void(std::size_t)>& task,
+                         std::size_t threads = 0) {
   const std::size_t cores = std::max(1U, std::thread::hardware_concurrency());
-  const std::size_t workers = std::min(n, cores);
+  const std::size_t workers = std::min(n, threads == 0 ? cores : threads);
   if (workers <= 1) {
     for (std::size_t i = 0; i < n; ++i) task(i);
     return;
@@ -32,14 +34,15 @@ inline void run_parallel(std::size_t n, const std::function<void(std::size_t)>& 
       } catch (...) {
         const std::lock_guard<std::mutex> lock(error_mutex);
         if (!error) error = std::current_exception();
+        next = n;  // no further task starts
       }
     }
   };
-  std::vector<std::thread> threads;
-  threads.reserve(workers - 1);
-  for (std::size_t k = 1; k < workers; ++k) threads.emplace_back(work);
+  std::vector<std::thread> helpers;
+  helpers.reserve(workers - 1);
+  for (std::size_t k = 1; k < workers; ++k) helpers.emplace_back(work);
   work();
-  for (auto& t : threads) t.join();
+  for (auto& t : helpers) t.join();
   if (error) std::rethrow_exception(error);
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "details/diagnosis_signals.hpp"
+#include "diagnosis/details/cancel_point.hpp"
 #include "diagnosis/details/candidate_reports.hpp"
 #include "diagnosis/details/candidates.hpp"
 #include "diagnosis/details/left_out.hpp"
@@ -44,6 +45,7 @@ namespace {
 Diagnosis run_diagnosis(std::span<const double> t, std::span<const double> u,
                         std::span<const double> y, const DiagnosisOptions& options,
                         const std::vector<details::RecordPart>& parts) {
+  const CancelScope cancellable(options);
   report(options, 0.0, "checking the record");
   const std::vector<std::size_t> starts = details::starts_of(parts);
   const details::DiagnosisRecord r = details::make_diagnosis_record(t, u, y, options, starts);

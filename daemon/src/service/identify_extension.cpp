@@ -111,11 +111,13 @@ json extension_json(const hc::Diagnosis& d, const std::vector<std::string>& adde
 
 // How identify diagnoses its record with `baseline`.
 hc::DiagnosisOptions diagnosis_options(hc::ActuatorModel baseline, bool swap_operator,
-                                       const details::DiagnosisAhead::Progress& progress) {
+                                       const details::DiagnosisAhead::Controls& controls) {
   hc::DiagnosisOptions options;
   options.baseline = std::move(baseline);
   options.units = {"V", "um"};
-  options.progress = progress;
+  options.progress = controls.progress;
+  options.cancelled = controls.cancelled;
+  options.threads = controls.threads;
   options.swap_operator = swap_operator;
   return options;
 }
@@ -149,7 +151,8 @@ std::optional<hc::Diagnosis> diagnose_after_timing(
     return std::find(draft.parts.begin(), draft.parts.end(), part) != draft.parts.end();
   };
   if (!timed_off(timing) || has("loop_shape")) return std::nullopt;
-  hc::Diagnosis d = hc::diagnose(t, u, y, diagnosis_options(draft.model, swap_operator, progress));
+  hc::Diagnosis d =
+      hc::diagnose(t, u, y, diagnosis_options(draft.model, swap_operator, {progress, nullptr, 0}));
   std::vector<std::string> added;
   if (d.cause != hc::Cause::kNone) {
     for (const std::string& part : d.extended_parts) {
@@ -285,9 +288,9 @@ details::DiagnosisAhead::Task identify_diagnosis(const std::vector<IdentifyCandi
   }
   return [baselines = std::move(baselines), t = record_times(u.size(), dt),
           u = std::vector<double>(u.begin(), u.end()), y = std::vector<double>(y.begin(), y.end()),
-          swap_operator](std::size_t candidate, const details::DiagnosisAhead::Progress& progress) {
+          swap_operator](std::size_t candidate, const details::DiagnosisAhead::Controls& controls) {
     return hc::diagnose(t, u, y,
-                        diagnosis_options(baselines.at(candidate), swap_operator, progress));
+                        diagnosis_options(baselines.at(candidate), swap_operator, controls));
   };
 }
 
@@ -338,7 +341,7 @@ bool details::IdentifyCoordinator::extend_identified_model() {
         s.ahead ? s.ahead->take(s.base, progress)
                 : details::DiagnosisAhead::Taken{
                       identify_diagnosis(s.candidates, exchange_s, s.u, s.y, dt_, s.swap_operator)(
-                          s.base, progress),
+                          s.base, {progress, nullptr, 0}),
                       "after the verification"};
     s.ahead.reset();
     const hc::Diagnosis& d = taken.diagnosis;

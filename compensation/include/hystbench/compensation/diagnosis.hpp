@@ -42,6 +42,7 @@
 #include <functional>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -90,8 +91,21 @@ struct DiagnosisOptions {
   bool swap_operator = true;
   /// Units written to the models.
   Units units;
-  /// Optional progress callback: (fraction done 0..1, what is happening).
+  /// Optional progress callback: (fraction done 0..1, what is happening). Called from the
+  /// diagnosis's threads one at a time; it may throw to cancel (rethrown by diagnose()).
   std::function<void(double, const std::string&)> progress;
+  /// Threads the candidates are tested on at once: 0 = every core, 1 = the calling thread alone
+  /// (a core left to a loop running beside). The result is the same whatever the count.
+  std::size_t threads = 0;
+  /// Optional: polled before each fit, also inside a candidate's test (every few ms to a few
+  /// hundred ms on a 10 kHz record), from any of the diagnosis's threads (so thread-safe); true
+  /// stops the diagnosis, which throws DiagnosisCancelled.
+  std::function<bool()> cancelled;
+};
+
+/// What diagnose() throws when DiagnosisOptions::cancelled said so.
+struct DiagnosisCancelled : std::runtime_error {
+  DiagnosisCancelled() : std::runtime_error("the diagnosis was cancelled") {}
 };
 
 /// How the record was split into fit and held-out parts.

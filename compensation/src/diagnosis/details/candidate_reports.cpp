@@ -1,9 +1,12 @@
 #include "diagnosis/details/candidate_reports.hpp"
 
+#include <mutex>
 #include <span>
 #include <string>
 #include <utility>
 
+#include "details/parallel_tasks.hpp"
+#include "diagnosis/details/cancel_point.hpp"
 #include "diagnosis/details/progress.hpp"
 
 namespace hystbench::compensation::details::diagnosis {
@@ -34,15 +37,29 @@ std::vector<details::ExtensionFit> test_candidates(Diagnosis& d,
                                                    const details::CandidateContext& ctx,
                                                    const DiagnosisOptions& options) {
   const std::span<const Cause> candidates = candidate_causes();
+  // Each test reads the context alone: run side by side, their outcomes are the same as one after
+  // another (DiagnosisThreads.*), and are reported in candidate order.
+  std::vector<details::CandidateOutcome> outcomes(candidates.size());
+  std::mutex progress_mutex;
+  std::size_t started = 0;
+  details::run_parallel(
+      candidates.size(),
+      [&](std::size_t i) {
+        const CancelScope cancellable(options);
+        {
+          const std::lock_guard lock(progress_mutex);
+          report(options, 0.25 + 0.7 * static_cast<double>(started++) / candidates.size(),
+                 "testing " + std::string(to_string(candidates[i])));
+        }
+        outcomes[i] = test_of(candidates[i])(ctx);
+      },
+      options.threads);
   std::vector<details::ExtensionFit> fits;
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const Cause c = candidates[i];
-    report(options, 0.25 + 0.7 * static_cast<double>(i) / candidates.size(),
-           "testing " + std::string(to_string(c)));
-    details::CandidateOutcome o = test_of(c)(ctx);
+    details::CandidateOutcome& o = outcomes[i];
     fits.push_back(o.fit);
     CandidateReport rep;
-    rep.cause = c;
+    rep.cause = candidates[i];
     rep.statistic = o.statistic;
     rep.threshold = o.threshold;
     rep.significant = o.statistic >= o.threshold;

@@ -9,6 +9,7 @@
 #include "details/diagnosis_signals.hpp"
 #include "details/scoped_no_denormals.hpp"
 #include "details/second_order_bank.hpp"
+#include "diagnosis/details/cancel_point.hpp"
 #include "hystbench/compensation/coupled_play_pi_model.hpp"
 #include "hystbench/compensation/delay_line.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
@@ -133,6 +134,8 @@ std::optional<ModelStructure> structure_of(const ActuatorModel& model, const Dia
         break;
       }
     }
+  } catch (const DiagnosisCancelled&) {
+    throw;
   } catch (const std::exception&) {
     return std::nullopt;  // e.g. a dead zone that cannot be inverted
   }
@@ -335,6 +338,7 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
   Eigen::VectorXd coef = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(unknowns));
   std::vector<double> a(unknowns);
   for (int iteration = 0; iteration < 4; ++iteration) {
+    diagnosis::cancellation_point();
     out = fit_joint(r, target, hysteresis_only, rows, nullptr);
     const std::vector<double> h = ActuatorModel(out.model).simulate(r.u, r.dt);
     NormalEquations ne(static_cast<Eigen::Index>(unknowns));
@@ -410,6 +414,7 @@ ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec, 
   // The dynamics filter regressor columns that go quiet; their states decay through the
   // subnormal range for thousands of samples, where arithmetic is slow (ScopedNoDenormals).
   const ScopedNoDenormals flushed;
+  diagnosis::cancellation_point();
   if (cached != nullptr && !cached->serves(r, spec)) cached = nullptr;
   Joint j =
       alternates(spec) ? fit_alternating(r, spec, rows) : fit_joint(r, r.y, spec, rows, cached);

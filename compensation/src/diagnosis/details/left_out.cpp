@@ -53,6 +53,8 @@ std::optional<std::vector<double>> LeftOutScorer::rms(const ExtensionSpec& spec)
     ActuatorModel model;
     try {
       model = fit_extension(others_[i]->record, spec, FitRows::kAll, false).model;
+    } catch (const DiagnosisCancelled&) {
+      throw;
     } catch (const std::exception&) {
       return std::nullopt;  // a structure the others cannot support (too few rows, ...)
     }

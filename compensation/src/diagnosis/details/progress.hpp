@@ -1,6 +1,7 @@
 #pragma once
 // Progress of a diagnosis (internals): the options' callback, told how far the diagnosis is and
-// what it does. Called between stages, never inside a fit.
+// what it does. Called between stages, never inside a fit; one at a time where the candidates run
+// side by side.
 #include <string>
 
 #include "hystbench/compensation/diagnosis.hpp"

@@ -12,12 +12,16 @@ DiagnosisAhead::DiagnosisAhead(Task task, std::vector<std::size_t> order)
 
 DiagnosisAhead::~DiagnosisAhead() { stop_and_join(); }
 
-void DiagnosisAhead::stop_and_join() {
+void DiagnosisAhead::cancel() {
   {
     std::lock_guard lock(mutex_);
     cancel_ = true;
   }
   changed_.notify_all();  // a worker waiting for more
+}
+
+void DiagnosisAhead::stop_and_join() {
+  cancel();
   if (worker_.joinable()) worker_.join();
 }
 
@@ -66,16 +70,22 @@ void DiagnosisAhead::run() {
       abandon_ = false;
       task = task_;
     }
-    const Progress cancellable = [this](double, const std::string&) {
+    const auto stopped = [this] {
       std::lock_guard lock(mutex_);
-      if (cancel_ || abandon_) throw Cancelled{};
+      return cancel_ || abandon_;
     };
+    const Controls controls{[stopped](double, const std::string&) {
+                              if (stopped()) throw Cancelled{};
+                            },
+                            stopped, 1};
     try {
-      compensation::Diagnosis d = (*task)(i, cancellable);
+      compensation::Diagnosis d = (*task)(i, controls);
       std::lock_guard lock(mutex_);
       done_.emplace(i, std::move(d));
     } catch (const Cancelled&) {
       // Abandoned for the one focused on (next in the queue), or cancelled: the loop stops.
+    } catch (const compensation::DiagnosisCancelled&) {
+      // The same, inside a fit.
     } catch (...) {
       std::lock_guard lock(mutex_);
       failed_.emplace(i, std::current_exception());
@@ -93,6 +103,7 @@ void DiagnosisAhead::run() {
 
 DiagnosisAhead::Taken DiagnosisAhead::take(std::size_t candidate, const Progress& progress) {
   std::string how = "during the verification";
+  bool ahead = false;
   {
     std::unique_lock lock(mutex_);
     if (!done_.contains(candidate) && !failed_.contains(candidate) && running_ == candidate) {
@@ -100,11 +111,19 @@ DiagnosisAhead::Taken DiagnosisAhead::take(std::size_t candidate, const Progress
       how = "partly during the verification";
       changed_.wait(lock, [&] { return running_ != candidate; });
     }
+    ahead = done_.contains(candidate) || failed_.contains(candidate);
+  }
+  if (!ahead) {
+    // Not started: the worker, busy with one abandoned or idle, stops at its next fit while the
+    // diagnosis runs here.
+    cancel();
+    Taken taken{(*task_)(candidate, Controls{progress, nullptr, 0}), "after the verification"};
+    stop_and_join();
+    return taken;
   }
   stop_and_join();
   if (const auto f = failed_.find(candidate); f != failed_.end()) std::rethrow_exception(f->second);
-  if (auto d = done_.find(candidate); d != done_.end()) return {std::move(d->second), how};
-  return {(*task_)(candidate, progress), "after the verification"};
+  return {std::move(done_.at(candidate)), how};
 }
 
 }  // namespace hystbench::daemon::details

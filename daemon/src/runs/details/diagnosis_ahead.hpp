@@ -3,9 +3,11 @@
 // verification segments (wall time the supervisor spends waiting): one candidate after another,
 // in the order given, each kept until taken; candidates fitted after it started join the queue
 // (queue_more); once the verification has chosen, only the chosen one (focus). The worker waits
-// for more until it is taken or destroyed. The worker runs at the normal policy: at SCHED_IDLE
-// another busy process starves it, and taking or cancelling it then waits for as long. Not
-// real-time code; the supervisor thread owns it.
+// for more until it is taken or destroyed, and diagnoses on one thread (the loop has the other
+// core); one abandoned or cancelled stops at its next fit. A diagnosis taken before it started
+// runs on every core, the loop idle then. The worker
+// runs at the normal policy: at SCHED_IDLE another busy process starves it, and taking or
+// cancelling it then waits for as long. Not real-time code; the supervisor thread owns it.
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -26,8 +28,14 @@ namespace hystbench::daemon::details {
 class DiagnosisAhead {
  public:
   using Progress = std::function<void(double, const std::string&)>;
-  /// Diagnoses candidate i, reporting through the given progress (which may throw to cancel).
-  using Task = std::function<compensation::Diagnosis(std::size_t, const Progress&)>;
+  /// How a diagnosis is run (the DiagnosisOptions fields of the same names).
+  struct Controls {
+    Progress progress;                ///< may throw to cancel
+    std::function<bool()> cancelled;  ///< polled inside the fits; may be empty
+    std::size_t threads = 1;
+  };
+  /// Diagnoses candidate i under the given controls.
+  using Task = std::function<compensation::Diagnosis(std::size_t, const Controls&)>;
 
   /// Starts the worker on the candidates in `order`.
   DiagnosisAhead(Task task, std::vector<std::size_t> order);
@@ -45,7 +53,8 @@ class DiagnosisAhead {
   DiagnosisAhead& operator=(const DiagnosisAhead&) = delete;
 
   /// Candidate i's diagnosis, and when it ran: during the verification, partly (waited for),
-  /// or after it, on the calling thread (reporting to `progress`) when it was not ahead. Stops the
+  /// or after it, on the calling thread and every core (reporting to `progress`) when it had not
+  /// started: a worker still busy with another one is cancelled, not waited for. Stops the
   /// worker: only one is taken. Throws what the diagnosis threw.
   struct Taken {
     compensation::Diagnosis diagnosis;
@@ -56,6 +65,7 @@ class DiagnosisAhead {
  private:
   struct Cancelled {};
   void run();
+  void cancel();
   void stop_and_join();
 
   std::shared_ptr<const Task> task_;  ///< the latest; the worker holds the one it runs

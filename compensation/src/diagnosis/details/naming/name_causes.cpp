@@ -185,6 +185,8 @@ bool try_next_cause(Diagnosis& d, const Naming& x, const Next& next, Joint& join
       d.extended_parts.push_back(std::string(to_string(c.cause)));
       return true;
     }
+  } catch (const DiagnosisCancelled&) {
+    throw;
   } catch (const std::exception&) {
     // A combination the designs cannot fit is left out.
     if (next.contender) c.not_named = "it could not be fitted on top of " + before;

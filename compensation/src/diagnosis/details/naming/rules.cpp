@@ -201,6 +201,8 @@ void find_delay_again(const Diagnosis& d, const Naming& x, Joint& joint) {
     if (o.statistic < o.threshold || !(o.fit.heldout.rmse < joint.fit.heldout.rmse)) return;
     joint.fit = std::move(o.fit);
     joint.added.push_back(o.extension + ", found again on top of the loop's shape");
+  } catch (const DiagnosisCancelled&) {
+    throw;
   } catch (const std::exception&) {
     // The delay found first stays.
   }
