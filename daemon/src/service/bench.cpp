@@ -17,6 +17,7 @@
 #include "runs/details/stage_runs.hpp"
 #include "runs/details/track_program.hpp"
 #include "service/details/command_table.hpp"
+#include "service/details/feedback_designer.hpp"
 #include "service/details/identify_coordinator.hpp"
 #include "service/details/learning_runs.hpp"
 #include "service/details/model_folder.hpp"
@@ -90,7 +91,7 @@ Bench::Bench(BenchSettings settings)
                           const std::optional<hc::StageResponses>& responses, json* why) {
     if (responses) models_->set_measured_responses(*responses);
     models_->adopt(std::move(file), path);
-    return feedback_now(hc::CompensatorKind::kInversePid, why);
+    return feedback_->feedback_now(hc::CompensatorKind::kInversePid, why);
   };
   identify.deliver = [this](json result) { deliver_result(std::move(result)); };
   const details::BenchParts parts{settings_, *loop_, *runs_, mutex_};
@@ -101,15 +102,16 @@ Bench::Bench(BenchSettings settings)
         const std::string path = models_->active_path();
         return path.empty() ? path : std::filesystem::path(path).filename().string();
       });
+  details::RunHooks hooks;
+  hooks.run_context = [this] { return run_context(); };
+  hooks.launch = [this](const char* kind, details::BuiltRun run) {
+    return launch(kind, std::move(run));
+  };
+  hooks.deliver = [this](json result) { deliver_result(std::move(result)); };
+  feedback_ = std::make_unique<details::FeedbackDesigner>(parts, *models_, hooks);
   if (is_stage()) {
-    details::StageCoordinator::Hooks stage;
-    stage.run_context = [this] { return run_context(); };
-    stage.launch = [this](const char* kind, details::BuiltRun run) {
-      return launch(kind, std::move(run));
-    };
-    stage.deliver = [this](json result) { deliver_result(std::move(result)); };
     stage_ = std::make_unique<details::StageCoordinator>(parts, *models_, *learning_, uploads_,
-                                                         std::move(stage));
+                                                         std::move(hooks));
   }
 }
 
@@ -253,7 +255,7 @@ json Bench::status() const {
   s["uploads"] = {{"open", uploads_.open()},
                   {"staged_samples", uploads_.staged_samples()},
                   {"max_samples", uploads_.limits().max_samples}};
-  s["feedback"] = last_feedback_;
+  s["feedback"] = feedback_->last();
   s["last_result"] = last_result_;
   s["faults"] = history_->faults();
   s["http"] = web_view_;
@@ -423,8 +425,7 @@ json Bench::start_track(const details::RequestParams& request, std::uint64_t cli
   details::BuiltRun run = details::make_track_program(track, ctx, upload.get());
   std::unique_ptr<details::TrackLearning> learning = std::move(run.learning);
   if (run.reply.contains("feedback") && run.reply["feedback"].is_object()) {
-    last_feedback_ = run.reply["feedback"];
-    last_feedback_["compensator"] = track.compensator;
+    feedback_->track_started(run.reply["feedback"], track.compensator);
   }
   json reply = launch("track", std::move(run));
   if (upload) uploads_.erase(upload_name, client);  // the run has it now
@@ -471,7 +472,7 @@ void Bench::finalize(std::unique_ptr<RunProgram> run) {
     return;
   }
   if (result.kind == RunKind::kFrequencyResponse) {
-    responses_finished(std::move(run), std::move(result));
+    feedback_->responses_measured(std::move(run), std::move(result));
     return;
   }
   if (run->axes() > 1) {

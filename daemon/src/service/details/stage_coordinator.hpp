@@ -29,16 +29,8 @@ class LearningRuns;
 
 class StageCoordinator {
  public:
-  /// What the stage asks of the bench (each as the bench's own commands use it).
-  struct Hooks {
-    /// What the run builders need to know. The caller holds the bench's mutex.
-    std::function<RunContext()> run_context;
-    /// Names the built run, submits it and makes it the active run; the start reply. The caller
-    /// holds the bench's mutex.
-    std::function<nlohmann::json(const char* kind, BuiltRun run)> launch;
-    /// A result, kept and announced (run.finished). No lock held.
-    std::function<void(nlohmann::json)> deliver;
-  };
+  /// What the stage asks of the bench.
+  using Hooks = RunHooks;
 
   /// `models`, `learning` and `uploads` are the bench's, and outlive the coordinator.
   StageCoordinator(BenchParts bench, ModelStore& models, LearningRuns& learning,

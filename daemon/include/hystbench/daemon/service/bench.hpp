@@ -27,7 +27,6 @@
 #include "hystbench/daemon/loop/bench_loop.hpp"
 #include "hystbench/daemon/runs/upload_store.hpp"
 #include "hystbench/drivers/driver.hpp"
-#include "hystbench/sim/frequency_response_excitation.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 
 namespace hystbench::daemon {
@@ -48,6 +47,7 @@ class RunSupervisor;
 class IdentifyCoordinator;
 class LearningRuns;
 class StageCoordinator;
+class FeedbackDesigner;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -96,7 +96,8 @@ class Bench {
   nlohmann::json start_track(const details::RequestParams& request, std::uint64_t client);
   /// excite: a complete drive upload played open loop after a ramp from the present output.
   nlohmann::json start_excite(const details::RequestParams& request, std::uint64_t client);
-  // The stage's frequency responses and the feedback designed on them (bench_responses.cpp).
+  // The frequency responses and the feedback designed on them (bench_feedback_commands.cpp; the
+  // stage coordinator's or the feedback designer's).
   /// frf: the multisines that measure them, open loop; its result kept by the bench and the
   /// active model (its file saved again).
   nlohmann::json start_frf(const details::RequestParams& request);
@@ -108,11 +109,6 @@ class Bench {
   /// The active models' files: the one active model's, or on a stage each axis's RUN-AXIS.json.
   /// Caller holds mutex_.
   std::vector<std::string> active_model_paths() const;
-  /// A finished frf run: the responses estimated, kept, and its result (supervisor thread).
-  void responses_finished(std::unique_ptr<RunProgram> run, details::RunResult result);
-  /// The feedback a track run with `kind` would get now, for a result or status (null when the
-  /// bench cannot design one: `why` says so). Caller holds mutex_.
-  nlohmann::json feedback_now(compensation::CompensatorKind kind, nlohmann::json* why);
   nlohmann::json stop_run();
   nlohmann::json abort_run();
   /// reset: leaves FAULT (reset_failed when the loop does not).
@@ -168,10 +164,9 @@ class Bench {
   nlohmann::json web_view_;                      // status "http"
   std::unique_ptr<details::ModelStore> models_;  // the active model and responses, the folder
   std::shared_ptr<details::PlanCache> plans_;    // track's last plan (its own lock)
-  // The options of the frf run under way; the feedback's last design.
-  std::optional<sim::FrequencyResponseExcitationOptions> frf_options_;
   std::shared_ptr<details::FeedbackPlanCache> feedback_plans_;
-  nlohmann::json last_feedback_;  // the feedback of the last track, tune or frf (status)
+  // frf's runs on one axis and the feedback designed on what they measure.
+  std::unique_ptr<details::FeedbackDesigner> feedback_;
   nlohmann::json last_result_;
   nlohmann::json pending_fit_;  // identify's fit request (details::BuiltRun::fit)
   // A stage's model and its runs (a stage of several axes only).
