@@ -5,9 +5,9 @@
 // (queue_more); once the verification has chosen, only the chosen one (focus). The worker waits
 // for more until it is taken or destroyed, and diagnoses on one thread (the loop has the other
 // core); one abandoned or cancelled stops at its next fit. A diagnosis taken before it started
-// runs on every core, the loop idle then. The worker
-// runs at the normal policy: at SCHED_IDLE another busy process starves it, and taking or
-// cancelling it then waits for as long. Not real-time code; the supervisor thread owns it.
+// runs on every core, the loop idle then. The worker runs at the normal policy: at SCHED_IDLE
+// another busy process starves it, and taking or cancelling it then waits for as long. Not
+// real-time code; the supervisor thread owns it.
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
