@@ -299,16 +299,18 @@ bool details::IdentifyCoordinator::play_while_diagnosing() {
   if (!s.ahead) return false;
   const std::size_t base = extension_base(s.candidates, s.rate_free, s.rate_sine_hz);
   s.ahead->focus(base);
-  // Played whether or not the diagnosis is ready: the base's sines are the extension's yardstick,
-  // and playing them first in every run keeps the bench's history before the extension's own
-  // segments the same however long the diagnosis takes (on the simulated clock, the outcome of a
-  // run would otherwise depend on the machine's load).
+  // Played whether or not the diagnosis is ready, so that the bench's history before the
+  // extension's own segments is the same however long the diagnosis takes (on the simulated
+  // clock, the outcome of a run would otherwise depend on the machine's load). First the frf run,
+  // which does not depend on the model chosen (it would otherwise play last, after the
+  // extension); then the base's sines, the extension's yardstick, next to the extension's own.
+  if (!s.responses_tried && measure_responses()) return true;
   const double fast = delay_sine_frequency(bench_.settings.loop.rate_hz);
   for (const double hz : {fast, fast / kMidFraction}) {
     if (s.candidates[base].sines.contains(hz)) continue;
     s.jobs.push_back({base, hz});
     s.sines_while_diagnosing.push_back(hz);
-    return true;
+    return verify_next_candidate();
   }
   return false;
 }

@@ -142,10 +142,10 @@ void details::IdentifyCoordinator::continue_identify() {
   IdentifySession& s = *session_;
   const bool go_on = !s.interrupted && !quitting();
   if (go_on && s.extend && s.step == IdentifyStep::kVerifyingCandidates) {
-    if (play_while_diagnosing() && verify_next_candidate()) return;
+    if (play_while_diagnosing()) return;
     if (extend_identified_model() && verify_next_candidate()) return;
   }
-  if (go_on && s.step != IdentifyStep::kMeasuringResponses) {
+  if (go_on && !s.responses_tried) {
     s.step = IdentifyStep::kMeasuringResponses;
     if (measure_responses()) return;
   }
@@ -154,6 +154,7 @@ void details::IdentifyCoordinator::continue_identify() {
 
 bool details::IdentifyCoordinator::measure_responses() {
   IdentifySession& s = *session_;
+  s.responses_tried = true;
   std::unique_ptr<RunProgram> p;
   sim::FrequencyResponseExcitationOptions o;
   {
@@ -206,7 +207,12 @@ void details::IdentifyCoordinator::responses_measured(std::unique_ptr<RunProgram
     s.responses_result = {{"error", std::string("the run did not complete: ") + run->end_reason},
                           {"log", log}};
   }
-  finish();
+  // Played while the diagnosis ran: the base's sines and the extension come next.
+  if (s.step == IdentifyStep::kMeasuringResponses || s.interrupted || quitting()) {
+    finish();
+  } else {
+    continue_identify();
+  }
 }
 
 }  // namespace hystbench::daemon

@@ -66,6 +66,9 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     // Not asked: nothing diagnosed, nothing verified beyond the candidates.
     EXPECT_FALSE(plain["model"]["extension"].value("adopted", true)) << plain["model"].dump(2);
     EXPECT_FALSE(plain["model"]["extension"].contains("parts")) << plain["model"].dump(2);
+    // The frf run plays last here, while the diagnosis runs below: the design has it both ways.
+    EXPECT_TRUE(plain["frequency_response"].contains("responses")) << plain.dump(2);
+    EXPECT_TRUE(plain["feedback"].contains("gains")) << plain["feedback"].dump(2);
     f.plain_500 = sine_rms(500.0);
     std::ostringstream plain_text;
     cli::print_run_result(plain, plain_text);
@@ -77,6 +80,8 @@ class BenchFeedforwardTest : public hystbench::test::BenchFixture {
     EXPECT_EQ(id["end"], "completed") << id.dump(2);
     EXPECT_FALSE(id.contains("fit_error")) << id.dump(2);
     f.extension = id["model"]["extension"];
+    EXPECT_TRUE(id["frequency_response"].contains("responses")) << id.dump(2);
+    EXPECT_TRUE(id["feedback"].contains("gains")) << id["feedback"].dump(2);
     // `hystbench identify` prints one line for the parts, one for the model's check before it
     // was played and one for the bench's check.
     std::ostringstream text;

@@ -73,12 +73,13 @@ class IdentifyCoordinator {
   bool verify_next_candidate();
   /// A verification segment came back: its figures go to its candidate.
   void verification_finished(std::unique_ptr<RunProgram> run);
-  /// The next segment, else the extension (once), else the responses, else finish().
+  /// The next segment, else the extension (once), else the responses (where they did not play
+  /// while the diagnosis ran), else finish().
   void continue_identify();
-  /// While the best verified candidate's diagnosis still runs (on its own from now on), queues
-  /// one of that candidate's sines an extension of delay or dynamics is judged against, not yet
-  /// played: the wait plays what the extension would play after it. False when it is ready or
-  /// both sines have played.
+  /// While the best verified candidate's diagnosis still runs (on its own from now on), plays
+  /// what identify would play after it: the frf run, then that candidate's sines an extension of
+  /// delay or dynamics is judged against. True when a segment started; false when all have
+  /// played (or there is no diagnosis ahead).
   bool play_while_diagnosing();
   /// Diagnoses the record with the best verified candidate and queues its extension's
   /// verification; false when nothing is added (the reason in the session's extension).
@@ -99,9 +100,10 @@ class IdentifyCoordinator {
   /// tracks better is taken (the band the extension held alone where the whole failed its
   /// check; else the fast band, then the slow one), and every part says whether it was.
   static void settle_parts_alone(IdentifySession& s, std::size_t& chosen, bool& extended);
-  /// identify's last segment: frf's run, once the model is chosen; false when it did not start.
+  /// identify's frf run (while the diagnosis runs, else last); false when it did not start.
   bool measure_responses();
-  /// identify's frf run came back: its responses go with the chosen model.
+  /// identify's frf run came back: its responses go with the chosen model; the session goes on
+  /// where it played while the diagnosis ran.
   void responses_measured(std::unique_ptr<RunProgram> run);
   /// Adopts the chosen candidate and delivers identify's result; the session ends.
   void finish();

@@ -165,7 +165,8 @@ enum class IdentifyStep {
   kVerifyingCandidates,  ///< the fitted candidates' triangle and sines on the loop
   kExtending,  ///< the diagnosis of the record ran (or failed); its extension, delay trim and
                ///< parts alone verified on the loop
-  kMeasuringResponses,  ///< frf's run for the chosen model (last; nothing left after it)
+  kMeasuringResponses,  ///< frf's run, where it did not play while the diagnosis ran (last;
+                        ///< nothing left after it)
 };
 
 struct IdentifySession {
@@ -212,9 +213,11 @@ struct IdentifySession {
   nlohmann::json extension;   ///< what the extension found, added and verified
   std::string program_id;     ///< run id of the verification on the loop
   bool interrupted = false;   ///< stop, abort or fault during a verification
-  /// The stage's frequency responses, measured once the model is chosen (frf's run, last):
-  /// the options of the run while it plays, what it measured, and what the result says of it.
+  /// The stage's frequency responses (frf's run: while the chosen candidate's diagnosis runs,
+  /// else last): the options of the run while it plays, what it measured, and what the result
+  /// says of it. responses_tried: the run was started (or failed to start), once.
   std::optional<sim::FrequencyResponseExcitationOptions> response_options;
+  bool responses_tried = false;
   std::optional<compensation::StageResponses> responses;
   nlohmann::json responses_result;
   /// The candidates' diagnoses, run while the loop verifies them (with the extension on);
