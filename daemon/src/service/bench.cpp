@@ -22,6 +22,7 @@
 #include "service/details/learning_runs.hpp"
 #include "service/details/model_folder.hpp"
 #include "service/details/model_store.hpp"
+#include "service/details/run_handback.hpp"
 #include "service/details/run_history.hpp"
 #include "service/details/run_log.hpp"
 #include "service/details/run_supervisor.hpp"
@@ -84,7 +85,7 @@ Bench::Bench(BenchSettings settings)
   BenchLoopOptions loop = settings_.loop;
   loop.axis_names = settings_.axes;
   loop_ = std::make_unique<BenchLoop>(*driver_, loop);
-  runs_ = std::make_unique<details::RunSupervisor>(*loop_, mutex_);
+  runs_ = std::make_unique<details::RunSupervisor>(*loop_, mutex_, settings_);
   details::IdentifyCoordinator::Hooks identify;
   identify.run_context = [this] { return run_context(); };
   identify.adopt = [this](hc::ModelFile file, const std::string& path,
@@ -104,15 +105,16 @@ Bench::Bench(BenchSettings settings)
       });
   details::RunHooks hooks;
   hooks.run_context = [this] { return run_context(); };
-  hooks.launch = [this](const char* kind, details::BuiltRun run) {
-    return launch(kind, std::move(run));
-  };
   hooks.deliver = [this](json result) { deliver_result(std::move(result)); };
   feedback_ = std::make_unique<details::FeedbackDesigner>(parts, *models_, hooks);
   if (is_stage()) {
     stage_ = std::make_unique<details::StageCoordinator>(parts, *models_, *learning_, uploads_,
                                                          std::move(hooks));
   }
+  handback_ = std::make_unique<details::RunHandback>(
+      parts,
+      details::RunHandback::Owners{*identify_, *learning_, *feedback_, stage_.get(),
+                                   [this](json result) { deliver_result(std::move(result)); }});
 }
 
 Bench::~Bench() {
@@ -126,10 +128,10 @@ Bench::~Bench() {
 
 RealtimeReport Bench::start() {
   realtime_ = loop_->start();
-  runs_->start({[this](std::unique_ptr<RunProgram> run) { finalize(std::move(run)); },
+  runs_->start({[this](std::unique_ptr<RunProgram> run) { handback_->played(std::move(run)); },
                 [this] { learning_->poll(); },
                 [this](std::unique_ptr<RunProgram> run, RunEnd end, const std::string& why) {
-                  end_unplayed(std::move(run), end, why);
+                  handback_->unplayed(std::move(run), end, why);
                 }});
   return realtime_;
 }
@@ -145,7 +147,7 @@ void Bench::shutdown() {
   }
   runs_->join();
   if (loop_) {
-    if (auto finished = loop_->take_finished()) finalize(std::move(finished));
+    if (auto finished = loop_->take_finished()) handback_->played(std::move(finished));
   }
   if (driver_) {
     driver_->safe_state();
@@ -172,22 +174,6 @@ bool Bench::loop_advanced() {
 }
 
 bool Bench::wait_idle(std::chrono::milliseconds timeout) { return runs_->wait_idle(timeout); }
-
-std::string Bench::new_run_id(const char* kind) {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char stamp[32];
-  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
-  // A daemon restarted within the second counts from 1 again: an id whose log is there
-  // already is taken by the run before the restart.
-  std::string id;
-  std::error_code ec;
-  do {
-    id = std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
-  } while (std::filesystem::exists(std::filesystem::path(settings_.log_dir) / (id + ".csv"), ec));
-  return id;
-}
 
 json Bench::handle(const std::string& cmd, const json& params, std::uint64_t client) {
   const std::lock_guard one_at_a_time(commands_mutex_);
@@ -308,16 +294,6 @@ void Bench::require_idle() const {
   runs_->require_idle();
 }
 
-Bench::SubmittedRun Bench::submit_run(std::unique_ptr<RunProgram> p, const json& header) {
-  details::open_run_log(*p, header, settings_);
-  SubmittedRun s{p->run_id, p->log->path().string(), p->total_samples};
-  if (auto refused = loop_->submit(std::move(p))) {
-    refused->log->close();
-    throw common::CommandError("busy", "the loop did not accept the run");
-  }
-  return s;
-}
-
 details::RunContext Bench::run_context() const {
   return {settings_,
           models_->active(),
@@ -328,47 +304,6 @@ details::RunContext Bench::run_context() const {
           feedback_plans_};
 }
 
-json Bench::launch(const char* kind, details::BuiltRun run) {
-  run.program->run_id = new_run_id(kind);
-  // The request's runs (identify's segments) follow each other after a fixed gap on the
-  // simulated clock, however long the bench computes between them; released with its result.
-  loop_->hold_time_between_runs(true);
-  struct ReleaseUnlessLaunched {  // a log that cannot open launches nothing: paced idle again
-    BenchLoop& loop;
-    bool launched = false;
-    ~ReleaseUnlessLaunched() {
-      if (!launched) loop.hold_time_between_runs(false);
-    }
-  } hold{*loop_};
-  const bool prepared = static_cast<bool>(run.preparation.work);
-  SubmittedRun r;
-  if (prepared) {
-    // Prepared on the supervisor thread, then submitted: the reply does not wait for it.
-    details::open_run_log(*run.program, run.header, settings_);
-    r = {run.program->run_id, run.program->log->path().string(), run.program->total_samples};
-  } else {
-    r = submit_run(std::move(run.program), run.header);
-  }
-  const std::string run_id = r.run_id, log_path = r.log_path;
-  const std::uint64_t total = r.total;
-  json active = {{"run_id", run_id}, {"kind", kind}, {"total", total}, {"log", log_path}};
-  active.update(run.status);
-  if (prepared) {
-    runs_->queue(std::move(run.program),
-                 std::make_unique<details::RunPreparation>(std::move(run.preparation)),
-                 std::move(active));
-  } else {
-    runs_->running(std::move(active));
-  }
-  json reply = {{"run_id", run_id},
-                {"samples", total},
-                {"duration_s", static_cast<double>(total) * dt_},
-                {"log", log_path}};
-  reply.update(run.reply);
-  hold.launched = true;
-  return reply;
-}
-
 json Bench::start_identify(const details::RequestParams& request) {
   const details::IdentifyRequest identify = details::parse_identify_request(request, settings_);
   std::lock_guard lock(mutex_);
@@ -376,8 +311,8 @@ json Bench::start_identify(const details::RequestParams& request) {
   if (is_stage()) return stage_->start_identify(identify);
   details::BuiltRun run = details::make_identify_program(identify, run_context());
   json fit = std::move(run.fit);
-  json reply = launch("identify", std::move(run));
-  pending_fit_ = std::move(fit);
+  json reply = runs_->launch("identify", std::move(run));
+  handback_->expect_fit(std::move(fit));
   return reply;
 }
 
@@ -399,7 +334,7 @@ json Bench::start_excite(const details::RequestParams& request, std::uint64_t cl
   const std::string upload_name = request.string("drive_upload", "");
   require_idle();
   const auto upload = uploads_.complete(upload_name, client, UploadKind::kDrive);
-  json reply = launch("excite", details::make_excite_program(*upload, run_context()));
+  json reply = runs_->launch("excite", details::make_excite_program(*upload, run_context()));
   uploads_.erase(upload_name, client);  // the run has it now
   return reply;
 }
@@ -427,70 +362,10 @@ json Bench::start_track(const details::RequestParams& request, std::uint64_t cli
   if (run.reply.contains("feedback") && run.reply["feedback"].is_object()) {
     feedback_->track_started(run.reply["feedback"], track.compensator);
   }
-  json reply = launch("track", std::move(run));
+  json reply = runs_->launch("track", std::move(run));
   if (upload) uploads_.erase(upload_name, client);  // the run has it now
   learning_->started(reply["run_id"].get<std::string>(), std::move(learning));
   return reply;
-}
-
-void Bench::end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason) {
-  {
-    std::lock_guard lock(mutex_);
-    runs_->finalizing();
-  }
-  run->end = end;
-  json report = details::collect_result(*run, loop_->last_output()).report;
-  // Its learners go with the program that holds their exchanges.
-  if (run->axes() > 1) {
-    details::replace_with_stage_result(report, *run, settings_.axes);
-    learning_->axes_finished(*run, report);
-  } else {
-    learning_->finished(*run, report);
-  }
-  report["reason"] = reason;
-  deliver_result(std::move(report));
-}
-
-void Bench::finalize(std::unique_ptr<RunProgram> run) {
-  if (identify_->owns(*run)) {
-    identify_->segment_played(std::move(run));
-    return;
-  }
-  {
-    std::lock_guard lock(mutex_);
-    runs_->finalizing();
-  }
-  details::RunResult result = details::collect_result(*run, loop_->last_output());
-  if (run->axes() > 1) {
-    details::replace_with_stage_result(result.report, *run, settings_.axes);
-    learning_->axes_finished(*run, result.report);
-  } else {
-    learning_->finished(*run, result.report);
-  }
-  if (run->axes() > 1 && result.kind == RunKind::kFrequencyResponse) {
-    stage_->responses_measured(*run, std::move(result));
-    return;
-  }
-  if (result.kind == RunKind::kFrequencyResponse) {
-    feedback_->responses_measured(std::move(run), std::move(result));
-    return;
-  }
-  if (run->axes() > 1) {
-    if (result.wants_fit()) {
-      stage_->identified(*run, std::move(result));
-      return;
-    }
-  } else if (result.wants_fit()) {
-    json fit_request;
-    {
-      std::lock_guard lock(mutex_);
-      fit_request = pending_fit_;
-    }
-    // Delivers when the candidates are verified.
-    identify_->excitation_played(*run, std::move(result), fit_request);
-    return;
-  }
-  deliver_result(std::move(result.report));
 }
 
 void Bench::deliver_result(json result) {

@@ -12,6 +12,7 @@
 #include "runs/details/response_program.hpp"
 #include "runs/details/run_context.hpp"
 #include "service/details/model_store.hpp"
+#include "service/details/run_supervisor.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -33,7 +34,7 @@ FeedbackDesigner::FeedbackDesigner(BenchParts bench, ModelStore& models, RunHook
 json FeedbackDesigner::start_frf(const RequestParams& request) {
   const RunContext ctx = hooks_.run_context();
   const sim::FrequencyResponseExcitationOptions o = response_options(request, ctx);
-  json reply = hooks_.launch("frf", make_response_program(o, ctx));
+  json reply = bench_.runs.launch("frf", make_response_program(o, ctx));
   frf_options_ = o;
   return reply;
 }

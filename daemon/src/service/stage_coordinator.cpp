@@ -153,7 +153,7 @@ json StageCoordinator::start_identify(const IdentifyRequest& request) {
   BuiltRun run =
       make_stage_identify_program(request, hooks_.run_context(), bench_.settings.axes, u_now);
   json fit = std::move(run.fit);
-  json reply = hooks_.launch("identify", std::move(run));
+  json reply = bench_.runs.launch("identify", std::move(run));
   fit_request_ = std::move(fit);
   return reply;
 }
@@ -172,7 +172,7 @@ json StageCoordinator::start_track(const RequestParams& request, std::uint64_t c
   BuiltRun run = make_stage_track_program(track, ctx, stage_.get(), u_now, raw);
   std::unique_ptr<TrackLearning> learning = std::move(run.learning);
   std::vector<std::unique_ptr<TrackLearning>> others = std::move(run.axis_learning);
-  json reply = hooks_.launch("track", std::move(run));
+  json reply = bench_.runs.launch("track", std::move(run));
   for (const std::string& name : track.uploads) uploads_.erase(name, client);
   learning_.started(reply["run_id"].get<std::string>(), std::move(learning), std::move(others));
   return reply;
@@ -196,7 +196,7 @@ json StageCoordinator::start_excite(const RequestParams& request, std::uint64_t 
   }
   BuiltRun run = make_stage_excite_program(raw, hooks_.run_context(), stage_.get(),
                                            bench_.settings.axes, axis_outputs());
-  json reply = hooks_.launch("excite", std::move(run));
+  json reply = bench_.runs.launch("excite", std::move(run));
   for (const std::string& name : names) uploads_.erase(name, client);  // the run has them now
   return reply;
 }
@@ -215,7 +215,7 @@ json StageCoordinator::start_frf(const RequestParams& request) {
   }
   BuiltRun run = make_stage_response_program(options, ctx, bench_.settings.axes, u_now);
   const std::size_t turn = run.fit.value("turn_samples", std::size_t{0});
-  json reply = hooks_.launch("frf", std::move(run));
+  json reply = bench_.runs.launch("frf", std::move(run));
   frf_options_ = std::move(options);
   frf_turn_ = turn;
   return reply;

@@ -38,7 +38,7 @@ struct Harness {
     EXPECT_TRUE(driver->configure(json::object(), settings.loop.rate_hz).ok);
     EXPECT_TRUE(driver->activate().ok);
     loop = std::make_unique<hd::BenchLoop>(*driver, settings.loop);
-    runs = std::make_unique<hd::details::RunSupervisor>(*loop, mutex);
+    runs = std::make_unique<hd::details::RunSupervisor>(*loop, mutex, settings);
     hd::details::IdentifyCoordinator::Hooks hooks;
     hooks.run_context = []() -> hd::details::RunContext {
       throw std::logic_error("no run is built before a candidate fits");

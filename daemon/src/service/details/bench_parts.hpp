@@ -14,7 +14,6 @@ namespace hystbench::daemon::details {
 
 class RunSupervisor;
 struct RunContext;
-struct BuiltRun;
 
 struct BenchParts {
   const BenchSettings& settings;
@@ -29,9 +28,6 @@ struct BenchParts {
 struct RunHooks {
   /// What the run builders need to know. The caller holds the bench's mutex.
   std::function<RunContext()> run_context;
-  /// Names the built run, submits it and makes it the active run; the start reply. The caller
-  /// holds the bench's mutex.
-  std::function<nlohmann::json(const char* kind, BuiltRun run)> launch;
   /// A result, kept and announced (run.finished). No lock held.
   std::function<void(nlohmann::json)> deliver;
 };

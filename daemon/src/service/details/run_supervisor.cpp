@@ -1,6 +1,11 @@
 #include "service/details/run_supervisor.hpp"
 
+#include <ctime>
+#include <filesystem>
+#include <system_error>
+
 #include "hystbench/common/command_error.hpp"
+#include "service/details/run_log.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -36,6 +41,60 @@ void RunSupervisor::require_idle() const {
 
 void RunSupervisor::set_stage(const std::string& stage) {
   if (!active_.is_null()) active_["stage"] = stage;
+}
+
+std::string RunSupervisor::new_run_id(const char* kind) {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &tm);
+  // A daemon restarted within the second counts from 1 again: an id whose log is there
+  // already is taken by the run before the restart.
+  std::string id;
+  std::error_code ec;
+  do {
+    id = std::string(stamp) + "-" + kind + "-" + std::to_string(++run_counter_);
+  } while (std::filesystem::exists(std::filesystem::path(settings_.log_dir) / (id + ".csv"), ec));
+  return id;
+}
+
+json RunSupervisor::launch(const char* kind, BuiltRun run) {
+  RunProgram& program = *run.program;
+  program.run_id = new_run_id(kind);
+  // The request's runs (identify's segments) follow each other after a fixed gap on the
+  // simulated clock, however long the bench computes between them; released with its result.
+  loop_.hold_time_between_runs(true);
+  struct ReleaseUnlessLaunched {  // a log that cannot open launches nothing: paced idle again
+    BenchLoop& loop;
+    bool launched = false;
+    ~ReleaseUnlessLaunched() {
+      if (!launched) loop.hold_time_between_runs(false);
+    }
+  } hold{loop_};
+  open_run_log(program, run.header, settings_);
+  const std::string run_id = program.run_id, log_path = program.log->path().string();
+  const std::uint64_t total = program.total_samples;
+  json active = {{"run_id", run_id}, {"kind", kind}, {"total", total}, {"log", log_path}};
+  active.update(run.status);
+  if (run.preparation.work) {
+    // Prepared on the supervisor thread, then submitted: the reply does not wait for it.
+    queue(std::move(run.program), std::make_unique<RunPreparation>(std::move(run.preparation)),
+          std::move(active));
+  } else {
+    if (auto refused = loop_.submit(std::move(run.program))) {
+      refused->log->close();
+      throw common::CommandError("busy", "the loop did not accept the run");
+    }
+    running(std::move(active));
+  }
+  json reply = {{"run_id", run_id},
+                {"samples", total},
+                {"duration_s", static_cast<double>(total) / settings_.loop.rate_hz},
+                {"log", log_path}};
+  reply.update(run.reply);
+  hold.launched = true;
+  return reply;
 }
 
 void RunSupervisor::running(json active) {

@@ -4,12 +4,13 @@
 // show it, and the supervisor thread. That thread prepares a queued run and hands it to the
 // loop, announces each run and segment (run.progress), reports progress every 0.5 s, and hands
 // each run the loop finished to the bench (Hooks::finished), which makes its result and calls
-// deliver(). It shares the bench's mutex (one lock guards the bench's state and its run's):
-// each method says whether it takes the lock or expects it held. Not real-time safe; the loop
-// thread never calls it.
+// deliver(). launch() names a built run, opens its log and starts it. It shares the bench's mutex
+// (one lock guards the bench's state and its run's): each method says whether it takes the lock or
+// expects it held. Not real-time safe; the loop thread never calls it.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -17,6 +18,7 @@
 #include <string>
 #include <thread>
 
+#include "hystbench/daemon/config/bench_settings.hpp"
 #include "hystbench/daemon/loop/bench_loop.hpp"
 #include "runs/details/run_context.hpp"
 
@@ -42,7 +44,10 @@ class RunSupervisor {
     std::function<void(std::unique_ptr<RunProgram>, RunEnd, const std::string&)> unplayed;
   };
 
-  RunSupervisor(BenchLoop& loop, std::mutex& mutex) : loop_(loop), mutex_(mutex) {}
+  /// The bench's loop, its mutex and its settings (the log folder, the loop's rate); each
+  /// outlives the supervisor.
+  RunSupervisor(BenchLoop& loop, std::mutex& mutex, const BenchSettings& settings)
+      : loop_(loop), mutex_(mutex), settings_(settings) {}
   ~RunSupervisor();
   RunSupervisor(const RunSupervisor&) = delete;
   RunSupervisor& operator=(const RunSupervisor&) = delete;
@@ -65,11 +70,12 @@ class RunSupervisor {
   const nlohmann::json& active() const noexcept { return active_; }
   /// The active run's stage, as status and run.progress name it (nothing when idle).
   void set_stage(const std::string& stage);
-  /// A run submitted to the loop is the active one; the supervisor announces it.
-  void running(nlohmann::json active);
-  /// A run queued for its preparation on the supervisor thread, which then submits it.
-  void queue(std::unique_ptr<RunProgram> run, std::unique_ptr<RunPreparation> preparation,
-             nlohmann::json active);
+  /// Names a built run `<UTC second>-<kind>-<n>` (n counts up; a name whose log is in the log
+  /// folder already is skipped), opens its log, then hands it to the loop, or with a preparation
+  /// queues it for the supervisor thread; it is the active run from then on. Returns the start
+  /// reply: run_id, samples, duration_s, log, and the builder's reply. Throws CommandError
+  /// log_error (the log does not open) or busy (the loop refuses the run; its log closed).
+  nlohmann::json launch(const char* kind, BuiltRun run);
   /// A segment of the active run (identify's verification or responses, a stage's responses):
   /// submitted to the loop, the active run's stage, total and `log_key` set to it. False with
   /// `why` (its log closed) when the daemon shuts down or the loop refuses it.
@@ -93,6 +99,12 @@ class RunSupervisor {
   void emit(const nlohmann::json& event);
 
  private:
+  /// A run submitted to the loop is the active one; the supervisor announces it.
+  void running(nlohmann::json active);
+  /// A run queued for its preparation on the supervisor thread, which then submits it.
+  void queue(std::unique_ptr<RunProgram> run, std::unique_ptr<RunPreparation> preparation,
+             nlohmann::json active);
+  std::string new_run_id(const char* kind);
   void supervise();
   /// run.progress once for a run or segment not announced yet.
   void announce();
@@ -105,6 +117,7 @@ class RunSupervisor {
 
   BenchLoop& loop_;
   std::mutex& mutex_;
+  const BenchSettings& settings_;
   Hooks hooks_;
   // Guarded by mutex_.
   RunPhase phase_ = RunPhase::kIdle;
@@ -115,6 +128,7 @@ class RunSupervisor {
   std::unique_ptr<RunPreparation> preparation_;
   RunEnd cancel_ = RunEnd::kCompleted;  // what stop or abort asked of a preparation
   EventSink sink_;
+  std::uint64_t run_counter_ = 0;  // the last run id's n
   // The supervisor thread's own.
   std::string announced_;  // run_id/stage last announced
   std::thread thread_;

@@ -35,9 +35,6 @@ namespace details {
 class RequestParams;
 struct Command;
 struct RunContext;
-struct BuiltRun;
-struct RunPreparation;
-struct RunResult;
 struct PlanCache;
 struct FeedbackPlanCache;
 struct IdentifyRequest;
@@ -48,6 +45,7 @@ class IdentifyCoordinator;
 class LearningRuns;
 class StageCoordinator;
 class FeedbackDesigner;
+class RunHandback;
 std::span<const Command> bench_commands();
 }  // namespace details
 
@@ -123,27 +121,11 @@ class Bench {
   nlohmann::json delete_model(const details::RequestParams& request);
   /// Throws CommandError fault or busy unless a run may start. Caller holds mutex_.
   void require_idle() const;
-  struct SubmittedRun {
-    std::string run_id, log_path;
-    std::uint64_t total;
-  };
   /// What the run builders need to know (settings, model, present output). Caller holds mutex_.
   details::RunContext run_context() const;
-  /// Names the built run, submits it and makes it the active run; returns the start reply.
-  /// Caller holds mutex_.
-  nlohmann::json launch(const char* kind, details::BuiltRun run);
-  /// Opens the run's log with `header` and hands the run to the loop; throws busy when the loop
-  /// does not take it (the log is closed). Caller holds mutex_.
-  SubmittedRun submit_run(std::unique_ptr<RunProgram> p, const nlohmann::json& header);
-  /// The result of a run that ends before the loop played it (stopped or aborted while it was
-  /// prepared, refused by the loop): delivered with 0 samples and `reason`.
-  void end_unplayed(std::unique_ptr<RunProgram> run, RunEnd end, const std::string& reason);
-  /// A run the loop played and handed back: its result (supervisor thread).
-  void finalize(std::unique_ptr<RunProgram> run);
   /// Keeps the result as the last one and in the history; the supervisor leaves the bench idle
   /// and emits run.finished.
   void deliver_result(nlohmann::json result);
-  std::string new_run_id(const char* kind);
   void emit(const nlohmann::json& event);
   bool quitting() const noexcept;
 
@@ -168,12 +150,12 @@ class Bench {
   // frf's runs on one axis and the feedback designed on what they measure.
   std::unique_ptr<details::FeedbackDesigner> feedback_;
   nlohmann::json last_result_;
-  nlohmann::json pending_fit_;  // identify's fit request (details::BuiltRun::fit)
   // A stage's model and its runs (a stage of several axes only).
   std::unique_ptr<details::StageCoordinator> stage_;
   // The learning runs' learners, their trials and kept drives (supervisor thread).
   std::unique_ptr<details::LearningRuns> learning_;
-  std::uint64_t run_counter_ = 0;
+  // Each run handed back to its owner, or its result delivered (supervisor thread).
+  std::unique_ptr<details::RunHandback> handback_;
   UploadStore uploads_;  // its own lock
   std::uint64_t watchdog_ticks_ = 0;
 };
