@@ -12,33 +12,19 @@
 #include <string>
 #include <vector>
 
-#include "drivers/example_driver.hpp"
-#include "hystbench/daemon/loop/bench_loop.hpp"
-#include "service/details/run_supervisor.hpp"
+#include "support/bench_parts_harness.hpp"
 
 namespace hd = hystbench::daemon;
 using nlohmann::json;
 
 namespace {
 
-struct Harness {
-  hd::BenchSettings settings;
-  std::unique_ptr<hystbench::drivers::Driver> driver;
-  std::unique_ptr<hd::BenchLoop> loop;
-  std::mutex mutex;
-  std::unique_ptr<hd::details::RunSupervisor> runs;
+struct Harness : hystbench::test::BenchPartsHarness {
   std::vector<json> delivered;
   int adopted = 0;
   std::unique_ptr<hd::details::IdentifyCoordinator> coordinator;
 
   Harness() {
-    settings.loop.rate_hz = 2000.0;
-    driver =
-        std::make_unique<hystbench::drivers::Driver>(std::make_unique<example::FirstOrderDriver>());
-    EXPECT_TRUE(driver->configure(json::object(), settings.loop.rate_hz).ok);
-    EXPECT_TRUE(driver->activate().ok);
-    loop = std::make_unique<hd::BenchLoop>(*driver, settings.loop);
-    runs = std::make_unique<hd::details::RunSupervisor>(*loop, mutex, settings);
     hd::details::IdentifyCoordinator::Hooks hooks;
     hooks.run_context = []() -> hd::details::RunContext {
       throw std::logic_error("no run is built before a candidate fits");
@@ -48,8 +34,7 @@ struct Harness {
       return json();
     };
     hooks.deliver = [this](json result) { delivered.push_back(std::move(result)); };
-    coordinator = std::make_unique<hd::details::IdentifyCoordinator>(
-        hd::details::BenchParts{settings, *loop, *runs, mutex}, std::move(hooks));
+    coordinator = std::make_unique<hd::details::IdentifyCoordinator>(parts(), std::move(hooks));
   }
 };
 

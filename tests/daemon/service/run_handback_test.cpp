@@ -15,25 +15,18 @@
 #include <string>
 #include <vector>
 
-#include "drivers/example_driver.hpp"
-#include "hystbench/daemon/loop/bench_loop.hpp"
 #include "service/details/feedback_designer.hpp"
 #include "service/details/identify_coordinator.hpp"
 #include "service/details/learning_runs.hpp"
 #include "service/details/model_store.hpp"
-#include "service/details/run_supervisor.hpp"
+#include "support/bench_parts_harness.hpp"
 
 namespace hd = hystbench::daemon;
 using nlohmann::json;
 
 namespace {
 
-struct Harness {
-  hd::BenchSettings settings;
-  std::unique_ptr<hystbench::drivers::Driver> driver;
-  std::unique_ptr<hd::BenchLoop> loop;
-  std::mutex mutex;
-  std::unique_ptr<hd::details::RunSupervisor> runs;
+struct Harness : hystbench::test::BenchPartsHarness {
   std::unique_ptr<hd::details::ModelStore> models;
   std::unique_ptr<hd::details::IdentifyCoordinator> identify;
   std::unique_ptr<hd::details::LearningRuns> learning;
@@ -42,16 +35,9 @@ struct Harness {
   std::vector<json> delivered;
 
   Harness() {
-    settings.loop.rate_hz = 2000.0;
     settings.model_dir = (std::filesystem::temp_directory_path() / "hystbench-handback").string();
-    driver =
-        std::make_unique<hystbench::drivers::Driver>(std::make_unique<example::FirstOrderDriver>());
-    EXPECT_TRUE(driver->configure(json::object(), settings.loop.rate_hz).ok);
-    EXPECT_TRUE(driver->activate().ok);
-    loop = std::make_unique<hd::BenchLoop>(*driver, settings.loop);
-    runs = std::make_unique<hd::details::RunSupervisor>(*loop, mutex, settings);
     models = std::make_unique<hd::details::ModelStore>(settings.model_dir);
-    const hd::details::BenchParts parts{settings, *loop, *runs, mutex};
+    const hd::details::BenchParts parts = this->parts();
     const auto deliver = [this](json result) { delivered.push_back(std::move(result)); };
     hd::details::IdentifyCoordinator::Hooks identify_hooks;
     identify_hooks.run_context = []() -> hd::details::RunContext {
