@@ -315,6 +315,30 @@ bool details::IdentifyCoordinator::play_while_diagnosing() {
   return false;
 }
 
+details::DiagnosisAhead::Progress details::IdentifyCoordinator::extension_progress() const {
+  return [this, run_id = session_->result["run_id"].get<std::string>()](double f,
+                                                                        const std::string& what) {
+    emit({{"event", "fit.progress"},
+          {"run_id", run_id},
+          {"fraction", f},
+          {"stage", "extension: " + what}});
+  };
+}
+
+details::DiagnosisAhead::Taken details::IdentifyCoordinator::take_diagnosis(
+    double exchange_s, const details::DiagnosisAhead::Progress& progress) {
+  IdentifySession& s = *session_;
+  // The worker started with the session's extension; without it, the diagnosis runs here.
+  details::DiagnosisAhead::Taken taken =
+      s.ahead ? s.ahead->take(s.base, progress)
+              : details::DiagnosisAhead::Taken{
+                    identify_diagnosis(s.candidates, exchange_s, s.u, s.y, dt_, s.swap_operator)(
+                        s.base, {progress, nullptr, 0}),
+                    "after the verification"};
+  s.ahead.reset();
+  return taken;
+}
+
 bool details::IdentifyCoordinator::extend_identified_model() {
   IdentifySession& s = *session_;
   s.step = IdentifyStep::kExtending;
@@ -331,21 +355,8 @@ bool details::IdentifyCoordinator::extend_identified_model() {
   const double exchange_s = s.history.value("exchange_ticks", 0) * dt_;
   try {
     const std::vector<double> t = record_times(s.u.size(), dt_);
-    const details::DiagnosisAhead::Progress progress =
-        [this, run_id = s.result["run_id"].get<std::string>()](double f, const std::string& what) {
-          emit({{"event", "fit.progress"},
-                {"run_id", run_id},
-                {"fraction", f},
-                {"stage", "extension: " + what}});
-        };
-    // The worker started with the session's extension; without it, the diagnosis runs here.
-    details::DiagnosisAhead::Taken taken =
-        s.ahead ? s.ahead->take(s.base, progress)
-                : details::DiagnosisAhead::Taken{
-                      identify_diagnosis(s.candidates, exchange_s, s.u, s.y, dt_, s.swap_operator)(
-                          s.base, {progress, nullptr, 0}),
-                      "after the verification"};
-    s.ahead.reset();
+    const details::DiagnosisAhead::Progress progress = extension_progress();
+    const details::DiagnosisAhead::Taken taken = take_diagnosis(exchange_s, progress);
     const hc::Diagnosis& d = taken.diagnosis;
     std::optional<ExtensionDraft> draft = extension_draft(d);
     s.extension = extension_json(d, draft ? draft->parts : std::vector<std::string>{});

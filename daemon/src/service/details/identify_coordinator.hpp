@@ -16,6 +16,7 @@
 #include "hystbench/compensation/stage_responses.hpp"
 #include "hystbench/daemon/config/bench_settings.hpp"
 #include "hystbench/daemon/loop/bench_loop.hpp"
+#include "runs/details/diagnosis_ahead.hpp"
 #include "runs/details/run_context.hpp"
 #include "runs/details/run_result.hpp"
 #include "service/details/bench_parts.hpp"
@@ -84,6 +85,11 @@ class IdentifyCoordinator {
   /// Diagnoses the record with the best verified candidate and queues its extension's
   /// verification; false when nothing is added (the reason in the session's extension).
   bool extend_identified_model();
+  /// The extension's progress as fit.progress events of identify's run.
+  DiagnosisAhead::Progress extension_progress() const;
+  /// The base's diagnosis: the worker's (waited for, or run at once on every core), else run
+  /// here; the worker ends either way.
+  DiagnosisAhead::Taken take_diagnosis(double exchange_s, const DiagnosisAhead::Progress& progress);
   /// Once the extension's fast sine has played: its model with the delay the sine's output lag
   /// measures, and the model as timed, queued on that sine ahead of the segments left (nothing
   /// when the lag is outside the trim's bounds or the sine judges no delay or dynamics).
