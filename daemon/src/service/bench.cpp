@@ -3,7 +3,6 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 
@@ -24,7 +23,6 @@
 #include "service/details/model_store.hpp"
 #include "service/details/run_handback.hpp"
 #include "service/details/run_history.hpp"
-#include "service/details/run_log.hpp"
 #include "service/details/run_supervisor.hpp"
 #include "service/details/stage_coordinator.hpp"
 
@@ -86,15 +84,19 @@ Bench::Bench(BenchSettings settings)
   loop.axis_names = settings_.axes;
   loop_ = std::make_unique<BenchLoop>(*driver_, loop);
   runs_ = std::make_unique<details::RunSupervisor>(*loop_, mutex_, settings_);
+  // What every component asks of the bench: the run builders' context, a result delivered.
+  details::RunHooks hooks;
+  hooks.run_context = [this] { return run_context(); };
+  hooks.deliver = [this](json result) { deliver_result(std::move(result)); };
   details::IdentifyCoordinator::Hooks identify;
-  identify.run_context = [this] { return run_context(); };
+  identify.run_context = hooks.run_context;
   identify.adopt = [this](hc::ModelFile file, const std::string& path,
                           const std::optional<hc::StageResponses>& responses, json* why) {
     if (responses) models_->set_measured_responses(*responses);
     models_->adopt(std::move(file), path);
     return feedback_->feedback_now(hc::CompensatorKind::kInversePid, why);
   };
-  identify.deliver = [this](json result) { deliver_result(std::move(result)); };
+  identify.deliver = hooks.deliver;
   const details::BenchParts parts{settings_, *loop_, *runs_, mutex_};
   identify_ = std::make_unique<details::IdentifyCoordinator>(parts, std::move(identify));
   learning_ = std::make_unique<details::LearningRuns>(
@@ -103,18 +105,14 @@ Bench::Bench(BenchSettings settings)
         const std::string path = models_->active_path();
         return path.empty() ? path : std::filesystem::path(path).filename().string();
       });
-  details::RunHooks hooks;
-  hooks.run_context = [this] { return run_context(); };
-  hooks.deliver = [this](json result) { deliver_result(std::move(result)); };
   feedback_ = std::make_unique<details::FeedbackDesigner>(parts, *models_, hooks);
   if (is_stage()) {
-    stage_ = std::make_unique<details::StageCoordinator>(parts, *models_, *learning_, uploads_,
-                                                         std::move(hooks));
+    stage_ =
+        std::make_unique<details::StageCoordinator>(parts, *models_, *learning_, uploads_, hooks);
   }
   handback_ = std::make_unique<details::RunHandback>(
-      parts,
-      details::RunHandback::Owners{*identify_, *learning_, *feedback_, stage_.get(),
-                                   [this](json result) { deliver_result(std::move(result)); }});
+      parts, details::RunHandback::Owners{*identify_, *learning_, *feedback_, stage_.get(),
+                                          hooks.deliver});
 }
 
 Bench::~Bench() {

@@ -44,9 +44,8 @@ json FeedbackDesigner::tune(hc::CompensatorKind kind, const std::string& name,
   const FeedbackPlan plan = plan_feedback(hooks_.run_context(), kind, gains);
   json out = plan.summary;
   out["compensator"] = name;
+  last_ = out;
   out["curves"] = loop_curves(plan, bench_.dt());
-  last_ = plan.summary;
-  last_["compensator"] = name;
   return out;
 }
 

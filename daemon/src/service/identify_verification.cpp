@@ -207,8 +207,9 @@ void details::IdentifyCoordinator::responses_measured(std::unique_ptr<RunProgram
     s.responses_result = {{"error", std::string("the run did not complete: ") + run->end_reason},
                           {"log", log}};
   }
-  // Played while the diagnosis ran: the base's sines and the extension come next.
-  if (s.step == IdentifyStep::kMeasuringResponses || s.interrupted || quitting()) {
+  // Played while the diagnosis ran, the base's sines and the extension come next; played last,
+  // continue_identify() finds nothing left and finishes.
+  if (s.interrupted || quitting()) {
     finish();
   } else {
     continue_identify();

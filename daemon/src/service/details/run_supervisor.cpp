@@ -11,6 +11,12 @@ namespace hystbench::daemon::details {
 
 using nlohmann::json;
 
+namespace {
+
+constexpr const char* kRefused = "the loop did not accept the run";
+
+}  // namespace
+
 RunSupervisor::~RunSupervisor() {
   quit();
   if (thread_.joinable()) thread_.join();
@@ -41,6 +47,12 @@ void RunSupervisor::require_idle() const {
 
 void RunSupervisor::set_stage(const std::string& stage) {
   if (!active_.is_null()) active_["stage"] = stage;
+}
+
+bool RunSupervisor::submit_to_loop(std::unique_ptr<RunProgram> run) {
+  std::unique_ptr<RunProgram> refused = loop_.submit(std::move(run));
+  if (refused) refused->log->close();
+  return refused == nullptr;
 }
 
 std::string RunSupervisor::new_run_id(const char* kind) {
@@ -82,10 +94,7 @@ json RunSupervisor::launch(const char* kind, BuiltRun run) {
     queue(std::move(run.program), std::make_unique<RunPreparation>(std::move(run.preparation)),
           std::move(active));
   } else {
-    if (auto refused = loop_.submit(std::move(run.program))) {
-      refused->log->close();
-      throw common::CommandError("busy", "the loop did not accept the run");
-    }
+    if (!submit_to_loop(std::move(run.program))) throw common::CommandError("busy", kRefused);
     running(std::move(active));
   }
   json reply = {{"run_id", run_id},
@@ -123,9 +132,8 @@ bool RunSupervisor::submit_segment(std::unique_ptr<RunProgram> segment, const st
   }
   const std::uint64_t total = segment->total_samples;
   const std::string log = segment->log->path().string();
-  if (auto refused = loop_.submit(std::move(segment))) {
-    refused->log->close();
-    why = "the loop did not accept the run";
+  if (!submit_to_loop(std::move(segment))) {
+    why = kRefused;
     return false;
   }
   active_["stage"] = stage;

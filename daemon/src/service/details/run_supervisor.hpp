@@ -104,6 +104,8 @@ class RunSupervisor {
   /// A run queued for its preparation on the supervisor thread, which then submits it.
   void queue(std::unique_ptr<RunProgram> run, std::unique_ptr<RunPreparation> preparation,
              nlohmann::json active);
+  /// Hands `run` to the loop; false when the loop refuses it (its log is closed then).
+  bool submit_to_loop(std::unique_ptr<RunProgram> run);
   std::string new_run_id(const char* kind);
   void supervise();
   /// run.progress once for a run or segment not announced yet.
