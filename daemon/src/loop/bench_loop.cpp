@@ -292,6 +292,8 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
       grace_end_ns_ = -1;
       for (std::size_t a = 0; a < axes_; ++a) {
         stuck_[a].reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
+        lateness_[a].reset();
+        y_prev_late_[a] = 0;
       }
       driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
@@ -431,7 +433,8 @@ BenchLoop::TickDrive BenchLoop::drive(std::size_t a, RunProgram& p, std::uint64_
     rec.u_ff = d.u_request;
   } else {
     if (simulated_) await_drive(*p.drive, k);
-    const DriveCommand c = p.drive->update(DriveInput{k, y_prev_[a], k >= p.feedback_from});
+    const DriveCommand c =
+        p.drive->update(DriveInput{k, y_prev_[a], k >= p.feedback_from, y_prev_late_[a]});
     d.y_ref = c.y_ref;
     d.u_request = c.u;
     d.trial_ends = c.trial_ends;
@@ -511,6 +514,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
       if (st == drivers::DriverStatus::kOk) {
         x.response[a] = static_cast<std::uint32_t>(
             std::min<std::uint64_t>(m[a].response_ticks, RunRecords::kNoFreshReading - 1));
+        y_prev_late_[a] = lateness_[a].late_ticks(x.response[a]);
       }
     }
     if (x.failure == nullptr) {

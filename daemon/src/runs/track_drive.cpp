@@ -65,11 +65,21 @@ DriveCommand TrackDrive::update(const DriveInput& in) noexcept {
   auto target_at = [this, tare_um](double tt) noexcept { return feedforward_target(tt, tare_um); };
   // The feedback's reference; NaN before the feedback may act: the PID holds.
   const double fb_ref = in.feedback_on ? d.y_ref : std::numeric_limits<double>::quiet_NaN();
+  // The compensator compares the reading with the reference of the tick before. A reading that
+  // answered late (ReadingLateness) is moved by the reference's motion since the tick it
+  // answered, so that the feedback sees the stage's error and not the exchange's lateness.
+  double y = in.y;
+  if (in.y_late_ticks > 0 && std::isfinite(y)) {
+    auto reference_at = [this](double tt) noexcept {
+      return std::clamp(reference->value(std::max(0.0, tt)), y_ref_min, y_ref_max);
+    };
+    y += reference_at(t - dt_) - reference_at(t - dt_ * static_cast<double>(1 + in.y_late_ticks));
+  }
   compensation::CompensatorOutput out;
   if (targets_.capacity() > 1) {
-    out = compensator->step(fb_ref, in.y, targets_.advance(t, dt_, target_at));
+    out = compensator->step(fb_ref, y, targets_.advance(t, dt_, target_at));
   } else {
-    out = compensator->step(fb_ref, in.y, target_at(t));
+    out = compensator->step(fb_ref, y, target_at(t));
   }
   const double twin = learned_twin ? twin_feedforward(t) : kNoTwin;
   d.u_ff = out.u_ff;

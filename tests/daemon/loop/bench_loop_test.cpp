@@ -10,6 +10,7 @@
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "hystbench/daemon/runs/track_drive.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
+#include "support/stepped_loop.hpp"
 
 namespace hd = hystbench::daemon;
 namespace hs = hystbench::sim;
@@ -99,15 +100,9 @@ TEST(BenchLoop, StepIsIgnoredWhileTheLoopThreadRuns) {
 // stale reading, and does on the tick after a fresh one while the loop still converges.
 TEST(BenchLoop, TheFeedbackHoldsOnAStaleReading) {
   constexpr double kRate = 2000.0, kDt = 1.0 / kRate;
-  fake_now = 0;
-  hystbench::drivers::Driver driver(std::make_unique<example::FirstOrderDriver>());
-  ASSERT_TRUE(driver.configure(nlohmann::json::object(), kRate).ok);
-  ASSERT_TRUE(driver.activate().ok);
-  hd::BenchLoopOptions o;
-  o.rate_hz = kRate;
-  o.clock_ns = &fake_clock;
-  hd::BenchLoop loop(driver, o);
-  loop.step();
+  hystbench::test::SteppedLoop s =
+      hystbench::test::stepped_loop(std::make_unique<example::FirstOrderDriver>(), kRate);
+  hd::BenchLoop& loop = *s.loop;
   namespace hc = hystbench::compensation;
   hc::FeedbackLaw law;
   law.pid.ki = 200.0;  // [1/s] on the 50 Hz first-order stage through its gain

@@ -17,6 +17,7 @@
 #include "hystbench/compensation/pi_model.hpp"
 #include "hystbench/daemon/loop/bench_loop.hpp"
 #include "hystbench/daemon/loop/sample_record.hpp"
+#include "support/stepped_loop.hpp"
 
 namespace hd = hystbench::daemon;
 namespace hc = hystbench::compensation;
@@ -25,8 +26,6 @@ namespace {
 
 constexpr double kRate = 2000.0;
 constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
-std::int64_t fake_now = 0;
-std::int64_t fake_clock() noexcept { return fake_now += 1000; }
 
 // Records every call into buffers reserved before the run (the loop's calls must not allocate).
 class RecordingDrive final : public hd::RunDrive {
@@ -76,24 +75,8 @@ class RecordingDrive final : public hd::RunDrive {
   }
 };
 
-struct SteppedLoop {
-  std::unique_ptr<hystbench::drivers::Driver> driver;
-  std::unique_ptr<hd::BenchLoop> loop;
-};
-
-SteppedLoop stepped_loop() {
-  fake_now = 0;
-  SteppedLoop s;
-  s.driver =
-      std::make_unique<hystbench::drivers::Driver>(std::make_unique<example::FirstOrderDriver>());
-  EXPECT_TRUE(s.driver->configure(nlohmann::json::object(), kRate).ok);
-  EXPECT_TRUE(s.driver->activate().ok);
-  hd::BenchLoopOptions o;
-  o.rate_hz = kRate;
-  o.clock_ns = &fake_clock;
-  s.loop = std::make_unique<hd::BenchLoop>(*s.driver, o);
-  s.loop->step();  // idle: reads the stage once
-  return s;
+hystbench::test::SteppedLoop stepped_loop() {
+  return hystbench::test::stepped_loop(std::make_unique<example::FirstOrderDriver>(), kRate);
 }
 
 // 10 ticks of excitation at 2 V, then the drive, 40 ticks in all, every sample kept.
@@ -112,7 +95,7 @@ std::unique_ptr<hd::RunProgram> program_with(std::unique_ptr<RecordingDrive> dri
 }  // namespace
 
 TEST(RunDrive, TheExcitationPlaysFirstThenTheDriveGivesEveryTicksOutputAndHearsTheTick) {
-  SteppedLoop s = stepped_loop();
+  hystbench::test::SteppedLoop s = stepped_loop();
   auto owned = std::make_unique<RecordingDrive>();
   RecordingDrive& drive = *owned;
   drive.reference_clipped_at = 25;
@@ -156,7 +139,7 @@ TEST(RunDrive, TheExcitationPlaysFirstThenTheDriveGivesEveryTicksOutputAndHearsT
 }
 
 TEST(RunDrive, ADrivesLastTrialEndsTheRunAndAnEarlierScoredStartMovesTheWindows) {
-  SteppedLoop s = stepped_loop();
+  hystbench::test::SteppedLoop s = stepped_loop();
   auto owned = std::make_unique<RecordingDrive>();
   RecordingDrive& drive = *owned;
   drive.lead_in_ends_at = 12;  // a lead-in that ends early: scored from 15, not 18
@@ -178,7 +161,7 @@ TEST(RunDrive, ADrivesLastTrialEndsTheRunAndAnEarlierScoredStartMovesTheWindows)
 }
 
 TEST(RunDrive, ARunLongerThanItsExcitationWithoutADriveIsRefused) {
-  SteppedLoop s = stepped_loop();
+  hystbench::test::SteppedLoop s = stepped_loop();
   auto program = program_with(nullptr);
   auto refused = s.loop->submit(std::move(program));
   ASSERT_NE(refused, nullptr) << "nothing would give the output after the excitation";

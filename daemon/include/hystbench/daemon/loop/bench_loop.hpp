@@ -52,6 +52,7 @@
 
 #include "hystbench/daemon/loop/loop_statistics.hpp"
 #include "hystbench/daemon/loop/output_limiter.hpp"
+#include "hystbench/daemon/loop/reading_lateness.hpp"
 #include "hystbench/daemon/loop/realtime.hpp"
 #include "hystbench/daemon/loop/run_program.hpp"
 #include "hystbench/daemon/loop/scope_tap.hpp"
@@ -271,8 +272,11 @@ class BenchLoop {
   // Loop-thread state.
   RunProgram* active_ = nullptr;
   std::int64_t run_start_ns_ = 0;
-  // Per axis, the last tick's reading for the feedback; NaN after a stale one (it holds).
+  // Per axis, the last tick's reading for the feedback; NaN after a stale one (it holds). With
+  // how late it answered (ReadingLateness): the feedback compares it with the reference of then.
   AxisValues y_prev_{};
+  std::array<std::uint64_t, drivers::kMaxAxes> y_prev_late_{};
+  std::array<ReadingLateness, drivers::kMaxAxes> lateness_{};
   // Per axis, the last tick's reference for the scope; NaN while none is driven.
   AxisValues last_yr_{};
   double dt_ = 1e-4;

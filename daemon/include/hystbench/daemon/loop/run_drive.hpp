@@ -29,6 +29,9 @@ struct DriveInput {
   /// The last fresh reading [µm]; NaN when the last reading was stale (the feedback holds).
   double y = std::numeric_limits<double>::quiet_NaN();
   bool feedback_on = false;  ///< k >= the program's feedback_from: the feedback may act
+  /// How much later y answered than the run's usual readings [ticks] (ReadingLateness): the
+  /// feedback compares it with the reference of that many ticks before.
+  std::uint64_t y_late_ticks = 0;
 };
 
 /// What a drive asks of tick k.
