@@ -36,13 +36,16 @@
 #              inverse+pid (rate dependence, the delay, one mode at 800 Hz, the modified-PI truth)
 #   feedback-learning  a 1 kHz loop with a 190 Hz mode (zeta 0.07), rate dependence and creep
 #              on: identify, then track --learn 10 at 20 and 50 Hz with inverse+pid
+#   feedback-modbus  on the wall clock over Modbus TCP (io = "thread") to hystbench-simdaq at
+#              1 kHz: identify, then two sweeps 1-20 Hz with inverse and inverse+pid; each run's
+#              rms over every scored tick and over those 30 ticks or more after a stale reading
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${HYSTBENCH_BIN:-build/bin}"
 sections=("$@")
-[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled feedback feedback-variants feedback-learning)
+[ ${#sections[@]} -gt 0 ] || sections=(default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled feedback feedback-variants feedback-learning feedback-modbus)
 work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
@@ -97,6 +100,12 @@ track_row() {  # track_row LABEL JSON
 triangle() { hb track --reference triangle --frequency 1 --periods 5 --compensator "$1" --wait --json; }
 # The design a result states (jq filter on its `feedback`), and the frf's bench time.
 design='"\(.structure // .gains); crossover \(.crossover_hz | f) Hz, bandwidth \(.bandwidth_hz | f) Hz, |S| -20 dB from \(.tenfold_rejection_hz | f) Hz; GM >= \([.margins[].gain_margin_db] | min | f) dB, PM >= \([.margins[].phase_margin_deg] | min | f) deg, peak |S| <= \([.margins[].peak_sensitivity_db] | max | f) dB; limited by \(.limited_by // "-")"'
+# identify, then one line: the model kept, the parts its extension adopted and the loop's design.
+identify_design() {
+  local id
+  id=$(hb identify --wait --json || true)
+  jq -r "$f3"'"\(.model.type) [\([.model.extension.parts[]?.cause] | join("+"))]: \(.feedback | '"$design"')"' <<<"$id" || true
+}
 # A 1 kHz bench with a 190 Hz mode (zeta 0.07): the loopback at 1 kHz with one mode.
 slow_bench() {
   sed 's/^rate_hz = 10000/rate_hz = 1000/' config/loopback.toml >"$work/slow.toml"
@@ -430,8 +439,7 @@ for section in "${sections[@]}"; do
           fi
           start_daemon "variant-$truth-$bench" "$config" "$extra"
           echo "### $truth truth, $bench loop"
-          id=$(hb identify --wait --json || true)
-          jq -r "$f3"'"\(.model.type) [\([.model.extension.parts[]?.cause] | join("+"))]: \(.feedback | '"$design"')"' <<<"$id" || true
+          identify_design
           echo
           hb sweep --frequencies "$freqs" --compensators inverse,inverse+pid || true
           echo
@@ -443,8 +451,7 @@ for section in "${sections[@]}"; do
       slow=$(slow_bench)
       start_daemon feedback-learning "$slow" $'[actuator.rate_dependence]\nenabled = true'
       echo "### 1 kHz loop, a 190 Hz mode, rate dependence and creep on: learning with the default compensator (inverse) and with inverse+pid"
-      id=$(hb identify --wait --json || true)
-      jq -r "$f3"'"\(.model.type) [\([.model.extension.parts[]?.cause] | join("+"))]: \(.feedback | '"$design"')"' <<<"$id" || true
+      identify_design
       echo
       echo "| compensator | f [Hz] | trials (rms %, the first the compensator's) | last rms % | last max % | floor % | why it ended |"
       echo "| --- | --- | --- | --- | --- | --- | --- |"
@@ -459,8 +466,47 @@ for section in "${sections[@]}"; do
       echo
       stop_daemon
       ;;
+    feedback-modbus)
+      port=15502
+      "$bin/hystbench-simdaq" --port "$port" >"$work/simdaq.log" 2>&1 &
+      simdaq_pid=$!
+      sed "s/^rate_hz = 5000/rate_hz = 1000/; s/^port = 1502/port = $port/" config/modbus-tcp.toml \
+        >"$work/modbus-1k.toml"
+      clock=wall
+      start_daemon feedback-modbus "$work/modbus-1k.toml"
+      clock=simulated
+      echo "### Modbus TCP to hystbench-simdaq, 1 kHz, wall clock"
+      identify_design
+      echo
+      echo "| sweep | f [Hz] | compensator | rms % | max % | rms % 30 ticks or more after a stale reading (share of the scored ticks) |"
+      echo "| --- | --- | --- | --- | --- | --- |"
+      for sweep in 1 2; do
+        hb sweep --frequencies 1,5,10,20 --compensators inverse,inverse+pid --json >"$work/modbus-sweep$sweep.json" || true
+        python3 - "$work/modbus-sweep$sweep.json" "$sweep" <<'PY'
+import csv, json, math, sys
+for r in json.load(open(sys.argv[1]))["rows"]:
+    lines = open(r["log"]).read().splitlines()
+    run = next(json.loads(l[2:])["run"] for l in lines if l.startswith('# {"run"'))
+    rows = list(csv.DictReader(l for l in lines if not l.startswith("#")))
+    clear, last_stale = [], -10**9
+    for k, row in enumerate(rows):
+        if int(row["flags"]) & 64:
+            last_stale = k
+        if k >= run["metrics_from"] and k - last_stale >= 30:
+            clear.append(float(row["y"]) - float(row["yr"]))
+    rms = math.sqrt(sum(e * e for e in clear) / len(clear)) * 100 / r["range_um"] if clear else float("nan")
+    share = len(clear) / max(1, len(rows) - run["metrics_from"])
+    print(f"| {sys.argv[2]} | {r['frequency_hz']:g} | {r['compensator']} | {r['rms_error_percent']:.3f} | "
+          f"{r['max_error_percent']:.2f} | {rms:.3f} ({share:.0%}) |")
+PY
+      done
+      echo
+      stop_daemon
+      kill "$simdaq_pid" 2>/dev/null || true
+      wait "$simdaq_pid" 2>/dev/null || true
+      ;;
     *)
-      echo "measure-loopback: unknown section '$section' (default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled feedback feedback-variants feedback-learning)" >&2
+      echo "measure-loopback: unknown section '$section' (default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled feedback feedback-variants feedback-learning feedback-modbus)" >&2
       exit 2
       ;;
   esac
