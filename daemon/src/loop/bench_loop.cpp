@@ -294,6 +294,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
         stuck_[a].reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
         lateness_[a].reset();
         y_prev_late_[a] = 0;
+        fed_back_[a] = true;
       }
       driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
@@ -503,6 +504,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
         rec[a].flags |= kSampleStale;
         ++pa.counters.stale_reads;
         stuck_[a].stale(u[a]);
+        lateness_[a].stale();
       }
       if (x.failure == nullptr && !std::isfinite(m[a].position_um)) {
         x.failure = axis_fault(a, kNotFinite);
@@ -514,15 +516,19 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
       if (st == drivers::DriverStatus::kOk) {
         x.response[a] = static_cast<std::uint32_t>(
             std::min<std::uint64_t>(m[a].response_ticks, RunRecords::kNoFreshReading - 1));
-        y_prev_late_[a] = lateness_[a].late_ticks(x.response[a]);
+        const ReadingLateness::Fresh f = lateness_[a].fresh(x.response[a]);
+        y_prev_late_[a] = f.late_ticks;
+        fed_back_[a] = !f.hold;
       }
     }
     if (x.failure == nullptr) {
       for (std::size_t a = 0; a < axes_; ++a) {
         // A stale reading is the last fresh one again: the feedback must not integrate an error
-        // that only the reading's age makes. It holds until the next fresh one.
-        y_prev_[a] = st == drivers::DriverStatus::kOk ? m[a].position_um
-                                                      : std::numeric_limits<double>::quiet_NaN();
+        // that only the reading's age makes. It holds until the next fresh one, and over the
+        // fresh ones that follow a stall (ReadingLateness).
+        y_prev_[a] = st == drivers::DriverStatus::kOk && fed_back_[a]
+                         ? m[a].position_um
+                         : std::numeric_limits<double>::quiet_NaN();
         last_y_[a].store(m[a].position_um, std::memory_order_relaxed);
         if (a < n && st == drivers::DriverStatus::kOk && p.axis(a).drive) {
           p.axis(a).drive->measured(k, m[a]);

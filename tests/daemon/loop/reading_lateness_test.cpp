@@ -23,17 +23,43 @@ namespace {
 TEST(ReadingLateness, AReadingIsLateByHowFarItExceedsTheRunsMostFrequentResponse) {
   hd::ReadingLateness lateness;
   lateness.reset();
-  EXPECT_EQ(lateness.late_ticks(2), 0u) << "the first fresh reading sets the usual";
-  EXPECT_EQ(lateness.late_ticks(2), 0u);
-  EXPECT_EQ(lateness.late_ticks(5), 3u);
-  EXPECT_EQ(lateness.late_ticks(1), 0u) << "a quicker answer is not early";
-  EXPECT_EQ(lateness.late_ticks(2), 0u) << "nor does it move the usual";
-  EXPECT_EQ(lateness.late_ticks(5), 3u);
-  for (int i = 0; i < 4; ++i) (void)lateness.late_ticks(4);
-  EXPECT_EQ(lateness.late_ticks(5), 1u) << "the most frequent is the usual";
-  EXPECT_EQ(lateness.late_ticks(1000), 996u) << "however late";
+  auto late = [&lateness](std::uint64_t r) { return lateness.fresh(r).late_ticks; };
+  EXPECT_EQ(late(2), 0u) << "the first fresh reading sets the usual";
+  EXPECT_EQ(late(2), 0u);
+  EXPECT_EQ(late(5), 3u);
+  EXPECT_EQ(late(1), 0u) << "a quicker answer is not early";
+  EXPECT_EQ(late(2), 0u) << "nor does it move the usual";
+  EXPECT_EQ(late(5), 3u);
+  for (int i = 0; i < 4; ++i) (void)late(4);
+  EXPECT_EQ(late(5), 1u) << "the most frequent is the usual";
+  EXPECT_EQ(late(1000), 996u) << "however late";
   lateness.reset();
-  EXPECT_EQ(lateness.late_ticks(5), 0u) << "a new run keeps nothing of the last";
+  EXPECT_EQ(late(5), 0u) << "a new run keeps nothing of the last";
+}
+
+TEST(ReadingLateness, TheFeedbackHoldsAfterAStallForAsManyReadingsAsItAddedTicks) {
+  hd::ReadingLateness every_tick;
+  every_tick.reset();
+  for (int i = 0; i < 20; ++i) EXPECT_FALSE(every_tick.fresh(1).hold);
+  every_tick.stale();
+  EXPECT_FALSE(every_tick.fresh(1).hold) << "one stale tick is no stall";
+  for (int i = 0; i < 3; ++i) every_tick.stale();
+  std::vector<bool> held;
+  for (int i = 0; i < 5; ++i) held.push_back(every_tick.fresh(1).hold);
+  EXPECT_EQ(held, (std::vector<bool>{true, true, true, false, false}))
+      << "3 stale ticks more than usual: the next 3 readings held";
+
+  hd::ReadingLateness every_third_tick;
+  every_third_tick.reset();
+  for (int i = 0; i < 30; ++i) {
+    every_third_tick.stale();
+    every_third_tick.stale();
+    EXPECT_FALSE(every_third_tick.fresh(1).hold) << "its usual gap: " << i;
+  }
+  for (int i = 0; i < 4; ++i) every_third_tick.stale();
+  EXPECT_TRUE(every_third_tick.fresh(1).hold) << "two ticks more than its usual gap";
+  EXPECT_TRUE(every_third_tick.fresh(1).hold);
+  EXPECT_FALSE(every_third_tick.fresh(1).hold);
 }
 
 // A stage whose position is its output (1 µm per V), read through an exchange that answers the

@@ -272,10 +272,12 @@ class BenchLoop {
   // Loop-thread state.
   RunProgram* active_ = nullptr;
   std::int64_t run_start_ns_ = 0;
-  // Per axis, the last tick's reading for the feedback; NaN after a stale one (it holds). With
-  // how late it answered (ReadingLateness): the feedback compares it with the reference of then.
+  // Per axis, the last tick's reading for the feedback; NaN after a stale one and after a
+  // stall (it holds). With how late it answered (ReadingLateness): the feedback compares it with
+  // the reference of then.
   AxisValues y_prev_{};
   std::array<std::uint64_t, drivers::kMaxAxes> y_prev_late_{};
+  std::array<bool, drivers::kMaxAxes> fed_back_{};
   std::array<ReadingLateness, drivers::kMaxAxes> lateness_{};
   // Per axis, the last tick's reference for the scope; NaN while none is driven.
   AxisValues last_yr_{};

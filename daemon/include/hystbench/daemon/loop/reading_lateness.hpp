@@ -1,19 +1,25 @@
 #pragma once
-// How much later than usual a reading answered, for the feedback of one axis. A driver that
-// exchanges on its own thread (Modbus with io = "thread", a CAN amplifier) sometimes answers late:
-// its reading answers the output of response_ticks ago, more than its usual latency, after a
-// run of stale ticks. Whether the value is an old sample delivered late or a new one of a stage
-// whose command arrived late, it shows what the stage did with the output it answers; against
-// this tick's reference it shows the reference's motion since then as an error, which the
-// feedback would correct, and overshoot once the exchange catches up. The feedback compares it
-// with the reference of `late` ticks before instead (DriveInput::y_late_ticks). The run's error
-// figures score every tick as read, unchanged: the sample's time is not known.
+// How much later than usual a reading came, for the feedback of one axis. A driver that exchanges
+// on its own thread (Modbus with io = "thread", a CAN amplifier) sometimes stalls: a run of stale
+// ticks, during which the stage gets no new output, then a reading that may answer an older output
+// than usual. The feedback must not correct what the stall alone made:
 //
-// Late: how far response_ticks exceed the run's usual, the most frequent so far (the driver's
-// latency, which the feedforward's delay and the loop's design already hold). A quicker answer
-// than the usual is not early, and one of them does not move the usual: compared with the
-// reference a tick before, every usual reading would show a tick's motion as an error. A driver
-// that always answers alike (the loopback, io = "loop") is never late.
+// - Late: a fresh reading's response_ticks above the run's usual (the most frequent so far: the
+//   driver's latency, which the feedforward's delay and the loop's design already hold). Old
+//   sample or new one of a stage whose output came late, it shows what the stage did with the
+//   output it answers; the feedback compares it with the reference of `late` ticks before
+//   (DriveInput::y_late_ticks), not with this tick's, which has moved on since. A quicker answer
+//   than the usual is not early, and one of them does not move the usual: compared with the
+//   reference a tick before, every usual reading would show a tick's motion as an error.
+// - Stalled: the gap since the last fresh reading longer than the run's usual gap (most
+//   frequent) by two ticks or more. The stage, without new outputs while it lasted, lags behind
+//   its reference; the next outputs bring it back by themselves, and a correction added to theirs
+//   overshoots. The feedback holds over as many fresh readings as the stall added ticks. A device
+//   that answers every second or third tick as a rule never stalls by that rule.
+//
+// The run's error figures score every tick as read: the sample's time is not known, and a stage
+// whose outputs stalled did lag. A driver that always answers alike (the loopback, io = "loop")
+// is never late nor stalled.
 //
 // Loop thread only; noexcept, allocation-free and lock-free.
 #include <array>
@@ -23,19 +29,32 @@ namespace hystbench::daemon {
 
 class ReadingLateness {
  public:
-  /// Responses counted; a larger one counts as this one less one.
-  static constexpr std::uint64_t kResponses = 64;
+  /// Responses and gaps counted; a larger one counts as this one less one.
+  static constexpr std::uint64_t kCounted = 64;
+
+  /// What a fresh reading tells the feedback.
+  struct Fresh {
+    std::uint64_t late_ticks = 0;  ///< compare it with the reference of this many ticks before
+    bool hold = false;             ///< it follows a stall: the feedback holds
+  };
 
   /// A new run: no reading seen.
   void reset() noexcept;
-  /// A fresh reading that answers the output of `response_ticks` ago: how many ticks later it is
-  /// than the run's usual (>= 0; the most frequent response_ticks of the run's fresh readings so
-  /// far, this one counted; the smaller one on a tie).
-  std::uint64_t late_ticks(std::uint64_t response_ticks) noexcept;
+  /// A stale tick: the gap to the next fresh reading grows.
+  void stale() noexcept { ++stale_run_; }
+  /// A fresh reading that answers the output of `response_ticks` ago (the usual response and
+  /// gap are the most frequent of the run's fresh readings so far, this one counted; the smaller
+  /// on a tie).
+  Fresh fresh(std::uint64_t response_ticks) noexcept;
 
  private:
-  std::array<std::uint32_t, kResponses> responses_{};  ///< fresh readings by response_ticks
-  std::uint64_t usual_ = 0;
+  using Counts = std::array<std::uint32_t, kCounted>;
+  /// Counts `value` in `counts` and moves `usual` to it where it is now the most frequent.
+  static void count(Counts& counts, std::uint64_t& usual, std::uint64_t value) noexcept;
+  Counts responses_{}, gaps_{};
+  std::uint64_t usual_response_ = 0, usual_gap_ = 1;
+  std::uint64_t stale_run_ = 0;  ///< stale ticks since the last fresh reading
+  std::uint64_t holding_ = 0;    ///< fresh readings still held after a stall
 };
 
 }  // namespace hystbench::daemon
