@@ -26,7 +26,8 @@ struct DriveSetup {
 /// What the loop hands a drive at tick k.
 struct DriveInput {
   std::uint64_t k = 0;  ///< the run's tick (0 = its first)
-  /// The last fresh reading [µm]; NaN when the last reading was stale (the feedback holds).
+  /// The last fresh reading [µm]; NaN when the last reading was stale or followed a stall of the
+  /// exchange (ReadingLateness): the feedback holds.
   double y = std::numeric_limits<double>::quiet_NaN();
   bool feedback_on = false;  ///< k >= the program's feedback_from: the feedback may act
   /// How much later y answered than the run's usual readings [ticks] (ReadingLateness): the
