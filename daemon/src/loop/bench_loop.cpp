@@ -294,7 +294,6 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
         stuck_[a].reset(options_.stuck_sensor.latency_ticks + p->response_delay_ticks);
         lateness_[a].reset();
         y_prev_late_[a] = 0;
-        fed_back_[a] = true;
       }
       driver_.set_run_active(true);
       run_start_ns_ = scheduled_ns;
@@ -494,6 +493,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
     for (std::size_t a = 0; a < axes_; ++a) last_u_[a].store(u[a], std::memory_order_relaxed);
     std::array<drivers::Measurement, drivers::kMaxAxes> m{};
     const auto st = read_all(m);
+    std::array<bool, drivers::kMaxAxes> after_stall{};  // the feedback holds on this reading
     if (st != drivers::DriverStatus::kOk && st != drivers::DriverStatus::kStale) {
       x.failure =
           st == drivers::DriverStatus::kTimeout ? "driver read timed out" : "driver read failed";
@@ -518,7 +518,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
             std::min<std::uint64_t>(m[a].response_ticks, RunRecords::kNoFreshReading - 1));
         const ReadingLateness::Fresh f = lateness_[a].fresh(x.response[a]);
         y_prev_late_[a] = f.late_ticks;
-        fed_back_[a] = !f.hold;
+        after_stall[a] = f.hold;
       }
     }
     if (x.failure == nullptr) {
@@ -526,7 +526,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
         // A stale reading is the last fresh one again: the feedback must not integrate an error
         // that only the reading's age makes. It holds until the next fresh one, and over the
         // fresh ones that follow a stall (ReadingLateness).
-        y_prev_[a] = st == drivers::DriverStatus::kOk && fed_back_[a]
+        y_prev_[a] = st == drivers::DriverStatus::kOk && !after_stall[a]
                          ? m[a].position_um
                          : std::numeric_limits<double>::quiet_NaN();
         last_y_[a].store(m[a].position_um, std::memory_order_relaxed);

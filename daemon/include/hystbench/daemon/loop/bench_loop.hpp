@@ -277,7 +277,6 @@ class BenchLoop {
   // the reference of then.
   AxisValues y_prev_{};
   std::array<std::uint64_t, drivers::kMaxAxes> y_prev_late_{};
-  std::array<bool, drivers::kMaxAxes> fed_back_{};
   std::array<ReadingLateness, drivers::kMaxAxes> lateness_{};
   // Per axis, the last tick's reference for the scope; NaN while none is driven.
   AxisValues last_yr_{};
