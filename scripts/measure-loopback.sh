@@ -50,15 +50,18 @@ work="${HYSTBENCH_MEASURE_DIR:-$(mktemp -d -t hystbench-measure.XXXXXX)}"
 mkdir -p "$work"
 scripts/deps.sh measure
 
-daemon_pid=
-stop_daemon() {
-  if [ -n "$daemon_pid" ]; then
-    kill "$daemon_pid" 2>/dev/null || true
-    wait "$daemon_pid" 2>/dev/null || true
-  fi
-  daemon_pid=
+# stop PID: stops a process this script started (nothing for an empty PID).
+stop() {
+  [ -n "$1" ] || return 0
+  kill "$1" 2>/dev/null || true
+  wait "$1" 2>/dev/null || true
 }
-trap stop_daemon EXIT
+daemon_pid=
+stop_daemon() { stop "$daemon_pid"; daemon_pid=; }
+# feedback-modbus's hystbench-simdaq, stopped with the daemon on the way out.
+simdaq_pid=
+stop_simdaq() { stop "$simdaq_pid"; simdaq_pid=; }
+trap 'stop_daemon; stop_simdaq' EXIT
 # start_daemon NAME CONFIG [EXTRA_TOML]: a daemon of its own folder on the simulated clock
 # (on the wall clock with clock=wall).
 clock=simulated
@@ -486,11 +489,13 @@ for section in "${sections[@]}"; do
 import csv, json, math, sys
 for r in json.load(open(sys.argv[1]))["rows"]:
     lines = open(r["log"]).read().splitlines()
-    run = next(json.loads(l[2:])["run"] for l in lines if l.startswith('# {"run"'))
+    header = [json.loads(l[2:]) for l in lines if l.startswith("# {")]
+    run = next(h["run"] for h in header if "run" in h)
+    stale = next(h["flags"]["stale"] for h in header if "flags" in h)
     rows = list(csv.DictReader(l for l in lines if not l.startswith("#")))
     clear, last_stale = [], -10**9
     for k, row in enumerate(rows):
-        if int(row["flags"]) & 64:
+        if int(row["flags"]) & stale:
             last_stale = k
         if k >= run["metrics_from"] and k - last_stale >= 30:
             clear.append(float(row["y"]) - float(row["yr"]))
@@ -502,8 +507,7 @@ PY
       done
       echo
       stop_daemon
-      kill "$simdaq_pid" 2>/dev/null || true
-      wait "$simdaq_pid" 2>/dev/null || true
+      stop_simdaq
       ;;
     *)
       echo "measure-loopback: unknown section '$section' (default repeat rate thresholds delay campaign identify-time learning learning-delay learning-raster learning-restart learning-scaled feedback feedback-variants feedback-learning feedback-modbus)" >&2
