@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "details/preisach_search.hpp"
+#include "details/record_startup.hpp"
 #include "details/validate.hpp"
 
 namespace hystbench::compensation {
@@ -22,7 +23,11 @@ PreisachFit fit_preisach(std::span<const double> u, std::span<const double> y,
   }
   const std::size_t n = o.cells, cells = PreisachModel::cell_count(n);
   details::require(n >= 1 && n <= PreisachModel::kMaxCells, "preisach fit: cells out of range");
-  details::require(o.begin < u.size() && u.size() - o.begin >= 4 * (cells + 2),
+  const auto heldout = static_cast<std::size_t>(o.heldout_fraction * static_cast<double>(u.size()));
+  const std::size_t begin =
+      o.begin ? *o.begin
+              : details::startup_samples(u.first(u.size() - heldout), (u.size() - heldout) / 4);
+  details::require(begin < u.size() && u.size() - begin >= 4 * (cells + 2),
                    "preisach fit: the record is too short for " + std::to_string(cells) +
                        " cells (at least 4 samples per unknown after `begin`)");
   double u_min = o.u_min, u_max = o.u_max;
@@ -33,7 +38,7 @@ PreisachFit fit_preisach(std::span<const double> u, std::span<const double> y,
     details::require(u_min < u_max, "preisach fit: the input does not move");
   }
   const auto split = u.size() - static_cast<std::size_t>(o.heldout_fraction *
-                                                         static_cast<double>(u.size() - o.begin));
+                                                         static_cast<double>(u.size() - begin));
   details::ModelStructure base;
   base.kind = ModelKind::kPreisach;
   base.dt = 1.0;  // no lags or drift: the sampling does not enter
@@ -43,7 +48,7 @@ PreisachFit fit_preisach(std::span<const double> u, std::span<const double> y,
   base.input_reference = 0.5 * (u_min + u_max);
   base.min_dead_zone_slope = kMinMapSlope;
   const details::PreisachSearch found =
-      details::search_preisach(base, u, y, o.begin, split, u.size(), o.smoothness, o.output_zones);
+      details::search_preisach(base, u, y, begin, split, u.size(), o.smoothness, o.output_zones);
   const details::Design design(found.structure);
   PreisachFit fit;
   fit.parameters =
@@ -51,15 +56,16 @@ PreisachFit fit_preisach(std::span<const double> u, std::span<const double> y,
   fit.smoothness = found.structure.smoothness;
   fit.output_zones = found.structure.dead_zone_thresholds.size() / 2;
   fit.heldout_rms = found.heldout_rms;
+  fit.begin = begin;
   fit.tried_rms = found.tried_rms;
   PreisachModel model(fit.parameters);
   model.reset(u.front());
   double sum = 0.0;
   for (std::size_t k = 0; k < u.size(); ++k) {
     const double e = model.step(u[k]) - y[k];
-    if (k >= o.begin) sum += e * e;
+    if (k >= begin) sum += e * e;
   }
-  fit.fit_rms = std::sqrt(sum / static_cast<double>(u.size() - o.begin));
+  fit.fit_rms = std::sqrt(sum / static_cast<double>(u.size() - begin));
   return fit;
 }
 

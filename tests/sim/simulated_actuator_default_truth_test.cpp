@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -14,6 +15,7 @@
 #include "hystbench/compensation/diagnosis.hpp"
 #include "hystbench/compensation/identification.hpp"
 #include "hystbench/compensation/preisach_identification.hpp"
+#include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "hystbench/sim/major_loop_metrics.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
@@ -146,6 +148,26 @@ TEST(SimulatedActuatorDefault, NoModelFamilyFitsItsHysteresisExactly) {
   }
 }
 
+/// The rms error [µm] of the plane `p` on a 1 Hz triangle between 20 and 130 V after the record
+/// `u` it was fitted to, its model stepped over the record first and the truth `a` continuing
+/// from the record's end; the first of four periods is not scored. The triangle's rising branches
+/// start from a minimum inside the plane, where the record has few.
+double triangle_after(const hystbench::compensation::PreisachParameters& p,
+                      std::span<const double> u, hs::SimulatedActuator& a, double dt) {
+  hystbench::compensation::PreisachModel model(p);
+  model.reset(u.front());
+  for (const double v : u) model.step(v);
+  const std::size_t period = static_cast<std::size_t>(std::lround(1.0 / dt));
+  double sum = 0.0;
+  for (std::size_t k = 0; k < 4 * period; ++k) {
+    const double phase = static_cast<double>(k % period) / static_cast<double>(period);
+    const double v = 20.0 + 110.0 * (phase < 0.5 ? 2.0 * phase : 2.0 - 2.0 * phase);
+    const double e = model.step(v) - a.step(v);
+    if (k >= period) sum += e * e;
+  }
+  return std::sqrt(sum / static_cast<double>(3 * period));
+}
+
 // The Preisach family (a density on a 24 x 24 grid, no parametric form) on the same record:
 // the default truth's loop, which every PI family misses (NoModelFamilyFitsItsHysteresisExactly),
 // is held to less than half the coupled-play PI's error on the record's held-out quarter.
@@ -167,12 +189,18 @@ TEST(SimulatedActuatorDefault, ThePreisachFamilyHoldsItsLoop) {
   const double cpi =
       heldout_rms_of_fit(hs::SimulatedActuatorConfig{}, hc::ModelKind::kCoupledPlayPi);
   EXPECT_LT(fit.heldout_rms, 0.5 * cpi);
+  // A truth that is a Preisach model: the plane predicts the triangle's branches too.
+  const double triangle = triangle_after(fit.parameters, x.samples, a, dt);
+  RecordProperty("preisach_triangle_um", std::to_string(triangle));
+  EXPECT_LT(triangle, 0.5 * cpi);
   // Through fit_model (`fit --model preisach`): the same plane, its held-out error alike.
   const double by_name =
       heldout_rms_of_fit(hs::SimulatedActuatorConfig{}, hc::ModelKind::kPreisach);
   RecordProperty("fit_model_preisach_heldout_um", std::to_string(by_name));
   EXPECT_LT(by_name, 0.5 * cpi);
-  // On the modified-PI truth (plays, then dead zones on the output: not a Preisach model).
+  // On the modified-PI truth (plays, then dead zones on the output: not a Preisach model, and a
+  // record that starts where the plays, not the plane's relays, are relaxed): held below the
+  // loopback sensor's 5 nm noise once the start-up is skipped, as fit_preisach does by default.
   c.hysteresis = hs::SimulatedActuatorConfig::modified_pi_truth().hysteresis;
   hs::SimulatedActuator b(c, dt);
   b.reset(x.samples.front());
@@ -182,6 +210,20 @@ TEST(SimulatedActuatorDefault, ThePreisachFamilyHoldsItsLoop) {
   std::cout << "preisach 24 x 24 on the modified-PI truth: held-out " << other.heldout_rms
             << " um\n";
   RecordProperty("preisach_on_mpi_truth_heldout_um", std::to_string(other.heldout_rms));
+  EXPECT_GT(other.begin, 0u);
+  EXPECT_LT(other.heldout_rms, 0.005);
+  // Fitted from the record's first sample, the start-up's mismatch is in the fit.
+  hc::PreisachFitOptions from_start;
+  from_start.begin = 0;
+  const hc::PreisachFit started = hc::fit_preisach(x.samples, y, from_start);
+  RecordProperty("preisach_on_mpi_truth_from_start_heldout_um",
+                 std::to_string(started.heldout_rms));
+  EXPECT_GT(started.heldout_rms, 10.0 * other.heldout_rms);
+  // The triangle after the record: its rising branches from a minimum inside the range are not
+  // congruent on this truth (the output map bends each by where it lies), which relays alone do
+  // not hold; measured, not asserted (docs/design/measurements-identify.md).
+  RecordProperty("preisach_on_mpi_truth_triangle_um",
+                 std::to_string(triangle_after(other.parameters, x.samples, b, dt)));
 }
 
 /// A noise-free record of the static hysteresis of `c` (every other effect off) at 1 kHz.

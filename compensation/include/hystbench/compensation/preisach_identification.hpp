@@ -12,6 +12,7 @@
 // record. fit_model(kind = preisach) fits the same with creep lags and a drift beside the cells.
 // Pure maths, not real-time.
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -29,7 +30,11 @@ struct PreisachFitOptions {
   /// The output map's dead zones per side tried, each with every smoothness weight (0: the
   /// identity); the best on the held-out part is kept.
   std::vector<std::size_t> output_zones = {0, 3};
-  std::size_t begin = 0;  ///< samples before this are simulated, not fitted or scored
+  /// Samples before this are simulated, not fitted or scored. Unset: the record's start-up, until
+  /// the input has come near both of its extremes (its memory of what came before is then wiped
+  /// out: the plane starts from its relaxed state, which a record need not; FitOptions's
+  /// automatic skip_samples alike), at most a quarter of the part before the held-out part.
+  std::optional<std::size_t> begin;
 };
 
 /// The output map's least slope, as its inverse's: 1 / 20 of the identity's.
@@ -41,6 +46,7 @@ struct PreisachFit {
   std::size_t output_zones = 0;  ///< the output map's dead zones per side kept
   double heldout_rms = 0.0;      ///< of the fit on the first part, on the rest [output unit]
   double fit_rms = 0.0;          ///< of the kept fit on the whole scored record
+  std::size_t begin = 0;         ///< the first sample fitted and scored
   std::vector<double>
       tried_rms;  ///< held-out rms of each smoothness weight, in order (the kept map's)
 };
