@@ -80,6 +80,10 @@ class Identifier {
   ModelStructure structure(ModelKind kind, int plays, int dead_zones) const;
   // Fitted on every stride-th row of the fitted part (fit_design), scored on every sample.
   Candidate evaluate(const ModelStructure& s, std::string method, std::size_t stride = 1);
+  // evaluate() of each structure, on the machine's cores; the results and the log in the
+  // structures' order (the same as evaluated one after another).
+  std::vector<Candidate> evaluate_each(const std::vector<ModelStructure>& structures,
+                                       const std::string& method, std::size_t stride = 1);
   Candidate& memo(ModelKind kind, int plays, int dead_zones,
                   std::array<double, 3> cp = {1.0, 1.0, 1.0});
   std::vector<int> operator_grid(int extra_unknowns) const;

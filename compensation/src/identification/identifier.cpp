@@ -7,6 +7,7 @@
 #include <string>
 #include <utility>
 
+#include "details/parallel_tasks.hpp"
 #include "details/threshold_refinement.hpp"
 #include "details/validate.hpp"
 #include "hystbench/compensation/dead_zone.hpp"
@@ -190,20 +191,44 @@ ModelStructure Identifier::structure(ModelKind kind, int plays, int dead_zones) 
   return s;
 }
 
-Candidate Identifier::evaluate(const ModelStructure& s, std::string method, std::size_t stride) {
+namespace {
+
+// The structure fitted on every stride-th row of the record's fitted part and scored on it; reads
+// the record only (several at once on the machine's cores).
+Candidate fitted(const ModelStructure& s, std::string method, std::size_t stride, const Record& r) {
   Candidate c;
   c.structure = s;
   c.method = std::move(method);
   Design design(s);
   const details::BoundedLsqResult fit =
-      details::fit_design(design, r_.ud, r_.y, r_.begin, r_.fit_end, stride);
+      details::fit_design(design, r.ud, r.y, r.begin, r.fit_end, stride);
   c.x = fit.x;
   c.model = design.build(fit.x);
   if (s.drift) c.drift = fit.x[design.drift_column()];
-  score(c, r_);
+  score(c, r);
+  return c;
+}
+
+}  // namespace
+
+Candidate Identifier::evaluate(const ModelStructure& s, std::string method, std::size_t stride) {
+  Candidate c = fitted(s, std::move(method), stride, r_);
   log_.push_back(
       {s.kind, operators_of(s), dead_zones_of(s), r_.delay, c.fit.rmse, c.heldout.rmse, c.method});
   return c;
+}
+
+std::vector<Candidate> Identifier::evaluate_each(const std::vector<ModelStructure>& structures,
+                                                 const std::string& method, std::size_t stride) {
+  std::vector<Candidate> out(structures.size());
+  details::run_parallel(structures.size(),
+                        [&](std::size_t i) { out[i] = fitted(structures[i], method, stride, r_); });
+  for (const Candidate& c : out) {
+    const ModelStructure& s = c.structure;
+    log_.push_back({s.kind, operators_of(s), dead_zones_of(s), r_.delay, c.fit.rmse, c.heldout.rmse,
+                    c.method});
+  }
+  return out;
 }
 
 Candidate& Identifier::memo(ModelKind kind, int plays, int dead_zones, std::array<double, 3> cp) {
