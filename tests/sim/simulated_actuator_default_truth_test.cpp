@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <numbers>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -18,6 +19,7 @@
 #include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "hystbench/sim/major_loop_metrics.hpp"
+#include "hystbench/sim/signal_generator.hpp"
 #include "hystbench/sim/simulated_actuator.hpp"
 #include "support/simulated_actuator_runs.hpp"
 
@@ -157,15 +159,19 @@ double triangle_after(const hystbench::compensation::PreisachParameters& p,
   hystbench::compensation::PreisachModel model(p);
   model.reset(u.front());
   for (const double v : u) model.step(v);
-  const std::size_t period = static_cast<std::size_t>(std::lround(1.0 / dt));
+  hs::SignalSpec spec;
+  spec.kind = hs::SignalKind::kTriangle;
+  spec.amplitude = 55.0;
+  spec.offset = 75.0;
+  spec.phase_rad = -0.5 * std::numbers::pi;  // from its minimum, rising
+  const std::vector<double> triangle = hs::sample_signal(*hs::make_signal_generator(spec), dt, 4.0);
+  const std::size_t period = triangle.size() / 4;
   double sum = 0.0;
-  for (std::size_t k = 0; k < 4 * period; ++k) {
-    const double phase = static_cast<double>(k % period) / static_cast<double>(period);
-    const double v = 20.0 + 110.0 * (phase < 0.5 ? 2.0 * phase : 2.0 - 2.0 * phase);
-    const double e = model.step(v) - a.step(v);
+  for (std::size_t k = 0; k < triangle.size(); ++k) {
+    const double e = model.step(triangle[k]) - a.step(triangle[k]);
     if (k >= period) sum += e * e;
   }
-  return std::sqrt(sum / static_cast<double>(3 * period));
+  return std::sqrt(sum / static_cast<double>(triangle.size() - period));
 }
 
 // The Preisach family (a density on a 24 x 24 grid, no parametric form) on the same record:

@@ -80,6 +80,8 @@ class Identifier {
   ModelStructure structure(ModelKind kind, int plays, int dead_zones) const;
   // Fitted on every stride-th row of the fitted part (fit_design), scored on every sample.
   Candidate evaluate(const ModelStructure& s, std::string method, std::size_t stride = 1);
+  // The fit log's row of a candidate evaluated on the record (FitResult::candidates).
+  void log_fit(const Candidate& c);
   // evaluate() of each structure, on the machine's cores; the results and the log in the
   // structures' order (the same as evaluated one after another).
   std::vector<Candidate> evaluate_each(const std::vector<ModelStructure>& structures,

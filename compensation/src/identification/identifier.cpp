@@ -211,10 +211,15 @@ Candidate fitted(const ModelStructure& s, std::string method, std::size_t stride
 
 }  // namespace
 
-Candidate Identifier::evaluate(const ModelStructure& s, std::string method, std::size_t stride) {
-  Candidate c = fitted(s, std::move(method), stride, r_);
+void Identifier::log_fit(const Candidate& c) {
+  const ModelStructure& s = c.structure;
   log_.push_back(
       {s.kind, operators_of(s), dead_zones_of(s), r_.delay, c.fit.rmse, c.heldout.rmse, c.method});
+}
+
+Candidate Identifier::evaluate(const ModelStructure& s, std::string method, std::size_t stride) {
+  Candidate c = fitted(s, std::move(method), stride, r_);
+  log_fit(c);
   return c;
 }
 
@@ -223,11 +228,7 @@ std::vector<Candidate> Identifier::evaluate_each(const std::vector<ModelStructur
   std::vector<Candidate> out(structures.size());
   details::run_parallel(structures.size(),
                         [&](std::size_t i) { out[i] = fitted(structures[i], method, stride, r_); });
-  for (const Candidate& c : out) {
-    const ModelStructure& s = c.structure;
-    log_.push_back({s.kind, operators_of(s), dead_zones_of(s), r_.delay, c.fit.rmse, c.heldout.rmse,
-                    c.method});
-  }
+  for (const Candidate& c : out) log_fit(c);
   return out;
 }
 
