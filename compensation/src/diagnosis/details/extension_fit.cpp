@@ -311,14 +311,21 @@ Eigen::VectorXd additive_coefficients(NormalEquations& ne, std::size_t nc, std::
   return solve_bounded_lsq(ne.gram(), ne.rhs(), lo, inf).x;
 }
 
+// The spec without the additive terms an alternating fit holds apart.
+ExtensionSpec hysteresis_only(ExtensionSpec spec) {
+  spec.structure.creep_time_constants.clear();
+  spec.drift = false;
+  return spec;
+}
+
 // Dead-zone kinds regress S'[y] (Kuhnen's error model), where creep and drift, which add to the
 // output, do not belong. As the identification does for creep, alternate: the hysteresis on
 // y minus the additive terms, then the additive terms (creep gains, drift) on y minus the
 // simulated hysteresis, both linear.
-Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows) {
-  ExtensionSpec hysteresis_only = spec;
-  hysteresis_only.structure.creep_time_constants.clear();
-  hysteresis_only.drift = false;
+// `hysteresis_target`, when given, gets the output less the additive terms last fitted.
+Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows,
+                      std::vector<double>* hysteresis_target = nullptr) {
+  const ExtensionSpec hysteresis = hysteresis_only(spec);
   const std::vector<double>& taus = spec.structure.creep_time_constants;
   const DriftBasis drift(r.drift_knot_samples(), spec.drift ? r.drift_knots() : 0,
                          r.drift_origin());
@@ -339,7 +346,7 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
   std::vector<double> a(unknowns);
   for (int iteration = 0; iteration < 4; ++iteration) {
     diagnosis::cancellation_point();
-    out = fit_joint(r, target, hysteresis_only, rows, nullptr);
+    out = fit_joint(r, target, hysteresis, rows, nullptr);
     const std::vector<double> h = ActuatorModel(out.model).simulate(r.u, r.dt);
     NormalEquations ne(static_cast<Eigen::Index>(unknowns));
     std::size_t fit_index = 0;
@@ -363,6 +370,7 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
       target[k] = r.y[k] - v;
     }
   }
+  if (hysteresis_target != nullptr) *hysteresis_target = target;
   if (nc > 0) {
     out.model.set_creep(CreepParameters{taus, std::vector<double>(coef.data(), coef.data() + nc)});
   }
@@ -380,18 +388,17 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
 
 }  // namespace
 
-namespace {
-
-// Dead-zone kinds with additive terms alternate the fit over a moving target.
 bool alternates(const ExtensionSpec& spec) noexcept {
   const bool additive = !spec.structure.creep_time_constants.empty() || spec.drift;
   return spec.structure.has_dead_zones() && additive;
 }
 
-}  // namespace
-
 DesignRows::DesignRows(const DiagnosisRecord& r, const ExtensionSpec& spec)
-    : record_(&r), spec_(spec) {
+    : DesignRows(r, spec, r.y) {}
+
+DesignRows::DesignRows(const DiagnosisRecord& r, const ExtensionSpec& spec,
+                       std::span<const double> y)
+    : record_(&r), spec_(spec), measured_(y.data() == r.y.data()) {
   if (alternates(spec)) return;  // never served
   Design design(spec.structure);
   columns_ = static_cast<std::size_t>(design.unknowns());
@@ -400,13 +407,47 @@ DesignRows::DesignRows(const DiagnosisRecord& r, const ExtensionSpec& spec)
   const std::vector<double> ud = delayed(r.u, spec.delay_samples);
   design.reset(ud[0]);
   for (std::size_t k = 0; k < r.n; ++k) {
-    targets_[k] = design.row(ud[k], r.y[k], rows_.data() + k * columns_);
+    targets_[k] = design.row(ud[k], y[k], rows_.data() + k * columns_);
   }
 }
 
 bool DesignRows::serves(const DiagnosisRecord& r, const ExtensionSpec& spec) const noexcept {
-  return columns_ > 0 && &r == record_ && spec.structure == spec_.structure &&
+  return columns_ > 0 && measured_ && &r == record_ && spec.structure == spec_.structure &&
          spec.delay_samples == spec_.delay_samples && !alternates(spec);
+}
+
+std::vector<double> held_search_target(const DiagnosisRecord& r, const ExtensionSpec& spec) {
+  std::vector<double> target;
+  if (alternates(spec)) fit_alternating(r, spec, FitRows::kSearch, &target);
+  return target;
+}
+
+double search_mse(const DiagnosisRecord& r, const ExtensionSpec& spec, std::span<const double> held,
+                  const DesignRows* cached) {
+  if (held.empty() || !alternates(spec)) {
+    if (cached != nullptr && !cached->serves(r, spec)) cached = nullptr;
+    return fit_extension(r, spec, FitRows::kSearch, false, cached).regression_mse;
+  }
+  const ScopedNoDenormals flushed;
+  diagnosis::cancellation_point();
+  return fit_joint(r, held, hysteresis_only(spec), FitRows::kSearch, cached).regression_mse;
+}
+
+DynamicsSearch::DynamicsSearch(const DiagnosisRecord& r, const ExtensionSpec& spec)
+    : r_(r),
+      spec_(spec),
+      held_(held_search_target(r, spec)),
+      rows_(r, held_.empty() ? spec : hysteresis_only(spec),
+            held_.empty() ? r.y : std::span<const double>(held_)) {}
+
+double DynamicsSearch::operator()(double fn, double zeta) const {
+  ExtensionSpec spec = spec_;
+  spec.dynamics = DynamicsParameters{fn, zeta};
+  if (held_.empty()) return search_mse(r_, spec, held_, &rows_);
+  // The held rows were stepped against the held target: fit_joint takes them as they are.
+  const ScopedNoDenormals flushed;
+  diagnosis::cancellation_point();
+  return fit_joint(r_, held_, hysteresis_only(spec), FitRows::kSearch, &rows_).regression_mse;
 }
 
 ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows,

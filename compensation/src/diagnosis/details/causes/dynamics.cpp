@@ -100,27 +100,12 @@ Resonance search(const DiagnosisRecord& r, std::span<const double> x, double f_l
   return best;
 }
 
-// Variable projection: for fixed (fn, zeta) every other unknown is linear, so the joint fit's
-// mean square error is a function of those two alone. It is minimised over log fn and log zeta
-// by alternating golden-section searches in shrinking brackets; this fits the resonance with
+// Variable projection (DynamicsSearch): for a fixed (fn, zeta) every other unknown is linear, so
+// the joint fit's error is a function of those two alone. It is minimised over log fn and log
+// zeta by alternating golden-section searches in shrinking brackets; this fits the resonance with
 // the weights free, where the search above filters a fixed baseline prediction (whose weights
 // have already absorbed part of the resonance, which biases fn low and zeta high).
-class JointObjective {
- public:
-  JointObjective(const DiagnosisRecord& r, const ExtensionSpec& base, const DesignRows& rows)
-      : r_(r), spec_(base), rows_(rows) {}
-  double operator()(double fn, double zeta) {
-    spec_.dynamics = DynamicsParameters{fn, zeta};
-    return fit_extension(r_, spec_, FitRows::kSearch, false, &rows_).regression_mse;
-  }
-
- private:
-  const DiagnosisRecord& r_;
-  ExtensionSpec spec_;
-  const DesignRows& rows_;
-};
-
-Resonance project(JointObjective& j, Resonance start, double f_lo, double f_hi) {
+Resonance project(const DynamicsSearch& j, Resonance start, double f_lo, double f_hi) {
   Resonance best = start;
   best.mse = j(best.fn, best.zeta);
   double f_span = 1.15, z_span = 2.0;  // bracket half-widths (factors)
@@ -178,7 +163,7 @@ std::vector<double> static_prediction(const ExtensionFit& f, const DiagnosisReco
 
 // The joint projection from the better (by the joint objective) of `estimate` and the measured
 // response's `peak`.
-Resonance project_from(JointObjective& joint, Resonance estimate,
+Resonance project_from(const DynamicsSearch& joint, Resonance estimate,
                        const std::optional<Resonance>& peak, double f_lo, double f_hi) {
   estimate.mse = joint(estimate.fn, estimate.zeta);
   if (peak) {
@@ -202,8 +187,7 @@ std::optional<DynamicsParameters> refit_resonance(const DiagnosisRecord& r,
   const auto [f_lo, f_hi] = resonance_band(r);
   const auto peak = spectral_peak(response, f_lo, f_hi);
   if (!peak || on_peak(*spec.dynamics, *peak)) return std::nullopt;
-  const DesignRows rows(r, spec);
-  JointObjective joint(r, spec, rows);
+  const DynamicsSearch joint(r, spec);
   const Resonance best = project_from(
       joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio}, peak, f_lo, f_hi);
   return moved_to(*spec.dynamics, best);
@@ -215,9 +199,8 @@ std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
   const auto [f_lo, f_hi] = resonance_band(r);
   const auto peak = spectral_peak(response, f_lo, f_hi);
   if (!peak || !on_peak(*spec.dynamics, *peak)) return std::nullopt;
-  const DesignRows rows(r, spec);
-  if (!rows.serves(r, spec)) return std::nullopt;
-  JointObjective joint(r, spec, rows);
+  if (alternates(spec)) return std::nullopt;
+  const DynamicsSearch joint(r, spec);
   const Resonance best = project(
       joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio, 0.0}, f_lo, f_hi);
   return moved_to(*spec.dynamics, best);
@@ -231,7 +214,8 @@ CandidateOutcome test_dynamics(const CandidateContext& c) {
   std::vector<double> x = static_prediction(c.base_fit, r);
   Resonance res = search(r, x, f_lo, f_hi, std::nullopt);
   // Every fit below differs from the base only in its dynamics: the design is stepped once.
-  const DesignRows rows(r, c.base);
+  const DynamicsSearch joint(r, c.base);
+  const DesignRows& rows = joint.rows();
   ExtensionSpec spec = c.base;
   spec.dynamics = DynamicsParameters{res.fn, res.zeta};
   ExtensionFit fit = fit_extension(r, spec, FitRows::kAll, true, &rows);
@@ -243,7 +227,6 @@ CandidateOutcome test_dynamics(const CandidateContext& c) {
   ExtensionFit fit2 = fit_extension(r, spec2, FitRows::kAll, true, &rows);
   if (fit2.fit.rmse < fit.fit.rmse) fit = std::move(fit2), res = again;
   // Then jointly with the weights, from the better of that estimate and the spectral peak.
-  JointObjective joint(r, c.base, rows);
   const Resonance projected =
       project_from(joint, res, spectral_peak(c.response, f_lo, f_hi), f_lo, f_hi);
   ExtensionSpec spec3 = c.base;

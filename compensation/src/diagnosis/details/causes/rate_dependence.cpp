@@ -53,6 +53,7 @@ ExtensionSpec best_thresholds_law(const DiagnosisRecord& r, const ExtensionSpec&
   const double span = r.u_hi - r.u_lo;
   double best_search = std::numeric_limits<double>::infinity();
   ExtensionSpec best_widened = widened;
+  const std::vector<double> held = held_search_target(r, spec);
   for (const double samples : kWideningFilterSamples) {
     // Linear: not capped inside the record (as the identification), a step's rate holds the
     // switching. The square root capped at the smooth rates: after a step its filtered rate
@@ -69,7 +70,7 @@ ExtensionSpec best_thresholds_law(const DiagnosisRecord& r, const ExtensionSpec&
         // The widening at s.max_rate is `fraction` of the span.
         w.threshold_rate_s = fraction * span / s.max_rate;
         // Ranked by the regression's residual, as the dynamics search: no simulation per point.
-        const double mse = fit_extension(r, widened, FitRows::kSearch, false).regression_mse;
+        const double mse = search_mse(r, widened, held);
         if (mse < best_search) best_search = mse, best_widened = widened;
       }
     }
