@@ -8,9 +8,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Only what the demo runs (the CLI and the daemon, optimised without debug info, nlohmann/json and
-# Eigen precompiled once for every library, in build-demo/): the first output comes minutes sooner
-# on a fresh machine. scripts/build.sh builds everything,
-# with debug info, in build/.
+# Eigen precompiled once for every library, each library compiled in unity batches of 8 files, in
+# build-demo/): the first output comes minutes sooner on a fresh machine. scripts/build.sh builds
+# everything, file by file with debug info, in build/.
 bash scripts/deps.sh demo >&2
 cmake --preset demo >/dev/null
 echo "hystbench: building hystbench and hystbenchd in build-demo/ (the tests: scripts/test.sh)" >&2

@@ -2,26 +2,19 @@
 
 #include <cmath>
 
+#include "details/json_fields.hpp"
+
 namespace hystbench::compensation {
 
+using details::fail;
+using details::number;
 using nlohmann::json;
 
 namespace {
 
-[[noreturn]] void fail(const std::string& field, const std::string& what) {
-  throw ModelFileError(field + ": " + what);
-}
-
 const json& member(const json& j, const std::string& key, const std::string& field) {
   if (!j.is_object() || !j.contains(key)) fail(field + key, "missing");
   return j.at(key);
-}
-
-double number(const json& j, const std::string& field) {
-  if (!j.is_number()) fail(field, "not a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) fail(field, "not finite");
-  return v;
 }
 
 std::vector<double> numbers(const json& j, const std::string& field) {

@@ -15,7 +15,7 @@ namespace hystbench::compensation {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
+[[noreturn]] void refuse(const std::string& what) { throw std::invalid_argument(what); }
 
 constexpr int kMaxSweeps = 50;
 constexpr double kTolerance = 1e-9;  // of the reference's largest magnitude
@@ -203,17 +203,17 @@ DynamicStageDecoupler::DynamicStageDecoupler(const Eigen::MatrixXd& gains, PathS
   // The static decoupler's rules on the gains (and its inverse, the substitutions' start).
   static_cast<void>(StageDecoupler(gains));
   static_inverse_ = (Eigen::MatrixXd::Identity(gains.rows(), gains.cols()) + gains).inverse();
-  if (!(std::isfinite(dt_s) && dt_s > 0.0)) fail("dynamic decoupler: dt must be > 0");
+  if (!(std::isfinite(dt_s) && dt_s > 0.0)) refuse("dynamic decoupler: dt must be > 0");
   const std::size_t n = axes();
   if (paths_.empty()) return;
   if (paths_.size() != n) {
-    fail("dynamic decoupler: paths for " + std::to_string(paths_.size()) + " axes, gains for " +
-         std::to_string(n));
+    refuse("dynamic decoupler: paths for " + std::to_string(paths_.size()) + " axes, gains for " +
+           std::to_string(n));
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (paths_[i].size() != n) {
-      fail("dynamic decoupler: paths row " + std::to_string(i) + " has " +
-           std::to_string(paths_[i].size()) + " paths, not " + std::to_string(n));
+      refuse("dynamic decoupler: paths row " + std::to_string(i) + " has " +
+             std::to_string(paths_[i].size()) + " paths, not " + std::to_string(n));
     }
     paths_[i][i].reset();  // an axis's own dynamics are its model's
     for (std::size_t j = 0; j < n; ++j) {
@@ -222,17 +222,17 @@ DynamicStageDecoupler::DynamicStageDecoupler(const Eigen::MatrixXd& gains, PathS
           "dynamic decoupler: path " + std::to_string(i) + " <- " + std::to_string(j) + ": ";
       if (!std::isfinite(paths_[i][j]->direct) || !std::isfinite(paths_[i][j]->slope) ||
           !std::isfinite(paths_[i][j]->curvature)) {
-        fail(which + "a share or weight is not finite");
+        refuse(which + "a share or weight is not finite");
       }
       if (!(std::abs(paths_[i][j]->lag_samples) <= 1e6)) {
-        fail(which + "its lag must be in [-1e6, 1e6] samples");
+        refuse(which + "its lag must be in [-1e6, 1e6] samples");
       }
       for (const CouplingPathShape::Mode& m : paths_[i][j]->modes) {
-        if (!std::isfinite(m.share)) fail(which + "a mode's share is not finite");
+        if (!std::isfinite(m.share)) refuse(which + "a mode's share is not finite");
         try {
           SecondOrderDynamics check(m.parameters, dt_s);
         } catch (const std::exception& e) {
-          fail(which + e.what());
+          refuse(which + e.what());
         }
       }
     }
@@ -252,14 +252,14 @@ DynamicStageDecoupler::Solution DynamicStageDecoupler::own_targets(
     const Eigen::MatrixXd& stage, std::span<const StrokeOf> strokes) const {
   const auto n = static_cast<Eigen::Index>(axes());
   if (stage.rows() != n) {
-    fail("dynamic decoupler: a reference of " + std::to_string(stage.rows()) + " axes for " +
-         std::to_string(n));
+    refuse("dynamic decoupler: a reference of " + std::to_string(stage.rows()) + " axes for " +
+           std::to_string(n));
   }
   if (!strokes.empty() && strokes.size() != axes()) {
-    fail("dynamic decoupler: " + std::to_string(strokes.size()) + " strokes for " +
-         std::to_string(n) + " axes");
+    refuse("dynamic decoupler: " + std::to_string(strokes.size()) + " strokes for " +
+           std::to_string(n) + " axes");
   }
-  if (!stage.allFinite()) fail("dynamic decoupler: a reference value is not a finite number");
+  if (!stage.allFinite()) refuse("dynamic decoupler: a reference value is not a finite number");
   const Eigen::Index samples = stage.cols();
   Solution out;
   out.own = static_inverse_ * stage;
@@ -300,21 +300,21 @@ DynamicStageDecoupler::Solution DynamicStageDecoupler::own_targets(
         next.row(i) -= k_ij * filtered;
       }
     }
-    if (!next.allFinite()) fail("dynamic decoupler: the substitutions diverged (not finite)");
+    if (!next.allFinite()) refuse("dynamic decoupler: the substitutions diverged (not finite)");
     out.change = (next - out.own).cwiseAbs().maxCoeff();
     out.own.swap(next);
     out.sweeps = sweep;
     if (out.change <= kTolerance * scale) return out;
     if (sweep > 5 && out.change > previous) {
-      fail(
+      refuse(
           "dynamic decoupler: the substitutions diverge (the coupling at its mode is too strong "
           "to be taken out this way)");
     }
     previous = out.change;
   }
   if (out.change > kGiveUp * scale) {
-    fail("dynamic decoupler: no convergence in " + std::to_string(kMaxSweeps) +
-         " substitutions (change " + std::to_string(out.change) + ")");
+    refuse("dynamic decoupler: no convergence in " + std::to_string(kMaxSweeps) +
+           " substitutions (change " + std::to_string(out.change) + ")");
   }
   return out;
 }

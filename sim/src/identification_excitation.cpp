@@ -12,20 +12,20 @@ namespace hystbench::sim {
 
 namespace {
 
-void require(bool ok, const std::string& field, const std::string& what) {
+void require_excitation(bool ok, const std::string& field, const std::string& what) {
   if (!ok) throw std::invalid_argument("identification_excitation: " + field + ": " + what);
 }
 
-void require_positive(double value, const std::string& field) {
-  require(std::isfinite(value) && value > 0.0, field, "must be > 0");
+void require_positive_excitation(double value, const std::string& field) {
+  require_excitation(std::isfinite(value) && value > 0.0, field, "must be > 0");
 }
 
 std::string indexed(const std::string& field, std::size_t k) {
   return field + "[" + std::to_string(k) + "]";
 }
 
-void require_fraction(double value, const std::string& field) {
-  require(value >= 0.0 && value <= 1.0, field, "must be in [0, 1]");
+void require_fraction_excitation(double value, const std::string& field) {
+  require_excitation(value >= 0.0 && value <= 1.0, field, "must be in [0, 1]");
 }
 
 /// Cosine cycles from `low` up to `low + span` and back, starting and ending at `low`.
@@ -42,39 +42,40 @@ SignalSpec cycles_from_bottom(double low, double span, double frequency_hz, doub
 
 void validate(double range_min, double range_max, double dt_s,
               const IdentificationExcitationOptions& o) {
-  require(std::isfinite(range_min) && std::isfinite(range_max) && range_max > range_min,
-          "range_max", "must be a finite number greater than range_min");
-  require_positive(dt_s, "dt_s");
-  require(std::isfinite(o.precondition_s) && o.precondition_s >= 0.0, "precondition_s",
-          "must be >= 0");
-  require(std::isfinite(o.settle_s) && o.settle_s >= 0.0, "settle_s", "must be >= 0");
-  require_positive(o.major_loop_frequency_hz, "major_loop_frequency_hz");
-  require(o.major_loop_cycles >= 1, "major_loop_cycles", "must be >= 1");
-  require_positive(o.minor_loop_frequency_hz, "minor_loop_frequency_hz");
-  require(o.minor_loops >= 0, "minor_loops", "must be >= 0");
-  require(o.rate_cycles.size() == o.rate_frequencies_hz.size(), "rate_cycles",
-          "needs one entry per rate_frequencies_hz entry");
+  require_excitation(std::isfinite(range_min) && std::isfinite(range_max) && range_max > range_min,
+                     "range_max", "must be a finite number greater than range_min");
+  require_positive_excitation(dt_s, "dt_s");
+  require_excitation(std::isfinite(o.precondition_s) && o.precondition_s >= 0.0, "precondition_s",
+                     "must be >= 0");
+  require_excitation(std::isfinite(o.settle_s) && o.settle_s >= 0.0, "settle_s", "must be >= 0");
+  require_positive_excitation(o.major_loop_frequency_hz, "major_loop_frequency_hz");
+  require_excitation(o.major_loop_cycles >= 1, "major_loop_cycles", "must be >= 1");
+  require_positive_excitation(o.minor_loop_frequency_hz, "minor_loop_frequency_hz");
+  require_excitation(o.minor_loops >= 0, "minor_loops", "must be >= 0");
+  require_excitation(o.rate_cycles.size() == o.rate_frequencies_hz.size(), "rate_cycles",
+                     "needs one entry per rate_frequencies_hz entry");
   for (std::size_t k = 0; k < o.rate_frequencies_hz.size(); ++k) {
-    require_positive(o.rate_frequencies_hz[k], indexed("rate_frequencies_hz", k));
-    require(o.rate_cycles[k] >= 1, indexed("rate_cycles", k), "must be >= 1");
+    require_positive_excitation(o.rate_frequencies_hz[k], indexed("rate_frequencies_hz", k));
+    require_excitation(o.rate_cycles[k] >= 1, indexed("rate_cycles", k), "must be >= 1");
   }
-  require(o.rate_span_fraction > 0.0 && o.rate_span_fraction <= 1.0, "rate_span_fraction",
-          "must be in (0, 1]");
+  require_excitation(o.rate_span_fraction > 0.0 && o.rate_span_fraction <= 1.0,
+                     "rate_span_fraction", "must be in (0, 1]");
   for (std::size_t k = 0; k < o.reversal_points.size(); ++k) {
-    require_fraction(o.reversal_points[k], indexed("reversal_points", k));
+    require_fraction_excitation(o.reversal_points[k], indexed("reversal_points", k));
   }
-  require_positive(o.reversal_rate_fraction_per_s, "reversal_rate_fraction_per_s");
+  require_positive_excitation(o.reversal_rate_fraction_per_s, "reversal_rate_fraction_per_s");
   for (std::size_t k = 0; k < o.hold_levels.size(); ++k) {
-    require_fraction(o.hold_levels[k], indexed("hold_levels", k));
+    require_fraction_excitation(o.hold_levels[k], indexed("hold_levels", k));
   }
-  require_positive(o.hold_s, "hold_s");
-  require(o.min_samples_per_period >= 2, "min_samples_per_period", "must be >= 2");
+  require_positive_excitation(o.hold_s, "hold_s");
+  require_excitation(o.min_samples_per_period >= 2, "min_samples_per_period", "must be >= 2");
 
   double fastest_hz = std::max(o.major_loop_frequency_hz, o.minor_loop_frequency_hz);
   for (const double f : o.rate_frequencies_hz) fastest_hz = std::max(fastest_hz, f);
-  require(dt_s * fastest_hz * o.min_samples_per_period <= 1.0, "dt_s",
-          "too coarse: fewer than " + std::to_string(o.min_samples_per_period) +
-              " samples per period at " + compensation::significant(fastest_hz, 6) + " Hz");
+  require_excitation(dt_s * fastest_hz * o.min_samples_per_period <= 1.0, "dt_s",
+                     "too coarse: fewer than " + std::to_string(o.min_samples_per_period) +
+                         " samples per period at " + compensation::significant(fastest_hz, 6) +
+                         " Hz");
 }
 
 class ExcitationBuilder {

@@ -26,12 +26,12 @@ constexpr std::array<std::pair<SignalKind, std::string_view>, 9> kKindNames{{
     {SignalKind::kSamples, "csv"},
 }};
 
-void require(bool ok, const std::string& field, const std::string& what) {
+void require_signal(bool ok, const std::string& field, const std::string& what) {
   if (!ok) throw std::invalid_argument("signal." + field + ": " + what);
 }
 
-void require_positive(double value, const std::string& field) {
-  require(std::isfinite(value) && value > 0.0, field, "must be > 0");
+void require_positive_signal(double value, const std::string& field) {
+  require_signal(std::isfinite(value) && value > 0.0, field, "must be > 0");
 }
 
 double fractional_part(double x) noexcept { return x - std::floor(x); }
@@ -236,10 +236,10 @@ class UniformSignal final : public SignalGenerator {
 };
 
 void validate(const SignalSpec& spec) {
-  require(std::isfinite(spec.amplitude), "amplitude", "must be a finite number");
-  require(std::isfinite(spec.offset), "offset", "must be a finite number");
-  require(std::isfinite(spec.phase_rad), "phase_rad", "must be a finite number");
-  require(std::isfinite(spec.rise_s) && spec.rise_s >= 0.0, "rise_s", "must be >= 0");
+  require_signal(std::isfinite(spec.amplitude), "amplitude", "must be a finite number");
+  require_signal(std::isfinite(spec.offset), "offset", "must be a finite number");
+  require_signal(std::isfinite(spec.phase_rad), "phase_rad", "must be a finite number");
+  require_signal(std::isfinite(spec.rise_s) && spec.rise_s >= 0.0, "rise_s", "must be >= 0");
   const std::string kind(to_string(spec.kind));
   switch (spec.kind) {
     case SignalKind::kSine:
@@ -247,11 +247,11 @@ void validate(const SignalSpec& spec) {
     case SignalKind::kSawtooth:
     case SignalKind::kStep:
     case SignalKind::kMultiFrequency:
-      require(spec.duration_s > 0.0, "duration_s", "must be > 0 (infinite allowed)");
+      require_signal(spec.duration_s > 0.0, "duration_s", "must be > 0 (infinite allowed)");
       break;
     case SignalKind::kDecayingSine:
     case SignalKind::kChirp:
-      require_positive(spec.duration_s, "duration_s");
+      require_positive_signal(spec.duration_s, "duration_s");
       break;
     case SignalKind::kSteps:
     case SignalKind::kSamples:
@@ -259,40 +259,41 @@ void validate(const SignalSpec& spec) {
   }
   switch (spec.kind) {
     case SignalKind::kChirp:
-      require_positive(spec.end_frequency_hz, "end_frequency_hz");
+      require_positive_signal(spec.end_frequency_hz, "end_frequency_hz");
       [[fallthrough]];
     case SignalKind::kSine:
     case SignalKind::kTriangle:
     case SignalKind::kSawtooth:
     case SignalKind::kStep:
     case SignalKind::kDecayingSine:
-      require_positive(spec.frequency_hz, "frequency_hz");
+      require_positive_signal(spec.frequency_hz, "frequency_hz");
       break;
     case SignalKind::kMultiFrequency:
-      require(!spec.component_frequencies_hz.empty(), "component_frequencies_hz",
-              "must not be empty");
+      require_signal(!spec.component_frequencies_hz.empty(), "component_frequencies_hz",
+                     "must not be empty");
       for (std::size_t k = 0; k < spec.component_frequencies_hz.size(); ++k) {
-        require_positive(spec.component_frequencies_hz[k],
-                         "component_frequencies_hz[" + std::to_string(k) + "]");
+        require_positive_signal(spec.component_frequencies_hz[k],
+                                "component_frequencies_hz[" + std::to_string(k) + "]");
       }
-      require_positive(spec.modulation_frequency_hz, "modulation_frequency_hz");
+      require_positive_signal(spec.modulation_frequency_hz, "modulation_frequency_hz");
       break;
     case SignalKind::kSteps:
-      require(!spec.steps.empty(), "steps", "must not be empty for kind " + kind);
+      require_signal(!spec.steps.empty(), "steps", "must not be empty for kind " + kind);
       for (std::size_t k = 0; k < spec.steps.size(); ++k) {
         const std::string field = "steps[" + std::to_string(k) + "]";
-        require(std::isfinite(spec.steps[k].level), field + ".level", "must be a finite number");
-        require_positive(spec.steps[k].hold_s, field + ".hold_s");
+        require_signal(std::isfinite(spec.steps[k].level), field + ".level",
+                       "must be a finite number");
+        require_positive_signal(spec.steps[k].hold_s, field + ".hold_s");
       }
       break;
     case SignalKind::kSamples:
-      require(!spec.samples.empty(), "samples", "must not be empty for kind " + kind);
+      require_signal(!spec.samples.empty(), "samples", "must not be empty for kind " + kind);
       for (std::size_t k = 0; k < spec.samples.size(); ++k) {
         const std::string field = "samples[" + std::to_string(k) + "]";
-        require(std::isfinite(spec.samples[k].t_s) && std::isfinite(spec.samples[k].value), field,
-                "time and value must be finite numbers");
-        require(k == 0 || spec.samples[k].t_s > spec.samples[k - 1].t_s, field + ".t_s",
-                "must be greater than the previous sample's (strictly increasing)");
+        require_signal(std::isfinite(spec.samples[k].t_s) && std::isfinite(spec.samples[k].value),
+                       field, "time and value must be finite numbers");
+        require_signal(k == 0 || spec.samples[k].t_s > spec.samples[k - 1].t_s, field + ".t_s",
+                       "must be greater than the previous sample's (strictly increasing)");
       }
       break;
   }
@@ -340,11 +341,11 @@ std::unique_ptr<SignalGenerator> make_signal_generator(const SignalSpec& spec) {
 }
 
 std::unique_ptr<SignalGenerator> make_uniform_signal(std::vector<double> values, double dt_s) {
-  require(std::isfinite(dt_s) && dt_s > 0.0, "dt_s", "must be > 0");
-  require(!values.empty(), "values", "must not be empty");
+  require_signal(std::isfinite(dt_s) && dt_s > 0.0, "dt_s", "must be > 0");
+  require_signal(!values.empty(), "values", "must not be empty");
   for (std::size_t k = 0; k < values.size(); ++k) {
-    require(std::isfinite(values[k]), "values[" + std::to_string(k) + "]",
-            "must be a finite number");
+    require_signal(std::isfinite(values[k]), "values[" + std::to_string(k) + "]",
+                   "must be a finite number");
   }
   return std::make_unique<UniformSignal>(std::move(values), dt_s);
 }

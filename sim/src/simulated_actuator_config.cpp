@@ -6,23 +6,19 @@
 #include <stdexcept>
 #include <string>
 
+#include "details/field_checks.hpp"
 #include "hystbench/sim/preisach_hysteresis.hpp"
 
 namespace hystbench::sim {
 
-namespace {
-
 // Every message starts with the field path: "<field>: <what is wrong>".
-void require(bool ok, const std::string& field, const std::string& what) {
-  if (!ok) throw std::invalid_argument(field + ": " + what);
-}
+using details::require;
+using details::require_positive;
+
+namespace {
 
 void require_finite(double value, const std::string& field) {
   require(std::isfinite(value), field, "must be a finite number");
-}
-
-void require_positive(double value, const std::string& field) {
-  require(std::isfinite(value) && value > 0.0, field, "must be > 0");
 }
 
 void require_non_negative(double value, const std::string& field) {

@@ -11,9 +11,12 @@
 #include <string_view>
 #include <type_traits>
 
+#include "details/field_checks.hpp"
 #include "hystbench/sim/simulated_actuator_config.hpp"
 
 namespace hystbench::sim {
+
+using details::fail;
 
 namespace {
 
@@ -222,10 +225,6 @@ json encode(RateMechanism mechanism) { return std::string(to_string(mechanism));
 json encode(CreepLaw law) { return std::string(to_string(law)); }
 
 // --- decoding: every reader names the key path on a type error ---
-
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw std::invalid_argument(path + ": " + what);
-}
 
 void decode(const json& j, const std::string& path, bool& out) {
   if (!j.is_boolean()) fail(path, "expected true or false, got " + j.dump());

@@ -5,16 +5,16 @@
 #include <stdexcept>
 #include <string>
 
+#include "details/field_checks.hpp"
+
 namespace hystbench::sim {
+
+// Every message starts with the field path: "<field>: <what is wrong>".
+using details::fail;
 
 namespace {
 
 using json = nlohmann::json;
-
-// Every message starts with the field path: "<field>: <what is wrong>".
-[[noreturn]] void fail(const std::string& field, const std::string& what) {
-  throw std::invalid_argument(field + ": " + what);
-}
 
 std::string axis_path(std::size_t i) { return "axes[" + std::to_string(i) + "]"; }
 

@@ -5,13 +5,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "details/field_checks.hpp"
+
 namespace hystbench::sim {
 
-namespace {
+// Every message starts with the field path: "<field>: <what is wrong>".
+using details::fail;
 
-[[noreturn]] void fail(const std::string& field, const std::string& what) {
-  throw std::invalid_argument(field + ": " + what);
-}
+namespace {
 
 /// A constant at the middle of `range`: a sine of no amplitude.
 SignalSpec held(double middle) {

@@ -15,7 +15,7 @@
 namespace hystbench::compensation::details {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kUnbounded = std::numeric_limits<double>::infinity();
 }  // namespace
 
 std::size_t ModelStructure::zero_index() const {
@@ -194,7 +194,8 @@ double Design::step(double u, double y, double* a) noexcept {
       t[j] = -(sj - next);
       next = sj;
     }
-    target = std::clamp(v, m_neg_ > 0 ? dz_neg_[0] : -kInf, m_pos_ > 0 ? dz_pos_[0] : kInf);
+    target =
+        std::clamp(v, m_neg_ > 0 ? dz_neg_[0] : -kUnbounded, m_pos_ > 0 ? dz_pos_[0] : kUnbounded);
   }
   double* c = a + creep_col_;
   for (std::size_t k = 0; k < creep_x_.size(); ++k) {
@@ -208,7 +209,7 @@ double Design::step(double u, double y, double* a) noexcept {
 }
 
 Eigen::VectorXd Design::lower_bounds() const {
-  Eigen::VectorXd lo = Eigen::VectorXd::Constant(unknowns_, -kInf);
+  Eigen::VectorXd lo = Eigen::VectorXd::Constant(unknowns_, -kUnbounded);
   lo.head(n_).setConstant(s_.min_play_slope);
   // Jumping coupled plays: w_0 >= eps and w_i >= 0, so every cumulative weight is >= eps too.
   if (increments_) lo.segment(1, n_ - 1).setConstant(0.0);
@@ -230,7 +231,9 @@ Eigen::VectorXd Design::lower_bounds() const {
   return lo;
 }
 
-Eigen::VectorXd Design::upper_bounds() const { return Eigen::VectorXd::Constant(unknowns_, kInf); }
+Eigen::VectorXd Design::upper_bounds() const {
+  return Eigen::VectorXd::Constant(unknowns_, kUnbounded);
+}
 
 void Design::add_penalty(Eigen::MatrixXd& gram) const {
   if (plane_ && s_.preisach_shape.empty()) {

@@ -13,7 +13,7 @@ namespace hystbench::compensation::details {
 namespace {
 
 constexpr int kPlayGrid[] = {8, 12, 16, 24, 32};
-constexpr double kParsimony = 0.01;
+constexpr double kBaselineParsimony = 0.01;
 
 }  // namespace
 
@@ -37,7 +37,7 @@ PiBaseline fit_pi_baseline(const DiagnosisRecord& r) {
   out.finest_spec = fits.back().spec;
   out.finest_fit = fits.back();
   for (ExtensionFit& f : fits) {
-    if (f.heldout.rmse <= best * (1.0 + kParsimony)) {
+    if (f.heldout.rmse <= best * (1.0 + kBaselineParsimony)) {
       out.spec = f.spec;
       out.fit = std::move(f);
       break;

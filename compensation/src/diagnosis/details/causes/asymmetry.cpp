@@ -12,8 +12,8 @@ namespace hystbench::compensation::details {
 
 namespace {
 
-constexpr double kThreshold = 0.15;
-constexpr double kParsimony = 0.02;
+constexpr double kAsymmetryThreshold = 0.15;
+constexpr double kAsymmetryParsimony = 0.02;
 // Coupled-play scales (rb = ra, rc) tried for unipolar inputs; bipolar inputs add ra < rb.
 constexpr std::array<std::array<double, 3>, 4> kCoupledScales{
     {{0.6, 0.6, 2.0}, {1.5, 1.5, 2.0}, {0.6, 0.6, 4.0}, {1.5, 1.5, 4.0}}};
@@ -52,7 +52,7 @@ CandidateOutcome test_asymmetry(const CandidateContext& c) {
   CandidateOutcome out;
   const ResidualProfile& level = c.profile("input");
   out.statistic = level.explained;
-  out.threshold = kThreshold;
+  out.threshold = kAsymmetryThreshold;
   const auto [lo, hi] = std::minmax_element(level.means.begin(), level.means.end());
   out.evidence = "the input level explains " + percent(level.explained) +
                  " of the residual variance (level-dependent error from " + num(*lo) + " to " +
@@ -85,7 +85,7 @@ CandidateOutcome test_asymmetry(const CandidateContext& c) {
       fits.back().fit.rmse = std::numeric_limits<double>::infinity();
     }
   }
-  const std::size_t kept = simplest_within(fits, kParsimony);
+  const std::size_t kept = simplest_within(fits, kAsymmetryParsimony);
   out.fit = std::move(fits[kept]);
   out.extension = tries[kept].second;
   return out;

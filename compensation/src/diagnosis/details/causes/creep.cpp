@@ -17,7 +17,7 @@ namespace hystbench::compensation::details {
 
 namespace {
 
-constexpr double kThreshold = 0.2;
+constexpr double kCreepThreshold = 0.2;
 constexpr double kSettleSeconds = 0.05;
 constexpr double kMinHoldSeconds = 0.5;  // in all, for the holds to count as evidence
 
@@ -83,7 +83,7 @@ CandidateOutcome test_creep(const CandidateContext& c) {
   } else {
     out.evidence = "the input never rests long enough to show creep";
   }
-  out.threshold = kThreshold;
+  out.threshold = kCreepThreshold;
 
   ExtensionSpec spec = c.base;
   spec.structure.creep_time_constants = creep_time_constants(r);

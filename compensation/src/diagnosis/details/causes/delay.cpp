@@ -12,7 +12,7 @@ namespace hystbench::compensation::details {
 
 namespace {
 
-constexpr double kThreshold = 1.0;  // samples
+constexpr double kDelayThreshold = 1.0;  // samples
 constexpr double kMaxDelaySeconds = 0.02;
 
 // Mean square error of y(k) ~ a x(k - s) + b over the search rows.
@@ -79,7 +79,7 @@ CandidateOutcome test_delay(const CandidateContext& c) {
   }
   const auto d = std::lround(out.fit.spec.delay_samples);
   out.statistic = static_cast<double>(std::abs(d - d0));
-  out.threshold = kThreshold;
+  out.threshold = kDelayThreshold;
   out.evidence = "the output matches the baseline prediction best " +
                  std::string(first_shift >= 0 ? "delayed" : "advanced") + " by " +
                  std::to_string(std::abs(first_shift)) + " samples (rms " + num(std::sqrt(best)) +

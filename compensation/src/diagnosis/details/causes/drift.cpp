@@ -14,7 +14,7 @@ namespace hystbench::compensation::details {
 
 namespace {
 
-constexpr double kThreshold = 0.2;
+constexpr double kDriftThreshold = 0.2;
 
 }  // namespace
 
@@ -23,7 +23,7 @@ CandidateOutcome test_drift(const CandidateContext& c) {
   const DiagnosisRecord& r = c.record;
   const ResidualProfile& time = c.profile("time");
   out.statistic = time.explained;
-  out.threshold = kThreshold;
+  out.threshold = kDriftThreshold;
 
   ExtensionSpec spec = c.base;
   spec.drift = true;

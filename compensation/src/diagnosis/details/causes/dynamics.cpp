@@ -22,7 +22,7 @@ namespace hystbench::compensation::details {
 
 namespace {
 
-constexpr double kThreshold = 0.15;
+constexpr double kDynamicsThreshold = 0.15;
 constexpr double kZetaGrid[] = {0.02, 0.07, 0.2, 0.5};
 constexpr double kZetaMin = 0.003, kZetaMax = 1.0;
 constexpr int kFrequenciesPerDecade = 8;
@@ -248,7 +248,7 @@ CandidateOutcome test_dynamics(const CandidateContext& c) {
     }
   }
   out.statistic = worst;
-  out.threshold = kThreshold;
+  out.threshold = kDynamicsThreshold;
   out.evidence =
       worst > 0.0 ? "the measured/predicted response peaks at gain " + num(gain) + " near " +
                         num(at) + " Hz (phase " + num(phase * 180.0 / std::numbers::pi) +

@@ -20,7 +20,7 @@ namespace hystbench::compensation::details {
 
 namespace {
 
-constexpr double kThreshold = 0.15;
+constexpr double kLoopShapeThreshold = 0.15;
 // The probe's cells per side: coarse, so that its few unknowns cannot take the noise.
 constexpr std::size_t kProbeCells = 8;
 // The extension's plane: cells per side, and its smoothness weight relative to the columns'
@@ -29,7 +29,7 @@ constexpr std::size_t kPlaneCells = 20;
 constexpr double kSmoothness = 1e-4;
 // Output maps tried: dead zones per side (0: the identity).
 constexpr std::array<int, 2> kOutputZones{0, 3};
-constexpr double kParsimony = 0.02;
+constexpr double kLoopShapeParsimony = 0.02;
 
 ModelStructure plane_of(const ModelStructure& base, const DiagnosisRecord& r, std::size_t cells,
                         int zones) {
@@ -85,7 +85,7 @@ double explained_by_probe(const CandidateContext& c) {
 
 CandidateOutcome test_loop_shape(const CandidateContext& c) {
   CandidateOutcome out;
-  out.threshold = kThreshold;
+  out.threshold = kLoopShapeThreshold;
   if (c.base.structure.kind == ModelKind::kPreisach || !c.swap_operator) {
     out.evidence = c.swap_operator
                        ? "the baseline is a Preisach plane already: no operator to swap"
@@ -105,7 +105,7 @@ CandidateOutcome test_loop_shape(const CandidateContext& c) {
     spec.structure = plane_of(c.base.structure, c.record, kPlaneCells, zones);
     fits.push_back(fit_extension(c.record, spec));
   }
-  const std::size_t kept = simplest_within(fits, kParsimony);
+  const std::size_t kept = simplest_within(fits, kLoopShapeParsimony);
   out.fit = std::move(fits[kept]);
   const int zones = kOutputZones[kept];
   out.extension =

@@ -26,7 +26,7 @@ namespace {
 // explains (docs/measurements.md, Diagnosis). It only keeps a record whose residual the rate does
 // not order at all from the contest; the held-out gain and the carry-over decide
 // (DiagnosisHiddenEffect.NamesRateDependenceBehindASwitchingFront names the weak cases).
-constexpr double kThreshold = 0.1;
+constexpr double kRateDependenceThreshold = 0.1;
 constexpr double kMinRateSpread = 1.25;  // as the identification's automatic family choice
 constexpr double kRateQuantile = 0.999;
 // The thresholds law: widening at max_rate as fractions of the input span, and rate filters in
@@ -131,7 +131,7 @@ void read_rate_statistic(const CandidateContext& c, CandidateOutcome& out) {
   const ResidualProfile& rate = c.profile("rate");
   const double spread = half_cycle_rate_spread(r.u, r.dt, 0, r.n);
   out.statistic = spread >= kMinRateSpread ? rate.explained : 0.0;
-  out.threshold = kThreshold;
+  out.threshold = kRateDependenceThreshold;
   if (rate.means.empty()) {
     out.evidence = "the input never moves smoothly enough to profile the rate";
   } else {
