@@ -430,7 +430,7 @@ double search_mse(const DiagnosisRecord& r, const ExtensionSpec& spec, std::span
   }
   const ScopedNoDenormals flushed;
   diagnosis::cancellation_point();
-  return fit_joint(r, held, hysteresis_only(spec), FitRows::kSearch, cached).regression_mse;
+  return fit_joint(r, held, hysteresis_only(spec), FitRows::kSearch, nullptr).regression_mse;
 }
 
 DynamicsSearch::DynamicsSearch(const DiagnosisRecord& r, const ExtensionSpec& spec)

@@ -92,8 +92,8 @@ ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec,
 std::vector<double> held_search_target(const DiagnosisRecord& r, const ExtensionSpec& spec);
 
 /// A search trial's mean square regression residual: `spec` (its creep and drift those of the
-/// spec `held` came from) fitted on `held`, or as fit_extension does where `held` is empty or
-/// `spec` does not alternate. `cached` rows are used where they serve.
+/// spec `held` came from) fitted on `held`, or as fit_extension does (with `cached` where those
+/// rows serve it) where `held` is empty or `spec` does not alternate.
 double search_mse(const DiagnosisRecord& r, const ExtensionSpec& spec, std::span<const double> held,
                   const DesignRows* cached = nullptr);
 
