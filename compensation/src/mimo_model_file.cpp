@@ -6,11 +6,14 @@
 
 namespace hystbench::compensation {
 
-using details::fail;
-using details::number;
 using nlohmann::json;
 
 namespace {
+
+// Inside the unnamed namespace, so that a unity batch's other files' helpers of the same name
+// overload these instead of hiding them.
+using details::fail;
+using details::number;
 
 const json& member(const json& j, const std::string& key, const std::string& field) {
   if (!j.is_object() || !j.contains(key)) fail(field + key, "missing");

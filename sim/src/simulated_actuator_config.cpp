@@ -11,11 +11,13 @@
 
 namespace hystbench::sim {
 
+namespace {
+
 // Every message starts with the field path: "<field>: <what is wrong>".
+// Inside the unnamed namespace, so that a unity batch's other files' helpers of the same name
+// overload these instead of hiding them.
 using details::require;
 using details::require_positive;
-
-namespace {
 
 void require_finite(double value, const std::string& field) {
   require(std::isfinite(value), field, "must be a finite number");

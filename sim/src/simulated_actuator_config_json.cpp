@@ -16,9 +16,11 @@
 
 namespace hystbench::sim {
 
-using details::fail;
-
 namespace {
+
+// Inside the unnamed namespace, so that a unity batch's other files' helpers of the same name
+// overload these instead of hiding them.
+using details::fail;
 
 using json = nlohmann::json;
 using Config = SimulatedActuatorConfig;

@@ -9,10 +9,12 @@
 
 namespace hystbench::sim {
 
-// Every message starts with the field path: "<field>: <what is wrong>".
-using details::fail;
-
 namespace {
+
+// Every message starts with the field path: "<field>: <what is wrong>".
+// Inside the unnamed namespace, so that a unity batch's other files' helpers of the same name
+// overload these instead of hiding them.
+using details::fail;
 
 using json = nlohmann::json;
 
