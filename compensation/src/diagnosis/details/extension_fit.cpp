@@ -416,6 +416,19 @@ bool DesignRows::serves(const DiagnosisRecord& r, const ExtensionSpec& spec) con
          spec.delay_samples == spec_.delay_samples && !alternates(spec);
 }
 
+namespace {
+
+// One turn of the alternation: `spec`'s hysteresis fitted on `held` (the output less the held
+// creep and drift); `rows`, when given, its design stepped against `held`.
+double held_turn_mse(const DiagnosisRecord& r, const ExtensionSpec& spec,
+                     std::span<const double> held, const DesignRows* rows) {
+  const ScopedNoDenormals flushed;
+  diagnosis::cancellation_point();
+  return fit_joint(r, held, hysteresis_only(spec), FitRows::kSearch, rows).regression_mse;
+}
+
+}  // namespace
+
 std::vector<double> held_search_target(const DiagnosisRecord& r, const ExtensionSpec& spec) {
   std::vector<double> target;
   if (alternates(spec)) fit_alternating(r, spec, FitRows::kSearch, &target);
@@ -428,9 +441,7 @@ double search_mse(const DiagnosisRecord& r, const ExtensionSpec& spec, std::span
     if (cached != nullptr && !cached->serves(r, spec)) cached = nullptr;
     return fit_extension(r, spec, FitRows::kSearch, false, cached).regression_mse;
   }
-  const ScopedNoDenormals flushed;
-  diagnosis::cancellation_point();
-  return fit_joint(r, held, hysteresis_only(spec), FitRows::kSearch, nullptr).regression_mse;
+  return held_turn_mse(r, spec, held, nullptr);
 }
 
 DynamicsSearch::DynamicsSearch(const DiagnosisRecord& r, const ExtensionSpec& spec)
@@ -443,11 +454,8 @@ DynamicsSearch::DynamicsSearch(const DiagnosisRecord& r, const ExtensionSpec& sp
 double DynamicsSearch::operator()(double fn, double zeta) const {
   ExtensionSpec spec = spec_;
   spec.dynamics = DynamicsParameters{fn, zeta};
-  if (held_.empty()) return search_mse(r_, spec, held_, &rows_);
-  // The held rows were stepped against the held target: fit_joint takes them as they are.
-  const ScopedNoDenormals flushed;
-  diagnosis::cancellation_point();
-  return fit_joint(r_, held_, hysteresis_only(spec), FitRows::kSearch, &rows_).regression_mse;
+  return held_.empty() ? search_mse(r_, spec, held_, &rows_)
+                       : held_turn_mse(r_, spec, held_, &rows_);
 }
 
 ExtensionFit fit_extension(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRows rows,
