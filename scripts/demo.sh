@@ -8,10 +8,16 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Only what the demo runs (the CLI and the daemon, optimised without debug info, nlohmann/json and
-# Eigen precompiled once for every library, each library compiled in unity batches of 8 files, in
-# build-demo/): the first output comes minutes sooner on a fresh machine. scripts/build.sh builds
-# everything, file by file with debug info, in build/.
+# Eigen precompiled once for every library, each library compiled in unity batches of 8 files, by
+# Ninja, which compiles the libraries side by side, in build-demo/): the first output comes
+# minutes sooner on a fresh machine. scripts/build.sh builds everything, file by file with debug
+# info, in build/.
 bash scripts/deps.sh demo >&2
+# A build-demo/ an older demo configured for make: CMake keeps a folder's generator, so it starts
+# again there.
+if [ -f build-demo/CMakeCache.txt ] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' build-demo/CMakeCache.txt; then
+  rm -rf build-demo
+fi
 cmake --preset demo >/dev/null
 echo "hystbench: building hystbench and hystbenchd in build-demo/ (the tests: scripts/test.sh)" >&2
 cmake --build --preset demo -j "$(nproc)" >&2

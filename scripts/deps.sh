@@ -19,8 +19,9 @@ TEST_PKGS=(python3 python3-pip python3-setuptools python3-wheel socat python3-py
 FUZZ_PKGS=(clang libclang-rt-14-dev)
 # JSON and arithmetic on the command line, for the measurement scripts only.
 MEASURE_PKGS=(jq bc)
-# JSON on the command line, for scripts/demo.sh (the run logs from the results).
-DEMO_PKGS=(jq)
+# JSON on the command line, for scripts/demo.sh (the run logs from the results); Ninja, which
+# builds the demo's libraries side by side where make builds them one after another.
+DEMO_PKGS=(jq ninja-build)
 
 want=("${BUILD_PKGS[@]}")
 case "${1:-build}" in
