@@ -273,13 +273,13 @@ TEST_F(BenchLearningTest, AFastSineLearnsBesideTheModeIdentifyAdded) {
   // divided by it, Q no longer held below the model's mode.
   ASSERT_TRUE(r["learning"]["measured_plant"].is_object()) << r["learning"].dump(2);
   EXPECT_GT(r["learning"]["measured_plant"]["harmonics"].get<int>(), 4) << r["learning"].dump(2);
-  // Replayed, the drive plays 20 ms (ten periods) ahead of its scored period: one period of
-  // 2 ms leaves the actuator settling from rest.
+  // Replayed, the drive plays 0.2 s (a hundred periods) ahead of its scored period: one period
+  // of 2 ms leaves the actuator settling from rest.
   const json replay = run_and_wait(
       "track",
       {{"reference", "sine"}, {"frequency_hz", 500.0}, {"learned", r["learning"]["drive"]}});
   ASSERT_EQ(replay["end"], "completed") << replay.dump(2);
-  EXPECT_EQ(replay["learning"]["lead_in_periods"], 10) << replay["learning"].dump(2);
+  EXPECT_EQ(replay["learning"]["lead_in_periods"], 100) << replay["learning"].dump(2);
   std::cout << "replayed: " << replay["rms_error_percent"] << " % (the last trial " << rms.back()
             << " %)\n";
   EXPECT_LE(replay["rms_error_percent"].get<double>(), 1.5 * rms.back());

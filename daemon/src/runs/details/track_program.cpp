@@ -35,8 +35,9 @@ namespace {
 
 // A drive learned before plays at least this long ahead of its first scored period: a fast
 // sine's single period leaves the actuator settling from rest (its fast creep, its modes) where
-// the drive was learned on a periodic state.
-constexpr double kLeadInS = 0.02;
+// the drive was learned on a periodic state, and the offset measured on the last of them is
+// that of a settled motion (measurements.md, "the script's drives on the same bench").
+constexpr double kLeadInS = 0.2;
 // Where the actuator's offset is not the one the drive was learned at, the lead-in goes on while
 // the offset moves toward it (creep), following it every kFollowS, until it is within
 // kLeadInTolerance x the last trial's rms (the move the drive makes through the model to meet
