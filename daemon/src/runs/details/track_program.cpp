@@ -38,6 +38,9 @@ namespace {
 // the drive was learned on a periodic state, and the offset measured on the last of them is
 // that of a settled motion (measurements.md, "the script's drives on the same bench").
 constexpr double kLeadInS = 0.2;
+// ... and at least this many periods: the first starts from rest, so the offset is measured on a
+// whole period after it.
+constexpr std::size_t kLeadInPeriods = 2;
 // Where the actuator's offset is not the one the drive was learned at, the lead-in goes on while
 // the offset moves toward it (creep), following it every kFollowS, until it is within
 // kLeadInTolerance x the last trial's rms (the move the drive makes through the model to meet
@@ -93,7 +96,7 @@ std::optional<LearningPlan> learning_plan(const TrackRequest& request, const Run
   plan.period = static_cast<std::size_t>(std::llround(rate / request.reference.frequency_hz));
   plan.frequency_hz = rate / static_cast<double>(plan.period);
   if (plan.start) {
-    plan.lead_in = periods_filling(kLeadInS, plan.frequency_hz);
+    plan.lead_in = std::max(kLeadInPeriods, periods_filling(kLeadInS, plan.frequency_hz));
     plan.lead_in_max =
         std::max(plan.lead_in, periods_filling(keys.lead_in_max_s, plan.frequency_hz));
   } else {
