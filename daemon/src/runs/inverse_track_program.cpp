@@ -52,9 +52,9 @@ std::vector<double> precondition_sweep(double u_now, double u_min, double u_max,
 
 void arm_tare(TrackDrive& track, std::size_t sweep_samples, std::uint64_t model_exchange_ticks) {
   const std::size_t half = sweep_samples / 2;
-  track.tare.from = half < 10 ? std::numeric_limits<std::uint64_t>::max()
-                              : half + half / 5;  // skip the turn's transient
-  track.tare.model_exchange_ticks = model_exchange_ticks;
+  track.program.tare.from = half < 10 ? std::numeric_limits<std::uint64_t>::max()
+                                      : half + half / 5;  // skip the turn's transient
+  track.program.tare.model_exchange_ticks = model_exchange_ticks;
 }
 
 hc::ActuatorModel model_after(const hc::ActuatorModel& model, std::span<const double> prefix,
@@ -93,14 +93,14 @@ std::unique_ptr<RunProgram> make_verification_program(const hc::ActuatorModel& m
   auto p = std::make_unique<RunProgram>();
   p->kind = RunKind::kTrack;
   TrackDrive& track = make_track_drive(*p);
-  track.reference = sim::make_signal_generator(ref);
+  track.program.reference = sim::make_signal_generator(ref);
   p->excitation = precondition_sweep(u_now, limits.u_min, limits.u_max, spec.precondition_s, dt_s);
   const hc::ActuatorModel m =
       model_after(model, p->excitation, u_now, limits.u_min, limits.u_max, dt_s);
   const hc::LinearMap linear{span / (limits.u_max - limits.u_min),
                              range.y_bottom - span / (limits.u_max - limits.u_min) * limits.u_min};
-  track.compensator.emplace(hc::CompensatorKind::kInverse, hc::make_inverse(m), std::nullopt,
-                            linear);
+  track.program.compensator.emplace(hc::CompensatorKind::kInverse, hc::make_inverse(m),
+                                    std::nullopt, linear);
   // As `track`: the model predicts y in every sample, and its delay and dynamics are inverted
   // from the previewed reference.
   hc::ActuatorModel predictor = model;
@@ -108,15 +108,15 @@ std::unique_ptr<RunProgram> make_verification_program(const hc::ActuatorModel& m
   predictor.reset(p->excitation.empty() ? u_now : p->excitation.front());
   p->model = std::move(predictor);
   const hc::DynamicsInversion inversion(model, dt_s, spec.feedforward_bandwidth_hz);
-  if (inversion.active()) track.preview = inversion;
+  if (inversion.active()) track.program.preview = inversion;
   arm_tare(track, p->excitation.size(), spec.model_exchange_ticks);
   const std::uint64_t prefix = p->excitation.size();
   const auto body = static_cast<std::uint64_t>(std::llround(ref.duration_s / dt_s));
   const auto one_period = static_cast<std::uint64_t>(std::llround(1.0 / spec.frequency_hz / dt_s));
   p->total_samples = prefix + body;
   p->metrics_from = prefix + (body >= 2 * one_period ? one_period : 0);
-  track.y_ref_min = range.y_bottom;
-  track.y_ref_max = range.y_top;
+  track.program.y_ref_min = range.y_bottom;
+  track.program.y_ref_max = range.y_top;
   p->records.capacity = p->total_samples - p->metrics_from;
   p->records.u.resize(p->records.capacity);
   p->records.y.resize(p->records.capacity);
@@ -140,8 +140,9 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   r["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
   r["error_samples"] = run.error.samples;
   if (const TrackDrive* track = track_drive(run)) {
-    if (track->tare.samples > 0) r["tare_um"] = track->tare.um();
-    if (track->tare.startup_samples > 0) r["startup_offset_um"] = track->tare.startup_um();
+    if (track->state().tare.samples > 0) r["tare_um"] = track->state().tare.um();
+    const TareMeasure& tare = track->state().tare;
+    if (tare.startup_samples > 0) r["startup_offset_um"] = tare.startup_um();
   }
   // A reference that steps (a tenth of its span or more between two ticks): how y answered.
   const hc::StepFigures steps = hc::step_figures(yr, y, run.dt_s, 0.1 * e.range);

@@ -111,9 +111,9 @@ TEST(BenchLoop, TheFeedbackHoldsOnAStaleReading) {
   program->kind = hd::RunKind::kTrack;
   program->total_samples = 400;
   hd::TrackDrive& track = hd::make_track_drive(*program);
-  track.reference = hystbench::sim::make_uniform_signal({10.0, 10.0}, 1.0);
-  track.compensator.emplace(hc::CompensatorKind::kPid, nullptr, hc::FeedbackController(law, kDt),
-                            linear);
+  track.program.reference = hystbench::sim::make_uniform_signal({10.0, 10.0}, 1.0);
+  track.program.compensator.emplace(hc::CompensatorKind::kPid, nullptr,
+                                    hc::FeedbackController(law, kDt), linear);
   program->records.capacity = program->total_samples;
   program->records.u.resize(program->total_samples);
   program->records.y.resize(program->total_samples);

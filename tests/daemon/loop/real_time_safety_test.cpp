@@ -68,7 +68,7 @@ long run_allocations(const Case& c, const std::filesystem::path& dir) {
     auto truth = hs::make_truth_model(truth_config, 1.0 / kRate);
     const hc::ActuatorModel m = hd::model_after(truth, program->excitation, loop.last_output(),
                                                 o.limits.u_min, o.limits.u_max, 1.0 / kRate);
-    hd::track_drive(*program)->compensator.emplace(
+    hd::track_drive(*program)->program.compensator.emplace(
         hc::CompensatorKind::kInversePid, hc::make_inverse(m),
         hc::FeedbackController(law, 1.0 / kRate), hc::LinearMap{});
   }

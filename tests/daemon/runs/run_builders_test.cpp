@@ -123,7 +123,7 @@ TEST(TrackProgram, ABuiltInTriangleWithoutAModelFollowsTheConfiguredRange) {
       track({{"compensator", "none"}, {"frequency_hz", 2.0}, {"periods", 3}}, ctx);
   const hd::RunProgram& p = *run.program;
   ASSERT_NE(hd::track_drive(p), nullptr);
-  const hd::TrackDrive& t = *hd::track_drive(p);
+  const hd::TrackProgram& t = hd::track_drive(p)->program;
   EXPECT_EQ(p.kind, hd::RunKind::kTrack);
   EXPECT_TRUE(p.run_id.empty());  // the bench names it
   // The prefix is the precondition sweep from the present output: 0.4 s at 1 kHz.
@@ -163,7 +163,7 @@ TEST(TrackProgram, AModelsInverseIsPreviewedAndTaredOverTheModelsRange) {
   const hdd::BuiltRun run = track({{"periods", 2}}, ctx);  // "inverse" is the default with a model
   const hd::RunProgram& p = *run.program;
   ASSERT_NE(hd::track_drive(p), nullptr);
-  const hd::TrackDrive& t = *hd::track_drive(p);
+  const hd::TrackProgram& t = hd::track_drive(p)->program;
   const hd::ModelOutputRange range = hd::major_loop_range(model.model, 0.0, 150.0, 1e-3);
   EXPECT_DOUBLE_EQ(t.y_ref_min, range.y_bottom);
   EXPECT_DOUBLE_EQ(t.y_ref_max, range.y_top);
@@ -209,7 +209,7 @@ TEST(TrackProgram, ARateDependentModelsFeedforwardIsPlannedOverTheReference) {
       track({{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 3}}, ctx);
   hd::RunProgram& p = *run.program;
   ASSERT_NE(hd::track_drive(p), nullptr);
-  hd::TrackDrive& t = *hd::track_drive(p);
+  hd::TrackProgram& t = hd::track_drive(p)->program;
   const std::uint64_t prefix = p.excitation.size(), samples = p.total_samples - prefix;
   EXPECT_EQ(run.reply["feedforward"]["planned"], json({{"samples", samples}, {"planning", true}}));
   ASSERT_TRUE(run.preparation.work);
@@ -368,7 +368,7 @@ TEST(TrackProgram, AnUploadedReferenceIsApproachedFromTheBottomOfTheRange) {
   const hdd::BuiltRun run = track({{"reference_upload", "r"}, {"approach_s", 0.5}}, ctx, &up);
   const hd::RunProgram& p = *run.program;
   ASSERT_NE(hd::track_drive(p), nullptr);
-  const hd::TrackDrive& t = *hd::track_drive(p);
+  const hd::TrackProgram& t = hd::track_drive(p)->program;
   EXPECT_NEAR(t.reference->value(0.0), 0.0, 1e-9);  // where the sweep leaves the output
   EXPECT_EQ(run.reply["reference"]["kind"], "upload");
   EXPECT_EQ(p.metrics_from, p.excitation.size() + 500);  // the approach is not scored

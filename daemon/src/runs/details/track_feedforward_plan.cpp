@@ -140,7 +140,7 @@ struct FeedforwardPlanning {
     // at it plans on the continued law: where that leaves it worse on the model as it
     // is, the previewed inverse plays.
     if (plan.rms <= plan.start_rms) {
-      track_drive(program)->compensator.emplace(
+      track_drive(program)->program.compensator.emplace(
           kind, std::make_unique<hc::PlannedInverse>(std::move(targets), std::move(plan)), pid,
           linear, path);
     } else {
@@ -192,7 +192,7 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
     return {};
   }
   std::vector<double> targets(samples);
-  const TrackDrive& track = *track_drive(p);
+  const TrackProgram& track = track_drive(p)->program;
   for (std::uint64_t k = 0; k < samples; ++k) {
     targets[k] = track.feedforward_target(static_cast<double>(k) * dt, 0.0);
   }

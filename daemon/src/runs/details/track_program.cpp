@@ -187,7 +187,7 @@ json arm_feedforward(RunProgram& p, TrackDrive& track, const RunContext& ctx) {
   }
   if (model.delay_samples() > 0 || model.delay_s() > 0.0) inverted.push_back("delay");
   if (model.dynamics()) inverted.push_back("dynamics");
-  if (inversion.active()) track.preview = inversion;
+  if (inversion.active()) track.program.preview = inversion;
   arm_tare(track, p.excitation.size(), model_exchange_ticks(ctx));
   json out = {{"inverted", inverted},
               {"preview_samples", inversion.preview_samples()},
@@ -275,7 +275,7 @@ std::unique_ptr<TrackLearning> learning(RunProgram& p, TrackDrive& track, const 
 std::optional<double> tare_window_prediction(hc::ActuatorModel model, const RunProgram& p,
                                              double dt) {
   const std::vector<double>& sweep = p.excitation;
-  const TareWindow& tare = track_drive(p)->tare;
+  const TareWindow& tare = track_drive(p)->program.tare;
   if (sweep.empty() || tare.from >= sweep.size()) return std::nullopt;
   model.configure(dt);
   model.reset(sweep.front());
@@ -299,7 +299,7 @@ std::optional<double> tare_window_prediction(hc::ActuatorModel model, const RunP
 std::optional<double> learned_start_offset(const LearnedDrive& start, const RunProgram& p,
                                            const RunContext& ctx) {
   const double offset = start.meta.value("compensator_offset_um", std::nan(""));
-  if (start.compensator.empty() || !std::isfinite(offset) || !track_drive(p)->compensator) {
+  if (start.compensator.empty() || !std::isfinite(offset) || !track_drive(p)->program.compensator) {
     return std::nullopt;
   }
   const json then_model = start.meta.value("model", json());
@@ -327,9 +327,11 @@ RunPreparation with_learned_start(RunPreparation preparation, double offset) {
                          RunProgram& p, const std::function<void(double)>& progress) {
     if (before) before(p, progress);
     TrackDrive& track = *track_drive(p);
-    if (track.compensator && track.learning) {
-      track.learned_twin = *track.compensator;  // its state the compensator's at the run's start
-      track.learned_twin_offset_um = offset;
+    TrackProgram& program = track.program;
+    if (program.compensator && track.learning) {
+      // Its state the compensator's at the run's start.
+      program.learned_twin.emplace(*program.compensator);
+      program.learned_twin_offset_um = offset;
     }
   };
   return preparation;
@@ -386,7 +388,7 @@ json learning_summary(const LearningPlan& learn) {
 
 // A periodic reference (one unscored period, metrics_from = prefix + period) re-tares the
 // feedforward on a second unscored period: its mean error moves the target from the first scored
-// tick on (TareWindow::startup_um). The first period is the start from rest, whose mean is not
+// tick on (TareMeasure::startup_um). The first period is the start from rest, whose mean is not
 // the periodic motion's. Only beside the prefix's tare (a feedforward that inverts the model)
 // and with two scored periods left; not for a learning run (it has its own lead-in), an upload
 // (its approach is not the trajectory) or a run with feedback (the loop holds the mean from the
@@ -464,10 +466,10 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
   p->kind = RunKind::kTrack;
   p->response_delay_ticks = model_delay_ticks(ctx);
   TrackDrive& track = make_track_drive(*p);
-  track.reference = std::move(ref.signal);
-  track.feedforward_reference = std::move(feedforward_reference);
-  track.y_ref_min = range.y_bottom;
-  track.y_ref_max = range.y_top;
+  track.program.reference = std::move(ref.signal);
+  track.program.feedforward_reference = std::move(feedforward_reference);
+  track.program.y_ref_min = range.y_bottom;
+  track.program.y_ref_max = range.y_top;
   // Pre-conditioning: current output -> u_max -> u_min, open loop.
   p->excitation =
       precondition_sweep(ctx.u_now, lim.u_min, lim.u_max, request.precondition_s, ctx.dt());
@@ -488,7 +490,7 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
                                    linear, path);
   }
   try {
-    track.compensator.emplace(kind, std::move(inverse), pid, linear, path);
+    track.program.compensator.emplace(kind, std::move(inverse), pid, linear, path);
   } catch (const std::exception& e) {
     throw common::CommandError("bad_params", e.what());
   }
@@ -502,7 +504,7 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
   const std::uint64_t prefix = p->excitation.size();
   p->total_samples = prefix + ref.samples;
   p->metrics_from = prefix + ref.unscored;
-  arm_periodic_startup(*p, track.tare, ref, learn.has_value(), pid.has_value());
+  arm_periodic_startup(*p, track.program.tare, ref, learn.has_value(), pid.has_value());
   // The feedback holds the reading to the reference from the reference's first tick on, so that
   // it has taken out the start from rest before the scored part begins (held until then, the
   // scored part began with the feedforward's error there).
