@@ -92,7 +92,7 @@ void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, doub
   LeadInEnd end = LeadInEnd::kLongest;
   if (!longer) {
     end = LeadInEnd::kMinimum;
-  } else if (gap(tare) <= follow_.tolerance) {
+  } else if (settled(tare)) {
     end = LeadInEnd::kOffsetReached;
   } else if (begun + 1 >= lead_in_periods) {
     end = LeadInEnd::kLongest;
@@ -116,6 +116,14 @@ void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, doub
   pending_ = true;
   pending_tick_ = k;
   pending_end_ = end;
+}
+
+bool LearningExchange::settled(double tare) noexcept {
+  if (!within_ && gap(tare) > follow_.tolerance) return false;
+  within_ = true;
+  if (!(follow_.settled > 0.0)) return true;
+  return (steps_within_ > 0 && std::abs(last_step_error_) <= follow_.settled) ||
+         steps_within_ >= follow_.settle_steps;
 }
 
 void LearningExchange::end_lead_in(std::uint64_t k, std::uint64_t begun, LeadInEnd end) noexcept {
@@ -158,7 +166,9 @@ void LearningExchange::lead_in_error(std::uint64_t k, double error, double tare)
   follow_sum_ += error;
   ++follow_samples_;
   if ((since + 1) % step != 0) return;
-  followed_ -= follow_sum_ / static_cast<double>(follow_samples_);
+  last_step_error_ = follow_sum_ / static_cast<double>(follow_samples_);
+  followed_ -= last_step_error_;
+  if (within_) ++steps_within_;
   follow_sum_ = 0.0;
   follow_samples_ = 0;
   const std::size_t checked = std::max<std::size_t>(follow_.stall_steps, 1);

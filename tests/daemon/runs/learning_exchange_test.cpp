@@ -187,12 +187,21 @@ TEST(LearningExchange, ALeadInOfSeveralPeriodsMeasuresTheOffsetOnItsLastWhole) {
   EXPECT_DOUBLE_EQ(x.target_offset(first, 3.0), 3.1);
 }
 
-// A lead-in that may last 200 periods, following the output's offset every 2 periods, ending
-// within 0.05 of the offset 1.0 the drive was learned at, or when at the pace it came closer
-// over the last `stall_steps` follow steps it would not come within it before the longest. The
-// actuator's offset is `offset(k)`; the target takes off the tare (the offset at the run's start)
-// and what the lead-in followed, so a lead-in tick's error (reference - reading) is what the
-// target takes off less the offset.
+// A lead-in that may last 200 periods (lead_in_plan), following the output's offset every 2
+// periods, ending within 0.05 of the offset 1.0 the drive was learned at, or when at the pace it
+// came closer over the last `stall_steps` follow steps it would not come within it before the
+// longest. The actuator's offset is `offset(k)`; the target takes off the tare (the offset at the
+// run's start) and what the lead-in followed, so a lead-in tick's error (reference - reading) is
+// what the target takes off less the offset.
+hd::LearningLeadIn lead_in_plan(std::size_t stall_steps = 5, double settled = 0.0) {
+  hd::LearningLeadIn l;
+  l.learned_offset = 1.0;
+  l.tolerance = 0.05;
+  l.follow_periods = 2;
+  l.stall_steps = stall_steps;
+  l.settled = settled;
+  return l;
+}
 struct LeadInRun {
   std::uint64_t played = 0;
   std::uint64_t first_scored = 0;
@@ -203,12 +212,7 @@ template <typename Offset>
 LeadInRun run_lead_in(Offset offset, std::size_t stall_steps = 5) {
   constexpr std::uint64_t first = 1000;
   hd::LearningExchange x(kPeriod, first, 200);
-  hd::LearningLeadIn l;
-  l.learned_offset = 1.0;
-  l.tolerance = 0.05;
-  l.follow_periods = 2;
-  l.stall_steps = stall_steps;
-  x.follow_offset(3, l);
+  x.follow_offset(3, lead_in_plan(stall_steps));
   EXPECT_TRUE(x.start_from({7, 8, 9, 10}, {}, true));
   const double tare = offset(first - 200 * kPeriod);
   LeadInRun r;
@@ -274,6 +278,37 @@ TEST(LearningExchange, ALeadInEndsAtItsLongest) {
   EXPECT_EQ(r.first_scored, 1000u);
 }
 
+// The actuator answers a move of the target by 1.25x the move (the model's gain there is not the
+// actuator's), its offset 0.04 from the tare's, within the tolerance at once. Ended there, the
+// last period's mean taken off would leave a quarter of it at trial 0. Settling, the lead-in
+// follows the error until a step's mean is within `settled`, and trial 0 starts well within it.
+TEST(LearningExchange, ALeadInSettlesTheErrorWhereTheActuatorAnswersAMoveByMore) {
+  auto lead_in = [](double settled) {
+    constexpr std::uint64_t first = 1000;
+    constexpr double kGain = 1.25, kTare = 1.0, kOffset = 1.04;
+    hd::LearningExchange x(kPeriod, first, 200);
+    x.follow_offset(3, lead_in_plan(5, settled));
+    EXPECT_TRUE(x.start_from({7, 8, 9, 10}, {}, true));
+    auto error_at = [&](std::uint64_t k) {
+      return kGain * (x.target_offset(k, kTare) - kTare) + kTare - kOffset;
+    };
+    double u = 0.0;
+    for (std::uint64_t k = first - 200 * kPeriod; x.lead_in(k, u); ++k) {
+      x.lead_in_error(k, error_at(k), kTare);
+    }
+    EXPECT_EQ(x.lead_in_end(), hd::LearningExchange::LeadInEnd::kOffsetReached);
+    return std::pair{error_at(x.first_scored_tick()), x.lead_in_played()};
+  };
+  const auto [unsettled, shortest] = lead_in(0.0);
+  EXPECT_EQ(shortest, 3u);
+  EXPECT_NEAR(unsettled, 0.01, 1e-9);
+  const hd::LearningLeadIn defaults;
+  const auto [left, played] = lead_in(0.005);
+  EXPECT_LE(std::abs(left), 0.005 / 4);
+  EXPECT_GT(played, 3u);
+  EXPECT_LE(played, 3 + 2 * (defaults.settle_steps + 1));
+}
+
 // Two axes of a stage: x's offset is its learned one at once, y's creeps toward its own. Alone,
 // x's lead-in ends at its minimum while y's goes on; deciding together, both end at the first
 // period where y's would, their trial 0 at one tick, and x follows its offset until then.
@@ -287,12 +322,7 @@ TEST(LearningExchange, AStagesLeadInsEndTogetherWhereEveryAxisWould) {
     std::vector<std::unique_ptr<hd::LearningExchange>> axes;
     for (int a = 0; a < 2; ++a) {
       axes.push_back(std::make_unique<hd::LearningExchange>(kPeriod, first, 200));
-      hd::LearningLeadIn l;
-      l.learned_offset = 1.0;
-      l.tolerance = 0.05;
-      l.follow_periods = 2;
-      l.stall_steps = 5;
-      axes.back()->follow_offset(3, l);
+      axes.back()->follow_offset(3, lead_in_plan());
       EXPECT_TRUE(axes.back()->start_from({7, 8, 9, 10}, {}, true));
       axes.back()->decide_together(together);
     }

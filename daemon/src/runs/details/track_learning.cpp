@@ -220,7 +220,7 @@ std::string lead_in_end(const LearningExchange& x) {
     case LearningExchange::LeadInEnd::kOffsetReached:
       return x.lead_in_followed() != 0.0
                  ? "the offset, followed, came within the tolerance of the one the drive was "
-                   "learned at"
+                   "learned at, and the error's mean within the last trial's rms"
                  : "the offset is within the tolerance of the one the drive was learned at";
     case LearningExchange::LeadInEnd::kOffsetStalled:
       return "the offset, followed, would not come within the tolerance of the one the drive was "

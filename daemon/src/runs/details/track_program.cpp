@@ -45,9 +45,13 @@ constexpr std::size_t kLeadInPeriods = 2;
 // the offset moves toward it (creep), following it every kFollowS, until it is within
 // kLeadInTolerance x the last trial's rms (the move the drive makes through the model to meet
 // the rest has the model's shape, off the actuator's by a fraction of the move), or it came
-// no closer by that over kStallS.
+// no closer by that over kStallS. Within it, the lead-in follows on until a step's mean error is
+// within kLeadInSettled x the last trial's rms (the actuator answers the move of the target by
+// the model's gain there, not exactly by the move: the step after a move shows the rest), for
+// at most LearningLeadIn::settle_steps steps.
 constexpr double kFollowS = 0.1;
 constexpr double kLeadInTolerance = 5.0;
+constexpr double kLeadInSettled = 1.0;
 constexpr double kStallS = 5.0;
 
 ActuatorRange known_range(const RunContext& ctx) {
@@ -348,6 +352,7 @@ LearningLeadIn lead_in_following(const LearnedDrive& start, const LearningPlan& 
   const double period_s = static_cast<double>(plan.period) / rate_hz;
   l.learned_offset = offset;
   l.tolerance = kLeadInTolerance * rms;
+  l.settled = kLeadInSettled * rms;
   l.follow_periods = static_cast<std::size_t>(std::max(1.0, std::ceil(kFollowS / period_s)));
   l.stall_steps = static_cast<std::size_t>(
       std::max(1.0, std::ceil(kStallS / (static_cast<double>(l.follow_periods) * period_s))));

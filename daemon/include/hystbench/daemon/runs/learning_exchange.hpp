@@ -32,6 +32,12 @@ struct LearningLeadIn {
   /// ... and ends when, at the pace the offset came closer over the last this many follow
   /// steps, it would not come within the tolerance before the longest lead-in.
   std::size_t stall_steps = 50;
+  /// Within the tolerance, the lead-in also waits for a follow step whose mean error is within
+  /// this [output unit; 0: it does not]: the offset the drive then plays at is the one the
+  /// actuator shows with it, not the tare's estimate (the actuator answers a move of the target
+  /// by the model's gain there, not exactly by the move). It waits at most settle_steps steps.
+  double settled = 0.0;
+  std::size_t settle_steps = 3;
 };
 
 struct LearningExchange {
@@ -60,8 +66,9 @@ struct LearningExchange {
   /// Before the run: decide with the others through `together` (outlives the run).
   void decide_together(LeadInTogether* together) noexcept { together_ = together; }
   /// Why the lead-in ended where it did: its minimum, with no following (none asked for or the
-  /// learned offset not known); the offset within the tolerance (at once, or followed there);
-  /// followed, it would not get there before the longest; the longest.
+  /// learned offset not known); the offset within the tolerance (at once, or followed there,
+  /// and settled as LearningLeadIn::settled asks); followed, it would not get there before the
+  /// longest; the longest.
   enum class LeadInEnd { kMinimum, kOffsetReached, kOffsetStalled, kLongest };
   /// The tick trial 0 begins at: first_tick, or earlier where the lead-in ended early (the loop
   /// decides it, a period ahead).
@@ -181,6 +188,12 @@ struct LearningExchange {
   double follow_sum_ = 0.0;
   std::uint64_t follow_samples_ = 0;
   std::size_t follow_steps_ = 0;
+  double last_step_error_ = std::numeric_limits<double>::quiet_NaN();  // its mean
+  bool within_ = false;           // the offset has come within the tolerance
+  std::size_t steps_within_ = 0;  // follow steps since
+  // The offset within the tolerance (once: following the error may move it out again), and a
+  // follow step's mean error within `settled` since (or the steps the settling waits played).
+  bool settled(double tare) noexcept;
   double checkpoint_gap_ = std::numeric_limits<double>::quiet_NaN();
   bool stalled_ = false;
   // Deciding with the other axes: the end this axis would take at pending_tick_.
