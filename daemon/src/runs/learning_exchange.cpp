@@ -96,7 +96,7 @@ void LearningExchange::decide_lead_in(std::uint64_t k, std::uint64_t begun, doub
     end = LeadInEnd::kOffsetReached;
   } else if (begun + 1 >= lead_in_periods) {
     end = LeadInEnd::kLongest;
-  } else if (stalled_) {
+  } else if (stalled_ && !within_) {  // within, the settling's own steps bound it
     end = LeadInEnd::kOffsetStalled;
   } else {
     return;

@@ -281,13 +281,15 @@ TEST(LearningExchange, ALeadInEndsAtItsLongest) {
 // The actuator answers a move of the target by 1.25x the move (the model's gain there is not the
 // actuator's), its offset 0.04 from the tare's, within the tolerance at once. Ended there, the
 // last period's mean taken off would leave a quarter of it at trial 0. Settling, the lead-in
-// follows the error until a step's mean is within `settled`, and trial 0 starts well within it.
+// follows the error until a step's mean is within `settled`, and trial 0 starts well within it;
+// also where the pace is checked every step (following moves the offset away from the learned
+// one: the settling's own steps bound it, not the stall).
 TEST(LearningExchange, ALeadInSettlesTheErrorWhereTheActuatorAnswersAMoveByMore) {
-  auto lead_in = [](double settled) {
+  auto lead_in = [](double settled, std::size_t stall_steps = 5) {
     constexpr std::uint64_t first = 1000;
     constexpr double kGain = 1.25, kTare = 1.0, kOffset = 1.04;
     hd::LearningExchange x(kPeriod, first, 200);
-    x.follow_offset(3, lead_in_plan(5, settled));
+    x.follow_offset(3, lead_in_plan(stall_steps, settled));
     EXPECT_TRUE(x.start_from({7, 8, 9, 10}, {}, true));
     auto error_at = [&](std::uint64_t k) {
       return kGain * (x.target_offset(k, kTare) - kTare) + kTare - kOffset;
@@ -307,6 +309,9 @@ TEST(LearningExchange, ALeadInSettlesTheErrorWhereTheActuatorAnswersAMoveByMore)
   EXPECT_LE(std::abs(left), 0.005 / 4);
   EXPECT_GT(played, 3u);
   EXPECT_LE(played, 3 + 2 * (defaults.settle_steps + 1));
+  const auto [left_paced, played_paced] = lead_in(0.005, 1);
+  EXPECT_DOUBLE_EQ(left_paced, left);
+  EXPECT_EQ(played_paced, played);
 }
 
 // Two axes of a stage: x's offset is its learned one at once, y's creeps toward its own. Alone,
