@@ -146,7 +146,10 @@ TEST(RealTimePath, AModbusStageAllocatesNothingInLoopAndThreadMode) {
     const auto d = hd::make_driver("modbus");
     json params = simdaq_params(port, io, io == "thread");
     params["axes"] = {"x", "y"};
-    ASSERT_TRUE(d->configure(params, 500.0).ok);
+    // In loop mode each tick makes a transaction per axis and direction; at 200 Hz the
+    // activation's latency check (one tick's exchange within the period) holds on a machine
+    // that CTest's other job loads. What this test holds is the allocations, not the rate.
+    ASSERT_TRUE(d->configure(params, 200.0).ok);
     const auto r = d->activate();
     ASSERT_TRUE(r.ok) << r.message;
     std::array<double, 2> u{};
