@@ -140,8 +140,8 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   r["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
   r["error_samples"] = run.error.samples;
   if (const TrackDrive* track = track_drive(run)) {
-    if (track->state().tare.samples > 0) r["tare_um"] = track->state().tare.um();
     const TareMeasure& tare = track->state().tare;
+    if (tare.samples > 0) r["tare_um"] = tare.um();
     if (tare.startup_samples > 0) r["startup_offset_um"] = tare.startup_um();
   }
   // A reference that steps (a tenth of its span or more between two ticks): how y answered.
