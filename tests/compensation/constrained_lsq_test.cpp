@@ -79,6 +79,39 @@ TEST(NormalEquations, MatchesDenseProductsAcrossBlocks) {
   EXPECT_TRUE(ne.gram().isApprox(ne.gram().transpose()));
 }
 
+// Rows like a Preisach plane's: most columns hold their value over runs of rows (some stay 0),
+// a few vary every row, interleaved; more than one block and a partial one.
+TEST(NormalEquations, MatchesDenseProductsWhereMostColumnsArePiecewiseConstant) {
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::uniform_int_distribution<int> run(5, 60);
+  const int n = 80, rows = 1000;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, n);
+  for (int i = 0; i < n; ++i) {
+    if (i % 7 == 3) {
+      for (int t = 0; t < rows; ++t) A(t, i) = value(rng);  // varies every row
+    } else if (i % 5 != 1) {                                // every fifth column stays 0
+      for (int t = 0; t < rows;) {
+        const int length = run(rng);
+        const double v = value(rng);
+        for (int r = t; r < std::min(rows, t + length); ++r) A(r, i) = v;
+        t += length;
+      }
+    }
+  }
+  Eigen::VectorXd z(rows);
+  for (int t = 0; t < rows; ++t) z[t] = value(rng);
+  const Eigen::MatrixXd G = A.transpose() * A;
+  hd::NormalEquations ne(n, 128);
+  for (int t = 0; t < rows; ++t) {
+    Eigen::Map<Eigen::VectorXd>(ne.row(), n) = A.row(t).transpose();
+    ne.push(z[t]);
+  }
+  EXPECT_LT((ne.gram() - G).cwiseAbs().maxCoeff(), 1e-12 * G.cwiseAbs().maxCoeff());
+  EXPECT_LT((ne.rhs() - A.transpose() * z).norm(), 1e-12 * (A.transpose() * z).norm());
+  EXPECT_EQ(ne.gram(), ne.gram().transpose());
+}
+
 TEST(BoundedLsq, EqualsUnconstrainedSolutionWhenNoBoundIsActive) {
   std::mt19937_64 rng(2);
   const Problem p = random_problem(rng, 200, 8, 0.3);

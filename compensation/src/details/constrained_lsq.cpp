@@ -8,17 +8,101 @@
 
 namespace hystbench::compensation::details {
 
+namespace {
+
+// A column is taken run by run where it holds its value over runs this many rows long on
+// average; the block is, where at least this share of its columns is, and it has this many
+// columns (below, the rank update costs little, and the fits keep its rounding).
+constexpr Eigen::Index kMinRunRows = 8;
+constexpr double kMinPiecewiseShare = 0.5;
+constexpr Eigen::Index kMinPiecewiseColumns = 64;
+
+}  // namespace
+
 NormalEquations::NormalEquations(Eigen::Index unknowns, Eigen::Index block_rows)
     : block_(block_rows, unknowns),
       targets_(block_rows),
       gram_(Eigen::MatrixXd::Zero(unknowns, unknowns)),
-      rhs_(Eigen::VectorXd::Zero(unknowns)) {}
+      rhs_(Eigen::VectorXd::Zero(unknowns)),
+      prefix_(block_rows + 1, unknowns),
+      column_products_(unknowns),
+      varying_block_(block_rows, unknowns),
+      varying_gram_(unknowns, unknowns),
+      runs_(static_cast<std::size_t>(unknowns)) {
+  varying_.reserve(static_cast<std::size_t>(unknowns));
+}
+
+bool NormalEquations::add_piecewise_block() {
+  const Eigen::Index k = pending_, n = block_.cols();
+  if (k < 2 * kMinRunRows || n < kMinPiecewiseColumns) return false;
+  const auto rows = block_.topRows(k);
+  std::fill(runs_.begin(), runs_.end(), 1);
+  for (Eigen::Index t = 1; t < k; ++t) {
+    const double* now = rows.row(t).data();
+    const double* before = rows.row(t - 1).data();
+    for (Eigen::Index i = 0; i < n; ++i) runs_[static_cast<std::size_t>(i)] += now[i] != before[i];
+  }
+  varying_.clear();
+  const Eigen::Index max_runs = k / kMinRunRows;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (runs_[static_cast<std::size_t>(i)] > max_runs) varying_.push_back(i);
+  }
+  const auto piecewise = n - static_cast<Eigen::Index>(varying_.size());
+  if (static_cast<double>(piecewise) < kMinPiecewiseShare * static_cast<double>(n)) return false;
+
+  // Row t of the prefix sums: the block's rows before t summed.
+  prefix_.row(0).setZero();
+  for (Eigen::Index t = 0; t < k; ++t) prefix_.row(t + 1) = prefix_.row(t) + rows.row(t);
+  // A piecewise column i's products with every column, run by run: value times the run's sums.
+  // They go to G's lower triangle: column i from row i down, and row i left of it where the
+  // column there is a varying one (a piecewise one's own pass writes its column).
+  std::size_t next_varying = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (next_varying < varying_.size() && varying_[next_varying] == i) {
+      ++next_varying;
+      continue;
+    }
+    column_products_.setZero();
+    bool any = false;
+    Eigen::Index start = 0;
+    for (Eigen::Index t = 1; t <= k; ++t) {
+      if (t < k && rows(t, i) == rows(start, i)) continue;
+      const double value = rows(start, i);
+      if (value != 0.0) {
+        column_products_.noalias() += value * (prefix_.row(t) - prefix_.row(start)).transpose();
+        any = true;
+      }
+      start = t;
+    }
+    if (!any) continue;
+    gram_.col(i).tail(n - i) += column_products_.tail(n - i);
+    for (std::size_t v = 0; v < next_varying; ++v)
+      gram_(i, varying_[v]) += column_products_[varying_[v]];
+  }
+  // The varying columns among themselves: the rank update on them gathered.
+  const auto m = static_cast<Eigen::Index>(varying_.size());
+  if (m == 0) return true;
+  for (Eigen::Index c = 0; c < m; ++c) {
+    varying_block_.col(c).head(k) = rows.col(varying_[static_cast<std::size_t>(c)]);
+  }
+  auto gathered = varying_block_.topLeftCorner(k, m);
+  auto products = varying_gram_.topLeftCorner(m, m);
+  products.setZero();
+  products.selfadjointView<Eigen::Lower>().rankUpdate(gathered.transpose());
+  for (Eigen::Index q = 0; q < m; ++q) {
+    for (Eigen::Index p = q; p < m; ++p) {
+      gram_(varying_[static_cast<std::size_t>(p)], varying_[static_cast<std::size_t>(q)]) +=
+          products(p, q);
+    }
+  }
+  return true;
+}
 
 void NormalEquations::flush() {
   if (pending_ == 0) return;
   const auto rows = block_.topRows(pending_);
   const auto z = targets_.head(pending_);
-  gram_.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+  if (!add_piecewise_block()) gram_.selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
   rhs_.noalias() += rows.transpose() * z;
   zz_ += z.squaredNorm();
   rows_ += pending_;

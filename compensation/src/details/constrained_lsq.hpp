@@ -13,6 +13,9 @@ namespace hystbench::compensation::details {
 
 /// Accumulates G = A'A, b = A'z and z'z row by row without storing A. Rows are buffered in
 /// blocks and added with a symmetric rank-k update (cache friendly, no allocation per row).
+/// Where most of a wide block's columns hold their value over long runs of rows (a Preisach plane's
+/// cells: only those the input's front crosses change), those columns' products are taken run
+/// by run from the block's prefix sums instead, and the rank update covers the rest alone.
 class NormalEquations {
  public:
   explicit NormalEquations(Eigen::Index unknowns, Eigen::Index block_rows = 128);
@@ -33,15 +36,26 @@ class NormalEquations {
   Eigen::Index unknowns() const noexcept { return gram_.rows(); }
 
  private:
+  using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   void flush();
+  /// Adds the pending block's products where enough of its columns are piecewise constant;
+  /// false (nothing added) where the plain rank update is as cheap.
+  bool add_piecewise_block();
 
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> block_;
+  RowMajorMatrix block_;
   Eigen::VectorXd targets_;
   Eigen::MatrixXd gram_;  // lower triangle up to date after flush(); full on gram()
   Eigen::VectorXd rhs_;
   double zz_ = 0.0;
   Eigen::Index pending_ = 0;
   Eigen::Index rows_ = 0;
+  // add_piecewise_block()'s scratch, sized once.
+  RowMajorMatrix prefix_;              // block rows + 1 prefix sums of the block's rows
+  Eigen::VectorXd column_products_;    // one piecewise column's products with every column
+  Eigen::MatrixXd varying_block_;      // the block's varying columns, gathered
+  Eigen::MatrixXd varying_gram_;       // their products among themselves
+  std::vector<Eigen::Index> runs_;     // per column, its runs of equal values in the block
+  std::vector<Eigen::Index> varying_;  // the columns the rank update takes
 };
 
 enum class BoundState : signed char { kLower = -1, kFree = 0, kUpper = 1 };
