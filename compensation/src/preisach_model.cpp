@@ -245,32 +245,41 @@ void PreisachModel::step_relays(double u) noexcept {
 void PreisachModel::write_cell_areas(const Memory& m, double x,
                                      std::span<double> out) const noexcept {
   std::fill(out.begin(), out.end(), 0.0);
-  // Each cell's area in {b <= beta <= alpha <= a}, times sign, added to out.
-  auto add = [&](double a, double b, double sign) {
-    if (!(a > b)) return;
-    const std::size_t n = p_.cells;
-    const std::size_t i = on_grid(a, p_.u_min, h_, n).cell, j = on_grid(b, p_.u_min, h_, n).cell;
-    for (std::size_t r = j; r <= i; ++r) {
-      const double a_lo = p_.u_min + static_cast<double>(r) * h_;
-      const double a_hi = std::min(a_lo + h_, a);
-      for (std::size_t c = j; c <= r; ++c) {
-        const double b_lo = std::max(p_.u_min + static_cast<double>(c) * h_, b);
-        const double b_hi = p_.u_min + static_cast<double>(c + 1) * h_;
-        double area = 0.0;
-        if (c < r) {
-          area = std::max(0.0, a_hi - a_lo) * std::max(0.0, b_hi - b_lo);
-        } else if (a_hi > b_lo) {
-          area = 0.5 * (a_hi - b_lo) * (a_hi - b_lo);
-        }
-        out[cell_index(r, c)] += sign * area;
-      }
-    }
-  };
-  for (std::size_t i = 1; i < m.n; i += 2) {
-    add(m.e[i], m.e[i - 1], 1.0);
-    add(m.e[i], i + 1 < m.n ? m.e[i + 1] : x, -1.0);
+  // The up region in stripes of beta. With the memory's extrema and the input in a row,
+  // s = e_0 .. e_(n-1), x (minima at even places, maxima at odd ones), stripe k holds
+  // s_k <= beta < s_(k+2) under the top s_(k+1); the last one runs to its top.
+  const std::size_t len = m.n + 1;
+  auto s = [&](std::size_t k) { return k < m.n ? m.e[k] : x; };
+  for (std::size_t k = 0; k + 1 < len; k += 2) {
+    const double top = s(k + 1);
+    add_stripe_areas(s(k), k + 2 < len ? s(k + 2) : top, top, out);
   }
-  if (m.n % 2 == 1) add(x, m.e[m.n - 1], 1.0);
+}
+
+void PreisachModel::add_stripe_areas(double from, double to, double top,
+                                     std::span<double> out) const noexcept {
+  if (!(to > from) || !(top > from)) return;
+  const std::size_t n = p_.cells;
+  const std::size_t first = on_grid(from, p_.u_min, h_, n).cell;
+  const std::size_t last = on_grid(to, p_.u_min, h_, n).cell;
+  for (std::size_t c = first; c <= last; ++c) {
+    const double cell_lo = p_.u_min + static_cast<double>(c) * h_;
+    const double b_lo = std::max(cell_lo, from), b_hi = std::min(cell_lo + h_, to);
+    if (!(b_hi > b_lo)) continue;
+    // The diagonal cell: beta <= alpha <= min(top, its top edge) over [b_lo, b_hi].
+    const double u = std::min(top, cell_lo + h_);
+    if (u > b_lo) {
+      const double v = std::min(b_hi, u);
+      out[cell_index(c, c)] += 0.5 * ((u - b_lo) * (u - b_lo) - (u - v) * (u - v));
+    }
+    // The cells above it: alpha up to the top, wholly above beta.
+    const double width = b_hi - b_lo;
+    for (std::size_t r = c + 1; r < n; ++r) {
+      const double a_lo = p_.u_min + static_cast<double>(r) * h_;
+      if (!(top > a_lo)) break;
+      out[cell_index(r, c)] += width * (std::min(a_lo + h_, top) - a_lo);
+    }
+  }
 }
 
 Invertibility PreisachModel::invertibility() const {

@@ -108,6 +108,8 @@ class PreisachModel final : public HysteresisModel {
   };
   /// Each cell's area in the up region of memory m, the input at x, written to out.
   void write_cell_areas(const Memory& m, double x, std::span<double> out) const noexcept;
+  /// Adds each cell's area in {from <= beta < to, beta <= alpha <= top} to out.
+  void add_stripe_areas(double from, double to, double top, std::span<double> out) const noexcept;
   // What an input x does to a memory, without changing it: its new size, and where the last
   // input joins it (kNoPush: it does not) with the prefix sum there.
   static constexpr std::size_t kNoPush = kMaxExtrema + 1;
