@@ -23,12 +23,13 @@ NormalEquations::NormalEquations(Eigen::Index unknowns, Eigen::Index block_rows)
     : block_(block_rows, unknowns),
       targets_(block_rows),
       gram_(Eigen::MatrixXd::Zero(unknowns, unknowns)),
-      rhs_(Eigen::VectorXd::Zero(unknowns)),
-      prefix_(block_rows + 1, unknowns),
-      column_products_(unknowns),
-      varying_block_(block_rows, unknowns),
-      varying_gram_(unknowns, unknowns),
-      runs_(static_cast<std::size_t>(unknowns)) {
+      rhs_(Eigen::VectorXd::Zero(unknowns)) {
+  if (unknowns < kMinPiecewiseColumns) return;  // add_piecewise_block() declines: no scratch
+  prefix_.resize(block_rows + 1, unknowns);
+  column_products_.resize(unknowns);
+  varying_block_.resize(block_rows, unknowns);
+  varying_gram_.resize(unknowns, unknowns);
+  runs_.resize(static_cast<std::size_t>(unknowns));
   varying_.reserve(static_cast<std::size_t>(unknowns));
 }
 
@@ -76,8 +77,9 @@ bool NormalEquations::add_piecewise_block() {
     }
     if (!any) continue;
     gram_.col(i).tail(n - i) += column_products_.tail(n - i);
-    for (std::size_t v = 0; v < next_varying; ++v)
+    for (std::size_t v = 0; v < next_varying; ++v) {
       gram_(i, varying_[v]) += column_products_[varying_[v]];
+    }
   }
   // The varying columns among themselves: the rank update on them gathered.
   const auto m = static_cast<Eigen::Index>(varying_.size());

@@ -49,7 +49,7 @@ class NormalEquations {
   double zz_ = 0.0;
   Eigen::Index pending_ = 0;
   Eigen::Index rows_ = 0;
-  // add_piecewise_block()'s scratch, sized once.
+  // add_piecewise_block()'s scratch, sized once where the blocks are wide enough for it.
   RowMajorMatrix prefix_;              // block rows + 1 prefix sums of the block's rows
   Eigen::VectorXd column_products_;    // one piecewise column's products with every column
   Eigen::MatrixXd varying_block_;      // the block's varying columns, gathered
