@@ -82,9 +82,10 @@ class BenchLearningTest : public hystbench::test::BenchFixture {
     if (rms.size() < trials + 2) {
       EXPECT_TRUE(r["learning"]["floor"]["reached"].get<bool>()) << r["learning"].dump(2);
     }
-    // The repeat is trial 0 again, within the bench's floor; the learned ones below trial 0.
+    // The repeat is trial 0 again, within the bench's floor those two measured; the learned
+    // ones below trial 0.
     if (rms.size() > 1) {
-      const double floor = r["learning"]["floor"].value("rms_error_percent", 0.0);
+      const double floor = r["learning"]["floor"].value("first_rms_error_percent", 0.0);
       EXPECT_LE(rms[1], rms.front() + 3.0 * floor) << r["learning"].dump(2);
     }
     for (std::size_t i = 2; i < rms.size(); ++i)
@@ -186,12 +187,12 @@ TEST_F(BenchLearningTest, SinesConvergeNearTheNoiseFloorWithEveryEffectOn) {
 }
 
 // A 1 kHz loop with a 190 Hz mode (zeta 0.07), rate dependence and creep on, identify with its
-// defaults, then `track --learn 10` at 20 and 50 Hz, none above the first trial. With the default
-// compensator (the inverse), both within the target, 0.05 %. With inverse+pid, 20 Hz within it
-// and 50 Hz within 1.6x: 50 Hz lies above the loop's crossover, where |S| is above 1 and the
-// loop amplifies what does not repeat, the floor the learning stops at (the run's
-// feedback.at_reference says so). A 50 Hz trial is 20 ticks, the first 2-3 answering the drive
-// the trial before ended with.
+// defaults, then `track --learn 10` at 20 and 50 Hz, none above the first trial, each within the
+// target, 0.05 %, with the default compensator (the inverse) and with inverse+pid. 50 Hz lies
+// above the loop's crossover, where |S| is above 1 and the loop amplifies what does not repeat
+// (the run's feedback.at_reference says so); the floor trials 0 and 1 measure there holds what
+// settles at their error, and is measured again where a trial reaches it. A 50 Hz trial is 20
+// ticks, the first 2-3 answering the drive the trial before ended with.
 TEST_F(BenchLearningTest, OnAOneKilohertzBenchWithA190HzModeTheLoopLearnsBothSines) {
   start_with_progress(
       settings_from_toml(slow_bench_toml("[actuator.rate_dependence]\nenabled = true\n")));
@@ -199,8 +200,7 @@ TEST_F(BenchLearningTest, OnAOneKilohertzBenchWithA190HzModeTheLoopLearnsBothSin
   ASSERT_EQ(id["end"], "completed") << id.dump(2);
   for (const std::string compensator : {"", "inverse+pid"}) {
     const json extra = compensator.empty() ? json::object() : json{{"compensator", compensator}};
-    for (const auto& [hz, bound] :
-         {std::pair{20.0, 0.05}, std::pair{50.0, compensator.empty() ? 0.05 : 0.08}}) {
+    for (const auto& [hz, bound] : {std::pair{20.0, 0.05}, std::pair{50.0, 0.05}}) {
       SCOPED_TRACE(compensator.empty() ? "the default compensator" : compensator);
       const json r = learn(hz, 10, extra);
       const std::vector<double> rms = converged(r, 10, bound);

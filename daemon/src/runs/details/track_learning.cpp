@@ -127,21 +127,32 @@ void TrackLearning::measure_floor() {
     noise_share = static_cast<double>(n) / static_cast<double>(n - 2 * kFloorSettlingHarmonics);
   }
   floor_um_ = scored_rms(d) * std::sqrt(noise_share) / std::sqrt(2.0);
+  if (first_floor_um_ == 0.0) first_floor_um_ = floor_um_;
 }
 
 bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
   // The best drive plays twice: the first period settles the actuator after the trials that
   // went wrong (their extremes and creep), the second is the run's last trial. Where the trials
   // asked for leave one more, it plays once: the run never plays more trials than asked.
+  // Where the trial just taken repeated the best drive to measure the floor, it settled the
+  // actuator already: the drive plays once more.
   const bool used_up = t.trial >= request_.trials;
-  const bool last = stopped_ || used_up;
-  const std::string plays = used_up ? "once, as the last of the trials asked for"
-                                    : "twice (the first settles the actuator)";
+  const bool settled = t.drive == "repeat" && u_ == best_drive_;
+  const bool last = stopped_ || used_up || settled;
+  const std::string plays = used_up   ? "once, as the last of the trials asked for"
+                            : settled ? "once more (its repeat settled the actuator)"
+                                      : "twice (the first settles the actuator)";
+  // The trial that reached the floor: this one, or the one its repeat measured the floor after.
+  const Trial& reached = floor_trials_[0] != 0 && t.trial == floor_trials_[1] && trials_.size() >= 2
+                             ? trials_[trials_.size() - 2]
+                             : t;
   if (!stopped_) {
-    why_ = at_floor ? "trial " + std::to_string(t.trial) + " reached the bench's floor (" +
-                          hc::significant(t.rms_um / floor_um_, 3) +
-                          "x the part of the error that does not repeat, measured on trials "
-                          "0 and 1, the same drive): learning on would learn what does not "
+    why_ = at_floor ? "trial " + std::to_string(reached.trial) + " reached the bench's floor (" +
+                          hc::significant(reached.rms_um / floor_um_, 3) +
+                          "x the part of the error that does not repeat, measured on trials " +
+                          std::to_string(floor_trials_[0] == 0 ? 0 : floor_trials_[0]) + " and " +
+                          std::to_string(floor_trials_[0] == 0 ? 1 : floor_trials_[1]) +
+                          ", the same drive): learning on would learn what does not "
                           "repeat; the best trial's drive plays " +
                           plays
                     : "two trials in a row more than 20 % above the best (trial " +
@@ -186,13 +197,37 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
       if (!exchange_.offer(next_, false)) fail("the loop had not taken the drive before trial 1");
       continue;
     }
-    if (number == 1 && first_error_.size() == e_.size()) measure_floor();
+    if ((number == 1 || (floor_trials_[0] != 0 && number == floor_trials_[1])) &&
+        first_error_.size() == e_.size()) {
+      measure_floor();
+    }
     bool last = false;
     const hc::LearningGuard::Action action =
         stopped_ ? hc::LearningGuard::Action::kStop : guard_.after_trial(t.rms_um);
     if (!stopped_ && guard_.best_trial() == guard_.trials() - 1) best_drive_ = u_;
-    const bool at_floor =
-        !stopped_ && number >= 2 && floor_um_ > 0.0 && t.rms_um <= kFloorReach * floor_um_;
+    // The repeat's floor within kFloorReach of the first: the first held, and the learning
+    // reached it (the trial before did; the repeat's own error holds what drifted since).
+    const bool confirmed = floor_trials_[0] != 0 && number == floor_trials_[1] &&
+                           kFloorReach * floor_um_ >= first_floor_um_;
+    const bool at_floor = !stopped_ && number >= 2 && floor_um_ > 0.0 &&
+                          (t.rms_um <= kFloorReach * floor_um_ || confirmed);
+    if (at_floor && floor_trials_[0] == 0 && number + 2 <= request_.trials &&
+        action != hc::LearningGuard::Action::kStop) {
+      // The floor measured on trials 0 and 1 holds what did not repeat at their error, which
+      // the start's settling and a nonlinear stage's slower orbit scale: the drive that reached
+      // it plays again, and the pair measures the floor at the error the learning reached.
+      // Learning goes on where the trial is above it.
+      floor_trials_ = {number, number + 1};
+      first_error_ = e_;
+      next_ = u_;
+      next_gain_ = 0.0;
+      next_drive_ = "repeat";
+      kept_ = next_;
+      if (!exchange_.offer(next_, false)) {
+        fail("the loop had not taken the drive before trial " + std::to_string(number));
+      }
+      continue;
+    }
     if (action == hc::LearningGuard::Action::kStop || at_floor) {
       last = stop_on_best(t, at_floor);
     } else {
@@ -291,53 +326,60 @@ json TrackLearning::result() const {
   for (std::size_t i = 1; i < trials_.size(); ++i) {
     if (trials_[i].rms_um < trials_[best].rms_um) best = i;
   }
-  return {
-      {"trials", trials},
-      {"trials_requested", request_.trials},
-      {"gain", request_.gain},
-      {"cutoff_hz", learner_.cutoff_hz()},
-      {"above_cutoff", above_cutoff()},
-      {"delay_ticks",
-       {{"model", learner_.model_delay_samples()},
-        {"used", learner_.delay_samples()},
-        {"measurements", learner_.delay_measurements()}}},
-      {"period_samples", exchange_.period},
-      {"scored_from", request_.scored_from},
-      {"reference", request_.reference},
-      {"frequency_hz", request_.frequency_hz},
-      {"stopped", stopped_},
-      {"why", stopped_ ? why_
-              : trials_.size() >= request_.trials + (request_.trials > 0 ? 2 : 1)
-                  ? "every trial asked for was played"
-                  : "the run ended before the trials asked for were played"},
-      {"floor", floor_um_ > 0.0
-                    ? json{{"rms_error_um", floor_um_},
-                           {"rms_error_percent",
-                            request_.range_um > 0.0 ? 100.0 * floor_um_ / request_.range_um : 0.0},
-                           {"measured_on",
-                            "trials 0 and 1: the same drive; the rms of their errors' "
-                            "difference over sqrt(2), less its straight line (and over " +
-                                std::to_string(kFloorMinSamples) + " samples or more its first " +
-                                std::to_string(kFloorSettlingHarmonics) +
-                                " harmonics: the start still settling)"},
-                           {"reached", stopped_ && why_.find("floor") != std::string::npos}}
-                    : json(nullptr)},
-      {"measured_plant", learner_.uses_measured_plant()
-                             ? json{{"harmonics", learner_.measured_harmonics()},
-                                    {"left_out", learner_.measured_harmonics_left_out()},
-                                    {"delay_added_ticks", learner_.residual_delay_samples()}}
-                             : json(nullptr)},
-      {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
-      {"lead_in_offset_um", exchange_.lead_in_offset()},
-      {"lead_in_periods", started ? exchange_.lead_in_played() : 0},
-      {"lead_in_followed_um", exchange_.lead_in_followed()},
-      {"lead_in_end", started ? lead_in_end(exchange_) : "none: no drive learned before"},
-      {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
-      {"stale_periods", exchange_.stale_periods()},
-      {"update_ms",
-       {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
-        {"max", update_ms_max_},
-        {"count", updates_}}}};
+  return {{"trials", trials},
+          {"trials_requested", request_.trials},
+          {"gain", request_.gain},
+          {"cutoff_hz", learner_.cutoff_hz()},
+          {"above_cutoff", above_cutoff()},
+          {"delay_ticks",
+           {{"model", learner_.model_delay_samples()},
+            {"used", learner_.delay_samples()},
+            {"measurements", learner_.delay_measurements()}}},
+          {"period_samples", exchange_.period},
+          {"scored_from", request_.scored_from},
+          {"reference", request_.reference},
+          {"frequency_hz", request_.frequency_hz},
+          {"stopped", stopped_},
+          {"why", stopped_ ? why_
+                  : trials_.size() >= request_.trials + (request_.trials > 0 ? 2 : 1)
+                      ? "every trial asked for was played"
+                      : "the run ended before the trials asked for were played"},
+          {"floor",
+           floor_um_ > 0.0
+               ? json{{"rms_error_um", floor_um_},
+                      {"rms_error_percent",
+                       request_.range_um > 0.0 ? 100.0 * floor_um_ / request_.range_um : 0.0},
+                      {"trials", floor_trials_[0] == 0
+                                     ? json::array({0, 1})
+                                     : json::array({floor_trials_[0], floor_trials_[1]})},
+                      {"first_rms_error_um", first_floor_um_},
+                      {"first_rms_error_percent",
+                       request_.range_um > 0.0 ? 100.0 * first_floor_um_ / request_.range_um : 0.0},
+                      {"measured_on",
+                       "two trials of the same drive (0 and 1, again where a trial reached "
+                       "the floor they measured); the rms of their errors' "
+                       "difference over sqrt(2), less its straight line (and over " +
+                           std::to_string(kFloorMinSamples) + " samples or more its first " +
+                           std::to_string(kFloorSettlingHarmonics) +
+                           " harmonics: the start still settling)"},
+                      {"reached", stopped_ && why_.find("floor") != std::string::npos}}
+               : json(nullptr)},
+          {"measured_plant", learner_.uses_measured_plant()
+                                 ? json{{"harmonics", learner_.measured_harmonics()},
+                                        {"left_out", learner_.measured_harmonics_left_out()},
+                                        {"delay_added_ticks", learner_.residual_delay_samples()}}
+                                 : json(nullptr)},
+          {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
+          {"lead_in_offset_um", exchange_.lead_in_offset()},
+          {"lead_in_periods", started ? exchange_.lead_in_played() : 0},
+          {"lead_in_followed_um", exchange_.lead_in_followed()},
+          {"lead_in_end", started ? lead_in_end(exchange_) : "none: no drive learned before"},
+          {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
+          {"stale_periods", exchange_.stale_periods()},
+          {"update_ms",
+           {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
+            {"max", update_ms_max_},
+            {"count", updates_}}}};
 }
 
 }  // namespace hystbench::daemon::details

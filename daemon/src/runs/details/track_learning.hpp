@@ -4,9 +4,12 @@
 // (compensation::IterativeLearning), or the best trial's drive twice (a period to settle, then the
 // last) when the guard stops the learning. Trial 1 plays trial 0's drive again: what differs
 // between the two is what does not repeat on the bench (noise, a DAQ's clock, stale readings),
-// the floor no learning goes below; once a trial is within kFloorReach of it the learning
-// stops the same way, and says so. N learned trials follow the two. Its result is the run's
-// `learning` object; the drive it keeps is saved for replay. Not real-time safe.
+// the floor no learning goes below. The first trial within kFloorReach of it plays its drive
+// again, and that pair measures the floor anew, at the error the learning reached; a trial
+// within kFloorReach of the floor then stops the learning the same way, and says so. N learned
+// trials follow the two. Its result is the run's `learning` object; the drive it keeps is saved for
+// replay. Not real-time safe.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -116,6 +119,10 @@ class TrackLearning {
   // their difference over sqrt(2) [µm] (0 before).
   std::vector<double> first_error_;
   double floor_um_ = 0.0;
+  double first_floor_um_ = 0.0;  ///< the floor trials 0 and 1 measured
+  // The trials that measure the floor again (the first reached it, the second repeats its
+  // drive); {0, 0}: not asked for.
+  std::array<std::uint64_t, 2> floor_trials_{};
   // Whether trial n is the repeat of trial 0 (no learning between them).
   bool repeats(std::uint64_t n) const noexcept { return n == 0 && request_.trials > 0; }
   // The trials' rms within their scored phases [µm].
