@@ -38,7 +38,8 @@
 #              on: identify, then track --learn 10 at 20 and 50 Hz with inverse+pid
 #   feedback-modbus  on the wall clock over Modbus TCP (io = "thread") to hystbench-simdaq at
 #              1 kHz: identify, then two sweeps 1-20 Hz with inverse and inverse+pid; each run's
-#              rms over every scored tick and over those 30 ticks or more after a stale reading
+#              rms over every scored tick and over those 30 ticks or more after a stale reading;
+#              then 20 and 10 Hz learned from inverse+pid (the floor a DAQ's clock sets)
 # Usage: scripts/measure-loopback.sh [section ...]   (default: all; needs build/bin)
 # Prints markdown tables; logs and models stay in the folder it names at the end.
 set -euo pipefail
@@ -504,6 +505,15 @@ for r in json.load(open(sys.argv[1]))["rows"]:
     print(f"| {sys.argv[2]} | {r['frequency_hz']:g} | {r['compensator']} | {r['rms_error_percent']:.3f} | "
           f"{r['max_error_percent']:.2f} | {rms:.3f} ({share:.0%}) |")
 PY
+      done
+      echo
+      # Learning where a repeated drive does not give a repeated output (the exchange's clock):
+      # the floor, measured again where a trial reaches it, and where the learning ended.
+      echo "| f [Hz] | trials (rms %, the first the compensator's), drives | floor % (trials 0 and 1) | floor % (the pair) | why it ended |"
+      echo "| --- | --- | --- | --- | --- |"
+      for f in 20 10; do
+        hb track --reference sine --frequency "$f" --compensator inverse+pid --learn 10 --wait --json |
+          jq -r --arg f "$f" "$f3"'"| \($f) | \([.learning.trials[] | "\(.rms_error_percent | f) \(.drive)"] | join(", ")) | \(.learning.floor.first_rms_error_percent | f) | \(.learning.floor.rms_error_percent | f) (trials \(.learning.floor.trials | map(tostring) | join(" and "))) | \(.learning.why) |"' || true
       done
       echo
       stop_daemon

@@ -142,10 +142,11 @@ bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
   const std::string plays = used_up   ? "once, as the last of the trials asked for"
                             : settled ? "once more (its repeat settled the actuator)"
                                       : "twice (the first settles the actuator)";
-  // The trial that reached the floor: this one, or the one its repeat measured the floor after.
-  const Trial& reached = floor_trials_[0] != 0 && t.trial == floor_trials_[1] && trials_.size() >= 2
-                             ? trials_[trials_.size() - 2]
-                             : t;
+  // The trial that reached the floor: this one where it is within kFloorReach of it, else the
+  // one its repeat measured the floor after (the floor held there).
+  const bool after_repeat = floor_trials_[0] != 0 && t.trial == floor_trials_[1] &&
+                            t.rms_um > kFloorReach * floor_um_ && trials_.size() >= 2;
+  const Trial& reached = after_repeat ? trials_[trials_.size() - 2] : t;
   if (!stopped_) {
     why_ = at_floor ? "trial " + std::to_string(reached.trial) + " reached the bench's floor (" +
                           hc::significant(reached.rms_um / floor_um_, 3) +
