@@ -186,6 +186,7 @@ TEST(PreisachFit, RecoversADiscreteModelFromItsOwnRecordExactly) {
   const std::vector<double> u = reversals(rng, 600, 0.0, 150.0);
   m.reset(u.front());
   std::vector<double> y;
+  y.reserve(u.size());
   for (const double v : u) y.push_back(m.step(v));
   hc::PreisachFitOptions o;
   o.cells = 8;

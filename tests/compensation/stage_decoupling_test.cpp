@@ -39,7 +39,9 @@ hc::OneAxisMotion linear_motion(const Eigen::MatrixXd& k, std::size_t moved, dou
   std::mt19937 rng(seed);
   std::normal_distribution<double> step(0.0, 0.3), noise(0.0, sigma);
   Eigen::VectorXd own = Eigen::VectorXd::LinSpaced(n, 5.0, 20.0);
-  hc::OneAxisMotion rec{moved, Eigen::MatrixXd(n, 4000)};
+  hc::OneAxisMotion rec;
+  rec.moved = moved;
+  rec.outputs = Eigen::MatrixXd(n, 4000);
   for (Eigen::Index t = 0; t < rec.outputs.cols(); ++t) {
     own(static_cast<Eigen::Index>(moved)) += step(rng);
     rec.outputs.col(t) = (Eigen::MatrixXd::Identity(n, n) + k) * own;

@@ -168,6 +168,21 @@ TEST(TrackLearningFloor, AFloorThatHoldsOnTheRepeatStopsTheLearningWithItsDriveO
   EXPECT_NE(l["why"].get<std::string>().find("once more"), std::string::npos) << l["why"];
 }
 
+TEST(TrackLearningFloor, AGuardThatStopsNamesTheBestTrial) {
+  // The repeatable error falls to trial 3's drive, then grows fourfold with each drive: two
+  // trials in a row above the best stop the learning, which names trial 3 and plays its drive.
+  const nlohmann::json l = scripted_run(
+      12, [](std::size_t) { return 0.1 * kNoiseUm; },
+      [](std::size_t m) {
+        return m <= 2 ? 0.1 * std::pow(0.5, static_cast<double>(m))
+                      : 0.025 * std::pow(4.0, static_cast<double>(m - 2));
+      });
+  EXPECT_TRUE(l["stopped"].get<bool>());
+  const std::string why = l["why"].get<std::string>();
+  EXPECT_NE(why.find("above the best (trial 3)"), std::string::npos) << l.dump(1);
+  EXPECT_EQ(l["best_trial"].get<int>(), 3) << l.dump(1);
+}
+
 TEST(TrackLearningFloor, IsTheNoiseNotTheStartStillSettling) {
   // 50 Hz at 10 kHz (200 samples): the settling, 3x the noise, is left out.
   const double settled = measured_floor(200, 0.0);

@@ -157,7 +157,7 @@ bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
                           "repeat; the best trial's drive plays " +
                           plays
                     : "two trials in a row more than 20 % above the best (trial " +
-                          std::to_string(trials_[guard_.best_trial()].trial) +
+                          std::to_string(trials_[guard_.best_trial() + 1].trial) +
                           "): the learning stopped and plays the best trial's drive " + plays;
   }
   stopped_ = true;

@@ -106,6 +106,8 @@ class TrackLearning {
   bool mode_in_model_ = false;   ///< the model holds a mode (else the identify's timed one)
   bool cutoff_by_hand_ = false;  ///< learn_cutoff_hz set Q (nothing is learned above it)
   compensation::LearningGuard guard_;
+  // Every trial scored, trial 0 first; the guard judges those after it (its trial i is
+  // trials_[i + 1]).
   std::vector<Trial> trials_;
   std::vector<double> u_, c_, e_, next_, best_drive_, kept_;
   bool stopped_ = false;
