@@ -136,6 +136,16 @@ void print_learning(std::ostream& out, const json& l) {
         << " periods replayed while the update was computed";
   }
   out << "\n";
+  // The bench's floor: what two plays of one drive differ by, and where it was measured again.
+  if (const auto f = l.find("floor"); f != l.end() && f->is_object()) {
+    const json pair = f->value("trials", json::array({0, 1}));
+    out << "  floor           " << fixed((*f)["rms_error_percent"], 3) << " % rms (trials "
+        << pair[0].dump() << " and " << pair[1].dump() << ", the same drive)";
+    if (pair[0] != 0 && f->contains("first_rms_error_percent")) {
+      out << "; " << fixed((*f)["first_rms_error_percent"], 3) << " % on trials 0 and 1";
+    }
+    out << "\n";
+  }
   if (from.is_string() && l.value("lead_in_periods", 0) > 0) {
     const double period_s =
         l.value("frequency_hz", 0.0) > 0.0 ? 1.0 / l["frequency_hz"].get<double>() : 0.0;

@@ -82,6 +82,35 @@ TEST(PrintRunResult, SaysWhereTheLargestErrorsFell) {
   EXPECT_NE(older.str().find("0.3000 um (3.000 %)"), std::string::npos) << older.str();
 }
 
+// A learning run's printed result gives the bench's floor, and where a trial at it had its drive
+// played again, that pair's floor beside the first.
+TEST(PrintRunResult, GivesTheLearningsFloorAndWhereItWasMeasuredAgain) {
+  nlohmann::json r = {{"run_id", "r2"},           {"kind", "track"},     {"end", "completed"},
+                      {"samples", 100},           {"rms_error_um", 0.1}, {"rms_error_percent", 1.0},
+                      {"range_um", 10.0},         {"max_error_um", 0.3}, {"max_error_percent", 3.0},
+                      {"hysteresis_percent", 0.5}};
+  r["learning"] = {
+      {"trials", nlohmann::json::array()},
+      {"frequency_hz", 50.0},
+      {"cutoff_hz", 200.0},
+      {"why", "every trial asked for was played"},
+      {"best_trial", 11},
+      {"floor",
+       {{"rms_error_percent", 0.020}, {"first_rms_error_percent", 0.039}, {"trials", {8, 9}}}}};
+  std::ostringstream again;
+  cli::print_run_result(r, again);
+  EXPECT_NE(again.str().find("floor           0.020 % rms (trials 8 and 9, the same drive); "
+                             "0.039 % on trials 0 and 1"),
+            std::string::npos)
+      << again.str();
+  r["learning"]["floor"]["trials"] = {0, 1};
+  std::ostringstream first;
+  cli::print_run_result(r, first);
+  EXPECT_NE(first.str().find("floor           0.020 % rms (trials 0 and 1, the same drive)\n"),
+            std::string::npos)
+      << first.str();
+}
+
 // Without an active model the daemon predicts y with the straight line of the configured
 // limits: the report leaves out the model's error then (it measures the line), on one axis and
 // on each axis of a stage, and gives it where a model predicted.
