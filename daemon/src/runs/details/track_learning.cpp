@@ -151,7 +151,7 @@ bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
     why_ = at_floor ? "trial " + std::to_string(reached.trial) + " reached the bench's floor (" +
                           hc::significant(reached.rms_um / floor_um_, 3) +
                           "x the part of the error that does not repeat, measured on trials " +
-                          std::to_string(floor_trials_[0] == 0 ? 0 : floor_trials_[0]) + " and " +
+                          std::to_string(floor_trials_[0]) + " and " +
                           std::to_string(floor_trials_[0] == 0 ? 1 : floor_trials_[1]) +
                           ", the same drive): learning on would learn what does not "
                           "repeat; the best trial's drive plays " +
