@@ -100,9 +100,8 @@ TrackLearning::Trial TrackLearning::score(std::uint64_t number, std::uint64_t fi
   t.max_tick = first_tick + peak_at;
   t.rms_um = std::sqrt(sum2 / static_cast<double>(n));
   t.max_um = peak;
-  const double range = request_.range_um;
-  t.rms_percent = range > 0.0 ? 100.0 * t.rms_um / range : 0.0;
-  t.max_percent = range > 0.0 ? 100.0 * peak / range : 0.0;
+  t.rms_percent = percent(t.rms_um);
+  t.max_percent = percent(peak);
   t.gain = number == 0 ? 0.0 : next_gain_;
   t.drive = number != 0 ? next_drive_ : request_.start_drive.empty() ? "compensator" : "saved";
   return t;
@@ -144,27 +143,38 @@ bool TrackLearning::stop_on_best(const Trial& t, bool at_floor) {
                                       : "twice (the first settles the actuator)";
   // The trial that reached the floor: this one where it is within kFloorReach of it, else the
   // one its repeat measured the floor after (the floor held there).
-  const bool after_repeat = floor_trials_[0] != 0 && t.trial == floor_trials_[1] &&
+  const bool after_repeat = remeasured() && t.trial == floor_trials_[1] &&
                             t.rms_um > kFloorReach * floor_um_ && trials_.size() >= 2;
   const Trial& reached = after_repeat ? trials_[trials_.size() - 2] : t;
   if (!stopped_) {
-    why_ = at_floor ? "trial " + std::to_string(reached.trial) + " reached the bench's floor (" +
-                          hc::significant(reached.rms_um / floor_um_, 3) +
-                          "x the part of the error that does not repeat, measured on trials " +
-                          std::to_string(floor_trials_[0]) + " and " +
-                          std::to_string(floor_trials_[0] == 0 ? 1 : floor_trials_[1]) +
-                          ", the same drive): learning on would learn what does not "
-                          "repeat; the best trial's drive plays " +
-                          plays
-                    : "two trials in a row more than 20 % above the best (trial " +
-                          std::to_string(trials_[guard_.best_trial() + 1].trial) +
-                          "): the learning stopped and plays the best trial's drive " + plays;
+    why_ = at_floor
+               ? "trial " + std::to_string(reached.trial) + " reached the bench's floor (" +
+                     hc::significant(reached.rms_um / floor_um_, 3) +
+                     "x the part of the error that does not repeat, measured on trials " +
+                     std::to_string(floor_trials_[0]) + " and " + std::to_string(floor_trials_[1]) +
+                     ", the same drive): learning on would learn what does not "
+                     "repeat; the best trial's drive plays " +
+                     plays
+               : "two trials in a row more than 20 % above the best (trial " +
+                     std::to_string(trials_[guard_.best_trial() + 1].trial) +
+                     "): the learning stopped and plays the best trial's drive " + plays;
   }
   stopped_ = true;
   next_ = best_drive_;
   next_gain_ = 0.0;
   next_drive_ = "best";
   return last;
+}
+
+void TrackLearning::offer_repeat(std::uint64_t number) {
+  first_error_ = e_;
+  next_ = u_;
+  next_gain_ = 0.0;
+  next_drive_ = "repeat";
+  kept_ = next_;
+  if (!exchange_.offer(next_, false)) {
+    fail("the loop had not taken the drive before trial " + std::to_string(number + 1));
+  }
 }
 
 void TrackLearning::learn_next() {
@@ -190,43 +200,28 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
     if (done_) continue;  // the last trial: nothing more to offer
     if (repeats(number)) {
       // Trial 1 plays this drive again: the bench's floor is what differs between the two.
-      first_error_ = e_;
-      next_ = u_;
-      next_gain_ = 0.0;
-      next_drive_ = "repeat";
-      kept_ = next_;
-      if (!exchange_.offer(next_, false)) fail("the loop had not taken the drive before trial 1");
+      offer_repeat(number);
       continue;
     }
-    if ((number == 1 || (floor_trials_[0] != 0 && number == floor_trials_[1])) &&
-        first_error_.size() == e_.size()) {
-      measure_floor();
-    }
+    if (number == floor_trials_[1] && first_error_.size() == e_.size()) measure_floor();
     bool last = false;
     const hc::LearningGuard::Action action =
         stopped_ ? hc::LearningGuard::Action::kStop : guard_.after_trial(t.rms_um);
     if (!stopped_ && guard_.best_trial() == guard_.trials() - 1) best_drive_ = u_;
     // The repeat's floor within kFloorReach of the first: the first held, and the learning
     // reached it (the trial before did; the repeat's own error holds what drifted since).
-    const bool confirmed = floor_trials_[0] != 0 && number == floor_trials_[1] &&
-                           kFloorReach * floor_um_ >= first_floor_um_;
+    const bool confirmed =
+        remeasured() && number == floor_trials_[1] && kFloorReach * floor_um_ >= first_floor_um_;
     const bool at_floor = !stopped_ && number >= 2 && floor_um_ > 0.0 &&
                           (t.rms_um <= kFloorReach * floor_um_ || confirmed);
-    if (at_floor && floor_trials_[0] == 0 && number + 2 <= request_.trials &&
+    if (at_floor && !remeasured() && number + 2 <= request_.trials &&
         action != hc::LearningGuard::Action::kStop) {
       // The floor measured on trials 0 and 1 holds what did not repeat at their error, which
       // the start's settling and a nonlinear stage's slower orbit scale: the drive that reached
       // it plays again, and the pair measures the floor at the error the learning reached.
       // Learning goes on where the trial is above it.
       floor_trials_ = {number, number + 1};
-      first_error_ = e_;
-      next_ = u_;
-      next_gain_ = 0.0;
-      next_drive_ = "repeat";
-      kept_ = next_;
-      if (!exchange_.offer(next_, false)) {
-        fail("the loop had not taken the drive before trial " + std::to_string(number));
-      }
+      offer_repeat(number);
       continue;
     }
     if (action == hc::LearningGuard::Action::kStop || at_floor) {
@@ -327,60 +322,56 @@ json TrackLearning::result() const {
   for (std::size_t i = 1; i < trials_.size(); ++i) {
     if (trials_[i].rms_um < trials_[best].rms_um) best = i;
   }
-  return {{"trials", trials},
-          {"trials_requested", request_.trials},
-          {"gain", request_.gain},
-          {"cutoff_hz", learner_.cutoff_hz()},
-          {"above_cutoff", above_cutoff()},
-          {"delay_ticks",
-           {{"model", learner_.model_delay_samples()},
-            {"used", learner_.delay_samples()},
-            {"measurements", learner_.delay_measurements()}}},
-          {"period_samples", exchange_.period},
-          {"scored_from", request_.scored_from},
-          {"reference", request_.reference},
-          {"frequency_hz", request_.frequency_hz},
-          {"stopped", stopped_},
-          {"why", stopped_ ? why_
-                  : trials_.size() >= request_.trials + (request_.trials > 0 ? 2 : 1)
-                      ? "every trial asked for was played"
-                      : "the run ended before the trials asked for were played"},
-          {"floor",
-           floor_um_ > 0.0
-               ? json{{"rms_error_um", floor_um_},
-                      {"rms_error_percent",
-                       request_.range_um > 0.0 ? 100.0 * floor_um_ / request_.range_um : 0.0},
-                      {"trials", floor_trials_[0] == 0
-                                     ? json::array({0, 1})
-                                     : json::array({floor_trials_[0], floor_trials_[1]})},
-                      {"first_rms_error_um", first_floor_um_},
-                      {"first_rms_error_percent",
-                       request_.range_um > 0.0 ? 100.0 * first_floor_um_ / request_.range_um : 0.0},
-                      {"measured_on",
-                       "two trials of the same drive (0 and 1, again where a trial reached "
-                       "the floor they measured); the rms of their errors' "
-                       "difference over sqrt(2), less its straight line (and over " +
-                           std::to_string(kFloorMinSamples) + " samples or more its first " +
-                           std::to_string(kFloorSettlingHarmonics) +
-                           " harmonics: the start still settling)"},
-                      {"reached", stopped_ && why_.find("floor") != std::string::npos}}
-               : json(nullptr)},
-          {"measured_plant", learner_.uses_measured_plant()
-                                 ? json{{"harmonics", learner_.measured_harmonics()},
-                                        {"left_out", learner_.measured_harmonics_left_out()},
-                                        {"delay_added_ticks", learner_.residual_delay_samples()}}
-                                 : json(nullptr)},
-          {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
-          {"lead_in_offset_um", exchange_.lead_in_offset()},
-          {"lead_in_periods", started ? exchange_.lead_in_played() : 0},
-          {"lead_in_followed_um", exchange_.lead_in_followed()},
-          {"lead_in_end", started ? lead_in_end(exchange_) : "none: no drive learned before"},
-          {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
-          {"stale_periods", exchange_.stale_periods()},
-          {"update_ms",
-           {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
-            {"max", update_ms_max_},
-            {"count", updates_}}}};
+  return {
+      {"trials", trials},
+      {"trials_requested", request_.trials},
+      {"gain", request_.gain},
+      {"cutoff_hz", learner_.cutoff_hz()},
+      {"above_cutoff", above_cutoff()},
+      {"delay_ticks",
+       {{"model", learner_.model_delay_samples()},
+        {"used", learner_.delay_samples()},
+        {"measurements", learner_.delay_measurements()}}},
+      {"period_samples", exchange_.period},
+      {"scored_from", request_.scored_from},
+      {"reference", request_.reference},
+      {"frequency_hz", request_.frequency_hz},
+      {"stopped", stopped_},
+      {"why", stopped_ ? why_
+              : trials_.size() >= request_.trials + (request_.trials > 0 ? 2 : 1)
+                  ? "every trial asked for was played"
+                  : "the run ended before the trials asked for were played"},
+      {"floor", floor_um_ > 0.0
+                    ? json{{"rms_error_um", floor_um_},
+                           {"rms_error_percent", percent(floor_um_)},
+                           {"trials", floor_trials_},
+                           {"first_rms_error_um", first_floor_um_},
+                           {"first_rms_error_percent", percent(first_floor_um_)},
+                           {"measured_on",
+                            "two trials of the same drive (0 and 1, again where a trial reached "
+                            "the floor they measured); the rms of their errors' "
+                            "difference over sqrt(2), less its straight line (and over " +
+                                std::to_string(kFloorMinSamples) + " samples or more its first " +
+                                std::to_string(kFloorSettlingHarmonics) +
+                                " harmonics: the start still settling)"},
+                           {"reached", stopped_ && why_.find("floor") != std::string::npos}}
+                    : json(nullptr)},
+      {"measured_plant", learner_.uses_measured_plant()
+                             ? json{{"harmonics", learner_.measured_harmonics()},
+                                    {"left_out", learner_.measured_harmonics_left_out()},
+                                    {"delay_added_ticks", learner_.residual_delay_samples()}}
+                             : json(nullptr)},
+      {"started_from", request_.start_name.empty() ? json() : json(request_.start_name)},
+      {"lead_in_offset_um", exchange_.lead_in_offset()},
+      {"lead_in_periods", started ? exchange_.lead_in_played() : 0},
+      {"lead_in_followed_um", exchange_.lead_in_followed()},
+      {"lead_in_end", started ? lead_in_end(exchange_) : "none: no drive learned before"},
+      {"best_trial", trials_.empty() ? json() : json(trials_[best].trial)},
+      {"stale_periods", exchange_.stale_periods()},
+      {"update_ms",
+       {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
+        {"max", update_ms_max_},
+        {"count", updates_}}}};
 }
 
 }  // namespace hystbench::daemon::details

@@ -122,9 +122,14 @@ class TrackLearning {
   std::vector<double> first_error_;
   double floor_um_ = 0.0;
   double first_floor_um_ = 0.0;  ///< the floor trials 0 and 1 measured
-  // The trials that measure the floor again (the first reached it, the second repeats its
-  // drive); {0, 0}: not asked for.
-  std::array<std::uint64_t, 2> floor_trials_{};
+  // The two trials of one drive the floor comes from: 0 and 1, then where a trial reached
+  // that floor, it and the repeat of its drive.
+  std::array<std::uint64_t, 2> floor_trials_{0, 1};
+  bool remeasured() const noexcept { return floor_trials_[0] != 0; }
+  // The share of the reference's span [%] of a length [µm] (0 without a span).
+  double percent(double um) const noexcept {
+    return request_.range_um > 0.0 ? 100.0 * um / request_.range_um : 0.0;
+  }
   // Whether trial n is the repeat of trial 0 (no learning between them).
   bool repeats(std::uint64_t n) const noexcept { return n == 0 && request_.trials > 0; }
   // The trials' rms within their scored phases [µm].
@@ -136,6 +141,9 @@ class TrackLearning {
   // The best drive offered next (the guard stopped, or the trial reached the floor); true
   // when it is the last.
   bool stop_on_best(const Trial& t, bool at_floor);
+  // The drive of trial `number` (u_) offered again for the next, its error (e_) kept to measure
+  // the floor against.
+  void offer_repeat(std::uint64_t number);
   // The next drive learned from the trial just taken.
   void learn_next();
 };
