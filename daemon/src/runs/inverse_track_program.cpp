@@ -10,6 +10,7 @@
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/sim/signal_generator.hpp"
+#include "runs/details/percent_of_range.hpp"
 
 namespace hystbench::daemon {
 
@@ -135,8 +136,8 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   r["max_error_um"] = run.error.max;
   r["max_error_index"] = run.error.max_index;
   r["range_um"] = e.range;
-  r["rms_error_percent"] = e.range > 0 ? 100.0 * rms / e.range : 0.0;
-  r["max_error_percent"] = e.range > 0 ? 100.0 * run.error.max / e.range : 0.0;
+  r["rms_error_percent"] = details::percent_of_range(rms, e.range);
+  r["max_error_percent"] = details::percent_of_range(run.error.max, e.range);
   r["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
   r["error_samples"] = run.error.samples;
   if (const TrackDrive* track = track_drive(run)) {
@@ -149,7 +150,7 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   if (steps.steps > 0) {
     r["step"] = {{"steps", steps.steps},
                  {"size_um", steps.mean_size},
-                 {"size_percent", e.range > 0 ? 100.0 * steps.mean_size / e.range : 0.0},
+                 {"size_percent", details::percent_of_range(steps.mean_size, e.range)},
                  {"settling_ms",
                   {{"max", 1e3 * steps.max_settling_s}, {"mean", 1e3 * steps.mean_settling_s}}},
                  {"overshoot_percent",

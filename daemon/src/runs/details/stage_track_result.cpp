@@ -4,6 +4,7 @@
 
 #include "hystbench/compensation/stage_coupling_error.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
+#include "runs/details/percent_of_range.hpp"
 #include "runs/details/run_result.hpp"
 #include "runs/details/stage_runs.hpp"
 
@@ -11,12 +12,6 @@ namespace hystbench::daemon::details {
 
 using nlohmann::json;
 namespace hc = hystbench::compensation;
-
-namespace {
-
-double percent(double um, double range) { return range > 0.0 ? 100.0 * um / range : 0.0; }
-
-}  // namespace
 
 void replace_with_stage_result(json& report, const RunProgram& run,
                                std::span<const std::string> axes) {
@@ -83,7 +78,7 @@ json stage_result(const RunProgram& run, std::span<const std::string> axes) {
       if (i != j) from[axes[static_cast<std::size_t>(j)]] = left.gains(i, j);
     }
     coupling[name] = {{"rms_um", left.rms_um(i)},
-                      {"rms_percent", percent(left.rms_um(i), range)},
+                      {"rms_percent", percent_of_range(left.rms_um(i), range)},
                       {"gain_from", from}};
   }
   out["coupling_error"] = coupling;
