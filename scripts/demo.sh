@@ -14,11 +14,8 @@ cd "$(dirname "$0")/.."
 # minutes sooner on a fresh machine. scripts/build.sh builds everything, file by file with debug
 # info, in build/.
 bash scripts/deps.sh demo >&2
-# A build-demo/ an older demo configured for make: CMake keeps a folder's generator, so it starts
-# again there.
-if [ -f build-demo/CMakeCache.txt ] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' build-demo/CMakeCache.txt; then
-  rm -rf build-demo
-fi
+source scripts/lib/ninja-tree.sh
+ninja_tree_or_fresh build-demo
 cmake --preset demo >/dev/null
 echo "hystbench: building hystbench and hystbenchd in build-demo/ (the tests: scripts/test.sh)" >&2
 cmake --build --preset demo -j "$(nproc)" >&2

@@ -5,7 +5,7 @@
 set -euo pipefail
 
 BUILD_PKGS=(
-  build-essential cmake pkg-config
+  build-essential cmake ninja-build pkg-config
   libeigen3-dev libspdlog-dev libfmt-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
   libsystemd-dev libmodbus-dev libgpiod-dev libsocketcan-dev
   libgtest-dev libgmock-dev libbenchmark-dev
@@ -19,9 +19,8 @@ TEST_PKGS=(python3 python3-pip python3-setuptools python3-wheel socat python3-py
 FUZZ_PKGS=(clang libclang-rt-14-dev)
 # JSON and arithmetic on the command line, for the measurement scripts only.
 MEASURE_PKGS=(jq bc)
-# JSON on the command line, for scripts/demo.sh (the run logs from the results); Ninja, which
-# builds the demo's libraries side by side where make builds them one after another.
-DEMO_PKGS=(jq ninja-build)
+# JSON on the command line, for scripts/demo.sh (the run logs from the results).
+DEMO_PKGS=(jq)
 
 want=("${BUILD_PKGS[@]}")
 case "${1:-build}" in
