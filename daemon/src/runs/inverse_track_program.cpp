@@ -10,7 +10,6 @@
 #include "hystbench/compensation/inverse_model.hpp"
 #include "hystbench/compensation/tracking_metrics.hpp"
 #include "hystbench/sim/signal_generator.hpp"
-#include "runs/details/percent_of_range.hpp"
 
 namespace hystbench::daemon {
 
@@ -136,8 +135,8 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   r["max_error_um"] = run.error.max;
   r["max_error_index"] = run.error.max_index;
   r["range_um"] = e.range;
-  r["rms_error_percent"] = details::percent_of_range(rms, e.range);
-  r["max_error_percent"] = details::percent_of_range(run.error.max, e.range);
+  r["rms_error_percent"] = compensation::percent_of_range(rms, e.range);
+  r["max_error_percent"] = compensation::percent_of_range(run.error.max, e.range);
   r["hysteresis_percent"] = hc::hysteresis_percent(yr, y);
   r["error_samples"] = run.error.samples;
   if (const TrackDrive* track = track_drive(run)) {
@@ -150,7 +149,7 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   if (steps.steps > 0) {
     r["step"] = {{"steps", steps.steps},
                  {"size_um", steps.mean_size},
-                 {"size_percent", details::percent_of_range(steps.mean_size, e.range)},
+                 {"size_percent", compensation::percent_of_range(steps.mean_size, e.range)},
                  {"settling_ms",
                   {{"max", 1e3 * steps.max_settling_s}, {"mean", 1e3 * steps.mean_settling_s}}},
                  {"overshoot_percent",

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <fstream>
 
+#include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
 #include "hystbench/daemon/runs/track_drive.hpp"
-#include "runs/details/percent_of_range.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -24,8 +24,8 @@ void add_model_error(const RunProgram& run, json& report) {
   const double rms = std::sqrt(run.model_error.sum2 / run.model_error.samples);
   report["model_rms_error_um"] = rms;
   report["model_max_error_um"] = run.model_error.max;
-  report["model_rms_error_percent"] = percent_of_range(rms, range);
-  report["model_max_error_percent"] = percent_of_range(run.model_error.max, range);
+  report["model_rms_error_percent"] = compensation::percent_of_range(rms, range);
+  report["model_max_error_percent"] = compensation::percent_of_range(run.model_error.max, range);
   report["model_max_error_index"] = run.model_error.max_index;
 }
 

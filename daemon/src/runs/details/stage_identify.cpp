@@ -7,8 +7,8 @@
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/common/fit_families.hpp"
+#include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/daemon/runs/identification_fit.hpp"
-#include "runs/details/percent_of_range.hpp"
 #include "runs/details/stage_runs.hpp"
 
 namespace hystbench::daemon::details {
@@ -298,15 +298,16 @@ StageModel fit_stage_identify(const RunProgram& run, const json& fit,
     }
     const Eigen::RowVectorXd own = records[a].outputs.row(static_cast<Eigen::Index>(a));
     const double range = own.maxCoeff() - own.minCoeff();
-    const json figures = {{"model", std::string(hc::to_string(f.model.hysteresis().kind()))},
-                          {"operators", f.operators},
-                          {"heldout_rms_error_um", f.heldout.rmse},
-                          {"heldout_rms_error_percent", percent_of_range(f.heldout.rmse, range)},
-                          {"fit_rms_error_um", f.fit.rmse},
-                          {"range_um", range},
-                          {"delay_samples", f.delay_samples},
-                          {"creep", f.creep},
-                          {"notes", f.notes}};
+    const json figures = {
+        {"model", std::string(hc::to_string(f.model.hysteresis().kind()))},
+        {"operators", f.operators},
+        {"heldout_rms_error_um", f.heldout.rmse},
+        {"heldout_rms_error_percent", hc::percent_of_range(f.heldout.rmse, range)},
+        {"fit_rms_error_um", f.fit.rmse},
+        {"range_um", range},
+        {"delay_samples", f.delay_samples},
+        {"creep", f.creep},
+        {"notes", f.notes}};
     per_axis[axes[a]] = figures;
     hc::ModelFile file{
         std::move(f.model),

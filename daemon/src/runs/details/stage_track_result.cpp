@@ -2,9 +2,9 @@
 #include <cmath>
 #include <string>
 
+#include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/stage_coupling_error.hpp"
 #include "hystbench/daemon/runs/inverse_track_program.hpp"
-#include "runs/details/percent_of_range.hpp"
 #include "runs/details/run_result.hpp"
 #include "runs/details/stage_runs.hpp"
 
@@ -78,7 +78,7 @@ json stage_result(const RunProgram& run, std::span<const std::string> axes) {
       if (i != j) from[axes[static_cast<std::size_t>(j)]] = left.gains(i, j);
     }
     coupling[name] = {{"rms_um", left.rms_um(i)},
-                      {"rms_percent", percent_of_range(left.rms_um(i), range)},
+                      {"rms_percent", compensation::percent_of_range(left.rms_um(i), range)},
                       {"gain_from", from}};
   }
   out["coupling_error"] = coupling;

@@ -17,11 +17,11 @@
 #include <string>
 #include <vector>
 
+#include "hystbench/compensation/error_metrics.hpp"
 #include "hystbench/compensation/iterative_learning.hpp"
 #include "hystbench/compensation/learning_guard.hpp"
 #include "hystbench/daemon/runs/learning_exchange.hpp"
 #include "runs/details/learned_drive.hpp"
-#include "runs/details/percent_of_range.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -128,7 +128,9 @@ class TrackLearning {
   std::array<std::uint64_t, 2> floor_trials_{0, 1};
   bool remeasured() const noexcept { return floor_trials_[0] != 0; }
   // The share of the reference's span [%] of a length [µm] (0 without a span).
-  double percent(double um) const noexcept { return percent_of_range(um, request_.range_um); }
+  double percent(double um) const noexcept {
+    return compensation::percent_of_range(um, request_.range_um);
+  }
   // Whether trial n is the repeat of trial 0 (no learning between them).
   bool repeats(std::uint64_t n) const noexcept { return n == 0 && request_.trials > 0; }
   // The trials' rms within their scored phases [µm].
