@@ -10,9 +10,9 @@ cd "$(dirname "$0")/.."
 # Only what the demo runs (the CLI and the daemon, optimised without debug info, nlohmann/json and
 # Eigen precompiled once for every library, each library compiled in unity batches of 8 files, by
 # Ninja, which compiles the libraries side by side, none waiting for another's archive
-# (CMAKE_OPTIMIZE_DEPENDENCIES), in build-demo/): the first output comes
-# minutes sooner on a fresh machine. scripts/build.sh builds everything, file by file with debug
-# info, in build/.
+# (CMAKE_OPTIMIZE_DEPENDENCIES), in build-demo/): the first output comes minutes sooner on a fresh
+# machine than after building everything. scripts/build.sh builds everything, the tests too, the
+# same way with line tables, in build/.
 bash scripts/deps.sh demo >&2
 source scripts/lib/ninja-tree.sh
 ninja_tree_or_fresh build-demo
