@@ -6,22 +6,24 @@
 # header, so a missing include shows there.
 option(HYSTBENCH_PCH "Precompile nlohmann/json and Eigen once and reuse them in every library" OFF)
 
+set(HYSTBENCH_PCH_HEADERS <nlohmann/json.hpp> <Eigen/Dense>
+    <algorithm> <cmath> <functional> <map> <memory> <optional> <span> <string> <vector>)
+# GCC 12 reports libstdc++'s own string copies as out of bounds or overlapping once they are
+# inlined from a precompiled header (a few files; none without it). The debug preset, without the
+# header, keeps these warnings for the project's code.
+set(HYSTBENCH_PCH_WARNINGS -Wno-array-bounds -Wno-stringop-overflow -Wno-restrict)
+
 if(HYSTBENCH_PCH)
   add_library(hystbench_pch OBJECT ${CMAKE_CURRENT_LIST_DIR}/shared_pch.cpp)
   target_link_libraries(hystbench_pch PRIVATE Eigen3::Eigen nlohmann_json::nlohmann_json)
-  target_precompile_headers(hystbench_pch PRIVATE
-    <nlohmann/json.hpp> <Eigen/Dense>
-    <algorithm> <cmath> <functional> <map> <memory> <optional> <span> <string> <vector>)
+  target_precompile_headers(hystbench_pch PRIVATE ${HYSTBENCH_PCH_HEADERS})
 endif()
 
 # Makes `target` reuse the shared precompiled header (nothing without HYSTBENCH_PCH).
 function(hystbench_shared_pch target)
   if(HYSTBENCH_PCH)
     target_precompile_headers(${target} REUSE_FROM hystbench_pch)
-    # GCC 12 reports libstdc++'s own string copies as out of bounds or overlapping once they are
-    # inlined from the precompiled header (a few files; none without it). The debug preset,
-    # without the header, keeps these warnings for the project's code.
-    target_compile_options(${target} PRIVATE -Wno-array-bounds -Wno-stringop-overflow -Wno-restrict)
+    target_compile_options(${target} PRIVATE ${HYSTBENCH_PCH_WARNINGS})
   endif()
 endfunction()
 
@@ -34,9 +36,7 @@ function(hystbench_test_pch target)
   set_target_properties(${target} PROPERTIES UNITY_BUILD OFF)
   if(HYSTBENCH_PCH)
     target_link_libraries(${target} PRIVATE Eigen3::Eigen nlohmann_json::nlohmann_json)
-    target_precompile_headers(${target} PRIVATE
-      <gtest/gtest.h> <gmock/gmock.h> <nlohmann/json.hpp> <Eigen/Dense>
-      <algorithm> <cmath> <functional> <map> <memory> <optional> <span> <string> <vector>)
-    target_compile_options(${target} PRIVATE -Wno-array-bounds -Wno-stringop-overflow -Wno-restrict)
+    target_precompile_headers(${target} PRIVATE <gtest/gtest.h> <gmock/gmock.h> ${HYSTBENCH_PCH_HEADERS})
+    target_compile_options(${target} PRIVATE ${HYSTBENCH_PCH_WARNINGS})
   endif()
 endfunction()
