@@ -9,7 +9,11 @@
 namespace hystbench::compensation {
 
 FeedbackController::FeedbackController(const FeedbackLaw& law, double dt_s)
-    : law_(law), dt_(dt_s), pid_(law.pid, dt_s), shaping_(law.shaping, dt_s) {
+    : law_(law),
+      dt_(dt_s),
+      pid_(law.pid, dt_s),
+      shaping_(law.shaping, dt_s),
+      resonators_(law.harmonics, dt_s) {
   const LowFrequencyBoost& b = law.boost;
   if (b.frequency_hz > 0.0) {
     details::require(std::isfinite(b.frequency_hz) && b.frequency_hz < 0.5 / dt_s,
@@ -31,13 +35,14 @@ double FeedbackController::step(double error) noexcept {
   const double boosted = b0_ * error + b1_ * x1_ - a1_ * y1_;
   x1_ = error;
   y1_ = boosted;
-  out_ = shaping_.step(pid_.step(boosted));
+  out_ = shaping_.step(pid_.step(boosted)) + resonators_.step(error);
   return out_;
 }
 
 void FeedbackController::reset() noexcept {
   pid_.reset(0.0);
   shaping_.reset(0.0);
+  resonators_.reset();
   x1_ = y1_ = 0.0;
   out_ = 0.0;
 }
@@ -48,7 +53,7 @@ std::complex<double> FeedbackController::response(double f_hz) const noexcept {
 
 std::complex<double> FeedbackController::response_at(std::complex<double> zi) const noexcept {
   const std::complex<double> boost = (b0_ + b1_ * zi) / (1.0 + a1_ * zi);
-  return boost * pid_.response_at(zi) * shaping_.response_at(zi);
+  return boost * pid_.response_at(zi) * shaping_.response_at(zi) + resonators_.response_at(zi);
 }
 
 }  // namespace hystbench::compensation

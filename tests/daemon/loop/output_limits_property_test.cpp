@@ -88,7 +88,7 @@ TEST(OutputLimitsProperty, NeverExceededOverAMillionTicks) {
     }
     if (hc::needs_model(s.kind) && !inverse) inverse = hc::make_inverse(model);
     std::optional<hc::FeedbackController> pid;
-    if (hc::uses_feedback(s.kind)) pid.emplace(hc::FeedbackLaw{{}, s.pid, {}}, s.dt);
+    if (hc::uses_feedback(s.kind)) pid.emplace(hc::FeedbackLaw{{}, s.pid, {}, {}}, s.dt);
     hc::Compensator comp(s.kind, std::move(inverse), pid, hc::LinearMap{0.1 + unit(rng), 0.0});
     hd::OutputLimiter limiter(s.limits, s.dt);
     const double safe = s.limits.u_min + (s.limits.u_max - s.limits.u_min) * unit(rng);

@@ -60,10 +60,13 @@ long run_allocations(const Case& c, const std::filesystem::path& dir) {
   auto program = hd::make_verification_program(hs::make_truth_model(truth_config, 1.0 / kRate),
                                                spec, loop.last_output(), o.limits, 1.0 / kRate);
   if (c.feedback) {
-    // The designed loop's parts: a boost, the integral, a notch and a low-pass.
-    hc::FeedbackLaw law{{300.0, 10.0},
-                        {0.0, 2000.0, 0.0, 0.0, -9.0, 9.0, 0.0},
-                        {{{3000.0, 0.5, 0.1}}, {2500.0, 0.7071}}};
+    // The designed loop's parts: a boost, the integral, a notch and a low-pass, and resonators
+    // at the reference's first harmonics.
+    hc::FeedbackLaw law{
+        {300.0, 10.0},
+        {0.0, 2000.0, 0.0, 0.0, -9.0, 9.0, 0.0},
+        {{{3000.0, 0.5, 0.1}}, {2500.0, 0.7071}},
+        {{{10.0, {1.0, 0.0}, 0.01}, {20.0, {0.0, 1.0}, 0.01}, {30.0, {0.5, 0.5}, 0.02}}, 9.0}};
     // Rebuild the compensator with the same inverse plus feedback.
     auto truth = hs::make_truth_model(truth_config, 1.0 / kRate);
     const hc::ActuatorModel m = hd::model_after(truth, program->excitation, loop.last_output(),
