@@ -111,6 +111,32 @@ TEST(PrintRunResult, GivesTheLearningsFloorAndWhereItWasMeasuredAgain) {
       << first.str();
 }
 
+// A periodic reference's run names the resonators its loop ran beside, or says it ran none.
+TEST(PrintRunResult, NamesTheResonatorsAtTheReferencesHarmonics) {
+  nlohmann::json r = {{"run_id", "r4"},           {"kind", "track"},     {"end", "completed"},
+                      {"samples", 100},           {"rms_error_um", 0.1}, {"rms_error_percent", 1.0},
+                      {"range_um", 10.0},         {"max_error_um", 0.3}, {"max_error_percent", 3.0},
+                      {"hysteresis_percent", 0.5}};
+  r["feedback"] = {{"gains", "designed"},
+                   {"structure", "integral"},
+                   {"margins", nlohmann::json::array()},
+                   {"harmonics",
+                    {{"fundamental_hz", 50.0},
+                     {"resonators", 2},
+                     {"kept", {{{"frequency_hz", 100.0}}, {{"frequency_hz", 150.0}}}},
+                     {"settle_s", 0.32}}}};
+  std::ostringstream kept;
+  cli::print_run_result(r, kept);
+  EXPECT_NE(kept.str().find("harmonics       resonators at 2 of the reference's harmonics (100, "
+                            "150 Hz), settled in about 0.320 s"),
+            std::string::npos)
+      << kept.str();
+  r["feedback"]["harmonics"] = {{"fundamental_hz", 1.0}, {"resonators", 0}};
+  std::ostringstream none;
+  cli::print_run_result(r, none);
+  EXPECT_NE(none.str().find("harmonics       no resonator"), std::string::npos) << none.str();
+}
+
 // Without an active model the daemon predicts y with the straight line of the configured
 // limits: the report leaves out the model's error then (it measures the line), on one axis and
 // on each axis of a stage, and gives it where a model predicted.

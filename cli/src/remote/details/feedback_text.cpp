@@ -65,6 +65,21 @@ void print_feedback(std::ostream& out, const json& f) {
     out << "  limited by      " << f["limited_by"].get<std::string>() << ": "
         << f.value("limit", std::string()) << "\n";
   }
+  if (const json& h = f.value("harmonics", json()); h.is_object()) {
+    const json& kept = h.value("kept", json::array());
+    out << "  harmonics       ";
+    if (kept.empty()) {
+      out << "no resonator: the loop takes out more than half of each harmonic, or one near a "
+             "mode would not hold\n";
+    } else {
+      out << "resonators at " << kept.size() << " of the reference's harmonics (";
+      for (std::size_t i = 0; i < kept.size(); ++i) {
+        out << (i > 0 ? ", " : "") << fixed_or_dash(kept[i].value("frequency_hz", json()), 0);
+      }
+      out << " Hz), settled in about " << fixed_or_dash(h.value("settle_s", json()), 3)
+          << " s, where the loop alone leaves more than half\n";
+    }
+  }
   if (const json& at = f.value("at_reference", json()); at.is_object()) {
     out << "  at reference    |S| " << fixed_or_dash(at.value("sensitivity", json()), 2) << " at "
         << fixed_or_dash(at.value("frequency_hz", json()), 0)

@@ -7,6 +7,7 @@
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/feedback_plant.hpp"
+#include "hystbench/compensation/harmonic_resonator_design.hpp"
 #include "hystbench/compensation/number_text.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/sim/frequency_response_excitation.hpp"
@@ -395,6 +396,57 @@ FeedbackPlan lowered_plan(const RunContext& ctx, hc::CompensatorKind kind,
                        why.value("meaning", std::string("the stage's coupling"));
   keep_plan(ctx, plan_key(ctx, kind, gains, r), p);
   return p;
+}
+
+hc::FeedbackLaw with_reference_harmonics(const RunContext& ctx, const FeedbackPlan& plan,
+                                         double fundamental_hz, json& feedback) {
+  if (plan.summary.value("gains", std::string()) != "designed" || !(fundamental_hz > 0.0)) {
+    return plan.law;
+  }
+  hc::HarmonicResonatorOptions o;
+  o.dt_s = ctx.dt();
+  o.fundamental_hz = fundamental_hz;
+  const hc::HarmonicResonatorDesign d =
+      hc::design_harmonic_resonators(plan.plants, plan.law, stage_modes(ctx), o);
+  json kept = json::array(), left_out = json::array();
+  for (std::size_t i = 0, r = 0; i < d.harmonics.size(); ++i) {
+    const hc::HarmonicChoice& h = d.harmonics[i];
+    json one = {{"harmonic", h.harmonic},
+                {"frequency_hz", h.frequency_hz},
+                {"sensitivity", h.sensitivity},
+                {"phase_spread_deg", h.phase_spread_deg}};
+    if (h.kept) {
+      const std::complex<double> c = d.spec.resonators[r++].gain;
+      one["gain"] = std::abs(c);
+      one["phase_deg"] = std::arg(c) * kDeg;
+      one["settle_s"] = h.settle_periods / fundamental_hz;
+      kept.push_back(std::move(one));
+    } else {
+      one["why"] = h.why;
+      left_out.push_back(std::move(one));
+    }
+  }
+  json& out = feedback["harmonics"];
+  out = {{"fundamental_hz", fundamental_hz}, {"resonators", kept.size()}};
+  // Only what there is: no empty list, no settling of none.
+  if (!kept.empty()) {
+    out["kept"] = std::move(kept);
+    out["settle_s"] = d.settle_periods / fundamental_hz;
+    out["between_harmonics"] = d.between;
+  }
+  if (!left_out.empty()) out["left_out"] = std::move(left_out);
+  out["rule"] =
+      "a resonator at each of the reference's first harmonics where the loop alone leaves more "
+      "than half (|S| > " +
+      hc::significant(o.min_sensitivity, 3) + ") and its phase through the stage holds within " +
+      hc::significant(o.max_phase_spread_deg, 3) +
+      " deg over the responses, their gain -/+ 30 % and their modes moved -/+ 20 %: it takes "
+      "that harmonic out; settling as fast as leaves the loop between the harmonics moved by at "
+      "most " +
+      hc::significant(o.max_between, 3) + " of 1 + L (between_harmonics)";
+  hc::FeedbackLaw law = plan.law;
+  law.harmonics = d.spec;
+  return law;
 }
 
 OscillationOptions oscillation_options(const json& feedback, double span_um, double rate_hz) {

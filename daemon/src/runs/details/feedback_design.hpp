@@ -84,6 +84,13 @@ nlohmann::json loop_curves(const FeedbackPlan& plan, double dt_s);
 /// reach it (linear between lines); NaN where none does.
 double sensitivity_at(const FeedbackPlan& plan, double frequency_hz, double dt_s);
 
+/// The plan's law with resonators at the harmonics of a periodic reference whose fundamental is
+/// fundamental_hz [Hz] where its loop alone leaves more than half of them
+/// (harmonic_resonator_design.hpp), for a designed loop (gains by hand run as given); `feedback`
+/// (the run's summary) gets `harmonics`: those kept and why the others were left out.
+compensation::FeedbackLaw with_reference_harmonics(const RunContext& ctx, const FeedbackPlan& plan,
+                                                   double fundamental_hz, nlohmann::json& feedback);
+
 /// The oscillation supervisor of a run with `feedback` (its summary): the error watched around
 /// the loop's weakest frequency (the largest peak of |S| over the measured responses), against
 /// the reference's span [µm].

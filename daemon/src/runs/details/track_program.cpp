@@ -163,15 +163,19 @@ std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
 
 // The feedback (designed on the stage's measured responses, or the gains given by hand checked
 // on them: feedback_design.hpp); `summary` states it. nullopt for a compensator without one.
+// A periodic reference's fundamental_hz (0: none, or a run whose learning takes the repeated
+// error) adds resonators at its harmonics to a designed loop.
 std::optional<hc::FeedbackController> feedback_controller(const FeedbackGainsRequest& request,
                                                           hc::CompensatorKind kind,
-                                                          const RunContext& ctx, json& summary,
+                                                          const RunContext& ctx,
+                                                          double fundamental_hz, json& summary,
                                                           std::optional<FeedbackPlan>& plan) {
   if (!hc::uses_feedback(kind)) return std::nullopt;
   plan = plan_feedback(ctx, kind, request);
   summary = plan->summary;
   try {
-    return hc::FeedbackController(plan->law, ctx.dt());
+    return hc::FeedbackController(with_reference_harmonics(ctx, *plan, fundamental_hz, summary),
+                                  ctx.dt());
   } catch (const std::exception& e) {
     throw common::CommandError("bad_params", e.what());
   }
@@ -440,10 +444,16 @@ void describe_track_run(BuiltRun& run, const RunProgram& p, const TrackReference
 }
 
 // A periodic reference where the loop amplifies (|S| > 1 at its fundamental, above the
-// crossover): the feedback adds to what the feedforward leaves there; `feedback` says so.
+// crossover) and no resonator sits at it: the feedback adds to what the feedforward leaves
+// there; `feedback` says so.
 void note_feedback_at_reference(const std::optional<FeedbackPlan>& plan, const TrackReference& ref,
                                 double rate_hz, json& feedback) {
   if (!plan || !feedback.is_object() || ref.frequency_hz <= 0.0) return;
+  if (feedback.contains("harmonics")) {
+    for (const json& h : feedback["harmonics"].value("kept", json::array())) {
+      if (h.value("harmonic", 0) == 1) return;
+    }
+  }
   const double s_ref = sensitivity_at(*plan, ref.frequency_hz, 1.0 / rate_hz);
   if (std::isfinite(s_ref) && s_ref > 1.0) {
     feedback["at_reference"] = {
@@ -457,10 +467,12 @@ void note_feedback_at_reference(const std::optional<FeedbackPlan>& plan, const T
 }
 
 // make_track_program's and make_axis_track_program's run: `ref` built from the request,
-// `feedforward_reference` the feedforward's in its place (null: the reference).
+// `feedforward_reference` the feedforward's in its place (null: the reference); `single_axis`
+// false for one axis of a stage's run.
 BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, TrackReference ref,
                          std::optional<LearningPlan> learn,
-                         std::unique_ptr<sim::SignalGenerator> feedforward_reference) {
+                         std::unique_ptr<sim::SignalGenerator> feedforward_reference,
+                         bool single_axis) {
   const BenchSettings& s = ctx.settings;
   const auto& lim = s.loop.limits;
   const std::string& comp_name = request.compensator;
@@ -485,8 +497,11 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
   std::unique_ptr<hc::InverseModel> inverse = feedforward_inverse(kind, ctx, p->excitation);
   json feedback = nullptr;
   std::optional<FeedbackPlan> plan;
-  const std::optional<hc::FeedbackController> pid =
-      feedback_controller(request.gains, kind, ctx, feedback, plan);
+  // One axis's periodic run without learning: the stage's axes share their modes, and a
+  // learning run learns the repeated error itself.
+  const bool harmonics = single_axis && !learn && !request.learning.learned;
+  const std::optional<hc::FeedbackController> pid = feedback_controller(
+      request.gains, kind, ctx, harmonics ? ref.frequency_hz : 0.0, feedback, plan);
   const hc::FeedbackPath path = plan ? plan->path : hc::FeedbackPath::kInverse;
   note_feedback_at_reference(plan, ref, s.loop.rate_hz, feedback);
   RunPreparation preparation;
@@ -547,7 +562,7 @@ BuiltRun make_track_program(const TrackRequest& request, const RunContext& ctx,
                             const Upload* upload) {
   std::optional<LearningPlan> learn = learning_plan(request, ctx);
   TrackReference ref = reference(request, ctx, known_range(ctx), upload, learn);
-  return build_track_run(request, ctx, std::move(ref), std::move(learn), nullptr);
+  return build_track_run(request, ctx, std::move(ref), std::move(learn), nullptr, true);
 }
 
 BuiltRun make_axis_track_program(const TrackRequest& request, const RunContext& ctx,
@@ -557,7 +572,7 @@ BuiltRun make_axis_track_program(const TrackRequest& request, const RunContext& 
   // A learning run's plan takes its trials' period from the trajectory's passes.
   if (learn) (void)reference(request, ctx, known_range(ctx), reference_upload, learn);
   return build_track_run(request, ctx, std::move(axis_reference), std::move(learn),
-                         std::move(feedforward_reference));
+                         std::move(feedforward_reference), false);
 }
 
 }  // namespace hystbench::daemon::details
