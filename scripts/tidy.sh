@@ -13,7 +13,13 @@ cmake -S . -B build-tidy -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_EXPO
   -DHYSTBENCH_TESTS=OFF -DHYSTBENCH_BENCH=OFF >/dev/null
 filter=${1:-'(compensation|sim|drivers|common|daemon|cli)/(src|apps)/'}
 out=$(mktemp)
-run-clang-tidy -p build-tidy -quiet "$filter" >"$out" 2>&1 || true
+status=0
+run-clang-tidy -p build-tidy -quiet "$filter" >"$out" 2>&1 || status=$?
+# Stopped by a signal: what it checked so far says nothing about the rest.
+if [ "$status" -ge 128 ]; then
+  echo "clang-tidy: interrupted (status $status) before it checked every source" >&2
+  exit 1
+fi
 # A finding of a check, or a source clang-tidy could not compile (then it checked nothing there).
 if sed -E 's/\x1b\[[0-9;]*m//g' "$out" |
   grep -E "(warning: .*\[[a-z-]+(\.[a-z-]+)*\]|error: )" | sort -u; then
