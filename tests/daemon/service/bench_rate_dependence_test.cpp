@@ -5,10 +5,9 @@
 // 1-19 Hz. The rate-dependent inverse tracks the fastest sine better than the rate-independent
 // one, is at most 40 % worse at any frequency (a law linear in the rate fitted to a front
 // whose lag grows with its square root gives up some of the slow sines for the fast ones; which
-// law identify keeps varies between runs, and so does the mpi's slow sine: over 20 runs the rpi
-// inverse tracked 1 Hz at 0.71-0.94 % and the mpi's at 0.70-0.86 %; identify keeps a law when it
-// tracks a 20 Hz sine better than its rate-free self, or adds one back from the diagnosis of its
-// own record when that tracks better on the bench) and stays within 1.5 % of range, also
+// law identify keeps varies between runs, and so does the mpi's slow sine; identify keeps a law
+// when it tracks a 20 Hz sine better than its rate-free self, or adds one back from the diagnosis
+// of its own record when that tracks better on the bench) and stays within 1.5 % of range, also
 // over a reference too long to plan whole. The targets (1 % at every frequency, 85 % below the
 // rate-independent inverse on average) are missed: most of what both leave is the Preisach
 // loop's shape, and no rate law follows a switching front (docs/measurements.md). No compensator
