@@ -39,17 +39,18 @@ struct Variant {
 };
 
 // What the resonators' output does to the error at f_hz, G = z^-1 P S, and the loop's |S|
-// there, on variant v: nullopt above its band.
+// there, on variant v, the controller's response there being `controller` (the same for every
+// variant): nullopt above its band.
 struct AtFrequency {
   Complex g;
   double sensitivity = 0.0;
 };
-std::optional<AtFrequency> at_frequency(const Variant& v, const FeedbackController& c, double f_hz,
+std::optional<AtFrequency> at_frequency(const Variant& v, Complex controller, double f_hz,
                                         double dt_s) {
   const std::optional<Complex> plant = response_at(*v.response, f_hz);
   if (!plant) return std::nullopt;
   const Complex delayed = v.gain * *plant * std::polar(1.0, -2.0 * std::numbers::pi * f_hz * dt_s);
-  const Complex s = 1.0 / (1.0 + c.response(f_hz) * delayed);
+  const Complex s = 1.0 / (1.0 + controller * delayed);
   return AtFrequency{delayed * s, std::abs(s)};
 }
 
@@ -79,8 +80,9 @@ double settle(std::vector<HarmonicResonator>& kept, std::vector<double>& periods
   std::vector<Complex> g(grid.size() * m), unit(grid.size() * n);
   for (std::size_t p = 0; p < grid.size(); ++p) {
     const Complex zi = std::polar(1.0, -2.0 * std::numbers::pi * grid[p] * o.dt_s);
+    const Complex controller = c.response_at(zi);
     for (std::size_t v = 0; v < m; ++v) {
-      const std::optional<AtFrequency> a = at_frequency(variants[v], c, grid[p], o.dt_s);
+      const std::optional<AtFrequency> a = at_frequency(variants[v], controller, grid[p], o.dt_s);
       g[p * m + v] = a ? a->g : Complex{0.0, 0.0};
     }
     for (std::size_t k = 0; k < n; ++k) {
@@ -177,8 +179,9 @@ HarmonicChoice judge_harmonic(std::size_t k, const std::vector<Variant>& variant
   Complex mean{0.0, 0.0};
   double largest = 0.0;
   std::vector<Complex> seen;
+  const Complex controller = c.response(h.frequency_hz);
   for (const Variant& v : variants) {
-    const std::optional<AtFrequency> a = at_frequency(v, c, h.frequency_hz, o.dt_s);
+    const std::optional<AtFrequency> a = at_frequency(v, controller, h.frequency_hz, o.dt_s);
     if (!a) break;
     seen.push_back(a->g);
     if (v.measured) {

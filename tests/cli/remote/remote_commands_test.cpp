@@ -34,6 +34,14 @@ class ReadUploadTest : public hystbench::test::TempDirTest {
   }
 };
 
+// A completed track run's result with its error figures and nothing else.
+nlohmann::json track_result(const std::string& run_id) {
+  return {{"run_id", run_id},         {"kind", "track"},     {"end", "completed"},
+          {"samples", 100},           {"rms_error_um", 0.1}, {"rms_error_percent", 1.0},
+          {"range_um", 10.0},         {"max_error_um", 0.3}, {"max_error_percent", 3.0},
+          {"hysteresis_percent", 0.5}};
+}
+
 }  // namespace
 
 TEST_F(ReadUploadTest, AMissingColumnIsNamedWithTheCommandsOption) {
@@ -85,10 +93,7 @@ TEST(PrintRunResult, SaysWhereTheLargestErrorsFell) {
 // A learning run's printed result gives the bench's floor, and where a trial at it had its drive
 // played again, that pair's floor beside the first.
 TEST(PrintRunResult, GivesTheLearningsFloorAndWhereItWasMeasuredAgain) {
-  nlohmann::json r = {{"run_id", "r2"},           {"kind", "track"},     {"end", "completed"},
-                      {"samples", 100},           {"rms_error_um", 0.1}, {"rms_error_percent", 1.0},
-                      {"range_um", 10.0},         {"max_error_um", 0.3}, {"max_error_percent", 3.0},
-                      {"hysteresis_percent", 0.5}};
+  nlohmann::json r = track_result("r2");
   r["learning"] = {
       {"trials", nlohmann::json::array()},
       {"frequency_hz", 50.0},
@@ -113,10 +118,7 @@ TEST(PrintRunResult, GivesTheLearningsFloorAndWhereItWasMeasuredAgain) {
 
 // A periodic reference's run names the resonators its loop ran beside, or says it ran none.
 TEST(PrintRunResult, NamesTheResonatorsAtTheReferencesHarmonics) {
-  nlohmann::json r = {{"run_id", "r4"},           {"kind", "track"},     {"end", "completed"},
-                      {"samples", 100},           {"rms_error_um", 0.1}, {"rms_error_percent", 1.0},
-                      {"range_um", 10.0},         {"max_error_um", 0.3}, {"max_error_percent", 3.0},
-                      {"hysteresis_percent", 0.5}};
+  nlohmann::json r = track_result("r4");
   r["feedback"] = {{"gains", "designed"},
                    {"structure", "integral"},
                    {"margins", nlohmann::json::array()},
