@@ -119,6 +119,40 @@ TEST(Compensator, SaysWhenTheFeedbackIsAtItsClamp) {
   EXPECT_FALSE(none.step(1e9, 0.0).feedback_saturated);
 }
 
+// A resonator beside a loop without gain: what it integrated (a start from rest) drives its
+// output until restart_harmonics() drops it; the PID's state stays, and the resonator integrates
+// again from then on.
+TEST(Compensator, RestartingTheHarmonicsDropsWhatTheResonatorsIntegratedAndKeepsThePid) {
+  const double dt = 1e-3;
+  hc::FeedbackLaw law;
+  law.pid = {0.0, 100.0, 0.0, 0.0, -50.0, 50.0};
+  law.harmonics.resonators.push_back({50.0, {1.0, 0.0}, 0.1});
+  hc::Compensator c(hc::CompensatorKind::kPid, nullptr, hc::FeedbackController(law, dt),
+                    {1.0, 0.0});
+  hc::Compensator pid_alone(hc::CompensatorKind::kPid, nullptr, feedback(0.0, 100.0, 50.0, dt),
+                            {1.0, 0.0});
+  c.reset(0.0);
+  pid_alone.reset(0.0);
+  for (int k = 0; k < 5; ++k) {  // a 1 um error, as a start from rest leaves
+    c.step(1.0, 0.0);
+    pid_alone.step(1.0, 0.0);
+  }
+  const double integrated = c.step(0.0, 0.0).u_fb - pid_alone.step(0.0, 0.0).u_fb;
+  EXPECT_GT(std::abs(integrated), 0.1);  // the resonator holds the error it integrated
+  c.restart_harmonics();
+  // From rest: with no error since, the resonator adds nothing to the PID's output.
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_NEAR(c.step(0.0, 0.0).u_fb, pid_alone.step(0.0, 0.0).u_fb, 1e-12) << k;
+  }
+  // And it integrates again.
+  c.step(1.0, 0.0);
+  pid_alone.step(1.0, 0.0);
+  EXPECT_GT(std::abs(c.step(0.0, 0.0).u_fb - pid_alone.step(0.0, 0.0).u_fb), 0.05);
+  hc::Compensator none(hc::CompensatorKind::kNone, nullptr, std::nullopt, {1.0, 0.0});
+  none.restart_harmonics();  // nothing to restart
+  EXPECT_DOUBLE_EQ(none.step(1.0, 0.0).u_fb, 0.0);
+}
+
 // The loop's output corrects the feedforward's target: u = inverse(target + v). The feedforward
 // alone (u_ff) is what the same inverse gives for the target, and on a plant that is the model
 // plus an offset the loop takes the offset out, whatever the model's local slope there.

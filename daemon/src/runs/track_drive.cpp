@@ -87,6 +87,7 @@ DriveCommand TrackDrive::update(const DriveInput& in) noexcept {
     y += p.clipped_reference(std::max(0.0, t - s.dt)) -
          p.clipped_reference(std::max(0.0, t - s.dt * static_cast<double>(1 + in.y_late_ticks)));
   }
+  if (k == p.harmonics_from && k > 0 && s.compensator) s.compensator->restart_harmonics();
   compensation::CompensatorOutput out;
   if (s.targets.capacity() > 1) {
     out = s.compensator->step(fb_ref, y, s.targets.advance(t, s.dt, target_at));

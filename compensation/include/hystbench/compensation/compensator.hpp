@@ -94,6 +94,10 @@ class Compensator {
   }
   /// Starts from a relaxed actuator at input u0.
   void reset(double u0) noexcept;
+  /// The feedback's resonators from rest (FeedbackController::restart_harmonics()); none: nothing.
+  void restart_harmonics() noexcept {
+    if (feedback_) feedback_->restart_harmonics();
+  }
   CompensatorKind kind() const noexcept { return kind_; }
   FeedbackPath feedback_path() const noexcept { return path_; }
   /// The feedback loop (null for a kind without one).

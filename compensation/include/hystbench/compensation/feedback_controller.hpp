@@ -45,6 +45,9 @@ class FeedbackController {
   }
   /// Restarts from v = 0 (PID and shaping settled there).
   void reset() noexcept;
+  /// The resonators alone from rest: what they integrated up to now (a start from rest, which
+  /// does not repeat) no longer drives them.
+  void restart_harmonics() noexcept { resonators_.reset(); }
   double output() const noexcept { return out_; }
   /// The PID's output at its clamp (before the shaping).
   bool saturated() const noexcept { return pid_.saturated(); }

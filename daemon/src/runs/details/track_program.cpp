@@ -395,25 +395,26 @@ json learning_summary(const LearningPlan& learn) {
   return l;
 }
 
-// A periodic reference (one unscored period, metrics_from = prefix + period) re-tares the
-// feedforward on a second unscored period: its mean error moves the target from the first scored
-// tick on (TareMeasure::startup_um). The first period is the start from rest, whose mean is not
-// the periodic motion's. Only beside the prefix's tare (a feedforward that inverts the model)
-// and with two scored periods left; not for a learning run (it has its own lead-in), an upload
-// (its approach is not the trajectory) or a run with feedback (the loop holds the mean from the
-// reference's start, and the target's step would only kick the stage). Call with total_samples
-// and metrics_from set.
+// A periodic reference (one unscored period, metrics_from = prefix + period) leaves a second
+// period unscored, on which the feedforward re-tares: its mean error moves the target from the
+// first scored tick on (TareMeasure::startup_um). The first period is the start from rest, whose
+// mean is not the periodic motion's. Only beside the prefix's tare (a feedforward that inverts
+// the model) and with two scored periods left; not for a learning run (it has its own lead-in)
+// or an upload (its approach is not the trajectory). A run with feedback leaves the period
+// unscored too, so that the feedforward alone and with its loop score the same periods, but
+// keeps its target (the loop holds the mean from the reference's start, and the target's step
+// would only kick the stage). Call with total_samples and metrics_from set.
 void arm_periodic_startup(RunProgram& p, TareWindow& tare, const TrackReference& ref, bool learning,
                           bool feedback) {
   const std::uint64_t prefix = p.excitation.size(), period = ref.unscored;
-  if (ref.frequency_hz <= 0.0 || learning || feedback || ref.pass_samples != 0 || period < 4 ||
+  if (ref.frequency_hz <= 0.0 || learning || ref.pass_samples != 0 || period < 4 ||
       tare.from >= prefix || p.metrics_from != prefix + period ||
       p.total_samples < p.metrics_from + 3 * period) {
     return;
   }
-  tare.startup_from = p.metrics_from;
+  if (!feedback) tare.startup_from = p.metrics_from;
   p.metrics_from += period;
-  tare.startup_to = p.metrics_from;
+  if (!feedback) tare.startup_to = p.metrics_from;
 }
 
 // The run log's header and the start reply of a track run built as `p`.
@@ -529,6 +530,10 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
   // it has taken out the start from rest before the scored part begins (held until then, the
   // scored part began with the feedforward's error there).
   if (pid) p->feedback_from = prefix;
+  // Its resonators take out the periodic error: the start from rest does not repeat.
+  if (pid && !pid->law().harmonics.empty() && ref.unscored > 0) {
+    track.program.harmonics_from = prefix + ref.unscored;
+  }
   if (pid && s.pid.oscillation_trip) {
     OscillationOptions o = oscillation_options(feedback, ref.max_um - ref.min_um, s.loop.rate_hz);
     // A periodic reference: the supervisor watches the error's change over its period (what a

@@ -82,6 +82,9 @@ struct TrackProgram {
   double y_ref_min = -std::numeric_limits<double>::infinity();
   double y_ref_max = std::numeric_limits<double>::infinity();
   TareWindow tare;
+  /// The tick at which the feedback's resonators restart from rest (the end of a periodic
+  /// reference's start from rest, which they would otherwise take for its repeated error); 0: none.
+  std::uint64_t harmonics_from = 0;
   /// --learned: the compensator again, fed the targets at the offset the drive was learned at
   /// (learned_twin_offset_um) with its feedback held; the drive moves by how far the
   /// compensator's feedforward is from its twin's at the same tick: the target offset's effect
