@@ -246,9 +246,9 @@ TEST_F(BenchTest, SixtySecondsAtTenKilohertzLogEverySample) {
 // identify on a bench with a history: identify, track, identify, track. The second
 // identification starts after two runs have left the actuator's hysteresis and creep in another
 // state than the first found; both models must track alike, and identify reports the tracking
-// its verification saw. The same for the coupled-play family. On the default truth each tracks
-// the 1 Hz triangle within 1.6-1.9 % of range (max; neither family holds the truth's loop
-// shape, docs/measurements.md), guarded at 2.3 %.
+// its verification saw. The same for the coupled-play family and the Preisach plane. On the
+// default truth neither play family holds the loop's shape (docs/measurements.md): their
+// triangle's max is guarded at 2.3 % of range.
 class BenchRepeatTest : public BenchTest, public ::testing::WithParamInterface<const char*> {};
 
 TEST_P(BenchRepeatTest, IdentifyAfterEarlierRunsTracksAsWellAsTheFirst) {
@@ -269,23 +269,25 @@ TEST_P(BenchRepeatTest, IdentifyAfterEarlierRunsTracksAsWellAsTheFirst) {
   };
   const json first = identify_and_track();
   const json second = identify_and_track();
+  // The plane holds the loop's shape: the target of its triangle, 0.5 % of range at most.
+  const double bound = model == "preisach" ? 0.5 : 2.3;
   for (const json* r : {&first, &second}) {
     const json& id = (*r)["identify"];
     EXPECT_GT(id["model"]["history"]["precondition_sweep_s"].get<double>(), 0.0) << id.dump(2);
     ASSERT_EQ(id["verification"]["end"], "completed") << id.dump(2);
-    EXPECT_LE(id["verification"]["max_error_percent"].get<double>(), 2.3) << id.dump(2);
-    EXPECT_LE((*r)["track"]["max_error_percent"].get<double>(), 2.3) << (*r)["track"].dump(2);
+    EXPECT_LE(id["verification"]["max_error_percent"].get<double>(), bound) << id.dump(2);
+    EXPECT_LE((*r)["track"]["max_error_percent"].get<double>(), bound) << (*r)["track"].dump(2);
   }
   const double a = first["track"]["max_error_percent"].get<double>();
   const double b = second["track"]["max_error_percent"].get<double>();
-  // The worst within 1.3x of the best (measured 1.01x for both families on this shortened
-  // excitation; identify-repeatability.sh measures the default one).
+  // The worst within 1.3x of the best, the Preisach plane's too (on this shortened excitation;
+  // identify-repeatability.sh measures the default one).
   EXPECT_LE(std::max(a, b), 1.3 * std::min(a, b)) << "first " << a << " %, second " << b << " %";
   EXPECT_TRUE(
       std::filesystem::exists(second["identify"]["verification"]["log"].get<std::string>()));
 }
 
-INSTANTIATE_TEST_SUITE_P(Families, BenchRepeatTest, ::testing::Values("mpi", "cpi"),
+INSTANTIATE_TEST_SUITE_P(Families, BenchRepeatTest, ::testing::Values("mpi", "cpi", "preisach"),
                          [](const ::testing::TestParamInfo<const char*>& i) {
                            return std::string(i.param);
                          });
