@@ -146,6 +146,14 @@ void print_learning(std::ostream& out, const json& l) {
     }
     out << "\n";
   }
+  // The best trial's drive played again: said where its error did not repeat.
+  if (const auto b = l.find("best_replayed");
+      b != l.end() && b->is_object() && !b->value("held", true)) {
+    out << "  best replayed   trial " << (*b)["trial"].dump() << "'s drive: rms %";
+    for (const json& r : (*b)["replays_rms_percent"]) out << " " << fixed(r, 3);
+    out << " (its own " << fixed((*b)["rms_error_percent"], 3)
+        << "): " << b->value("meaning", std::string()) << "\n";
+  }
   if (from.is_string() && l.value("lead_in_periods", 0) > 0) {
     const double period_s =
         l.value("frequency_hz", 0.0) > 0.0 ? 1.0 / l["frequency_hz"].get<double>() : 0.0;

@@ -91,7 +91,8 @@ TEST(PrintRunResult, SaysWhereTheLargestErrorsFell) {
 }
 
 // A learning run's printed result gives the bench's floor, and where a trial at it had its drive
-// played again, that pair's floor beside the first.
+// played again, that pair's floor beside the first; where the best drive's replays did not
+// repeat its error, a line says so.
 TEST(PrintRunResult, GivesTheLearningsFloorAndWhereItWasMeasuredAgain) {
   nlohmann::json r = track_result("r2");
   r["learning"] = {
@@ -114,6 +115,23 @@ TEST(PrintRunResult, GivesTheLearningsFloorAndWhereItWasMeasuredAgain) {
   EXPECT_NE(first.str().find("floor           0.020 % rms (trials 0 and 1, the same drive)\n"),
             std::string::npos)
       << first.str();
+  // The best drive's replays: a line only where they did not repeat its error.
+  EXPECT_EQ(first.str().find("best replayed"), std::string::npos) << first.str();
+  r["learning"]["best_replayed"] = {{"trial", 3},
+                                    {"rms_error_percent", 0.114},
+                                    {"replays_rms_percent", {0.374, 0.543}},
+                                    {"held", false},
+                                    {"meaning", "it does not repeat"}};
+  std::ostringstream replayed;
+  cli::print_run_result(r, replayed);
+  EXPECT_NE(replayed.str().find("best replayed   trial 3's drive: rms % 0.374 0.543 (its own "
+                                "0.114): it does not repeat\n"),
+            std::string::npos)
+      << replayed.str();
+  r["learning"]["best_replayed"]["held"] = true;
+  std::ostringstream held;
+  cli::print_run_result(r, held);
+  EXPECT_EQ(held.str().find("best replayed"), std::string::npos) << held.str();
 }
 
 // A periodic reference's run names the resonators its loop ran beside, or says it ran none.

@@ -24,6 +24,7 @@ namespace hc = hystbench::compensation;
 
 namespace {
 
+using TrackLearningFloorLimits = hd::details::TrackLearning;
 constexpr double kRate = 10000.0;
 constexpr double kNoiseUm = 0.005;  // the sensor's, rms
 
@@ -166,6 +167,11 @@ TEST(TrackLearningFloor, AFloorThatHoldsOnTheRepeatStopsTheLearningWithItsDriveO
   EXPECT_TRUE(l["stopped"].get<bool>());
   EXPECT_TRUE(l["floor"]["reached"].get<bool>());
   EXPECT_NE(l["why"].get<std::string>().find("once more"), std::string::npos) << l["why"];
+  // The drive played once more repeated its error.
+  ASSERT_TRUE(l.contains("best_replayed")) << l.dump(1);
+  EXPECT_EQ(l["best_replayed"]["trial"].get<std::size_t>(), first) << l.dump(1);
+  EXPECT_TRUE(l["best_replayed"]["held"].get<bool>()) << l.dump(1);
+  EXPECT_FALSE(l["best_replayed"].contains("meaning")) << l.dump(1);
 }
 
 TEST(TrackLearningFloor, AGuardThatStopsNamesTheBestTrial) {
@@ -181,6 +187,17 @@ TEST(TrackLearningFloor, AGuardThatStopsNamesTheBestTrial) {
   const std::string why = l["why"].get<std::string>();
   EXPECT_NE(why.find("above the best (trial 3)"), std::string::npos) << l.dump(1);
   EXPECT_EQ(l["best_trial"].get<int>(), 3) << l.dump(1);
+  // The scripted loop answers the best drive, played after others, with a new and larger error:
+  // the result says its replays did not repeat trial 3's.
+  ASSERT_TRUE(l.contains("best_replayed")) << l.dump(1);
+  const nlohmann::json& b = l["best_replayed"];
+  EXPECT_EQ(b["trial"].get<int>(), 3) << b;
+  EXPECT_FALSE(b["held"].get<bool>()) << b;
+  ASSERT_FALSE(b["replays_rms_percent"].empty()) << b;
+  EXPECT_GT(b["replays_rms_percent"][0].get<double>(),
+            TrackLearningFloorLimits::kReplayHeld * b["rms_error_percent"].get<double>())
+      << b;
+  EXPECT_NE(b.value("meaning", std::string()).find("does not repeat"), std::string::npos) << b;
 }
 
 TEST(TrackLearningFloor, IsTheNoiseNotTheStartStillSettling) {

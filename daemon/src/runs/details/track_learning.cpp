@@ -207,7 +207,10 @@ std::vector<TrackLearning::Trial> TrackLearning::poll() {
     bool last = false;
     const hc::LearningGuard::Action action =
         stopped_ ? hc::LearningGuard::Action::kStop : guard_.after_trial(t.rms_um);
-    if (!stopped_ && guard_.best_trial() == guard_.trials() - 1) best_drive_ = u_;
+    if (!stopped_ && guard_.best_trial() == guard_.trials() - 1) {
+      best_drive_ = u_;
+      best_drive_trial_ = number;
+    }
     // The repeat's floor within kFloorReach of the first: the first held, and the learning
     // reached it (the trial before did; the repeat's own error holds what drifted since).
     const bool confirmed =
@@ -305,6 +308,33 @@ json TrackLearning::above_cutoff() const {
           {"mode_from", mode_in_model_ ? "the model" : "the steps its identify timed"}};
 }
 
+json TrackLearning::best_replayed() const {
+  const Trial* best = nullptr;
+  json replays = json::array();
+  double worst = 0.0;
+  for (const Trial& t : trials_) {
+    if (t.drive == "best") {
+      replays.push_back(t.rms_percent);
+      worst = std::max(worst, t.rms_um);
+    } else if (t.trial == best_drive_trial_) {
+      best = &t;
+    }
+  }
+  if (best == nullptr || replays.empty()) return nullptr;
+  const bool held = worst <= kReplayHeld * best->rms_um;
+  json r = {{"trial", best->trial},
+            {"rms_error_percent", best->rms_percent},
+            {"replays_rms_percent", std::move(replays)},
+            {"held", held}};
+  if (!held) {
+    r["meaning"] = "its drive, played again, tracked " + hc::significant(worst / best->rms_um, 3) +
+                   "x its own error: this bench does not repeat a drive as closely as the "
+                   "floor's two trials showed (an exchange that stalls, a DAQ's own clock), and "
+                   "the best trial was partly chance";
+  }
+  return r;
+}
+
 json TrackLearning::result() const {
   const bool started = !request_.start_drive.empty();
   json trials = json::array();
@@ -322,7 +352,7 @@ json TrackLearning::result() const {
   for (std::size_t i = 1; i < trials_.size(); ++i) {
     if (trials_[i].rms_um < trials_[best].rms_um) best = i;
   }
-  return {
+  json out = {
       {"trials", trials},
       {"trials_requested", request_.trials},
       {"gain", request_.gain},
@@ -372,6 +402,11 @@ json TrackLearning::result() const {
        {{"mean", updates_ ? update_ms_sum_ / static_cast<double>(updates_) : 0.0},
         {"max", update_ms_max_},
         {"count", updates_}}}};
+  // Only where the learning stopped and replayed its best drive.
+  if (json replayed = best_replayed(); !replayed.is_null()) {
+    out["best_replayed"] = std::move(replayed);
+  }
+  return out;
 }
 
 }  // namespace hystbench::daemon::details

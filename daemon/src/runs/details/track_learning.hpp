@@ -58,6 +58,9 @@ class TrackLearning {
   /// rest settling toward the orbit it repeats), over trials of at least kFloorMinSamples.
   static constexpr std::size_t kFloorSettlingHarmonics = 2;
   static constexpr std::size_t kFloorMinSamples = 100;
+  /// The best trial's drive played again after the learning stopped repeats its error while the
+  /// replays stay within this factor of it.
+  static constexpr double kReplayHeld = 1.5;
 
   TrackLearning(const compensation::ActuatorModel& model, LearningExchange& exchange,
                 LearningRequest request, const compensation::LearningOptions& options);
@@ -102,6 +105,8 @@ class TrackLearning {
   LearningRequest request_;
   // The `above_cutoff` object: how a fast trial learned its harmonics above Q, or why not.
   nlohmann::json above_cutoff() const;
+  // The `best_replayed` object: the replays of the best trial's drive against its own error.
+  nlohmann::json best_replayed() const;
 
   compensation::IterativeLearning learner_;
   bool mode_in_model_ = false;   ///< the model holds a mode (else the identify's timed one)
@@ -111,6 +116,7 @@ class TrackLearning {
   // trials_[i + 1]).
   std::vector<Trial> trials_;
   std::vector<double> u_, c_, e_, next_, best_drive_, kept_;
+  std::uint64_t best_drive_trial_ = 0;  ///< the trial that played best_drive_
   bool stopped_ = false;
   bool done_ = false;  ///< the last drive was offered
   std::string why_;
