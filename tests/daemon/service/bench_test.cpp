@@ -294,8 +294,8 @@ INSTANTIATE_TEST_SUITE_P(Families, BenchRepeatTest, ::testing::Values("mpi", "cp
 
 // The user's path with the Preisach plane: `identify --model preisach`, then the 1 Hz triangle
 // through its inverse. The plane holds the default truth's loop that the play families miss: the
-// verification and the track within 0.8 % of range at their largest (measured 0.31 / 0.40 % on
-// this shortened excitation), where the modified PI leaves 1.6-1.9 %.
+// verification and the track within 0.8 % of range at their largest on this shortened
+// excitation, where the modified PI leaves more than twice that (BenchRepeatTest).
 TEST_F(BenchTest, IdentifyWithThePreisachFamilyTracksTheTriangleThroughItsInverse) {
   start(short_identify_settings());
   const json id = run_and_wait("identify", {{"model", "preisach"}});
