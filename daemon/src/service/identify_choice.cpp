@@ -68,7 +68,7 @@ bool within_spread(double ext, double base) { return ext <= 1.1 * base + 0.05; }
 // Where the extension gains this much on every sine (a delay or a mode the model misses), far
 // beyond the spread between two runs, the triangle's rms may lose up to its spread between runs
 // apart in the bench's history: the extension's triangle runs after the diagnosis, the model's
-// before it (three identifies in one daemon verified its max at 1.8-2.4 %).
+// before it (the spread of identifies in one daemon: scripts/identify-repeatability.sh).
 constexpr double kDecisiveSineGain = 2.0;
 bool within_history_spread(double ext, double base) { return ext <= 1.25 * base + 0.05; }
 
