@@ -445,15 +445,17 @@ void describe_track_run(BuiltRun& run, const RunProgram& p, const TrackReference
 }
 
 // A periodic reference where the loop amplifies (|S| > 1 at its fundamental, above the
-// crossover) and no resonator sits at it: the feedback adds to what the feedforward leaves
-// there; `feedback` says so.
-void note_feedback_at_reference(const std::optional<FeedbackPlan>& plan, const TrackReference& ref,
-                                double rate_hz, json& feedback) {
-  if (!plan || !feedback.is_object() || ref.frequency_hz <= 0.0) return;
-  if (feedback.contains("harmonics")) {
-    for (const json& h : feedback["harmonics"].value("kept", json::array())) {
-      if (h.value("harmonic", 0) == 1) return;
-    }
+// crossover) and no resonator of `pid` sits at it: the feedback adds to what the feedforward
+// leaves there; `feedback` says so.
+void note_feedback_at_reference(const std::optional<FeedbackPlan>& plan,
+                                const std::optional<hc::FeedbackController>& pid,
+                                const TrackReference& ref, double rate_hz, json& feedback) {
+  if (!plan || !pid || !feedback.is_object() || ref.frequency_hz <= 0.0) return;
+  const std::vector<hc::HarmonicResonator>& resonators = pid->law().harmonics.resonators;
+  if (std::any_of(resonators.begin(), resonators.end(), [&](const hc::HarmonicResonator& r) {
+        return std::abs(r.frequency_hz - ref.frequency_hz) <= 1e-9 * ref.frequency_hz;
+      })) {
+    return;
   }
   const double s_ref = sensitivity_at(*plan, ref.frequency_hz, 1.0 / rate_hz);
   if (std::isfinite(s_ref) && s_ref > 1.0) {
@@ -504,7 +506,7 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
   const std::optional<hc::FeedbackController> pid = feedback_controller(
       request.gains, kind, ctx, harmonics ? ref.frequency_hz : 0.0, feedback, plan);
   const hc::FeedbackPath path = plan ? plan->path : hc::FeedbackPath::kInverse;
-  note_feedback_at_reference(plan, ref, s.loop.rate_hz, feedback);
+  note_feedback_at_reference(plan, pid, ref, s.loop.rate_hz, feedback);
   RunPreparation preparation;
   if (inverse) {
     preparation = feedforward_plan(*p, ctx, kind, ref.samples, ref.frequency_hz, feedforward, pid,
