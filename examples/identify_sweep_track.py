@@ -22,7 +22,6 @@ The script reads the run logs, so run it where the daemon's log folder is visibl
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 from typing import Any, Dict, List, Optional, Sequence, Tuple
@@ -232,8 +231,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if raster:
         fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
         for i, (compensator, result) in enumerate(raster.items()):
-            log = read_run(result["log"], columns=["t", "yr", "y"])
-            keep = [k for k, yr in enumerate(log["yr"]) if not math.isnan(yr)]
+            log = read_run(result["log"], columns=["t", "yr", "y", "flags"])
+            open_loop = int(log.header["flags"]["open_loop"])  # rows that follow no reference
+            keep = [k for k, f in enumerate(log["flags"]) if not int(f) & open_loop]
             t = [log["t"][k] for k in keep]
             if i == 0:
                 top.plot(t, [log["yr"][k] for k in keep], "k-", lw=1, label="reference")

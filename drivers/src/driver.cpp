@@ -183,7 +183,8 @@ nlohmann::json Driver::diagnostics() const {
   d["stale_reads"] = stale_reads_.load(std::memory_order_relaxed);
   d["max_rate_hz"] = info_.max_rate_hz;
   d["axes"] = axes_;
-  d["last_fault"] = faults_.describe();
+  const std::string fault = faults_.describe();
+  d["last_fault"] = fault.empty() ? std::string("none") : fault;
   return d;
 }
 

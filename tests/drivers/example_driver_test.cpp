@@ -77,7 +77,7 @@ TEST(ExampleDriver, StaleReadsRepeatTheLastValueWithItsAge) {
   EXPECT_EQ(d.diagnostics()["stale_reads"], 2);
   EXPECT_EQ(d.diagnostics()["position_um"], fresh);
   EXPECT_EQ(d.diagnostics()["output_v"], 100.0);
-  EXPECT_EQ(d.diagnostics()["last_fault"], "");
+  EXPECT_EQ(d.diagnostics()["last_fault"], "none");
 }
 
 TEST(ExampleDriver, AFaultCallsOnErrorOnceAndIsNamedInWords) {

@@ -274,7 +274,8 @@ void print_stage(std::ostream& out, const json& r) {
 
 void print_run_result(const json& r, std::ostream& out) {
   out << "run " << r.value("run_id", "?") << " " << r.value("end", "?");
-  if (!r.value("reason", std::string()).empty())
+  // A completed run's reason ("every planned sample played") adds nothing to its end.
+  if (r.value("end", "") != "completed" && !r.value("reason", std::string()).empty())
     out << " (" << r["reason"].get<std::string>() << ")";
   out << ": " << r.value("samples", 0) << " samples, " << r.value("dropped", 0) << " dropped\n";
   if (r.contains("rms_error_um")) print_tracking_error(out, r);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -30,6 +31,28 @@ const std::vector<double>* drawn_column(const DataTable& t, const std::string& n
   return t.has(name) && any_finite(t.column(name)) ? &t.column(name) : nullptr;
 }
 
+// The log's reference without its open-loop rows: there a run log's yr holds the model's
+// output (the header's `open_loop` flag bit says which rows), and no reference was followed.
+std::vector<double> followed_reference(const DataTable& t, const std::vector<double>& yr) {
+  std::vector<double> out = yr;
+  if (!t.has("flags")) return out;
+  std::uint32_t bit = 0;
+  for (const std::string& c : t.comments()) {
+    const auto j = nlohmann::json::parse(c, nullptr, false);
+    if (j.is_object() && j.contains("flags") && j["flags"].is_object()) {
+      bit = j["flags"].value("open_loop", 0U);
+    }
+  }
+  if (bit == 0) return out;
+  const std::vector<double>& flags = t.column("flags");
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    if (std::isfinite(flags[k]) && (static_cast<std::uint32_t>(flags[k]) & bit) != 0U) {
+      out[k] = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+  return out;
+}
+
 void put(std::ostream& o, double v) {
   if (std::isfinite(v)) {
     o << ' ' << v;
@@ -38,31 +61,14 @@ void put(std::ostream& o, double v) {
   }
 }
 
-}  // namespace
-
-fs::path default_plot_dir(const std::string& log_path) {
-  fs::path p(log_path);
-  return p.parent_path() / (p.stem().string() + "-plots");
-}
-
-std::vector<fs::path> plot_run_log(const std::string& log_path, const fs::path& dir) {
-  const DataTable table = DataTable::read_csv(log_path);
-  for (const char* name : {"t", "u", "y"}) {
-    if (!table.has(name)) {
-      throw std::runtime_error(log_path + ": no '" + name +
-                               "' column (a run log or a CSV with t, u, y is needed)");
-    }
-  }
+// plot.dat: t u y yr y_model error_min error_max, every bin-th sample (at most kMaxPoints rows);
+// the error against yr where the log has a reference, else against y_model.
+void write_plot_data(const fs::path& dat, const DataTable& table, const std::vector<double>* yr,
+                     const std::vector<double>* ym) {
   const std::vector<double>& t = table.column("t");
   const std::vector<double>& u = table.column("u");
   const std::vector<double>& y = table.column("y");
-  const std::vector<double>* yr = drawn_column(table, "yr");
-  const std::vector<double>* ym = drawn_column(table, "y_model");
   const std::size_t n = table.rows();
-  if (n == 0 || !any_finite(y)) throw std::runtime_error(log_path + ": no finite sample of y");
-
-  fs::create_directories(dir);
-  const fs::path dat = dir / "plot.dat";
   std::ofstream d(dat, std::ios::trunc);
   if (!d) throw std::runtime_error(dat.string() + ": cannot write");
   d.precision(9);
@@ -85,7 +91,35 @@ std::vector<fs::path> plot_run_log(const std::string& log_path, const fs::path& 
     put(d, hi);
     d << '\n';
   }
-  d.close();
+}
+
+}  // namespace
+
+fs::path default_plot_dir(const std::string& log_path) {
+  fs::path p(log_path);
+  return p.parent_path() / (p.stem().string() + "-plots");
+}
+
+std::vector<fs::path> plot_run_log(const std::string& log_path, const fs::path& dir) {
+  const DataTable table = DataTable::read_csv(log_path);
+  for (const char* name : {"t", "u", "y"}) {
+    if (!table.has(name)) {
+      throw std::runtime_error(log_path + ": no '" + name +
+                               "' column (a run log or a CSV with t, u, y is needed)");
+    }
+  }
+  const std::vector<double>* logged_yr = drawn_column(table, "yr");
+  const std::vector<double> followed =
+      logged_yr ? followed_reference(table, *logged_yr) : std::vector<double>();
+  const std::vector<double>* yr = logged_yr && any_finite(followed) ? &followed : nullptr;
+  const std::vector<double>* ym = drawn_column(table, "y_model");
+  if (table.rows() == 0 || !any_finite(table.column("y"))) {
+    throw std::runtime_error(log_path + ": no finite sample of y");
+  }
+
+  fs::create_directories(dir);
+  const fs::path dat = dir / "plot.dat";
+  write_plot_data(dat, table, yr, ym);
 
   const std::string data = details::gnuplot_quoted(dat);
   const std::string name = fs::path(log_path).filename().string();

@@ -108,8 +108,13 @@ class WithoutModelTest(_support.DaemonTestCase):
         self.assertEqual(log["index"][:3], [0.0, 1.0, 2.0])
         precondition = log.header["run"]["precondition_samples"]
         self.assertEqual(precondition, 2000)
-        self.assertTrue(math.isnan(log["yr"][0]))
-        self.assertFalse(math.isnan(log["yr"][precondition]))
+        # The precondition sweep follows no reference: its rows carry the open-loop flag and the
+        # model's output as yr; no cell is NaN.
+        open_loop = log.header["flags"]["open_loop"]
+        flagged = [int(f) & open_loop != 0 for f in log["flags"]]
+        self.assertEqual(flagged, [k < precondition for k in range(len(log))])
+        self.assertEqual(log["yr"][:precondition], log["y_model"][:precondition])
+        self.assertFalse(any(math.isnan(v) for name in log.names for v in log[name]))
         rms, peak = rms_and_max(log, log.header["run"]["metrics_from"])
         self.assertAlmostEqual(rms, result["rms_error_um"], places=9)
         self.assertAlmostEqual(peak, result["max_error_um"], places=9)

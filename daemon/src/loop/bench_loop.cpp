@@ -411,6 +411,12 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   rec[0].exec_ns = now_ns() - exec_start_ns_;
   for (std::size_t a = 0; a < n; ++a) {
     rec[a].exec_ns = rec[0].exec_ns;
+    if (!std::isfinite(rec[a].reference)) {
+      // No reference on an open-loop tick: the log's yr holds what the model expects of the
+      // drive, flagged, so that no column is left empty (the run's records keep NaN).
+      rec[a].flags |= kSampleOpenLoop;
+      rec[a].reference = rec[a].y_model;
+    }
     record(p.axis(a), k, d[a], x.response[a], wake_ns - scheduled_ns, rec[a]);
   }
   log_sample(p, std::span<const SampleRecord>(rec).first(n));
@@ -418,7 +424,8 @@ void BenchLoop::run_tick(RunProgram& p, std::int64_t scheduled_ns, std::int64_t 
   if (x.failure != nullptr) {
     fault(x.failure);
   } else if (k + 1 >= p.total_samples || last_trial_played) {
-    end_run(RunEnd::kCompleted, "");
+    end_run(RunEnd::kCompleted,
+            last_trial_played ? "its last trial played" : "every planned sample played");
   } else if (stop_requested_.exchange(false, std::memory_order_acq_rel)) {
     end_run(RunEnd::kStopped, "stopped by request");
   }

@@ -67,7 +67,8 @@ std::string make_header(const SampleLogOptions& o) {
                        {"feedback_saturated", kSampleFeedbackSaturated},
                        {"overrun", kSampleOverrun},
                        {"fault", kSampleFault},
-                       {"stale", kSampleStale}}}});
+                       {"stale", kSampleStale},
+                       {"open_loop", kSampleOpenLoop}}}});
   nlohmann::json columns = nlohmann::json::array();
   for (const auto& column : columns_units) columns.push_back(column.first);
   h += comment_line({{"columns", columns}});

@@ -4,13 +4,16 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace cli = hystbench::cli;
 namespace fs = std::filesystem;
@@ -32,25 +35,41 @@ class PlotCommandTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  // A run log as the daemon writes it: a JSON header comment, NaN where a column has no value
-  // (yr during the precondition sweep), 50 000 samples (thinned for the plot).
+  // A run log as the daemon writes it: a JSON header comment with the flag bits, the open-loop
+  // rows (the precondition sweep; all of them without a reference) flagged with yr = y_model,
+  // 50 000 samples (thinned for the plot).
   std::string write_log(bool with_reference) {
     const fs::path path = dir_ / "run.csv";
     std::ofstream f(path);
-    f << "# {\"run_id\":\"test\"}\nindex,t,yr,u,y,y_model,flags\n";
+    f << "# {\"run_id\":\"test\"}\n# {\"flags\":{\"stale\":64,\"open_loop\":128}}\n"
+      << "index,t,yr,u,y,y_model,flags\n";
     for (int k = 0; k < 50000; ++k) {
       const double t = k * 1e-4;
       const double u = 75.0 + 70.0 * std::sin(2.0 * std::numbers::pi * t);
       const double y = 0.3 * u + 2.0 * std::cos(2.0 * std::numbers::pi * t);
-      f << k << ',' << t << ',';
-      if (with_reference && k >= 10000) {
-        f << y + 0.01 * std::sin(40.0 * t);
-      } else {
-        f << "NaN";
-      }
-      f << ',' << u << ',' << y << ',' << y - 0.02 << ",0\n";
+      const bool followed = with_reference && k >= 10000;
+      f << k << ',' << t << ',' << (followed ? y + 0.01 * std::sin(40.0 * t) : y - 0.02) << ',' << u
+        << ',' << y << ',' << y - 0.02 << ',' << (followed ? 0 : 128) << '\n';
     }
     return path.string();
+  }
+
+  // plot.dat's rows: t u y yr y_model error_min error_max.
+  std::vector<std::array<double, 7>> plotted(const fs::path& dat) {
+    std::vector<std::array<double, 7>> rows;
+    std::ifstream in(dat);
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream cells(line);
+      std::array<double, 7> r{};
+      for (double& v : r) {
+        std::string cell;
+        cells >> cell;
+        v = cell == "NaN" ? std::numeric_limits<double>::quiet_NaN() : std::stod(cell);
+      }
+      rows.push_back(r);
+    }
+    return rows;
   }
 
   fs::path dir_;
@@ -74,6 +93,17 @@ TEST_F(PlotCommandTest, WritesTheThreePicturesOfARunLog) {
   for (std::string line; std::getline(dat, line);) ++lines;
   EXPECT_LE(lines, 20001u);
   EXPECT_GT(lines, 10000u);
+  // The open-loop rows draw no reference and no tracking error; after them, the reference's
+  // error (0.01 um at most here, where the model's is 0.02).
+  for (const auto& r : plotted(dir_ / "plots" / "plot.dat")) {
+    if (r[0] < 1.0 - 1e-3) {
+      ASSERT_TRUE(std::isnan(r[3])) << r[0];
+      ASSERT_TRUE(std::isnan(r[5])) << r[0];
+    } else if (r[0] > 1.0 + 1e-3) {
+      ASSERT_FALSE(std::isnan(r[3])) << r[0];
+      ASSERT_LE(std::abs(r[6]), 0.0100001) << r[0];
+    }
+  }
 }
 
 TEST_F(PlotCommandTest, ALogWithoutReferenceIsDrawnWithItsModelError) {
@@ -82,6 +112,12 @@ TEST_F(PlotCommandTest, ALogWithoutReferenceIsDrawnWithItsModelError) {
   ASSERT_EQ(pngs.size(), 3u);
   for (const auto& p : pngs) EXPECT_GT(fs::file_size(p), 2000u) << p;
   EXPECT_EQ(cli::default_plot_dir(log), dir_ / "run-plots");
+  // No row follows a reference: none is drawn, and the error is the model's (the log's six
+  // digits round it).
+  for (const auto& r : plotted(dir_ / "p" / "plot.dat")) {
+    ASSERT_TRUE(std::isnan(r[3])) << r[0];
+    ASSERT_NEAR(r[5], 0.02, 1e-4) << r[0];
+  }
 }
 
 TEST_F(PlotCommandTest, AFileThatIsNotARunLogIsRefusedByName) {

@@ -227,6 +227,10 @@ TEST_F(WebViewTest, ARunStartedWithTheTokenAppearsInTheListWithItsPlot) {
   }
   EXPECT_GT(hi - lo, 5.0);  // the sine moved the actuator
   EXPECT_EQ(axis["yr"].size(), plot["t"].size());
+  // The precondition sweep follows no reference: none is drawn there (null), and the reference
+  // after it is.
+  ASSERT_TRUE(axis["yr"].front().is_null()) << axis["yr"].dump();
+  ASSERT_TRUE(axis["yr"].back().is_number()) << axis["yr"].dump();
   // A second run after the first: both listed, newest first.
   auto [again, reply2] = command(kShortTrack, kToken);
   ASSERT_EQ(again, 200) << reply2.dump();

@@ -3,8 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -70,11 +73,12 @@ class BenchTest : public hystbench::test::BenchFixture {
 
 }  // namespace
 
-TEST_F(BenchTest, TrackWithoutModelLogsEverySampleAndReportsHysteresis) {
+TEST_F(BenchTest, TrackWithoutModelLogsEverySampleWithNoCellEmptyAndReportsHysteresis) {
   start(settings());
   const json r =
       run_and_wait("track", {{"compensator", "none"}, {"periods", 3}, {"frequency_hz", 2}});
   ASSERT_EQ(r["end"], "completed") << r.dump(2);
+  EXPECT_EQ(r["reason"], "every planned sample played");
   EXPECT_EQ(r["samples"], r["planned_samples"]);
   EXPECT_EQ(r["dropped"], 0);
   EXPECT_EQ(r["logged"], r["samples"]);
@@ -86,6 +90,24 @@ TEST_F(BenchTest, TrackWithoutModelLogsEverySampleAndReportsHysteresis) {
   for (std::size_t k = 0; k < index.size(); ++k) ASSERT_EQ(index[k], static_cast<double>(k));
   const json header = hd::read_sample_log_header(r["log"].get<std::string>());
   EXPECT_EQ(header["run"]["compensator"], "none");
+  // No cell is left empty: the precondition sweep before the reference follows none, and its
+  // rows say so by their flag, with the model's output (here the limits' line) as yr.
+  for (const std::string& name : table.names()) {
+    const auto& c = table.column(name);
+    ASSERT_TRUE(std::all_of(c.begin(), c.end(), [](double v) { return std::isfinite(v); })) << name;
+  }
+  const auto open_loop = header["flags"]["open_loop"].get<std::uint32_t>();
+  const auto &flags = table.column("flags"), &yr = table.column("yr"),
+             &y_model = table.column("y_model");
+  std::size_t open_rows = 0;
+  for (std::size_t k = 0; k < flags.size(); ++k) {
+    if ((static_cast<std::uint32_t>(flags[k]) & open_loop) == 0U) continue;
+    ASSERT_EQ(open_rows, k) << "an open-loop row after the reference began";
+    ASSERT_EQ(yr[k], y_model[k]) << k;
+    ++open_rows;
+  }
+  EXPECT_GT(open_rows, 0U);
+  EXPECT_LT(open_rows, flags.size());
 }
 
 // model.load carries the model document; the daemon keeps a copy in its model folder, lists it,

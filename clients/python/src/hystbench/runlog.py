@@ -3,8 +3,10 @@
 A run log (``<log_dir>/<run_id>.csv``) starts with ``#`` comment lines, each a JSON object
 (schema, run parameters, model, units, flag bits, columns), then a header row and one numeric
 row per sample: ``index,t,t_scheduled_ns,t_wake_ns,exec_ns,yr,u_ff,u_fb,u,y,y_model,flags``
-(``t`` in s, ``yr``/``y``/``y_model`` in µm, ``u*`` in V, ``*_ns`` in ns). ``NaN`` marks a
-missing value (``yr`` during the precondition sweep, for example).
+(``t`` in s, ``yr``/``y``/``y_model`` in µm, ``u*`` in V, ``*_ns`` in ns). On open-loop rows
+(the precondition sweep, an excitation) the ``open_loop`` flag bit (``header["flags"]``) is set
+and ``yr`` holds ``y_model``: no reference is followed there. ``NaN`` marks a value that cannot
+exist (a measurement the driver reported as not a number).
 """
 
 from __future__ import annotations

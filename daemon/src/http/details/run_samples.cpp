@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <string_view>
@@ -10,6 +11,7 @@
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/daemon/loop/sample_log_writer.hpp"
+#include "hystbench/daemon/loop/sample_record.hpp"
 
 namespace hystbench::daemon::details {
 
@@ -34,10 +36,10 @@ double cell_value(std::string_view cell) {
   return r.ec == std::errc() ? v : std::numeric_limits<double>::quiet_NaN();
 }
 
-// Column indices of one axis's yr, y, u (suffix "" for one axis, "_x" for axis x).
+// Column indices of one axis's yr, y, u and flags (suffix "" for one axis, "_x" for axis x).
 struct AxisColumns {
   std::string name;
-  std::size_t yr, y, u;
+  std::size_t yr, y, u, flags;
 };
 
 std::size_t column(const std::vector<std::string_view>& header, const std::string& name) {
@@ -49,14 +51,15 @@ std::size_t column(const std::vector<std::string_view>& header, const std::strin
 std::vector<AxisColumns> axis_columns(const std::vector<std::string_view>& header) {
   std::vector<AxisColumns> axes;
   if (column(header, "y") != std::string_view::npos) {
-    axes.push_back({"", column(header, "yr"), column(header, "y"), column(header, "u")});
+    axes.push_back({"", column(header, "yr"), column(header, "y"), column(header, "u"),
+                    column(header, "flags")});
     return axes;
   }
   for (const std::string_view h : header) {
     if (h.substr(0, 2) != "y_" || h.substr(0, 8) == "y_model_") continue;
     const std::string name(h.substr(2));
     axes.push_back({name, column(header, "yr_" + name), column(header, "y_" + name),
-                    column(header, "u_" + name)});
+                    column(header, "u_" + name), column(header, "flags_" + name)});
   }
   return axes;
 }
@@ -115,7 +118,12 @@ json decimated_run_log(const std::filesystem::path& log_dir, const std::string& 
     const std::vector<std::string_view> cells = split(line);
     t.push_back(value_at(cells, t_col));
     for (std::size_t a = 0; a < axes.size(); ++a) {
-      series[3 * a].push_back(value_at(cells, axes[a].yr));
+      // An open-loop row's yr is the model's output, not a reference: none is drawn there.
+      const double flags = value_at(cells, axes[a].flags);
+      const bool open_loop =
+          std::isfinite(flags) && (static_cast<std::uint32_t>(flags) & kSampleOpenLoop) != 0U;
+      series[3 * a].push_back(open_loop ? std::numeric_limits<double>::quiet_NaN()
+                                        : value_at(cells, axes[a].yr));
       series[3 * a + 1].push_back(value_at(cells, axes[a].y));
       series[3 * a + 2].push_back(value_at(cells, axes[a].u));
     }

@@ -211,20 +211,22 @@ json law_json(const hc::FeedbackLaw& law) {
     notches.push_back(
         {{"frequency_hz", n.frequency_hz}, {"damping", n.damping}, {"depth", n.depth}});
   }
+  json out = {{"kp", law.pid.kp},
+              {"ki", law.pid.ki},
+              {"kd", law.pid.kd},
+              {"derivative_filter_hz", law.pid.derivative_filter_hz},
+              {"output_filter_hz", law.pid.output_filter_hz},
+              {"notches", notches},
+              {"v_limit_um", law.pid.output_max}};
+  // The boost and the low-pass are there only where the design has them.
+  if (law.boost.frequency_hz > 0.0) {
+    out["boost"] = {{"frequency_hz", law.boost.frequency_hz}, {"gain", law.boost.gain}};
+  }
   const auto& lp = law.shaping.low_pass;
-  return {{"boost", law.boost.frequency_hz > 0.0
-                        ? json{{"frequency_hz", law.boost.frequency_hz}, {"gain", law.boost.gain}}
-                        : json(nullptr)},
-          {"kp", law.pid.kp},
-          {"ki", law.pid.ki},
-          {"kd", law.pid.kd},
-          {"derivative_filter_hz", law.pid.derivative_filter_hz},
-          {"output_filter_hz", law.pid.output_filter_hz},
-          {"notches", notches},
-          {"low_pass", lp.frequency_hz > 0.0
-                           ? json{{"frequency_hz", lp.frequency_hz}, {"damping", lp.damping}}
-                           : json(nullptr)},
-          {"v_limit_um", law.pid.output_max}};
+  if (lp.frequency_hz > 0.0) {
+    out["low_pass"] = {{"frequency_hz", lp.frequency_hz}, {"damping", lp.damping}};
+  }
+  return out;
 }
 
 json summary_json(const FeedbackPlan& p, const hc::StageResponses& r,

@@ -70,7 +70,8 @@ class Driver final : private FaultSource {
   double safe_output_v() const noexcept { return info_.safe_output_v; }
   double measurement_resolution_um() const noexcept { return info_.measurement_resolution_um; }
   std::string_view type() const noexcept { return driver_->type(); }
-  /// The driver's, plus output_v, position_um, stale_reads and last_fault (not real-time).
+  /// The driver's, plus output_v, position_um, stale_reads and last_fault ("none" before any)
+  /// (not real-time).
   nlohmann::json diagnostics() const;
 
   DriverInterface& interface() noexcept { return *driver_; }

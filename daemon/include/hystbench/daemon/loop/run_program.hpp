@@ -119,7 +119,8 @@ struct RunProgram {
   // ---- written by the loop thread ----
   std::atomic<std::uint64_t> done{0};  ///< samples completed (any thread may read)
   RunEnd end = RunEnd::kCompleted;
-  /// Set when the run did not complete: a static string, or one its loop keeps while it lives.
+  /// Why the run ended, in words (a completed run's too): a static string, or one its loop keeps
+  /// while it lives.
   const char* end_reason = "";
   RunCounters counters;
   ErrorFigures error;        ///< tracking error, from metrics_from on

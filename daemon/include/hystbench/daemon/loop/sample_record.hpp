@@ -18,6 +18,9 @@ enum SampleFlag : std::uint32_t {
   kSampleOverrun = 1u << 4,            ///< this tick's work ran past the next deadline
   kSampleFault = 1u << 5,              ///< the driver reported an error / fault this tick
   kSampleStale = 1u << 6,              ///< the measurement was not fresh this tick
+  /// No reference was followed this tick (an open-loop drive: identify's excitation, a track's
+  /// precondition sweep); the logged yr is then the model's output y_model.
+  kSampleOpenLoop = 1u << 7,
 };
 
 struct SampleRecord {
@@ -25,7 +28,7 @@ struct SampleRecord {
   std::int64_t scheduled_ns = 0;  ///< deadline of this tick (t_scheduled_ns; t = this in s)
   std::int64_t wake_ns = 0;       ///< when the loop thread actually woke (t_wake_ns)
   std::int64_t exec_ns = 0;       ///< work time of the tick, wake to done (exec_ns)
-  double reference = 0.0;         ///< reference position y_ref [µm] (yr)
+  double reference = 0.0;         ///< reference position y_ref [µm] (yr); see kSampleOpenLoop
   double u_ff = 0.0;              ///< feedforward (inverse model) output [V] (u_ff)
   double u_fb = 0.0;              ///< feedback (PID) output [V] (u_fb)
   double u_out = 0.0;             ///< command sent to the driver after limits [V] (u)
