@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -168,6 +169,8 @@ double PreisachModel::relays(double x) const noexcept {
 }
 
 double PreisachModel::step(double u) noexcept {
+  // The same input again: the relays stay, the output is what it was (bit for bit).
+  if (u == held_u_) return held_output_;
   // A non-finite input leaves the relays where they are (clamp()), and the front and rate too.
   if (p_.rate_law.active() && std::isfinite(u)) front_ = front(u, rate_.step(u));
   const double x = clamp(p_.rate_law.active() ? front_ : u);
@@ -179,7 +182,11 @@ double PreisachModel::step(double u) noexcept {
   }
   memory_.n = t.n;
   u_ = x;
-  return p_.center + map_.apply(p_.offset + p_.slope * u + y);
+  const double out = p_.center + map_.apply(p_.offset + p_.slope * u + y);
+  // With a rate law a held input still moves the front and the rate: nothing is kept.
+  held_u_ = p_.rate_law.active() ? std::numeric_limits<double>::quiet_NaN() : u;
+  held_output_ = out;
+  return out;
 }
 
 double PreisachModel::peek(double u) const noexcept {
@@ -209,6 +216,7 @@ std::unique_ptr<HysteresisModel> PreisachModel::rate_free_part() const {
 }
 
 void PreisachModel::reset(double u0) noexcept {
+  held_u_ = std::numeric_limits<double>::quiet_NaN();
   rate_.reset(u0);
   front_ = u0;
   memory_.n = 1;
@@ -236,6 +244,7 @@ void PreisachModel::step_cell_areas(double u, std::span<double> out) noexcept {
 
 void PreisachModel::step_relays(double u) noexcept {
   // As step(u), without the output's Everett value.
+  held_u_ = std::numeric_limits<double>::quiet_NaN();
   if (p_.rate_law.active() && std::isfinite(u)) front_ = front(u, rate_.step(u));
   const double x = clamp(p_.rate_law.active() ? front_ : u);
   apply(x, memory_);

@@ -130,6 +130,29 @@ TEST(PreisachModel, HasReturnPointMemoryAndSaturates) {
   EXPECT_NEAR(last, p.offset + p.slope * -10.0, 1e-9);  // below the plane: the slope alone
 }
 
+// A held input returns the output it had: step() keeps it, until anything else moves the relays
+// (step_relays(), reset()), after which the same input is stepped again: the same outputs as a
+// model stepped through the same moves.
+TEST(PreisachModel, AHeldInputKeepsItsOutputUntilTheRelaysMove) {
+  std::mt19937_64 rng(11);
+  const hc::PreisachParameters p = random_parameters(rng, 10);
+  hc::PreisachModel m(p), stepped(p);
+  m.reset(0.0);
+  stepped.reset(0.0);
+  const double at_60 = m.step(60.0);
+  EXPECT_EQ(m.step(60.0), at_60);
+  EXPECT_EQ(stepped.step(60.0), at_60);
+  m.step_relays(140.0);
+  stepped.step(140.0);
+  const double back = m.step(60.0);
+  EXPECT_EQ(back, stepped.step(60.0));
+  EXPECT_GT(back, at_60 + 1e-6) << "the loop's descending branch lies above its ascending one";
+  m.reset(0.0);
+  stepped.reset(0.0);
+  EXPECT_EQ(m.step(60.0), stepped.step(60.0));
+  EXPECT_EQ(m.step(60.0), at_60);
+}
+
 TEST(PreisachModel, NamesWhatIsWrong) {
   EXPECT_THROW(hc::PreisachModel({1.0, 1.0, 2, {0.0, 0.0, 0.0}, 0.0, 0.0}), std::invalid_argument);
   EXPECT_THROW(hc::PreisachModel({0.0, 1.0, 2, {0.0, 0.0}, 0.0, 0.0}), std::invalid_argument);

@@ -83,3 +83,44 @@ TEST(ThresholdRefinement, EveryRefinedPlayMovesWithinTheFittedRows) {
   ASSERT_EQ(t.size(), s.play_thresholds.size());
   EXPECT_LT(2.0 * t.back(), 150.0) << "the top play, at " << t.back() << " V";
 }
+
+// A modified PI's output depends on the input's path alone: the refinement steps its models on
+// sample 0, the residual rows and the input's turning points only. Its errors are bit for bit
+// those of every sample stepped, before the search and after it, on a record with holds, a
+// dense small sine, a drift column, rows from a later start and a stride.
+TEST(ThresholdRefinement, APlayModelSteppedOnItsTurningPointsErrsAsOnEverySample) {
+  std::vector<double> u;
+  for (int cycle = 0; cycle < 3; ++cycle) {
+    for (int k = 0; k <= 300; ++k) u.push_back(140.0 * k / 300.0);
+    u.insert(u.end(), 200, 140.0);  // a hold at the top
+    for (int k = 300; k >= 0; --k) u.push_back(10.0 + (130.0 - 30.0 * cycle) * k / 300.0);
+    for (int k = 0; k < 400; ++k) u.push_back(u.back() + 3.0 * std::sin(0.7 * k));
+  }
+  hc::PiModel truth(hc::PiParameters{{0.0, 15.0, 35.0, 60.0}, {0.25, 0.1, 0.06, 0.04}, 2.0});
+  truth.reset(u.front());
+  std::vector<double> y;
+  for (std::size_t k = 0; k < u.size(); ++k) {
+    const double x = truth.step(u[k]);
+    y.push_back(x + 2e-4 * x * x + 1e-3 * static_cast<double>(k) + 0.01 * std::sin(1.3 * k));
+  }
+  hd::ModelStructure s;
+  s.kind = hc::ModelKind::kModifiedPi;
+  s.dt = 1e-3;
+  s.play_thresholds = {0.0, 12.0, 30.0, 50.0, 65.0};
+  s.input_reference = 75.0;
+  s.center = 25.0;
+  s.dead_zone_thresholds = {-20.0, -8.0, 0.0, 10.0, 22.0};
+  s.min_play_slope = 1e-3;
+  s.min_dead_zone_slope = 1e-3;
+  s.drift = true;
+  hd::RefinementSettings settings;
+  settings.max_rows = 700;  // a stride of 4 over the rows below
+  const std::size_t begin = 350;
+  const std::size_t stride = (u.size() - begin + settings.max_rows - 1) / settings.max_rows;
+  ASSERT_GT(stride, 1U);
+  const hd::RefinementRecord rec{u, y, begin, u.size(), stride};
+  const hd::RefinementResult r = hd::refine_structure(s, {u, y, begin, u.size(), 1}, settings);
+  EXPECT_EQ(r.initial_rmse, hd::structure_rmse(s, rec));
+  ASSERT_LT(r.final_rmse, r.initial_rmse);  // the search ran and kept its result
+  EXPECT_EQ(r.final_rmse, hd::structure_rmse(r.structure, rec));
+}

@@ -137,6 +137,9 @@ class Design {
   /// Steps the operators with input u as row() does, without the regressors: a sample the fit
   /// leaves out (the rows after it are the same as when row() stepped it).
   void skip(double u) noexcept { (void)step(u, 0.0, nullptr); }
+  /// Makes the next row() or skip() the record's sample k (the drift column's clock), for a
+  /// record stepped on some of its samples only.
+  void set_sample(std::size_t k) noexcept { sample_ = k; }
 
   Eigen::VectorXd lower_bounds() const;
   Eigen::VectorXd upper_bounds() const;

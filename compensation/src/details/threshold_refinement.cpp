@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <optional>
 #include <unsupported/Eigen/LevenbergMarquardt>
+#include <vector>
 
+#include "details/constrained_lsq.hpp"
 #include "details/forward_difference.hpp"
 
 namespace hystbench::compensation::details {
@@ -122,11 +125,83 @@ class Packing {
   Eigen::Index scales_ = 0;
 };
 
-// Output error of the structure with its weights fitted by constrained least squares.
-void output_residuals(const ModelStructure& s, const RefinementRecord& rec, double* f) {
+// The samples a refinement steps its models on: every one up to the record's end, or, where the
+// structure's output depends on the input's path alone, sample 0, each residual row and each
+// turning point of the input (thin_path()).
+struct ResidualPath {
+  std::vector<double> u, y;
+  std::vector<std::size_t> sample;  // the record's sample of each
+  std::vector<std::size_t> rows;    // where the residual rows are among them, in order
+};
+
+// A classical or modified PI without creep lags: rate-independent plays and memoryless dead
+// zones. Along a monotone run of the input each play steps to the same state from the run's last
+// sample alone (max and min are exact in floating point), so such a model's output at a kept
+// sample is bit for bit the output stepped on every sample.
+bool path_decides_output(const ModelStructure& s) {
+  return (s.kind == ModelKind::kPi || s.kind == ModelKind::kModifiedPi) &&
+         s.creep_time_constants.empty();
+}
+
+// Sample 0, the residual rows and the input's turning points (a sample after which the input
+// moves the other way than it last moved; plateaus step nothing) up to the record's end.
+ResidualPath thin_path(const RefinementRecord& rec) {
+  ResidualPath p;
+  int last_move = 0;  // -1, 0, +1: the sign of the last nonzero input step
+  for (std::size_t k = 0; k < rec.end; ++k) {
+    const bool row = k >= rec.begin && (k - rec.begin) % rec.stride == 0;
+    const double next = k + 1 < rec.end ? rec.u[k + 1] - rec.u[k] : 0.0;
+    const int move = (next > 0.0) - (next < 0.0);
+    const bool turns = move != 0 && last_move != 0 && move != last_move;
+    if (move != 0) last_move = move;
+    if (k != 0 && !row && !turns) continue;
+    if (row) p.rows.push_back(p.u.size());
+    p.u.push_back(rec.u[k]);
+    p.y.push_back(rec.y[k]);
+    p.sample.push_back(k);
+  }
+  return p;
+}
+
+// fit_design() over a thinned path: the same rows, the operators stepped on its samples only.
+BoundedLsqResult fit_on_path(Design& design, const ResidualPath& p) {
+  NormalEquations ne(design.unknowns());
+  design.reset(p.u[0]);
+  std::size_t next_row = 0;
+  for (std::size_t j = 0; j < p.u.size(); ++j) {
+    design.set_sample(p.sample[j]);
+    if (next_row < p.rows.size() && p.rows[next_row] == j) {
+      ne.push(design.row(p.u[j], p.y[j], ne.row()));
+      ++next_row;
+    } else {
+      design.skip(p.u[j]);
+    }
+  }
+  Eigen::MatrixXd g = ne.gram();
+  design.add_penalty(g);
+  return solve_bounded_lsq(g, ne.rhs(), design.lower_bounds(), design.upper_bounds());
+}
+
+// Output error of the structure with its weights fitted by constrained least squares; on `path`
+// where one is given (path_decides_output() of the structure), else on every sample.
+void output_residuals(const ModelStructure& s, const RefinementRecord& rec, double* f,
+                      const ResidualPath* path = nullptr) {
   const std::size_t n = rec.residuals();
   try {
     Design design(s);
+    if (path != nullptr) {
+      const BoundedLsqResult fit = fit_on_path(design, *path);
+      ActuatorModel model = design.build(fit.x);
+      const std::vector<double> yhat = model.simulate(path->u, s.dt);
+      const double drift = s.drift ? fit.x[design.drift_column()] : 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t j = path->rows[i];
+        const double predicted =
+            s.drift ? yhat[j] + drift * s.drift_time_s(path->sample[j]) : yhat[j];
+        f[i] = path->y[j] - predicted;
+      }
+      return;
+    }
     const BoundedLsqResult fit = fit_design(design, rec.u, rec.y, rec.begin, rec.end, rec.stride);
     ActuatorModel model = design.build(fit.x);
     std::vector<double> yhat = model.simulate(rec.u.first(rec.end), s.dt);
@@ -141,16 +216,18 @@ void output_residuals(const ModelStructure& s, const RefinementRecord& rec, doub
 }
 
 struct Residuals : Eigen::DenseFunctor<double> {
-  Residuals(const Packing& packing, const RefinementRecord& record, int* evaluations)
+  Residuals(const Packing& packing, const RefinementRecord& record, const ResidualPath* path,
+            int* evaluations)
       : Eigen::DenseFunctor<double>(static_cast<int>(packing.size()),
                                     static_cast<int>(record.residuals())),
         packing_(packing),
         record_(record),
+        path_(path),
         evaluations_(evaluations) {}
 
   int operator()(const InputType& theta, ValueType& f) const {
     ++*evaluations_;
-    output_residuals(packing_.unpack(theta), record_, f.data());
+    output_residuals(packing_.unpack(theta), record_, f.data(), path_);
     return 0;
   }
 
@@ -163,8 +240,16 @@ struct Residuals : Eigen::DenseFunctor<double> {
 
   const Packing& packing_;
   const RefinementRecord& record_;
+  const ResidualPath* path_;
   int* evaluations_;
 };
+
+double path_rmse(const ModelStructure& s, const RefinementRecord& record,
+                 const ResidualPath* path) {
+  Eigen::VectorXd f(static_cast<Eigen::Index>(record.residuals()));
+  output_residuals(s, record, f.data(), path);
+  return f.size() > 0 ? std::sqrt(f.squaredNorm() / static_cast<double>(f.size())) : 0.0;
+}
 
 }  // namespace
 
@@ -175,9 +260,7 @@ double next_threshold(double previous, double log_gap, double min_gap, double ma
 double min_threshold_gap(double span) noexcept { return 1e-6 * std::max(std::abs(span), 1.0); }
 
 double structure_rmse(const ModelStructure& s, const RefinementRecord& record) {
-  Eigen::VectorXd f(static_cast<Eigen::Index>(record.residuals()));
-  output_residuals(s, record, f.data());
-  return f.size() > 0 ? std::sqrt(f.squaredNorm() / static_cast<double>(f.size())) : 0.0;
+  return path_rmse(s, record, nullptr);
 }
 
 RefinementResult refine_structure(const ModelStructure& s, const RefinementRecord& full,
@@ -188,11 +271,15 @@ RefinementResult refine_structure(const ModelStructure& s, const RefinementRecor
       1, (rows + settings.max_rows - 1) / std::max<std::size_t>(1, settings.max_rows));
   RefinementResult out;
   out.structure = s;
-  out.initial_rmse = out.final_rmse = structure_rmse(s, record);
+  // Every threshold the search tries keeps the structure's kind and lags: one path serves all.
+  std::optional<ResidualPath> path;
+  if (path_decides_output(s) && record.end > record.begin) path = thin_path(record);
+  const ResidualPath* on = path ? &*path : nullptr;
+  out.initial_rmse = out.final_rmse = path_rmse(s, record, on);
   const Packing packing(s, settings, record);
   if (packing.size() == 0 || record.end <= record.begin) return out;
 
-  Residuals functor(packing, record, &out.evaluations);
+  Residuals functor(packing, record, on, &out.evaluations);
   Eigen::LevenbergMarquardt<Residuals> lm(functor);
   lm.setMaxfev(settings.max_iterations);
   lm.setFtol(1e-6);
@@ -200,7 +287,7 @@ RefinementResult refine_structure(const ModelStructure& s, const RefinementRecor
   Eigen::VectorXd theta = packing.pack();
   lm.minimize(theta);
   const ModelStructure refined = packing.unpack(theta);
-  const double rmse = structure_rmse(refined, record);
+  const double rmse = path_rmse(refined, record, on);
   if (rmse < out.initial_rmse) {
     out.structure = refined;
     out.final_rmse = rmse;

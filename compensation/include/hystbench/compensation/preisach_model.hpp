@@ -27,6 +27,7 @@
 // allocation).
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <span>
 #include <vector>
@@ -138,6 +139,10 @@ class PreisachModel final : public HysteresisModel {
   double u_ = 0.0;      // the relays' last input (the front), clamped to the plane
   double front_ = 0.0;  // the front, unclamped (rate law)
   RateEstimator rate_;  // |du/dt| as the rate law reads it
+  // step()'s last input and output without a rate law: a held input (a record's holds) moves no
+  // relay, and its output is returned as it was. NaN after anything else moved the relays.
+  double held_u_ = std::numeric_limits<double>::quiet_NaN();
+  double held_output_ = 0.0;
 };
 
 }  // namespace hystbench::compensation
