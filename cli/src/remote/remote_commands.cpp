@@ -187,12 +187,19 @@ void print_planned_feedforward(std::ostream& out, const json& p) {
 // without the key (kept before the daemon wrote it) counts as a model's.
 bool model_predicted(const json& r) { return r.value("y_model_from", "model") == "model"; }
 
-// The bench's output against the model's prediction over the run.
+// The bench's output against the model's prediction over the run; where the result gives the
+// mean, the rms about it too (an offset apart: the creep since identify, say).
 void print_model_error(std::ostream& out, const json& r) {
   out << "  model vs bench  rms " << fixed(r["model_rms_error_um"], 4) << " um ("
-      << fixed(r["model_rms_error_percent"], 3) << " %)   max " << fixed(r["model_max_error_um"], 4)
-      << " um (" << fixed(r["model_max_error_percent"], 3) << " %"
-      << at_index(r, "model_max_error_index")
+      << fixed(r["model_rms_error_percent"], 3) << " %)";
+  if (r.contains("model_mean_error_um")) {
+    const double rms = r["model_rms_error_um"].get<double>();
+    const double mean = r["model_mean_error_um"].get<double>();
+    out << ", mean " << fixed(mean, 4) << " um and "
+        << fixed(std::sqrt(std::max(0.0, rms * rms - mean * mean)), 4) << " um about it";
+  }
+  out << "   max " << fixed(r["model_max_error_um"], 4) << " um ("
+      << fixed(r["model_max_error_percent"], 3) << " %" << at_index(r, "model_max_error_index")
       << "): y - y_model (y_model: " << r.value("y_model", std::string("?")) << ")\n";
 }
 

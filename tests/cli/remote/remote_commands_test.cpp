@@ -178,8 +178,15 @@ TEST(PrintRunResult, GivesTheModelErrorOnlyWhereAModelPredicted) {
   r["y_model_from"] = "model";
   std::ostringstream model;
   cli::print_run_result(r, model);
-  EXPECT_NE(model.str().find("model vs bench  rms 2.5500 um (4.200 %)"), std::string::npos)
+  EXPECT_NE(model.str().find("model vs bench  rms 2.5500 um (4.200 %)   max"), std::string::npos)
       << model.str();
+  // With its mean, the rms about it: sqrt(2.55^2 - 2.4^2) = 0.8617.
+  r["model_mean_error_um"] = 2.4;
+  std::ostringstream offset;
+  cli::print_run_result(r, offset);
+  EXPECT_NE(offset.str().find("rms 2.5500 um (4.200 %), mean 2.4000 um and 0.8617 um about it"),
+            std::string::npos)
+      << offset.str();
   const nlohmann::json stage = {{"run_id", "r4"},
                                 {"end", "completed"},
                                 {"axes", {{"x", {{"model_rms_error_um", 2.55}}}}},

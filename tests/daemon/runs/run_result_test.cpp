@@ -44,6 +44,8 @@ TEST(RunResult, ReportsTheOutcomeCountersSummaryAndTheModelsError) {
   EXPECT_DOUBLE_EQ(j["model_rms_error_percent"].get<double>(), 10.0);
   EXPECT_DOUBLE_EQ(j["model_max_error_percent"].get<double>(), 15.0);
   EXPECT_EQ(j["model_max_error_index"], 2);
+  // The mean apart: (1 - 0.5 - 1.5 + sqrt(0.5)) / 4.
+  EXPECT_DOUBLE_EQ(j["model_mean_error_um"].get<double>(), (std::sqrt(0.5) - 1.0) / 4.0);
 }
 
 TEST(RunResult, OnlyACompletedIdentifyWithARecordWantsAFit) {

@@ -274,10 +274,15 @@ TEST_F(BenchRateDependenceTest, WithoutRateDependenceTodaysFiguresHoldAndEverySa
   for (std::size_t k = 0; k < y_model.size(); ++k) ASSERT_TRUE(std::isfinite(y_model[k])) << k;
   const json header = hd::read_sample_log_header(inv["log"].get<std::string>());
   const auto from = header["run"]["metrics_from"].get<std::size_t>();
-  double sum2 = 0.0;
-  for (std::size_t k = from; k < y.size(); ++k) sum2 += (y[k] - y_model[k]) * (y[k] - y_model[k]);
+  double sum = 0.0, sum2 = 0.0;
+  for (std::size_t k = from; k < y.size(); ++k) {
+    sum += y[k] - y_model[k];
+    sum2 += (y[k] - y_model[k]) * (y[k] - y_model[k]);
+  }
   const double rms_from_log = std::sqrt(sum2 / static_cast<double>(y.size() - from));
   EXPECT_NEAR(rms_from_log, inv["model_rms_error_um"].get<double>(),
+              1e-3 * inv["model_rms_error_um"].get<double>());
+  EXPECT_NEAR(sum / static_cast<double>(y.size() - from), inv["model_mean_error_um"].get<double>(),
               1e-3 * inv["model_rms_error_um"].get<double>());
   EXPECT_LT(inv["model_rms_error_percent"].get<double>(), 2.0) << inv.dump(2);
 

@@ -15,7 +15,8 @@ using nlohmann::json;
 namespace {
 
 // The simulation's error on the bench: y - y_model over the scored samples, in µm and in % of
-// the output range the run covered (the reference's for a tracking run).
+// the output range the run covered (the reference's for a tracking run); its mean apart, an
+// offset the model does not hold (the creep since identify, which a track's tare takes off).
 void add_model_error(const RunProgram& run, json& report) {
   const std::size_t n = run.records.count;
   if (run.model_error.samples == 0 || n <= 2) return;
@@ -27,6 +28,8 @@ void add_model_error(const RunProgram& run, json& report) {
   report["model_rms_error_percent"] = compensation::percent_of_range(rms, range);
   report["model_max_error_percent"] = compensation::percent_of_range(run.model_error.max, range);
   report["model_max_error_index"] = run.model_error.max_index;
+  report["model_mean_error_um"] =
+      run.model_error.sum / static_cast<double>(run.model_error.samples);
 }
 
 // A drive learned before whose lead-in ended before its longest: the header's metrics_from is

@@ -20,7 +20,8 @@ void replace_with_stage_result(json& report, const RunProgram& run,
        {"rms_error_um", "max_error_um", "max_error_index", "range_um", "rms_error_percent",
         "max_error_percent", "hysteresis_percent", "error_samples", "tare_um", "startup_offset_um",
         "step", "model_rms_error_um", "model_max_error_um", "model_rms_error_percent",
-        "model_max_error_percent", "model_max_error_index", "feedback", "feedforward"}) {
+        "model_max_error_percent", "model_max_error_index", "model_mean_error_um", "feedback",
+        "feedforward"}) {
     report.erase(key);
   }
   report.update(stage_result(run, axes));
@@ -36,6 +37,7 @@ json stage_result(const RunProgram& run, std::span<const std::string> axes) {
       const double rms = std::sqrt(p.model_error.sum2 / static_cast<double>(p.model_error.samples));
       r["model_rms_error_um"] = rms;
       r["model_max_error_um"] = p.model_error.max;
+      r["model_mean_error_um"] = p.model_error.sum / static_cast<double>(p.model_error.samples);
     }
     // What the axis's compensator was built with (its feedforward's plan, its loop's design).
     for (const char* key : {"feedforward", "feedback"}) {

@@ -50,12 +50,13 @@ struct RunCounters {
 
 /// An error's running figures over its scored samples [µm] (written by the loop).
 struct ErrorFigures {
-  double sum2 = 0.0, max = 0.0;
+  double sum = 0.0, sum2 = 0.0, max = 0.0;
   std::uint64_t samples = 0;
   std::uint64_t max_index = 0;  ///< the run sample (the log's `index`) where `max` fell
 
   /// Adds one scored sample's error e at run sample k. Real-time safe.
   void add(double e, std::uint64_t k) noexcept {
+    sum += e;
     sum2 += e * e;
     if (std::abs(e) > max) max = std::abs(e), max_index = k;
     ++samples;
