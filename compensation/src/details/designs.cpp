@@ -364,6 +364,10 @@ BoundedLsqResult fit_design(Design& design, std::span<const double> u, std::span
       }
     }
   }
+  return solve_design(design, ne);
+}
+
+BoundedLsqResult solve_design(const Design& design, NormalEquations& ne) {
   Eigen::MatrixXd g = ne.gram();
   design.add_penalty(g);
   return solve_bounded_lsq(g, ne.rhs(), design.lower_bounds(), design.upper_bounds());

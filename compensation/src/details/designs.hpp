@@ -194,4 +194,8 @@ class Design {
 BoundedLsqResult fit_design(Design& design, std::span<const double> u, std::span<const double> y,
                             std::size_t begin, std::size_t end, std::size_t stride = 1);
 
+/// The design's unknowns from the normal equations of its rows: its penalty added, bounded to
+/// its limits.
+BoundedLsqResult solve_design(const Design& design, NormalEquations& ne);
+
 }  // namespace hystbench::compensation::details

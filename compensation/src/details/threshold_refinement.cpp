@@ -177,9 +177,7 @@ BoundedLsqResult fit_on_path(Design& design, const ResidualPath& p) {
       design.skip(p.u[j]);
     }
   }
-  Eigen::MatrixXd g = ne.gram();
-  design.add_penalty(g);
-  return solve_bounded_lsq(g, ne.rhs(), design.lower_bounds(), design.upper_bounds());
+  return solve_design(design, ne);
 }
 
 // Output error of the structure with its weights fitted by constrained least squares; on `path`

@@ -130,7 +130,7 @@ nlohmann::json tracking_error_json(const RunProgram& run) {
   if (n <= 2) return r;
   std::span<const double> yr(run.records.yr.data(), n), y(run.records.y.data(), n);
   const hc::ErrorStats e = hc::error_stats(yr, y);  // range = reference span
-  const double rms = run.error.samples ? std::sqrt(run.error.sum2 / run.error.samples) : 0.0;
+  const double rms = run.error.rms();
   r["rms_error_um"] = rms;
   r["max_error_um"] = run.error.max;
   r["max_error_index"] = run.error.max_index;

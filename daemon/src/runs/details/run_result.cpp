@@ -22,14 +22,13 @@ void add_model_error(const RunProgram& run, json& report) {
   if (run.model_error.samples == 0 || n <= 2) return;
   const auto [lo, hi] = std::minmax_element(run.records.y.begin(), run.records.y.begin() + n);
   const double range = report.contains("range_um") ? report["range_um"].get<double>() : *hi - *lo;
-  const double rms = std::sqrt(run.model_error.sum2 / run.model_error.samples);
+  const double rms = run.model_error.rms();
   report["model_rms_error_um"] = rms;
   report["model_max_error_um"] = run.model_error.max;
   report["model_rms_error_percent"] = compensation::percent_of_range(rms, range);
   report["model_max_error_percent"] = compensation::percent_of_range(run.model_error.max, range);
   report["model_max_error_index"] = run.model_error.max_index;
-  report["model_mean_error_um"] =
-      run.model_error.sum / static_cast<double>(run.model_error.samples);
+  report["model_mean_error_um"] = run.model_error.mean();
 }
 
 // A drive learned before whose lead-in ended before its longest: the header's metrics_from is

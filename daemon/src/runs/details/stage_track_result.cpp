@@ -34,10 +34,9 @@ json stage_result(const RunProgram& run, std::span<const std::string> axes) {
     json r = run.kind == RunKind::kTrack ? tracking_error_json(p) : json::object();
     // identify's prediction is the configured range's linear map, not a model: left out.
     if (run.kind == RunKind::kTrack && p.model_error.samples > 0) {
-      const double rms = std::sqrt(p.model_error.sum2 / static_cast<double>(p.model_error.samples));
-      r["model_rms_error_um"] = rms;
+      r["model_rms_error_um"] = p.model_error.rms();
       r["model_max_error_um"] = p.model_error.max;
-      r["model_mean_error_um"] = p.model_error.sum / static_cast<double>(p.model_error.samples);
+      r["model_mean_error_um"] = p.model_error.mean();
     }
     // What the axis's compensator was built with (its feedforward's plan, its loop's design).
     for (const char* key : {"feedforward", "feedback"}) {

@@ -61,6 +61,12 @@ struct ErrorFigures {
     if (std::abs(e) > max) max = std::abs(e), max_index = k;
     ++samples;
   }
+  /// The mean error [µm]; 0 before any sample.
+  double mean() const noexcept { return samples > 0 ? sum / static_cast<double>(samples) : 0.0; }
+  /// The rms error [µm]; 0 before any sample.
+  double rms() const noexcept {
+    return samples > 0 ? std::sqrt(sum2 / static_cast<double>(samples)) : 0.0;
+  }
 };
 
 struct RunProgram {
