@@ -224,10 +224,9 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
   NormalEquations ne(unknowns);
   std::vector<double> scratch(static_cast<std::size_t>(unknowns));
   design.reset(ud[0]);
-  std::size_t fit_index = 0;
+  EveryNth fit_rows(stride);
   for (std::size_t k = 0; k < r.n; ++k) {
-    bool use = r.fit_row(k);
-    if (use) use = fit_index++ % stride == 0;
+    bool use = r.fit_row(k) && fit_rows.take();
     if (use && rate_cap && k > 0 && std::abs(ud[k] - ud[k - 1]) > max_step) use = false;
     if (!use && !filters.active()) {
       // Nothing reads the row: the operators step alone (a cached row is not needed at all).
@@ -349,9 +348,9 @@ Joint fit_alternating(const DiagnosisRecord& r, const ExtensionSpec& spec, FitRo
     out = fit_joint(r, target, hysteresis, rows, nullptr);
     const std::vector<double> h = ActuatorModel(out.model).simulate(r.u, r.dt);
     NormalEquations ne(static_cast<Eigen::Index>(unknowns));
-    std::size_t fit_index = 0;
+    EveryNth fit_rows(stride);
     for (std::size_t k = 0; k < r.n; ++k) {
-      if (!r.fit_row(k) || fit_index++ % stride != 0) continue;
+      if (!r.fit_row(k) || !fit_rows.take()) continue;
       double* row = ne.row();
       for (std::size_t j = 0; j < nc; ++j) row[j] = lags[j][k];
       drift.row(k, row + nc);

@@ -18,6 +18,25 @@ enum Part : unsigned char {
   kSkippedPart = 2,  ///< start-up: simulated, neither fitted nor scored
 };
 
+/// Takes every stride-th of the rows it is asked about: the first, then each stride-th after it
+/// (a search's rows among the fit rows), without a division per sample.
+class EveryNth {
+ public:
+  explicit EveryNth(std::size_t stride) noexcept : stride_(stride > 0 ? stride : 1) {}
+  bool take() noexcept {
+    if (left_ > 0) {
+      --left_;
+      return false;
+    }
+    left_ = stride_ - 1;
+    return true;
+  }
+
+ private:
+  std::size_t stride_;
+  std::size_t left_ = 0;
+};
+
 struct DiagnosisRecord {
   std::span<const double> t, u, y;
   std::size_t n = 0;

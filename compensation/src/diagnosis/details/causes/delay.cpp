@@ -18,10 +18,10 @@ constexpr double kMaxDelaySeconds = 0.02;
 // Mean square error of y(k) ~ a x(k - s) + b over the search rows.
 double shifted_mse(const DiagnosisRecord& r, std::span<const double> x, long s) {
   double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
-  std::size_t fit_index = 0;
+  EveryNth search_rows(r.search_stride);
   const auto last = static_cast<long>(r.n) - 1;
   for (std::size_t k = 0; k < r.n; ++k) {
-    if (!r.fit_row(k) || fit_index++ % r.search_stride != 0) continue;
+    if (!r.fit_row(k) || !search_rows.take()) continue;
     const long j = std::clamp(static_cast<long>(k) - s, 0L, last);
     const double v = x[static_cast<std::size_t>(j)], y = r.y[k];
     n += 1, sx += v, sy += y, sxx += v * v, sxy += v * y, syy += y * y;

@@ -16,6 +16,7 @@
 #include <optional>
 #include <utility>
 
+#include "details/line_minimum.hpp"
 #include "diagnosis/details/candidates.hpp"
 
 namespace hystbench::compensation::details {
@@ -33,16 +34,20 @@ constexpr double kOffPeak = 1.15, kOffPeakDamping = 2.0;
 // The variable projection's rounds end at a round that lowers the joint error by less than this
 // fraction of it.
 constexpr double kProjectionGain = 1e-4;
+// The line searches' resolution in log frequency (0.1 %) and log damping (0.3 %), and their
+// most evaluations.
+constexpr double kLogFrequencyTolerance = 1e-3, kLogDampingTolerance = 3e-3;
+constexpr int kMaxLineEvaluations = 16;
 
 // Mean square error of y ~ D[x] + b over the search rows (unit DC gain, as in the model).
 double filtered_mse(const DiagnosisRecord& r, std::span<const double> x, double fn, double zeta) {
   SecondOrderDynamics d({fn, zeta}, r.dt);
   d.reset(x[0]);
   double n = 0, sd = 0, sy = 0, sdd = 0, sdy = 0, syy = 0;  // sums over the rows
-  std::size_t fit_index = 0;
+  EveryNth search_rows(r.search_stride);
   for (std::size_t k = 0; k < r.n; ++k) {
     const double v = d.step(x[k]);
-    if (!r.fit_row(k) || fit_index++ % r.search_stride != 0) continue;
+    if (!r.fit_row(k) || !search_rows.take()) continue;
     const double y = r.y[k];
     n += 1, sd += v, sy += y, sdd += v * v, sdy += v * y, syy += y * y;
   }
@@ -52,25 +57,28 @@ double filtered_mse(const DiagnosisRecord& r, std::span<const double> x, double 
   return std::max(0.0, se / n - me * me);
 }
 
-// Golden-section search of f on [a, b] (a few evaluations; f roughly unimodal there).
-template <class F>
-double golden(F f, double a, double b, int iterations) {
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  double c = b - g * (b - a), d = a + g * (b - a);
-  double fc = f(c), fd = f(d);
-  for (int i = 0; i < iterations; ++i) {
-    if (fc < fd) {
-      b = d, d = c, fd = fc, c = b - g * (b - a), fc = f(c);
-    } else {
-      a = c, c = d, fc = fd, d = a + g * (b - a), fd = f(d);
-    }
-  }
-  return fc < fd ? c : d;
-}
-
 struct Resonance {
   double fn = 0.0, zeta = 0.0, mse = std::numeric_limits<double>::infinity();
 };
+
+// `best` moved to the minimum of mse(fn, best.zeta) over fn in [f_lo, f_hi], on log fn (its
+// error best.mse known).
+template <class Mse>
+Resonance along_frequency(const Mse& mse, Resonance best, double f_lo, double f_hi) {
+  const LineMinimum m = line_minimum([&](double l) { return mse(std::exp(l), best.zeta); },
+                                     std::log(f_lo), std::log(f_hi), std::log(best.fn), best.mse,
+                                     kLogFrequencyTolerance, kMaxLineEvaluations);
+  return {std::exp(m.x), best.zeta, m.value};
+}
+
+// `best` moved to the minimum of mse(best.fn, zeta) over zeta in [z_lo, z_hi], on log zeta.
+template <class Mse>
+Resonance along_damping(const Mse& mse, Resonance best, double z_lo, double z_hi) {
+  const LineMinimum m = line_minimum([&](double l) { return mse(best.fn, std::exp(l)); },
+                                     std::log(z_lo), std::log(z_hi), std::log(best.zeta), best.mse,
+                                     kLogDampingTolerance, kMaxLineEvaluations);
+  return {best.fn, std::exp(m.x), m.value};
+}
 
 Resonance search(const DiagnosisRecord& r, std::span<const double> x, double f_lo, double f_hi,
                  std::optional<Resonance> start) {
@@ -87,45 +95,34 @@ Resonance search(const DiagnosisRecord& r, std::span<const double> x, double f_l
     best = *start;
   }
   // Refine: log frequency within one grid step, then log damping, then frequency again.
+  if (start) best.mse = filtered_mse(r, x, best.fn, best.zeta);  // start's error on another x
   for (int round = 0; round < 2; ++round) {
-    const double zeta = best.zeta;
-    const double lf = golden([&](double l) { return filtered_mse(r, x, std::exp(l), zeta); },
-                             std::log(std::max(f_lo, best.fn / step)),
-                             std::log(std::min(f_hi, best.fn * step)), 12);
-    best.fn = std::exp(lf);
-    const double fn = best.fn;
-    const double lz = golden([&](double l) { return filtered_mse(r, x, fn, std::exp(l)); },
-                             std::log(std::max(kZetaMin, best.zeta / 2.5)),
-                             std::log(std::min(kZetaMax, best.zeta * 2.5)), 12);
-    best.zeta = std::exp(lz);
+    best = along_frequency([&](double fn, double zeta) { return filtered_mse(r, x, fn, zeta); },
+                           best, std::max(f_lo, best.fn / step), std::min(f_hi, best.fn * step));
+    best = along_damping([&](double fn, double zeta) { return filtered_mse(r, x, fn, zeta); }, best,
+                         std::max(kZetaMin, best.zeta / 2.5), std::min(kZetaMax, best.zeta * 2.5));
   }
-  best.mse = filtered_mse(r, x, best.fn, best.zeta);
   return best;
 }
 
 // Variable projection (DynamicsSearch): for a fixed (fn, zeta) every other unknown is linear, so
 // the joint fit's error is a function of those two alone. It is minimised over log fn and log
-// zeta by alternating golden-section searches in shrinking brackets; this fits the resonance with
-// the weights free, where the search above filters a fixed baseline prediction (whose weights
-// have already absorbed part of the resonance, which biases fn low and zeta high). The rounds
-// stop once one lowers the error by less than kProjectionGain of it: each round costs some 25
-// joint fits over the whole record, and past that point the mode moves by tenths of a percent.
+// zeta by alternating line searches in shrinking brackets; this fits the resonance with the
+// weights free, where the search above filters a fixed baseline prediction (whose weights have
+// already absorbed part of the resonance, which biases fn low and zeta high). The rounds stop
+// once one lowers the error by less than kProjectionGain of it: each evaluation is a joint fit
+// over the whole record, and past that point the mode moves by less than the searches resolve.
+// `start`'s error is evaluated unless it is known (finite).
 Resonance project(const DynamicsSearch& j, Resonance start, double f_lo, double f_hi) {
   Resonance best = start;
-  best.mse = j(best.fn, best.zeta);
+  if (!std::isfinite(best.mse)) best.mse = j(best.fn, best.zeta);
   double f_span = 1.15, z_span = 2.0;  // bracket half-widths (factors)
   for (int round = 0; round < 4; ++round) {
     const double before = best.mse;
-    const double zeta = best.zeta;
-    const double lf = golden([&](double l) { return j(std::exp(l), zeta); },
-                             std::log(std::max(f_lo, best.fn / f_span)),
-                             std::log(std::min(f_hi, best.fn * f_span)), 10);
-    const double fn = std::exp(lf);
-    const double lz = golden([&](double l) { return j(fn, std::exp(l)); },
-                             std::log(std::max(kZetaMin, best.zeta / z_span)),
-                             std::log(std::min(kZetaMax, best.zeta * z_span)), 10);
-    const double mse = j(fn, std::exp(lz));
-    if (mse < best.mse) best = {fn, std::exp(lz), mse};
+    best = along_frequency(j, best, std::max(f_lo, best.fn / f_span),
+                           std::min(f_hi, best.fn * f_span));
+    best = along_damping(j, best, std::max(kZetaMin, best.zeta / z_span),
+                         std::min(kZetaMax, best.zeta * z_span));
     if (before - best.mse <= kProjectionGain * before) break;
     f_span = std::sqrt(f_span), z_span = std::sqrt(z_span);
   }
@@ -209,7 +206,7 @@ std::optional<DynamicsParameters> project_resonance(const DiagnosisRecord& r,
   if (alternates(spec)) return std::nullopt;
   const DynamicsSearch joint(r, spec);
   const Resonance best = project(
-      joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio, 0.0}, f_lo, f_hi);
+      joint, {spec.dynamics->natural_frequency_hz, spec.dynamics->damping_ratio}, f_lo, f_hi);
   return moved_to(*spec.dynamics, best);
 }
 
