@@ -144,19 +144,18 @@ double output_error(const PeriodicSpectra& s, const CrossSpectra& c, const Eigen
                     const std::vector<Eigen::VectorXd>& b, Eigen::Index N) {
   const auto m = static_cast<Eigen::Index>(s.inputs()), p = static_cast<Eigen::Index>(s.outputs());
   double cost = 0.0;
+  Eigen::VectorXcd zl(N + 1);  // z^-l, l = 0..N
+  Eigen::VectorXcd g(m);       // row i of G at z
   for (std::size_t q = 0; q < c.k.size(); ++q) {
-    const cd z = s.z(c.k[q]);
-    Eigen::VectorXcd zl(N + 1);
+    const cd z_inverse = 1.0 / s.z(c.k[q]);
     zl(0) = 1.0;
-    for (Eigen::Index l = 1; l <= N; ++l) zl(l) = zl(l - 1) / z;
-    const cd den = 1.0 + (a.cast<cd>().array() * zl.tail(N).array()).sum();
+    for (Eigen::Index l = 1; l <= N; ++l) zl(l) = zl(l - 1) * z_inverse;
+    // dot() conjugates its left side: real coefficients there, the powers of z on the right.
+    const cd den_inverse = 1.0 / (1.0 + a.cast<cd>().dot(zl.tail(N)));
     for (Eigen::Index i = 0; i < p; ++i) {
-      Eigen::VectorXcd g(m);  // row i of G at z
       for (Eigen::Index j = 0; j < m; ++j) {
-        g(j) = (b[static_cast<std::size_t>(i)].segment(j * (N + 1), N + 1).cast<cd>().array() *
-                zl.array())
-                   .sum() /
-               den;
+        g(j) = b[static_cast<std::size_t>(i)].segment(j * (N + 1), N + 1).cast<cd>().dot(zl) *
+               den_inverse;
       }
       // |Y - g U|^2 summed over r: yy - 2 Re(sum_j g_j conj(yu_ij)... ) + g^H uu^T g.
       const cd cross = (g.array() * c.yu[q].row(i).transpose().array()).sum();
@@ -256,12 +255,20 @@ MimoLinearModel residues(const PeriodicSpectra& s, const CrossSpectra& c,
   const Eigen::Index n = m * nq;  // unknowns per output: (j, q)
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, p);
+  Eigen::MatrixXd pp_re(nq, nq), pp_im(nq, nq);
   for (std::size_t q = 0; q < c.k.size(); ++q) {
     const Eigen::VectorXcd psi = MimoLinearModel::basis(poles, s.z(c.k[q]));
-    const Eigen::MatrixXcd pp = psi.conjugate() * psi.transpose();  // conj(psi_q) psi_q'
+    // conj(psi_q) psi_q', apart in its real and imaginary parts: Re(pp u) = Re pp Re u - Im pp Im
+    // u.
+    const Eigen::VectorXd re = psi.real(), im = psi.imag();
+    pp_re.noalias() = re * re.transpose();
+    pp_re.noalias() += im * im.transpose();
+    pp_im.noalias() = re * im.transpose();
+    pp_im.noalias() -= im * re.transpose();
     for (Eigen::Index j = 0; j < m; ++j) {
       for (Eigen::Index j2 = 0; j2 < m; ++j2) {
-        a.block(j * nq, j2 * nq, nq, nq) += (pp * c.uu[q](j, j2)).real();
+        const cd u = c.uu[q](j, j2);
+        a.block(j * nq, j2 * nq, nq, nq) += u.real() * pp_re - u.imag() * pp_im;
       }
       for (Eigen::Index i = 0; i < p; ++i) {
         rhs.block(j * nq, i, nq, 1) += (psi.conjugate() * std::conj(c.yu[q](i, j))).real();
