@@ -151,6 +151,15 @@ void validate(const Eigen::MatrixXd& G, const Eigen::VectorXd& b, const Eigen::V
   }
 }
 
+// The solution of H x = r for H symmetric positive definite (the scaled problem's ridge makes it
+// so): Cholesky, blocked and several times faster than a pivoted LDL' on the hundreds of
+// unknowns of a Preisach plane; the pivoted LDL' where rounding defeats Cholesky.
+Eigen::VectorXd solve_positive_definite(const Eigen::MatrixXd& H, const Eigen::VectorXd& r) {
+  const Eigen::LLT<Eigen::MatrixXd> llt(H);
+  if (llt.info() == Eigen::Success) return llt.solve(r);
+  return H.ldlt().solve(r);
+}
+
 // The active-set iteration on the scaled problem min 0.5 x'Hx - c'x, lo <= x <= hi.
 class ActiveSet {
  public:
@@ -160,7 +169,7 @@ class ActiveSet {
 
   BoundedLsqResult run() {
     BoundedLsqResult out;
-    x_ = H_.ldlt().solve(c_);
+    x_ = solve_positive_definite(H_, c_);
     if (feasible(x_)) {
       out.x = x_;
       out.state = state_;
@@ -210,18 +219,19 @@ class ActiveSet {
     }
     const auto nf = static_cast<Eigen::Index>(free_.size());
     if (nf == 0) return true;
+    // The free unknowns' rows of c - H x_bound (x_bound: x with the free unknowns at 0), and
+    // H's free block, gathered column by column (H is column-major).
+    Eigen::VectorXd bound = x_;
+    for (const Eigen::Index i : free_) bound[i] = 0.0;
+    const Eigen::VectorXd pull = H_ * bound;
     Eigen::MatrixXd Hff(nf, nf);
     Eigen::VectorXd rhs(nf);
-    for (Eigen::Index a = 0; a < nf; ++a) {
-      const Eigen::Index i = free_[a];
-      double r = c_[i];
-      for (Eigen::Index j = 0; j < n_; ++j) {
-        if (state_[j] != BoundState::kFree) r -= H_(i, j) * x_[j];
-      }
-      rhs[a] = r;
-      for (Eigen::Index b = 0; b < nf; ++b) Hff(a, b) = H_(i, free_[b]);
+    for (Eigen::Index a = 0; a < nf; ++a) rhs[a] = c_[free_[a]] - pull[free_[a]];
+    for (Eigen::Index b = 0; b < nf; ++b) {
+      const auto column = H_.col(free_[b]);
+      for (Eigen::Index a = 0; a < nf; ++a) Hff(a, b) = column[free_[a]];
     }
-    const Eigen::VectorXd target = Hff.ldlt().solve(rhs);
+    const Eigen::VectorXd target = solve_positive_definite(Hff, rhs);
     double alpha = 1.0;
     Eigen::Index blocking = -1;
     BoundState side = BoundState::kFree;

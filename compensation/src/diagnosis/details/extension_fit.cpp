@@ -245,7 +245,7 @@ Joint fit_joint(const DiagnosisRecord& r, std::span<const double> y, const Exten
       target = design.row(ud[k], y[k], a);
     }
     filters.apply(k, row, a);
-    if (nb > 0) drift.row(k, a + nd);
+    if (use && nb > 0) drift.row(k, a + nd);  // only a fitted row reads its drift
     if (use) ne.push(target);
   }
   Eigen::VectorXd lo(unknowns), hi(unknowns);
