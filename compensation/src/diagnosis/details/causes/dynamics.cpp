@@ -9,6 +9,7 @@
 // shape error shifts the phase but does not raise the gain; a lightly damped resonance does
 // (1 / (2 zeta) at the natural frequency).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -24,7 +25,7 @@ namespace hystbench::compensation::details {
 namespace {
 
 constexpr double kDynamicsThreshold = 0.15;
-constexpr double kZetaGrid[] = {0.02, 0.07, 0.2, 0.5};
+constexpr std::array<double, 4> kZetaGrid = {0.02, 0.07, 0.2, 0.5};
 constexpr double kZetaMin = 0.003, kZetaMax = 1.0;
 constexpr int kFrequenciesPerDecade = 8;
 // A fitted resonance this far (ratio) in frequency, or in damping, from the measured response's
@@ -39,22 +40,45 @@ constexpr double kProjectionGain = 1e-4;
 constexpr double kLogFrequencyTolerance = 1e-3, kLogDampingTolerance = 3e-3;
 constexpr int kMaxLineEvaluations = 16;
 
-// Mean square error of y ~ D[x] + b over the search rows (unit DC gain, as in the model).
-double filtered_mse(const DiagnosisRecord& r, std::span<const double> x, double fn, double zeta) {
-  SecondOrderDynamics d({fn, zeta}, r.dt);
-  d.reset(x[0]);
-  double n = 0, sd = 0, sy = 0, sdd = 0, sdy = 0, syy = 0;  // sums over the rows
+// Mean square errors of y ~ D_l[x] + b_l over the search rows (unit DC gain, as in the model),
+// D_l the resonance at fn with damping zetas[l]: the L filters stepped side by side in one pass.
+template <std::size_t L>
+std::array<double, L> filtered_mses(const DiagnosisRecord& r, std::span<const double> x, double fn,
+                                    const std::array<double, L>& zetas) {
+  double p00[L], p01[L], p10[L], p11[L], g0[L], g1[L], s0[L], s1[L];
+  double sd[L] = {}, sdd[L] = {}, sdy[L] = {};  // sums over the rows, per filter
+  for (std::size_t l = 0; l < L; ++l) {
+    const SecondOrderDynamics d({fn, zetas[l]}, r.dt);
+    p00[l] = d.phi(0, 0), p01[l] = d.phi(0, 1), p10[l] = d.phi(1, 0), p11[l] = d.phi(1, 1);
+    g0[l] = d.gam(0), g1[l] = d.gam(1);
+    s0[l] = x[0], s1[l] = 0.0;  // settled at the first sample, as SecondOrderDynamics::reset
+  }
+  double n = 0, sy = 0, syy = 0;
   EveryNth search_rows(r.search_stride);
   for (std::size_t k = 0; k < r.n; ++k) {
-    const double v = d.step(x[k]);
+    for (std::size_t l = 0; l < L; ++l) {
+      const double y0 = p00[l] * s0[l] + p01[l] * s1[l] + g0[l] * x[k];
+      const double y1 = p10[l] * s0[l] + p11[l] * s1[l] + g1[l] * x[k];
+      s0[l] = y0, s1[l] = y1;
+    }
     if (!r.fit_row(k) || !search_rows.take()) continue;
     const double y = r.y[k];
-    n += 1, sd += v, sy += y, sdd += v * v, sdy += v * y, syy += y * y;
+    n += 1, sy += y, syy += y * y;
+    for (std::size_t l = 0; l < L; ++l)
+      sd[l] += s0[l], sdd[l] += s0[l] * s0[l], sdy[l] += s0[l] * y;
   }
   // sum (y - v - b)^2 with b the mean difference
-  const double se = syy - 2.0 * sdy + sdd;
-  const double me = (sy - sd) / n;
-  return std::max(0.0, se / n - me * me);
+  std::array<double, L> mse;
+  for (std::size_t l = 0; l < L; ++l) {
+    const double se = syy - 2.0 * sdy[l] + sdd[l];
+    const double me = (sy - sd[l]) / n;
+    mse[l] = std::max(0.0, se / n - me * me);
+  }
+  return mse;
+}
+
+double filtered_mse(const DiagnosisRecord& r, std::span<const double> x, double fn, double zeta) {
+  return filtered_mses<1>(r, x, fn, {zeta})[0];
 }
 
 struct Resonance {
@@ -86,9 +110,9 @@ Resonance search(const DiagnosisRecord& r, std::span<const double> x, double f_l
   const double step = std::pow(10.0, 1.0 / kFrequenciesPerDecade);
   if (!start) {
     for (double fn = f_lo; fn <= f_hi; fn *= step) {
-      for (const double zeta : kZetaGrid) {
-        const double mse = filtered_mse(r, x, fn, zeta);
-        if (mse < best.mse) best = {fn, zeta, mse};
+      const auto mses = filtered_mses(r, x, fn, kZetaGrid);
+      for (std::size_t l = 0; l < kZetaGrid.size(); ++l) {
+        if (mses[l] < best.mse) best = {fn, kZetaGrid[l], mses[l]};
       }
     }
   } else {
