@@ -1,7 +1,7 @@
 // Candidate `dynamics`: a structural resonance after the hysteresis, seen as ringing after sharp
 // reversals or steps and as a frequency-dependent gain and phase of the output against the
 // baseline prediction. Extension: second-order dynamics (natural frequency, damping) found by
-// a grid and golden-section search on the baseline prediction filtered through it, then every
+// a grid and line searches (Brent's) on the baseline prediction filtered through it, then every
 // weight refitted jointly with the dynamics applied to the regressors.
 // Statistic: the resonance peak of the measured response y/yhat: its largest gain over the
 // informative bins (coherent, above the noise) between half and twice the fitted natural
