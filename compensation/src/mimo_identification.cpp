@@ -258,8 +258,8 @@ MimoLinearModel residues(const PeriodicSpectra& s, const CrossSpectra& c,
   Eigen::MatrixXd pp_re(nq, nq), pp_im(nq, nq);
   for (std::size_t q = 0; q < c.k.size(); ++q) {
     const Eigen::VectorXcd psi = MimoLinearModel::basis(poles, s.z(c.k[q]));
-    // conj(psi_q) psi_q', apart in its real and imaginary parts: Re(pp u) = Re pp Re u - Im pp Im
-    // u.
+    // pp = conj(psi_q) psi_q', kept as its real and imaginary parts:
+    // Re(pp u) = Re(pp) Re(u) - Im(pp) Im(u).
     const Eigen::VectorXd re = psi.real(), im = psi.imag();
     pp_re.noalias() = re * re.transpose();
     pp_re.noalias() += im * im.transpose();

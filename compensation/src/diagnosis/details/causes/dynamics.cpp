@@ -16,6 +16,7 @@
 #include <numbers>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include "details/line_minimum.hpp"
 #include "diagnosis/details/candidates.hpp"
@@ -45,27 +46,22 @@ constexpr int kMaxLineEvaluations = 16;
 template <std::size_t L>
 std::array<double, L> filtered_mses(const DiagnosisRecord& r, std::span<const double> x, double fn,
                                     const std::array<double, L>& zetas) {
-  double p00[L], p01[L], p10[L], p11[L], g0[L], g1[L], s0[L], s1[L];
-  double sd[L] = {}, sdd[L] = {}, sdy[L] = {};  // sums over the rows, per filter
-  for (std::size_t l = 0; l < L; ++l) {
-    const SecondOrderDynamics d({fn, zetas[l]}, r.dt);
-    p00[l] = d.phi(0, 0), p01[l] = d.phi(0, 1), p10[l] = d.phi(1, 0), p11[l] = d.phi(1, 1);
-    g0[l] = d.gam(0), g1[l] = d.gam(1);
-    s0[l] = x[0], s1[l] = 0.0;  // settled at the first sample, as SecondOrderDynamics::reset
+  std::vector<SecondOrderDynamics> filters;
+  filters.reserve(L);
+  for (const double zeta : zetas) {
+    filters.emplace_back(DynamicsParameters{fn, zeta}, r.dt);
+    filters.back().reset(x[0]);
   }
-  double n = 0, sy = 0, syy = 0;
+  double n = 0, sy = 0, syy = 0;                // sums over the rows
+  double sd[L] = {}, sdd[L] = {}, sdy[L] = {};  // and per filter
+  double v[L];
   EveryNth search_rows(r.search_stride);
   for (std::size_t k = 0; k < r.n; ++k) {
-    for (std::size_t l = 0; l < L; ++l) {
-      const double y0 = p00[l] * s0[l] + p01[l] * s1[l] + g0[l] * x[k];
-      const double y1 = p10[l] * s0[l] + p11[l] * s1[l] + g1[l] * x[k];
-      s0[l] = y0, s1[l] = y1;
-    }
+    for (std::size_t l = 0; l < L; ++l) v[l] = filters[l].step(x[k]);
     if (!r.fit_row(k) || !search_rows.take()) continue;
     const double y = r.y[k];
     n += 1, sy += y, syy += y * y;
-    for (std::size_t l = 0; l < L; ++l)
-      sd[l] += s0[l], sdd[l] += s0[l] * s0[l], sdy[l] += s0[l] * y;
+    for (std::size_t l = 0; l < L; ++l) sd[l] += v[l], sdd[l] += v[l] * v[l], sdy[l] += v[l] * y;
   }
   // sum (y - v - b)^2 with b the mean difference
   std::array<double, L> mse;
@@ -119,12 +115,13 @@ Resonance search(const DiagnosisRecord& r, std::span<const double> x, double f_l
     best = *start;
   }
   // Refine: log frequency within one grid step, then log damping, then frequency again.
-  if (start) best.mse = filtered_mse(r, x, best.fn, best.zeta);  // start's error on another x
+  const auto mse = [&](double fn, double zeta) { return filtered_mse(r, x, fn, zeta); };
+  if (start) best.mse = mse(best.fn, best.zeta);  // start's error on another x
   for (int round = 0; round < 2; ++round) {
-    best = along_frequency([&](double fn, double zeta) { return filtered_mse(r, x, fn, zeta); },
-                           best, std::max(f_lo, best.fn / step), std::min(f_hi, best.fn * step));
-    best = along_damping([&](double fn, double zeta) { return filtered_mse(r, x, fn, zeta); }, best,
-                         std::max(kZetaMin, best.zeta / 2.5), std::min(kZetaMax, best.zeta * 2.5));
+    best =
+        along_frequency(mse, best, std::max(f_lo, best.fn / step), std::min(f_hi, best.fn * step));
+    best = along_damping(mse, best, std::max(kZetaMin, best.zeta / 2.5),
+                         std::min(kZetaMax, best.zeta * 2.5));
   }
   return best;
 }
