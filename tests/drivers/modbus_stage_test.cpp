@@ -64,12 +64,21 @@ class ModbusStage : public ::testing::Test {
 
 // Each axis's block drives its own axis, on the I/O thread and in the loop: 100 V on x lifts x
 // by tens of micrometres and y by the stage's coupling only; 100 V on y the other way round.
+// In the loop each tick waits for both exchanges, and activation refuses a 1 kHz loop when
+// they take longer than a tick on this machine; that refusal, named as such, skips the loop
+// half after three tries, and any other failure fails the test.
 TEST_F(ModbusStage, EachAxisBlockDrivesItsOwnAxis) {
+  std::string loop_refused;
   for (const std::string io : {"thread", "loop"}) {
     SCOPED_TRACE(io);
     hd::Driver d(hd::make_interface<hd::ModbusDaqDriver, hd::IoThreadDriver>());
     ASSERT_TRUE(d.configure(params({"x", "y"}, io), 1000.0).ok);
-    const hd::Result r = d.activate();
+    hd::Result r = d.activate();
+    for (int attempt = 1; io == "loop" && !r.ok && attempt < 3; ++attempt) r = d.activate();
+    if (io == "loop" && !r.ok && r.message.rfind("loop.rate_hz: ", 0) == 0) {
+      loop_refused = r.message;
+      continue;
+    }
     ASSERT_TRUE(r.ok) << r.message;
     const auto rest = hold(d, {0.0, 0.0});
     const auto x_driven = hold(d, {100.0, 0.0});
@@ -92,6 +101,7 @@ TEST_F(ModbusStage, EachAxisBlockDrivesItsOwnAxis) {
     EXPECT_EQ(diag["failed_transactions"], 0) << diag.dump();
     EXPECT_TRUE(d.deactivate().ok);
   }
+  if (!loop_refused.empty()) GTEST_SKIP() << "the loop half not run: " << loop_refused;
 }
 
 // An axis whose block the device does not have is refused at activation, naming the axis and
