@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -217,4 +218,35 @@ TEST(CumulativeToIncrements, InvertsARunningSum) {
   EXPECT_EQ(w, (std::vector<double>{1.0, 0.5, -0.25, 0.75}));
   const std::vector<double> v = hd::cumulative_to_increments(W, 2, 1.0);
   EXPECT_EQ(v, (std::vector<double>{0.0, 0.5}));
+}
+
+// Columns like a Preisach plane's relays (nested steps of the input, nearly collinear) with
+// nonnegative weights, two thirds of which end on zero, and an upper bound on a few: the states
+// are exchanged in blocks, so the solve takes a few factorisations, not one per bound that
+// binds, and it ends at the optimum.
+TEST(BoundedLsq, SettlesTheBoundsOfNearlyCollinearRelayColumnsInFewFactorisations) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int trial = 0; trial < 5; ++trial) {
+    const int rows = 600, n = 90;
+    Problem p;
+    p.A.resize(rows, n);
+    for (int t = 0; t < rows; ++t) {
+      const double u = std::sin(0.031 * t) * (1.0 + 0.3 * std::sin(0.0047 * t));
+      for (int j = 0; j < n; ++j) p.A(t, j) = u > -1.3 + 2.6 * j / n ? 1.0 : 0.0;
+    }
+    p.z.resize(rows);
+    for (int t = 0; t < rows; ++t) p.z[t] = p.A.row(t).sum() / n + 0.2 * normal(rng);
+    p.G = p.A.transpose() * p.A;
+    p.b = p.A.transpose() * p.z;
+    const Eigen::VectorXd lo = Eigen::VectorXd::Zero(n);
+    Eigen::VectorXd hi = Eigen::VectorXd::Constant(n, kInf);
+    for (int j = 0; j < n; j += 11) hi[j] = 0.002;
+    const hd::BoundedLsqResult r = hd::solve_bounded_lsq(p.G, p.b, lo, hi);
+    ASSERT_TRUE(r.converged) << "trial " << trial;
+    expect_kkt(p, r.x, lo, hi);
+    const auto bound = std::count(r.state.begin(), r.state.end(), hd::BoundState::kLower);
+    EXPECT_GT(bound, n / 2) << "trial " << trial;
+    EXPECT_LT(r.iterations, bound / 5) << "trial " << trial << ": " << bound << " on zero";
+  }
 }

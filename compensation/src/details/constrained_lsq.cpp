@@ -130,6 +130,9 @@ double NormalEquations::target_square_sum() {
 namespace {
 
 constexpr double kRidge = 1e-12;  // relative to the unit diagonal after Jacobi scaling
+// Block exchanges that may fail to lower the count of wrong states before the one-at-a-time
+// steps take over (ActiveSet::exchange_blocks).
+constexpr int kBlockTries = 3;
 
 void validate(const Eigen::MatrixXd& G, const Eigen::VectorXd& b, const Eigen::VectorXd& lower,
               const Eigen::VectorXd& upper) {
@@ -180,8 +183,9 @@ class ActiveSet {
       if (x_[i] <= lo_[i]) set_bound(i, BoundState::kLower);
       if (x_[i] >= hi_[i]) set_bound(i, BoundState::kUpper);
     }
+    out.converged = exchange_blocks(out.iterations);
     const int max_iterations = 100 + 20 * static_cast<int>(n_);
-    while (out.iterations < max_iterations) {
+    while (!out.converged && out.iterations < max_iterations) {
       if (!step_to_subspace_minimum()) {
         ++out.iterations;
         continue;
@@ -209,16 +213,67 @@ class ActiveSet {
     x_[i] = s == BoundState::kLower ? lo_[i] : hi_[i];
   }
 
-  // Minimises over the free unknowns with the others held on their bounds; moves towards that
-  // minimum as far as the bounds allow. Returns false when a bound blocked the move (the
-  // blocking unknown is then fixed on it).
-  bool step_to_subspace_minimum() {
+  // Block principal pivoting (Judice and Pires; Portugal, Judice and Vicente 1994): from the
+  // current states, every unknown whose state is wrong changes it at once: a free one outside
+  // its box goes to the bound it passed, a bound one whose multiplier has the wrong sign is
+  // freed. Most problems settle in a few exchanges, where the steps below free or fix one unknown
+  // per factorisation. Where the count of wrong states stops falling for kBlockTries exchanges
+  // (an ill-conditioned plane's can cycle), the states that had fewest hand over to those steps,
+  // from a feasible point. True when the optimum was reached; `solves` counts the exchanges.
+  bool exchange_blocks(int& solves) {
+    std::vector<BoundState> best_state = state_;
+    Eigen::VectorXd best_x = x_;
+    std::size_t best_wrong = static_cast<std::size_t>(n_) + 1;
+    int tries = kBlockTries;
+    while (true) {
+      const Eigen::VectorXd target = subspace_minimum();
+      for (std::size_t a = 0; a < free_.size(); ++a)
+        x_[free_[a]] = target[static_cast<Eigen::Index>(a)];
+      ++solves;
+      const Eigen::VectorXd g = H_ * x_ - c_;
+      const double tol = multiplier_tolerance();
+      wrong_.clear();
+      for (Eigen::Index i = 0; i < n_; ++i) {
+        if (state_[i] == BoundState::kFree ? x_[i] < lo_[i] || x_[i] > hi_[i]
+                                           : multiplier_violation(i, g) > tol) {
+          wrong_.push_back(i);
+        }
+      }
+      if (wrong_.empty()) return true;
+      if (wrong_.size() < best_wrong) {
+        best_wrong = wrong_.size();
+        best_state = state_;
+        best_x = x_;
+        tries = kBlockTries;
+      } else if (--tries < 0) {
+        break;
+      }
+      for (const Eigen::Index i : wrong_) {
+        if (state_[i] != BoundState::kFree) {
+          state_[i] = BoundState::kFree;
+        } else {
+          set_bound(i, x_[i] < lo_[i] ? BoundState::kLower : BoundState::kUpper);
+        }
+      }
+    }
+    state_ = std::move(best_state);
+    x_ = std::move(best_x);
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      if (state_[i] != BoundState::kFree) continue;
+      if (x_[i] < lo_[i]) set_bound(i, BoundState::kLower);
+      if (x_[i] > hi_[i]) set_bound(i, BoundState::kUpper);
+    }
+    return false;
+  }
+
+  // The minimum over the free unknowns (free_, set here) with the others held on their bounds.
+  Eigen::VectorXd subspace_minimum() {
     free_.clear();
     for (Eigen::Index i = 0; i < n_; ++i) {
       if (state_[i] == BoundState::kFree) free_.push_back(i);
     }
     const auto nf = static_cast<Eigen::Index>(free_.size());
-    if (nf == 0) return true;
+    if (nf == 0) return {};
     // The free unknowns' rows of c - H x_bound (x_bound: x with the free unknowns at 0), and
     // H's free block, gathered column by column (H is column-major).
     Eigen::VectorXd bound = x_;
@@ -231,7 +286,15 @@ class ActiveSet {
       const auto column = H_.col(free_[b]);
       for (Eigen::Index a = 0; a < nf; ++a) Hff(a, b) = column[free_[a]];
     }
-    const Eigen::VectorXd target = solve_positive_definite(Hff, rhs);
+    return solve_positive_definite(Hff, rhs);
+  }
+
+  // Moves from the feasible x towards the subspace minimum as far as the bounds allow. Returns
+  // false when a bound blocked the move (the blocking unknown is then fixed on it).
+  bool step_to_subspace_minimum() {
+    const Eigen::VectorXd target = subspace_minimum();
+    const auto nf = static_cast<Eigen::Index>(free_.size());
+    if (nf == 0) return true;
     double alpha = 1.0;
     Eigen::Index blocking = -1;
     BoundState side = BoundState::kFree;
@@ -259,17 +322,25 @@ class ActiveSet {
   // The bound unknown whose Lagrange multiplier has the wrong sign by the largest margin, or -1.
   Eigen::Index most_violated_multiplier() const {
     const Eigen::VectorXd g = H_ * x_ - c_;
-    const double tol = 1e-10 * (c_.lpNorm<Eigen::Infinity>() + x_.lpNorm<Eigen::Infinity>());
     Eigen::Index best = -1;
-    double worst = tol;
+    double worst = multiplier_tolerance();
     for (Eigen::Index i = 0; i < n_; ++i) {
-      if (lo_[i] == hi_[i]) continue;  // fixed unknown
-      double violation = 0.0;
-      if (state_[i] == BoundState::kLower) violation = -g[i];  // wants to increase
-      if (state_[i] == BoundState::kUpper) violation = g[i];   // wants to decrease
+      const double violation = multiplier_violation(i, g);
       if (violation > worst) worst = violation, best = i;
     }
     return best;
+  }
+
+  // How far bound unknown i's multiplier has the wrong sign at the gradient g = Hx - c (> 0: it
+  // wants off its bound); 0 for free and fixed unknowns. Counted above multiplier_tolerance().
+  double multiplier_violation(Eigen::Index i, const Eigen::VectorXd& g) const {
+    if (lo_[i] == hi_[i]) return 0.0;                   // fixed unknown
+    if (state_[i] == BoundState::kLower) return -g[i];  // wants to increase
+    if (state_[i] == BoundState::kUpper) return g[i];   // wants to decrease
+    return 0.0;
+  }
+  double multiplier_tolerance() const {
+    return 1e-10 * (c_.lpNorm<Eigen::Infinity>() + x_.lpNorm<Eigen::Infinity>());
   }
 
   const Eigen::MatrixXd& H_;
@@ -279,6 +350,7 @@ class ActiveSet {
   Eigen::Index n_;
   std::vector<BoundState> state_;
   std::vector<Eigen::Index> free_;
+  std::vector<Eigen::Index> wrong_;  // exchange_blocks()'s unknowns in the wrong state
   Eigen::VectorXd x_;
 };
 

@@ -2,8 +2,9 @@
 // Bound-constrained linear least squares for the identification (not real-time).
 //   minimise ||A x - z||^2  subject to  lower <= x <= upper   (bounds may be +-infinity)
 // A is never stored: rows are accumulated into the normal equations G = A'A, b = A'z, and the
-// quadratic programme  min 0.5 x'Gx - b'x  is solved by a primal active-set method (the
-// bounded-variable least-squares idea of Stark & Parker, on the normal equations).
+// quadratic programme  min 0.5 x'Gx - b'x  is solved on the normal equations by block principal
+// pivoting (Judice & Pires: every wrong bound state exchanged at once), finished where that
+// stalls by a primal active-set method (the bounded-variable least squares of Stark & Parker).
 // Cumulative-weight constraints W_k = sum_{i<=k} w_i >= eps become plain bounds once the
 // unknowns are the cumulative weights themselves (see cumulative_to_increments()).
 #include <Eigen/Dense>
@@ -63,7 +64,7 @@ enum class BoundState : signed char { kLower = -1, kFree = 0, kUpper = 1 };
 struct BoundedLsqResult {
   Eigen::VectorXd x;
   std::vector<BoundState> state;  ///< which bound each unknown ends on
-  int iterations = 0;             ///< active-set changes
+  int iterations = 0;             ///< factorisations after the first (block exchanges, then steps)
   bool converged = false;         ///< KKT conditions met within tolerance
 };
 
