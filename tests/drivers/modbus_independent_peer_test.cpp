@@ -233,8 +233,8 @@ TEST_F(IndependentPeerTest, TrackACoarselyQuantisedPlantWithItsTrueModel) {
   }
   EXPECT_LE(inv["rms_error_percent"].get<double>(), 0.5) << inv.dump(2);
   // The true model predicts the plant: the tare sees only the counts, once each reading is
-  // compared with the output it answers (a thread-mode exchange answers an earlier tick's; the
-  // same-tick comparison read the ramp's lag as a 0.21 um offset and tracked at 0.75 %).
+  // compared with the output it answers (a thread-mode exchange answers an earlier tick's; a
+  // same-tick comparison would read the ramp's lag as an offset).
   EXPECT_LT(std::abs(inv["tare_um"].get<double>()), 0.05) << inv.dump(2);
 }
 

@@ -66,8 +66,9 @@ class Packing {
     // And a floor gap below half the fitted part's input excursion: a play moves there on every
     // pass between the excursion's extremes, whatever its state when the fitted part began. At
     // half the excursion it never moves within the fitted part, and its weight, fitted to
-    // nothing there, can flatten the model where the first sweep left it (a full-range play
-    // whose -0.36 cancelled the others' slope to 4e-4: the inverse missed its check by 26 %).
+    // nothing there, can flatten the model where the first sweep left it (a negative weight that
+    // cancels the others' slope, whose inverse then fails its check;
+    // ThresholdRefinement.EveryRefinedPlayMovesWithinTheFittedRows holds the gap).
     const double excursion = input_excursion(record);
     if (excursion > 0.0) play_top_ = std::min(play_top_, 0.5 * excursion - play_gap_);
     const auto& d = s.dead_zone_thresholds;

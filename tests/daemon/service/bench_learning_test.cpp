@@ -437,8 +437,8 @@ TEST_F(BenchLearningTest, ALearnedDriveReplaysAfterARestartAndOnlyForItsReferenc
 
   // Learning goes on from it: its first trial is the saved drive's, within 1.5x of the last
   // trial again. Near the noise floor the trials after it meet the creep recovering from the
-  // precondition sweep and the idle before it (the mean error moves by 0.01 um over four
-  // trials, 3x the last trial's rms), which the guard stops on.
+  // precondition sweep and the idle before it (the mean error moves by several times the last
+  // trial's rms over four trials), which the guard stops on.
   json more = replay_params;
   more["learn_trials"] = 4;
   const json r = run_and_wait("track", more);
