@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "hystbench/common/fit_families.hpp"
 #include "hystbench/compensation/model_check.hpp"
 #include "hystbench/compensation/modified_pi_model.hpp"
+#include "hystbench/compensation/preisach_identification.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/daemon/runs/identification_fit.hpp"
 #include "runs/details/run_result.hpp"
@@ -132,15 +134,30 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
   return out;
 }
 
+namespace {
+
+// The neighbour of `chosen`'s dead zones per side: one fewer; for a plane that kept the identity
+// as its output map, the other map its fit tries (a few dead zones per side).
+std::optional<int> neighbour_dead_zones(const hc::FitResult& chosen) {
+  if (chosen.dead_zones >= 1) return chosen.dead_zones - 1;
+  if (chosen.model.hysteresis().kind() != hc::ModelKind::kPreisach) return std::nullopt;
+  const std::vector<std::size_t> maps = hc::PreisachFitOptions{}.output_zones;
+  const std::size_t most = *std::max_element(maps.begin(), maps.end());
+  if (most == 0) return std::nullopt;
+  return static_cast<int>(most);
+}
+
+}  // namespace
+
 void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
                              std::span<const double> u, std::span<const double> y,
                              const hc::FitOptions& options) {
   if (!options.kind || options.dead_zones >= 0 || candidates.size() != 1) return;
   const hc::FitResult& chosen = candidates.front().fit;
-  if (chosen.dead_zones < 1) return;
-  hc::FitOptions o =
-      neighbour_options(options, std::to_string(chosen.dead_zones - 1) + " dead zones: ");
-  o.dead_zones = chosen.dead_zones - 1;
+  const std::optional<int> zones = neighbour_dead_zones(chosen);
+  if (!zones) return;
+  hc::FitOptions o = neighbour_options(options, std::to_string(*zones) + " dead zones: ");
+  o.dead_zones = *zones;
   // A plane's rate law, searched for on the chosen plane, is refitted on its neighbour rather
   // than searched for again (the search is most of a plane's fit).
   if (chosen.model.hysteresis().kind() == hc::ModelKind::kPreisach) {

@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "hystbench/compensation/modified_pi_model.hpp"
 #include "hystbench/compensation/pi_model.hpp"
+#include "hystbench/compensation/preisach_model.hpp"
 #include "hystbench/compensation/rate_dependent_pi_model.hpp"
 #include "hystbench/sim/identification_excitation.hpp"
 #include "service/details/identify_session.hpp"
@@ -209,6 +211,44 @@ TEST(IdentificationFit, TheDeadZoneOrderIsVerifiedAgainstItsNeighbour) {
   std::vector<hd::IdentifyCandidate> two(2, candidates[0]);
   hd::add_dead_zone_neighbour(two, r.t, r.u, r.y, o);
   EXPECT_EQ(two.size(), 2u);
+}
+
+// identify --model preisach: the plane's neighbour has one dead zone per side fewer, or, where it
+// kept the identity as its output map, the other map its fit tries (a few dead zones per side),
+// fitted on the same record with the rate law it kept, so that the bench's triangle, not the
+// record's held-out end alone, decides the map. The plant: relays whose density peaks in the
+// middle of the range, a loop no play model holds, so that the plane is kept.
+TEST(IdentificationFit, ThePlanesOutputMapIsVerifiedAgainstItsOtherMap) {
+  const Record pi = delayed_pi_record(0);
+  hc::PreisachParameters p;
+  p.u_min = 0.0;
+  p.u_max = 150.0;
+  p.cells = 12;
+  p.slope = 0.05;
+  for (std::size_t a = 0; a < p.cells; ++a) {
+    for (std::size_t b = 0; b <= a; ++b) {
+      const double centre = 0.5 * static_cast<double>(a + b + 1) / static_cast<double>(p.cells);
+      p.densities.push_back(2e-4 * std::exp(-std::pow((centre - 0.5) / 0.2, 2.0)));
+    }
+  }
+  hc::PreisachModel plant(p);
+  const hd::AveragedRecord r = averaged_response(plant, pi.u);
+  hc::FitOptions o;
+  o.kind = hc::ModelKind::kPreisach;
+  o.heldout_fraction = 0.1;
+  auto candidates = hd::fit_identify_candidates(r.t, r.u, r.y, o);
+  ASSERT_EQ(candidates.size(), 1u);
+  ASSERT_EQ(candidates[0].fit.model.hysteresis().kind(), hc::ModelKind::kPreisach)
+      << candidates[0].fit.method;
+  const int m = candidates[0].fit.dead_zones;
+  hd::add_dead_zone_neighbour(candidates, r.t, r.u, r.y, o);
+  ASSERT_EQ(candidates.size(), 2u);
+  const int other = candidates[1].fit.dead_zones;
+  EXPECT_EQ(other, m >= 1 ? m - 1 : 3);
+  EXPECT_EQ(candidates[1].fit.model.hysteresis().kind(), hc::ModelKind::kPreisach);
+  EXPECT_EQ(candidates[1].label, "preisach-" + std::to_string(other) + "dz");
+  EXPECT_EQ(candidates[1].fit.model.hysteresis().thresholds_law().has_value(),
+            candidates[0].fit.model.hysteresis().thresholds_law().has_value());
 }
 
 // identify --model rpi whose fit kept a rate law: the same plays and dead zones without the law

@@ -248,8 +248,11 @@ std::vector<IdentifyCandidate> fit_identify_candidates(std::span<const double> t
 /// family with one dead zone per side fewer, fitted on the same shifted record, appended as a
 /// candidate for the verification to judge. The held-out error hardly tells m from m - 1, the
 /// tracking does: the outermost dead zone fits the record's end of range, and the inverse can
-/// overshoot there. A plane's rate law is refitted on the neighbour, not searched for again.
-/// Nothing is appended for auto, fixed dead zones, none fitted, or a neighbour fit that fails.
+/// overshoot there. A plane that kept the identity as its output map is verified against the
+/// other map its fit tries (a few dead zones per side): the record's held-out end can prefer the
+/// identity where the bench's triangle, whose minor loops turn inside the range, needs the map.
+/// A plane's rate law is refitted on the neighbour, not searched for again. Nothing is appended
+/// for auto, fixed dead zones, a PI family fitted without any, or a neighbour fit that fails.
 void add_dead_zone_neighbour(std::vector<IdentifyCandidate>& candidates, std::span<const double> t,
                              std::span<const double> u, std::span<const double> y,
                              const compensation::FitOptions& options);
