@@ -1,5 +1,6 @@
 #include "hystbench/compensation/actuator_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "details/validate.hpp"
@@ -97,6 +98,16 @@ void ActuatorModel::reset(double u0) noexcept {
     y += creep_.peek(u0);
   }
   if (dynamics_) dynamics_->reset(y);
+}
+
+void ActuatorModel::hold(double u, std::uint64_t steps) noexcept {
+  const auto stepped =
+      std::min<std::uint64_t>(steps, static_cast<std::uint64_t>(std::ceil(kHoldStepsS / dt_)));
+  for (std::uint64_t k = 0; k < stepped; ++k) (void)step(u);
+  if (stepped == steps) return;
+  // The delay holds u by now; the hysteresis at a held input stays where it is.
+  if (!creep_.empty()) creep_.hold(u, steps - stepped);
+  if (dynamics_) dynamics_->reset(peek_static(u));
 }
 
 std::vector<double> ActuatorModel::simulate(std::span<const double> u, double dt_s) {

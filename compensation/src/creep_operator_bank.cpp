@@ -56,4 +56,9 @@ void CreepOperatorBank::reset(double u0) noexcept {
   for (auto& x : x_) x = u0;
 }
 
+void CreepOperatorBank::hold(double u, std::uint64_t steps) noexcept {
+  const auto n = static_cast<double>(steps);
+  for (std::size_t k = 0; k < x_.size(); ++k) x_[k] = u + (x_[k] - u) * std::pow(a_[k], n);
+}
+
 }  // namespace hystbench::compensation

@@ -38,6 +38,42 @@ TEST(CreepOperatorBank, OutputKeepsMovingDuringAHoldAndSettles) {
   EXPECT_NEAR(y.back(), 0.4, 1e-3);
 }
 
+TEST(ActuatorModel, AHeldOutputLeavesTheStateItsStepsWould) {
+  // A model with every part: a long hold moved in closed form ends where stepping ends.
+  const double dt = 1e-3;
+  hc::ActuatorModel stepped(
+      std::make_unique<hc::PiModel>(hc::PiParameters{{0.0, 1.0}, {0.3, 0.1}, 0}));
+  stepped.set_creep(
+      hc::CreepParameters{hc::log_spaced_time_constants(4, 0.05, 500.0), {0.01, 0.02, 0.02, 0.05}});
+  stepped.set_dynamics(hc::DynamicsParameters{200.0, 0.05});
+  stepped.set_delay(0.003);
+  stepped.configure(dt);
+  stepped.reset(0.0);
+  for (int k = 0; k < 2000; ++k) (void)stepped.step(8.0 * std::sin(0.01 * k));
+  hc::ActuatorModel held(stepped);
+  const std::uint64_t steps = 200000;  // 200 s, 200x the stepped part of hold()
+  const double before = held.peek_static(2.0);
+  for (std::uint64_t k = 0; k < steps; ++k) (void)stepped.step(2.0);
+  held.hold(2.0, steps);
+  // The creep moved over the hold by far more than the tolerance below.
+  EXPECT_GT(std::abs(held.peek_static(2.0) - before), 1e-3);
+  for (const double u : {2.0, 3.0, -1.0}) {
+    EXPECT_NEAR(held.step(u), stepped.step(u), 1e-6) << u;  // of an output moving 1e-3 or more
+  }
+}
+
+TEST(ActuatorModel, AShortHoldIsStepped) {
+  hc::ActuatorModel stepped(
+      std::make_unique<hc::PiModel>(hc::PiParameters{{0.0, 1.0}, {0.3, 0.1}, 0}));
+  stepped.set_creep(hc::CreepParameters{{0.1, 2.0}, {0.02, 0.05}});
+  stepped.configure(1e-3);
+  stepped.reset(0.0);
+  hc::ActuatorModel held(stepped);
+  for (int k = 0; k < 300; ++k) (void)stepped.step(4.0);
+  held.hold(4.0, 300);
+  EXPECT_EQ(held.step(1.0), stepped.step(1.0));
+}
+
 TEST(ActuatorModel, DelayShiftsTheOutputByWholeSamples) {
   hc::ActuatorModel plain(
       std::make_unique<hc::PiModel>(hc::PiParameters{{0.0, 1.0}, {0.3, 0.1}, 0}));

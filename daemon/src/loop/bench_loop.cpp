@@ -45,7 +45,8 @@ BenchLoop::BenchLoop(drivers::Driver& driver, const BenchLoopOptions& options)
       held_gap_ticks_(std::max<std::uint64_t>(
           1, static_cast<std::uint64_t>(std::llround(options.held_gap_s * options.rate_hz)))),
       idle_grace_ns_(
-          static_cast<std::int64_t>(std::llround(std::max(0.0, options.idle_grace_s) * 1e9))) {
+          static_cast<std::int64_t>(std::llround(std::max(0.0, options.idle_grace_s) * 1e9))),
+      output_history_(std::max<std::size_t>(1, options.output_history_ticks)) {
   if (axes_ > 1) {
     axis_faults_.resize(axes_);
     for (std::size_t a = 0; a < axes_; ++a) {
@@ -278,6 +279,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
   }
   if (state() == State::kFault) {
     driver_.safe_state();
+    output_history_.push(driver_.safe_output_v());
     std::array<drivers::Measurement, drivers::kMaxAxes> m{};
     if (read_all(m) == drivers::DriverStatus::kOk) {
       for (std::size_t a = 0; a < axes_; ++a) last_y_[a].store(m[a].position_um);
@@ -305,6 +307,7 @@ void BenchLoop::tick(std::int64_t scheduled_ns, std::int64_t wake_ns) noexcept {
     // Safe output now, not ramped; a run ends as aborted.
     driver_.safe_state();
     reset_outputs();
+    output_history_.push(driver_.safe_output_v());
     if (active_ != nullptr) end_run(RunEnd::kAborted, "aborted by request");
     return;
   }
@@ -340,6 +343,7 @@ void BenchLoop::idle_tick() noexcept {
     return;
   }
   for (std::size_t a = 0; a < axes_; ++a) last_u_[a].store(u[a], std::memory_order_relaxed);
+  output_history_.push(u[0]);
   std::array<drivers::Measurement, drivers::kMaxAxes> m{};
   const auto st = read_all(m);
   if (st == drivers::DriverStatus::kOk || st == drivers::DriverStatus::kStale) {
@@ -498,6 +502,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
     x.failure = "driver write failed";
   } else {
     for (std::size_t a = 0; a < axes_; ++a) last_u_[a].store(u[a], std::memory_order_relaxed);
+    output_history_.push(u[0]);
     std::array<drivers::Measurement, drivers::kMaxAxes> m{};
     const auto st = read_all(m);
     std::array<bool, drivers::kMaxAxes> after_stall{};  // the feedback holds on this reading

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "hystbench/compensation/dynamics_inversion.hpp"
 #include "hystbench/compensation/error_metrics.hpp"
@@ -62,6 +63,11 @@ hc::ActuatorModel model_after(const hc::ActuatorModel& model, std::span<const do
   hc::ActuatorModel m = model;
   m.configure(dt_s);
   m.reset(prefix.empty() ? u_start : prefix.front());
+  return model_after(std::move(m), prefix, u_min, u_max);
+}
+
+hc::ActuatorModel model_after(hc::ActuatorModel m, std::span<const double> prefix, double u_min,
+                              double u_max) {
   for (const double u : prefix) m.step(u);
   if (m.input_max <= m.input_min) {
     m.input_min = u_min;

@@ -20,6 +20,7 @@
 #include "service/details/identify_coordinator.hpp"
 #include "service/details/learning_runs.hpp"
 #include "service/details/model_folder.hpp"
+#include "service/details/model_state_tracker.hpp"
 #include "service/details/model_store.hpp"
 #include "service/details/run_handback.hpp"
 #include "service/details/run_history.hpp"
@@ -54,7 +55,6 @@ Bench::Bench(BenchSettings settings)
       history_(std::make_unique<details::RunHistory>(settings_.log_dir)),
       models_(std::make_unique<details::ModelStore>(
           settings_.model_dir, settings_.loop.limits.u_min, settings_.loop.limits.u_max)),
-      plans_(std::make_shared<details::PlanCache>()),
       feedback_plans_(std::make_shared<details::FeedbackPlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;
   try {
@@ -83,6 +83,7 @@ Bench::Bench(BenchSettings settings)
   BenchLoopOptions loop = settings_.loop;
   loop.axis_names = settings_.axes;
   loop_ = std::make_unique<BenchLoop>(*driver_, loop);
+  model_states_ = std::make_unique<details::ModelStateTracker>(loop_->output_history(), dt_);
   runs_ = std::make_unique<details::RunSupervisor>(*loop_, mutex_, settings_);
   // What every component asks of the bench: the run builders' context, a result delivered.
   details::RunHooks hooks;
@@ -293,13 +294,20 @@ void Bench::require_idle() const {
 }
 
 details::RunContext Bench::run_context() const {
-  return {settings_,
-          models_->active(),
-          loop_->last_output(),
-          models_->generation(),
-          plans_,
-          models_->measured_responses(),
-          feedback_plans_};
+  details::RunContext ctx{settings_,
+                          models_->active(),
+                          loop_->last_output(),
+                          models_->generation(),
+                          models_->measured_responses(),
+                          feedback_plans_};
+  // A stage's axes have models of their own: each of its runs starts relaxed.
+  if (ctx.model != nullptr && !is_stage()) {
+    const details::ModelStateTracker::State state =
+        model_states_->state(ctx.model->model, ctx.model_generation);
+    ctx.model_state = state.model;
+    ctx.model_history_s = state.history_s;
+  }
+  return ctx;
 }
 
 json Bench::start_identify(const details::RequestParams& request) {

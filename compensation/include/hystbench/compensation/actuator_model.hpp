@@ -7,6 +7,7 @@
 // and the diagnosis extend, and what inverses are built from.
 // configure() allocates; step()/peek()/reset() are real-time safe.
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -50,6 +51,13 @@ class ActuatorModel {
   double rate_for_static_output(double u, double y) const noexcept;
   /// Relaxed at input u0, every part settled.
   void reset(double u0) noexcept;
+  /// The state `steps` step(u) calls would leave: stepped for the first kHoldStepsS seconds'
+  /// worth (the delay, the rate, the hysteresis and the modes settle there), the creep's lags
+  /// moved over the rest in closed form and the modes settled at the output that leaves. For a
+  /// long stretch of one held output (an idle bench), at the cost of a second's steps.
+  /// Real-time safe.
+  void hold(double u, std::uint64_t steps) noexcept;
+  static constexpr double kHoldStepsS = 1.0;
 
   // --- inspection ---
   bool valid() const noexcept { return hysteresis_ != nullptr; }

@@ -4,6 +4,7 @@
 // Added to the hysteresis output, a bank of lags makes the output keep moving, about
 // logarithmically in time, after the input holds. Exact discretisation for a held input.
 // Real-time safe step()/peek().
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -27,6 +28,9 @@ class CreepOperatorBank {
   double peek(double u) const noexcept;
   /// Every lag settled at u0.
   void reset(double u0) noexcept;
+  /// The lags as `steps` step(u) calls would leave them, in closed form (each moves the fraction
+  /// 1 - a_k^steps of the way to u). Real-time safe.
+  void hold(double u, std::uint64_t steps) noexcept;
   void set_sample_period(double dt_s);
   bool empty() const noexcept { return p_.gains.empty(); }
 

@@ -26,8 +26,7 @@ BuiltRun make_excite_program(const Upload& upload, const RunContext& ctx) {
   const std::size_t offset = p->excitation.size();
   p->excitation.insert(p->excitation.end(), drive.begin(), drive.end());
   p->model = predictor(ctx, ctx.u_now);
-  p->summary["y_model"] = predictor_name(ctx);
-  p->summary["y_model_from"] = predictor_source(ctx);
+  describe_predictor(ctx, p->summary);
   p->total_samples = p->excitation.size();
   p->metrics_from = offset;
   allocate_records(*p);

@@ -81,9 +81,8 @@ BuiltRun make_identify_program(const IdentifyRequest& request, const RunContext&
               static_cast<std::size_t>(std::ceil(0.1 / ctx.dt())));
   p->model = predictor(ctx, ctx.u_now);
   // The result's model_rms_error is this predictor's: not the model identified from the run.
-  p->summary["y_model"] =
-      ctx.model != nullptr ? "the model active before this identification" : predictor_name(ctx);
-  p->summary["y_model_from"] = predictor_source(ctx);
+  describe_predictor(ctx, p->summary);
+  if (ctx.model != nullptr) p->summary["y_model"] = "the model active before this identification";
   const std::size_t offset = p->excitation.size();
   p->excitation.insert(p->excitation.end(), exc.samples.begin(), exc.samples.end());
   p->total_samples = p->excitation.size();

@@ -118,8 +118,7 @@ BuiltRun make_response_program(const sim::FrequencyResponseExcitationOptions& o,
   p->response_delay_ticks = model_delay_ticks(ctx);
   p->excitation = std::move(x.u);
   p->model = predictor(ctx, ctx.u_now);
-  p->summary["y_model"] = predictor_name(ctx);
-  p->summary["y_model_from"] = predictor_source(ctx);
+  describe_predictor(ctx, p->summary);
   p->total_samples = p->excitation.size();
   p->metrics_from = 0;
   allocate_records(*p);

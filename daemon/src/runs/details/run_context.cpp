@@ -25,6 +25,7 @@ std::optional<hc::ActuatorModel> predictor(const RunContext& ctx, double u0) {
   const BenchSettings& s = ctx.settings;
   const auto& lim = s.loop.limits;
   std::optional<hc::ActuatorModel> m;
+  if (ctx.model != nullptr && ctx.model_state != nullptr) return *ctx.model_state;
   if (ctx.model != nullptr) {
     m = ctx.model->model;
   } else if (s.y_max > s.y_min && lim.u_max > lim.u_min) {
@@ -40,6 +41,21 @@ std::optional<hc::ActuatorModel> predictor(const RunContext& ctx, double u0) {
   return m;
 }
 
+hc::ActuatorModel model_at_start(const RunContext& ctx, std::span<const double> prefix) {
+  const auto& lim = ctx.settings.loop.limits;
+  if (ctx.model_state != nullptr)
+    return model_after(*ctx.model_state, prefix, lim.u_min, lim.u_max);
+  return model_after(ctx.model->model, prefix, ctx.u_now, lim.u_min, lim.u_max, ctx.dt());
+}
+
+void describe_predictor(const RunContext& ctx, nlohmann::json& summary) {
+  summary["y_model"] = predictor_name(ctx);
+  summary["y_model_from"] = predictor_source(ctx);
+  if (ctx.model == nullptr) return;
+  summary["model_start"] = ctx.model_state != nullptr ? "history" : "relaxed";
+  if (ctx.model_state != nullptr) summary["model_history_s"] = ctx.model_history_s;
+}
+
 nlohmann::json model_header(const RunContext& ctx) {
   if (ctx.model == nullptr) return nullptr;
   compensation::ModelFile header = *ctx.model;
@@ -48,7 +64,10 @@ nlohmann::json model_header(const RunContext& ctx) {
 }
 
 const char* predictor_name(const RunContext& ctx) {
-  if (ctx.model != nullptr) return "the active model, stepped with u";
+  if (ctx.model != nullptr && ctx.model_state != nullptr) {
+    return "the active model from the state the bench's output history left, stepped with u";
+  }
+  if (ctx.model != nullptr) return "the active model relaxed at the first output, stepped with u";
   if (ctx.settings.y_max > ctx.settings.y_min) {
     return "linear map of limits.y_min..y_max, stepped with u";
   }

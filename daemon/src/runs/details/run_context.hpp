@@ -6,14 +6,13 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "hystbench/compensation/actuator_model.hpp"
-#include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/stage_responses.hpp"
 #include "hystbench/daemon/config/bench_settings.hpp"
@@ -25,34 +24,24 @@ namespace hystbench::daemon::details {
 struct FeedbackPlanCache;  // feedback_design.hpp
 struct FeedbackPlan;       // feedback_design.hpp
 
-/// The last feedforward plan and what it was planned from: a track run with the same model, the
-/// same start (output, open-loop prefix) and the same targets (another compensator over the same
-/// reference, as a sweep runs them) plays it again instead of planning it anew. The plan is a
-/// deterministic function of these, so the drive is the one a new plan would give. Any thread.
-struct PlanCache {
-  std::mutex mutex;
-  std::uint64_t model_generation = 0;
-  double u_now = 0.0;
-  std::vector<double> excitation, targets;
-  std::uint64_t planned_samples = 0;
-  double period_samples = 0.0;
-  std::optional<compensation::DrivePlan> plan;  ///< empty: nothing kept
-};
-
 struct RunContext {
   const BenchSettings& settings;
   const compensation::ModelFile* model = nullptr;            ///< the active model, or null
   double u_now = 0.0;                                        ///< the loop's present output [V]
   double dt() const { return 1.0 / settings.loop.rate_hz; }  ///< loop period [s]
-  /// Counts the bench's model changes: a plan kept for one generation is not another's.
+  /// Counts the bench's model changes: a design kept for one generation is not another's.
   std::uint64_t model_generation = 0;
-  /// Where track keeps its last plan; null = every plan is made anew.
-  std::shared_ptr<PlanCache> plans = nullptr;
   /// The stage's frequency responses the bench measured last (frf, identify), null if none:
   /// the feedback's when the active model holds none.
   const compensation::StageResponses* responses = nullptr;
   /// Where the feedback's last design is kept; null = designed anew.
   std::shared_ptr<FeedbackPlanCache> feedback_plans = nullptr;
+  /// The active model as the actuator's history leaves it now: stepped through the output of
+  /// every tick the loop kept (ModelStateTracker), configured at dt(). Null where that is not
+  /// known (no model, a stage, nothing played yet): a run's model then starts relaxed at u_now.
+  std::shared_ptr<const compensation::ActuatorModel> model_state = nullptr;
+  /// The output history model_state was stepped through [s] (0 without).
+  double model_history_s = 0.0;
 };
 
 /// Thrown by a preparation's progress callback to cancel it (stop, abort, shutdown); not a
@@ -100,15 +89,23 @@ struct ActuatorRange {
 };
 std::optional<ActuatorRange> actuator_range(const RunContext& ctx);
 
-/// The run's predictor of y (RunProgram::model) relaxed at output u0: the active model, or
-/// without one the linear map of limits.y_min/y_max; nullopt when neither is known.
+/// The run's predictor of y (RunProgram::model): the active model in the state its history left
+/// (model_state), else relaxed at output u0; without a model the linear map of
+/// limits.y_min/y_max; nullopt when neither is known.
 std::optional<compensation::ActuatorModel> predictor(const RunContext& ctx, double u0);
+/// The active model a run's inverse starts from after `prefix` (its open-loop sweep): from
+/// model_state where known, else relaxed at u_now (model_after). Needs ctx.model.
+compensation::ActuatorModel model_at_start(const RunContext& ctx, std::span<const double> prefix);
 /// What predictor() gives, in words, for the log header.
 const char* predictor_name(const RunContext& ctx);
 /// Whose prediction predictor() gives, for a result's y_model_from: "model" (the active model),
 /// "limits" (the straight line of limits.y_min/y_max, which measures nothing of the actuator) or
 /// "none". Clients read it, not y_model's wording.
 const char* predictor_source(const RunContext& ctx);
+/// The run's predictor in its result: `y_model` (predictor_name), `y_model_from`
+/// (predictor_source) and, with a model, where it starts: `model_start` "history" (model_state,
+/// with `model_history_s`) or "relaxed" (at the run's first output).
+void describe_predictor(const RunContext& ctx, nlohmann::json& summary);
 /// The active model as a run log's header keeps it (its file without the stage's frequency
 /// responses, which the model file keeps); null without one.
 nlohmann::json model_header(const RunContext& ctx);

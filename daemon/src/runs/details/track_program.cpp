@@ -141,15 +141,13 @@ TrackReference reference(const TrackRequest& request, const RunContext& ctx,
   return ref;
 }
 
-// The model's inverse, started in the state the sweep `prefix` leaves it in; null for a
-// compensator without one.
+// The model's inverse, started in the state the actuator's history and then the sweep `prefix`
+// leave it in; null for a compensator without one.
 std::unique_ptr<hc::InverseModel> feedforward_inverse(hc::CompensatorKind kind,
                                                       const RunContext& ctx,
                                                       const std::vector<double>& prefix) {
   if (ctx.model == nullptr || !hc::needs_model(kind)) return nullptr;
-  const auto& lim = ctx.settings.loop.limits;
-  const hc::ActuatorModel m =
-      model_after(ctx.model->model, prefix, ctx.u_now, lim.u_min, lim.u_max, ctx.dt());
+  const hc::ActuatorModel m = model_at_start(ctx, prefix);
   try {
     return hc::make_inverse(m, kind == hc::CompensatorKind::kInverseMultiplicative
                                    ? hc::InverseKind::kMultiplicative
@@ -518,9 +516,8 @@ BuiltRun build_track_run(const TrackRequest& request, const RunContext& ctx, Tra
     throw common::CommandError("bad_params", e.what());
   }
   p->model = predictor(ctx, p->excitation.empty() ? ctx.u_now : p->excitation.front());
-  p->summary = {{"compensator", comp_name},
-                {"y_model", predictor_name(ctx)},
-                {"y_model_from", predictor_source(ctx)}};
+  p->summary = {{"compensator", comp_name}};
+  describe_predictor(ctx, p->summary);
   if (!feedforward.is_null()) p->summary["feedforward"] = feedforward;
   if (!feedback.is_null()) p->summary["feedback"] = feedback;
 

@@ -51,6 +51,7 @@
 #include <vector>
 
 #include "hystbench/daemon/loop/loop_statistics.hpp"
+#include "hystbench/daemon/loop/output_history.hpp"
 #include "hystbench/daemon/loop/output_limiter.hpp"
 #include "hystbench/daemon/loop/reading_lateness.hpp"
 #include "hystbench/daemon/loop/realtime.hpp"
@@ -95,6 +96,9 @@ struct BenchLoopOptions {
   /// A live view's tap: every tap->decimation()-th tick's sample is offered to it (wait-free);
   /// null = none. Must outlive the loop.
   ScopeTap* scope = nullptr;
+  /// Ticks of axis 0's output the loop keeps (output_history()), >= 1: 2^21, 8 bytes each, is
+  /// 210 s at 10 kHz and 35 min at 1 kHz.
+  std::size_t output_history_ticks = std::size_t{1} << 21;
 };
 
 class BenchLoop {
@@ -175,6 +179,9 @@ class BenchLoop {
   }
   /// The driver's axes, [1, drivers::kMaxAxes].
   std::size_t axes() const noexcept { return axes_; }
+  /// Axis 0's output of every tick that exchanged with the driver, the last
+  /// options().output_history_ticks of them (see output_history.hpp).
+  const OutputHistory& output_history() const noexcept { return output_history_; }
   /// Increments every tick, and every poll while the simulated clock's time stands still: the
   /// watchdog is fed only while it advances.
   std::uint64_t ticks() const noexcept { return ticks_.load(std::memory_order_relaxed); }
@@ -295,6 +302,7 @@ class BenchLoop {
   std::int64_t idle_grace_ns_ = 0;
   std::int64_t grace_end_ns_ = -1;
   std::int64_t exec_start_ns_ = 0;  // CLOCK_MONOTONIC (or step()'s clock) when this tick began
+  OutputHistory output_history_;
 };
 
 }  // namespace hystbench::daemon

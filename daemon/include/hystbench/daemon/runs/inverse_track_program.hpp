@@ -44,6 +44,10 @@ void arm_tare(TrackDrive& track, std::size_t sweep_samples, std::uint64_t model_
 compensation::ActuatorModel model_after(const compensation::ActuatorModel& model,
                                         std::span<const double> prefix, double u_start,
                                         double u_min, double u_max, double dt_s);
+/// As model_after, from `state` (the model configured for the loop's period, in the state the
+/// actuator's history left it) instead of relaxed at u_start.
+compensation::ActuatorModel model_after(compensation::ActuatorModel state,
+                                        std::span<const double> prefix, double u_min, double u_max);
 
 /// identify's verification segment: the standard tracking reference, through the inverse.
 struct VerificationSpec {

@@ -35,11 +35,11 @@ namespace details {
 class RequestParams;
 struct Command;
 struct RunContext;
-struct PlanCache;
 struct FeedbackPlanCache;
 struct IdentifyRequest;
 class RunHistory;
 class ModelStore;
+class ModelStateTracker;
 class RunSupervisor;
 class IdentifyCoordinator;
 class LearningRuns;
@@ -145,7 +145,8 @@ class Bench {
   std::unique_ptr<details::IdentifyCoordinator> identify_;
   nlohmann::json web_view_;                      // status "http"
   std::unique_ptr<details::ModelStore> models_;  // the active model and responses, the folder
-  std::shared_ptr<details::PlanCache> plans_;    // track's last plan (its own lock)
+  // The active model in the state the loop's output history leaves it (one axis).
+  std::unique_ptr<details::ModelStateTracker> model_states_;
   std::shared_ptr<details::FeedbackPlanCache> feedback_plans_;
   // frf's runs on one axis and the feedback designed on what they measure.
   std::unique_ptr<details::FeedbackDesigner> feedback_;
