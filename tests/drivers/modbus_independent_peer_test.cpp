@@ -100,13 +100,13 @@ class IndependentPeerTest : public ht::BenchFixture {
 
   /// Why run `r`'s timing figures (the exchange's delay, the tracking error) are the machine's
   /// and not the bench's, or empty: the loop ran a period or more late on more than 0.5 % of its
-  /// ticks, or the peer, starved of CPU, left more than a quarter of the readings stale. (Beside
-  /// another CTest job 10-17 % come stale and the figures hold; with two CPU-bound processes more,
-  /// the loop runs late on 0.7-21 % of its ticks and the exchange answers within the tick.)
+  /// ticks, or the peer, starved of CPU, left more than a fifth of the readings stale. (Beside
+  /// most CTest jobs fewer come stale and the figures hold; beside the heaviest, or two CPU-bound
+  /// processes, more come stale, the exchange answers within the tick and the loop runs late.)
   static std::string loaded(const json& r) {
     const double samples = std::max(1.0, r["samples"].get<double>());
     const double overruns = r["overruns"].get<double>(), stale = r["stale_reads"].get<double>();
-    if (overruns <= 0.005 * samples && stale <= 0.25 * samples) return {};
+    if (overruns <= 0.005 * samples && stale <= 0.2 * samples) return {};
     return "the machine was loaded (" + r["run_id"].get<std::string>() + ": " +
            std::to_string(static_cast<long>(overruns)) + " overruns, " +
            std::to_string(static_cast<long>(stale)) + " stale readings of " +
