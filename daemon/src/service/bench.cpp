@@ -55,6 +55,7 @@ Bench::Bench(BenchSettings settings)
       history_(std::make_unique<details::RunHistory>(settings_.log_dir)),
       models_(std::make_unique<details::ModelStore>(
           settings_.model_dir, settings_.loop.limits.u_min, settings_.loop.limits.u_max)),
+      plans_(std::make_shared<details::PlanCache>()),
       feedback_plans_(std::make_shared<details::FeedbackPlanCache>()) {
   dt_ = 1.0 / settings_.loop.rate_hz;
   try {
@@ -298,6 +299,7 @@ details::RunContext Bench::run_context() const {
                           models_->active(),
                           loop_->last_output(),
                           models_->generation(),
+                          plans_,
                           models_->measured_responses(),
                           feedback_plans_};
   // A stage's axes have models of their own: each of its runs starts relaxed.

@@ -522,23 +522,28 @@ TEST_F(BenchTest, ARateDependentTrackIsPlannedBeforeItStartsAndStopCancelsThePla
       run_and_wait("track", {{"reference", "sine"}, {"frequency_hz", 10.0}, {"periods", 3}});
   EXPECT_EQ(r["end"], "completed") << r.dump(2);
   EXPECT_GT(r["feedforward"]["planned"]["samples"].get<double>(), 0.0) << r.dump(2);
+  EXPECT_EQ(r["feedforward"]["planned"]["reused"], false) << r.dump(2);
   EXPECT_LT(r["rms_error_percent"].get<double>(), 3.0) << r.dump(2);
   {
     std::lock_guard lock(m_);
     EXPECT_DOUBLE_EQ(planning.back()["fraction"].get<double>(), 1.0);
   }
-  // The same reference through another compensator (as a sweep runs them) is planned anew from
-  // the state the run before left the model in. (A feedback needs the stage's measured
-  // responses, which a model loaded without them has not: frf measures them.)
+  // The same reference through another compensator (as a sweep runs them) plays the same plan,
+  // kept from the run before; another reference is planned anew. (A feedback needs the stage's
+  // measured responses, which a model loaded without them has not: frf measures them.)
   EXPECT_EQ(error_code("track", {{"compensator", "inverse+pid"}}), "no_frequency_response");
   const json again = run_and_wait("track", {{"reference", "sine"},
                                             {"frequency_hz", 10.0},
                                             {"periods", 3},
                                             {"compensator", "inverse_multiplicative"}});
   ASSERT_EQ(again["end"], "completed") << again.dump(2);
-  EXPECT_EQ(again["model_start"], "history") << again.dump(2);
-  EXPECT_GT(again["feedforward"]["planned"]["samples"].get<double>(), 0.0) << again.dump(2);
-  EXPECT_LT(again["rms_error_percent"].get<double>(), 3.0) << again.dump(2);
+  EXPECT_EQ(again["feedforward"]["planned"]["reused"], true) << again.dump(2);
+  EXPECT_EQ(again["feedforward"]["planned"]["model_rms_um"],
+            r["feedforward"]["planned"]["model_rms_um"]);
+  const json other =
+      run_and_wait("track", {{"reference", "sine"}, {"frequency_hz", 11.0}, {"periods", 3}});
+  ASSERT_EQ(other["end"], "completed") << other.dump(2);
+  EXPECT_EQ(other["feedforward"]["planned"]["reused"], false) << other.dump(2);
 }
 
 // A run still being prepared when the daemon shuts down ends aborted, with its result delivered.

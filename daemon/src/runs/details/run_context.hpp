@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "hystbench/compensation/actuator_model.hpp"
+#include "hystbench/compensation/drive_planner.hpp"
 #include "hystbench/compensation/model_file.hpp"
 #include "hystbench/compensation/stage_responses.hpp"
 #include "hystbench/daemon/config/bench_settings.hpp"
@@ -24,13 +26,30 @@ namespace hystbench::daemon::details {
 struct FeedbackPlanCache;  // feedback_design.hpp
 struct FeedbackPlan;       // feedback_design.hpp
 
+/// The last feedforward plan and what it was planned from: a track run with the same model, the
+/// same start (output, open-loop prefix) and the same targets (another compensator over the same
+/// reference, as a sweep runs them) plays it again instead of planning it anew. The plan is a
+/// deterministic function of these (the planner starts the model relaxed at the output, not from
+/// its history), so the drive is the one a new plan would give. Any thread.
+struct PlanCache {
+  std::mutex mutex;
+  std::uint64_t model_generation = 0;
+  double u_now = 0.0;
+  std::vector<double> excitation, targets;
+  std::uint64_t planned_samples = 0;
+  double period_samples = 0.0;
+  std::optional<compensation::DrivePlan> plan;  ///< empty: nothing kept
+};
+
 struct RunContext {
   const BenchSettings& settings;
   const compensation::ModelFile* model = nullptr;            ///< the active model, or null
   double u_now = 0.0;                                        ///< the loop's present output [V]
   double dt() const { return 1.0 / settings.loop.rate_hz; }  ///< loop period [s]
-  /// Counts the bench's model changes: a design kept for one generation is not another's.
+  /// Counts the bench's model changes: a plan kept for one generation is not another's.
   std::uint64_t model_generation = 0;
+  /// Where track keeps its last plan; null = every plan is made anew.
+  std::shared_ptr<PlanCache> plans = nullptr;
   /// The stage's frequency responses the bench measured last (frf, identify), null if none:
   /// the feedback's when the active model holds none.
   const compensation::StageResponses* responses = nullptr;

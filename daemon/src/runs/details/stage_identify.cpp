@@ -163,6 +163,7 @@ RunContext axis_context(const RunContext& ctx, const StageModel* stage, std::siz
   RunContext c = ctx;
   c.model = stage != nullptr && a < stage->models.size() ? &stage->models[a] : nullptr;
   c.u_now = u_now;
+  c.plans = nullptr;
   c.model_state = nullptr;  // an axis's model is not the bench's active one
   c.responses = nullptr;
   c.feedback_plans = nullptr;

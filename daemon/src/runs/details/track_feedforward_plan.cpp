@@ -22,6 +22,35 @@ using nlohmann::json;
 
 namespace {
 
+/// Takes the kept plan into `plan` when it was made from the same inputs; true then.
+bool reuse_plan(PlanCache& cache, std::uint64_t generation, double u_now,
+                const std::vector<double>& excitation, const std::vector<double>& targets,
+                std::uint64_t planned_samples, double period_samples,
+                std::optional<hc::DrivePlan>& plan) {
+  std::lock_guard lock(cache.mutex);
+  if (!cache.plan || cache.model_generation != generation || cache.u_now != u_now ||
+      cache.planned_samples != planned_samples || cache.period_samples != period_samples ||
+      cache.excitation != excitation || cache.targets != targets) {
+    return false;
+  }
+  plan = cache.plan;
+  return true;
+}
+
+/// Keeps `plan` and what it was made from, in place of the plan kept before.
+void keep_plan(PlanCache& cache, std::uint64_t generation, double u_now,
+               const std::vector<double>& excitation, const std::vector<double>& targets,
+               std::uint64_t planned_samples, double period_samples, const hc::DrivePlan& plan) {
+  std::lock_guard lock(cache.mutex);
+  cache.model_generation = generation;
+  cache.u_now = u_now;
+  cache.excitation = excitation;
+  cache.targets = targets;
+  cache.planned_samples = planned_samples;
+  cache.period_samples = period_samples;
+  cache.plan = plan;
+}
+
 // The most planning a track run waits for before it starts, in compensation::plan_drive_work's
 // units (120 000 samples, 12 s at 10 kHz, for a model of 6 plays); what that costs in seconds,
 // hystbench-bench --benchmark_filter=plan_drive measures.
@@ -30,12 +59,11 @@ constexpr double kMaxPlanWork = 1.0e6;
 // fraction of the reference's span.
 constexpr double kGoodEnoughFraction = 1e-3;
 
-// The work of feedforward_plan's preparation: the drive planned over the targets from the state
-// the run starts in, put in the program's compensator in place of the previewed inverse where it
-// is better on the model; the program's summary says which and why. Each run plans anew: the
-// model's state (its creep since) differs from one run's start to the next.
+// The work of feedforward_plan's preparation: the drive planned over the targets (or the plan
+// kept from the same inputs), put in the program's compensator in place of the previewed
+// inverse where it is better on the model; the program's summary says which and why.
 struct FeedforwardPlanning {
-  hc::ActuatorModel model_start;  ///< the model as the run starts (model_at_start), at u_now
+  hc::ActuatorModel relaxed;  ///< the model relaxed at the present output u_now
   double u_now = 0.0;
   std::vector<double> targets;
   std::uint64_t planned_samples = 0;  ///< the targets planned; a periodic rest continues them
@@ -44,6 +72,8 @@ struct FeedforwardPlanning {
   std::optional<hc::FeedbackController> pid;
   hc::LinearMap linear;
   hc::FeedbackPath path = hc::FeedbackPath::kInverse;
+  std::shared_ptr<PlanCache> cache;
+  std::uint64_t generation = 0;  ///< the model's, for the cache
 
   void operator()(RunProgram& program, const std::function<void(double)>& progress) {
     hc::DrivePlanOptions options;
@@ -55,8 +85,14 @@ struct FeedforwardPlanning {
     const auto start = std::chrono::steady_clock::now();
     json planned = {{"samples", 0}};
     std::optional<hc::DrivePlan> plan;
+    const bool reused = cache && reuse_plan(*cache, generation, u_now, program.excitation, targets,
+                                            planned_samples, period_samples, plan);
     try {
-      make_plan(program, options, plan);
+      if (reused) {
+        progress(1.0);  // a stop or abort meanwhile still cancels the run
+      } else {
+        make_plan(program, options, plan);
+      }
     } catch (const PreparationCancelled&) {
       program.summary["feedforward"]["planned"] = {
           {"samples", 0}, {"why_not", "cancelled before the plan was done"}};
@@ -74,30 +110,32 @@ struct FeedforwardPlanning {
     if (plan) {
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      adopt(program, *plan, seconds, planned);
+      adopt(program, *plan, reused, seconds, planned);
     }
     program.summary["feedforward"]["planned"] = planned;
   }
 
-  // Plans the drive over the first planned_samples targets and continues a periodic plan over
-  // the rest.
+  // Plans the drive over the first planned_samples targets, continues a periodic plan over the
+  // rest and keeps the plan in the cache.
   void make_plan(const RunProgram& program, const hc::DrivePlanOptions& options,
                  std::optional<hc::DrivePlan>& plan) {
-    plan = hc::plan_drive(model_start, u_now, program.excitation,
+    plan = hc::plan_drive(relaxed, u_now, program.excitation,
                           std::span<const double>(targets).first(planned_samples), options);
     if (planned_samples < targets.size()) {
       plan = hc::continue_periodic_plan(std::move(*plan), period_samples, targets.size());
+    }
+    if (cache) {
+      keep_plan(*cache, generation, u_now, program.excitation, targets, planned_samples,
+                period_samples, *plan);
     }
   }
 
   // Puts the plan in the program's compensator where it is better on the model than the
   // previewed inverse; `planned` gets its figures, or why it does not play.
-  void adopt(RunProgram& program, hc::DrivePlan& plan, double seconds, json& planned) {
-    planned = {{"samples", targets.size()},
-               {"optimised_samples", planned_samples},
-               {"seconds", seconds},
-               {"model_rms_um", plan.rms},
-               {"previewed_model_rms_um", plan.start_rms}};
+  void adopt(RunProgram& program, hc::DrivePlan& plan, bool reused, double seconds, json& planned) {
+    planned = {{"samples", targets.size()}, {"optimised_samples", planned_samples},
+               {"seconds", seconds},        {"reused", reused},
+               {"model_rms_um", plan.rms},  {"previewed_model_rms_um", plan.start_rms}};
     // The plan pays for its smoothness, and beyond the rates its model was identified
     // at it plans on the continued law: where that leaves it worse on the model as it
     // is, the previewed inverse plays.
@@ -139,6 +177,7 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
                                 const std::optional<hc::FeedbackController>& pid,
                                 const hc::LinearMap& linear, hc::FeedbackPath path) {
   if (!hc::can_plan_drive(ctx.model->model) || samples == 0) return {};
+  const auto& lim = ctx.settings.loop.limits;
   const double dt = ctx.dt();
   const auto [planned_samples, period_samples] =
       planned_window(ctx.model->model, samples, reference_hz, dt);
@@ -158,9 +197,11 @@ RunPreparation feedforward_plan(const RunProgram& p, const RunContext& ctx,
     targets[k] = track.feedforward_target(static_cast<double>(k) * dt, 0.0);
   }
   feedforward["planned"] = {{"samples", samples}, {"planning", true}};
-  return {"planning the feedforward",
-          FeedforwardPlanning{model_at_start(ctx, {}), ctx.u_now, std::move(targets),
-                              planned_samples, period_samples, kind, pid, linear, path}};
+  return {
+      "planning the feedforward",
+      FeedforwardPlanning{model_after(ctx.model->model, {}, ctx.u_now, lim.u_min, lim.u_max, dt),
+                          ctx.u_now, std::move(targets), planned_samples, period_samples, kind, pid,
+                          linear, path, ctx.plans, ctx.model_generation}};
 }
 
 }  // namespace hystbench::daemon::details

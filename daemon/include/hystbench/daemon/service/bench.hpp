@@ -35,6 +35,7 @@ namespace details {
 class RequestParams;
 struct Command;
 struct RunContext;
+struct PlanCache;
 struct FeedbackPlanCache;
 struct IdentifyRequest;
 class RunHistory;
@@ -145,6 +146,7 @@ class Bench {
   std::unique_ptr<details::IdentifyCoordinator> identify_;
   nlohmann::json web_view_;                      // status "http"
   std::unique_ptr<details::ModelStore> models_;  // the active model and responses, the folder
+  std::shared_ptr<details::PlanCache> plans_;    // track's last plan (its own lock)
   // The active model in the state the loop's output history leaves it (one axis).
   std::unique_ptr<details::ModelStateTracker> model_states_;
   std::shared_ptr<details::FeedbackPlanCache> feedback_plans_;
