@@ -67,6 +67,11 @@ void BenchLoop::reset_outputs() noexcept {
   }
 }
 
+void BenchLoop::wrote(const AxisValues& u) noexcept {
+  for (std::size_t a = 0; a < axes_; ++a) last_u_[a].store(u[a], std::memory_order_relaxed);
+  output_history_.push(u[0]);
+}
+
 drivers::DriverStatus BenchLoop::write_all(const AxisValues& u) noexcept {
   return axes_ == 1 ? driver_.write(u[0]) : driver_.write_axes(std::span(u).first(axes_));
 }
@@ -342,8 +347,7 @@ void BenchLoop::idle_tick() noexcept {
     fault("driver write failed while idle");
     return;
   }
-  for (std::size_t a = 0; a < axes_; ++a) last_u_[a].store(u[a], std::memory_order_relaxed);
-  output_history_.push(u[0]);
+  wrote(u);
   std::array<drivers::Measurement, drivers::kMaxAxes> m{};
   const auto st = read_all(m);
   if (st == drivers::DriverStatus::kOk || st == drivers::DriverStatus::kStale) {
@@ -501,8 +505,7 @@ BenchLoop::TickExchange BenchLoop::exchange(RunProgram& p, std::size_t n, std::u
   } else if (write_all(u) != drivers::DriverStatus::kOk) {
     x.failure = "driver write failed";
   } else {
-    for (std::size_t a = 0; a < axes_; ++a) last_u_[a].store(u[a], std::memory_order_relaxed);
-    output_history_.push(u[0]);
+    wrote(u);
     std::array<drivers::Measurement, drivers::kMaxAxes> m{};
     const auto st = read_all(m);
     std::array<bool, drivers::kMaxAxes> after_stall{};  // the feedback holds on this reading

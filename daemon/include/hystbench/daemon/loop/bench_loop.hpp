@@ -228,6 +228,9 @@ class BenchLoop {
   drivers::DriverStatus read_all(std::array<drivers::Measurement, drivers::kMaxAxes>& m) noexcept;
   /// Every axis's limiter and last output back at the safe output.
   void reset_outputs() noexcept;
+  /// The outputs a tick wrote: every axis's last output, axis 0's into the output history.
+  /// Real-time safe.
+  void wrote(const AxisValues& u) noexcept;
   /// Adds a sample that did not fault to the run's errors and hands it to the run's drive; true
   /// when the drive's last trial has played.
   static inline bool score(RunProgram& p, std::uint64_t k, const TickDrive& d,
