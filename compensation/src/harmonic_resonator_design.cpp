@@ -236,25 +236,33 @@ HarmonicResonatorDesign design_harmonic_resonators(std::span<const MeasuredRespo
     d.harmonics.push_back(judge_harmonic(k, variants, c, o, r));
     if (r) d.spec.resonators.push_back(*r);
   }
-  if (d.spec.resonators.empty()) return d;
+  // Where together they cannot settle within max_between, the highest harmonic goes first (the
+  // lower ones carry more of a periodic error) until the rest can.
   std::vector<double> periods;
   bool met = false;
-  d.between = settle(d.spec.resonators, periods, variants, c, o, met);
-  for (std::size_t i = 0, k = 0; i < d.harmonics.size(); ++i) {
+  while (!d.spec.resonators.empty()) {
+    const double between = settle(d.spec.resonators, periods, variants, c, o, met);
+    if (met) {
+      d.between = between;
+      break;
+    }
+    const double dropped = d.spec.resonators.back().frequency_hz;
+    d.spec.resonators.pop_back();
+    for (HarmonicChoice& h : d.harmonics) {
+      if (!h.kept || h.frequency_hz != dropped) continue;
+      h.kept = false;
+      h.why = "with the resonators below it the loop between the harmonics would move by " +
+              significant(between, 3) + " of 1 + L on a variant of the stage, even settling in " +
+              significant(o.max_settle_periods, 3) + " periods (at most " +
+              significant(o.max_between, 3) + ")";
+    }
+  }
+  for (std::size_t i = 0, k = 0; i < d.harmonics.size() && met; ++i) {
     HarmonicChoice& h = d.harmonics[i];
     if (!h.kept) continue;
-    if (met) {
-      h.settle_periods = periods[k++];
-      d.settle_periods = std::max(d.settle_periods, h.settle_periods);
-      continue;
-    }
-    h.kept = false;
-    h.why = "together the resonators would move the loop between the harmonics by " +
-            significant(d.between, 3) + " of 1 + L on a variant of the stage, even settling in " +
-            significant(o.max_settle_periods, 3) + " periods (at most " +
-            significant(o.max_between, 3) + ")";
+    h.settle_periods = periods[k++];
+    d.settle_periods = std::max(d.settle_periods, h.settle_periods);
   }
-  if (!met) d.spec.resonators.clear();
   return d;
 }
 

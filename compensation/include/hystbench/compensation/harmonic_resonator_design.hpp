@@ -19,8 +19,9 @@
 // settles from settle_periods on, and while |R G| on a variant, between the kept harmonics or up
 // to three fundamentals beyond them, exceeds max_between (the loop's return difference 1 + L
 // moved by that share, away from the harmonics themselves, where G's phase holds the loop), the
-// resonator that gives most of it there settles twice as slowly, up to max_settle_periods. None
-// is kept where that does not hold it. Pure maths; allocates: not real-time.
+// resonator that gives most of it there settles twice as slowly, up to max_settle_periods. Where
+// that does not hold it, the highest kept harmonic is left out, and so on until it holds (the
+// lower harmonics carry more of a periodic error). Pure maths; allocates: not real-time.
 #include <cstddef>
 #include <span>
 #include <string>
@@ -35,7 +36,7 @@ namespace hystbench::compensation {
 struct HarmonicResonatorOptions {
   double dt_s = 1e-4;                   ///< the loop's period [s]
   double fundamental_hz = 0.0;          ///< the reference's, > 0 [Hz]
-  std::size_t max_harmonics = 10;       ///< k at most
+  std::size_t max_harmonics = 30;       ///< k at most
   double max_frequency_fraction = 0.4;  ///< k f at most this times the loop rate
   double min_sensitivity = 0.5;         ///< worst |S| above this
   double max_phase_spread_deg = 60.0;   ///< in (0, 90)
