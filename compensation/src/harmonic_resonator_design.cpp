@@ -230,8 +230,13 @@ HarmonicResonatorDesign design_harmonic_resonators(std::span<const MeasuredRespo
   HarmonicResonatorDesign d;
   d.spec.amplitude_limit =
       law.pid.output_max > 0.0 ? law.pid.output_max : std::numeric_limits<double>::infinity();
+  // Above the first mode the loop leaves each harmonic whole (|S| near 1) and the feedforward
+  // little there; resonators there only slow the lower ones, which must settle beside them.
+  double first_mode_hz = std::numeric_limits<double>::infinity();
+  for (const MeasuredMode& m : modes) first_mode_hz = std::min(first_mode_hz, m.frequency_hz);
   for (std::size_t k = 1; k <= o.max_harmonics; ++k) {
     if (static_cast<double>(k) * o.fundamental_hz > o.max_frequency_fraction / o.dt_s) break;
+    if (static_cast<double>(k) * o.fundamental_hz > first_mode_hz) break;
     std::optional<HarmonicResonator> r;
     d.harmonics.push_back(judge_harmonic(k, variants, c, o, r));
     if (r) d.spec.resonators.push_back(*r);

@@ -153,6 +153,14 @@ TEST(HarmonicResonatorDesign, LeaveOutTheHighestHarmonicsUntilTheRestSettle) {
     }
   }
   ASSERT_TRUE(std::isfinite(lowest_dropped)) << "the premise: together they do not settle";
+  // None judged above the stage's first mode.
+  double first_mode_hz = INFINITY;
+  for (const hc::MeasuredMode& m : hc::measured_modes(measured(s))) {
+    first_mode_hz = std::min(first_mode_hz, m.frequency_hz);
+  }
+  for (const hc::HarmonicChoice& h : d.harmonics.harmonics) {
+    EXPECT_LE(h.frequency_hz, first_mode_hz) << h.harmonic;
+  }
   EXPECT_GT(lowest_dropped, highest_kept);
   EXPECT_LE(d.harmonics.between, o.max_between);
   hc::FeedbackLaw with = d.loop;

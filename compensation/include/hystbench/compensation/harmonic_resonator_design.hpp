@@ -1,8 +1,9 @@
 #pragma once
 // The resonators a periodic reference's run adds to its designed loop (harmonic_resonators.hpp),
 // chosen on the stage's measured frequency responses. For each harmonic k f of the reference's
-// fundamental f (k <= max_harmonics, below max_frequency_fraction of the loop rate and below
-// every response's top line; a response is held at its lowest line below it), the loop C z^-1 P
+// fundamental f (k <= max_harmonics, below max_frequency_fraction of the loop rate, below the
+// lowest of `modes` and below every response's top line; a response is held at its lowest line
+// below it), the loop C z^-1 P
 // closed on each response gives S and what the resonator's output does to the error, G = z^-1 P S.
 // A harmonic gets a resonator where:
 //   - the loop alone leaves more than min_sensitivity of it (worst |S| over the responses): a

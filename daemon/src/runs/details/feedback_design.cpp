@@ -438,15 +438,16 @@ hc::FeedbackLaw with_reference_harmonics(const RunContext& ctx, const FeedbackPl
   }
   if (!left_out.empty()) out["left_out"] = std::move(left_out);
   out["rule"] =
-      "a resonator at each of the reference's first harmonics where the loop alone leaves more "
-      "than half (|S| > " +
+      "a resonator at each of the reference's first harmonics below the stage's first mode where "
+      "the loop alone leaves more than half (|S| > " +
       hc::significant(o.min_sensitivity, 3) + ") and its phase through the stage holds within " +
       hc::significant(o.max_phase_spread_deg, 3) + " deg over the responses, their gain -/+ " +
       hc::significant(100.0 * o.gain_uncertainty, 3) + " % and their modes moved -/+ " +
       hc::significant(100.0 * o.mode_uncertainty, 3) +
       " %: it takes that harmonic out; settling as fast as leaves the loop between the harmonics "
       "moved by at most " +
-      hc::significant(o.max_between, 3) + " of 1 + L (between_harmonics)";
+      hc::significant(o.max_between, 3) +
+      " of 1 + L (between_harmonics), the highest left out first where they cannot";
   hc::FeedbackLaw law = plan.law;
   law.harmonics = d.spec;
   return law;
