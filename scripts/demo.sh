@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The main job on the loopback default: builds hystbench and hystbenchd (installing missing
-# Debian packages), starts hystbenchd on the simulated actuator, identifies it, tracks a 1 Hz
-# triangle over 80 % of its range without compensation, with the inverse model and with
-# inverse + PID, and prints the results. Everything it writes goes to a temporary folder (printed at the end) unless
+# Debian packages), starts hystbenchd on the simulated actuator, tracks a 1 Hz triangle over
+# 80 % of its range without compensation (the first result, before identify's minute on the
+# wall clock), identifies it, tracks the triangle with the inverse model and with inverse + PID,
+# and prints the results. Everything it writes goes to a temporary folder (printed at the end) unless
 # HYSTBENCH_DEMO_DIR is set. No hardware, no root needed (real-time scheduling is used when
 # permitted, otherwise the daemon says so and runs degraded).
 set -euo pipefail
@@ -43,18 +44,26 @@ done
 
 echo "== hystbenchd on the loopback driver (simulated 150 V / 45 um piezo stack)"
 grep -m1 "real-time" "$work/hystbenchd.log" || true
+declare -A logs
+# One track run with compensator $1: its result, and its log in logs[$1].
+track() {
+  "$bin/hystbench" track --reference triangle --frequency 1 --periods 5 --compensator "$1" \
+    --wait --plot "$work/plots/$1"
+  # The run's log, from its result: `status --json` keeps the result of the run just finished as
+  # last_result (track --json would print that object instead of the human result above).
+  logs[$1]=$("$bin/hystbench" status --json | jq -r '.last_result.log')
+}
+echo
+echo "== track: 1 Hz triangle over 80 % of the range, 5 periods, no compensation (no model yet:"
+echo "   the range is the configuration's, limits.y_min to limits.y_max)"
+track none
 echo
 echo "== identify: play the identification excitation, fit, verify and extend the model"
 "$bin/hystbench" identify --wait
-declare -A logs
-for comp in none inverse inverse+pid; do
+for comp in inverse inverse+pid; do
   echo
-  echo "== track: 1 Hz triangle over 80 % of the range, 5 periods, compensator '$comp'"
-  "$bin/hystbench" track --reference triangle --frequency 1 --periods 5 --compensator "$comp" \
-    --wait --plot "$work/plots/$comp"
-  # The run's log, from its result: `status --json` keeps the result of the run just finished as
-  # last_result (track --json would print that object instead of the human result above).
-  logs[$comp]=$("$bin/hystbench" status --json | jq -r '.last_result.log')
+  echo "== track: 1 Hz triangle over 80 % of the model's range, 5 periods, compensator '$comp'"
+  track "$comp"
 done
 # One picture of the loop before and after compensation: output against reference, the scored
 # periods of the runs without compensation and with the inverse (the README shows it).
