@@ -169,6 +169,21 @@ TEST(HarmonicResonatorDesign, LeaveOutTheHighestHarmonicsUntilTheRestSettle) {
   EXPECT_LT(error_rms(s, &with, f, ticks), error_rms(s, &d.loop, f, ticks));
 }
 
+// A tick more of delay (a DAQ's stale reading) turns a harmonic's phase by 360 f dt degrees:
+// beyond the first ten harmonics only those it turns by at most 30 degrees are judged. On a
+// 10 kHz loop a 20 Hz sine's first 30 (up to 600 Hz, 22 deg); on a 1 kHz loop a 10 Hz sine's
+// first ten (from the 9th on, 32 deg and more).
+TEST(HarmonicResonatorDesign, JudgeBeyondTheFirstTenOnlyWhereATickTurnsThePhaseLittle) {
+  const auto highest = [](const Stage& s, double f) {
+    const Designed d = design(s, f);
+    std::size_t k = 0;
+    for (const hc::HarmonicChoice& h : d.harmonics.harmonics) k = std::max(k, h.harmonic);
+    return k;
+  };
+  EXPECT_EQ(highest(Stage{1.0, {3000.0, 0.06}, 0, 1e-4}, 20.0), 30u);
+  EXPECT_EQ(highest(Stage{1.0, {3000.0, 0.06}, 0, 1e-3}, 10.0), 10u);
+}
+
 TEST(HarmonicResonatorDesign, RefusesNoResponseAndABadFundamental) {
   const Stage s{1.0, {3000.0, 0.06}, 0, 1e-4};
   hc::HarmonicResonatorOptions o;

@@ -1,9 +1,10 @@
 #pragma once
 // The resonators a periodic reference's run adds to its designed loop (harmonic_resonators.hpp),
 // chosen on the stage's measured frequency responses. For each harmonic k f of the reference's
-// fundamental f (k <= max_harmonics, below max_frequency_fraction of the loop rate, below the
-// lowest of `modes` and below every response's top line; a response is held at its lowest line
-// below it), the loop C z^-1 P
+// fundamental f (k <= max_harmonics, and beyond min_harmonics only where a tick turns the phase
+// by at most max_tick_phase_deg; below max_frequency_fraction of the loop rate, below the lowest
+// of `modes` and below every response's top line; a response is held at its lowest line below
+// it), the loop C z^-1 P
 // closed on each response gives S and what the resonator's output does to the error, G = z^-1 P S.
 // A harmonic gets a resonator where:
 //   - the loop alone leaves more than min_sensitivity of it (worst |S| over the responses): a
@@ -35,9 +36,13 @@
 namespace hystbench::compensation {
 
 struct HarmonicResonatorOptions {
-  double dt_s = 1e-4;                   ///< the loop's period [s]
-  double fundamental_hz = 0.0;          ///< the reference's, > 0 [Hz]
-  std::size_t max_harmonics = 30;       ///< k at most
+  double dt_s = 1e-4;              ///< the loop's period [s]
+  double fundamental_hz = 0.0;     ///< the reference's, > 0 [Hz]
+  std::size_t max_harmonics = 30;  ///< k at most
+  /// Beyond the first min_harmonics, k f only where one tick more of delay (a stale reading, an
+  /// exchange's jitter) turns the phase by at most this [deg]: 360 k f dt.
+  double max_tick_phase_deg = 30.0;
+  std::size_t min_harmonics = 10;
   double max_frequency_fraction = 0.4;  ///< k f at most this times the loop rate
   double min_sensitivity = 0.5;         ///< worst |S| above this
   double max_phase_spread_deg = 60.0;   ///< in (0, 90)
