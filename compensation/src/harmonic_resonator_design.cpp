@@ -133,6 +133,8 @@ void validate_options(const HarmonicResonatorOptions& o) {
                    "harmonics: max_frequency_fraction must be in (0, 0.5)");
   details::require(o.max_phase_spread_deg > 0.0 && o.max_phase_spread_deg < 90.0,
                    "harmonics: max_phase_spread_deg must be in (0, 90)");
+  details::require(o.max_tick_phase_deg > 0.0 && o.max_tick_phase_deg < 180.0,
+                   "harmonics: max_tick_phase_deg must be in (0, 180)");
   details::require(o.gain_uncertainty >= 0.0 && o.gain_uncertainty < 1.0,
                    "harmonics: gain_uncertainty must be in [0, 1)");
   details::require(o.mode_uncertainty >= 0.0 && o.mode_uncertainty < 1.0,

@@ -191,4 +191,8 @@ TEST(HarmonicResonatorDesign, RefusesNoResponseAndABadFundamental) {
   o.fundamental_hz = -1.0;
   EXPECT_THROW(hc::design_harmonic_resonators(measured(s), hc::FeedbackLaw{}, {}, o),
                std::invalid_argument);
+  o.fundamental_hz = 10.0;
+  o.max_tick_phase_deg = 0.0;
+  EXPECT_THROW(hc::design_harmonic_resonators(measured(s), hc::FeedbackLaw{}, {}, o),
+               std::invalid_argument);
 }

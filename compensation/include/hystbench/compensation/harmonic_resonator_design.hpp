@@ -41,8 +41,8 @@ struct HarmonicResonatorOptions {
   std::size_t max_harmonics = 30;  ///< k at most
   /// Beyond the first min_harmonics, k f only where one tick more of delay (a stale reading, an
   /// exchange's jitter) turns the phase by at most this [deg]: 360 k f dt.
-  double max_tick_phase_deg = 30.0;
-  std::size_t min_harmonics = 10;
+  double max_tick_phase_deg = 30.0;     ///< in (0, 180)
+  std::size_t min_harmonics = 10;       ///< k up to this whatever a tick does to the phase
   double max_frequency_fraction = 0.4;  ///< k f at most this times the loop rate
   double min_sensitivity = 0.5;         ///< worst |S| above this
   double max_phase_spread_deg = 60.0;   ///< in (0, 90)

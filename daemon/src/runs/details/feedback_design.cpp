@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <string>
 
 #include "hystbench/common/command_error.hpp"
 #include "hystbench/compensation/feedback_plant.hpp"
@@ -438,8 +439,12 @@ hc::FeedbackLaw with_reference_harmonics(const RunContext& ctx, const FeedbackPl
   }
   if (!left_out.empty()) out["left_out"] = std::move(left_out);
   out["rule"] =
-      "a resonator at each of the reference's first harmonics below the stage's first mode where "
-      "the loop alone leaves more than half (|S| > " +
+      "a resonator at each of the reference's first " + std::to_string(o.max_harmonics) +
+      " harmonics below the stage's first mode (beyond harmonic " +
+      std::to_string(o.min_harmonics) + ", where a tick of delay turns the phase by at most " +
+      hc::significant(o.max_tick_phase_deg, 3) +
+      " deg) where the loop alone leaves more than "
+      "half (|S| > " +
       hc::significant(o.min_sensitivity, 3) + ") and its phase through the stage holds within " +
       hc::significant(o.max_phase_spread_deg, 3) + " deg over the responses, their gain -/+ " +
       hc::significant(100.0 * o.gain_uncertainty, 3) + " % and their modes moved -/+ " +
