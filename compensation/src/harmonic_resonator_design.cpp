@@ -240,9 +240,9 @@ HarmonicResonatorDesign design_harmonic_resonators(std::span<const MeasuredRespo
   // 360 k f dt: on a 1 kHz loop 108 deg at 300 Hz, more than a resonator converges through.
   const double tick_hz = o.max_tick_phase_deg / 360.0 / o.dt_s;
   for (std::size_t k = 1; k <= o.max_harmonics; ++k) {
-    if (static_cast<double>(k) * o.fundamental_hz > o.max_frequency_fraction / o.dt_s) break;
-    if (k > o.min_harmonics && static_cast<double>(k) * o.fundamental_hz > tick_hz) break;
-    if (static_cast<double>(k) * o.fundamental_hz > first_mode_hz) break;
+    const double f_k = static_cast<double>(k) * o.fundamental_hz;
+    if (f_k > o.max_frequency_fraction / o.dt_s || f_k > first_mode_hz) break;
+    if (k > o.min_harmonics && f_k > tick_hz) break;
     std::optional<HarmonicResonator> r;
     d.harmonics.push_back(judge_harmonic(k, variants, c, o, r));
     if (r) d.spec.resonators.push_back(*r);

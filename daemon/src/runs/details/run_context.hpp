@@ -32,12 +32,17 @@ struct FeedbackPlan;       // feedback_design.hpp
 /// deterministic function of these (the planner starts the model relaxed at the output, not from
 /// its history), so the drive is the one a new plan would give. Any thread.
 struct PlanCache {
+  /// What a plan is made from.
+  struct Inputs {
+    std::uint64_t model_generation = 0;
+    double u_now = 0.0;
+    std::vector<double> excitation, targets;
+    std::uint64_t planned_samples = 0;
+    double period_samples = 0.0;
+    bool operator==(const Inputs&) const = default;
+  };
   std::mutex mutex;
-  std::uint64_t model_generation = 0;
-  double u_now = 0.0;
-  std::vector<double> excitation, targets;
-  std::uint64_t planned_samples = 0;
-  double period_samples = 0.0;
+  Inputs inputs;
   std::optional<compensation::DrivePlan> plan;  ///< empty: nothing kept
 };
 

@@ -23,31 +23,18 @@ using nlohmann::json;
 namespace {
 
 /// Takes the kept plan into `plan` when it was made from the same inputs; true then.
-bool reuse_plan(PlanCache& cache, std::uint64_t generation, double u_now,
-                const std::vector<double>& excitation, const std::vector<double>& targets,
-                std::uint64_t planned_samples, double period_samples,
+bool reuse_plan(PlanCache& cache, const PlanCache::Inputs& inputs,
                 std::optional<hc::DrivePlan>& plan) {
   std::lock_guard lock(cache.mutex);
-  if (!cache.plan || cache.model_generation != generation || cache.u_now != u_now ||
-      cache.planned_samples != planned_samples || cache.period_samples != period_samples ||
-      cache.excitation != excitation || cache.targets != targets) {
-    return false;
-  }
+  if (!cache.plan || !(cache.inputs == inputs)) return false;
   plan = cache.plan;
   return true;
 }
 
 /// Keeps `plan` and what it was made from, in place of the plan kept before.
-void keep_plan(PlanCache& cache, std::uint64_t generation, double u_now,
-               const std::vector<double>& excitation, const std::vector<double>& targets,
-               std::uint64_t planned_samples, double period_samples, const hc::DrivePlan& plan) {
+void keep_plan(PlanCache& cache, PlanCache::Inputs inputs, const hc::DrivePlan& plan) {
   std::lock_guard lock(cache.mutex);
-  cache.model_generation = generation;
-  cache.u_now = u_now;
-  cache.excitation = excitation;
-  cache.targets = targets;
-  cache.planned_samples = planned_samples;
-  cache.period_samples = period_samples;
+  cache.inputs = std::move(inputs);
   cache.plan = plan;
 }
 
@@ -85,8 +72,7 @@ struct FeedforwardPlanning {
     const auto start = std::chrono::steady_clock::now();
     json planned = {{"samples", 0}};
     std::optional<hc::DrivePlan> plan;
-    const bool reused = cache && reuse_plan(*cache, generation, u_now, program.excitation, targets,
-                                            planned_samples, period_samples, plan);
+    const bool reused = cache && reuse_plan(*cache, inputs(program), plan);
     try {
       if (reused) {
         progress(1.0);  // a stop or abort meanwhile still cancels the run
@@ -124,10 +110,12 @@ struct FeedforwardPlanning {
     if (planned_samples < targets.size()) {
       plan = hc::continue_periodic_plan(std::move(*plan), period_samples, targets.size());
     }
-    if (cache) {
-      keep_plan(*cache, generation, u_now, program.excitation, targets, planned_samples,
-                period_samples, *plan);
-    }
+    if (cache) keep_plan(*cache, inputs(program), *plan);
+  }
+
+  // What this run's plan is made from, for the cache.
+  PlanCache::Inputs inputs(const RunProgram& program) const {
+    return {generation, u_now, program.excitation, targets, planned_samples, period_samples};
   }
 
   // Puts the plan in the program's compensator where it is better on the model than the
